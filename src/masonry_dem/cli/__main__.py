@@ -1,0 +1,5 @@
+import sys
+
+from masonry_dem.cli import main
+
+sys.exit(main())
