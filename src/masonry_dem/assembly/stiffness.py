@@ -1,0 +1,66 @@
+"""Interface stiffness Kbar (diagonal, local components) and the assembled stiffness
+K = H^T Kbar H on the free DOFs; internal forces and reactions."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import sparse
+
+from masonry_dem.assembly.compatibility import compatibility_matrix
+from masonry_dem.model import Model
+
+
+def interface_stiffness(model: Model) -> np.ndarray:
+    """(m, 6) elastic stiffness per local component:
+    [kt A, kt A, kn A, kn I1, kn I2, kt J] (shear, normal, bending, torsion)."""
+    its = model.interfaces
+    area = its.area
+    return np.stack(
+        [
+            model.kt * area,
+            model.kt * area,
+            model.kn * area,
+            model.kn * its.inertia1,
+            model.kn * its.inertia2,
+            model.kt * its.polar,
+        ],
+        axis=1,
+    )
+
+
+@dataclass(frozen=True)
+class Assembly:
+    """Matrices of one model: H on all DOFs, its free-DOF columns, and the elastic Kbar."""
+
+    H: sparse.csr_matrix  # (6m, 6n)
+    H_free: sparse.csr_matrix  # (6m, nf)
+    free_index: np.ndarray  # (nf,) global DOF numbers of the free DOFs
+    kbar: np.ndarray  # (m, 6) elastic interface stiffness
+
+    @classmethod
+    def of(cls, model: Model) -> Assembly:
+        H = compatibility_matrix(model.blocks, model.interfaces)
+        free_index = np.flatnonzero(model.free)
+        H_free = H.tocsc()[:, free_index].tocsr()
+        return cls(H, H_free, free_index, interface_stiffness(model))
+
+    @property
+    def n_free(self) -> int:
+        return int(self.free_index.size)
+
+    def stiffness(self, factors: np.ndarray | None = None) -> sparse.csc_matrix:
+        """K_ff = H_f^T diag(kbar * factors) H_f (factors (m, 6) scale each component)."""
+        k = self.kbar if factors is None else self.kbar * factors
+        D = sparse.diags(k.reshape(-1), format="csr")
+        K = (self.H_free.T @ D @ self.H_free).tocsc()
+        return K
+
+    def internal_forces(self, actions: np.ndarray) -> np.ndarray:
+        """Generalised forces on all block DOFs (6n,) from interface actions (m, 6): H^T f."""
+        return self.H.T @ actions.reshape(-1)
+
+    def relative_displacements(self, q: np.ndarray) -> np.ndarray:
+        """(m, 6) local relative displacements from all block DOFs q (6n,)."""
+        return (self.H @ q).reshape(-1, 6)

@@ -1,0 +1,71 @@
+"""Write an analysis to a results folder as it runs, so a failed run keeps every step.
+
+Folder layout: ``blocks.pvd``, ``interfaces.pvd``, ``steps/*.vtu``, ``pushover.csv``,
+``summary.json`` (and PNG renders next to them).
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+from pathlib import Path
+
+import numpy as np
+
+from masonry_dem.export.pvd import write_pvd
+from masonry_dem.export.vtu import write_step_vtu
+from masonry_dem.model import Model
+from masonry_dem.results import History, StepResult, write_pushover_csv
+
+log = logging.getLogger(__name__)
+
+
+class ResultsWriter:
+    """Callback for the solvers: ``writer(step)`` writes one step and refreshes the PVDs."""
+
+    def __init__(self, folder: Path | str, model: Model, every: int = 1) -> None:
+        self.folder = Path(folder)
+        self.folder.mkdir(parents=True, exist_ok=True)
+        self.model = model
+        self.every = max(1, int(every))
+        self.block_files: list[str] = []
+        self.interface_files: list[str] = []
+        self.times: list[float] = []
+        self.steps_written: list[int] = []
+        self._count = 0
+
+    def __call__(self, step: StepResult, force: bool = False) -> None:
+        self._count += 1
+        if not force and (self._count - 1) % self.every:
+            return
+        bfile, ifile = write_step_vtu(self.folder, self.model, step)
+        self.block_files.append(bfile)
+        self.interface_files.append(ifile)
+        self.times.append(step.load_factor)
+        self.steps_written.append(step.step)
+        self._write_indexes()
+
+    def _write_indexes(self) -> None:
+        times = np.asarray(self.times)
+        # ParaView needs increasing times; past a load peak lambda falls, so use step numbers.
+        if times.size > 1 and np.any(np.diff(times) <= 0):
+            times = np.asarray(self.steps_written, dtype=float)
+        write_pvd(self.folder / "blocks.pvd", self.block_files, times)
+        if self.model.interfaces.count:
+            write_pvd(self.folder / "interfaces.pvd", self.interface_files, times)
+
+    def finish(self, history: History, **summary_extra) -> dict:
+        """Write the last step if skipped, pushover.csv and summary.json."""
+        if history.steps and (not self.steps_written or self.steps_written[-1] != history.last.step):
+            self(history.last, force=True)
+        write_pushover_csv(self.folder / "pushover.csv", history)
+        summary = history.summary(
+            blocks=self.model.blocks.count,
+            interfaces=self.model.interfaces.count,
+            name=self.model.name,
+            steps_written=len(self.steps_written),
+            **summary_extra,
+        )
+        (self.folder / "summary.json").write_text(json.dumps(summary, indent=2))
+        log.info("results written to %s", self.folder)
+        return summary

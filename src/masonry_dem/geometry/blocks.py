@@ -1,0 +1,102 @@
+"""Axis-aligned box blocks stored as arrays, one row per block.
+
+Global axes: e1 along the wall, e2 vertical (up), e3 out of plane.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from masonry_dem._validation import as_finite_array, require_positive
+
+
+@dataclass(frozen=True)
+class Blocks:
+    """Rigid box blocks.
+
+    centres: (n, 3) block centres [m]; sizes: (n, 3) edge lengths along e1, e2, e3 [m];
+    unit_weight: (n,) weight per unit volume [N/m^3].
+    """
+
+    centres: np.ndarray
+    sizes: np.ndarray
+    unit_weight: np.ndarray
+
+    def __post_init__(self) -> None:
+        centres = as_finite_array("centres", self.centres, (None, 3))
+        n = centres.shape[0]
+        if n == 0:
+            raise ValueError("blocks: an assembly needs at least one block, got 0")
+        sizes = as_finite_array("sizes", self.sizes, (n, 3))
+        require_positive("sizes", sizes)
+        gamma = as_finite_array("unit_weight", np.broadcast_to(self.unit_weight, (n,)), (n,))
+        require_positive("unit_weight", gamma, strict=False)
+        object.__setattr__(self, "centres", centres)
+        object.__setattr__(self, "sizes", sizes)
+        object.__setattr__(self, "unit_weight", gamma.copy())
+        for arr in (self.centres, self.sizes, self.unit_weight):
+            arr.flags.writeable = False
+
+    @classmethod
+    def from_boxes(cls, lower, upper, unit_weight) -> Blocks:
+        """Blocks from lower and upper corners, each (n, 3)."""
+        lo = as_finite_array("lower", lower, (None, 3))
+        hi = as_finite_array("upper", upper, (lo.shape[0], 3))
+        return cls((lo + hi) / 2, hi - lo, unit_weight)
+
+    @property
+    def count(self) -> int:
+        return int(self.centres.shape[0])
+
+    def __len__(self) -> int:
+        return self.count
+
+    @property
+    def lower(self) -> np.ndarray:
+        return self.centres - self.sizes / 2
+
+    @property
+    def upper(self) -> np.ndarray:
+        return self.centres + self.sizes / 2
+
+    @property
+    def volumes(self) -> np.ndarray:
+        return np.prod(self.sizes, axis=1)
+
+    @property
+    def weights(self) -> np.ndarray:
+        return self.volumes * self.unit_weight
+
+    def subset(self, index) -> Blocks:
+        return Blocks(self.centres[index], self.sizes[index], self.unit_weight[index])
+
+    def permuted(self, order) -> Blocks:
+        """The same blocks in another order (for numbering-independence checks)."""
+        return self.subset(np.asarray(order))
+
+    @staticmethod
+    def concatenate(*parts: Blocks) -> Blocks:
+        return Blocks(
+            np.vstack([p.centres for p in parts]),
+            np.vstack([p.sizes for p in parts]),
+            np.concatenate([p.unit_weight for p in parts]),
+        )
+
+    def corner_points(self) -> np.ndarray:
+        """(n, 8, 3) corners in VTK hexahedron order."""
+        signs = np.array(
+            [
+                [-1, -1, -1],
+                [1, -1, -1],
+                [1, 1, -1],
+                [-1, 1, -1],
+                [-1, -1, 1],
+                [1, -1, 1],
+                [1, 1, 1],
+                [-1, 1, 1],
+            ],
+            dtype=float,
+        )
+        return self.centres[:, None, :] + 0.5 * signs[None, :, :] * self.sizes[:, None, :]

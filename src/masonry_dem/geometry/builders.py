@@ -1,0 +1,128 @@
+"""Builders of block assemblies: running-bond walls, stack-bond columns, single blocks, openings,
+supports (rigid base, return walls), and user lists of boxes."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from masonry_dem._validation import as_finite_array, positive_scalar
+from masonry_dem.geometry.blocks import Blocks
+
+
+def _count(name: str, value) -> int:
+    if isinstance(value, bool) or int(value) != value or int(value) < 1:
+        raise ValueError(f"{name} must be a positive integer, got {value!r}")
+    return int(value)
+
+
+def running_bond_wall(
+    blocks_along_length: int,
+    courses: int,
+    a: float,
+    b: float,
+    s: float,
+    unit_weight: float,
+    joint: float = 0.0,
+    origin=(0.0, 0.0, 0.0),
+    start_with_half: bool = False,
+) -> Blocks:
+    """A single-leaf running-bond wall with straight ends.
+
+    Course k (from the bottom) holds ``blocks_along_length`` whole blocks when k is even and,
+    when k is odd, a half block at each end with ``blocks_along_length - 1`` whole blocks between
+    (``start_with_half`` swaps the two). Block pitch is (b + joint) along e1 and (a + joint)
+    along e2: the mortar joint thickness ``joint`` is included in the blocks, so the wall
+    measures n(b+e) x courses(a+e) x s. The wall's lower-left-back corner sits at ``origin``.
+    """
+    n = _count("blocks_along_length", blocks_along_length)
+    nc = _count("courses", courses)
+    a, b, s = (positive_scalar(k, v) for k, v in (("a", a), ("b", b), ("s", s)))
+    e = positive_scalar("joint", joint, strict=False)
+    gamma = positive_scalar("unit_weight", unit_weight, strict=False)
+    px, py = b + e, a + e
+    half_course = (np.arange(nc) % 2 == 1) ^ bool(start_with_half)
+    # Each course is cut at integer or half-integer pitches; describe blocks by their cut points.
+    per_course = np.where(half_course, n + 1, n)
+    course = np.repeat(np.arange(nc), per_course)
+    pos = np.arange(course.size) - np.repeat(np.cumsum(per_course) - per_course, per_course)
+    shifted = half_course[course]
+    left = np.where(shifted, np.maximum(pos - 0.5, 0.0), pos)
+    right = np.where(shifted, np.minimum(pos + 0.5, n), pos + 1.0)
+    x0, y0, z0 = as_finite_array("origin", origin, (3,))
+    lower = np.stack([x0 + left * px, y0 + course * py, np.full(course.size, z0)], axis=1)
+    upper = np.stack([x0 + right * px, y0 + (course + 1) * py, np.full(course.size, z0 + s)], axis=1)
+    return Blocks.from_boxes(lower, upper, gamma)
+
+
+def running_bond_wall_of_size(
+    length: float,
+    height: float,
+    a: float,
+    b: float,
+    s: float,
+    unit_weight: float,
+    joint: float = 0.0,
+) -> Blocks:
+    """A running-bond wall of the given overall size: the nearest whole numbers of blocks and
+    courses, with the pitch stretched (by less than half a block) so the wall is exactly
+    ``length`` x ``height``."""
+    length = positive_scalar("length", length)
+    height = positive_scalar("height", height)
+    a, b = positive_scalar("a", a), positive_scalar("b", b)
+    e = positive_scalar("joint", joint, strict=False)
+    n = max(1, round(length / (b + e)))
+    nc = max(1, round(height / (a + e)))
+    pitch_x, pitch_y = length / n, height / nc
+    return running_bond_wall(n, nc, pitch_y, pitch_x, s, unit_weight, joint=0.0)
+
+
+def stack_bond_column(courses: int, a: float, b: float, s: float, unit_weight: float) -> Blocks:
+    """Blocks stacked one on another (a column of ``courses`` blocks)."""
+    nc = _count("courses", courses)
+    a, b, s = (positive_scalar(k, v) for k, v in (("a", a), ("b", b), ("s", s)))
+    k = np.arange(nc)
+    centres = np.stack([np.full(nc, b / 2), (k + 0.5) * a, np.full(nc, s / 2)], axis=1)
+    return Blocks(centres, np.tile([b, a, s], (nc, 1)), positive_scalar("unit_weight", unit_weight, False))
+
+
+def single_block(a: float, b: float, s: float, unit_weight: float) -> Blocks:
+    """One block of height a, width b and thickness s with its base on y = 0."""
+    return stack_bond_column(1, a, b, s, unit_weight)
+
+
+def boxes(lower, upper, unit_weight) -> Blocks:
+    """Any user list of boxes given by their lower and upper corners, each (n, 3)."""
+    return Blocks.from_boxes(lower, upper, unit_weight)
+
+
+def cut_openings(blocks: Blocks, openings) -> Blocks:
+    """Remove every block whose centre lies inside one of the rectangular openings.
+
+    ``openings`` is a list of (x_min, y_min, x_max, y_max) in the wall plane (e1, e2). Openings
+    are cut in whole blocks: choose their edges on block boundaries for clean jambs.
+    """
+    keep = np.ones(blocks.count, dtype=bool)
+    for k, rect in enumerate(openings):
+        x0, y0, x1, y1 = as_finite_array(f"openings[{k}]", rect, (4,))
+        if x1 <= x0 or y1 <= y0:
+            raise ValueError(f"openings[{k}] must have x_max > x_min and y_max > y_min, got {rect!r}")
+        c = blocks.centres
+        inside = (c[:, 0] > x0) & (c[:, 0] < x1) & (c[:, 1] > y0) & (c[:, 1] < y1)
+        if not inside.any():
+            raise ValueError(f"openings[{k}] = {list(rect)} removes no block")
+        keep &= ~inside
+    return blocks.subset(np.flatnonzero(keep))
+
+
+def add_base(blocks: Blocks, depth: float | None = None, overhang: float = 0.0) -> tuple[Blocks, int]:
+    """Append a rigid base slab under the assembly; returns the blocks and the base index.
+
+    The base spans the footprint of the assembly (plus ``overhang`` on every side in the plane)
+    and its top face touches the lowest blocks, so real interfaces join it to the wall.
+    """
+    lo, hi = blocks.lower.min(axis=0), blocks.upper.max(axis=0)
+    depth = float(np.median(blocks.sizes[:, 1])) if depth is None else positive_scalar("depth", depth)
+    base_lo = np.array([lo[0] - overhang, lo[1] - depth, lo[2] - overhang])
+    base_hi = np.array([hi[0] + overhang, lo[1], hi[2] + overhang])
+    base = Blocks.from_boxes(base_lo[None], base_hi[None], 0.0)
+    return Blocks.concatenate(blocks, base), blocks.count

@@ -1,0 +1,272 @@
+"""The frozen analysis model: blocks, interfaces, interface materials, supports and loads.
+
+Block DOFs q = (u1, u2, u3, w1, w2, w3) at the block centre. Loads are generalised forces at
+block centres: ``dead`` (applied first, held constant) and ``live`` (scaled by lambda).
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from masonry_dem._validation import as_finite_array, positive_scalar
+from masonry_dem.geometry.blocks import Blocks
+from masonry_dem.geometry.interfaces import Interfaces, detect_interfaces
+
+log = logging.getLogger(__name__)
+
+DOF_NAMES = ("u1", "u2", "u3", "w1", "w2", "w3")
+_DOF_GROUPS = {
+    "all": (0, 1, 2, 3, 4, 5),
+    "translations": (0, 1, 2),
+    "rotations": (3, 4, 5),
+    "in_plane": (0, 1, 5),
+    "out_of_plane": (2, 3, 4),
+}
+
+
+@dataclass(frozen=True)
+class InterfaceMaterial:
+    """Joint properties. kn, kt: stiffness per unit area [N/m^3]; friction: mu = tan(phi);
+    tensile_strength [Pa] (also sets cohesion c = mu * ft); alpha: torsion-shear exponent of
+    Eq. (A5) (None: 1.5, the paper's value for running-bond masonry)."""
+
+    kn: float
+    kt: float
+    friction: float
+    tensile_strength: float = 0.0
+    alpha: float | None = None
+
+    def __post_init__(self) -> None:
+        positive_scalar("kn", self.kn)
+        positive_scalar("kt", self.kt)
+        positive_scalar("friction", self.friction, strict=False)
+        positive_scalar("tensile_strength", self.tensile_strength, strict=False)
+        if self.alpha is not None:
+            positive_scalar("alpha", self.alpha)
+
+
+def dof_mask(dofs: str | Sequence[str]) -> np.ndarray:
+    """Boolean (6,) mask from a group name (``all``, ``translations``, ``rotations``,
+    ``in_plane``, ``out_of_plane``) or a list of DOF names (``u1`` ... ``w3``)."""
+    mask = np.zeros(6, dtype=bool)
+    names = [dofs] if isinstance(dofs, str) else list(dofs)
+    for name in names:
+        if name in _DOF_GROUPS:
+            mask[list(_DOF_GROUPS[name])] = True
+        elif name in DOF_NAMES:
+            mask[DOF_NAMES.index(name)] = True
+        else:
+            raise ValueError(
+                f"dofs must name a group {sorted(_DOF_GROUPS)} or DOFs {DOF_NAMES}, got {name!r}"
+            )
+    return mask
+
+
+# --------------------------------------------------------------------------- supports
+@dataclass(frozen=True)
+class Support:
+    """Fix ``dofs`` of the given blocks (indices)."""
+
+    blocks: np.ndarray
+    dofs: str | Sequence[str] = "all"
+
+    def mask(self, n_blocks: int) -> np.ndarray:
+        idx = np.atleast_1d(np.asarray(self.blocks, dtype=np.int64))
+        if idx.size == 0:
+            raise ValueError("support blocks: the selection is empty")
+        if idx.min() < 0 or idx.max() >= n_blocks:
+            raise ValueError(f"support blocks: index out of range 0..{n_blocks - 1}: {idx.tolist()}")
+        out = np.zeros((n_blocks, 6), dtype=bool)
+        out[np.ix_(idx, np.flatnonzero(dof_mask(self.dofs)))] = True
+        return out
+
+
+# --------------------------------------------------------------------------- loads
+@dataclass(frozen=True)
+class SelfWeight:
+    """Block weights acting along -e2 (dead, or live for a vertical-acceleration pattern)."""
+
+    live: bool = False
+
+    def vector(self, blocks: Blocks) -> np.ndarray:
+        out = np.zeros((blocks.count, 6))
+        out[:, 1] = -blocks.weights
+        return out
+
+
+@dataclass(frozen=True)
+class WeightProportional:
+    """A horizontal (or any) pattern proportional to the block weights, e.g. a tilt table:
+    force = weight x unit(direction). Live by default (scaled by lambda)."""
+
+    direction: Sequence[float] = (0.0, 0.0, 1.0)
+    live: bool = True
+    blocks: np.ndarray | None = None
+
+    def vector(self, blocks: Blocks) -> np.ndarray:
+        d = as_finite_array("direction", self.direction, (3,))
+        norm = np.linalg.norm(d)
+        if norm == 0:
+            raise ValueError("direction must be a non-zero vector, got (0, 0, 0)")
+        out = np.zeros((blocks.count, 6))
+        sel = slice(None) if self.blocks is None else np.asarray(self.blocks)
+        out[sel, :3] = blocks.weights[sel, None] * (d / norm)[None, :]
+        return out
+
+
+@dataclass(frozen=True)
+class Pressure:
+    """Uniform pressure [Pa] on the face of the selected blocks normal to ``axis``, pushing
+    towards ``sign`` x e[axis]. Resultant at block centres (it passes through them)."""
+
+    value: float
+    axis: int = 2
+    sign: int = 1
+    live: bool = True
+    blocks: np.ndarray | None = None
+
+    def vector(self, blocks: Blocks) -> np.ndarray:
+        p = float(as_finite_array("pressure", self.value))
+        if self.axis not in (0, 1, 2):
+            raise ValueError(f"pressure axis must be 0, 1 or 2, got {self.axis!r}")
+        if self.sign not in (-1, 1):
+            raise ValueError(f"pressure sign must be +1 or -1, got {self.sign!r}")
+        others = [k for k in range(3) if k != self.axis]
+        area = blocks.sizes[:, others[0]] * blocks.sizes[:, others[1]]
+        out = np.zeros((blocks.count, 6))
+        sel = slice(None) if self.blocks is None else np.asarray(self.blocks)
+        out[sel, self.axis] = self.sign * p * area[sel]
+        return out
+
+
+@dataclass(frozen=True)
+class PointLoad:
+    """Point forces (3,) on each selected block, applied at ``point`` offsets from the block
+    centres (default: the centre). Dead by default (e.g. the timber beams of S32)."""
+
+    blocks: np.ndarray
+    force: Sequence[float]
+    offset: Sequence[float] = (0.0, 0.0, 0.0)
+    live: bool = False
+
+    def vector(self, blocks: Blocks) -> np.ndarray:
+        idx = np.atleast_1d(np.asarray(self.blocks, dtype=np.int64))
+        f = as_finite_array("force", self.force, (3,))
+        r = as_finite_array("offset", self.offset, (3,))
+        out = np.zeros((blocks.count, 6))
+        np.add.at(out, (idx, slice(0, 3)), f)
+        np.add.at(out, (idx, slice(3, 6)), np.cross(r, f))
+        return out
+
+
+Load = SelfWeight | WeightProportional | Pressure | PointLoad
+
+
+# --------------------------------------------------------------------------- model
+@dataclass(frozen=True)
+class Model:
+    """Everything an analysis needs, validated and frozen.
+
+    interface properties are (m,) arrays: kn, kt, friction, tensile_strength, alpha.
+    fixed: (n, 6) bool; dead, live: (n, 6) generalised forces at block centres.
+    """
+
+    blocks: Blocks
+    interfaces: Interfaces
+    kn: np.ndarray
+    kt: np.ndarray
+    friction: np.ndarray
+    tensile_strength: np.ndarray
+    alpha: np.ndarray
+    fixed: np.ndarray
+    dead: np.ndarray
+    live: np.ndarray
+    name: str = "model"
+    meta: dict = field(default_factory=dict)
+
+    @classmethod
+    def build(
+        cls,
+        blocks: Blocks,
+        material: InterfaceMaterial,
+        supports: Sequence[Support] = (),
+        loads: Sequence[Load] = (SelfWeight(),),
+        name: str = "model",
+        interfaces: Interfaces | None = None,
+        material_overrides: Sequence[tuple[np.ndarray, InterfaceMaterial]] = (),
+        meta: dict | None = None,
+    ) -> Model:
+        """Detect contacts, apply supports and loads.
+
+        Interfaces between two fully fixed blocks carry nothing and are dropped.
+        ``material_overrides`` assigns other materials to interfaces touching given blocks
+        (e.g. the joint with a rigid base).
+        """
+        n = blocks.count
+        fixed = np.zeros((n, 6), dtype=bool)
+        for sup in supports:
+            fixed |= sup.mask(n)
+        its = detect_interfaces(blocks) if interfaces is None else interfaces
+        fully = fixed.all(axis=1)
+        keep = ~(fully[its.block_i] & fully[its.block_j])
+        its = its.subset(np.flatnonzero(keep))
+        m = its.count
+
+        def per_interface(mat: InterfaceMaterial) -> np.ndarray:
+            alpha = np.nan if mat.alpha is None else mat.alpha
+            return np.array([mat.kn, mat.kt, mat.friction, mat.tensile_strength, alpha])
+
+        props = np.tile(per_interface(material), (m, 1))
+        for blk, mat in material_overrides:
+            touch = np.isin(its.block_i, blk) | np.isin(its.block_j, blk)
+            props[touch] = per_interface(mat)
+        props[:, 4] = np.where(np.isnan(props[:, 4]), 1.5, props[:, 4])
+
+        dead = np.zeros((n, 6))
+        live = np.zeros((n, 6))
+        for load in loads:
+            (live if load.live else dead)[...] += load.vector(blocks)
+        model = cls(
+            blocks, its, *props.T.copy(), fixed, dead, live, name=name, meta=dict(meta or {})
+        )
+        model.check_supported()
+        return model
+
+    # -- DOF bookkeeping
+    @property
+    def n_dofs(self) -> int:
+        return 6 * self.blocks.count
+
+    @property
+    def free(self) -> np.ndarray:
+        """(6n,) bool mask of free DOFs (block-major)."""
+        return ~self.fixed.reshape(-1)
+
+    def check_supported(self) -> None:
+        """Refuse an assembly with a rigid-body mechanism before any solve: every connected
+        group of blocks needs fixed DOFs in it (a free-floating part is a mechanism)."""
+        from scipy.sparse import coo_matrix
+        from scipy.sparse.csgraph import connected_components
+
+        n = self.blocks.count
+        if not self.fixed.any():
+            raise ValueError(
+                "supports: no DOF is fixed, the assembly is a free body (a mechanism); "
+                "fix a base block or some DOFs"
+            )
+        its = self.interfaces
+        graph = coo_matrix((np.ones(its.count), (its.block_i, its.block_j)), shape=(n, n))
+        ncomp, label = connected_components(graph, directed=False)
+        anchored = np.zeros(ncomp, dtype=bool)
+        anchored[label[self.fixed.any(axis=1)]] = True
+        if not anchored.all():
+            loose = np.flatnonzero(~anchored[label])
+            raise ValueError(
+                f"supports: {loose.size} block(s) touch no support through any interface "
+                f"(first: block {loose[0]} at {self.blocks.centres[loose[0]].tolist()}); "
+                "the assembly is a mechanism"
+            )

@@ -1,0 +1,94 @@
+"""Results of an analysis: one StepResult per converged step, and the History of a run."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+# damage state codes of the interfaces (cell data "state" in the VTU files)
+STATE_NAMES = ("elastic", "sliding", "rocking", "sliding+rocking", "detached")
+STATE_ELASTIC, STATE_SLIDING, STATE_ROCKING, STATE_SLIDING_ROCKING, STATE_DETACHED = range(5)
+
+
+@dataclass(frozen=True)
+class StepResult:
+    """One converged equilibrium state.
+
+    q: (n, 6) block displacements/rotations; actions: (m, 6) local interface actions
+    [f1, f2, fn, m1, m2, m3]; state: (m,) damage code; utilisation: (m,) demand/capacity.
+    """
+
+    step: int
+    load_factor: float
+    q: np.ndarray
+    actions: np.ndarray
+    state: np.ndarray
+    utilisation: np.ndarray
+    flags: np.ndarray | None = None
+    control_displacement: float = 0.0
+    iterations: int = 0
+
+
+@dataclass
+class History:
+    """All steps of a run, and how it ended."""
+
+    steps: list[StepResult] = field(default_factory=list)
+    status: str = "running"  # "completed", "collapse", "failed"
+    reason: str = ""
+    collapse_bracket: tuple[float, float] | None = None
+    seconds: float = 0.0
+    iterations: int = 0
+    factorizations: int = 0
+
+    @property
+    def load_factors(self) -> np.ndarray:
+        return np.array([s.load_factor for s in self.steps])
+
+    @property
+    def control_displacements(self) -> np.ndarray:
+        return np.array([s.control_displacement for s in self.steps])
+
+    @property
+    def last(self) -> StepResult:
+        return self.steps[-1]
+
+    @property
+    def collapse_multiplier(self) -> float | None:
+        """Lambda at collapse: the last converged value of the refined bracket."""
+        return None if self.collapse_bracket is None else self.collapse_bracket[0]
+
+    @property
+    def final_load_factor(self) -> float:
+        return float(self.steps[-1].load_factor) if self.steps else 0.0
+
+    def summary(self, **extra) -> dict:
+        out = {
+            "status": self.status,
+            "reason": self.reason,
+            "steps": len(self.steps),
+            "lambda": self.collapse_multiplier
+            if self.collapse_multiplier is not None
+            else self.final_load_factor,
+            "lambda_bracket": list(self.collapse_bracket) if self.collapse_bracket else None,
+            "iterations": self.iterations,
+            "factorizations": self.factorizations,
+            "seconds": round(self.seconds, 4),
+        }
+        out.update(extra)
+        return out
+
+
+def write_pushover_csv(path: Path, history: History) -> None:
+    rows = np.column_stack(
+        [np.arange(len(history.steps)), history.load_factors, history.control_displacements]
+    )
+    np.savetxt(path, rows, delimiter=",", header="step,lambda,control_displacement", comments="",
+               fmt=["%d", "%.10g", "%.10g"])
+
+
+def read_summary(folder: Path) -> dict:
+    return json.loads((Path(folder) / "summary.json").read_text())

@@ -1,0 +1,37 @@
+"""Linear elastic static solve of the assembly."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.sparse.linalg import splu
+
+from masonry_dem.assembly.stiffness import Assembly
+from masonry_dem.model import Model
+
+
+@dataclass(frozen=True)
+class LinearSolution:
+    q: np.ndarray  # (n, 6) block displacements and rotations
+    actions: np.ndarray  # (m, 6) interface actions, local order [f1, f2, fn, m1, m2, m3]
+    reactions: np.ndarray  # (n, 6) support reactions (zero on free DOFs)
+    relative: np.ndarray  # (m, 6) relative displacements
+
+
+def solve_linear(model: Model, load_factor: float = 1.0, assembly: Assembly | None = None) -> LinearSolution:
+    """Solve K q = F_dead + load_factor F_live on the free DOFs."""
+    asm = Assembly.of(model) if assembly is None else assembly
+    F = (model.dead + load_factor * model.live).reshape(-1)
+    K = asm.stiffness()
+    try:
+        lu = splu(K)
+    except RuntimeError as exc:
+        raise ValueError(f"the assembly is a mechanism: the stiffness is singular ({exc})") from exc
+    q = np.zeros(model.n_dofs)
+    q[asm.free_index] = lu.solve(F[asm.free_index])
+    rel = asm.relative_displacements(q)
+    actions = asm.kbar * rel
+    reactions = asm.internal_forces(actions) - F
+    reactions[asm.free_index] = 0.0
+    return LinearSolution(q.reshape(-1, 6), actions, reactions.reshape(-1, 6), rel)
