@@ -1,0 +1,429 @@
+"""Closed-form strength domain of a rectangular interface, batched over interfaces.
+
+Implements Section 2.1, Eqs. (9)-(14) and Eqs. (A4)-(A5) of Baraldi & Cecchi, in terms of the
+resultant actions of one interface. The local action order used everywhere in the package is::
+
+    [f1, f2, fn, m1, m2, m3]
+
+shear along the local axis y1, shear along y2, normal force (tension positive, compression
+negative), bending about y1, bending about y2 and torsion about the normal. The interface is an
+``l1 x l2`` rectangle, ``l1`` along y1 and ``l2`` along y2.
+
+Criteria, with ``ft`` the tensile force of the whole interface (tensile strength x area) and
+``cap = ft - fn``:
+
+* detachment: ``fn <= ft``;
+* rocking: ``|m1| <= cap * l2 / 2`` and ``|m2| <= cap * l1 / 2`` (the lever is half the side
+  perpendicular to the bending axis: for the paper's horizontal running-bond joints this is
+  lc1 = s/2 and lc2 = b/4);
+* shear-torsion, Eq. (A5): ``(|m3| / m3u)**alpha + (f1**2 + f2**2) / fsu**2 <= 1`` with
+  ``fsu = mu * cap`` and ``m3u = cT * mu * cap``. With the torsion-bending interaction of
+  Figure 10, ``cT`` is evaluated on the reduced rectangle under uniform compression,
+  ``l1' = l1 - 2 |m2| / cap`` and ``l2' = l2 - 2 |m1| / cap`` (bending moments already clipped).
+
+The torsion constant ``cT`` is the mean distance of the rectangle's points from its centre; the
+printed Eq. (11) is garbled and the correct form is used here (see ``DESIGN.md``).
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass
+from typing import Final
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+__all__ = [
+    "ALPHA_TABLE_A1",
+    "DEFAULT_ALPHA",
+    "FLAG_DETACHED",
+    "FLAG_ROCKING_1",
+    "FLAG_ROCKING_2",
+    "FLAG_SHEAR_TORSION",
+    "SHEAR_TORSION_TOLERANCE",
+    "STATE_DETACHED",
+    "STATE_ELASTIC",
+    "STATE_ROCKING",
+    "STATE_SLIDING",
+    "STATE_SLIDING_ROCKING",
+    "StrengthCheck",
+    "alpha_from_table",
+    "check_strength",
+    "shear_strength",
+    "torsion_constant",
+    "torsion_strength",
+]
+
+logger = logging.getLogger(__name__)
+
+#: Exponent of Eq. (A5) suggested for running-bond masonry panels.
+DEFAULT_ALPHA: Final[float] = 1.5
+
+#: Table A1: exponent alpha of (m3/m3u)^alpha + (f/fsu)^2 <= 1 by aspect ratio l1/l2. The
+#: ``"f1=f2"`` column was obtained by the paper with equal relative displacements d1 = d2.
+ALPHA_TABLE_A1: Final[dict[str, tuple[float, ...]]] = {
+    "aspect": (0.1, 0.2, 0.5, 1.0, 2.0, 5.0, 10.0),
+    "f1": (1.00, 1.05, 1.25, 1.43, 1.92, 2.44, 2.56),
+    "f2": (2.56, 2.44, 1.92, 1.43, 1.25, 1.05, 1.00),
+    "f1=f2": (2.00, 1.90, 1.70, 1.43, 1.70, 1.90, 2.00),
+}
+DIRECTIONS: Final[tuple[str, ...]] = ("f1", "f2", "f1=f2")
+
+#: A trial is a shear-torsion violation only if the value of Eq. (A5) exceeds 1 by more than this.
+#: The radial projection lands on the boundary to ~1e-15, so re-checking projected actions
+#: reports them elastic (and returns them unchanged).
+SHEAR_TORSION_TOLERANCE: Final[float] = 1e-9
+
+STATE_ELASTIC: Final[int] = 0
+STATE_SLIDING: Final[int] = 1
+STATE_ROCKING: Final[int] = 2
+STATE_SLIDING_ROCKING: Final[int] = 3
+STATE_DETACHED: Final[int] = 4
+
+FLAG_SHEAR_TORSION: Final[int] = 1
+FLAG_ROCKING_1: Final[int] = 2
+FLAG_ROCKING_2: Final[int] = 4
+FLAG_DETACHED: Final[int] = 8
+
+_NEWTON_MAX_ITER = 60
+_NEWTON_RTOL = 1e-13
+
+
+# --------------------------------------------------------------------------------------------
+# input checking
+
+
+def _field(name: str, value: ArrayLike, m: int, *, minimum: float, strict: bool) -> NDArray:
+    """Broadcast ``value`` to shape (m,) float64 and check ``value >= minimum`` (or ``>``)."""
+    arr = np.asarray(value, dtype=float)
+    try:
+        arr = np.broadcast_to(arr, (m,))
+    except ValueError:
+        raise ValueError(
+            f"{name} must be a scalar or an array of shape ({m},), got shape {arr.shape}"
+        ) from None
+    bad = ~np.isfinite(arr) | ((arr <= minimum) if strict else (arr < minimum))
+    if bad.any():
+        i = int(np.flatnonzero(bad)[0])
+        rel = ">" if strict else ">="
+        raise ValueError(f"{name} must be finite and {rel} {minimum}, got {arr[i]!r} at index {i}")
+    return arr
+
+
+def _actions(actions: ArrayLike) -> NDArray:
+    arr = np.asarray(actions, dtype=float)
+    if arr.ndim == 1:
+        arr = arr[None, :]
+    if arr.ndim != 2 or arr.shape[1] != 6:
+        raise ValueError(f"actions must have shape (m, 6), got {np.shape(actions)}")
+    finite = np.isfinite(arr)
+    if not finite.all():
+        i, j = (int(k[0]) for k in np.nonzero(~finite))
+        raise ValueError(f"actions must be finite, got {arr[i, j]!r} at [{i}, {j}]")
+    return arr
+
+
+# --------------------------------------------------------------------------------------------
+# torsion constant and alpha
+
+
+def _asinh_ratio(x: NDArray) -> NDArray:
+    """asinh(x)/x with its limit 1 at x = 0 and 0 at x = inf."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        out = np.arcsinh(x) / x
+    out = np.where(x < 1e-8, 1.0 - x * x / 6.0, out)
+    return np.where(np.isinf(x), 0.0, out)
+
+
+def _torsion_constant(l1: NDArray, l2: NDArray) -> NDArray:
+    """cT for sides >= 0 (degenerate rectangles allowed: cT(l, 0) = l/4, cT(0, 0) = 0)."""
+    l1 = np.asarray(l1, dtype=float)
+    l2 = np.asarray(l2, dtype=float)
+    c = np.hypot(l1, l2)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        # l1^2/(4 l2) ln((l2 + c)/l1) = (l1/4) asinh(l2/l1)/(l2/l1), and symmetrically.
+        t1 = np.where(l1 > 0, 0.25 * l1 * _asinh_ratio(l2 / l1), 0.0)
+        t2 = np.where(l2 > 0, 0.25 * l2 * _asinh_ratio(l1 / l2), 0.0)
+    return (0.5 * c + t1 + t2) / 3.0
+
+
+def torsion_constant(l1: ArrayLike, l2: ArrayLike) -> NDArray:
+    """Torsion constant cT (m) of an ``l1 x l2`` rectangle: mean distance from its centre.
+
+    ``cT = (1/3) [c/2 + l1^2/(4 l2) ln((l2 + c)/l1) + l2^2/(4 l1) ln((l1 + c)/l2)]`` with
+    ``c = sqrt(l1^2 + l2^2)``, so that the pure-torsion strength is ``m3u = cT * fsu``
+    (0.3 x 0.2 m gives 0.09681 m). Scalars or arrays, broadcast together.
+    """
+    a, b = np.broadcast_arrays(np.asarray(l1, dtype=float), np.asarray(l2, dtype=float))
+    shape = a.shape
+    a = _field("l1", a.ravel(), a.size, minimum=0.0, strict=True)
+    b = _field("l2", b.ravel(), b.size, minimum=0.0, strict=True)
+    return _torsion_constant(a, b).reshape(shape)
+
+
+def alpha_from_table(aspect: ArrayLike, direction: str = "f1") -> NDArray:
+    """Exponent alpha of Eq. (A4)/(A5) interpolated in Table A1.
+
+    ``aspect`` is l1/l2 (scalar or array); ``direction`` is ``"f1"``, ``"f2"`` or ``"f1=f2"``.
+    Interpolation is linear in log(aspect); outside [0.1, 10] the end values are used.
+    """
+    if direction not in DIRECTIONS:
+        raise ValueError(f"direction must be one of {DIRECTIONS}, got {direction!r}")
+    arr = np.asarray(aspect, dtype=float)
+    if not np.all(np.isfinite(arr)) or np.any(arr <= 0):
+        raise ValueError(f"aspect must be finite and > 0, got {aspect!r}")
+    table_x = np.log(np.asarray(ALPHA_TABLE_A1["aspect"]))
+    return np.interp(np.log(arr), table_x, np.asarray(ALPHA_TABLE_A1[direction]))
+
+
+# --------------------------------------------------------------------------------------------
+# radial factor on the shear-torsion boundary
+
+
+def _radial_factor(a: NDArray, b: NDArray, alpha: NDArray) -> NDArray:
+    """The s > 0 solving ``(s a)^alpha + s^2 b = 1`` for a, b >= 0 and alpha >= 1.
+
+    Returns inf where a = b = 0 and 0 where a or b is inf. Closed forms for alpha = 1, 2 and
+    when a or b vanishes; otherwise Newton's method from the upper bound min(1/a, 1/sqrt(b)),
+    which converges monotonically because the left-hand side is convex and increasing in s.
+    """
+    a, b, alpha = np.broadcast_arrays(a, b, alpha)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        s_a = 1.0 / a
+        s_b = 1.0 / np.sqrt(b)
+        s = np.minimum(s_a, s_b)  # exact when a or b is 0 (or inf)
+        both = (a > 0) & (b > 0) & np.isfinite(a) & np.isfinite(b)
+        two = both & (alpha == 2.0)
+        s = np.where(two, 1.0 / np.sqrt(a * a + b), s)
+        one = both & (alpha == 1.0)
+        s = np.where(one, 2.0 / (a + np.sqrt(a * a + 4.0 * b)), s)
+    idx = np.flatnonzero(both & ~one & ~two)
+    if idx.size:
+        aa, bb, al = a[idx], b[idx], alpha[idx]
+        x = s[idx]
+        for _ in range(_NEWTON_MAX_ITER):  # iterate on the rows not yet converged
+            p = (x * aa) ** al
+            g = p + x * x * bb - 1.0
+            dg = al * p / x + 2.0 * x * bb
+            step = g / dg
+            x = x - step
+            s[idx] = x
+            keep = np.abs(step) > _NEWTON_RTOL * x
+            if not keep.any():
+                break
+            idx, x, aa, bb, al = idx[keep], x[keep], aa[keep], bb[keep], al[keep]
+        else:  # pragma: no cover - Newton from the right of a convex root always converges
+            logger.warning("radial factor: Newton did not converge to %g", _NEWTON_RTOL)
+    return s
+
+
+def _safe_ratio(demand: NDArray, capacity: NDArray) -> NDArray:
+    """demand/capacity with 0/0 = 0 and d/0 = inf (demand >= 0, capacity >= 0)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        r = demand / capacity
+    return np.where(demand == 0, 0.0, np.where(capacity > 0, r, np.inf))
+
+
+# --------------------------------------------------------------------------------------------
+# public API
+
+
+@dataclass(frozen=True)
+class StrengthCheck:
+    """Result of :func:`check_strength` for m interfaces.
+
+    Attributes:
+        projected: (m, 6) actions projected back on the domain (unchanged where elastic).
+        state: (m,) int8 damage code: 0 elastic, 1 sliding (shear and/or torsion), 2 rocking
+            (bending about y1 and/or y2), 3 sliding and rocking, 4 detached (fn > ft).
+        flags: (m,) uint8 bit flags: 1 shear/torsion violated, 2 rocking about y1, 4 rocking
+            about y2, 8 detached (a detached interface carries only the flag 8).
+        stiffness_factors: (m, 6) of 0.0/1.0 per local component, Eqs. (13)-(14): detached ->
+            all zero; rocking about y1 -> m1 zero; about y2 -> m2 zero; shear/torsion -> f1, f2
+            and m3 zero.
+        utilisation: (m,) largest demand/capacity ratio of the trial actions (see
+            :func:`check_strength`); never NaN, +inf where a non-zero demand meets a zero
+            capacity.
+    """
+
+    projected: NDArray
+    state: NDArray
+    flags: NDArray
+    stiffness_factors: NDArray
+    utilisation: NDArray
+
+
+def shear_strength(fn: ArrayLike, friction: ArrayLike, tensile_force: ArrayLike = 0.0) -> NDArray:
+    """Shear strength fsu = mu (ft - fn) of Eq. (10), zero when fn >= ft (N)."""
+    fn_, mu, ft = np.broadcast_arrays(
+        *(np.asarray(x, dtype=float) for x in (fn, friction, tensile_force))
+    )
+    shape = fn_.shape
+    m = fn_.size
+    fn_ = fn_.ravel()
+    if not np.all(np.isfinite(fn_)):
+        raise ValueError(f"fn must be finite, got {fn!r}")
+    mu = _field("friction", mu.ravel(), m, minimum=0.0, strict=False)
+    ft = _field("tensile_force", ft.ravel(), m, minimum=0.0, strict=False)
+    return (mu * np.maximum(ft - fn_, 0.0)).reshape(shape)
+
+
+def torsion_strength(
+    fn: ArrayLike,
+    l1: ArrayLike,
+    l2: ArrayLike,
+    friction: ArrayLike,
+    tensile_force: ArrayLike = 0.0,
+    m1: ArrayLike = 0.0,
+    m2: ArrayLike = 0.0,
+) -> NDArray:
+    """Pure-torsion strength m3u = cT mu (ft - fn) (N m), Eq. (12).
+
+    With bending moments, cT is evaluated on the reduced rectangle of uniform compression
+    ``l1' = l1 - 2|m2|/(ft - fn)``, ``l2' = l2 - 2|m1|/(ft - fn)`` (Figure 10); moments beyond
+    the rocking limits give a zero reduced side.
+    """
+    arrs = np.broadcast_arrays(
+        *(np.asarray(x, dtype=float) for x in (fn, l1, l2, friction, tensile_force, m1, m2))
+    )
+    shape = arrs[0].shape
+    m = arrs[0].size
+    fn_, l1_, l2_, mu, ft, m1_, m2_ = (x.ravel() for x in arrs)
+    for name, x in (("fn", fn_), ("m1", m1_), ("m2", m2_)):
+        if not np.all(np.isfinite(x)):
+            raise ValueError(f"{name} must be finite, got {x[~np.isfinite(x)][0]!r}")
+    l1_ = _field("l1", l1_, m, minimum=0.0, strict=True)
+    l2_ = _field("l2", l2_, m, minimum=0.0, strict=True)
+    mu = _field("friction", mu, m, minimum=0.0, strict=False)
+    ft = _field("tensile_force", ft, m, minimum=0.0, strict=False)
+    cap = np.maximum(ft - fn_, 0.0)
+    l1r, l2r = _reduced_sides(l1_, l2_, cap, np.abs(m1_), np.abs(m2_))
+    return (_torsion_constant(l1r, l2r) * mu * cap).reshape(shape)
+
+
+def _reduced_sides(
+    l1: NDArray, l2: NDArray, cap: NDArray, abs_m1: NDArray, abs_m2: NDArray
+) -> tuple[NDArray, NDArray]:
+    """Sides of the rectangle of uniform compression cap carrying the bending moments."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        l1r = np.where(cap > 0, l1 - 2.0 * abs_m2 / cap, 0.0)
+        l2r = np.where(cap > 0, l2 - 2.0 * abs_m1 / cap, 0.0)
+    return np.clip(l1r, 0.0, l1), np.clip(l2r, 0.0, l2)
+
+
+def check_strength(
+    actions: ArrayLike,
+    l1: ArrayLike,
+    l2: ArrayLike,
+    friction: ArrayLike,
+    tensile_force: ArrayLike,
+    alpha: ArrayLike | None = None,
+    torsion_bending_interaction: bool = True,
+) -> StrengthCheck:
+    """Check m interfaces against the closed-form domain and project the actions back on it.
+
+    Args:
+        actions: (m, 6) local actions ``[f1, f2, fn, m1, m2, m3]`` (N, N m; tension positive).
+            A single (6,) row is accepted as m = 1.
+        l1, l2: interface sides along y1 and y2 (m), > 0; scalars or (m,).
+        friction: friction coefficient mu >= 0; scalar or (m,).
+        tensile_force: ft = tensile strength x area (N) >= 0; scalar or (m,).
+        alpha: exponent of Eq. (A5), >= 1 (a convex domain); None means ``DEFAULT_ALPHA``.
+        torsion_bending_interaction: evaluate cT on the reduced rectangle (Figure 10).
+
+    Projection order: fn > ft -> detached, projected to ``[0, 0, ft, 0, 0, 0]``; then m1, m2
+    clipped to their rocking limits; then (f1, f2, m3) scaled radially onto the shear-torsion
+    boundary. Where the torsion capacity is zero (both reduced sides zero) and m3 != 0, m3 is
+    set to zero and the shear force is clipped radially to fsu. Actions inside the domain are
+    returned unchanged (bitwise).
+
+    Utilisation: the largest of the demand/capacity ratios of the trial actions, namely
+    ``max(fn, 0)/ft`` (or, for ft = 0, 1 at fn = 0 and 0 in compression), ``|m1|/(cap l2/2)``,
+    ``|m2|/(cap l1/2)`` and, for Eq. (A5), ``1/s`` where ``s`` scales (f1, f2, m3) onto the
+    boundary (so it is |f|/fsu in pure shear and |m3|/m3u in pure torsion). It is 1 on the
+    boundary, below 1 inside and above 1 outside. Ratios use 0/0 = 0 and d/0 = +inf; a detached
+    interface has ``fn/ft`` (+inf when ft = 0). Never NaN.
+    """
+    act = _actions(actions)
+    m = act.shape[0]
+    l1_ = _field("l1", l1, m, minimum=0.0, strict=True)
+    l2_ = _field("l2", l2, m, minimum=0.0, strict=True)
+    mu = _field("friction", friction, m, minimum=0.0, strict=False)
+    ft = _field("tensile_force", tensile_force, m, minimum=0.0, strict=False)
+    al = _field("alpha", DEFAULT_ALPHA if alpha is None else alpha, m, minimum=1.0, strict=False)
+
+    f1, f2, fn, m1, m2, m3 = np.ascontiguousarray(act.T)
+
+    # detachment
+    detached = fn > ft
+    cap = np.where(detached, 0.0, ft - fn)  # >= 0
+
+    # rocking: clip the bending moments to the eccentricity limits
+    m1_lim = 0.5 * cap * l2_
+    m2_lim = 0.5 * cap * l1_
+    abs_m1, abs_m2 = np.abs(m1), np.abs(m2)
+    rock1 = ~detached & (abs_m1 > m1_lim)
+    rock2 = ~detached & (abs_m2 > m2_lim)
+    m1_c = np.where(rock1, np.copysign(m1_lim, m1), m1)
+    m2_c = np.where(rock2, np.copysign(m2_lim, m2), m2)
+
+    # shear and torsion
+    fsu = mu * cap
+    if torsion_bending_interaction:
+        l1r, l2r = _reduced_sides(l1_, l2_, cap, np.abs(m1_c), np.abs(m2_c))
+        c_t = _torsion_constant(l1r, l2r)
+    else:
+        c_t = _torsion_constant(l1_, l2_)
+    m3u = c_t * fsu
+    a = _safe_ratio(np.abs(m3), m3u)
+    b = _safe_ratio(f1 * f1 + f2 * f2, fsu * fsu)
+    with np.errstate(over="ignore", invalid="ignore"):
+        phi = a**al + b
+    sliding = ~detached & (phi > 1.0 + SHEAR_TORSION_TOLERANCE)
+    s = _radial_factor(a, b, al)
+    no_torsion = np.isinf(a)  # m3 != 0 with zero torsion capacity
+    with np.errstate(divide="ignore"):
+        s_f = np.where(no_torsion, np.minimum(1.0, 1.0 / np.sqrt(b)), s)
+    s_m = np.where(no_torsion, 0.0, s)
+    s_f = np.where(sliding, s_f, 1.0)  # keep non-sliding rows finite (they are not scaled)
+    s_m = np.where(sliding, s_m, 1.0)
+
+    # projection (np.where keeps untouched entries bitwise)
+    proj = act.copy()
+    proj[:, 0] = np.where(sliding, f1 * s_f, f1)
+    proj[:, 1] = np.where(sliding, f2 * s_f, f2)
+    proj[:, 3] = m1_c
+    proj[:, 4] = m2_c
+    proj[:, 5] = np.where(sliding, m3 * s_m, m3)
+    proj[detached] = 0.0
+    proj[detached, 2] = ft[detached]
+
+    # codes
+    flags = (
+        sliding.astype(np.uint8) * FLAG_SHEAR_TORSION
+        | rock1.astype(np.uint8) * FLAG_ROCKING_1
+        | rock2.astype(np.uint8) * FLAG_ROCKING_2
+        | detached.astype(np.uint8) * FLAG_DETACHED
+    ).astype(np.uint8)
+    state = (sliding.astype(np.int8) * STATE_SLIDING + (rock1 | rock2).astype(np.int8) * 2).astype(
+        np.int8
+    )
+    state[detached] = STATE_DETACHED
+
+    factors = np.ones((m, 6))
+    factors[sliding[:, None] & np.array([True, True, False, False, False, True])] = 0.0
+    factors[rock1, 3] = 0.0
+    factors[rock2, 4] = 0.0
+    factors[detached] = 0.0
+
+    # utilisation
+    with np.errstate(divide="ignore", invalid="ignore"):
+        u_tension = np.where(ft > 0, np.maximum(fn, 0.0) / ft, np.where(fn >= 0, 1.0, 0.0))
+        u_tension = np.where(detached & (ft == 0), np.inf, u_tension)
+        u_st = np.where(no_torsion, np.inf, 1.0 / s)
+    u_rock = np.maximum(_safe_ratio(abs_m1, m1_lim), _safe_ratio(abs_m2, m2_lim))
+    util = np.where(detached, u_tension, np.maximum(np.maximum(u_tension, u_rock), u_st))
+    return StrengthCheck(
+        projected=proj, state=state, flags=flags, stiffness_factors=factors, utilisation=util
+    )
