@@ -36,6 +36,10 @@ def edge(blocks: Blocks, which: str, among: np.ndarray | None = None) -> np.ndar
         raise ValueError(f"edge must be one of {EDGES}, got {which!r}")
     axis, side = _EDGE_AXIS[which]
     pool = np.ones(blocks.count, bool) if among is None else among
+    if not np.any(pool):
+        # an empty ``among`` made min()/max() fail with numpy's "zero-size array" message;
+        # say which selector matched nothing instead
+        raise ValueError(f"selector edge={which!r} matches no block: `among` selects none")
     if side < 0:
         limit = blocks.lower[pool, axis].min()
         mask = blocks.lower[:, axis] <= limit + _tol(blocks)
