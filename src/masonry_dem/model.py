@@ -79,7 +79,9 @@ class Support:
         if idx.size == 0:
             raise ValueError("support blocks: the selection is empty")
         if idx.min() < 0 or idx.max() >= n_blocks:
-            raise ValueError(f"support blocks: index out of range 0..{n_blocks - 1}: {idx.tolist()}")
+            raise ValueError(
+                f"support blocks: index out of range 0..{n_blocks - 1}: {idx.tolist()}"
+            )
         out = np.zeros((n_blocks, 6), dtype=bool)
         out[np.ix_(idx, np.flatnonzero(dof_mask(self.dofs)))] = True
         return out
@@ -269,4 +271,60 @@ class Model:
                 f"supports: {loose.size} block(s) touch no support through any interface "
                 f"(first: block {loose[0]} at {self.blocks.centres[loose[0]].tolist()}); "
                 "the assembly is a mechanism"
+            )
+        self._check_rigid_modes_restrained(label, ncomp)
+
+    def _check_rigid_modes_restrained(self, label: np.ndarray, ncomp: int) -> None:
+        """Each connected group must have its six rigid-body motions stopped by its fixed DOFs.
+
+        Added with the kernel tests: anchoring a group by *some* fixed DOF is not enough (e.g.
+        only the translations of one base block, or no DOF along e3 anywhere). Such K_ff is
+        singular in exact arithmetic, but splu usually factors it anyway in floating point
+        and returns a meaningless displacement instead of an error. Elastic interfaces of
+        positive area make each connected group rigid under zero energy, so K_ff is regular
+        iff, per group, the fixed-DOF rows of the rigid-motion map q_b = [u0 + w x r_b, w]
+        have rank 6. Checked with one batched 6 x 6 Gram matrix per group (no loop).
+        """
+        b, d = np.nonzero(self.fixed)  # fixed (block, dof) pairs
+        lab = label[b]
+        # arms from each group's centroid, in units of a block size, for a well-scaled Gram
+        count = np.bincount(label, minlength=ncomp).astype(float)
+        centroid = (
+            np.stack(
+                [np.bincount(label, self.blocks.centres[:, k], ncomp) for k in range(3)], axis=1
+            )
+            / count[:, None]
+        )
+        length = float(np.median(self.blocks.sizes))
+        r = (self.blocks.centres[b] - centroid[lab]) / length
+        rows = np.zeros((b.size, 6))
+        rows[np.arange(b.size), d] = 1.0  # u_a of a translation DOF, w_a of a rotation DOF
+        # translation DOF a also sees (w x r)_a = sum_c C[a, c] w_c, C = -[r]x
+        zero = np.zeros(b.size)
+        C = np.stack(
+            [
+                np.stack([zero, r[:, 2], -r[:, 1]], axis=1),
+                np.stack([-r[:, 2], zero, r[:, 0]], axis=1),
+                np.stack([r[:, 1], -r[:, 0], zero], axis=1),
+            ],
+            axis=1,
+        )  # (k, 3, 3)
+        trans = d < 3
+        rows[trans, 3:] = C[trans, d[trans], :]
+        gram = np.zeros((ncomp, 6, 6))
+        np.add.at(gram, lab, rows[:, :, None] * rows[:, None, :])
+        eig, vec = np.linalg.eigh(gram)
+        weak = eig[:, 0] <= 1e-10 * np.maximum(eig[:, -1], 1.0)
+        if weak.any():
+            c = int(np.argmax(weak))
+            first = int(np.flatnonzero(label == c)[0])
+            free_modes = int(np.sum(eig[c] <= 1e-10 * max(eig[c, -1], 1.0)))
+            mode = vec[c, :, 0]
+            mode = np.round(mode / np.abs(mode).max(), 3) + 0.0  # +0.0: no "-0.0"
+            raise ValueError(
+                f"supports: the fixed DOFs leave {free_modes} rigid-body motion(s) of the group "
+                f"of {int(count[c])} block(s) containing block {first} free (e.g. "
+                f"(u1, u2, u3, w1, w2, w3) ~ {mode.tolist()}, u in block sizes, about its "
+                f"centroid); "
+                "the assembly is a mechanism: fix more DOFs"
             )
