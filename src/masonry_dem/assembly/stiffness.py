@@ -57,6 +57,17 @@ class Assembly:
         K = (self.H_free.T @ D @ self.H_free).tocsc()
         return K
 
+    def tangent_stiffness(self, blocks6: np.ndarray) -> sparse.csc_matrix:
+        """K_ff = H_f^T T H_f for per-interface 6x6 tangents T (m, 6, 6), in one sparse build."""
+        m = blocks6.shape[0]
+        base = 6 * np.arange(m)[:, None, None]
+        rows = np.broadcast_to(base + np.arange(6)[None, :, None], (m, 6, 6))
+        cols = np.broadcast_to(base + np.arange(6)[None, None, :], (m, 6, 6))
+        T = sparse.csr_matrix(
+            (blocks6.ravel(), (rows.ravel(), cols.ravel())), shape=(6 * m, 6 * m)
+        )
+        return (self.H_free.T @ (T @ self.H_free)).tocsc()
+
     def internal_forces(self, actions: np.ndarray) -> np.ndarray:
         """Generalised forces on all block DOFs (6n,) from interface actions (m, 6): H^T f."""
         return self.H.T @ actions.reshape(-1)
