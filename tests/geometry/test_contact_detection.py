@@ -221,3 +221,21 @@ def test_no_contacts_gives_empty_interfaces():
     lo = np.array([[0.0, 0.0, 0.0], [5.0, 0.0, 0.0]])
     its = detect_interfaces(boxes(lo, lo + 1.0, 1.0))
     assert its.count == 0 and its.centre.shape == (0, 3)
+
+
+def test_corner_points_of_many_interfaces_span_each_contact_rectangle():
+    # regression: corner_points() failed to broadcast for more than one interface
+    w, _ = add_base(running_bond_wall(4, 3, A, B, S, GAMMA))
+    its = detect_interfaces(w)
+    assert its.count > 1
+    pts = its.corner_points()
+    assert pts.shape == (its.count, 4, 3)
+    lo = np.maximum(w.lower[its.block_i], w.lower[its.block_j])
+    hi = np.minimum(w.upper[its.block_i], w.upper[its.block_j])
+    rows = np.arange(its.count)
+    lo[rows, its.axis] = hi[rows, its.axis] = its.centre[rows, its.axis]
+    np.testing.assert_allclose(pts.min(axis=1), lo, rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(pts.max(axis=1), hi, rtol=1e-12, atol=1e-15)
+    # counter-clockwise about the normal: (p1 - p0) x (p3 - p0) points along +e[axis]
+    normal = np.cross(pts[:, 1] - pts[:, 0], pts[:, 3] - pts[:, 0])
+    np.testing.assert_allclose(normal[rows, its.axis], its.area, rtol=1e-12)

@@ -76,8 +76,13 @@ class Interfaces:
         rows = np.arange(self.count)
         signs = np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]], dtype=float)
         pts = np.repeat(self.centre[:, None, :], 4, axis=1)
-        pts[rows[:, None], :, axes[:, 0:1]] += 0.5 * signs[None, :, 0] * self.l1[:, None]
-        pts[rows[:, None], :, axes[:, 1:2]] += 0.5 * signs[None, :, 1] * self.l2[:, None]
+        # Index all three axes with arrays, (m, 1) x (1, 4) x (m, 1) -> (m, 4). The former
+        # pts[rows[:, None], :, axes[:, 0:1]] put a slice between the advanced indices, so
+        # numpy moved the indexed shape to the front, (m, 1, 4), and the (m, 4) update failed
+        # to broadcast for every m > 1 (any VTU export of a real wall raised).
+        corner = np.arange(4)[None, :]
+        pts[rows[:, None], corner, axes[:, 0:1]] += 0.5 * signs[None, :, 0] * self.l1[:, None]
+        pts[rows[:, None], corner, axes[:, 1:2]] += 0.5 * signs[None, :, 1] * self.l2[:, None]
         return pts
 
 
