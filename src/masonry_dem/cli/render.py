@@ -1,0 +1,77 @@
+"""``masonry-dem render RESULTS``: PNG of a step (and optionally the animation and the pushover
+curve) written next to the results."""
+
+from __future__ import annotations
+
+import argparse
+import re
+
+VIEW_CHOICES = ("front", "back", "oblique", "side")  # keep in step with export.render.VIEWS
+
+
+def _step(text: str) -> int | str:
+    t = text.strip().lower()
+    if t in ("last", "first"):
+        return t
+    if re.fullmatch(r"\d+", t):
+        return int(t)
+    raise argparse.ArgumentTypeError(f"expected a step number, 'first' or 'last', got {text!r}")
+
+
+def _size(text: str) -> tuple[int, int]:
+    m = re.fullmatch(r"\s*(\d+)\s*[xX]\s*(\d+)\s*", text)
+    if not m:
+        raise argparse.ArgumentTypeError(f"expected WIDTHxHEIGHT in pixels, got {text!r}")
+    return int(m.group(1)), int(m.group(2))
+
+
+def add_parser(subparsers) -> argparse.ArgumentParser:
+    p = subparsers.add_parser(
+        "render",
+        help="render a results folder: deformed wall with damage colours (PNG), animation, "
+        "pushover curve",
+        description="Render a results folder off-screen. Interfaces coloured by state: green "
+        "elastic, red sliding, magenta rocking, orange sliding+rocking, blue detached. Files are "
+        "written next to the results: render_<view>_<step>.png, animation_<view>.gif, "
+        "pushover.png.",
+    )
+    p.add_argument("results", help="results folder (blocks.pvd, interfaces.pvd, steps/, ...)")
+    p.add_argument("--step", type=_step, default="last",
+                   help="step number, or 'last' (default) / 'first'")
+    p.add_argument("--view", action="append", choices=VIEW_CHOICES + ("all",),
+                   help="camera preset (default oblique); repeat it or give 'all' for several")
+    p.add_argument("--scale", type=float, default=None,
+                   help="displacement amplification (default: automatic, ~6%% of the wall size)")
+    p.add_argument("--animate", action="store_true",
+                   help="also write an animation (GIF) of every step")
+    p.add_argument("--pushover", action="store_true", help="also plot the pushover curve")
+    p.add_argument("--size", type=_size, default=(1200, 900), metavar="WxH",
+                   help="picture size in pixels (default 1200x900; animation: 800x600 unless set)")
+    p.add_argument("--fps", type=float, default=8.0, help="animation frames per second (8)")
+    p.set_defaults(func=run)
+    return p
+
+
+def run(args: argparse.Namespace) -> int:
+    from masonry_dem.export import render  # imports pyvista lazily, only when rendering
+
+    views = args.view or ["oblique"]
+    if "all" in views:
+        views = list(VIEW_CHOICES)
+    views = list(dict.fromkeys(views))
+    written = []
+    # check the folder, step and views before writing anything
+    series = render.open_results(args.results)
+    series.index_of(args.step)
+    for view in views:
+        written.append(render.render_step(args.results, step=args.step, view=view,
+                                          scale=args.scale, window_size=args.size))
+    if args.animate:
+        size = args.size if args.size != (1200, 900) else (800, 600)
+        written.append(render.render_animation(args.results, fps=args.fps, view=views[0],
+                                               scale=args.scale, window_size=size))
+    if args.pushover:
+        written.append(render.plot_pushover(args.results))
+    for path in written:
+        print(path)
+    return 0

@@ -1,0 +1,703 @@
+"""Off-screen pictures of a results folder: the deformed wall with its damage map, an animation
+of the whole analysis, and the pushover curve.
+
+This is the only module of the package that imports pyvista, and it does so lazily (inside the
+functions), so ``import masonry_dem`` and the command line stay light. Rendering is always
+off-screen: with no ``DISPLAY`` the VTK wheel renders through EGL (or OSMesa).
+
+The picture (Figures 20-21 of the paper): blocks are drawn slightly shrunk about their centres
+and every interface as a thin slab ("joint") filling the gap, coloured by its state with flat,
+unlit colours (:data:`STATE_COLOURS`): green elastic, red sliding (shear or torsion), magenta
+rocking (flexural), orange sliding and rocking, blue detached. Support blocks are dark grey.
+Points move by ``scale`` times their displacement; the scale is chosen automatically (a round
+number making the largest displacement about 6 % of the wall's largest dimension) unless
+given, and stated in the title with the load multiplier.
+
+Everything is batched: one mesh for all blocks and one for all joints, built with numpy.
+"""
+
+from __future__ import annotations
+
+import csv
+import ctypes.util
+import json
+import logging
+import math
+import os
+import re
+import sys
+import uuid
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from masonry_dem.results import STATE_NAMES
+
+log = logging.getLogger(__name__)
+
+#: RGB colour (0-255) of each interface state code, index = code (see ``STATE_NAMES``).
+STATE_COLOURS: tuple[tuple[int, int, int], ...] = (
+    (0, 170, 0),  # 0 elastic: green
+    (220, 0, 0),  # 1 sliding (shear / torsion): red
+    (225, 0, 225),  # 2 rocking (flexural): magenta
+    (255, 140, 0),  # 3 sliding + rocking: orange
+    (0, 70, 255),  # 4 detached: blue
+)
+#: colour of an interface whose state code is unknown
+UNKNOWN_STATE_COLOUR = (128, 128, 128)
+BLOCK_COLOUR = (222, 214, 200)
+SUPPORT_COLOUR = (105, 105, 105)
+BACKGROUND = (255, 255, 255)
+
+#: camera presets: direction from the wall towards the camera, view-up, parallel projection.
+#: Axes: e1 along the wall, e2 up, e3 out of plane (the front face looks along +e3).
+VIEWS: dict[str, dict[str, Any]] = {
+    "front": {"direction": (0.0, 0.0, 1.0), "up": (0.0, 1.0, 0.0), "parallel": True},
+    "back": {"direction": (0.0, 0.0, -1.0), "up": (0.0, 1.0, 0.0), "parallel": True},
+    "oblique": {"direction": (0.75, 0.55, 1.0), "up": (0.0, 1.0, 0.0), "parallel": False},
+    "side": {"direction": (1.0, 0.0, 0.0), "up": (0.0, 1.0, 0.0), "parallel": True},
+}
+
+#: legend box in normalised window coordinates (x0, y0, width, height), y from the bottom
+LEGEND_BOX = (0.79, 0.015, 0.2, 0.2)
+# part of the window left to the wall: (x0, y0, x1, y1), normalised, y from the bottom
+_FREE_BOX = (0.01, 0.01, 0.78, 0.91)
+#: largest displacement / largest wall dimension aimed at by the automatic scale
+AUTO_SCALE_TARGET = 0.065
+#: joint (gap) thickness as a fraction of the median smallest block dimension
+GAP_FRACTION = 0.1
+
+_IMAGE_SUFFIXES = (".png",)
+_ANIMATION_SUFFIXES = (".gif", ".mp4")
+_PLOT_SUFFIXES = (".png", ".svg", ".pdf")
+_STEP_FILE = re.compile(r"_(\d+)\.vtu$")
+_VTK_HEXAHEDRON, _VTK_QUAD = 12, 9
+# faces of a VTK hexahedron, outward normals
+_HEX_FACES = np.array(
+    [[0, 3, 2, 1], [4, 5, 6, 7], [0, 1, 5, 4], [1, 2, 6, 5], [2, 3, 7, 6], [3, 0, 4, 7]]
+)
+
+
+# --------------------------------------------------------------------------- pyvista, lazily
+def _configure_offscreen() -> None:
+    """With no display, pick a headless OpenGL window before VTK makes one (the VTK wheel
+    would try X first and warn). Never overrides a user's ``VTK_DEFAULT_OPENGL_WINDOW``."""
+    if not sys.platform.startswith("linux") or os.environ.get("VTK_DEFAULT_OPENGL_WINDOW"):
+        return
+    if os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"):
+        return
+    if ctypes.util.find_library("EGL"):
+        os.environ["VTK_DEFAULT_OPENGL_WINDOW"] = "vtkEGLRenderWindow"
+    elif ctypes.util.find_library("OSMesa"):
+        os.environ["VTK_DEFAULT_OPENGL_WINDOW"] = "vtkOSOpenGLRenderWindow"
+
+
+def _pyvista():
+    _configure_offscreen()
+    import pyvista as pv
+
+    pv.OFF_SCREEN = True
+    return pv
+
+
+# --------------------------------------------------------------------------- the results folder
+@dataclass(frozen=True)
+class ResultsSeries:
+    """The time series of a results folder, checked to be complete.
+
+    steps: step numbers (from the file names); load_factors: lambda of each step;
+    block_files / interface_files: absolute paths (interface_files is None when the model has
+    no interface).
+    """
+
+    folder: Path
+    steps: np.ndarray
+    times: np.ndarray
+    load_factors: np.ndarray
+    block_files: tuple[Path, ...]
+    interface_files: tuple[Path, ...] | None
+    name: str
+    summary: dict
+
+    def index_of(self, step: int | str) -> int:
+        """Position in the series of step ``step`` (a step number, or ``"last"``/``"first"``)."""
+        if isinstance(step, str):
+            key = step.strip().lower()
+            if key == "last":
+                return len(self.steps) - 1
+            if key == "first":
+                return 0
+            if not re.fullmatch(r"[+-]?\d+", key):
+                raise ValueError(f"step must be a step number, 'first' or 'last', got {step!r}")
+            step = int(key)
+        if isinstance(step, bool) or not isinstance(step, (int, np.integer)):
+            raise ValueError(f"step must be a step number, 'first' or 'last', got {step!r}")
+        hits = np.flatnonzero(self.steps == int(step))
+        if hits.size == 0:
+            raise ValueError(
+                f"step {int(step)} is not in {self.folder}: it holds {len(self.steps)} step(s), "
+                f"numbers {_ranges(self.steps)}"
+            )
+        return int(hits[0])
+
+
+def _ranges(values: np.ndarray) -> str:
+    v = np.asarray(values, dtype=int)
+    if v.size and np.array_equal(v, np.arange(v[0], v[0] + v.size)):
+        return f"{v[0]}..{v[-1]}"
+    return ", ".join(str(x) for x in v[:20]) + (" ..." if v.size > 20 else "")
+
+
+def _read_pvd(path: Path) -> list[tuple[float, str]]:
+    from masonry_dem.export.pvd import read_pvd
+
+    try:
+        return read_pvd(path)
+    except Exception as exc:  # xml.etree.ElementTree.ParseError and friends
+        raise ValueError(f"{path} is not a readable PVD file: {exc}") from exc
+
+
+def open_results(folder: Path | str) -> ResultsSeries:
+    """Check that ``folder`` is a complete results folder and index its steps.
+
+    Raises FileNotFoundError (folder, ``blocks.pvd`` or a listed VTU file missing) or
+    ValueError (empty or inconsistent index)."""
+    folder = Path(folder)
+    if not folder.exists():
+        raise FileNotFoundError(f"results folder not found: {folder}")
+    if not folder.is_dir():
+        raise FileNotFoundError(f"not a results folder (not a directory): {folder}")
+    bpvd, ipvd = folder / "blocks.pvd", folder / "interfaces.pvd"
+    if not bpvd.is_file():
+        raise FileNotFoundError(
+            f"incomplete results folder {folder}: blocks.pvd is missing "
+            "(a results folder holds blocks.pvd, interfaces.pvd, steps/, pushover.csv, "
+            "summary.json)"
+        )
+    blocks = _read_pvd(bpvd)
+    if not blocks:
+        raise ValueError(f"incomplete results folder {folder}: blocks.pvd lists no step")
+    interfaces: list[tuple[float, str]] | None = None
+    if ipvd.is_file():
+        interfaces = _read_pvd(ipvd)
+        if len(interfaces) != len(blocks):
+            raise ValueError(
+                f"inconsistent results folder {folder}: blocks.pvd lists {len(blocks)} steps "
+                f"but interfaces.pvd {len(interfaces)}"
+            )
+    elif any((folder / "steps").glob("interfaces_*.vtu")):
+        raise FileNotFoundError(f"incomplete results folder {folder}: interfaces.pvd is missing")
+    files = [folder / f for _, f in blocks]
+    ifiles = None if interfaces is None else [folder / f for _, f in interfaces]
+    for f in files + (ifiles or []):
+        if not f.is_file():
+            raise FileNotFoundError(f"incomplete results folder {folder}: {f} is missing")
+    steps = []
+    for k, f in enumerate(files):
+        m = _STEP_FILE.search(f.name)
+        steps.append(int(m.group(1)) if m else k)
+    steps_a = np.asarray(steps, dtype=int)
+    times = np.asarray([t for t, _ in blocks], dtype=float)
+    summary: dict = {}
+    if (folder / "summary.json").is_file():
+        try:
+            summary = json.loads((folder / "summary.json").read_text())
+        except (OSError, ValueError) as exc:
+            log.warning("summary.json of %s unreadable (%s): ignored", folder, exc)
+    return ResultsSeries(
+        folder=folder,
+        steps=steps_a,
+        times=times,
+        load_factors=_load_factors(folder, steps_a, times),
+        block_files=tuple(files),
+        interface_files=None if ifiles is None else tuple(ifiles),
+        name=str(summary.get("name", folder.name)),
+        summary=summary,
+    )
+
+
+def _load_factors(folder: Path, steps: np.ndarray, times: np.ndarray) -> np.ndarray:
+    """lambda of each step: the PVD times, unless the writer replaced them by step numbers
+    (lambda not increasing), in which case pushover.csv gives them."""
+    if not (steps.size > 1 and np.array_equal(times, steps.astype(float))):
+        return times
+    try:
+        table = read_pushover(folder)
+    except (FileNotFoundError, ValueError):
+        log.warning("%s: PVD times are step numbers and pushover.csv is unusable", folder)
+        return np.full(steps.size, np.nan)
+    lookup = dict(zip(table["step"].astype(int).tolist(), table["lambda"].tolist(), strict=True))
+    return np.array([lookup.get(int(s), np.nan) for s in steps])
+
+
+def read_pushover(folder: Path | str) -> dict[str, np.ndarray]:
+    """Columns of ``pushover.csv`` (step, lambda, control_displacement) as arrays."""
+    path = Path(folder) / "pushover.csv"
+    if not path.is_file():
+        raise FileNotFoundError(f"incomplete results folder {Path(folder)}: pushover.csv is missing")
+    with path.open(newline="") as fh:
+        rows = list(csv.reader(fh))
+    if not rows:
+        raise ValueError(f"{path} is empty")
+    header = [h.strip() for h in rows[0]]
+    need = ("step", "lambda", "control_displacement")
+    if any(h not in header for h in need):
+        raise ValueError(f"{path}: header must hold {', '.join(need)}, got {', '.join(header)}")
+    try:
+        data = np.array([[float(x) for x in r] for r in rows[1:] if r], dtype=float)
+    except ValueError as exc:
+        raise ValueError(f"{path}: non-numeric value ({exc})") from exc
+    data = data.reshape(-1, len(header))
+    return {h: data[:, header.index(h)] for h in need}
+
+
+# --------------------------------------------------------------------------- one step's geometry
+@dataclass(frozen=True)
+class _StepData:
+    """Blocks (nb, 8, 3) corners + displacements, fixed flags; interfaces (m, 4, 3) corners +
+    displacements, normal axis and state."""
+
+    block_points: np.ndarray
+    block_disp: np.ndarray
+    fixed: np.ndarray
+    joint_points: np.ndarray | None
+    joint_disp: np.ndarray | None
+    joint_axis: np.ndarray | None
+    state: np.ndarray | None
+    load_factor: float | None
+
+
+def _read_cells(pv, path: Path, celltype: int, per_cell: int):
+    grid = pv.read(str(path))
+    n = grid.n_cells
+    if n and not np.all(np.asarray(grid.celltypes) == celltype):
+        raise ValueError(f"{path}: expected only VTK cell type {celltype}")
+    conn = np.asarray(grid.cell_connectivity).reshape(n, per_cell)
+    pts = np.asarray(grid.points, dtype=float)[conn]
+    if "displacement" not in grid.point_data:
+        raise ValueError(f"{path}: point data 'displacement' is missing")
+    disp = np.asarray(grid.point_data["displacement"], dtype=float)[conn]
+    return grid, pts, disp
+
+
+def _read_step(series: ResultsSeries, index: int) -> _StepData:
+    pv = _pyvista()
+    grid, bpts, bdisp = _read_cells(pv, series.block_files[index], _VTK_HEXAHEDRON, 8)
+    fixed = (
+        np.asarray(grid.cell_data["fixed"]).astype(bool)
+        if "fixed" in grid.cell_data
+        else np.zeros(grid.n_cells, dtype=bool)
+    )
+    lam = None
+    if "load_factor" in grid.field_data:  # written by newer writers; preferred when present
+        lam = float(np.asarray(grid.field_data["load_factor"]).ravel()[0])
+    jp = jd = axis = state = None
+    if series.interface_files is not None:
+        igrid, jp, jd = _read_cells(pv, series.interface_files[index], _VTK_QUAD, 4)
+        if "state" not in igrid.cell_data:
+            raise ValueError(f"{series.interface_files[index]}: cell data 'state' is missing")
+        state = np.asarray(igrid.cell_data["state"]).astype(int)
+        if "normal_axis" in igrid.cell_data:
+            axis = np.asarray(igrid.cell_data["normal_axis"]).astype(int)
+        else:  # the axis along which the quad is flat
+            axis = np.argmin(np.ptp(jp, axis=1), axis=1)
+    return _StepData(bpts, bdisp, fixed, jp, jd, axis, state, lam)
+
+
+def _wall_size(data: _StepData) -> float:
+    p = data.block_points.reshape(-1, 3)
+    return float(np.max(p.max(axis=0) - p.min(axis=0)))
+
+
+def _max_displacement(data: _StepData) -> float:
+    return float(np.sqrt(np.max(np.sum(data.block_disp**2, axis=2)))) if data.block_disp.size else 0.0
+
+
+def auto_scale(max_displacement: float, wall_size: float) -> float:
+    """A round amplification (two significant figures, rounded down) making the largest
+    displacement about :data:`AUTO_SCALE_TARGET` of the wall size; 1 when nothing moves."""
+    if not (max_displacement > 0 and math.isfinite(max_displacement)) or wall_size <= 0:
+        return 1.0
+    raw = AUTO_SCALE_TARGET * wall_size / max_displacement
+    mag = 10.0 ** (math.floor(math.log10(raw)) - 1)
+    return float(math.floor(raw / mag) * mag)
+
+
+def _gap(data: _StepData, window_size: tuple[int, int]) -> float:
+    """Joint thickness: GAP_FRACTION of the median smallest block dimension, at least about
+    1.5 pixels (so the damage colours stay visible on large walls), at most 35 % of it."""
+    ext = data.block_points.max(axis=1) - data.block_points.min(axis=1)
+    dmin = float(np.median(ext.min(axis=1)))
+    pixel = _wall_size(data) / (min(window_size) * (_FREE_BOX[3] - _FREE_BOX[1]))
+    return float(min(max(GAP_FRACTION * dmin, 1.5 * pixel), 0.35 * dmin))
+
+
+def _block_surface(data: _StepData, scale: float, gap: float):
+    """Points (nb*8, 3) of the shrunk, displaced blocks (faces are fixed)."""
+    p, d = data.block_points, data.block_disp
+    c = p.mean(axis=1)
+    x = p - c[:, None, :]
+    dc = d.mean(axis=1)
+    # displacement field of a rigid (affine) motion fitted on the 8 corners: exact for blocks
+    denom = np.einsum("nik,nik->nk", x, x)
+    grad = np.einsum("nij,nik->njk", d - dc[:, None, :], x) / np.where(denom > 0, denom, 1.0)[:, None]
+    half = np.abs(x).max(axis=1)
+    shrunk_half = np.maximum(half - gap / 2, 0.5 * half)
+    xs = np.sign(x) * shrunk_half[:, None, :]
+    ds = dc[:, None, :] + np.einsum("njk,nik->nij", grad, xs)
+    return (c[:, None, :] + xs + scale * ds).reshape(-1, 3)
+
+
+def _joint_surface(data: _StepData, scale: float, gap: float):
+    """Points (m*8, 3) of the joint slabs: each interface quad thickened by ``gap``."""
+    q, d, axis = data.joint_points, data.joint_disp, data.joint_axis
+    assert q is not None and d is not None and axis is not None
+    offset = np.zeros((q.shape[0], 3))
+    offset[np.arange(q.shape[0]), axis] = gap / 2
+    pts = np.concatenate([q - offset[:, None, :], q + offset[:, None, :]], axis=1)
+    disp = np.concatenate([d, d], axis=1)
+    return (pts + scale * disp).reshape(-1, 3)
+
+
+def _hex_faces(n: int) -> np.ndarray:
+    return (8 * np.arange(n)[:, None, None] + _HEX_FACES[None]).reshape(-1, 4)
+
+
+def state_colours(state: np.ndarray) -> np.ndarray:
+    """(m, 3) uint8 RGB of interface states (unknown codes grey)."""
+    table = np.array(list(STATE_COLOURS) + [UNKNOWN_STATE_COLOUR], dtype=np.uint8)
+    code = np.asarray(state, dtype=int)
+    code = np.where((code >= 0) & (code < len(STATE_COLOURS)), code, len(STATE_COLOURS))
+    return table[code]
+
+
+# --------------------------------------------------------------------------- the scene
+def _check_view(view: str) -> dict[str, Any]:
+    if view not in VIEWS:
+        raise ValueError(f"unknown view {view!r}: choose one of {', '.join(VIEWS)}")
+    return VIEWS[view]
+
+
+def _check_scale(scale: float | None) -> float | None:
+    if scale is None:
+        return None
+    s = float(scale)
+    if not math.isfinite(s) or s < 0:
+        raise ValueError(f"scale must be a finite number >= 0, got {scale!r}")
+    return s
+
+
+def _check_window(window_size: Sequence[int]) -> tuple[int, int]:
+    try:
+        w, h = (int(v) for v in window_size)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"window_size must be (width, height), got {window_size!r}") from exc
+    if w < 64 or h < 64 or w > 8192 or h > 8192:
+        raise ValueError(f"window_size must be between 64 and 8192 pixels, got {window_size!r}")
+    return w, h
+
+
+def _check_out(out: Path | str | None, default: Path, suffixes: tuple[str, ...], what: str) -> Path:
+    path = default if out is None else Path(out)
+    if path.suffix.lower() not in suffixes:
+        raise ValueError(f"{what} must be written to a {' or '.join(suffixes)} file, got {path}")
+    if path.exists() and path.is_dir():
+        raise ValueError(f"{what}: {path} is a directory")
+    return path
+
+
+def _atomic_target(path: Path) -> Path:
+    """A temporary name beside ``path`` (same suffix) to be renamed over it when complete,
+    so a failed render never leaves a half-written file or destroys the previous one."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    return path.with_name(f".{path.stem}.{os.getpid()}.{uuid.uuid4().hex[:8]}.tmp{path.suffix}")
+
+
+class _Scene:
+    """One plotter with the block mesh and the joint mesh, updated in place for each step."""
+
+    def __init__(
+        self,
+        first: _StepData,
+        view: str,
+        window_size: tuple[int, int],
+        gap: float,
+        legend: bool = True,
+    ) -> None:
+        pv = _pyvista()
+        self.pv = pv
+        self.view = _check_view(view)
+        self.gap = gap
+        self.plotter = pv.Plotter(
+            off_screen=True, window_size=list(window_size), lighting="three lights"
+        )
+        p = self.plotter
+        p.set_background([c / 255 for c in BACKGROUND])
+        nb = first.block_points.shape[0]
+        self.blocks = pv.PolyData.from_regular_faces(
+            _block_surface(first, 0.0, gap), _hex_faces(nb)
+        )
+        colours = np.where(
+            np.repeat(first.fixed, 6)[:, None],
+            np.array(SUPPORT_COLOUR, dtype=np.uint8),
+            np.array(BLOCK_COLOUR, dtype=np.uint8),
+        ).astype(np.uint8)
+        self.blocks.cell_data["rgb"] = colours
+        p.add_mesh(
+            self.blocks, scalars="rgb", rgb=True, show_scalar_bar=False, ambient=0.3, diffuse=0.75
+        )
+        self.joints = None
+        if first.joint_points is not None and first.joint_points.shape[0]:
+            m = first.joint_points.shape[0]
+            self.joints = pv.PolyData.from_regular_faces(
+                _joint_surface(first, 0.0, gap), _hex_faces(m)
+            )
+            self.joints.cell_data["rgb"] = np.repeat(state_colours(first.state), 6, axis=0)
+            p.add_mesh(
+                self.joints, scalars="rgb", rgb=True, lighting=False, show_scalar_bar=False
+            )
+        if legend:
+            box = p.add_legend(
+                labels=[[name, [c / 255 for c in col]] for name, col in zip(
+                    STATE_NAMES, STATE_COLOURS, strict=True)],
+                bcolor=(1.0, 1.0, 1.0),
+                border=True,
+                face="rectangle",
+            )
+            box.SetPosition(LEGEND_BOX[0], LEGEND_BOX[1])
+            box.SetPosition2(LEGEND_BOX[2], LEGEND_BOX[3])
+
+    def update(self, data: _StepData, scale: float) -> None:
+        self.blocks.points = _block_surface(data, scale, self.gap)
+        if self.joints is not None and data.state is not None:
+            self.joints.points = _joint_surface(data, scale, self.gap)
+            self.joints.cell_data["rgb"] = np.repeat(state_colours(data.state), 6, axis=0)
+
+    def frame_camera(self, points: np.ndarray) -> None:
+        """Place the camera of the view preset so that ``points`` (k, 3) fill the picture."""
+        v = self.view
+        cam = self.plotter.camera
+        lo, hi = points.min(axis=0), points.max(axis=0)
+        centre = (lo + hi) / 2
+        direction = np.asarray(v["direction"], dtype=float)
+        direction /= np.linalg.norm(direction)
+        up = np.asarray(v["up"], dtype=float)
+        up = up - direction * (up @ direction)
+        up /= np.linalg.norm(up)
+        right = np.cross(up, direction)
+        corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
+                            for z in (lo[2], hi[2])]) - centre
+        half_w = float(np.max(np.abs(corners @ right))) or 1.0
+        half_h = float(np.max(np.abs(corners @ up))) or 1.0
+        depth = float(np.max(np.abs(corners @ direction)))
+        w, h = self.plotter.window_size
+        aspect = w / h
+        # the wall goes in the free part of the window: below the title, left of the legend
+        x0, y0, x1, y1 = _FREE_BOX
+        margin = 1.03 if v["parallel"] else 1.1
+        half_view = margin * max(half_h / (y1 - y0), half_w / (aspect * (x1 - x0)))
+        shift = ((x0 + x1) / 2 - 0.5) * 2 * half_view * aspect * right + (
+            (y0 + y1) / 2 - 0.5
+        ) * 2 * half_view * up
+        focal = centre - shift
+        radius = float(np.linalg.norm(hi - lo)) / 2 or 1.0
+        cam.focal_point = tuple(focal)
+        cam.up = tuple(up)
+        if v["parallel"]:
+            cam.enable_parallel_projection()
+            cam.position = tuple(focal + direction * (depth + 4 * radius))
+            cam.parallel_scale = half_view
+            far = depth + 8 * radius
+        else:
+            cam.disable_parallel_projection()
+            angle = 30.0
+            cam.view_angle = angle
+            dist = depth + half_view / math.tan(math.radians(angle) / 2)
+            cam.position = tuple(focal + direction * dist)
+            far = dist + 2 * radius
+        cam.clipping_range = (1e-3 * far, 2 * far)
+
+    def title(self, text: str) -> None:
+        w, h = self.plotter.window_size
+        size = max(6, int(round(13 * min(w / 1200, h / 900))))
+        self.plotter.add_text(text, position="upper_edge", font_size=size, color="black",
+                              name="title")
+
+    def image(self) -> np.ndarray:
+        return self.plotter.screenshot(return_img=True)
+
+    def save(self, path: Path) -> None:
+        self.plotter.screenshot(str(path), return_img=False)
+
+    def close(self) -> None:
+        self.plotter.close()
+
+
+def _title(series: ResultsSeries, index: int, data: _StepData, scale: float) -> str:
+    lam = data.load_factor if data.load_factor is not None else series.load_factors[index]
+    lam_txt = "n/a" if lam is None or not np.isfinite(lam) else f"{lam:.4g}"
+    return (
+        f"{series.name}: step {int(series.steps[index])}\n"
+        f"lambda = {lam_txt}   displacements x {scale:.3g}"
+    )
+
+
+def _deformed_extent(data: _StepData, scale: float, gap: float) -> np.ndarray:
+    return np.concatenate([data.block_points.reshape(-1, 3), _block_surface(data, scale, gap)])
+
+
+# --------------------------------------------------------------------------- public API
+def render_step(
+    folder: Path | str,
+    step: int | str = "last",
+    view: str = "oblique",
+    scale: float | None = None,
+    out: Path | str | None = None,
+    window_size: Sequence[int] = (1200, 900),
+) -> Path:
+    """PNG of the deformed wall at ``step`` (a step number or ``"last"``), damage colours on
+    the interfaces, in camera preset ``view`` (:data:`VIEWS`). ``scale`` amplifies the
+    displacements (None: automatic). Written to ``out`` or ``<folder>/render_<view>_<step>.png``;
+    returns the path."""
+    vdef = _check_view(view)
+    del vdef
+    scale = _check_scale(scale)
+    wsize = _check_window(window_size)
+    series = open_results(folder)
+    index = series.index_of(step)
+    default = series.folder / f"render_{view}_{int(series.steps[index]):04d}.png"
+    path = _check_out(out, default, _IMAGE_SUFFIXES, "render_step")
+    data = _read_step(series, index)
+    wall = _wall_size(data)
+    s = auto_scale(_max_displacement(data), wall) if scale is None else scale
+    gap = _gap(data, wsize)
+    scene = _Scene(data, view, wsize, gap)
+    try:
+        scene.update(data, s)
+        scene.frame_camera(_deformed_extent(data, s, gap))
+        scene.title(_title(series, index, data, s))
+        tmp = _atomic_target(path)
+        try:
+            scene.save(tmp)
+            tmp.replace(path)
+        finally:
+            tmp.unlink(missing_ok=True)
+    finally:
+        scene.close()
+    log.info("rendered step %d of %s (%s view, scale %g) to %s",
+             int(series.steps[index]), series.folder, view, s, path)
+    return path
+
+
+def render_animation(
+    folder: Path | str,
+    out: Path | str | None = None,
+    fps: float = 8.0,
+    view: str = "oblique",
+    scale: float | None = None,
+    window_size: Sequence[int] = (800, 600),
+) -> Path:
+    """Animation (GIF; MP4 when imageio-ffmpeg is installed) of every step of a results folder,
+    one frame per step, with one displacement scale and one camera for the whole run
+    (automatic scale: from the largest displacement of all steps). Written to ``out`` or
+    ``<folder>/animation_<view>.gif``; returns the path."""
+    _check_view(view)
+    scale = _check_scale(scale)
+    wsize = _check_window(window_size)
+    fps = float(fps)
+    if not math.isfinite(fps) or not 0 < fps <= 100:
+        raise ValueError(f"fps must be in (0, 100], got {fps!r}")
+    series = open_results(folder)
+    path = _check_out(out, series.folder / f"animation_{view}.gif", _ANIMATION_SUFFIXES,
+                      "render_animation")
+    import imageio.v3 as iio
+
+    if path.suffix.lower() == ".mp4":
+        try:
+            import imageio_ffmpeg  # noqa: F401
+        except ImportError as exc:
+            raise ValueError("an MP4 animation needs the imageio-ffmpeg package; write a .gif") from exc
+    steps = [_read_step(series, k) for k in range(len(series.steps))]
+    wall = max(_wall_size(d) for d in steps)
+    if scale is None:
+        scale = auto_scale(max(_max_displacement(d) for d in steps), wall)
+    gap = _gap(steps[0], wsize)
+    scene = _Scene(steps[0], view, wsize, gap)
+    frames = []
+    try:
+        extent = np.concatenate(
+            [steps[0].block_points.reshape(-1, 3)]
+            + [_block_surface(d, scale, gap) for d in steps]
+        )
+        scene.frame_camera(np.array([extent.min(axis=0), extent.max(axis=0)]))
+        for k, data in enumerate(steps):
+            scene.update(data, scale)
+            scene.title(_title(series, k, data, scale))
+            frames.append(np.asarray(scene.image()))
+    finally:
+        scene.close()
+    tmp = _atomic_target(path)
+    try:
+        if path.suffix.lower() == ".gif":
+            iio.imwrite(tmp, np.stack(frames), extension=".gif", duration=1000.0 / fps, loop=0)
+        else:
+            iio.imwrite(tmp, np.stack(frames), extension=".mp4", fps=fps)
+        tmp.replace(path)
+    finally:
+        tmp.unlink(missing_ok=True)
+    log.info("animation of %d steps of %s written to %s", len(frames), series.folder, path)
+    return path
+
+
+def plot_pushover(folder: Path | str, out: Path | str | None = None) -> Path:
+    """The pushover curve (lambda against the control displacement; against the step when
+    no control displacement was recorded), with the collapse multiplier when the summary
+    gives one. Written to ``out`` or ``<folder>/pushover.png``; returns the path."""
+    folder = Path(folder)
+    if not folder.is_dir():
+        raise FileNotFoundError(f"results folder not found: {folder}")
+    table = read_pushover(folder)
+    if table["lambda"].size == 0:
+        raise ValueError(f"{folder / 'pushover.csv'} holds no step")
+    path = _check_out(out, folder / "pushover.png", _PLOT_SUFFIXES, "plot_pushover")
+    summary: dict = {}
+    if (folder / "summary.json").is_file():
+        try:
+            summary = json.loads((folder / "summary.json").read_text())
+        except (OSError, ValueError):
+            summary = {}
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(6.4, 4.4), dpi=150)
+    FigureCanvasAgg(fig)
+    ax = fig.add_subplot()
+    x, lam = table["control_displacement"], table["lambda"]
+    if np.any(x != 0):
+        ax.plot(x, lam, "o-", ms=3, lw=1.4, color="#1f4e9c")
+        ax.set_xlabel("control displacement")
+    else:
+        ax.plot(table["step"], lam, "o-", ms=3, lw=1.4, color="#1f4e9c")
+        ax.set_xlabel("step")
+    ax.set_ylabel("load multiplier $\\lambda$")
+    collapse = summary.get("lambda") if summary.get("status") == "collapse" else None
+    if isinstance(collapse, (int, float)):
+        ax.axhline(collapse, ls="--", color="#c0392b", lw=1,
+                   label=f"collapse $\\lambda$ = {collapse:.4g}")
+        ax.legend(loc="lower right")
+    ax.grid(True, alpha=0.3)
+    name = summary.get("name", folder.name)
+    status = summary.get("status")
+    ax.set_title(f"{name}" + (f" ({status})" if status else ""))
+    fig.tight_layout()
+    tmp = _atomic_target(path)
+    try:
+        fig.savefig(tmp)
+        tmp.replace(path)
+    finally:
+        tmp.unlink(missing_ok=True)
+    log.info("pushover curve of %s written to %s", folder, path)
+    return path
