@@ -1,0 +1,194 @@
+"""Case files: a TOML description of a scene (geometry, material, supports, loads, analysis).
+
+The schema is documented in the README ("Case files"). Unknown keys are errors, so a typo is
+never silently ignored.
+"""
+
+from __future__ import annotations
+
+import sys
+from dataclasses import dataclass, fields
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from masonry_dem.geometry import builders
+from masonry_dem.geometry import selectors as sel
+from masonry_dem.geometry.blocks import Blocks
+from masonry_dem.model import (
+    InterfaceMaterial,
+    Model,
+    PointLoad,
+    Pressure,
+    SelfWeight,
+    Support,
+    WeightProportional,
+)
+from masonry_dem.solvers.incremental import DisplacementControl, StaticSettings
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+DEFAULT_CASE = "default_wall.toml"
+
+_BUILDERS = {
+    "running_bond_wall": builders.running_bond_wall,
+    "running_bond_wall_of_size": builders.running_bond_wall_of_size,
+    "stack_bond_column": builders.stack_bond_column,
+    "single_block": builders.single_block,
+    "boxes": builders.boxes,
+}
+_GEOMETRY_EXTRA = {"builder", "base", "openings"}
+
+
+@dataclass(frozen=True)
+class Case:
+    """A scene ready to run: the model, the solver settings and the optional control."""
+
+    model: Model
+    settings: StaticSettings
+    control: DisplacementControl | None
+    monitor: tuple[int, str] | None
+    source: str
+
+
+def _unknown(section: str, given: dict, allowed: set[str]) -> None:
+    extra = sorted(set(given) - allowed)
+    if extra:
+        raise ValueError(f"case file [{section}]: unknown key(s) {extra}; allowed: {sorted(allowed)}")
+
+
+def _require(section: str, data: dict, key: str) -> Any:
+    if key not in data:
+        raise ValueError(f"case file [{section}]: missing key {key!r}")
+    return data[key]
+
+
+def build_blocks(geometry: dict) -> tuple[Blocks, int | None, np.ndarray]:
+    """Blocks of the scene, the index of the base slab (or None) and the wall-block mask."""
+    builder = _require("geometry", geometry, "builder")
+    if builder not in _BUILDERS:
+        raise ValueError(f"case file [geometry] builder must be one of {sorted(_BUILDERS)}, got {builder!r}")
+    params = {k: v for k, v in geometry.items() if k not in _GEOMETRY_EXTRA}
+    func = _BUILDERS[builder]
+    allowed = set(func.__code__.co_varnames[: func.__code__.co_argcount])
+    _unknown("geometry", params, allowed)
+    try:
+        blocks = func(**params)
+    except TypeError as exc:
+        raise ValueError(f"case file [geometry] for builder {builder!r}: {exc}") from exc
+    if geometry.get("openings"):
+        blocks = builders.cut_openings(blocks, geometry["openings"])
+    wall = np.ones(blocks.count, dtype=bool)
+    base = None
+    if geometry.get("base", False):
+        blocks, base = builders.add_base(blocks)
+        wall = np.append(wall, False)
+    return blocks, base, wall
+
+
+def select_blocks(blocks: Blocks, spec: str | list[int], wall: np.ndarray, base: int | None) -> np.ndarray:
+    """Resolve a selector: ``base``, ``all``, ``column:left``, ``course:K``, ``edge:top``, or a
+    list of block indices."""
+    if isinstance(spec, list):
+        idx = np.asarray(spec, dtype=np.int64)
+        if idx.size == 0 or idx.min() < 0 or idx.max() >= blocks.count:
+            raise ValueError(f"select: block indices must be in 0..{blocks.count - 1}, got {spec!r}")
+        return idx
+    if spec == "base":
+        if base is None:
+            raise ValueError("select='base' but the geometry has no base (set base = true)")
+        return np.array([base])
+    if spec == "all":
+        return np.flatnonzero(wall)
+    kind, _, arg = str(spec).partition(":")
+    if kind == "column":
+        return sel.column(blocks, arg or "left", among=wall)
+    if kind == "course":
+        try:
+            k = int(arg)
+        except ValueError:
+            raise ValueError(f"select: course needs an integer, got {spec!r}") from None
+        return sel.course(blocks, k, among=wall)
+    if kind == "edge":
+        return sel.edge(blocks, arg, among=wall)
+    raise ValueError(
+        f"select must be 'base', 'all', 'column:left|right', 'course:K', 'edge:NAME' or a list of "
+        f"block indices, got {spec!r}"
+    )
+
+
+def _load(spec: dict, blocks: Blocks, wall: np.ndarray, base: int | None, k: int):
+    kind = _require(f"loads[{k}]", spec, "type")
+    section = f"loads[{k}]"
+    if kind == "self_weight":
+        _unknown(section, spec, {"type", "live"})
+        return SelfWeight(live=bool(spec.get("live", False)))
+    if kind == "weight_proportional":
+        _unknown(section, spec, {"type", "direction", "live", "select"})
+        chosen = select_blocks(blocks, spec.get("select", "all"), wall, base)
+        return WeightProportional(tuple(spec.get("direction", (0, 0, 1))), bool(spec.get("live", True)), chosen)
+    if kind == "pressure":
+        _unknown(section, spec, {"type", "value", "axis", "sign", "live", "select"})
+        chosen = select_blocks(blocks, spec.get("select", "all"), wall, base)
+        return Pressure(
+            float(_require(section, spec, "value")), int(spec.get("axis", 2)), int(spec.get("sign", 1)),
+            bool(spec.get("live", True)), chosen,
+        )
+    if kind == "point":
+        _unknown(section, spec, {"type", "select", "force", "offset", "live"})
+        chosen = select_blocks(blocks, _require(section, spec, "select"), wall, base)
+        return PointLoad(chosen, tuple(_require(section, spec, "force")), tuple(spec.get("offset", (0, 0, 0))),
+                         bool(spec.get("live", False)))
+    raise ValueError(f"case file [{section}] type must be self_weight, weight_proportional, pressure or point, got {kind!r}")
+
+
+def case_from_dict(data: dict, source: str = "<dict>") -> Case:
+    _unknown("top level", data, {"name", "description", "geometry", "material", "supports", "loads", "analysis"})
+    blocks, base, wall = build_blocks(_require("top level", data, "geometry"))
+    mat = dict(_require("top level", data, "material"))
+    _unknown("material", mat, {f.name for f in fields(InterfaceMaterial)})
+    try:
+        material = InterfaceMaterial(**mat)
+    except TypeError as exc:
+        raise ValueError(f"case file [material]: {exc}") from exc
+    supports = []
+    for k, spec in enumerate(data.get("supports", [])):
+        _unknown(f"supports[{k}]", spec, {"select", "dofs"})
+        idx = select_blocks(blocks, _require(f"supports[{k}]", spec, "select"), wall, base)
+        supports.append(Support(idx, spec.get("dofs", "all")))
+    loads = [_load(spec, blocks, wall, base, k) for k, spec in enumerate(data.get("loads", [{"type": "self_weight"}]))]
+    analysis = dict(data.get("analysis", {}))
+    control_spec = analysis.pop("control", None)
+    monitor_spec = analysis.pop("monitor", None)
+    _unknown("analysis", analysis, {f.name for f in fields(StaticSettings)})
+    settings = StaticSettings(**analysis)
+    model = Model.build(blocks, material, supports, loads, name=str(data.get("name", Path(source).stem)))
+    control = None
+    if control_spec is not None:
+        _unknown("analysis.control", control_spec, {"block", "dof", "target", "steps"})
+        control = DisplacementControl(**control_spec)
+    monitor = None
+    if monitor_spec is not None:
+        _unknown("analysis.monitor", monitor_spec, {"block", "dof"})
+        monitor = (int(monitor_spec["block"]), str(monitor_spec["dof"]))
+    return Case(model, settings, control, monitor, source)
+
+
+def load_case(path: str | Path | None = None) -> Case:
+    """Read a case file; with no path, the bundled default wall."""
+    if path is None:
+        text = resources.files("masonry_dem.cases").joinpath("data", DEFAULT_CASE).read_text()
+        return case_from_dict(tomllib.loads(text), source=f"bundled:{DEFAULT_CASE}")
+    p = Path(path)
+    if not p.is_file():
+        raise FileNotFoundError(f"case file not found: {p}")
+    try:
+        data = tomllib.loads(p.read_text())
+    except tomllib.TOMLDecodeError as exc:
+        raise ValueError(f"case file {p} is not valid TOML: {exc}") from exc
+    return case_from_dict(data, source=str(p))
