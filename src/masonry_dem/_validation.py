@@ -19,7 +19,9 @@ def as_finite_array(name: str, value, shape: tuple[int | None, ...] | None = Non
     bad = ~np.isfinite(arr)
     if bad.any():
         first = np.argwhere(bad)[0]
-        raise ValueError(f"{name} contains a non-finite value {arr[tuple(first)]!r} at {tuple(first)}")
+        raise ValueError(
+            f"{name} contains a non-finite value {arr[tuple(first)]!r} at {tuple(first)}"
+        )
     return arr
 
 

@@ -86,8 +86,14 @@ def write_pushover_csv(path: Path, history: History) -> None:
     rows = np.column_stack(
         [np.arange(len(history.steps)), history.load_factors, history.control_displacements]
     )
-    np.savetxt(path, rows, delimiter=",", header="step,lambda,control_displacement", comments="",
-               fmt=["%d", "%.10g", "%.10g"])
+    np.savetxt(
+        path,
+        rows,
+        delimiter=",",
+        header="step,lambda,control_displacement",
+        comments="",
+        fmt=["%d", "%.10g", "%.10g"],
+    )
 
 
 def read_summary(folder: Path) -> dict:

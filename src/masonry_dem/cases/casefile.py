@@ -59,7 +59,9 @@ class Case:
 def _unknown(section: str, given: dict, allowed: set[str]) -> None:
     extra = sorted(set(given) - allowed)
     if extra:
-        raise ValueError(f"case file [{section}]: unknown key(s) {extra}; allowed: {sorted(allowed)}")
+        raise ValueError(
+            f"case file [{section}]: unknown key(s) {extra}; allowed: {sorted(allowed)}"
+        )
 
 
 def _require(section: str, data: dict, key: str) -> Any:
@@ -72,7 +74,9 @@ def build_blocks(geometry: dict) -> tuple[Blocks, int | None, np.ndarray]:
     """Blocks of the scene, the index of the base slab (or None) and the wall-block mask."""
     builder = _require("geometry", geometry, "builder")
     if builder not in _BUILDERS:
-        raise ValueError(f"case file [geometry] builder must be one of {sorted(_BUILDERS)}, got {builder!r}")
+        raise ValueError(
+            f"case file [geometry] builder must be one of {sorted(_BUILDERS)}, got {builder!r}"
+        )
     params = {k: v for k, v in geometry.items() if k not in _GEOMETRY_EXTRA}
     func = _BUILDERS[builder]
     allowed = set(func.__code__.co_varnames[: func.__code__.co_argcount])
@@ -91,13 +95,17 @@ def build_blocks(geometry: dict) -> tuple[Blocks, int | None, np.ndarray]:
     return blocks, base, wall
 
 
-def select_blocks(blocks: Blocks, spec: str | list[int], wall: np.ndarray, base: int | None) -> np.ndarray:
+def select_blocks(
+    blocks: Blocks, spec: str | list[int], wall: np.ndarray, base: int | None
+) -> np.ndarray:
     """Resolve a selector: ``base``, ``all``, ``column:left``, ``course:K``, ``edge:top``, or a
     list of block indices."""
     if isinstance(spec, list):
         idx = np.asarray(spec, dtype=np.int64)
         if idx.size == 0 or idx.min() < 0 or idx.max() >= blocks.count:
-            raise ValueError(f"select: block indices must be in 0..{blocks.count - 1}, got {spec!r}")
+            raise ValueError(
+                f"select: block indices must be in 0..{blocks.count - 1}, got {spec!r}"
+            )
         return idx
     if spec == "base":
         if base is None:
@@ -131,24 +139,39 @@ def _load(spec: dict, blocks: Blocks, wall: np.ndarray, base: int | None, k: int
     if kind == "weight_proportional":
         _unknown(section, spec, {"type", "direction", "live", "select"})
         chosen = select_blocks(blocks, spec.get("select", "all"), wall, base)
-        return WeightProportional(tuple(spec.get("direction", (0, 0, 1))), bool(spec.get("live", True)), chosen)
+        return WeightProportional(
+            tuple(spec.get("direction", (0, 0, 1))), bool(spec.get("live", True)), chosen
+        )
     if kind == "pressure":
         _unknown(section, spec, {"type", "value", "axis", "sign", "live", "select"})
         chosen = select_blocks(blocks, spec.get("select", "all"), wall, base)
         return Pressure(
-            float(_require(section, spec, "value")), int(spec.get("axis", 2)), int(spec.get("sign", 1)),
-            bool(spec.get("live", True)), chosen,
+            float(_require(section, spec, "value")),
+            int(spec.get("axis", 2)),
+            int(spec.get("sign", 1)),
+            bool(spec.get("live", True)),
+            chosen,
         )
     if kind == "point":
         _unknown(section, spec, {"type", "select", "force", "offset", "live"})
         chosen = select_blocks(blocks, _require(section, spec, "select"), wall, base)
-        return PointLoad(chosen, tuple(_require(section, spec, "force")), tuple(spec.get("offset", (0, 0, 0))),
-                         bool(spec.get("live", False)))
-    raise ValueError(f"case file [{section}] type must be self_weight, weight_proportional, pressure or point, got {kind!r}")
+        return PointLoad(
+            chosen,
+            tuple(_require(section, spec, "force")),
+            tuple(spec.get("offset", (0, 0, 0))),
+            bool(spec.get("live", False)),
+        )
+    raise ValueError(
+        f"case file [{section}] type must be self_weight, weight_proportional, pressure or point, got {kind!r}"
+    )
 
 
 def case_from_dict(data: dict, source: str = "<dict>") -> Case:
-    _unknown("top level", data, {"name", "description", "geometry", "material", "supports", "loads", "analysis"})
+    _unknown(
+        "top level",
+        data,
+        {"name", "description", "geometry", "material", "supports", "loads", "analysis"},
+    )
     blocks, base, wall = build_blocks(_require("top level", data, "geometry"))
     mat = dict(_require("top level", data, "material"))
     _unknown("material", mat, {f.name for f in fields(InterfaceMaterial)})
@@ -161,13 +184,18 @@ def case_from_dict(data: dict, source: str = "<dict>") -> Case:
         _unknown(f"supports[{k}]", spec, {"select", "dofs"})
         idx = select_blocks(blocks, _require(f"supports[{k}]", spec, "select"), wall, base)
         supports.append(Support(idx, spec.get("dofs", "all")))
-    loads = [_load(spec, blocks, wall, base, k) for k, spec in enumerate(data.get("loads", [{"type": "self_weight"}]))]
+    loads = [
+        _load(spec, blocks, wall, base, k)
+        for k, spec in enumerate(data.get("loads", [{"type": "self_weight"}]))
+    ]
     analysis = dict(data.get("analysis", {}))
     control_spec = analysis.pop("control", None)
     monitor_spec = analysis.pop("monitor", None)
     _unknown("analysis", analysis, {f.name for f in fields(StaticSettings)})
     settings = StaticSettings(**analysis)
-    model = Model.build(blocks, material, supports, loads, name=str(data.get("name", Path(source).stem)))
+    model = Model.build(
+        blocks, material, supports, loads, name=str(data.get("name", Path(source).stem))
+    )
     control = None
     if control_spec is not None:
         _unknown("analysis.control", control_spec, {"block", "dof", "target", "steps"})

@@ -45,7 +45,9 @@ def run_command(args: argparse.Namespace) -> int:
     solver = StaticSolver(case.model, case.settings)
     history = solver.run(control=case.control, callback=on_step, monitor=case.monitor)
     bar.close()
-    summary = writer.finish(history, case=case.source, wall_seconds=round(time.perf_counter() - t0, 4))
+    summary = writer.finish(
+        history, case=case.source, wall_seconds=round(time.perf_counter() - t0, 4)
+    )
     if not args.no_render:
         try:
             from masonry_dem.export.render import render_step
@@ -55,7 +57,14 @@ def run_command(args: argparse.Namespace) -> int:
             png = render_step(out, step="last")
             summary["png"] = str(Path(png).name)
             (out / "summary.json").write_text(json.dumps(summary, indent=2))
-    print(json.dumps({k: summary[k] for k in ("status", "lambda", "steps", "seconds", "blocks", "interfaces")}))
+    print(
+        json.dumps(
+            {
+                k: summary[k]
+                for k in ("status", "lambda", "steps", "seconds", "blocks", "interfaces")
+            }
+        )
+    )
     print(f"{summary['status']}: {summary['reason']}")
     print(f"results in {out}/ (blocks.pvd, interfaces.pvd, summary.json, pushover.csv)")
     return 0 if summary["status"] in ("collapse", "completed") else 1

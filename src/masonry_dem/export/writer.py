@@ -56,7 +56,9 @@ class ResultsWriter:
 
     def finish(self, history: History, **summary_extra) -> dict:
         """Write the last step if skipped, pushover.csv and summary.json."""
-        if history.steps and (not self.steps_written or self.steps_written[-1] != history.last.step):
+        if history.steps and (
+            not self.steps_written or self.steps_written[-1] != history.last.step
+        ):
             self(history.last, force=True)
         write_pushover_csv(self.folder / "pushover.csv", history)
         summary = history.summary(

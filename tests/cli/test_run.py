@@ -1,0 +1,130 @@
+"""The ``run`` command and case files: outputs, schema errors, the README's Python example."""
+
+from __future__ import annotations
+
+import json
+import runpy
+import subprocess
+import sys
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import meshio
+import numpy as np
+import pytest
+
+from masonry_dem.cases.casefile import case_from_dict, load_case
+from masonry_dem.cli import main
+
+ROOT = Path(__file__).resolve().parents[2]
+
+SINGLE_BLOCK = {
+    "name": "block",
+    "geometry": {
+        "builder": "single_block",
+        "a": 0.4,
+        "b": 0.3,
+        "s": 0.2,
+        "unit_weight": 20e3,
+        "base": True,
+    },
+    "material": {"kn": 2.4e9, "kt": 1e9, "friction": 0.7},
+    "supports": [{"select": "base"}],
+    "loads": [{"type": "self_weight"}, {"type": "weight_proportional", "direction": [0, 0, 1]}],
+}
+
+
+def _write_case(tmp_path: Path, data: dict) -> Path:
+    lines = []
+
+    def emit(table: dict) -> None:
+        simple = {
+            k: v
+            for k, v in table.items()
+            if not isinstance(v, (dict, list))
+            or (isinstance(v, list) and not (v and isinstance(v[0], dict)))
+        }
+        for k, v in simple.items():
+            lines.append(f"{k} = {json.dumps(v)}")
+
+    emit(data)
+    for key in ("geometry", "material", "analysis"):
+        if key in data:
+            lines.append(f"[{key}]")
+            emit(data[key])
+    for key in ("supports", "loads"):
+        for item in data.get(key, []):
+            lines.append(f"[[{key}]]")
+            emit(item)
+    path = tmp_path / "case.toml"
+    path.write_text("\n".join(lines))
+    return path
+
+
+def test_run_single_block_case_writes_every_output(tmp_path):
+    case = _write_case(tmp_path, SINGLE_BLOCK)
+    out = tmp_path / "res"
+    assert main(["run", str(case), "--out", str(out), "--no-render", "--quiet"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    for key in ("status", "steps", "lambda", "seconds", "blocks", "interfaces"):
+        assert key in summary
+    assert summary["status"] == "collapse"
+    # a dry block 0.4 high and 0.2 thick tilts over at s/a = 0.5 (mu = 0.7 is higher)
+    assert summary["lambda"] == pytest.approx(0.5, rel=0.005)
+    assert summary["blocks"] == 2 and summary["interfaces"] == 1
+    entries = ET.parse(out / "blocks.pvd").getroot().findall(".//DataSet")
+    assert len(entries) == summary["steps"]
+    times = [float(e.get("timestep")) for e in entries]
+    assert times == sorted(times)
+    last = meshio.read(out / entries[-1].get("file"))
+    assert last.cells[0].type == "hexahedron"
+    assert np.isfinite(last.point_data["displacement"]).all()
+    rows = np.loadtxt(out / "pushover.csv", delimiter=",", skiprows=1, ndmin=2)
+    assert rows.shape[0] == summary["steps"]
+    assert rows[-1, 1] == pytest.approx(summary["lambda"])
+
+
+def test_default_case_loads_and_is_a_supported_wall():
+    case = load_case(None)
+    assert case.model.blocks.count == 3 * 7 + 4 * 6 + 1  # 13 courses, half blocks, base
+    assert case.model.fixed[-1].all()
+
+
+@pytest.mark.parametrize(
+    "patch, message",
+    [
+        ({"geometry": {"builder": "pyramid"}}, "builder"),
+        ({"material": {"kn": 1e9, "kt": 1e9, "friction": 0.7, "colour": "red"}}, "colour"),
+        ({"material": {"kn": -1.0, "kt": 1e9, "friction": 0.7}}, "kn"),
+        ({"material": {"kn": 1e9, "kt": 1e9, "friction": float("nan")}}, "friction"),
+        ({"supports": [{"select": "column:middle"}]}, "column"),
+        ({"supports": []}, "mechanism"),
+        ({"loads": [{"type": "wind"}]}, "type"),
+        ({"analysis": {"bracket_tolerance": 0.0}}, "bracket_tolerance"),
+        ({"analysis": {"step": 0.1}}, "step"),
+    ],
+)
+def test_bad_case_files_name_the_field(patch, message):
+    data = {**SINGLE_BLOCK, **patch}
+    with pytest.raises(ValueError, match=message):
+        case_from_dict(data)
+
+
+def test_missing_case_file_is_a_clear_cli_error(tmp_path, capsys):
+    assert main(["run", str(tmp_path / "nope.toml"), "--out", str(tmp_path / "r")]) == 2
+    assert "case file not found" in capsys.readouterr().err
+
+
+def test_console_script_help_lists_commands():
+    out = subprocess.run(
+        [sys.executable, "-m", "masonry_dem.cli", "--help"], capture_output=True, text=True
+    )
+    assert out.returncode == 0 and "run" in out.stdout
+
+
+def test_quickstart_example_runs(tmp_path, capsys):
+    summary = runpy.run_path(str(ROOT / "examples" / "quickstart.py"), run_name="not_main")["main"](
+        ["--out", str(tmp_path / "q"), "--courses", "5"]
+    )
+    assert summary["status"] == "collapse"
+    assert (tmp_path / "q" / "summary.json").exists()
