@@ -156,6 +156,11 @@ def test_blocks_reject_non_positive_sizes_and_nan_by_name():
         Blocks([[0, 0, 0]], [[1, np.nan, 1]], 1.0)
     with pytest.raises(ValueError, match=r"^unit_weight"):
         Blocks([[0, 0, 0]], [[1, 1, 1]], np.nan)
+    with pytest.raises(ValueError, match=r"^unit_weight must be a scalar or have shape \(2,\)"):
+        Blocks([[0, 0, 0], [2, 0, 0]], [[1, 1, 1]] * 2, [1.0, 2.0, 3.0])
+    np.testing.assert_array_equal(
+        Blocks([[0, 0, 0], [2, 0, 0]], [[1, 1, 1]] * 2, [5.0]).unit_weight, 5.0
+    )
     with pytest.raises(ValueError, match=r"^centres must have shape"):
         Blocks([[0, 0]], [[1, 1, 1]], 1.0)
     with pytest.raises(ValueError, match=r"^sizes must have shape"):

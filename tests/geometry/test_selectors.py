@@ -80,3 +80,19 @@ def test_predicate(wall):
         sel.where(wall, lambda c: c[:, 0] > 100.0, name="near_right")
     with pytest.raises(ValueError, match="predicate must return a boolean mask of shape"):
         sel.where(wall, lambda c: c[:3, 0] > 0.0)  # wrong shape: 3 of n
+
+
+def test_among_accepts_block_indices_like_a_mask(wall):
+    top = sel.course(wall, -1)
+    mask = np.zeros(wall.count, bool)
+    mask[top] = True
+    for which in ("left", "right"):
+        np.testing.assert_array_equal(
+            sel.column(wall, which, among=top), sel.column(wall, which, among=mask)
+        )
+    np.testing.assert_array_equal(sel.course(wall, 0, among=top), top)
+    np.testing.assert_allclose(sel.course_levels(wall, among=top), [(NC - 0.5) * A])
+    with pytest.raises(ValueError, match="among must be a boolean mask of shape"):
+        sel.edge(wall, "left", among=np.ones(3, bool))
+    with pytest.raises(ValueError, match="among: block index out of range"):
+        sel.edge(wall, "left", among=[wall.count])

@@ -31,7 +31,13 @@ class Blocks:
             raise ValueError("blocks: an assembly needs at least one block, got 0")
         sizes = as_finite_array("sizes", self.sizes, (n, 3))
         require_positive("sizes", sizes)
-        gamma = as_finite_array("unit_weight", np.broadcast_to(self.unit_weight, (n,)), (n,))
+        gamma = as_finite_array("unit_weight", self.unit_weight)
+        if gamma.ndim > 1 or gamma.size not in (1, n):
+            # np.broadcast_to raised numpy's "operands could not be broadcast" without the name
+            raise ValueError(
+                f"unit_weight must be a scalar or have shape ({n},), got {gamma.shape}"
+            )
+        gamma = np.broadcast_to(gamma.reshape(-1) if gamma.ndim else gamma, (n,))
         require_positive("unit_weight", gamma, strict=False)
         object.__setattr__(self, "centres", centres)
         object.__setattr__(self, "sizes", sizes)
