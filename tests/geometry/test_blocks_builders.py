@@ -110,6 +110,15 @@ def test_add_base_touches_the_wall():
     np.testing.assert_allclose(wb.upper[ib], [4 * B, 0.0, S], atol=1e-15)
     np.testing.assert_allclose(wb.lower[ib], [0.0, -0.2, 0.0], atol=1e-15)
     assert wb.unit_weight[ib] == 0.0
+    wide, ib2 = add_base(w, overhang=0.05)
+    np.testing.assert_allclose(wide.lower[ib2], [-0.05, -A, -0.05], atol=1e-15)
+    np.testing.assert_allclose(wide.upper[ib2], [4 * B + 0.05, 0.0, S + 0.05], atol=1e-15)
+    with pytest.raises(ValueError, match=r"^overhang"):
+        add_base(w, overhang=np.nan)
+    with pytest.raises(ValueError, match=r"^overhang must be non-negative"):
+        add_base(w, overhang=-0.01)
+    with pytest.raises(ValueError, match=r"^depth must be positive"):
+        add_base(w, depth=0.0)
 
 
 # ----------------------------------------------------------------------------- bad input

@@ -50,7 +50,9 @@ def running_bond_wall(
     right = np.where(shifted, np.minimum(pos + 0.5, n), pos + 1.0)
     x0, y0, z0 = as_finite_array("origin", origin, (3,))
     lower = np.stack([x0 + left * px, y0 + course * py, np.full(course.size, z0)], axis=1)
-    upper = np.stack([x0 + right * px, y0 + (course + 1) * py, np.full(course.size, z0 + s)], axis=1)
+    upper = np.stack(
+        [x0 + right * px, y0 + (course + 1) * py, np.full(course.size, z0 + s)], axis=1
+    )
     return Blocks.from_boxes(lower, upper, gamma)
 
 
@@ -82,7 +84,9 @@ def stack_bond_column(courses: int, a: float, b: float, s: float, unit_weight: f
     a, b, s = (positive_scalar(k, v) for k, v in (("a", a), ("b", b), ("s", s)))
     k = np.arange(nc)
     centres = np.stack([np.full(nc, b / 2), (k + 0.5) * a, np.full(nc, s / 2)], axis=1)
-    return Blocks(centres, np.tile([b, a, s], (nc, 1)), positive_scalar("unit_weight", unit_weight, False))
+    return Blocks(
+        centres, np.tile([b, a, s], (nc, 1)), positive_scalar("unit_weight", unit_weight, False)
+    )
 
 
 def single_block(a: float, b: float, s: float, unit_weight: float) -> Blocks:
@@ -105,7 +109,9 @@ def cut_openings(blocks: Blocks, openings) -> Blocks:
     for k, rect in enumerate(openings):
         x0, y0, x1, y1 = as_finite_array(f"openings[{k}]", rect, (4,))
         if x1 <= x0 or y1 <= y0:
-            raise ValueError(f"openings[{k}] must have x_max > x_min and y_max > y_min, got {rect!r}")
+            raise ValueError(
+                f"openings[{k}] must have x_max > x_min and y_max > y_min, got {rect!r}"
+            )
         c = blocks.centres
         inside = (c[:, 0] > x0) & (c[:, 0] < x1) & (c[:, 1] > y0) & (c[:, 1] < y1)
         if not inside.any():
@@ -114,14 +120,21 @@ def cut_openings(blocks: Blocks, openings) -> Blocks:
     return blocks.subset(np.flatnonzero(keep))
 
 
-def add_base(blocks: Blocks, depth: float | None = None, overhang: float = 0.0) -> tuple[Blocks, int]:
+def add_base(
+    blocks: Blocks, depth: float | None = None, overhang: float = 0.0
+) -> tuple[Blocks, int]:
     """Append a rigid base slab under the assembly; returns the blocks and the base index.
 
     The base spans the footprint of the assembly (plus ``overhang`` on every side in the plane)
     and its top face touches the lowest blocks, so real interfaces join it to the wall.
     """
     lo, hi = blocks.lower.min(axis=0), blocks.upper.max(axis=0)
-    depth = float(np.median(blocks.sizes[:, 1])) if depth is None else positive_scalar("depth", depth)
+    # validated here so a NaN or negative overhang is reported by name (it surfaced as a
+    # non-finite "lower" corner, or silently shrank the base)
+    overhang = positive_scalar("overhang", overhang, strict=False)
+    depth = (
+        float(np.median(blocks.sizes[:, 1])) if depth is None else positive_scalar("depth", depth)
+    )
     base_lo = np.array([lo[0] - overhang, lo[1] - depth, lo[2] - overhang])
     base_hi = np.array([hi[0] + overhang, lo[1], hi[2] + overhang])
     base = Blocks.from_boxes(base_lo[None], base_hi[None], 0.0)
