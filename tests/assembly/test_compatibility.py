@@ -88,9 +88,9 @@ def test_rigid_body_modes_span_the_null_space_of_the_unsupported_stiffness():
     n=st.integers(1, 6),
     nc=st.integers(1, 6),
     dims=st.tuples(st.floats(0.02, 1.0), st.floats(0.02, 1.0), st.floats(0.02, 1.0)),
-    u0=st.tuples(*(st.floats(-1, 1) for _ in range(3))),
-    w=st.tuples(*(st.floats(-1, 1) for _ in range(3))),
-    point=st.tuples(*(st.floats(-10, 10) for _ in range(3))),
+    u0=st.tuples(*(st.floats(-1, 1, allow_subnormal=False) for _ in range(3))),
+    w=st.tuples(*(st.floats(-1, 1, allow_subnormal=False) for _ in range(3))),
+    point=st.tuples(*(st.floats(-10, 10, allow_subnormal=False) for _ in range(3))),
 )
 def test_rigid_body_motions_any_running_bond_wall(n, nc, dims, u0, w, point):
     a, b, s = dims
@@ -98,7 +98,8 @@ def test_rigid_body_motions_any_running_bond_wall(n, nc, dims, u0, w, point):
     its = detect_interfaces(blocks)
     H = compatibility_matrix(blocks, its)
     q = rigid_motion(blocks.centres, u0, w, np.asarray(point))
-    scale = max(np.abs(q).max(), 1e-300)
+    # round-off of w x r scales with |w| times the arms, even when u0 cancels most of q
+    scale = max(np.abs(q).max(), np.abs(w).max() * 10.0, 1e-12)
     assert np.abs(H @ q.ravel()).max() <= 1e-12 * scale
 
 
