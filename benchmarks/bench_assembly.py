@@ -53,7 +53,6 @@ def pipeline(n_blocks: int) -> tuple[dict[str, float], dict[str, int]]:
     """One run: stage times [s] and sizes."""
     per_course, courses = wall_shape(n_blocks)
     blocks, base = add_base(running_bond_wall(per_course, courses, A, B, S, GAMMA))
-    t = {}
     t0 = time.perf_counter()
     its = detect_interfaces(blocks)
     t1 = time.perf_counter()
