@@ -160,8 +160,9 @@ class PointLoad:
         f = as_finite_array("force", self.force, (3,))
         r = as_finite_array("offset", self.offset, (3,))
         out = np.zeros((blocks.count, 6))
-        np.add.at(out, (idx, slice(0, 3)), f)
-        np.add.at(out, (idx, slice(3, 6)), np.cross(r, f))
+        # repeated indices add up (two beams on one block)
+        np.add.at(out[:, :3], idx, f)
+        np.add.at(out[:, 3:], idx, np.cross(r, f))
         return out
 
 
@@ -213,7 +214,7 @@ class Model:
         for sup in supports:
             fixed |= sup.mask(n)
         its = detect_interfaces(blocks) if interfaces is None else interfaces
-        fully = fixed.all(axis=1)
+        fully: np.ndarray = fixed.all(axis=1)
         keep = ~(fully[its.block_i] & fully[its.block_j])
         its = its.subset(np.flatnonzero(keep))
         m = its.count
@@ -232,8 +233,20 @@ class Model:
         live = np.zeros((n, 6))
         for load in loads:
             (live if load.live else dead)[...] += load.vector(blocks)
+        kn, kt, friction, tensile, alpha = props.T.copy()
         model = cls(
-            blocks, its, *props.T.copy(), fixed, dead, live, name=name, meta=dict(meta or {})
+            blocks,
+            its,
+            kn,
+            kt,
+            friction,
+            tensile,
+            alpha,
+            fixed,
+            dead,
+            live,
+            name=name,
+            meta=dict(meta or {}),
         )
         model.check_supported()
         return model

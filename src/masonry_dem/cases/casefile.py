@@ -6,6 +6,7 @@ never silently ignored.
 
 from __future__ import annotations
 
+import inspect
 import sys
 from dataclasses import dataclass, fields
 from importlib import resources
@@ -78,8 +79,8 @@ def build_blocks(geometry: dict) -> tuple[Blocks, int | None, np.ndarray]:
             f"case file [geometry] builder must be one of {sorted(_BUILDERS)}, got {builder!r}"
         )
     params = {k: v for k, v in geometry.items() if k not in _GEOMETRY_EXTRA}
-    func = _BUILDERS[builder]
-    allowed = set(func.__code__.co_varnames[: func.__code__.co_argcount])
+    func: Any = _BUILDERS[builder]
+    allowed = set(inspect.signature(func).parameters)
     _unknown("geometry", params, allowed)
     try:
         blocks = func(**params)

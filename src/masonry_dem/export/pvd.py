@@ -6,8 +6,10 @@ import xml.etree.ElementTree as ET
 from collections.abc import Sequence
 from pathlib import Path
 
+import numpy as np
 
-def write_pvd(path: Path, files: Sequence[str], times: Sequence[float]) -> None:
+
+def write_pvd(path: Path, files: Sequence[str], times: Sequence[float] | np.ndarray) -> None:
     """Write ``path`` listing ``files`` (relative to the PVD's folder) at ``times``."""
     if len(files) != len(times):
         raise ValueError(f"pvd: {len(files)} files but {len(times)} times")

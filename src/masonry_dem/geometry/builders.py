@@ -85,7 +85,9 @@ def stack_bond_column(courses: int, a: float, b: float, s: float, unit_weight: f
     k = np.arange(nc)
     centres = np.stack([np.full(nc, b / 2), (k + 0.5) * a, np.full(nc, s / 2)], axis=1)
     return Blocks(
-        centres, np.tile([b, a, s], (nc, 1)), positive_scalar("unit_weight", unit_weight, False)
+        centres,
+        np.tile([b, a, s], (nc, 1)),
+        np.full(nc, positive_scalar("unit_weight", unit_weight, False)),
     )
 
 
