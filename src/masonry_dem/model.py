@@ -214,7 +214,7 @@ class Model:
         for sup in supports:
             fixed |= sup.mask(n)
         its = detect_interfaces(blocks) if interfaces is None else interfaces
-        fully: np.ndarray = fixed.all(axis=1)
+        fully = np.asarray(fixed.all(axis=1), dtype=bool)
         keep = ~(fully[its.block_i] & fully[its.block_j])
         its = its.subset(np.flatnonzero(keep))
         m = its.count
