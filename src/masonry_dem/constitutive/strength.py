@@ -87,6 +87,7 @@ FLAG_ROCKING_2: Final[int] = 4
 FLAG_DETACHED: Final[int] = 8
 
 _NEWTON_MAX_ITER = 60
+_SNAP = 1e-12  # relative size below which a reduced side is zero
 _NEWTON_RTOL = 1e-13
 
 
@@ -220,7 +221,7 @@ def _radial_factor(a: NDArray, b: NDArray, alpha: NDArray) -> NDArray:
 
 def _safe_ratio(demand: NDArray, capacity: NDArray) -> NDArray:
     """demand/capacity with 0/0 = 0 and d/0 = inf (demand >= 0, capacity >= 0)."""
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         r = demand / capacity
     return np.where(demand == 0, 0.0, np.where(capacity > 0, r, np.inf))
 
@@ -309,7 +310,10 @@ def _reduced_sides(
     with np.errstate(divide="ignore", invalid="ignore"):
         l1r = np.where(cap > 0, l1 - 2.0 * abs_m2 / cap, 0.0)
         l2r = np.where(cap > 0, l2 - 2.0 * abs_m1 / cap, 0.0)
-    return np.clip(l1r, 0.0, l1), np.clip(l2r, 0.0, l2)
+    # a moment clipped to its rocking limit gives l - 2 |m| / cap = 0 up to rounding: snap it
+    l1r = np.where(l1r <= _SNAP * l1, 0.0, np.minimum(l1r, l1))
+    l2r = np.where(l2r <= _SNAP * l2, 0.0, np.minimum(l2r, l2))
+    return l1r, l2r
 
 
 def check_strength(
@@ -334,9 +338,9 @@ def check_strength(
 
     Projection order: fn > ft -> detached, projected to ``[0, 0, ft, 0, 0, 0]``; then m1, m2
     clipped to their rocking limits; then (f1, f2, m3) scaled radially onto the shear-torsion
-    boundary. Where the torsion capacity is zero (both reduced sides zero) and m3 != 0, m3 is
-    set to zero and the shear force is clipped radially to fsu. Actions inside the domain are
-    returned unchanged (bitwise).
+    boundary. Where m3 != 0 meets a zero torsion capacity (both reduced sides zero), the
+    scale factor is 0, the limit of the radial projection as the capacity vanishes: f1, f2 and
+    m3 are all dropped. Actions inside the domain are returned unchanged (bitwise).
 
     Utilisation: the largest of the demand/capacity ratios of the trial actions, namely
     ``max(fn, 0)/ft`` (or, for ft = 0, 1 at fn = 0 and 0 in compression), ``|m1|/(cap l2/2)``,
@@ -381,21 +385,18 @@ def check_strength(
     with np.errstate(over="ignore", invalid="ignore"):
         phi = a**al + b
     sliding = ~detached & (phi > 1.0 + SHEAR_TORSION_TOLERANCE)
+    # s = 0 (all of f1, f2, m3 dropped) where m3 != 0 meets a zero torsion or shear capacity:
+    # the limit of the radial projection as the capacity vanishes
     s = _radial_factor(a, b, al)
-    no_torsion = np.isinf(a)  # m3 != 0 with zero torsion capacity
-    with np.errstate(divide="ignore"):
-        s_f = np.where(no_torsion, np.minimum(1.0, 1.0 / np.sqrt(b)), s)
-    s_m = np.where(no_torsion, 0.0, s)
-    s_f = np.where(sliding, s_f, 1.0)  # keep non-sliding rows finite (they are not scaled)
-    s_m = np.where(sliding, s_m, 1.0)
+    scale = np.where(sliding, s, 1.0)  # keep non-sliding rows finite (they are not scaled)
 
     # projection (np.where keeps untouched entries bitwise)
     proj = act.copy()
-    proj[:, 0] = np.where(sliding, f1 * s_f, f1)
-    proj[:, 1] = np.where(sliding, f2 * s_f, f2)
+    proj[:, 0] = np.where(sliding, f1 * scale, f1)
+    proj[:, 1] = np.where(sliding, f2 * scale, f2)
     proj[:, 3] = m1_c
     proj[:, 4] = m2_c
-    proj[:, 5] = np.where(sliding, m3 * s_m, m3)
+    proj[:, 5] = np.where(sliding, m3 * scale, m3)
     proj[detached] = 0.0
     proj[detached, 2] = ft[detached]
 
@@ -418,10 +419,10 @@ def check_strength(
     factors[detached] = 0.0
 
     # utilisation
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         u_tension = np.where(ft > 0, np.maximum(fn, 0.0) / ft, np.where(fn >= 0, 1.0, 0.0))
         u_tension = np.where(detached & (ft == 0), np.inf, u_tension)
-        u_st = np.where(no_torsion, np.inf, 1.0 / s)
+        u_st = 1.0 / s
     u_rock = np.maximum(_safe_ratio(abs_m1, m1_lim), _safe_ratio(abs_m2, m2_lim))
     util = np.where(detached, u_tension, np.maximum(np.maximum(u_tension, u_rock), u_st))
     return StrengthCheck(

@@ -1,0 +1,47 @@
+"""Shared fixtures of the constitutive tests: the paper's reference numbers, read from TOML."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import pytest
+
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python 3.10
+    import tomli as tomllib
+
+_NAME = "baraldi_cecchi_2016.toml"
+
+
+def _reference_path() -> Path:
+    env = os.environ.get("MASONRY_DEM_REFERENCE")
+    if env:
+        return Path(env)
+    for parent in Path(__file__).resolve().parents:
+        candidate = parent / "shared" / "reference" / _NAME
+        if candidate.is_file():
+            return candidate
+    raise FileNotFoundError(
+        f"{_NAME} not found in any shared/reference/ above the tests; "
+        "set MASONRY_DEM_REFERENCE to its path"
+    )
+
+
+@pytest.fixture(scope="session")
+def reference() -> dict:
+    """The whole reference TOML."""
+    with _reference_path().open("rb") as fh:
+        return tomllib.load(fh)
+
+
+@pytest.fixture(scope="session")
+def ref_interface(reference: dict) -> dict:
+    """Section 2.1 reference interface (l1 = b, l2 = s)."""
+    return reference["interface_spring_model"]
+
+
+@pytest.fixture(scope="session")
+def table_a1(reference: dict) -> dict:
+    return reference["table_A1"]
