@@ -437,10 +437,10 @@ def fit_alpha(
     order = np.argsort(phi)
     phis = np.linspace(0.0, 0.5 * np.pi, int(samples) + 2)[1:-1]
     r = np.interp(phis, phi[order], np.hypot(x, y)[order])
-    a, b = r * np.cos(phis), (r * np.sin(phis)) ** 2
+    a, c = r * np.cos(phis), r * np.sin(phis)
 
     def objective(alpha: float) -> float:
-        s = _radial_factor(a, b, np.full_like(a, alpha))
+        s = _radial_factor(a, c, np.full_like(a, alpha))
         return float(np.sum(np.log(s) ** 2))
 
     res = minimize_scalar(objective, bounds=(1.0, 4.0), method="bounded", options={"xatol": 1e-6})

@@ -182,39 +182,43 @@ def alpha_from_table(aspect: ArrayLike, direction: str = "f1") -> NDArray:
 # radial factor on the shear-torsion boundary
 
 
-def _radial_factor(a: NDArray, b: NDArray, alpha: NDArray) -> NDArray:
-    """The s > 0 solving ``(s a)^alpha + s^2 b = 1`` for a, b >= 0 and alpha >= 1.
+def _radial_factor(a: NDArray, c: NDArray, alpha: NDArray) -> NDArray:
+    """The s > 0 solving ``(s a)^alpha + (s c)^2 = 1`` for a, c >= 0 and alpha >= 1.
 
-    Returns inf where a = b = 0 and 0 where a or b is inf. Closed forms for alpha = 1, 2 and
-    when a or b vanishes; otherwise Newton's method from the upper bound min(1/a, 1/sqrt(b)),
-    which converges monotonically because the left-hand side is convex and increasing in s.
+    ``a = |m3|/m3u`` and ``c = |f|/fsu`` (not squared, so tiny forces do not underflow). Returns
+    inf where a = c = 0 and 0 where a or c is inf. With ``m = max(a, c)`` the problem is solved
+    for ``t = s m`` in (0, 1] on O(1) numbers, ``(t a/m)^alpha + (t c/m)^2 = 1``: closed forms
+    for alpha = 1, 2 and when a or c vanishes, otherwise Newton's method from t = 1, which
+    converges monotonically because the left-hand side is convex and increasing in t.
     """
-    a, b, alpha = np.broadcast_arrays(a, b, alpha)
-    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        s_a = 1.0 / a
-        s_b = 1.0 / np.sqrt(b)
-        s = np.minimum(s_a, s_b)  # exact when a or b is 0 (or inf)
-        both = (a > 0) & (b > 0) & np.isfinite(a) & np.isfinite(b)
+    a, c, alpha = np.broadcast_arrays(a, c, alpha)
+    m = np.maximum(a, c)
+    both = (a > 0) & (c > 0) & np.isfinite(m)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        big_a = np.where(both, a / m, 0.0)
+        big_c = np.where(both, c / m, 0.0)
+        t = np.ones(m.shape)
         two = both & (alpha == 2.0)
-        s = np.where(two, 1.0 / np.sqrt(a * a + b), s)
+        t = np.where(two, 1.0 / np.hypot(big_a, big_c), t)
         one = both & (alpha == 1.0)
-        s = np.where(one, 2.0 / (a + np.sqrt(a * a + 4.0 * b)), s)
+        t = np.where(one, 2.0 / (big_a + np.sqrt(big_a * big_a + 4.0 * big_c * big_c)), t)
+        s = t / m  # t = 1 unless both > 0: s = 1/max(a, c), inf at a = c = 0, 0 at inf
     idx = np.flatnonzero(both & ~one & ~two)
     if idx.size:
-        aa, bb, al = a[idx], b[idx], alpha[idx]
-        x = s[idx]
+        aa, cc, al = big_a[idx], big_c[idx] ** 2, alpha[idx]
+        x = t[idx]
         for _ in range(_NEWTON_MAX_ITER):  # iterate on the rows not yet converged
             p = (x * aa) ** al
-            g = p + x * x * bb - 1.0
-            dg = al * p / x + 2.0 * x * bb
+            g = p + x * x * cc - 1.0
+            dg = al * p / x + 2.0 * x * cc
             step = g / dg
             x = x - step
-            s[idx] = x
+            s[idx] = x / m[idx]
             keep = np.abs(step) > _NEWTON_RTOL * x
             if not keep.any():
                 break
-            idx, x, aa, bb, al = idx[keep], x[keep], aa[keep], bb[keep], al[keep]
-        else:  # pragma: no cover - Newton from the right of a convex root always converges
+            idx, x, aa, cc, al = idx[keep], x[keep], aa[keep], cc[keep], al[keep]
+        else:  # pragma: no cover - Newton on a convex increasing function always converges
             logger.warning("radial factor: Newton did not converge to %g", _NEWTON_RTOL)
     return s
 
@@ -381,13 +385,13 @@ def check_strength(
         c_t = _torsion_constant(l1_, l2_)
     m3u = c_t * fsu
     a = _safe_ratio(np.abs(m3), m3u)
-    b = _safe_ratio(f1 * f1 + f2 * f2, fsu * fsu)
-    with np.errstate(over="ignore", invalid="ignore"):
-        phi = a**al + b
+    c = _safe_ratio(np.hypot(f1, f2), fsu)
+    with np.errstate(over="ignore", invalid="ignore", under="ignore"):
+        phi = a**al + c * c
     sliding = ~detached & (phi > 1.0 + SHEAR_TORSION_TOLERANCE)
     # s = 0 (all of f1, f2, m3 dropped) where m3 != 0 meets a zero torsion or shear capacity:
     # the limit of the radial projection as the capacity vanishes
-    s = _radial_factor(a, b, al)
+    s = _radial_factor(a, c, al)
     scale = np.where(sliding, s, 1.0)  # keep non-sliding rows finite (they are not scaled)
 
     # projection (np.where keeps untouched entries bitwise)
