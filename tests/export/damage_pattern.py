@@ -46,8 +46,9 @@ def states_at(model: Model, step: int) -> np.ndarray:
     return np.where(band <= step, band, 0).astype(np.int32)
 
 
-def write_results(folder: Path, model: Model, n_steps: int = 5, lam_max: float = 0.5,
-                  amplify: float = 1.0) -> History:
+def write_results(
+    folder: Path, model: Model, n_steps: int = 5, lam_max: float = 0.5, amplify: float = 1.0
+) -> History:
     lin = solve_linear(model, 1.0)
     hist = History()
     writer = ResultsWriter(folder, model)

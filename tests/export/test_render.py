@@ -132,8 +132,9 @@ def test_damage_colours_where_interfaces_failed(results, tmp_path):
     """Bands 0..4 from left to right in the front view, right to left in the back view."""
     centres = {}
     for view in ("front", "back"):
-        code = classify(iio.imread(render.render_step(results, view=view,
-                                                      out=tmp_path / f"{view}.png")))
+        code = classify(
+            iio.imread(render.render_step(results, view=view, out=tmp_path / f"{view}.png"))
+        )
         cols = np.nonzero(code >= 0)[1]
         centres[view] = [np.median(cols[code[code >= 0] == k]) for k in range(len(STATE_NAMES))]
     assert np.all(np.diff(centres["front"]) > 0)
@@ -152,8 +153,9 @@ def test_earlier_step_shows_its_own_states(results, model, tmp_path):
 
 def test_oblique_and_side_views_show_damage(results, tmp_path):
     for view in ("oblique", "side"):
-        code = classify(iio.imread(render.render_step(results, view=view,
-                                                      out=tmp_path / f"{view}.png")))
+        code = classify(
+            iio.imread(render.render_step(results, view=view, out=tmp_path / f"{view}.png"))
+        )
         assert (code >= 0).sum() > 500, view
 
 
@@ -257,12 +259,40 @@ def test_unknown_view_and_bad_arguments(results_copy, tmp_path):
 def test_cli_render(results_copy):
     from masonry_dem.cli import main
 
-    assert main(["render", str(results_copy), "--step", "2", "--view", "front", "--pushover",
-                 "--size", "300x200"]) == 0
+    assert (
+        main(
+            [
+                "render",
+                str(results_copy),
+                "--step",
+                "2",
+                "--view",
+                "front",
+                "--pushover",
+                "--size",
+                "300x200",
+            ]
+        )
+        == 0
+    )
     assert (results_copy / "render_front_0002.png").is_file()
     assert (results_copy / "pushover.png").is_file()
-    assert main(["render", str(results_copy), "--animate", "--view", "side", "--size", "160x120",
-                 "--scale", "0"]) == 0
+    assert (
+        main(
+            [
+                "render",
+                str(results_copy),
+                "--animate",
+                "--view",
+                "side",
+                "--size",
+                "160x120",
+                "--scale",
+                "0",
+            ]
+        )
+        == 0
+    )
     assert (results_copy / "render_side_0004.png").is_file()
     assert iio.imread(results_copy / "animation_side.gif", index=None).shape[0] == 5
 

@@ -36,17 +36,32 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
         "pushover.png.",
     )
     p.add_argument("results", help="results folder (blocks.pvd, interfaces.pvd, steps/, ...)")
-    p.add_argument("--step", type=_step, default="last",
-                   help="step number, or 'last' (default) / 'first'")
-    p.add_argument("--view", action="append", choices=VIEW_CHOICES + ("all",),
-                   help="camera preset (default oblique); repeat it or give 'all' for several")
-    p.add_argument("--scale", type=float, default=None,
-                   help="displacement amplification (default: automatic, ~6%% of the wall size)")
-    p.add_argument("--animate", action="store_true",
-                   help="also write an animation (GIF) of every step")
+    p.add_argument(
+        "--step", type=_step, default="last", help="step number, or 'last' (default) / 'first'"
+    )
+    p.add_argument(
+        "--view",
+        action="append",
+        choices=VIEW_CHOICES + ("all",),
+        help="camera preset (default oblique); repeat it or give 'all' for several",
+    )
+    p.add_argument(
+        "--scale",
+        type=float,
+        default=None,
+        help="displacement amplification (default: automatic, ~6%% of the wall size)",
+    )
+    p.add_argument(
+        "--animate", action="store_true", help="also write an animation (GIF) of every step"
+    )
     p.add_argument("--pushover", action="store_true", help="also plot the pushover curve")
-    p.add_argument("--size", type=_size, default=(1200, 900), metavar="WxH",
-                   help="picture size in pixels (default 1200x900; animation: 800x600 unless set)")
+    p.add_argument(
+        "--size",
+        type=_size,
+        default=(1200, 900),
+        metavar="WxH",
+        help="picture size in pixels (default 1200x900; animation: 800x600 unless set)",
+    )
     p.add_argument("--fps", type=float, default=8.0, help="animation frames per second (8)")
     p.set_defaults(func=run)
     return p
@@ -64,12 +79,18 @@ def run(args: argparse.Namespace) -> int:
     series = render.open_results(args.results)
     series.index_of(args.step)
     for view in views:
-        written.append(render.render_step(args.results, step=args.step, view=view,
-                                          scale=args.scale, window_size=args.size))
+        written.append(
+            render.render_step(
+                args.results, step=args.step, view=view, scale=args.scale, window_size=args.size
+            )
+        )
     if args.animate:
         size = args.size if args.size != (1200, 900) else (800, 600)
-        written.append(render.render_animation(args.results, fps=args.fps, view=views[0],
-                                               scale=args.scale, window_size=size))
+        written.append(
+            render.render_animation(
+                args.results, fps=args.fps, view=views[0], scale=args.scale, window_size=size
+            )
+        )
     if args.pushover:
         written.append(render.plot_pushover(args.results))
     for path in written:

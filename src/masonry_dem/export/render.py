@@ -237,7 +237,9 @@ def read_pushover(folder: Path | str) -> dict[str, np.ndarray]:
     """Columns of ``pushover.csv`` (step, lambda, control_displacement) as arrays."""
     path = Path(folder) / "pushover.csv"
     if not path.is_file():
-        raise FileNotFoundError(f"incomplete results folder {Path(folder)}: pushover.csv is missing")
+        raise FileNotFoundError(
+            f"incomplete results folder {Path(folder)}: pushover.csv is missing"
+        )
     with path.open(newline="") as fh:
         rows = list(csv.reader(fh))
     if not rows:
@@ -313,7 +315,9 @@ def _wall_size(data: _StepData) -> float:
 
 
 def _max_displacement(data: _StepData) -> float:
-    return float(np.sqrt(np.max(np.sum(data.block_disp**2, axis=2)))) if data.block_disp.size else 0.0
+    return (
+        float(np.sqrt(np.max(np.sum(data.block_disp**2, axis=2)))) if data.block_disp.size else 0.0
+    )
 
 
 def auto_scale(max_displacement: float, wall_size: float) -> float:
@@ -343,7 +347,9 @@ def _block_surface(data: _StepData, scale: float, gap: float):
     dc = d.mean(axis=1)
     # displacement field of a rigid (affine) motion fitted on the 8 corners: exact for blocks
     denom = np.einsum("nik,nik->nk", x, x)
-    grad = np.einsum("nij,nik->njk", d - dc[:, None, :], x) / np.where(denom > 0, denom, 1.0)[:, None]
+    grad = (
+        np.einsum("nij,nik->njk", d - dc[:, None, :], x) / np.where(denom > 0, denom, 1.0)[:, None]
+    )
     half = np.abs(x).max(axis=1)
     shrunk_half = np.maximum(half - gap / 2, 0.5 * half)
     xs = np.sign(x) * shrunk_half[:, None, :]
@@ -450,19 +456,19 @@ class _Scene:
             self.blocks, scalars="rgb", rgb=True, show_scalar_bar=False, ambient=0.3, diffuse=0.75
         )
         self.joints = None
-        if first.joint_points is not None and first.joint_points.shape[0]:
+        if first.joint_points is not None and first.state is not None and first.joint_points.size:
             m = first.joint_points.shape[0]
             self.joints = pv.PolyData.from_regular_faces(
                 _joint_surface(first, 0.0, gap), _hex_faces(m)
             )
             self.joints.cell_data["rgb"] = np.repeat(state_colours(first.state), 6, axis=0)
-            p.add_mesh(
-                self.joints, scalars="rgb", rgb=True, lighting=False, show_scalar_bar=False
-            )
+            p.add_mesh(self.joints, scalars="rgb", rgb=True, lighting=False, show_scalar_bar=False)
         if legend:
             box = p.add_legend(
-                labels=[[name, [c / 255 for c in col]] for name, col in zip(
-                    STATE_NAMES, STATE_COLOURS, strict=True)],
+                labels=[
+                    [name, [c / 255 for c in col]]
+                    for name, col in zip(STATE_NAMES, STATE_COLOURS, strict=True)
+                ],
                 bcolor=(1.0, 1.0, 1.0),
                 border=True,
                 face="rectangle",
@@ -488,8 +494,12 @@ class _Scene:
         up = up - direction * (up @ direction)
         up /= np.linalg.norm(up)
         right = np.cross(up, direction)
-        corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
-                            for z in (lo[2], hi[2])]) - centre
+        corners = (
+            np.array(
+                [[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])]
+            )
+            - centre
+        )
         half_w = float(np.max(np.abs(corners @ right))) or 1.0
         half_h = float(np.max(np.abs(corners @ up))) or 1.0
         depth = float(np.max(np.abs(corners @ direction)))
@@ -523,8 +533,9 @@ class _Scene:
     def title(self, text: str) -> None:
         w, h = self.plotter.window_size
         size = max(6, int(round(13 * min(w / 1200, h / 900))))
-        self.plotter.add_text(text, position="upper_edge", font_size=size, color="black",
-                              name="title")
+        self.plotter.add_text(
+            text, position="upper_edge", font_size=size, color="black", name="title"
+        )
 
     def image(self) -> np.ndarray:
         return self.plotter.screenshot(return_img=True)
@@ -587,8 +598,14 @@ def render_step(
             tmp.unlink(missing_ok=True)
     finally:
         scene.close()
-    log.info("rendered step %d of %s (%s view, scale %g) to %s",
-             int(series.steps[index]), series.folder, view, s, path)
+    log.info(
+        "rendered step %d of %s (%s view, scale %g) to %s",
+        int(series.steps[index]),
+        series.folder,
+        view,
+        s,
+        path,
+    )
     return path
 
 
@@ -611,15 +628,18 @@ def render_animation(
     if not math.isfinite(fps) or not 0 < fps <= 100:
         raise ValueError(f"fps must be in (0, 100], got {fps!r}")
     series = open_results(folder)
-    path = _check_out(out, series.folder / f"animation_{view}.gif", _ANIMATION_SUFFIXES,
-                      "render_animation")
+    path = _check_out(
+        out, series.folder / f"animation_{view}.gif", _ANIMATION_SUFFIXES, "render_animation"
+    )
     import imageio.v3 as iio
 
     if path.suffix.lower() == ".mp4":
         try:
             import imageio_ffmpeg  # noqa: F401
         except ImportError as exc:
-            raise ValueError("an MP4 animation needs the imageio-ffmpeg package; write a .gif") from exc
+            raise ValueError(
+                "an MP4 animation needs the imageio-ffmpeg package; write a .gif"
+            ) from exc
     steps = [_read_step(series, k) for k in range(len(series.steps))]
     wall = max(_wall_size(d) for d in steps)
     if scale is None:
@@ -629,8 +649,7 @@ def render_animation(
     frames = []
     try:
         extent = np.concatenate(
-            [steps[0].block_points.reshape(-1, 3)]
-            + [_block_surface(d, scale, gap) for d in steps]
+            [steps[0].block_points.reshape(-1, 3)] + [_block_surface(d, scale, gap) for d in steps]
         )
         scene.frame_camera(np.array([extent.min(axis=0), extent.max(axis=0)]))
         for k, data in enumerate(steps):
@@ -685,8 +704,9 @@ def plot_pushover(folder: Path | str, out: Path | str | None = None) -> Path:
     ax.set_ylabel("load multiplier $\\lambda$")
     collapse = summary.get("lambda") if summary.get("status") == "collapse" else None
     if isinstance(collapse, (int, float)):
-        ax.axhline(collapse, ls="--", color="#c0392b", lw=1,
-                   label=f"collapse $\\lambda$ = {collapse:.4g}")
+        ax.axhline(
+            collapse, ls="--", color="#c0392b", lw=1, label=f"collapse $\\lambda$ = {collapse:.4g}"
+        )
         ax.legend(loc="lower right")
     ax.grid(True, alpha=0.3)
     name = summary.get("name", folder.name)

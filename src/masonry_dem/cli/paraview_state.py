@@ -1,0 +1,44 @@
+"""``masonry-dem paraview-state NAME RESULTS``: copy a ParaView state next to a results folder
+with its paths filled in, so a double-click (or ``paraview --state=...``) opens it."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from masonry_dem.export.paraview_state import STATES
+
+
+def add_parser(subparsers) -> argparse.ArgumentParser:
+    p = subparsers.add_parser(
+        "paraview-state",
+        help="write a ParaView state (damage map, deformed shape, forces) into a results folder",
+        description="Copy a ParaView state into a results folder with the data file paths, "
+        "the camera and the warp scale filled in. States: damage_map (interfaces coloured by "
+        "state), deformed_shape (Warp By Vector on displacement), force_view (normal force and "
+        "utilisation). 'all' writes the three.",
+    )
+    p.add_argument("name", choices=STATES + ("all",), help="state to copy")
+    p.add_argument("results", help="results folder (blocks.pvd, interfaces.pvd, steps/)")
+    p.add_argument(
+        "--scale", type=float, default=None, help="Warp By Vector scale factor (default: automatic)"
+    )
+    p.add_argument("--force", action="store_true", help="replace an existing copy")
+    p.set_defaults(func=run)
+    return p
+
+
+def run(args: argparse.Namespace) -> int:
+    from masonry_dem.export.paraview_state import copy_state
+
+    names = STATES if args.name == "all" else (args.name,)
+    try:
+        paths = [copy_state(n, args.results, scale=args.scale, overwrite=args.force) for n in names]
+    except FileExistsError as exc:
+        print(f"masonry-dem: error: {exc}", file=sys.stderr)
+        return 2
+    for path in paths:
+        print(path)
+    if paths:
+        print(f"open with: paraview --state={paths[0]}")
+    return 0

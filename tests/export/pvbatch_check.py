@@ -1,0 +1,86 @@
+"""Run under ``xvfb-run -a pvbatch`` by test_paraview.py (ParaView's own Python).
+
+pvbatch pvbatch_check.py state STATE.pvsm DATA_DIR|- OUT.png [reset]
+    LoadState (with data_directory=DATA_DIR, or the file names stored in the state when
+    DATA_DIR is "-"), go to the last time step, optionally reset the cameras, save a
+    screenshot of the layout; print a JSON line with the time steps and the sources.
+pvbatch pvbatch_check.py states JOBS.json
+    the same for a list of jobs [[state, data_dir, out, reset], ...] in one ParaView
+    session (reset between jobs); prints a JSON list.
+pvbatch pvbatch_check.py pvd FILE.pvd [FILE.pvd ...]
+    open each PVD and print a JSON line {file: {timesteps, cells, arrays}}.
+"""
+
+import json
+import sys
+
+import paraview.simple as pvs
+
+
+def state(path, data_dir, out, reset):
+    print("RESULT " + json.dumps(_state(path, data_dir, out, reset)))
+
+
+def states(jobs_file):
+    with open(jobs_file) as fh:
+        jobs = json.load(fh)
+    results = []
+    for path, data_dir, out, reset in jobs:
+        pvs.ResetSession()
+        results.append(_state(path, data_dir, out, reset))
+    print("RESULT " + json.dumps(results))
+
+
+def _state(path, data_dir, out, reset):
+    if data_dir == "-":
+        pvs.LoadState(path)
+    else:
+        pvs.LoadState(path, data_directory=data_dir, restrict_to_data_directory=True)
+    scene = pvs.GetAnimationScene()
+    scene.GoToLast()
+    layout = pvs.GetLayouts()
+    layout = list(layout.values())[0]
+    views = [v for v in pvs.GetViews() if v.GetXMLName() == "RenderView"]
+    if reset:
+        for v in views:
+            v.ResetCamera(False)
+    files = {}
+    for (name, _), src in pvs.GetSources().items():
+        if hasattr(src, "FileName"):
+            files[name] = src.FileName
+    pvs.SaveScreenshot(out, layout, ImageResolution=[1200, 900])
+    return {
+        "timesteps": list(pvs.GetTimeKeeper().TimestepValues),
+        "time": views[0].ViewTime if views else None,
+        "end_time": scene.EndTime,
+        "files": files,
+        "views": len(views),
+        "sources": sorted(name for (name, _) in pvs.GetSources()),
+    }
+
+
+def pvd(paths):
+    out = {}
+    for path in paths:
+        reader = pvs.PVDReader(FileName=path)
+        reader.UpdatePipelineInformation()
+        times = list(reader.TimestepValues)
+        reader.UpdatePipeline(times[-1] if times else 0.0)
+        out[path] = {
+            "timesteps": times,
+            "cells": reader.GetDataInformation().GetNumberOfCells(),
+            "cell_arrays": sorted(reader.CellData.keys()),
+            "point_arrays": sorted(reader.PointData.keys()),
+        }
+    print("RESULT " + json.dumps(out))
+
+
+if __name__ == "__main__":
+    if sys.argv[1] == "state":
+        state(sys.argv[2], sys.argv[3], sys.argv[4], len(sys.argv) > 5 and sys.argv[5] == "reset")
+    elif sys.argv[1] == "states":
+        states(sys.argv[2])
+    elif sys.argv[1] == "pvd":
+        pvd(sys.argv[2:])
+    else:
+        sys.exit(f"unknown mode {sys.argv[1]!r}")

@@ -1,0 +1,305 @@
+"""ParaView state files, tested in a real ParaView (``xvfb-run -a pvbatch``) against a results
+folder that is not the one the states were made from (other wall, other number of steps).
+
+Without pvbatch or xvfb-run the ParaView tests skip, saying so (they fail instead when
+MASONRY_DEM_REQUIRE_PARAVIEW=1, for CI); the tests of copy_state and of the shipped files run
+everywhere.
+"""
+
+from __future__ import annotations
+
+import filecmp
+import json
+import os
+import shutil
+import subprocess
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import numpy as np
+import pytest
+from damage_pattern import build_model, states_at, write_results
+
+from masonry_dem.export import paraview_state
+from masonry_dem.export.pvd import read_pvd
+from masonry_dem.export.render import STATE_COLOURS
+from masonry_dem.results import STATE_NAMES
+
+REPO = Path(__file__).resolve().parents[2]
+USER_STATES = REPO / "paraview_states"
+CHECK = Path(__file__).with_name("pvbatch_check.py")
+PVBATCH_TIMEOUT = 300
+
+
+# --------------------------------------------------------------------------- helpers
+@pytest.fixture(scope="module")
+def pvbatch() -> list[str]:
+    missing = [tool for tool in ("pvbatch", "xvfb-run") if shutil.which(tool) is None]
+    if missing and os.environ.get("MASONRY_DEM_REQUIRE_PARAVIEW") == "1":
+        pytest.fail(f"MASONRY_DEM_REQUIRE_PARAVIEW=1 but {' and '.join(missing)} not on PATH")
+    if missing:
+        pytest.skip(
+            f"ParaView tests need {' and '.join(missing)} on PATH "
+            "(Debian/Ubuntu: apt-get install paraview xvfb); CI installs them"
+        )
+    return ["xvfb-run", "-a", "pvbatch"]
+
+
+def run_pvbatch(cmd: list[str], *args) -> dict:
+    proc = subprocess.run(
+        [*cmd, str(CHECK), *map(str, args)],
+        capture_output=True,
+        text=True,
+        timeout=PVBATCH_TIMEOUT,
+    )
+    lines = [ln for ln in proc.stdout.splitlines() if ln.startswith("RESULT ")]
+    assert proc.returncode == 0 and lines, (
+        f"pvbatch failed ({proc.returncode}):\n{proc.stdout[-3000:]}\n{proc.stderr[-3000:]}"
+    )
+    return json.loads(lines[-1][len("RESULT ") :])
+
+
+def damage_codes(img: np.ndarray, tol: float = 40.0) -> np.ndarray:
+    """State code of pixels drawn in a damage colour (-1 elsewhere), with the scalar bar
+    (upper right) and the orientation axes (lower left) masked."""
+    rgb = img[..., :3].astype(float)
+    ref = np.array(STATE_COLOURS, dtype=float)
+    dist = np.linalg.norm(rgb[:, :, None, :] - ref[None, None], axis=-1)
+    code = np.where(dist.min(axis=-1) < tol, dist.argmin(axis=-1), -1)
+    h, w = code.shape
+    code[: int(0.4 * h), int(0.85 * w) :] = -1
+    code[int(0.75 * h) :, : int(0.2 * w)] = -1
+    return code
+
+
+def assert_not_blank(img: np.ndarray) -> None:
+    rgb = img[..., :3].astype(int)
+    background = np.all(rgb == rgb[0, 0], axis=-1)
+    assert background.mean() < 0.97, "screenshot is (almost) blank"
+    packed = (rgb[..., 0] << 16) | (rgb[..., 1] << 8) | rgb[..., 2]
+    assert np.unique(packed).size > 20, "screenshot has hardly any colour"
+
+
+def expected_fractions(model, state) -> np.ndarray:
+    q = model.interfaces.corner_points()
+    length = np.ptp(q[:, :, 0], axis=1) + np.ptp(q[:, :, 1], axis=1)
+    w = np.bincount(state, weights=length, minlength=len(STATE_NAMES))
+    return w / w.sum()
+
+
+@pytest.fixture(scope="module")
+def pv_results(tmp_path_factory):
+    """12 courses x 10 blocks, 5 steps: not the sample the states were made from."""
+    model = build_model()
+    folder = tmp_path_factory.mktemp("pv") / "wall"
+    write_results(folder, model)
+    return model, folder
+
+
+# --------------------------------------------------------------------------- shipped files
+def test_user_copies_are_identical_to_the_shipped_states():
+    for name in paraview_state.STATES:
+        shipped = paraview_state.state_path(name)
+        user = USER_STATES / f"{name}.pvsm"
+        assert user.is_file(), f"{user} missing: run python paraview_states/make_states.py"
+        assert filecmp.cmp(shipped, user, shallow=False), (
+            f"{user} differs from {shipped}: regenerate both with paraview_states/make_states.py"
+        )
+
+
+@pytest.mark.parametrize("name", paraview_state.STATES)
+def test_shipped_states_point_only_at_the_placeholder(name):
+    root = ET.parse(paraview_state.state_path(name)).getroot()
+    files = [
+        e.get("value")
+        for p in root.iter("Property")
+        if p.get("name") == "FileName"
+        for e in p.findall("Element")
+    ]
+    assert sorted(files) == sorted(
+        f"{paraview_state.PLACEHOLDER}/{f}" for f in ("blocks.pvd", "interfaces.pvd")
+    )
+    text = paraview_state.state_path(name).read_text()
+    assert "/tmp/" not in text and str(REPO) not in text
+
+
+def test_state_names():
+    assert paraview_state.state_path("damage-map.pvsm") == paraview_state.state_path("damage_map")
+    with pytest.raises(ValueError, match="unknown ParaView state 'damage'.*damage_map"):
+        paraview_state.state_path("damage")
+
+
+# --------------------------------------------------------------------------- copy_state
+def test_copy_state_fills_in_the_folder(results_copy):
+    out = paraview_state.copy_state("deformed_shape", results_copy, scale=12.5)
+    assert out == results_copy / "deformed_shape.pvsm"
+    root = ET.parse(out).getroot()
+    files = sorted(
+        e.get("value")
+        for p in root.iter("Property")
+        if p.get("name") == "FileName"
+        for e in p.findall("Element")
+    )
+    assert files == [str((results_copy / f).resolve()) for f in ("blocks.pvd", "interfaces.pvd")]
+    scales = [
+        float(p.find("Element").get("value"))
+        for proxy in root.iter("Proxy")
+        if proxy.get("type") == "WarpVector"
+        for p in proxy.findall("Property")
+        if p.get("name") == "ScaleFactor"
+    ]
+    assert scales == [12.5, 12.5]
+
+
+def test_copy_state_refuses_to_overwrite(results_copy):
+    out = paraview_state.copy_state("damage_map", results_copy)
+    out.write_text("edited by the user")
+    with pytest.raises(FileExistsError, match="overwrite"):
+        paraview_state.copy_state("damage_map", results_copy)
+    assert out.read_text() == "edited by the user"
+    paraview_state.copy_state("damage_map", results_copy, overwrite=True)
+    assert out.read_text() != "edited by the user"
+
+
+def test_copy_state_bad_input(results_copy, tmp_path):
+    with pytest.raises(FileNotFoundError, match="not found"):
+        paraview_state.copy_state("damage_map", tmp_path / "missing")
+    with pytest.raises(ValueError, match="unknown ParaView state"):
+        paraview_state.copy_state("nope", results_copy)
+    with pytest.raises(ValueError, match=r"\.pvsm"):
+        paraview_state.copy_state("damage_map", results_copy, out=results_copy / "blocks.pvd")
+    (results_copy / "interfaces.pvd").unlink()
+    for f in (results_copy / "steps").glob("interfaces_*.vtu"):
+        f.unlink()
+    with pytest.raises(FileNotFoundError, match="interfaces.pvd"):
+        paraview_state.copy_state("damage_map", results_copy)
+
+
+def test_cli_paraview_state(results_copy, capsys):
+    from masonry_dem.cli import main
+
+    assert main(["paraview-state", "all", str(results_copy)]) == 0
+    for name in paraview_state.STATES:
+        assert (results_copy / f"{name}.pvsm").is_file()
+    assert main(["paraview-state", "damage_map", str(results_copy)]) == 2
+    assert "exists" in capsys.readouterr().err
+    assert main(["paraview-state", "damage_map", str(results_copy), "--force"]) == 0
+    with pytest.raises(SystemExit):
+        main(["paraview-state", "nope", str(results_copy)])
+
+
+# --------------------------------------------------------------------------- in ParaView
+@pytest.mark.paraview
+def test_pvd_opens_in_paraview_with_every_time_step(pvbatch, pv_results):
+    model, folder = pv_results
+    files = {
+        "blocks.pvd": (model.blocks.count, "fixed"),
+        "interfaces.pvd": (model.interfaces.count, "state"),
+    }
+    got = run_pvbatch(pvbatch, "pvd", *(folder / f for f in files))
+    for pvd, (cells, array) in files.items():
+        want = [t for t, _ in read_pvd(folder / pvd)]
+        info = got[str(folder / pvd)]
+        assert len(want) == 5 and info["timesteps"] == pytest.approx(want)
+        assert info["cells"] == cells
+        assert array in info["cell_arrays"] and "displacement" in info["point_arrays"]
+
+
+@pytest.mark.paraview
+def test_pvd_with_falling_lambda_opens_with_step_numbers(pvbatch, tmp_path):
+    """Past the peak lambda falls; the writer then indexes by step number."""
+    from masonry_dem.export.writer import ResultsWriter
+    from masonry_dem.results import StepResult
+    from masonry_dem.solvers.linear import solve_linear
+
+    model = build_model(4, 3)
+    lin = solve_linear(model)
+    writer = ResultsWriter(tmp_path / "peak", model)
+    for k, lam in enumerate((0.2, 0.4, 0.3)):
+        writer(
+            StepResult(
+                k,
+                lam,
+                lin.q * lam,
+                lin.actions * lam,
+                np.zeros(model.interfaces.count, dtype=np.int32),
+                np.zeros(model.interfaces.count),
+            )
+        )
+    path = tmp_path / "peak" / "interfaces.pvd"
+    assert run_pvbatch(pvbatch, "pvd", path)[str(path)]["timesteps"] == [0.0, 1.0, 2.0]
+
+
+@pytest.fixture(scope="module")
+def screenshots(pvbatch, pv_results, tmp_path_factory):
+    """Every state loaded twice: LoadState(data_directory=folder) (then Reset Camera, as a user
+    would for a wall of another size), and the copy_state copy loaded as is."""
+    import imageio.v3 as iio
+
+    model, folder = pv_results
+    out_dir = tmp_path_factory.mktemp("pv_shots")
+    jobs, keys = [], []
+    for name in paraview_state.STATES:
+        jobs.append(
+            [
+                str(paraview_state.state_path(name)),
+                str(folder),
+                str(out_dir / f"{name}_search.png"),
+                "reset",
+            ]
+        )
+        copy = paraview_state.copy_state(name, folder, out=out_dir / f"{name}.pvsm")
+        jobs.append([str(copy), "-", str(out_dir / f"{name}_copy.png"), ""])
+        keys += [(name, "search"), (name, "copy")]
+    (out_dir / "jobs.json").write_text(json.dumps(jobs))
+    infos = run_pvbatch(pvbatch, "states", out_dir / "jobs.json")
+    return {
+        key: (info, iio.imread(job[2])) for key, info, job in zip(keys, infos, jobs, strict=True)
+    }
+
+
+@pytest.mark.paraview
+@pytest.mark.parametrize("how", ["search", "copy"])
+@pytest.mark.parametrize("name", paraview_state.STATES)
+def test_state_loads_against_a_results_folder(screenshots, pv_results, name, how):
+    _, folder = pv_results
+    info, img = screenshots[name, how]
+    times = [t for t, _ in read_pvd(folder / "blocks.pvd")]
+    assert info["files"] == {
+        "blocks.pvd": str((folder / "blocks.pvd").resolve()),
+        "interfaces.pvd": str((folder / "interfaces.pvd").resolve()),
+    }
+    # time-aware: ParaView knows every step of this folder (5, the states were made with 4)
+    assert info["timesteps"] == pytest.approx(times)
+    assert info["end_time"] == pytest.approx(times[-1])
+    assert info["time"] == pytest.approx(times[-1])
+    assert_not_blank(img)
+
+
+@pytest.mark.paraview
+@pytest.mark.parametrize("how", ["search", "copy"])
+@pytest.mark.parametrize("name", ["damage_map", "deformed_shape"])
+def test_damage_colours_where_interfaces_failed(screenshots, pv_results, name, how):
+    model, _ = pv_results
+    _, img = screenshots[name, how]
+    code = damage_codes(img)
+    counts = np.bincount(code[code >= 0], minlength=len(STATE_NAMES))
+    assert np.all(counts > 200), (
+        f"damage colours missing: {dict(zip(STATE_NAMES, counts, strict=True))}"
+    )
+    # bands 0..4 lie left to right in both the front and the oblique (from the right) view
+    cols = np.nonzero(code >= 0)[1]
+    centre = [np.median(cols[code[code >= 0] == k]) for k in range(len(STATE_NAMES))]
+    assert np.all(np.diff(centre) > 0), centre
+    if name == "damage_map":  # front elevation: shares as the analysis says
+        got = counts / counts.sum()
+        np.testing.assert_allclose(got, expected_fractions(model, states_at(model, 4)), atol=0.03)
+
+
+@pytest.mark.paraview
+def test_force_view_shows_both_fields(screenshots):
+    for how in ("search", "copy"):
+        _, img = screenshots["force_view", how]
+        h = img.shape[0]
+        for half in (img[: h // 2], img[h // 2 :]):  # normal force above, utilisation below
+            assert_not_blank(half)
