@@ -1,8 +1,25 @@
-"""The elastic-perfectly-plastic interface law used by the panel solvers.
+"""The elastic-perfectly-plastic interface law used by the panel solvers (Section 2.2).
 
-Trial actions come from the elastic stiffness and the plastic relative displacements of the
-last converged state; the closed-form domain of Section 2.1 projects them back (force
-correction) and gives the damage state and the stiffness factors of Eqs. (13)-(14).
+Trial actions come from the elastic stiffness and the stored plastic relative displacements;
+the closed-form domain of Section 2.1 (:func:`~masonry_dem.constitutive.strength.check_strength`)
+projects them back (the force correction) and gives the damage state and the stiffness factors
+of Eqs. (13)-(14).
+
+What the law remembers between converged steps (``memory``):
+
+* ``"none"`` (default): no plastic displacement is stored, so the actions are the projection of
+  the *total* elastic trial (deformation-theory, or holonomic, plasticity). Under the monotonic,
+  proportional loading of a pushover this gives the same actions as the incremental law, and
+  the equilibrium at a load level does not depend on the steps taken to reach it.
+* ``"slip"``: the sliding (shear and torsion) components keep their plastic slip, as friction
+  does; normal and bending components stay memory-free in both modes. A dry joint is a
+  unilateral contact: one that opened carries load again only when the gap has closed, and a
+  rocking joint rocks back along the same curve. Storing a plastic opening (the textbook
+  return mapping applied to every component) would instead let a joint that opened take
+  compression as soon as its faces start to move back towards each other.
+
+Tensile strength (``tension``): ``"brittle"`` (a joint whose normal force exceeds ft loses
+its tensile strength for good, as a cracked mortar joint does) or ``"plastic"`` (it keeps ft).
 """
 
 from __future__ import annotations
@@ -11,10 +28,20 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from masonry_dem.constitutive.strength import check_strength
+from masonry_dem.constitutive.strength import FLAG_DETACHED, check_strength
 from masonry_dem.model import Model
 
-DETACHED_FLAG = 8
+DETACHED_FLAG = FLAG_DETACHED
+MEMORY = ("none", "slip")
+TENSION = ("brittle", "plastic")
+#: components that keep plastic slip with ``memory="slip"``: f1, f2, m3
+SLIP_COMPONENTS = np.array([True, True, False, False, False, True])
+#: relative size of the finite-difference steps of the tangent
+_FD_STEP = 1e-7
+#: trial normal forces within this fraction of the largest one count as "in contact" for the
+#: tangent: a joint with a zero gap and zero force must not flip between the tangents of a
+#: detached and of a closed joint on round-off (Newton's iterations would cycle)
+_CONTACT_BAND = 1e-8
 
 
 @dataclass(frozen=True)
@@ -22,7 +49,7 @@ class LawResponse:
     trial: np.ndarray  # (m, 6) elastic trial actions
     tensile_force: np.ndarray  # (m,) ft in force at this iterate (0 once cracked)
     actions: np.ndarray  # (m, 6) corrected actions
-    tangent: np.ndarray  # (m, 6) stiffness factors in [0, 1]
+    tangent: np.ndarray  # (m, 6) stiffness factors of Eqs. (13)-(14), 0 or 1
     state: np.ndarray  # (m,) damage code
     flags: np.ndarray  # (m,) violated-criteria bit flags
     utilisation: np.ndarray  # (m,)
@@ -30,11 +57,7 @@ class LawResponse:
 
 @dataclass(frozen=True)
 class InterfaceLaw:
-    """Batched law for all interfaces of a model.
-
-    tension: ``"brittle"`` (a joint that opens loses its tensile strength for good, as a cracked
-    mortar joint does) or ``"plastic"`` (it keeps carrying ft, perfectly plastic).
-    """
+    """Batched law for all interfaces of a model (arrays with one row per interface)."""
 
     kbar: np.ndarray  # (m, 6) elastic stiffness
     l1: np.ndarray
@@ -43,11 +66,18 @@ class InterfaceLaw:
     tensile_force: np.ndarray  # (m,) ft = tensile strength x area
     alpha: np.ndarray
     tension: str = "brittle"
+    memory: str = "none"
+
+    def __post_init__(self) -> None:
+        if self.tension not in TENSION:
+            raise ValueError(f"tension must be one of {TENSION}, got {self.tension!r}")
+        if self.memory not in MEMORY:
+            raise ValueError(f"memory must be one of {MEMORY}, got {self.memory!r}")
 
     @classmethod
-    def of(cls, model: Model, kbar: np.ndarray, tension: str = "brittle") -> InterfaceLaw:
-        if tension not in ("brittle", "plastic"):
-            raise ValueError(f"tension must be 'brittle' or 'plastic', got {tension!r}")
+    def of(
+        cls, model: Model, kbar: np.ndarray, tension: str = "brittle", memory: str = "none"
+    ) -> InterfaceLaw:
         its = model.interfaces
         return cls(
             kbar,
@@ -57,6 +87,12 @@ class InterfaceLaw:
             model.tensile_strength * its.area,
             model.alpha,
             tension,
+            memory,
+        )
+
+    def _check(self, trial: np.ndarray, ft: np.ndarray, rows=slice(None)):
+        return check_strength(
+            trial, self.l1[rows], self.l2[rows], self.friction[rows], ft, alpha=self.alpha[rows]
         )
 
     def respond(
@@ -66,7 +102,7 @@ class InterfaceLaw:
         joints already cracked in tension (m,) bool."""
         trial = self.kbar * (relative - plastic)
         ft = np.where(cracked, 0.0, self.tensile_force)
-        chk = check_strength(trial, self.l1, self.l2, self.friction, ft, alpha=self.alpha)
+        chk = self._check(trial, ft)
         actions = chk.projected
         if self.tension == "brittle":
             opened = (chk.flags & DETACHED_FLAG) > 0
@@ -76,59 +112,50 @@ class InterfaceLaw:
         )
 
     def tangent(self, r: LawResponse, floor: float = 1e-9) -> np.ndarray:
-        """(m, 6, 6) consistent tangent of the corrected actions w.r.t. relative displacements.
+        """(m, 6, 6) consistent tangent d(actions)/d(relative displacements) at ``r``.
 
-        Eqs. (13)-(14) zero the stiffness of the yielded components; the capacities of the
-        Mohr-Coulomb domain grow with compression (fsu = mu (ft - fn), rocking limit
-        (ft - fn) lc), so yielded actions keep a coupling to the normal displacement. Without
-        it a sliding joint looks free in Newton's matrix and the iterations jump far away.
-        On the shear-torsion surface the return is radial: the tangent keeps the transverse
-        part s (I - n n^T) of the elastic stiffness in the scaled space (f1/fsu, f2/fsu, m3/m3u).
+        Elastic joints: diag(kbar). Detached joints: zero. Yielded joints: the derivative of
+        the projection of :func:`check_strength`, by one batched forward difference over the
+        yielded rows only. It holds every coupling of the domain: capacities that grow with
+        compression (a sliding or rocking joint still stiffens in the normal direction), the
+        curved shear-torsion surface of Eq. (A5) and the torsion-bending interaction. Joints
+        with a zero gap and zero force are differentiated on the contact side. ``floor`` x
+        kbar is added to the diagonal so that the matrix of a mechanism stays regular.
         """
-        m = self.kbar.shape[0]
         k = self.kbar
-        T = np.zeros((m, 6, 6))
+        m = k.shape[0]
         idx = np.arange(6)
+        T = np.zeros((m, 6, 6))
         T[:, idx, idx] = k
-        flags = r.flags
-        detached = (flags & DETACHED_FLAG) > 0
-        rock1 = (flags & 2) > 0
-        rock2 = (flags & 4) > 0
-        sliding = (flags & 1) > 0
-        fn = r.actions[:, 2]
-        cap = np.maximum(r.tensile_force - fn, 0.0)
-        kn = k[:, 2]
-        T[rock1, 3, 3] = 0.0
-        T[rock1, 3, 2] = -np.sign(r.trial[rock1, 3]) * 0.5 * self.l2[rock1] * kn[rock1]
-        T[rock2, 4, 4] = 0.0
-        T[rock2, 4, 2] = -np.sign(r.trial[rock2, 4]) * 0.5 * self.l1[rock2] * kn[rock2]
-        rows = np.flatnonzero(sliding & ~detached)
+        trial, ft = r.trial, r.tensile_force
+        band = _CONTACT_BAND * float(np.abs(trial[:, 2]).max(initial=0.0))
+        open_ = trial[:, 2] > ft + band
+        T[open_] = 0.0
+        rows = np.flatnonzero((r.flags > 0) & ~open_)
         if rows.size:
-            sub = np.array([0, 1, 5])
-            t = r.trial[np.ix_(rows, sub)]
-            p = r.actions[np.ix_(rows, sub)]
-            c = np.abs(p) + 1e-300  # scale of each component on the surface
-            scale = np.maximum(np.abs(t), c)
-            x_t = t / scale
-            x_p = p / scale
-            nt = np.linalg.norm(x_t, axis=1, keepdims=True)
-            s = np.linalg.norm(x_p, axis=1, keepdims=True) / np.maximum(nt, 1e-300)
-            n = x_t / np.maximum(nt, 1e-300)
-            proj = np.eye(3)[None] - n[:, :, None] * n[:, None, :]
-            block = (
-                scale[:, :, None] * (s[:, :, None] * proj) / scale[:, None, :] * k[rows][:, sub][:, None, :]
-            )
-            T[rows[:, None, None], sub[None, :, None], sub[None, None, :]] = block
-            with np.errstate(divide="ignore", invalid="ignore"):
-                coupling = np.where(cap[rows, None] > 0, -p / cap[rows, None], 0.0)
-            T[rows[:, None], sub[None, :], 2] = coupling * kn[rows, None]
-        T[detached] = 0.0
+            n = rows.size
+            t = trial[rows].copy()
+            t[:, 2] = np.minimum(t[:, 2], ft[rows])  # in the contact band: at the contact side
+            big = np.abs(t).max(axis=1, keepdims=True)
+            h = _FD_STEP * (np.abs(t) + 1e-2 * big) + 1e-300  # (n, 6)
+            h[:, 2] = -h[:, 2]  # perturb the normal force towards compression
+            probe = np.repeat(t[None], 7, axis=0)  # row 0: base point; rows 1-6: perturbed
+            probe[idx + 1, :, idx] += h.T
+            ftr = np.tile(ft[rows], 7)
+            rows7 = np.tile(rows, 7)
+            proj = self._check(probe.reshape(-1, 6), ftr, rows7).projected.reshape(7, n, 6)
+            D = (proj[1:] - proj[:1]) / h.T[:, :, None]  # (6 perturbed, n, 6 actions)
+            T[rows] = np.transpose(D, (1, 2, 0)) * k[rows][:, None, :]
         T[:, idx, idx] += floor * k
         return T
 
     def plastic_part(self, relative: np.ndarray, actions: np.ndarray) -> np.ndarray:
-        """Plastic relative displacements consistent with converged actions."""
-        return relative - actions / self.kbar
+        """Plastic relative displacements to store at a converged state (see ``memory``)."""
+        if self.memory == "none":
+            return np.zeros_like(relative)
+        plastic = relative - actions / self.kbar
+        plastic[:, ~SLIP_COMPONENTS] = 0.0
+        return plastic
 
     def cracked_after(self, cracked: np.ndarray, response: LawResponse) -> np.ndarray:
         if self.tension != "brittle":

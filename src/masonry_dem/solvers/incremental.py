@@ -2,10 +2,21 @@
 updated as interfaces yield, interface actions are corrected onto the strength domain and the
 residual is iterated away in every step.
 
-Load control raises lambda in F = F_D + lambda F_L; a step that finds no equilibrium is cut in
-half from the last converged state, so the collapse multiplier comes out as a bracket
-[last converged, first failed] refined until it is narrower than ``bracket_tolerance``.
-Displacement control drives one DOF and lets lambda follow, tracing the curve past the peak.
+Loads are F = F_D + lambda F_L: the dead load first, then lambda raised step by step (load
+control) or one DOF driven while lambda follows (displacement control, which passes the peak).
+
+Each equilibrium is found by Newton's method on the corrected actions, with the consistent
+tangent of the interface law (:meth:`InterfaceLaw.tangent`: the paper's damaged stiffness of
+Eqs. 13-14 plus the couplings that make a yielded joint's capacity grow with its compression),
+safeguarded by a trust region on the displacement increment and a backtracking line search.
+Newton converges in a few iterations when an equilibrium exists, so the tolerance can be tight
+(1e-8 of the applied load) and a step that fails is one with no equilibrium near the last
+converged state: the search runs out of descent directions (the tangent of the yielded
+assembly is singular along a mechanism that the load drives), or the displacements leave the
+small-displacement range. The collapse multiplier is then bracketed: [last converged, first
+failed], the step is halved from the last converged state until the bracket is narrower than
+``bracket_tolerance`` x lambda, and the first failure is re-tried from the end of the bracket,
+so a failure caused only by a long step does not stop the analysis.
 """
 
 from __future__ import annotations
@@ -17,21 +28,38 @@ from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 import numpy as np
+from scipy import sparse
 from scipy.sparse.linalg import splu
 
 from masonry_dem.assembly.stiffness import Assembly
-from masonry_dem.constitutive.law import InterfaceLaw, LawResponse
+from masonry_dem.constitutive.law import MEMORY, TENSION, InterfaceLaw, LawResponse
 from masonry_dem.model import DOF_NAMES, Model
 from masonry_dem.results import History, StepResult
 
 log = logging.getLogger(__name__)
 
+#: Newton converges fast when an equilibrium is near: a search that has not halved the
+#: residual in _STALL_WINDOW iterations either sits at a local minimum of |R| away from
+#: equilibrium or drifts along a mechanism (equal corrections at a nearly constant residual,
+#: the displacements growing without bound): no equilibrium near the last converged state
+_STALL_WINDOW = 8
+_STALL_DECREASE = 0.5
+
 
 @dataclass(frozen=True)
 class StaticSettings:
-    """Knobs of the static solver (defaults: see docs/solvers.md for why).
+    """Knobs of the static solver. Step sizes are in units of the load scale |F_D| / |F_L|
+    (1 for a tilt table, where the live load is the weight turned horizontal).
 
-    Step sizes are in units of the load scale |F_D| / |F_L| (1 for a tilt table).
+    initial_step, max_step, growth: lambda increments (grown after easy steps).
+    bracket_tolerance: collapse bracket width, relative to lambda.
+    tolerance: force residual |R| / |F_D + lambda F_L| (moments measured as forces at the
+        median block size) below which a state is in equilibrium.
+    max_iterations: Newton iterations per attempt.
+    displacement_limit: largest translation [m] still in the small-displacement range
+        (None: half the smallest block dimension); beyond it the step has found a mechanism.
+    tension, memory: interface law options (see :mod:`masonry_dem.constitutive.law`).
+    residual_stiffness: fraction of the elastic stiffness kept on the diagonal of the tangent.
     """
 
     initial_step: float = 0.02
@@ -39,20 +67,23 @@ class StaticSettings:
     growth: float = 1.5
     bracket_tolerance: float = 0.005
     refine: bool = True
-    tolerance: float = 1e-4
-    max_iterations: int = 300
-    stall_iterations: int = 60
-    stall_reduction: float = 0.1
-    anderson: int = 5
+    tolerance: float = 1e-8
+    max_iterations: int = 40
     max_steps: int = 1000
     max_load_factor: float = math.inf
     displacement_limit: float | None = None
     tension: str = "brittle"
+    memory: str = "none"
     residual_stiffness: float = 1e-9
-    iteration: str = "elastic"
 
     def __post_init__(self) -> None:
-        for name in ("initial_step", "max_step", "bracket_tolerance", "tolerance", "residual_stiffness"):
+        for name in (
+            "initial_step",
+            "max_step",
+            "bracket_tolerance",
+            "tolerance",
+            "residual_stiffness",
+        ):
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
                 raise ValueError(f"{name} must be a positive number, got {value!r}")
@@ -60,12 +91,14 @@ class StaticSettings:
             raise ValueError(f"growth must be >= 1, got {self.growth!r}")
         if self.max_iterations < 1 or self.max_steps < 1:
             raise ValueError("max_iterations and max_steps must be at least 1")
-        if self.iteration not in ("modified", "newton", "elastic"):
+        if self.displacement_limit is not None and not self.displacement_limit > 0:
             raise ValueError(
-                f"iteration must be 'modified', 'newton' or 'elastic', got {self.iteration!r}"
+                f"displacement_limit must be positive or None, got {self.displacement_limit!r}"
             )
-        if self.tension not in ("brittle", "plastic"):
-            raise ValueError(f"tension must be 'brittle' or 'plastic', got {self.tension!r}")
+        if self.tension not in TENSION:
+            raise ValueError(f"tension must be one of {TENSION}, got {self.tension!r}")
+        if self.memory not in MEMORY:
+            raise ValueError(f"memory must be one of {MEMORY}, got {self.memory!r}")
 
 
 @dataclass(frozen=True)
@@ -83,19 +116,60 @@ class _Outcome:
     ok: bool
     q: np.ndarray
     load_factor: float
-    response: LawResponse | None
+    response: LawResponse
     iterations: int
     reason: str = ""
 
 
+class _TangentAssembler:
+    """K_ff = H_f^T T H_f for per-interface 6x6 tangents T, with the sparsity pattern built
+    once: each interface adds B = H_loc^T T H_loc (12 x 12, the DOFs of its two blocks) and
+    the blocks are summed into a fixed CSC structure with one bincount."""
+
+    def __init__(self, asm: Assembly, model: Model) -> None:
+        its = model.interfaces
+        m = its.count
+        H = asm.H.tocoo()
+        k = H.row // 6
+        blk = H.col // 6
+        side = (blk == its.block_j[k]).astype(np.int64)
+        self.H_loc = np.zeros((m, 6, 12))
+        self.H_loc[k, H.row % 6, 6 * side + H.col % 6] = H.data
+        dofs = np.concatenate(
+            [6 * its.block_i[:, None] + np.arange(6), 6 * its.block_j[:, None] + np.arange(6)],
+            axis=1,
+        )  # (m, 12)
+        position = np.full(model.n_dofs, -1, dtype=np.int64)
+        position[asm.free_index] = np.arange(asm.n_free)
+        pos = position[dofs]
+        rows = np.broadcast_to(pos[:, :, None], (m, 12, 12)).ravel()
+        cols = np.broadcast_to(pos[:, None, :], (m, 12, 12)).ravel()
+        self.keep = np.flatnonzero((rows >= 0) & (cols >= 0))
+        nf = asm.n_free
+        key = cols[self.keep] * nf + rows[self.keep]  # column-major
+        unique, self.inverse = np.unique(key, return_inverse=True)
+        self.indices = (unique % nf).astype(np.int32)
+        counts = np.bincount(unique // nf, minlength=nf)
+        self.indptr = np.concatenate([[0], np.cumsum(counts)]).astype(np.int32)
+        self.nnz = unique.size
+        self.n = nf
+
+    def matrix(self, T: np.ndarray) -> sparse.csc_matrix:
+        B = np.matmul(np.matmul(self.H_loc.transpose(0, 2, 1), T), self.H_loc)
+        data = np.bincount(self.inverse, B.reshape(-1)[self.keep], minlength=self.nnz)
+        return sparse.csc_matrix((data, self.indices, self.indptr), shape=(self.n, self.n))
+
+
 class StaticSolver:
-    """Incremental-iterative solver for one model (keeps the assembly and the factorizations)."""
+    """Incremental-iterative solver for one model (keeps the assembly and the state)."""
 
     def __init__(self, model: Model, settings: StaticSettings | None = None) -> None:
         self.model = model
         self.settings = settings or StaticSettings()
+        s = self.settings
         self.asm = Assembly.of(model)
-        self.law = InterfaceLaw.of(model, self.asm.kbar, self.settings.tension)
+        self.law = InterfaceLaw.of(model, self.asm.kbar, s.tension, s.memory)
+        self._tangents = _TangentAssembler(self.asm, model)
         free = self.asm.free_index
         self.F_dead = model.dead.reshape(-1)[free]
         self.F_live = model.live.reshape(-1)[free]
@@ -104,11 +178,13 @@ class StaticSolver:
         self.load_scale = dead_norm / live_norm if live_norm > 0 and dead_norm > 0 else 1.0
         blocks = model.blocks
         self.limit = (
-            self.settings.displacement_limit
-            if self.settings.displacement_limit is not None
+            s.displacement_limit
+            if s.displacement_limit is not None
             else 0.5 * float(blocks.sizes.min())
         )
-        # translational free DOFs, for the displacement limit
+        # residual norm: moments as forces at the median block size
+        length = float(np.median(blocks.sizes))
+        self._weight = np.where(free % 6 < 3, 1.0, 1.0 / length)
         self._translation = (free % 6) < 3
         m = model.interfaces.count
         self.plastic = np.zeros((m, 6))
@@ -116,158 +192,154 @@ class StaticSolver:
         self.q = np.zeros(model.n_dofs)
         self.factorizations = 0
         self.iterations = 0
-        self._lu = None
-        self._lu_key: bytes | None = None
-        self._lu_elastic = None
-        self._step_factors = np.ones((m, 6))
-
-    # ------------------------------------------------------------------ linear algebra
-    def _secant_lu(self, factors: np.ndarray):
-        """The paper's matrix: stiffness factors of Eqs. (13)-(14) from the last converged
-        state, fixed during the step (re-used across steps while no interface changes)."""
-        f = np.maximum(factors, self.settings.residual_stiffness)
-        key = f.tobytes()
-        if key != self._lu_key:
-            self._lu = splu(self.asm.stiffness(f), permc_spec="COLAMD")
-            self._lu_key = key
-            self.factorizations += 1
-        return self._lu
-
-    def _factor(self, response: LawResponse):
-        T = self.law.tangent(response, self.settings.residual_stiffness)
-        self.factorizations += 1
-        return splu(self.asm.tangent_stiffness(T), permc_spec="COLAMD")
+        self._last_increment = 0.0
 
     # ------------------------------------------------------------------ one equilibrium
-    def _residual(self, q: np.ndarray, lam: float, dead_factor: float):
+    def _residual(self, q: np.ndarray, lam: float, dead_factor: float = 1.0):
         rel = self.asm.relative_displacements(q)
         response = self.law.respond(rel, self.plastic, self.cracked)
         F_ext = dead_factor * self.F_dead + lam * self.F_live
         residual = F_ext - self.asm.H_free.T @ response.actions.reshape(-1)
-        scale = max(float(np.linalg.norm(F_ext)), 1e-30)
-        return residual, float(np.linalg.norm(residual)) / scale, response
+        scale = max(float(np.linalg.norm(self._weight * F_ext)), 1e-30)
+        return residual, float(np.linalg.norm(self._weight * residual)) / scale, response
 
-    def _elastic_lu(self):
-        if self._lu_elastic is None:
-            self._lu_elastic = splu(self.asm.stiffness(), permc_spec="COLAMD")
-            self.factorizations += 1
-        return self._lu_elastic
-
-    def _direction(self, lu, residual, q, lam, control):
-        free = self.asm.free_index
-        if control is None:
-            return lu.solve(residual), 0.0
-        k = control[0]
-        a = lu.solve(self.F_live)
-        b = lu.solve(residual)
-        if abs(a[k]) < 1e-300:
-            return None, 0.0
-        dlam = (control[1] - q[free[k]] - b[k]) / a[k]
-        return b + dlam * a, dlam
+    def _factor(self, response: LawResponse):
+        T = self.law.tangent(response, self.settings.residual_stiffness)
+        self.factorizations += 1
+        try:
+            return splu(self._tangents.matrix(T), permc_spec="COLAMD")
+        except RuntimeError:  # exactly singular: stiffen the floor and retry once
+            idx = np.arange(6)
+            T[:, idx, idx] += 1e-6 * self.law.kbar
+            return splu(self._tangents.matrix(T), permc_spec="COLAMD")
 
     def _equilibrate(
-        self, load_factor: float, dead_factor: float = 1.0, control: tuple[int, float] | None = None
+        self,
+        load_factor: float,
+        dead_factor: float = 1.0,
+        control: tuple[int, float] | None = None,
+        radius: float | None = None,
     ) -> _Outcome:
-        """Iterate from the last converged state to equilibrium at ``load_factor`` (load
-        control) or at the controlled DOF value ``control = (free dof, value)``.
+        """Newton iterations from the last converged state to equilibrium at ``load_factor``
+        (load control) or with the free DOF ``control[0]`` at ``control[1]`` (lambda free).
 
-        ``iteration="elastic"`` (default) corrects with the elastic stiffness, the
-        initial-stiffness method, which contracts for any perfectly plastic law even where
-        joints open, close and slide in the same step; Anderson mixing over the last few
-        corrections makes it converge in tens of iterations instead of thousands.
-        ``"modified"`` uses the paper's matrix (Eqs. 13-14 from the last converged step) and
-        ``"newton"`` the consistent tangent of the current iterate with a line search.
+        Safeguards: the translation part of each correction is held within a trust radius
+        (grown after full steps, cut by 8 when no step along the direction lowers the
+        residual), and the step is backtracked until the residual decreases.
         """
         s = self.settings
-        q = self.q.copy()
         free = self.asm.free_index
+        q = self.q.copy()
         lam = load_factor
-        best = math.inf
-        since_best = 0
+        if radius is None:
+            radius = max(4.0 * self._last_increment, 1e-4 * self.limit)
         residual, rnorm, response = self._residual(q, lam, dead_factor)
-        xs: list[np.ndarray] = []  # Anderson history: iterates and their corrections
-        gs: list[np.ndarray] = []
+        history = [(rnorm, radius)]
+
+        def constraint_error(qq: np.ndarray) -> float:
+            if control is None:
+                return 0.0
+            return abs(qq[free[control[0]]] - control[1]) / self.limit
+
         for it in range(1, s.max_iterations + 1):
-            constraint_ok = control is None or abs(q[free[control[0]]] - control[1]) <= 1e-9 * max(
-                abs(control[1]), self.limit * 1e-6
-            )
-            if rnorm <= s.tolerance and constraint_ok:
+            cerr = constraint_error(q)
+            if rnorm <= s.tolerance and cerr <= 1e-12:
+                self._last_increment = float(
+                    np.abs((q - self.q)[free][self._translation]).max(initial=0.0)
+                )
                 return _Outcome(True, q, lam, response, it - 1)
-            if rnorm < (1 - s.stall_reduction) * best:
-                best, since_best = rnorm, 0
-            else:
-                since_best += 1
-                if since_best > s.stall_iterations:
-                    return _Outcome(False, q, lam, response, it, f"residual stalled at {rnorm:.2e}")
             self.iterations += 1
-            if s.iteration == "newton":
-                out = self._newton_update(q, lam, residual, rnorm, response, dead_factor, control, constraint_ok)
-                if out is None:
-                    return _Outcome(False, q, lam, response, it, "controlled DOF does not move under the live load")
-                q, lam, residual, rnorm, response = out
-            else:
-                lu = self._elastic_lu() if s.iteration == "elastic" else self._secant_lu(self._step_factors)
-                dq, dlam = self._direction(lu, residual, q, lam, control)
-                if dq is None:
-                    return _Outcome(False, q, lam, response, it, "controlled DOF does not move under the live load")
-                x = np.append(q[free], lam)
-                g = np.append(dq, dlam)
-                x_new = x + g
-                if s.anderson > 0:
-                    xs.append(x)
-                    gs.append(g)
-                    if len(xs) > s.anderson + 1:
-                        xs.pop(0)
-                        gs.pop(0)
-                    if len(xs) > 1:
-                        dX = np.diff(np.array(xs), axis=0).T
-                        dG = np.diff(np.array(gs), axis=0).T
-                        gamma, *_ = np.linalg.lstsq(dG, g, rcond=None)
-                        x_new = x + g - (dX + dG) @ gamma
+            lu = self._factor(response)
+            dq = lu.solve(residual)
+            dlam = 0.0
+            if control is not None:
+                k = control[0]
+                a = lu.solve(self.F_live)
+                if abs(a[k]) < 1e-300:
+                    return _Outcome(
+                        False,
+                        q,
+                        lam,
+                        response,
+                        it,
+                        "the controlled DOF does not move under the live load",
+                    )
+                dlam = (control[1] - q[free[k]] - dq[k]) / a[k]
+                dq = dq + dlam * a
+            if not np.all(np.isfinite(dq)):
+                return _Outcome(False, q, lam, response, it, "singular tangent stiffness")
+            size = float(np.abs(dq[self._translation]).max(initial=0.0))
+            shrink = min(1.0, radius / size) if size > 0 else 1.0
+            merit = rnorm + cerr
+            accepted = None
+            for step in (1.0, 0.5, 0.25, 0.125):
+                f = shrink * step
                 q_try = q.copy()
-                q_try[free] = x_new[:-1]
-                lam_try = float(x_new[-1]) if control is not None else lam
+                q_try[free] += f * dq
+                lam_try = lam + f * dlam
                 r_try, n_try, resp_try = self._residual(q_try, lam_try, dead_factor)
-                if not np.isfinite(n_try) or n_try > 10 * rnorm:  # mixing went astray: plain step
-                    xs.clear()
-                    gs.clear()
-                    q_try = q.copy()
-                    q_try[free] += dq
-                    lam_try = lam + dlam
-                    r_try, n_try, resp_try = self._residual(q_try, lam_try, dead_factor)
-                q, lam, residual, rnorm, response = q_try, lam_try, r_try, n_try, resp_try
-            umax = float(np.abs(q[free][self._translation]).max(initial=0.0))
+                if n_try + constraint_error(q_try) < (1.0 - 1e-4 * f) * merit:
+                    accepted = (q_try, lam_try, r_try, n_try, resp_try)
+                    break
+            if accepted is None:
+                radius = min(radius, shrink * size) / 8.0
+                if radius < 1e-12 * self.limit:
+                    return _Outcome(
+                        False,
+                        q,
+                        lam,
+                        response,
+                        it,
+                        f"no equilibrium found: no correction lowers the residual {rnorm:.2e}",
+                    )
+                continue
+            if step == 1.0 and shrink < 1.0:
+                radius *= 2.0
+            q, lam, residual, rnorm, response = accepted
+            umax = float(np.abs((q - self.q)[free][self._translation]).max(initial=0.0))
             if not math.isfinite(umax) or umax > self.limit:
                 return _Outcome(
-                    False, q, lam, response, it,
-                    f"displacements exceed the limit {self.limit:.3g} m (a mechanism has formed)",
+                    False,
+                    q,
+                    lam,
+                    response,
+                    it,
+                    f"displacements exceed the limit {self.limit:.3g} m (a mechanism)",
                 )
-        return _Outcome(False, q, lam, response, s.max_iterations, "no convergence within max_iterations")
-
-    def _newton_update(self, q, lam, residual, rnorm, response, dead_factor, control, constraint_ok):
-        free = self.asm.free_index
-        for lu in (self._factor(response), self._elastic_lu()):
-            dq, dlam = self._direction(lu, residual, q, lam, control)
-            if dq is None:
-                return None
-            step = 1.0
-            while step >= 1.0 / 16:
-                q_try = q.copy()
-                q_try[free] += step * dq
-                lam_try = lam + step * dlam
-                r_try, n_try, resp_try = self._residual(q_try, lam_try, dead_factor)
-                if n_try < rnorm or (control is not None and not constraint_ok and step == 1.0):
-                    return q_try, lam_try, r_try, n_try, resp_try
-                step /= 2
-        return q_try, lam_try, r_try, n_try, resp_try
+            history.append((rnorm, radius))
+            if len(history) > _STALL_WINDOW:
+                window = history[-1 - _STALL_WINDOW :]
+                steady = all(rad >= window[0][1] for _, rad in window)  # no cut in the window
+                stalled = steady and rnorm > (1.0 - _STALL_DECREASE) * window[0][0]
+            if len(history) > _STALL_WINDOW and stalled:
+                return _Outcome(
+                    False,
+                    q,
+                    lam,
+                    response,
+                    it,
+                    f"no equilibrium found: the residual stalls at {rnorm:.2e} "
+                    f"(displacement increment {umax:.2e} m)",
+                )
+        if rnorm <= s.tolerance and constraint_error(q) <= 1e-12:
+            self._last_increment = float(
+                np.abs((q - self.q)[free][self._translation]).max(initial=0.0)
+            )
+            return _Outcome(True, q, lam, response, s.max_iterations)
+        return _Outcome(
+            False,
+            q,
+            lam,
+            response,
+            s.max_iterations,
+            f"no convergence in {s.max_iterations} iterations (residual {rnorm:.2e})",
+        )
 
     def _accept(self, out: _Outcome, step: int, control_value: float) -> StepResult:
         rel = self.asm.relative_displacements(out.q)
         resp = out.response
-        assert resp is not None
         self.plastic = self.law.plastic_part(rel, resp.actions)
         self.cracked = self.law.cracked_after(self.cracked, resp)
-        self._step_factors = resp.tangent
         self.q = out.q
         return StepResult(
             step=step,
@@ -312,16 +384,17 @@ class StaticSolver:
             if callback is not None:
                 callback(sr)
 
-        dead = self._equilibrate(0.0, 1.0)
+        dead = self._equilibrate(0.0, 1.0, radius=self.limit)
         if not dead.ok:
-            self._finish(hist, "failed", f"no equilibrium under the dead load: {dead.reason}", t0)
-            empty = _Outcome(True, np.zeros_like(self.q), 0.0, self.law.respond(
-                np.zeros_like(self.plastic), self.plastic, self.cracked), 0)
-            record(empty)
-            return self._finish(hist, "failed", f"no equilibrium under the dead load: {dead.reason}", t0)
+            reason = f"no equilibrium under the dead load: {dead.reason}"
+            zero = self._residual(np.zeros_like(self.q), 0.0, 0.0)[2]
+            record(_Outcome(True, np.zeros_like(self.q), 0.0, zero, dead.iterations))
+            return self._finish(hist, "failed", reason, t0)
         record(dead)
         if not np.any(self.F_live):
-            return self._finish(hist, "completed", "no live load: the dead-load state is the answer", t0)
+            return self._finish(
+                hist, "completed", "no live load: the dead-load state is the answer", t0
+            )
         if control is None:
             self._load_control(hist, record)
         else:
@@ -335,6 +408,7 @@ class StaticSolver:
         max_dlam = s.max_step * self.load_scale
         lam_fail = math.inf
         last_reason = ""
+        verified = False  # the first failure was re-tried from the end of the bracket
         for _ in range(s.max_steps):
             target = min(lam + dlam, s.max_load_factor)
             out = self._equilibrate(target)
@@ -344,27 +418,43 @@ class StaticSolver:
                 if lam >= s.max_load_factor:
                     hist.status, hist.reason = "completed", f"reached max_load_factor {lam:.6g}"
                     return
+                if lam >= lam_fail:  # the earlier failure came from a long step only
+                    log.debug("lambda=%.6g passed after an earlier failure", lam)
+                    lam_fail, verified = math.inf, False
                 if math.isfinite(lam_fail):
                     dlam = (lam_fail - lam) / 2
                 elif out.iterations <= 6:
                     dlam = min(dlam * s.growth, max_dlam)
             else:
                 last_reason = out.reason
-                lam_fail = min(lam_fail, target)
                 log.debug("step to lambda=%.6g failed: %s", target, out.reason)
+                if target < lam_fail:
+                    lam_fail, verified = target, False
+                elif target == lam_fail:
+                    verified = True
                 if not s.refine:
                     break
                 dlam = (lam_fail - lam) / 2
-            if math.isfinite(lam_fail) and lam_fail - lam <= s.bracket_tolerance * max(abs(lam), 1e-12 * self.load_scale):
-                break
+            if math.isfinite(lam_fail) and lam_fail - lam <= s.bracket_tolerance * max(
+                abs(lam), 1e-12 * self.load_scale
+            ):
+                if verified:
+                    break
+                dlam = lam_fail - lam  # re-try the first failure from the bracket's end
         else:
-            hist.status, hist.reason = "failed", f"max_steps={s.max_steps} reached at lambda={lam:.6g}"
+            hist.status = "failed"
+            hist.reason = f"max_steps={s.max_steps} reached at lambda={lam:.6g}"
             return
         hist.collapse_bracket = (lam, lam_fail)
         hist.status = "collapse"
-        hist.reason = f"no equilibrium beyond lambda={lam:.6g} (first failure at {lam_fail:.6g}: {last_reason})"
+        hist.reason = (
+            f"no equilibrium beyond lambda={lam:.6g} (first failure at {lam_fail:.6g}: "
+            f"{last_reason})"
+        )
 
-    def _displacement_control(self, hist: History, record, control: DisplacementControl, dof: int) -> None:
+    def _displacement_control(
+        self, hist: History, record, control: DisplacementControl, dof: int
+    ) -> None:
         s = self.settings
         position = np.flatnonzero(self.asm.free_index == dof)
         if position.size == 0:
@@ -377,7 +467,9 @@ class StaticSolver:
         lam = 0.0
         u = float(self.q[dof])
         cuts = 0
-        while abs(u - control.target) > 1e-12 * abs(control.target) and len(hist.steps) < s.max_steps:
+        while (
+            abs(u - control.target) > 1e-12 * abs(control.target) and len(hist.steps) < s.max_steps
+        ):
             goal = u + du
             if (goal - control.target) * np.sign(du_nominal) > 0:
                 goal = control.target
@@ -423,19 +515,28 @@ def pushover(
     out=None,
     monitor: tuple[int, str] | None = None,
     write_every: int = 1,
+    callback: Callable[[StepResult], None] | None = None,
 ) -> History:
     """Run the static incremental analysis; with ``out`` write VTU/PVD, pushover.csv and
-    summary.json to that folder as the steps converge."""
+    summary.json to that folder as the steps converge. ``callback(step)`` is called after
+    each converged step (e.g. a progress bar)."""
     writer = None
     if out is not None:
         from masonry_dem.export.writer import ResultsWriter
 
         writer = ResultsWriter(out, model, every=write_every)
+
+    def on_step(step: StepResult) -> None:
+        if writer is not None:
+            writer(step)
+        if callback is not None:
+            callback(step)
+
     solver = StaticSolver(model, settings)
-    history = solver.run(control=control, callback=writer, monitor=monitor)
+    history = solver.run(control=control, callback=on_step, monitor=monitor)
     if writer is not None:
         writer.finish(history)
     return history
 
 
-__all__ = ["StaticSettings", "DisplacementControl", "StaticSolver", "pushover", "replace"]
+__all__ = ["DisplacementControl", "StaticSettings", "StaticSolver", "pushover", "replace"]
