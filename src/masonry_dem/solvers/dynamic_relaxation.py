@@ -39,19 +39,25 @@ time, updates the plastic state every time step (the classical explicit DEM) and
 quasi-static states it passes through; with ``refine`` the collapse bracket is then refined in
 steps from the last quasi-static state.
 
-Convergence: relative residual ||F_ext - F_int|| / ||F_ext|| <= ``tolerance`` (the static
-solver's measure) and kinetic energy below ``energy_tolerance`` times its peak in the step.
+Convergence: relative residual ||F_ext - F_int|| / ||F_ext|| <= ``tolerance`` and kinetic
+energy below ``energy_tolerance`` times its peak in the step.
 
 Failure, never a wrong lambda:
 
 * a mechanism: displacements beyond ``displacement_limit`` (default half the smallest block
-  size), or no convergence within ``max_cycles``: the load step fails and the bracket is refined
-  as in the static solver; the run ends with status ``"collapse"``;
-* blow-up (the time step is above the stability limit): detected by the Rayleigh quotient of
-  the last increment, omega^2 dt^2 > 4 for several steps in a row, by an exploding residual or by
-  a non-finite value. ``on_blowup="cut"`` halves dt and repeats the step from the last converged
-  state (at most ``max_cuts`` times); ``"refuse"`` ends the run with status ``"failed"``, no
-  collapse multiplier, and a reason naming the step and the estimated limit.
+  size), or a residual that does not halve within ``stall_factor`` times the time steps of the
+  slowest converged step: the load step fails and the bracket is refined as in the static
+  solver; the run ends with status ``"collapse"``;
+* blow-up (the time step is above the stability limit): a stable central-difference step never
+  meets a Rayleigh quotient of the increment with omega^2 dt^2 > 4 (omega^2 <= lambda_max).
+  Such steps are counted (``blowup_patience`` of them end the relaxation; not in a row, since a
+  contact chattering above the limit separates every other step and bounds the growth), and a
+  load step that failed after meeting even one is not taken as evidence of collapse. An
+  exploding residual or a non-finite value is a blow-up too. ``on_blowup="cut"`` halves dt and
+  repeats the step from the last converged state (at most ``max_cuts`` times); ``"refuse"``
+  ends the run with status ``"failed"``, no collapse multiplier, and a reason naming the step
+  and the estimated limit.
+* ``max_time_steps`` bounds the whole run: when spent, status ``"failed"`` and no lambda.
 
 The results are a :class:`~masonry_dem.results.History` (one StepResult per converged load
 step), so the VTU/PVD writer works unchanged; ``History.iterations`` counts time steps.
@@ -83,7 +89,11 @@ _CHOICES = {
     "on_blowup": ("cut", "refuse"),
     "stability": ("elastic", "current"),
     "tension": ("brittle", "plastic"),
+    "memory": ("none", "slip"),
 }
+
+#: outcomes of a relaxation that end the whole run (no lambda is reported)
+_FATAL = ("blowup", "budget")
 
 
 @dataclass(frozen=True)
@@ -120,6 +130,8 @@ class DRSettings:
     max_load_factor: float = math.inf
     displacement_limit: float | None = None
     tension: str = "brittle"
+    memory: str = "none"
+    max_time_steps: int = 2_000_000
     on_blowup: str = "cut"
     max_cuts: int = 6
     blowup_patience: int = 5
@@ -166,12 +178,13 @@ class _Relaxed:
     """Outcome of one relaxation: converged, mechanism, stalled or blown up."""
 
     ok: bool
-    kind: str  # "converged", "mechanism", "stalled", "blowup", "limit"
+    kind: str  # "converged", "mechanism", "stalled", "blowup", "limit", "budget"
     x: np.ndarray  # free DOFs
     load_factor: float
     response: LawResponse
     cycles: int
     reason: str = ""
+    courant: float = 0.0  # largest omega^2 dt^2 seen (4 is the stability limit)
 
 
 @dataclass
@@ -196,6 +209,7 @@ class DRStats:
     dt: float = 0.0
     dt_limit: float = 0.0
     lambda_max: float = 0.0
+    courant: float = 0.0  # largest omega^2 dt^2 met (central differences are stable below 4)
     events: list[str] = field(default_factory=list)
 
 
@@ -206,7 +220,9 @@ class DynamicRelaxation:
         self.model = model
         self.settings = s = settings or DRSettings()
         self.asm = Assembly.of(model)
-        self.law = InterfaceLaw.of(model, self.asm.kbar, s.tension)
+        # memory is passed only when asked, so the call works with laws that predate it
+        extra = {} if s.memory == "none" else {"memory": s.memory}
+        self.law = InterfaceLaw.of(model, self.asm.kbar, s.tension, **extra)
         free = self.asm.free_index
         self.Hf = self.asm.H_free.tocsr()
         self.HfT = self.asm.H_free.T.tocsr()
@@ -233,6 +249,7 @@ class DynamicRelaxation:
             self.lambda_max,
         )
         self._slowest = 0
+        self._courant = 0.0
 
     # ------------------------------------------------------------------ masses and time step
     def _masses(self) -> np.ndarray:
@@ -328,6 +345,7 @@ class DynamicRelaxation:
         restart = True
         c = 0.0
         over = 0
+        self._courant = 0.0
         fscale = max(
             float(np.linalg.norm(self.F_dead + max(abs(target), 1e-12) * self.F_live)), 1e-30
         )
@@ -335,6 +353,16 @@ class DynamicRelaxation:
         best_before, best_now = math.inf, math.inf
         for cycle in range(1, s.max_cycles + 1):
             self.stats.time_steps += 1
+            if self.stats.time_steps > s.max_time_steps:
+                return _Relaxed(
+                    False,
+                    "budget",
+                    start.x,
+                    lam,
+                    resp,
+                    cycle,
+                    f"time-step budget max_time_steps={s.max_time_steps} spent at lambda={lam:.6g}",
+                )
             Fn = max(float(np.linalg.norm(F)), 1e-30)
             rnorm = float(np.linalg.norm(R)) / Fn
             best_now = min(best_now, rnorm)
@@ -397,13 +425,19 @@ class DynamicRelaxation:
             # blow-up check: Rayleigh quotient of the increment against the stability limit
             dmd = float(dx @ (M * dx))
             omega2 = float(dx @ df) / dmd if dmd > 0 else 0.0
-            over = over + 1 if omega2 * dt * dt > 4.0 * 1.1 else 0
+            # a stable step never sees omega^2 dt^2 > 4 (a Rayleigh quotient is at most
+            # lambda_max); count such steps over the whole relaxation, not in a row: a contact
+            # that chatters above the limit separates every other step and bounds the growth
+            if omega2 * dt * dt > self._courant:
+                self._courant = omega2 * dt * dt
+            if omega2 * dt * dt > 4.0:
+                over += 1
             rabs = float(np.linalg.norm(R))
             if not math.isfinite(rabs) or over >= s.blowup_patience or rabs > 1e8 * fscale:
                 why = (
                     "non-finite forces"
                     if not math.isfinite(rabs)
-                    else f"omega^2 dt^2 = {omega2 * dt * dt:.3g} > 4 for {over} steps"
+                    else f"omega^2 dt^2 > 4 in {over} time steps"
                     if over >= s.blowup_patience
                     else "the residual grew by 1e8"
                 )
@@ -506,6 +540,22 @@ class DynamicRelaxation:
         dt = self._step_for(start)
         for _ in range(s.max_cuts + 1):
             out = self._relax(start, target, dt, **kw)
+            out.courant = self._courant
+            self.stats.courant = max(self.stats.courant, self._courant)
+            if not out.ok and out.kind in ("mechanism", "stalled") and out.courant > 4.0:
+                # a failure met with the step above the limit is not evidence of collapse
+                out = _Relaxed(
+                    False,
+                    "blowup",
+                    start.x,
+                    out.load_factor,
+                    out.response,
+                    out.cycles,
+                    f"blow-up at lambda={out.load_factor:.6g}: the step failed ({out.reason}) "
+                    f"with omega^2 dt^2 = {out.courant:.3g} > 4, dt={dt:.4g} above the "
+                    f"stability limit (estimated {self.dt_limit:.4g})",
+                    out.courant,
+                )
             if out.kind != "blowup":
                 return out
             self.stats.events.append(out.reason)
@@ -584,7 +634,7 @@ class DynamicRelaxation:
 
         top = s.max_load_factor if math.isfinite(s.max_load_factor) else 1e6 * self.load_scale
         out = self._relax_with_cuts(state, top, hist, ramp_to=top, on_checkpoint=checkpoint)
-        if out.kind == "blowup":
+        if out.kind in _FATAL:
             hist.status, hist.reason = "failed", out.reason
             return state
         if out.ok:
@@ -603,7 +653,7 @@ class DynamicRelaxation:
             mid = (lo + hi) // 2
             cand, _ = candidates[mid]
             probe = self._relax_with_cuts(cand, cand.load_factor, hist)
-            if probe.kind == "blowup":
+            if probe.kind in _FATAL:
                 hist.status, hist.reason = "failed", probe.reason
                 return state
             if probe.ok:
@@ -655,7 +705,7 @@ class DynamicRelaxation:
                 break
             target = min(lam + dlam, s.max_load_factor)
             out = self._relax_with_cuts(state, target, hist)
-            if out.kind == "blowup":
+            if out.kind in _FATAL:
                 hist.status, hist.reason = "failed", out.reason
                 hist.collapse_bracket = None
                 return
