@@ -1,0 +1,143 @@
+"""``masonry-dem validate [CASE] [--json] [--out DIR]``: run the paper's validation cases
+(Tables 1-3) and print ours against the paper's DEM and the reference (test / FEM) values.
+
+Each case writes its VTU/PVD series, pushover.csv, summary.json, the pushover plot and a PNG
+of the collapse mechanism with the damage map to ``DIR/<case>/``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import math
+from pathlib import Path
+
+log = logging.getLogger(__name__)
+
+_VIEWS = {"1": "front", "2": "front", "3": "front"}
+
+
+def add_parser(subparsers) -> None:
+    p = subparsers.add_parser(
+        "validate",
+        help="run the paper's validation cases and print the comparison table",
+        description="Run the validation cases of Tables 1-3 of the paper (all, or one) and "
+        "print ours vs the paper's DEM and the test or FEM reference.",
+    )
+    p.add_argument("case", nargs="?", help="one case (OL1, S11, 2-3, ...); default: all")
+    p.add_argument("--json", action="store_true", help="print the rows as a JSON array")
+    p.add_argument(
+        "--out", default="results/validation", help="results folder (default: %(default)s)"
+    )
+    p.add_argument("--no-render", action="store_true", help="skip the PNGs")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=validate_command)
+
+
+def run_case(name: str, out: Path | None = None, render: bool = True) -> dict:
+    """Run one case; return its row (also used by the benchmark and the tests)."""
+    import time
+
+    from masonry_dem.cases.paper import build_case
+    from masonry_dem.solvers.incremental import pushover
+
+    case = build_case(name)
+    folder = None if out is None else Path(out) / name
+    t0 = time.perf_counter()
+    hist = pushover(case.model, case.settings, out=folder, monitor=case.monitor)
+    seconds = time.perf_counter() - t0
+    ours = hist.collapse_multiplier
+    row = {
+        "case": name,
+        "table": case.table,
+        "unit": case.unit,
+        "ours": ours,
+        "paper_dem": case.paper_dem,
+        "reference": case.reference,
+        "error_vs_reference": None if ours is None else case.error(ours),
+        "error_vs_paper": None if ours is None else case.error(ours, "paper"),
+        "bracket": list(hist.collapse_bracket) if hist.collapse_bracket else None,
+        "steps": len(hist.steps),
+        "iterations": hist.iterations,
+        "seconds": round(seconds, 3),
+        "status": hist.status,
+        "reason": hist.reason,
+        "mechanism": case.mechanism,
+    }
+    row.update({k: v for k, v in case.extra.items() if k in ("lambda_limit_analysis",)})
+    if folder is not None and render:
+        row["png"] = _render(folder, _VIEWS[case.table])
+    return row
+
+
+def _render(folder: Path, view: str) -> str | None:
+    try:
+        from masonry_dem.export.render import plot_pushover, render_step
+    except ImportError as exc:
+        log.warning("no PNG for %s: the render module is unavailable (%s)", folder, exc)
+        return None
+    try:
+        plot_pushover(folder)
+        png = render_step(folder, step="last", view="oblique", out=folder / "mechanism.png")
+        render_step(folder, step="last", view=view, out=folder / f"mechanism_{view}.png")
+    except Exception as exc:  # rendering must never lose the analysis
+        log.warning("no PNG for %s: %s", folder, exc)
+        return None
+    return str(png)
+
+
+def _fmt(value: float | None, unit: str) -> str:
+    if value is None or (isinstance(value, float) and not math.isfinite(value)):
+        return "-"
+    return f"{value:9.0f}" if unit == "Pa" else f"{value:9.4f}"
+
+
+def _pct(value: float | None) -> str:
+    return "-" if value is None else f"{100 * value:+6.1f}%"
+
+
+def format_table(rows: list[dict]) -> str:
+    head = (
+        f"{'case':7s} {'table':5s} {'ours':>9s} {'paper':>9s} {'ref':>9s} "
+        f"{'err ref':>8s} {'err pap':>8s} {'steps':>5s} {'s':>6s}  status"
+    )
+    lines = [head, "-" * len(head)]
+    for r in rows:
+        lines.append(
+            f"{r['case']:7s} {r['table']:5s} {_fmt(r['ours'], r['unit'])} "
+            f"{_fmt(r['paper_dem'], r['unit'])} {_fmt(r['reference'], r['unit'])} "
+            f"{_pct(r['error_vs_reference']):>8s} {_pct(r['error_vs_paper']):>8s} "
+            f"{r['steps']:5d} {r['seconds']:6.2f}  {r['status']}"
+        )
+    for table in ("1", "2", "3"):
+        errs = [abs(r["error_vs_reference"]) for r in rows if r["table"] == table and r["ours"]]
+        n_all = sum(r["table"] == table for r in rows)
+        if errs:
+            lines.append(
+                f"Table {table}: mean |error| vs reference {100 * sum(errs) / len(errs):.1f}% "
+                f"over {len(errs)} of {n_all} cases"
+            )
+    return "\n".join(lines)
+
+
+def validate_command(args: argparse.Namespace) -> int:
+    from tqdm import tqdm
+
+    from masonry_dem.cases.paper import case_names
+
+    names = [args.case] if args.case else case_names()
+    if args.case and args.case not in case_names():
+        raise ValueError(f"unknown case {args.case!r}; the cases are {', '.join(case_names())}")
+    out = Path(args.out)
+    rows = []
+    bar = tqdm(names, unit="case", disable=args.quiet or args.json)
+    for name in bar:
+        bar.set_description(name)
+        rows.append(run_case(name, out, render=not args.no_render))
+    if args.json:
+        print(json.dumps(rows, indent=1))
+    else:
+        print(format_table(rows))
+        print(f"results in {out}/<case>/")
+    return 0 if all(r["status"] == "collapse" for r in rows) else 1

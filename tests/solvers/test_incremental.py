@@ -1,0 +1,151 @@
+"""Static incremental solver against closed-form collapse loads, and its independence of what
+should not matter (solver knobs, block numbering, mirror image), and a failed analysis.
+
+Proves: a dry block on a base tilts over at lambda = s/a, or slides at lambda = mu when that
+is lower; a free-standing running-bond wall tilts at s/H; a dry wall under its weight alone
+stays in equilibrium; the collapse multiplier of a panel held on one edge moves by less than
+the bracket tolerance when the tolerance, the iteration budget or the step sizes change, when
+the blocks are renumbered, and when the wall is mirrored; a panel with a mechanism under its
+own weight stops with status "failed", a reason that says so, and the step it wrote.
+"""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from masonry_dem.geometry.blocks import Blocks
+from masonry_dem.geometry.builders import add_base, boxes, running_bond_wall, single_block
+from masonry_dem.geometry.selectors import column
+from masonry_dem.model import InterfaceMaterial, Model, SelfWeight, Support, WeightProportional
+from masonry_dem.solvers.incremental import DisplacementControl, StaticSettings, pushover
+
+DRY = InterfaceMaterial(kn=2.4e9, kt=1.0e9, friction=0.7)
+TOL = 0.005  # the default bracket tolerance
+
+
+def _tilt(blocks: Blocks, base: int, material=DRY, extra=()) -> Model:
+    return Model.build(
+        blocks,
+        material,
+        supports=[Support([base]), *extra],
+        loads=[SelfWeight(), WeightProportional((0.0, 0.0, 1.0))],
+    )
+
+
+def _collapse(model: Model, **settings) -> float:
+    h = pushover(model, StaticSettings(**settings))
+    assert h.status == "collapse", h.reason
+    lo, hi = h.collapse_bracket
+    assert hi - lo <= TOL * lo * 1.0001
+    return h.collapse_multiplier
+
+
+@pytest.mark.parametrize("a, s", [(0.2, 0.1), (0.3, 0.06)])
+def test_single_block_tilts_at_s_over_a(a, s):
+    blocks, base = add_base(single_block(a, 0.25, s, 20e3))
+    lam = _collapse(_tilt(blocks, base))
+    assert lam == pytest.approx(s / a, rel=TOL)
+    assert lam <= s / a * (1 + 1e-9)  # the last converged state is statically admissible
+
+
+def test_squat_block_slides_at_mu():
+    blocks, base = add_base(single_block(0.05, 0.25, 0.2, 20e3))  # s/a = 4 > mu
+    lam = _collapse(_tilt(blocks, base, InterfaceMaterial(kn=2.4e9, kt=1e9, friction=0.45)))
+    assert lam == pytest.approx(0.45, rel=TOL)
+
+
+def test_free_standing_wall_tilts_at_s_over_h():
+    a, s, courses = 0.081, 0.07, 9
+    blocks, base = add_base(running_bond_wall(4, courses, a, 0.21, s, 20e3))
+    lam = _collapse(_tilt(blocks, base))
+    assert lam == pytest.approx(s / (courses * a), rel=TOL)
+
+
+def test_dry_wall_under_its_weight_stays_in_equilibrium():
+    wall = running_bond_wall(5, 8, 0.081, 0.21, 0.07, 20e3)
+    blocks, base = add_base(wall)
+    model = Model.build(blocks, DRY, supports=[Support([base])], loads=[SelfWeight()])
+    h = pushover(model)
+    assert h.status == "completed"
+    last = h.last
+    assert np.all(last.actions[:, 2] <= 0.0)  # no tension in dry joints
+    bed = model.interfaces.axis == 1
+    assert np.all(last.state[bed] == 0)  # every bed joint elastic
+    # the base carries the whole weight through the joints of the first course
+    on_base = model.interfaces.block_j == base
+    on_base |= model.interfaces.block_i == base
+    assert -last.actions[on_base, 2].sum() == pytest.approx(wall.weights.sum(), rel=1e-6)
+
+
+# ------------------------------------------------------------------ independence
+def _panel(order=None, mirror=False) -> Model:
+    wall = running_bond_wall(3, 13, 0.081, 0.21, 0.07, 20e3)
+    if mirror:
+        c = wall.centres.copy()
+        c[:, 0] = wall.upper[:, 0].max() - c[:, 0]
+        wall = Blocks(c, wall.sizes, wall.unit_weight)
+    if order is not None:
+        wall = wall.permuted(order)
+    blocks, base = add_base(wall)
+    side = "right" if mirror else "left"
+    return _tilt(blocks, base, extra=[Support(column(wall, side), ["u1", "u3"])])
+
+
+@pytest.fixture(scope="module")
+def panel_lambda() -> float:
+    return _collapse(_panel())
+
+
+@pytest.mark.parametrize(
+    "settings",
+    [
+        {"tolerance": 1e-6},
+        {"tolerance": 1e-10},
+        {"max_iterations": 20},
+        {"max_iterations": 80},
+        {"initial_step": 0.005, "max_step": 0.01},
+        {"initial_step": 0.05, "max_step": 0.3},
+    ],
+)
+def test_collapse_multiplier_does_not_depend_on_solver_knobs(panel_lambda, settings):
+    assert _collapse(_panel(), **settings) == pytest.approx(panel_lambda, rel=TOL)
+
+
+def test_collapse_multiplier_does_not_depend_on_numbering(panel_lambda):
+    order = np.random.default_rng(3).permutation(3 * 13 + 6)
+    assert _collapse(_panel(order)) == pytest.approx(panel_lambda, rel=TOL)
+
+
+def test_mirror_image_collapses_at_the_same_load(panel_lambda):
+    assert _collapse(_panel(mirror=True)) == pytest.approx(panel_lambda, rel=TOL)
+
+
+# ------------------------------------------------------------------ past the peak
+def test_displacement_control_reaches_the_rocking_limit():
+    a, s = 0.2, 0.1
+    blocks, base = add_base(single_block(a, 0.25, s, 20e3))
+    settings = StaticSettings(max_steps=60)
+    h = pushover(_tilt(blocks, base), settings, control=DisplacementControl(0, "u3", 2e-3, 20))
+    lams = h.load_factors
+    assert lams.max() == pytest.approx(s / a, rel=1e-3)
+    assert lams.max() <= s / a * (1 + 1e-9)
+    # the control displacement grows monotonically along the curve
+    assert np.all(np.diff(h.control_displacements) >= 0)
+
+
+# ------------------------------------------------------------------ failures
+def test_mechanism_under_dead_load_fails_clearly_and_keeps_its_steps(tmp_path):
+    # a block held to a fixed block only by a dry head joint: nothing carries its weight
+    blocks = boxes([[0, 0, 0], [0.2, 0, 0]], [[0.2, 0.1, 0.1], [0.4, 0.1, 0.1]], 20e3)
+    model = Model.build(blocks, DRY, supports=[Support([0])], loads=[SelfWeight()])
+    h = pushover(model, out=tmp_path)
+    assert h.status == "failed"
+    assert "dead load" in h.reason
+    assert "no equilibrium" in h.reason or "limit" in h.reason
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert summary["status"] == "failed" and summary["reason"] == h.reason
+    assert summary["steps_written"] == len(h.steps) >= 1
+    assert list((tmp_path / "steps").glob("*.vtu"))
