@@ -1,0 +1,73 @@
+"""Time of every validation case (no files written), and the sensitivity of lambda to the
+assumptions of masonry_dem.cases.paper.Assumptions.
+
+    python benchmarks/bench_validation.py                 # time per case and in total
+    python benchmarks/bench_validation.py OL1 S11         # some cases
+    python benchmarks/bench_validation.py --sensitivity   # lambda when each assumption moves
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+from masonry_dem.cases.paper import build_case, case_names
+from masonry_dem.solvers.incremental import pushover
+
+# (case, assumption changes): a sensible move of each value the paper does not give
+SENSITIVITY = [
+    ("OL1", {"dry_kn": 2.4e8, "dry_kt": 1.0e8}),
+    ("OL1", {"dry_kn": 2.4e10, "dry_kt": 1.0e10}),
+    ("OL1", {"dry_kt": 0.4e9}),
+    ("S13", {"dry_kn": 2.4e8, "dry_kt": 1.0e8}),
+    ("S13", {"column_dofs_table2": ("u1", "u3")}),
+    ("S5", {"column_dofs_table2": ("u1", "u3")}),
+    ("S32", {"s32_beam_course": 16}),
+    ("S32", {"s32_top_restrained": True}),
+    ("9-13", {"brick_unit_weight": 16e3}),
+    ("9-13", {"brick_unit_weight": 20e3}),
+    ("9-13", {"simple_support_dofs": ("u3", "w2")}),
+]
+
+
+def run(name: str, **changes) -> tuple[float | None, int, int, float, float, str]:
+    case = build_case(name, **changes)
+    t0, c0 = time.perf_counter(), time.process_time()
+    h = pushover(case.model, case.settings, monitor=case.monitor)
+    return (
+        h.collapse_multiplier,
+        len(h.steps),
+        h.iterations,
+        time.perf_counter() - t0,
+        time.process_time() - c0,
+        h.status,
+    )
+
+
+def main(argv: list[str] | None = None) -> None:
+    p = argparse.ArgumentParser(description=__doc__)
+    p.add_argument("cases", nargs="*")
+    p.add_argument("--sensitivity", action="store_true")
+    args = p.parse_args(argv)
+    if args.sensitivity:
+        base: dict[str, float | None] = {}
+        print(f"{'case':6s} {'change':45s} {'lambda':>10s} {'base':>10s} {'move':>7s}")
+        for name, changes in SENSITIVITY:
+            if name not in base:
+                base[name] = run(name)[0]
+            lam = run(name, **changes)[0]
+            ref = base[name]
+            move = "-" if lam is None or not ref else f"{100 * (lam / ref - 1):+.1f}%"
+            print(f"{name:6s} {str(changes):45s} {lam!s:>10.8s} {ref!s:>10.8s} {move:>7s}")
+        return
+    total = 0.0
+    print(f"{'case':6s} {'lambda':>10s} {'steps':>5s} {'iters':>5s} {'wall s':>7s} {'cpu s':>6s}")
+    for name in args.cases or case_names():
+        lam, steps, its, wall, cpu, status = run(name)
+        total += wall
+        print(f"{name:6s} {lam!s:>10.8s} {steps:5d} {its:5d} {wall:7.2f} {cpu:6.2f} {status}")
+    print(f"total wall time {total:.1f} s")
+
+
+if __name__ == "__main__":
+    main()
