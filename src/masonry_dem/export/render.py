@@ -80,6 +80,8 @@ _VTK_HEXAHEDRON, _VTK_QUAD = 12, 9
 _HEX_FACES = np.array(
     [[0, 3, 2, 1], [4, 5, 6, 7], [0, 1, 5, 4], [1, 2, 6, 5], [2, 3, 7, 6], [3, 0, 4, 7]]
 )
+# a joint slab shows only its four thin sides: its two large faces always face a block
+_JOINT_FACES = _HEX_FACES[2:]
 
 
 # --------------------------------------------------------------------------- pyvista, lazily
@@ -286,7 +288,7 @@ def _read_cells(pv, path: Path, celltype: int, per_cell: int):
     return grid, pts, disp
 
 
-def _read_step(series: ResultsSeries, index: int) -> _StepData:
+def _read_step(series: ResultsSeries, index: int, interfaces: bool = True) -> _StepData:
     pv = _pyvista()
     grid, bpts, bdisp = _read_cells(pv, series.block_files[index], _VTK_HEXAHEDRON, 8)
     fixed = (
@@ -298,7 +300,7 @@ def _read_step(series: ResultsSeries, index: int) -> _StepData:
     if "load_factor" in grid.field_data:  # written by newer writers; preferred when present
         lam = float(np.asarray(grid.field_data["load_factor"]).ravel()[0])
     jp = jd = axis = state = None
-    if series.interface_files is not None:
+    if interfaces and series.interface_files is not None:
         igrid, jp, jd = _read_cells(pv, series.interface_files[index], _VTK_QUAD, 4)
         if "state" not in igrid.cell_data:
             raise ValueError(f"{series.interface_files[index]}: cell data 'state' is missing")
@@ -369,8 +371,8 @@ def _joint_surface(data: _StepData, scale: float, gap: float):
     return (pts + scale * disp).reshape(-1, 3)
 
 
-def _hex_faces(n: int) -> np.ndarray:
-    return (8 * np.arange(n)[:, None, None] + _HEX_FACES[None]).reshape(-1, 4)
+def _hex_faces(n: int, faces: np.ndarray = _HEX_FACES) -> np.ndarray:
+    return (8 * np.arange(n)[:, None, None] + faces[None]).reshape(-1, 4)
 
 
 def state_colours(state: np.ndarray) -> np.ndarray:
@@ -465,9 +467,9 @@ class _Scene:
         if first.joint_points is not None and first.state is not None and first.joint_points.size:
             m = first.joint_points.shape[0]
             self.joints = pv.PolyData.from_regular_faces(
-                _joint_surface(first, 0.0, gap), _hex_faces(m)
+                _joint_surface(first, 0.0, gap), _hex_faces(m, _JOINT_FACES)
             )
-            self.joints.cell_data["rgb"] = np.repeat(state_colours(first.state), 6, axis=0)
+            self.joints.cell_data["rgb"] = np.repeat(state_colours(first.state), 4, axis=0)
             p.add_mesh(self.joints, scalars="rgb", rgb=True, lighting=False, show_scalar_bar=False)
         if legend:
             box = p.add_legend(
@@ -486,7 +488,7 @@ class _Scene:
         self.blocks.points = _block_surface(data, scale, self.gap)
         if self.joints is not None and data.state is not None:
             self.joints.points = _joint_surface(data, scale, self.gap)
-            self.joints.cell_data["rgb"] = np.repeat(state_colours(data.state), 6, axis=0)
+            self.joints.cell_data["rgb"] = np.repeat(state_colours(data.state), 4, axis=0)
 
     def frame_camera(self, points: np.ndarray) -> None:
         """Place the camera of the view preset so that ``points`` (k, 3) fill the picture."""
@@ -657,19 +659,30 @@ def render_animation(
             raise ValueError(
                 "an MP4 animation needs the imageio-ffmpeg package; write a .gif"
             ) from exc
-    steps = [_read_step(series, k) for k in range(len(series.steps))]
-    wall = max(_wall_size(d) for d in steps)
+    # pass 1, blocks only, one step in memory at a time: one scale (the largest displacement
+    # of the run) and one camera (a box holding every deformed step) for the whole animation
+    n = len(series.steps)
+    first = _read_step(series, 0, interfaces=False)
+    wall, gap = _wall_size(first), _gap(first, wsize)
+    dmax = 0.0
+    p_lo, p_hi = first.block_points.min(axis=(0, 1)), first.block_points.max(axis=(0, 1))
+    d_lo, d_hi = np.zeros(3), np.zeros(3)
+    for k in range(n):
+        blocks = first if k == 0 else _read_step(series, k, interfaces=False)
+        dmax = max(dmax, _max_displacement(blocks))
+        d_lo = np.minimum(d_lo, blocks.block_disp.min(axis=(0, 1)))
+        d_hi = np.maximum(d_hi, blocks.block_disp.max(axis=(0, 1)))
     if scale is None:
-        scale = auto_scale(max(_max_displacement(d) for d in steps), wall)
-    gap = _gap(steps[0], wsize)
-    scene = _Scene(steps[0], view, wsize, gap)
+        scale = auto_scale(dmax, wall)
+    lo, hi = p_lo + scale * d_lo, p_hi + scale * d_hi
+    # pass 2: one frame per step
+    data = _read_step(series, 0)
+    scene = _Scene(data, view, wsize, gap)
     frames = []
     try:
-        extent = np.concatenate(
-            [steps[0].block_points.reshape(-1, 3)] + [_block_surface(d, scale, gap) for d in steps]
-        )
-        scene.frame_camera(np.array([extent.min(axis=0), extent.max(axis=0)]))
-        for k, data in enumerate(steps):
+        scene.frame_camera(np.array([lo, hi]))
+        for k in range(n):
+            data = data if k == 0 else _read_step(series, k)
             scene.update(data, scale)
             scene.title(_title(series, k, data, scale))
             frames.append(np.asarray(scene.image()))
