@@ -61,9 +61,10 @@ class Assumptions:
 
     dry_kn, dry_kt [N/m^3]: stiffness of the dry joints of Tables 1-2; the paper gives none
         for the panels, so the dry interface it studies in Section 2.1 (2.4 and 1 MPa/mm).
-    column_dofs_one_edge, column_dofs_two_edges: DOFs fixed on the restrained column(s).
-        Table 1 says "translations fixed"; Table 2 says the return walls fix "translations and
-        rotations" of the lateral columns.
+    column_dofs_table1, column_dofs_table2: DOFs fixed on the restrained column(s). Table 1
+        says "translations fixed" and Table 2 "translations and rotations", but fixing u2
+        makes the dead-load step fail (no equilibrium of the dry joints is found while the
+        wall settles against a column that cannot): the column settles with the wall (u2 free).
     opening_width, opening_height, sill_courses: openings of S23/S34 in blocks and courses
         (the paper shows them only in a figure): two windows of 3 blocks x 9 courses on a
         6-course sill; S23 keeps a 4-block central pier (piers 2-3-4-3-2 blocks wide),
