@@ -1,0 +1,575 @@
+"""``masonry-dem study ...``: speed against accuracy of every solver and setting, the in-plane
+reduction and the dry-joint stiffness sweep.
+
+* ``study speed-accuracy [--cases ...] [--quick] [--json] [--out DIR]``: runs each case with
+  every setting of the static solver and of dynamic relaxation, measures the run time and the
+  error in lambda against a converged reference of the same model (the static solver with a
+  bracket of 1e-4) and against the test; writes a table, ``speed_accuracy.json`` and a PNG
+  chart of time against error with the Pareto front marked; prints the static / DR time ratio
+  at equal (1 %) accuracy per case.
+* ``study reduction [--json]``: in-plane scenes solved with the full 6-DOF model and with the
+  3-DOF in-plane model (lambda, time, DOFs), and what the fixed-block DOFs and the closed-form
+  interface domain save.
+* ``study kn-sweep [--case NAME] [--factors ...] [--json]``: lambda as the dry-joint normal
+  stiffness grows.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import math
+import time
+from dataclasses import dataclass, fields, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+log = logging.getLogger(__name__)
+
+DEFAULT_CASES = ("S15", "OL1", "14-15")
+ACCURACY = 0.01  # the "equal accuracy" of the static / DR comparison
+
+#: settings of each method on the chart: (label, changes to the defaults)
+STATIC_GRID: tuple[tuple[str, dict], ...] = (
+    ("default", {}),
+    ("bracket 2%", {"bracket_tolerance": 0.02}),
+    ("bracket 0.1%", {"bracket_tolerance": 0.001}),
+    ("no refinement", {"refine": False}),
+    ("coarse steps", {"initial_step": 0.05, "max_step": 0.5, "bracket_tolerance": 0.01}),
+    ("fine steps", {"initial_step": 0.01, "max_step": 0.05}),
+    ("tolerance 1e-5", {"tolerance": 1e-5}),
+    ("modified iteration", {"iteration": "modified"}),
+)
+DR_GRID: tuple[tuple[str, dict], ...] = (
+    ("default", {}),
+    ("bracket 2%", {"bracket_tolerance": 0.02}),
+    ("tolerance 1e-3", {"tolerance": 1e-3, "bracket_tolerance": 0.01}),
+    ("dt 0.5 limit", {"dt_fraction": 0.5}),
+    ("dt power 0.95", {"dt_rule": "power", "dt_fraction": 0.95}),
+    ("viscous", {"damping": "viscous"}),
+    ("density mass", {"mass": "density"}),
+    ("ramp 2e-4", {"loading": "ramp", "ramp_rate": 2e-4}),
+    ("ramp 1e-3", {"loading": "ramp", "ramp_rate": 1e-3}),
+)
+QUICK = {
+    "static": ("default", "bracket 2%", "no refinement", "coarse steps"),
+    "dynamic_relaxation": ("default", "bracket 2%", "ramp 2e-4"),
+}
+#: step-size knobs copied from a case's static settings into DR (same load stepping)
+_SHARED = ("initial_step", "max_step", "growth", "max_load_factor", "displacement_limit", "tension")
+
+
+# ---------------------------------------------------------------------------- cases
+@dataclass(frozen=True)
+class StudyCase:
+    name: str
+    model: Any
+    reference: float | None  # test value (Table 1: FEM)
+    static: Any  # StaticSettings of the case
+    unit: str = "lambda"
+
+
+def load_study_case(name: str) -> StudyCase:
+    """A validation case from :mod:`masonry_dem.cases.paper`; ``default`` is the bundled wall."""
+    if name == "default":
+        from masonry_dem.cases.casefile import load_case
+
+        case = load_case()
+        return StudyCase("default", case.model, None, case.settings)
+    from masonry_dem.cases.paper import build_case
+
+    pc = build_case(name)
+    return StudyCase(pc.name, pc.model, float(pc.reference), pc.settings, pc.unit)
+
+
+def _settings(cls, base, changes: dict):
+    """``base`` (or the defaults of ``cls``) with the known ``changes``; None if a knob does not
+    exist in this version of the solver (the run is then skipped, not silently changed)."""
+    known = {f.name for f in fields(cls)}
+    if any(k not in known for k in changes):
+        return None
+    start = base if base is not None else cls()
+    return replace(start, **changes)
+
+
+def _dr_base(static):
+    from masonry_dem.solvers.dynamic_relaxation import DRSettings
+
+    shared = {k: getattr(static, k) for k in _SHARED if hasattr(static, k)}
+    return replace(DRSettings(), **shared)
+
+
+# ---------------------------------------------------------------------------- runs
+def _run(method: str, model, settings) -> tuple[Any, float, dict]:
+    from masonry_dem.solvers.dynamic_relaxation import DynamicRelaxation
+    from masonry_dem.solvers.incremental import StaticSolver
+
+    t0 = time.perf_counter()
+    if method == "static":
+        solver = StaticSolver(model, settings)
+        hist = solver.run()
+        cost = {"iterations": hist.iterations, "factorizations": hist.factorizations}
+    else:
+        dr = DynamicRelaxation(model, settings)
+        hist = dr.run()
+        cost = {
+            "time_steps": dr.stats.time_steps,
+            "law_evaluations": dr.stats.law_evaluations,
+            "dt_cuts": dr.stats.cuts,
+        }
+    return hist, time.perf_counter() - t0, cost
+
+
+def _lambda(hist) -> float | None:
+    lam = hist.collapse_multiplier
+    if hist.status != "collapse" or lam is None or not math.isfinite(lam):
+        return None
+    return float(lam)
+
+
+def _rel(value: float | None, ref: float | None) -> float | None:
+    if value is None or ref is None or ref == 0:
+        return None
+    return abs(value - ref) / abs(ref)
+
+
+def converged_reference(case: StudyCase) -> tuple[float | None, str]:
+    """lambda of the same model, converged: static with a 1e-4 bracket (DR if static fails)."""
+    from masonry_dem.solvers.dynamic_relaxation import DRSettings
+    from masonry_dem.solvers.incremental import StaticSettings
+
+    tight = _settings(StaticSettings, case.static, {"bracket_tolerance": 1e-4})
+    hist, _, _ = _run("static", case.model, tight)
+    lam = _lambda(hist)
+    if lam is not None:
+        return lam, "static, bracket 1e-4"
+    log.warning("%s: the static reference failed (%s); DR reference", case.name, hist.reason)
+    dr = _settings(DRSettings, _dr_base(case.static), {"bracket_tolerance": 1e-3})
+    hist, _, _ = _run("dynamic_relaxation", case.model, dr)
+    return _lambda(hist), "dynamic relaxation, bracket 1e-3"
+
+
+def speed_accuracy(
+    case_names,
+    quick: bool = False,
+    budget: int | None = None,
+    progress=None,
+) -> dict:
+    """Every setting of both methods on each case; rows (one per run) and a summary per case."""
+    from masonry_dem.solvers.dynamic_relaxation import DRSettings
+    from masonry_dem.solvers.incremental import StaticSettings
+
+    rows: list[dict] = []
+    summary: dict[str, dict] = {}
+    for name in case_names:
+        case = load_study_case(name)
+        lam_ref, ref_how = converged_reference(case)
+        grids = (
+            ("static", STATIC_GRID, StaticSettings, case.static),
+            ("dynamic_relaxation", DR_GRID, DRSettings, _dr_base(case.static)),
+        )
+        for method, grid, cls, base in grids:
+            for label, changes in grid:
+                if quick and label not in QUICK[method]:
+                    continue
+                if method == "dynamic_relaxation" and budget is not None:
+                    changes = {**changes, "max_time_steps": budget}
+                settings = _settings(cls, base, changes)
+                if settings is None:
+                    log.info("%s: %s %r skipped (no such knob)", name, method, label)
+                    continue
+                hist, seconds, cost = _run(method, case.model, settings)
+                lam = _lambda(hist)
+                row = {
+                    "case": case.name,
+                    "method": method,
+                    "label": label,
+                    "settings": {k: v for k, v in changes.items()},
+                    "seconds": round(seconds, 4),
+                    "lambda": lam,
+                    "lambda_converged": lam_ref,
+                    "error_vs_converged": _rel(lam, lam_ref),
+                    "lambda_test": case.reference,
+                    "error_vs_test": _rel(lam, case.reference),
+                    "unit": case.unit,
+                    "status": hist.status,
+                    "reason": hist.reason,
+                    **cost,
+                }
+                rows.append(row)
+                if progress is not None:
+                    progress(row)
+        case_rows = [r for r in rows if r["case"] == case.name]
+        mark_pareto(case_rows)
+        summary[case.name] = {
+            "lambda_converged": lam_ref,
+            "reference_method": ref_how,
+            "lambda_test": case.reference,
+            **equal_accuracy(case_rows, ACCURACY),
+        }
+    return {"rows": rows, "summary": summary, "accuracy": ACCURACY}
+
+
+def mark_pareto(rows: list[dict]) -> None:
+    """Set ``pareto`` on each row: no other run of the case is both faster and more accurate."""
+    ok = [r for r in rows if r["error_vs_converged"] is not None]
+    for r in rows:
+        r["pareto"] = False
+    best = math.inf
+    for r in sorted(ok, key=lambda r: (r["seconds"], r["error_vs_converged"])):
+        if r["error_vs_converged"] < best:
+            r["pareto"] = True
+            best = r["error_vs_converged"]
+
+
+def equal_accuracy(rows: list[dict], accuracy: float) -> dict:
+    """Fastest run of each method within ``accuracy`` of the converged lambda, and the ratio."""
+    out: dict[str, Any] = {}
+    for method in ("static", "dynamic_relaxation"):
+        good = [
+            r
+            for r in rows
+            if r["method"] == method
+            and r["error_vs_converged"] is not None
+            and r["error_vs_converged"] <= accuracy
+        ]
+        fastest = min(good, key=lambda r: r["seconds"]) if good else None
+        out[f"{method}_seconds"] = fastest["seconds"] if fastest else None
+        out[f"{method}_label"] = fastest["label"] if fastest else None
+    s, d = out["static_seconds"], out["dynamic_relaxation_seconds"]
+    out["time_ratio_dr_over_static"] = None if not s or not d else round(d / s, 2)
+    return out
+
+
+# ---------------------------------------------------------------------------- output
+def _fmt(value, spec: str, missing: str = "-") -> str:
+    return missing if value is None else format(value, spec)
+
+
+def table(rows: list[dict]) -> str:
+    head = (
+        f"{'case':<8} {'method':<8} {'settings':<20} {'status':<9} {'lambda':>11} "
+        f"{'err conv':>9} {'err test':>9} {'seconds':>8} {'work':>9} {'pareto':>6}"
+    )
+    lines = [head, "-" * len(head)]
+    for r in rows:
+        work = r.get("time_steps", r.get("iterations"))
+        lines.append(
+            f"{r['case']:<8} {'DR' if r['method'] != 'static' else 'static':<8} "
+            f"{r['label']:<20} {r['status']:<9} {_fmt(r['lambda'], '11.5g')} "
+            f"{_fmt(r['error_vs_converged'], '9.2%')} {_fmt(r['error_vs_test'], '9.2%')} "
+            f"{r['seconds']:8.2f} {_fmt(work, '9d')} {'*' if r.get('pareto') else '':>6}"
+        )
+    lines.append("work: Newton iterations (static) or time steps (DR); * on the Pareto front")
+    return "\n".join(lines)
+
+
+def summary_lines(summary: dict, accuracy: float) -> str:
+    lines = [f"static against dynamic relaxation at equal accuracy ({accuracy:.0%} in lambda):"]
+    for name, s in summary.items():
+        ratio = s["time_ratio_dr_over_static"]
+        lines.append(
+            f"  {name:<8} converged lambda {_fmt(s['lambda_converged'], '.5g')} "
+            f"({s['reference_method']}); fastest static {_fmt(s['static_seconds'], '.2f')} s "
+            f"[{s['static_label'] or 'none within'}], fastest DR "
+            f"{_fmt(s['dynamic_relaxation_seconds'], '.2f')} s "
+            f"[{s['dynamic_relaxation_label'] or 'none within'}]: DR / static = "
+            f"{_fmt(ratio, '.1f')}x"
+        )
+    return "\n".join(lines)
+
+
+def chart(rows: list[dict], path: Path, floor: float = 1e-5) -> Path:
+    """Run time against error in lambda, one panel per case, Pareto front joined."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    cases = list(dict.fromkeys(r["case"] for r in rows))
+    fig, axes = plt.subplots(1, max(len(cases), 1), figsize=(5.0 * max(len(cases), 1), 4.4))
+    axes = np.atleast_1d(axes)
+    style = {
+        "static": dict(marker="o", color="tab:blue", label="static (paper's method)"),
+        "dynamic_relaxation": dict(marker="^", color="tab:orange", label="dynamic relaxation"),
+    }
+    for ax, name in zip(axes, cases, strict=False):
+        rs = [r for r in rows if r["case"] == name]
+        for method, st in style.items():
+            ok = [r for r in rs if r["method"] == method and r["error_vs_converged"] is not None]
+            bad = [r for r in rs if r["method"] == method and r["error_vs_converged"] is None]
+            ax.scatter(
+                [r["seconds"] for r in ok],
+                [max(r["error_vs_converged"], floor) for r in ok],
+                s=36,
+                **st,
+            )
+            if bad:
+                ax.scatter(
+                    [r["seconds"] for r in bad],
+                    [1.0] * len(bad),
+                    marker="x",
+                    color=st["color"],
+                    label=f"{method.replace('_', ' ')}: no lambda (failed)",
+                )
+            for r in ok:
+                ax.annotate(
+                    r["label"],
+                    (r["seconds"], max(r["error_vs_converged"], floor)),
+                    fontsize=6,
+                    xytext=(3, 2),
+                    textcoords="offset points",
+                )
+        front = sorted((r for r in rs if r.get("pareto")), key=lambda r: r["seconds"])
+        if front:
+            ax.step(
+                [r["seconds"] for r in front],
+                [max(r["error_vs_converged"], floor) for r in front],
+                where="post",
+                color="k",
+                lw=1,
+                label="Pareto front",
+            )
+            ax.scatter(
+                [r["seconds"] for r in front],
+                [max(r["error_vs_converged"], floor) for r in front],
+                s=110,
+                facecolors="none",
+                edgecolors="k",
+            )
+        ax.axhline(ACCURACY, color="grey", ls=":", lw=1)
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_ylim(floor / 2, 2.0)
+        ax.set_xlabel("run time [s]")
+        ax.set_title(name)
+        ax.grid(True, which="both", alpha=0.2)
+    axes[0].set_ylabel(f"|lambda - converged| / converged (floor {floor:g})")
+    axes[0].legend(fontsize=7, loc="lower left")
+    fig.suptitle("Speed against accuracy: every solver setting (dotted: 1 %)")
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=130)
+    plt.close(fig)
+    return path
+
+
+# ---------------------------------------------------------------------------- reduction
+def in_plane_scenes() -> list[tuple[str, Any]]:
+    """In-plane scenes: running-bond shear walls on a rigid base pushed along e1 by lambda x
+    their weight (the Orduna-Lourenco block and a Chee Liang-sized brick wall)."""
+    from masonry_dem.geometry.builders import add_base, running_bond_wall
+    from masonry_dem.model import InterfaceMaterial, Model, SelfWeight, Support, WeightProportional
+
+    out = []
+    for name, nx, nc, dims, gamma, mat in (
+        ("shear wall 6x13", 6, 13, (0.081, 0.210, 0.070), 20e3, (2.4e9, 1.0e9, 0.7, 0.0)),
+        ("shear wall 12x26", 12, 26, (0.081, 0.210, 0.070), 20e3, (2.4e9, 1.0e9, 0.7, 0.0)),
+        ("mortar wall 20x40", 20, 40, (0.046, 0.122, 0.053), 18e3, (25e9, 105e9, 0.57, 0.35e6)),
+    ):
+        wall = running_bond_wall(nx, nc, *dims, gamma)
+        blocks, base = add_base(wall)
+        model = Model.build(
+            blocks,
+            InterfaceMaterial(*mat),
+            [Support(np.array([base]))],
+            [SelfWeight(), WeightProportional((1.0, 0.0, 0.0))],
+            name=name,
+        )
+        out.append((name, model))
+    return out
+
+
+def reduction_study(repeats: int = 3) -> dict:
+    from masonry_dem.solvers import reduction
+
+    scenes = []
+    for name, model in in_plane_scenes():
+        r = reduction.measure_reduction(model, repeats=repeats)
+        r["scene"] = name
+        scenes.append(r)
+    fixed = []
+    for name in ("S15", "14-15"):
+        try:
+            case = load_study_case(name)
+        except (ImportError, ValueError) as exc:
+            log.warning("case %s unavailable: %s", name, exc)
+            continue
+        f = reduction.measure_fixed_dofs(case.model, repeats=repeats)
+        f["case"] = name
+        s = reduction.measure_strength_model(case.model, repeats=repeats)
+        fixed.append({**f, "strength": s})
+    return {"in_plane": scenes, "fixed_dofs": fixed}
+
+
+def reduction_text(res: dict) -> str:
+    lines = ["in-plane scenes: full 6-DOF model against the 3-DOF (u1, u2, w3) model (static)"]
+    lines.append(
+        f"  {'scene':<18} {'free DOFs':>11} {'nnz K':>13} {'lambda 6-DOF':>13} "
+        f"{'lambda 3-DOF':>13} {'rel diff':>9} {'t6 [s]':>7} {'t3 [s]':>7} {'t6/t3':>6}"
+    )
+    for r in res["in_plane"]:
+        f, p = r["full"], r["in_plane"]
+        lines.append(
+            f"  {r['scene']:<18} {f['free_dofs']:>5}/{p['free_dofs']:<5} "
+            f"{f['nnz_K']:>6}/{p['nnz_K']:<6} {_fmt(f['lambda'], '13.6g')} "
+            f"{_fmt(p['lambda'], '13.6g')} {_fmt(r['lambda_relative_difference'], '9.1e')} "
+            f"{f['seconds']:7.2f} {p['seconds']:7.2f} {r['time_ratio']:6.2f}"
+        )
+    if res["fixed_dofs"]:
+        lines.append("fixed-block DOFs never assembled, and the closed-form interface domain:")
+        for f in res["fixed_dofs"]:
+            s = f["strength"]
+            lines.append(
+                f"  {f['case']:<8} DOFs {f['dofs_all']} -> {f['dofs_free']} free "
+                f"(nnz K {f['nnz_K_all']} -> {f['nnz_K_free']}); factorisation "
+                f"{1e3 * f['seconds_factor_all_penalty']:.2f} ms (all DOFs + penalty) -> "
+                f"{1e3 * f['seconds_factor_free']:.2f} ms ({f['time_ratio']:.1f}x); "
+                f"law for {s['interfaces']} interfaces: closed form "
+                f"{1e3 * s['seconds_closed_form']:.2f} ms, {s['springs_per_interface']}-spring "
+                f"model {1e3 * s['seconds_spring_model']:.1f} ms ({s['time_ratio']:.0f}x)"
+            )
+    return "\n".join(lines)
+
+
+# ---------------------------------------------------------------------------- kn sweep
+def kn_sweep(case_name: str, factors, method: str = "static", budget: int | None = None) -> dict:
+    """lambda of a dry-joint case as the dry normal stiffness is multiplied by ``factors``."""
+    from masonry_dem.cases.paper import Assumptions, build_case
+    from masonry_dem.solvers.dynamic_relaxation import DRSettings
+
+    kn0 = Assumptions().dry_kn
+    rows = []
+    for f in factors:
+        pc = build_case(case_name, dry_kn=kn0 * f)
+        if method == "static":
+            settings = pc.settings
+        else:
+            changes = {} if budget is None else {"max_time_steps": budget}
+            settings = _settings(DRSettings, _dr_base(pc.settings), changes)
+        hist, seconds, cost = _run(method, pc.model, settings)
+        rows.append(
+            {
+                "case": case_name,
+                "method": method,
+                "kn": kn0 * f,
+                "factor": f,
+                "lambda": _lambda(hist),
+                "status": hist.status,
+                "reason": hist.reason,
+                "seconds": round(seconds, 3),
+                **cost,
+            }
+        )
+    lams = [r["lambda"] for r in rows if r["lambda"] is not None]
+    base = rows[0]["lambda"]
+    for r in rows:
+        r["drift"] = _rel(r["lambda"], base)
+    spread = (max(lams) - min(lams)) / abs(base) if lams and base else None
+    return {"rows": rows, "spread": spread}
+
+
+# ---------------------------------------------------------------------------- CLI
+def add_parser(subparsers) -> None:
+    p = subparsers.add_parser(
+        "study",
+        help="speed against accuracy of the solvers, the in-plane reduction, the kn sweep",
+        description="Measurements of the solvers: see docs/solvers.md.",
+    )
+    sub = p.add_subparsers(dest="study", metavar="STUDY")
+    sa = sub.add_parser(
+        "speed-accuracy",
+        help="run cases with every solver setting; table, JSON and a time-vs-error chart",
+    )
+    sa.add_argument(
+        "--cases",
+        nargs="+",
+        default=list(DEFAULT_CASES),
+        help="validation cases (names of masonry_dem.cases.paper, or 'default'; "
+        "default: %(default)s)",
+    )
+    sa.add_argument("--quick", action="store_true", help="a few settings per method only")
+    sa.add_argument(
+        "--budget",
+        type=int,
+        default=400_000,
+        help="time-step budget of each DR run (default: %(default)s)",
+    )
+    sa.add_argument("--json", action="store_true", help="print the runs as a JSON array")
+    sa.add_argument(
+        "--out", default="results/study", help="folder for the PNG, JSON and table (%(default)s)"
+    )
+    sa.set_defaults(func=speed_accuracy_command)
+    rd = sub.add_parser("reduction", help="3-DOF in-plane model against the 6-DOF model")
+    rd.add_argument("--repeats", type=int, default=3, help="best of N timings (%(default)s)")
+    rd.add_argument("--json", action="store_true")
+    rd.set_defaults(func=reduction_command)
+    kn = sub.add_parser("kn-sweep", help="lambda as the dry-joint normal stiffness grows")
+    kn.add_argument("--case", default="S15", help="a dry-joint case (default: %(default)s)")
+    kn.add_argument(
+        "--factors",
+        type=float,
+        nargs="+",
+        default=[0.1, 1.0, 10.0, 100.0, 1000.0],
+        help="multipliers of the assumed dry kn (default: %(default)s)",
+    )
+    kn.add_argument("--method", choices=("static", "dynamic_relaxation"), default="static")
+    kn.add_argument("--budget", type=int, default=400_000, help="DR time-step budget")
+    kn.add_argument("--json", action="store_true")
+    kn.set_defaults(func=kn_sweep_command)
+    p.set_defaults(func=lambda args: _help(p))
+
+
+def _help(p: argparse.ArgumentParser) -> int:
+    p.print_help()
+    return 2
+
+
+def speed_accuracy_command(args: argparse.Namespace) -> int:
+    out = Path(args.out)
+
+    def progress(row: dict) -> None:
+        if not args.json:
+            print(
+                f"  {row['case']} {row['method']} [{row['label']}]: {row['status']} "
+                f"lambda={_fmt(row['lambda'], '.5g')} in {row['seconds']:.2f} s",
+                flush=True,
+            )
+
+    res = speed_accuracy(args.cases, quick=args.quick, budget=args.budget, progress=progress)
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "speed_accuracy.json").write_text(json.dumps(res, indent=2))
+    text = table(res["rows"]) + "\n\n" + summary_lines(res["summary"], res["accuracy"])
+    (out / "speed_accuracy.txt").write_text(text + "\n")
+    png = chart(res["rows"], out / "speed_accuracy.png")
+    if args.json:
+        print(json.dumps(res["rows"], indent=1))
+    else:
+        print(text)
+        print(f"chart: {png}; data: {out / 'speed_accuracy.json'}")
+    return 0 if res["rows"] else 1
+
+
+def reduction_command(args: argparse.Namespace) -> int:
+    res = reduction_study(repeats=args.repeats)
+    print(json.dumps(res, indent=1) if args.json else reduction_text(res))
+    return 0
+
+
+def kn_sweep_command(args: argparse.Namespace) -> int:
+    res = kn_sweep(args.case, args.factors, args.method, args.budget)
+    if args.json:
+        print(json.dumps(res, indent=1))
+        return 0
+    print(f"{args.case}: lambda as the dry-joint kn grows ({args.method})")
+    print(f"  {'kn [N/m^3]':>11} {'lambda':>10} {'drift':>8} {'seconds':>8}  status")
+    for r in res["rows"]:
+        print(
+            f"  {r['kn']:11.3g} {_fmt(r['lambda'], '10.5g')} {_fmt(r['drift'], '8.2%')} "
+            f"{r['seconds']:8.2f}  {r['status']}"
+        )
+    print(f"  spread of lambda over the sweep: {_fmt(res['spread'], '.2%')}")
+    return 0
