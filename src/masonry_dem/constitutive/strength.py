@@ -70,9 +70,9 @@ ALPHA_TABLE_A1: Final[dict[str, tuple[float, ...]]] = {
 }
 DIRECTIONS: Final[tuple[str, ...]] = ("f1", "f2", "f1=f2")
 
-#: A trial is a shear-torsion violation only if the value of Eq. (A5) exceeds 1 by more than this.
-#: The radial projection lands on the boundary to ~1e-15, so re-checking projected actions
-#: reports them elastic (and returns them unchanged).
+#: A trial violates Eq. (A5) only if its radial demand/capacity ratio (see ``check_strength``)
+#: exceeds 1 by more than this. The radial projection lands on the boundary to ~1e-13, so
+#: re-checking projected actions reports them elastic (and returns them unchanged).
 SHEAR_TORSION_TOLERANCE: Final[float] = 1e-9
 
 STATE_ELASTIC: Final[int] = 0
@@ -187,14 +187,14 @@ def _radial_factor(a: NDArray, c: NDArray, alpha: NDArray) -> NDArray:
 
     ``a = |m3|/m3u`` and ``c = |f|/fsu`` (not squared, so tiny forces do not underflow). Returns
     inf where a = c = 0 and 0 where a or c is inf. With ``m = max(a, c)`` the problem is solved
-    for ``t = s m`` in (0, 1] on O(1) numbers, ``(t a/m)^alpha + (t c/m)^2 = 1``: closed forms
-    for alpha = 1, 2 and when a or c vanishes, otherwise Newton's method from t = 1, which
-    converges monotonically because the left-hand side is convex and increasing in t.
+    for ``t = s m`` in (0, 1] on O(1) numbers, ``(t A)^alpha + (t C)^2 = 1`` with ``A = a/m``
+    and ``C = c/m``: closed forms for alpha = 1, 2 and when a or c vanishes, otherwise Newton's
+    method on the logarithm of the left-hand side, in ln t.
     """
     a, c, alpha = np.broadcast_arrays(a, c, alpha)
     m = np.maximum(a, c)
     both = (a > 0) & (c > 0) & np.isfinite(m)
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         big_a = np.where(both, a / m, 0.0)
         big_c = np.where(both, c / m, 0.0)
         t = np.ones(m.shape)
@@ -205,19 +205,24 @@ def _radial_factor(a: NDArray, c: NDArray, alpha: NDArray) -> NDArray:
         s = t / m  # t = 1 unless both > 0: s = 1/max(a, c), inf at a = c = 0, 0 at inf
     idx = np.flatnonzero(both & ~one & ~two)
     if idx.size:
-        aa, cc, al = big_a[idx], big_c[idx] ** 2, alpha[idx]
-        x = t[idx]
+        # Newton on G(tau) = ln((t A)^alpha + (t C)^2), tau = ln t: G is convex, increasing and
+        # nearly linear (slope between 2 and alpha), G(0) >= 0, so from tau = 0 the iterates
+        # decrease monotonically to the root in a few steps.
+        with np.errstate(divide="ignore"):  # A or C may underflow to 0: ln = -inf is fine
+            ln_a, ln_c, al = np.log(big_a[idx]), np.log(big_c[idx]), alpha[idx]
+        tau = np.zeros(idx.size)
         for _ in range(_NEWTON_MAX_ITER):  # iterate on the rows not yet converged
-            p = (x * aa) ** al
-            g = p + x * x * cc - 1.0
-            dg = al * p / x + 2.0 * x * cc
-            step = g / dg
-            x = x - step
-            s[idx] = x / m[idx]
-            keep = np.abs(step) > _NEWTON_RTOL * x
+            p = np.exp(al * (tau + ln_a))
+            q = np.exp(2.0 * (tau + ln_c))
+            total = p + q
+            step = np.log(total) * total / (al * p + 2.0 * q)
+            tau = tau - step
+            with np.errstate(over="ignore"):  # subnormal demands: s = inf, utilisation 0
+                s[idx] = np.exp(tau) / m[idx]
+            keep = np.abs(step) > _NEWTON_RTOL
             if not keep.any():
                 break
-            idx, x, aa, cc, al = idx[keep], x[keep], aa[keep], cc[keep], al[keep]
+            idx, tau, ln_a, ln_c, al = idx[keep], tau[keep], ln_a[keep], ln_c[keep], al[keep]
         else:  # pragma: no cover - Newton on a convex increasing function always converges
             logger.warning("radial factor: Newton did not converge to %g", _NEWTON_RTOL)
     return s
@@ -386,12 +391,12 @@ def check_strength(
     m3u = c_t * fsu
     a = _safe_ratio(np.abs(m3), m3u)
     c = _safe_ratio(np.hypot(f1, f2), fsu)
-    with np.errstate(over="ignore", invalid="ignore", under="ignore"):
-        phi = a**al + c * c
-    sliding = ~detached & (phi > 1.0 + SHEAR_TORSION_TOLERANCE)
     # s = 0 (all of f1, f2, m3 dropped) where m3 != 0 meets a zero torsion or shear capacity:
     # the limit of the radial projection as the capacity vanishes
     s = _radial_factor(a, c, al)
+    with np.errstate(divide="ignore"):
+        u_st = 1.0 / s  # radial demand/capacity ratio of Eq. (A5)
+    sliding = ~detached & (u_st > 1.0 + SHEAR_TORSION_TOLERANCE)
     scale = np.where(sliding, s, 1.0)  # keep non-sliding rows finite (they are not scaled)
 
     # projection (np.where keeps untouched entries bitwise)
@@ -426,7 +431,6 @@ def check_strength(
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         u_tension = np.where(ft > 0, np.maximum(fn, 0.0) / ft, np.where(fn >= 0, 1.0, 0.0))
         u_tension = np.where(detached & (ft == 0), np.inf, u_tension)
-        u_st = 1.0 / s
     u_rock = np.maximum(_safe_ratio(abs_m1, m1_lim), _safe_ratio(abs_m2, m2_lim))
     util = np.where(detached, u_tension, np.maximum(np.maximum(u_tension, u_rock), u_st))
     return StrengthCheck(
