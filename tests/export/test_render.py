@@ -306,3 +306,21 @@ def test_cli_render_errors(results_copy, tmp_path, capsys):
     assert "step 12 is not in" in capsys.readouterr().err
     with pytest.raises(SystemExit):
         main(["render", str(results_copy), "--view", "top"])
+
+
+def test_side_by_side(results, tmp_path):
+    out = render.render_side_by_side(
+        [results, results, results],
+        tmp_path / "sheet.png",
+        view=["front", "side", "oblique"],
+        columns=2,
+        window_size=(200, 150),
+    )
+    img = iio.imread(out)
+    assert img.shape[:2] == (300, 400)
+    assert (classify(img[:150, :200]) >= 0).sum() > 100  # the front panel shows the damage
+    assert np.all(img[150:, 200:] == 255)  # the empty fourth panel stays white
+    with pytest.raises(ValueError, match="views"):
+        render.render_side_by_side([results], tmp_path / "x.png", view=["front", "side"])
+    with pytest.raises(ValueError, match=r"\.png"):
+        render.render_side_by_side([results], tmp_path / "x.gif")

@@ -580,6 +580,24 @@ def _deformed_extent(data: _StepData, scale: float, gap: float) -> np.ndarray:
 
 
 # --------------------------------------------------------------------------- public API
+def _step_scene(
+    series: ResultsSeries, index: int, view: str, scale: float | None, wsize: tuple[int, int]
+) -> tuple[_Scene, float]:
+    """A scene of one step, camera and title set; the caller closes it."""
+    data = _read_step(series, index)
+    s = auto_scale(_max_displacement(data), _wall_size(data)) if scale is None else scale
+    gap = _gap(data, wsize)
+    scene = _Scene(data, view, wsize, gap)
+    try:
+        scene.update(data, s)
+        scene.frame_camera(_deformed_extent(data, s, gap))
+        scene.title(_title(series, index, data, s))
+    except BaseException:
+        scene.close()
+        raise
+    return scene, s
+
+
 def render_step(
     folder: Path | str,
     step: int | str = "last",
@@ -592,23 +610,15 @@ def render_step(
     the interfaces, in camera preset ``view`` (:data:`VIEWS`). ``scale`` amplifies the
     displacements (None: automatic). Written to ``out`` or ``<folder>/render_<view>_<step>.png``;
     returns the path."""
-    vdef = _check_view(view)
-    del vdef
+    _check_view(view)
     scale = _check_scale(scale)
     wsize = _check_window(window_size)
     series = open_results(folder)
     index = series.index_of(step)
     default = series.folder / f"render_{view}_{int(series.steps[index]):04d}.png"
     path = _check_out(out, default, _IMAGE_SUFFIXES, "render_step")
-    data = _read_step(series, index)
-    wall = _wall_size(data)
-    s = auto_scale(_max_displacement(data), wall) if scale is None else scale
-    gap = _gap(data, wsize)
-    scene = _Scene(data, view, wsize, gap)
+    scene, s = _step_scene(series, index, view, scale, wsize)
     try:
-        scene.update(data, s)
-        scene.frame_camera(_deformed_extent(data, s, gap))
-        scene.title(_title(series, index, data, s))
         tmp = _atomic_target(path)
         try:
             scene.save(tmp)
@@ -625,6 +635,58 @@ def render_step(
         s,
         path,
     )
+    return path
+
+
+def render_side_by_side(
+    folders: Sequence[Path | str],
+    out: Path | str,
+    view: str | Sequence[str] = "oblique",
+    step: int | str = "last",
+    columns: int | None = None,
+    window_size: Sequence[int] = (600, 450),
+) -> Path:
+    """One PNG with several results folders (or several views of one: repeat the folder and
+    give a list of views) rendered side by side, ``columns`` per row (default: all in one
+    row), each panel ``window_size`` with its own title and automatic scale. For galleries
+    such as the paper's collapse mechanisms."""
+    folders = [Path(f) for f in folders]
+    if not folders:
+        raise ValueError("render_side_by_side needs at least one results folder")
+    views = [view] * len(folders) if isinstance(view, str) else list(view)
+    if len(views) != len(folders):
+        raise ValueError(f"{len(folders)} folders but {len(views)} views")
+    for v in views:
+        _check_view(v)
+    wsize = _check_window(window_size)
+    ncol = len(folders) if columns is None else int(columns)
+    if ncol < 1:
+        raise ValueError(f"columns must be >= 1, got {columns!r}")
+    path = _check_out(out, Path(out), _IMAGE_SUFFIXES, "render_side_by_side")
+    series = [open_results(f) for f in folders]
+    indices = [s.index_of(step) for s in series]
+    panels = []
+    for ser, idx, v in zip(series, indices, views, strict=True):
+        scene, _ = _step_scene(ser, idx, v, None, wsize)
+        try:
+            panels.append(np.asarray(scene.image())[..., :3])
+        finally:
+            scene.close()
+    nrow = -(-len(panels) // ncol)
+    h, w = panels[0].shape[:2]
+    sheet = np.full((nrow * h, ncol * w, 3), 255, dtype=np.uint8)
+    for k, img in enumerate(panels):
+        r, c = divmod(k, ncol)
+        sheet[r * h : (r + 1) * h, c * w : (c + 1) * w] = img
+    import imageio.v3 as iio
+
+    tmp = _atomic_target(path)
+    try:
+        iio.imwrite(tmp, sheet, extension=".png")
+        tmp.replace(path)
+    finally:
+        tmp.unlink(missing_ok=True)
+    log.info("%d panels written to %s", len(panels), path)
     return path
 
 
