@@ -32,6 +32,9 @@ def test_json_reference_interface(capsys, ref_interface, table_a1):
         ref_interface["torsion_strength"], rel=1e-2
     )
     assert out["interface"]["springs_per_side"] == ref_interface["springs_per_side"]
+    errors = [abs(row["relative_error"]) for row in out["torsion_convergence"]]
+    assert [row["n"] for row in out["torsion_convergence"]] == [4, 8, 16, 32, 64]
+    assert errors == sorted(errors, reverse=True) and errors[-1] < 1e-3
     rows = out["alpha_table"]
     assert len(rows) == 3 * len(table_a1["aspect_l1_over_l2"])
     for row in rows:

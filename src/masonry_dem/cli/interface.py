@@ -2,8 +2,9 @@
 
 Prints, for the reference dry interface of Section 2.1 (0.30 x 0.20 m, fn = -240 N, mu = 0.7,
 32 x 32 springs) or one given on the command line, the shear and torsion strengths from the
-closed form and from the spring model, and Table A1 (alpha fitted to spring-model domains)
-side by side with the published values. The alpha fits use ``--alpha-n`` springs per side
+closed form and from the spring model, the convergence of the spring-model torsion strength
+for n = 4 ... 64 springs per side, and Table A1 (alpha fitted to spring-model domains) side by
+side with the published values. The alpha fits use ``--alpha-n`` springs per side
 (default 32: the 21 fits take about a second).
 """
 
@@ -28,6 +29,9 @@ from masonry_dem.constitutive.strength import (
     torsion_constant,
     torsion_strength,
 )
+
+#: springs per side of the torsion-convergence table (n = 64 is 4096 springs, a few ms)
+CONVERGENCE_N = (4, 8, 16, 32, 64)
 
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
@@ -91,8 +95,17 @@ def compute(args: argparse.Namespace) -> dict[str, Any]:
         "spring_shear_strength_max": float(fs.max()),
         "spring_shear_directions": len(angles),
         "spring_torsion_strength": m3s,
+        "torsion_convergence": [],
         "alpha_table": [],
     }
+    for n in CONVERGENCE_N:
+        value = torsion_strength_numeric(
+            args.l1, args.l2, args.fn, args.friction, args.tensile_strength, n=n,
+            kn=args.kn, ks=args.ks,
+        )  # fmt: skip
+        out["torsion_convergence"].append(
+            {"n": n, "spring_torsion_strength": value, "relative_error": value / m3u - 1.0}
+        )
     if not args.no_alpha_table:
         out["alpha_springs_per_side"] = args.alpha_n
         for direction in DIRECTIONS:
@@ -111,7 +124,10 @@ def compute(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def _pct(value: float, ref: float) -> str:
-    return f"{100.0 * (value / ref - 1.0):+.3f} %" if ref else "n/a"
+    if not ref:
+        return "n/a"
+    pct = 100.0 * (value / ref - 1.0)
+    return f"{0.0 if abs(pct) < 5e-4 else pct:+.3f} %"  # no "-0.000 %"
 
 
 def run(args: argparse.Namespace) -> int:
@@ -139,6 +155,11 @@ def run(args: argparse.Namespace) -> int:
     )
     m3u, m3s = res["torsion_strength"], res["spring_torsion_strength"]
     print(f"{'torsion strength [N m]':24s}{m3u:14.3f}{m3s:14.3f}{_pct(m3s, m3u):>14s}")
+    print("\nspring-model torsion strength against the closed form, n x n springs")
+    print(f"{'n':>5s}{'m3u spring [N m]':>18s}{'error':>12s}")
+    for row in res["torsion_convergence"]:
+        err = 100.0 * row["relative_error"]
+        print(f"{row['n']:5d}{row['spring_torsion_strength']:18.4f}{err:+11.3f}%")
     if res["alpha_table"]:
         n = res["alpha_springs_per_side"]
         print(f"\nTable A1: alpha fitted to the spring-model domain ({n} x {n} springs)")
