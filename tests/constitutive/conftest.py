@@ -45,3 +45,10 @@ def ref_interface(reference: dict) -> dict:
 @pytest.fixture(scope="session")
 def table_a1(reference: dict) -> dict:
     return reference["table_A1"]
+
+
+@pytest.fixture(scope="session")
+def alpha_columns(table_a1: dict) -> dict[str, list[float]]:
+    """Table A1 columns keyed by the package's shear-direction names."""
+    keys = {"f1": "alpha_shear_f1", "f2": "alpha_shear_f2", "f1=f2": "alpha_shear_f1_eq_f2"}
+    return {direction: table_a1[key] for direction, key in keys.items()}

@@ -16,8 +16,6 @@ from masonry_dem.constitutive import (
     torsion_strength_numeric,
 )
 
-DIRECTION_KEYS = {"f1": "alpha_shear_f1", "f2": "alpha_shear_f2", "f1=f2": "alpha_shear_f1_eq_f2"}
-
 # Table A1 entries where the exponent fitted to our spring-model domains differs from the
 # published one by more than 0.1 (measured: 0.119, 0.119, 0.115, 0.115). The published values
 # could not be reproduced with any fitting norm we tried (radial, area, minimax): the
@@ -113,9 +111,9 @@ def test_figure_10_torsion_against_bending(ref):
         torsion_strength_numeric(ref["l1"], ref["l2"], ref["fn"], ref["mu"], m1=m1_lim)
 
 
-def test_table_a1_alpha_within_0_1(table_a1):
-    for direction, key in DIRECTION_KEYS.items():
-        for aspect, paper in zip(table_a1["aspect_l1_over_l2"], table_a1[key], strict=True):
+def test_table_a1_alpha_within_0_1(table_a1, alpha_columns):
+    for direction, column in alpha_columns.items():
+        for aspect, paper in zip(table_a1["aspect_l1_over_l2"], column, strict=True):
             fitted = fit_alpha(aspect, direction, n=32)
             tol = 0.125 if (aspect, direction) in KNOWN_TABLE_A1_MISSES else 0.1
             assert fitted == pytest.approx(paper, abs=tol), (aspect, direction, fitted)
@@ -123,9 +121,9 @@ def test_table_a1_alpha_within_0_1(table_a1):
 
 @pytest.mark.xfail(strict=True, reason="published alpha not reproduced within 0.1 (see report)")
 @pytest.mark.parametrize(("aspect", "direction"), sorted(KNOWN_TABLE_A1_MISSES))
-def test_table_a1_known_misses(table_a1, aspect, direction):
+def test_table_a1_known_misses(table_a1, alpha_columns, aspect, direction):
     i = table_a1["aspect_l1_over_l2"].index(aspect)
-    paper = table_a1[DIRECTION_KEYS[direction]][i]
+    paper = alpha_columns[direction][i]
     assert fit_alpha(aspect, direction, n=32) == pytest.approx(paper, abs=0.1)
 
 
