@@ -44,6 +44,8 @@ log = logging.getLogger(__name__)
 #: the displacements growing without bound): no equilibrium near the last converged state
 _STALL_WINDOW = 8
 _STALL_DECREASE = 0.5
+#: largest tangent floor (fraction of the elastic stiffness) of the Levenberg-Marquardt fallback
+_MAX_FLOOR = 1e-3
 
 
 @dataclass(frozen=True)
@@ -203,12 +205,14 @@ class StaticSolver:
         scale = max(float(np.linalg.norm(self._weight * F_ext)), 1e-30)
         return residual, float(np.linalg.norm(self._weight * residual)) / scale, response
 
-    def _factor(self, response: LawResponse):
+    def _factor(self, response: LawResponse, floor: float | None = None):
         """LU of the tangent. The tangent is structurally symmetric with a regular diagonal
         (the residual stiffness), so SuperLU's symmetric mode (minimum degree on A^T + A,
         diagonal pivots) fills in less and runs about twice as fast as COLAMD; COLAMD with
         partial pivoting is the fallback."""
-        T = self.law.tangent(response, self.settings.residual_stiffness)
+        if floor is None:
+            floor = self.settings.residual_stiffness
+        T = self.law.tangent(response, floor)
         K = self._tangents.matrix(T)
         self.factorizations += 1
         try:
@@ -233,6 +237,7 @@ class StaticSolver:
         dead_factor: float = 1.0,
         control: tuple[int, float] | None = None,
         radius: float | None = None,
+        damped: bool = False,
     ) -> _Outcome:
         """Newton iterations from the last converged state to equilibrium at ``load_factor``
         (load control) or with the free DOF ``control[0]`` at ``control[1]`` (lambda free).
@@ -249,13 +254,33 @@ class StaticSolver:
             radius = max(4.0 * self._last_increment, 1e-4 * self.limit)
         residual, rnorm, response = self._residual(q, lam, dead_factor)
         history = [(rnorm, radius)]
+        floor = s.residual_stiffness
+
+        def regularise() -> bool:
+            """Levenberg-Marquardt fallback: stiffen the tangent's floor (x1000, up to
+            _MAX_FLOOR x kbar). A near-mechanism of the yielded assembly (a joint at zero gap
+            beside a sliding one) leaves the tangent almost singular along a direction the
+            residual needs; the undamped Newton step along it is huge, the trust region cuts
+            it to nothing and the search stalls far from an equilibrium that exists. The
+            floor changes only the search direction, never the residual, so a converged
+            state is still an exact equilibrium of the law."""
+            nonlocal floor, history, budget
+            if not damped or floor >= _MAX_FLOOR:
+                return False
+            floor = min(floor * 1e3, _MAX_FLOOR)
+            history = [(rnorm, radius)]
+            budget = it + s.max_iterations  # a fresh budget for the damped search
+            return True
 
         def constraint_error(qq: np.ndarray) -> float:
             if control is None:
                 return 0.0
             return abs(qq[free[control[0]]] - control[1]) / self.limit
 
-        for it in range(1, s.max_iterations + 1):
+        budget = s.max_iterations
+        it = 0
+        while it < budget:
+            it += 1
             cerr = constraint_error(q)
             if rnorm <= s.tolerance and cerr <= 1e-12:
                 self._last_increment = float(
@@ -263,7 +288,7 @@ class StaticSolver:
                 )
                 return _Outcome(True, q, lam, response, it - 1)
             self.iterations += 1
-            lu = self._factor(response)
+            lu = self._factor(response, floor)
             dq = lu.solve(residual)
             dlam = 0.0
             if control is not None:
@@ -297,6 +322,9 @@ class StaticSolver:
                     break
             if accepted is None:
                 radius = min(radius, shrink * size) / 8.0
+                if radius < 1e-12 * self.limit and regularise():
+                    radius = max(4.0 * self._last_increment, 1e-4 * self.limit)
+                    continue
                 if radius < 1e-12 * self.limit:
                     return _Outcome(
                         False,
@@ -325,6 +353,8 @@ class StaticSolver:
                 window = history[-1 - _STALL_WINDOW :]
                 steady = all(rad >= window[0][1] for _, rad in window)  # no cut in the window
                 stalled = steady and rnorm > (1.0 - _STALL_DECREASE) * window[0][0]
+            if len(history) > _STALL_WINDOW and stalled and regularise():
+                continue
             if len(history) > _STALL_WINDOW and stalled:
                 return _Outcome(
                     False,
@@ -339,14 +369,14 @@ class StaticSolver:
             self._last_increment = float(
                 np.abs((q - self.q)[free][self._translation]).max(initial=0.0)
             )
-            return _Outcome(True, q, lam, response, s.max_iterations)
+            return _Outcome(True, q, lam, response, it)
         return _Outcome(
             False,
             q,
             lam,
             response,
-            s.max_iterations,
-            f"no convergence in {s.max_iterations} iterations (residual {rnorm:.2e})",
+            it,
+            f"no convergence in {it} iterations (residual {rnorm:.2e})",
         )
 
     def _accept(self, out: _Outcome, step: int, control_value: float) -> StepResult:
@@ -398,7 +428,8 @@ class StaticSolver:
             if callback is not None:
                 callback(sr)
 
-        dead = self._equilibrate(0.0, 1.0, radius=self.limit)
+        # the dead-load state exists (the specimens stood): the damped fallback may be used
+        dead = self._equilibrate(0.0, 1.0, radius=self.limit, damped=True)
         if not dead.ok:
             reason = f"no equilibrium under the dead load: {dead.reason}"
             zero = self._residual(np.zeros_like(self.q), 0.0, 0.0)[2]
