@@ -8,6 +8,7 @@ tuned: docs/validation.md explains why it is above the paper's FEM reference).
 
 from __future__ import annotations
 
+from functools import lru_cache
 from importlib import resources
 from pathlib import Path
 
@@ -70,11 +71,75 @@ def test_assumptions_are_overridable_in_one_place():
     assert Assumptions().dry_kn == reference_data()["interface_spring_model"]["kn"]
 
 
+@lru_cache(maxsize=None)
+def _run(name: str):
+    case = build_case(name)
+    return case, pushover(case.model, case.settings, monitor=case.monitor)
+
+
+def _mechanism(name: str):
+    """The collapse mechanism as the out-of-plane displacement increment of the last step
+    (normalised to 1): which blocks move, not the state flags (a dry head joint is flagged
+    at zero compression before anything happens)."""
+    case, h = _run(name)
+    assert h.status == "collapse", h.reason
+    du = (h.steps[-1].q - h.steps[-2].q)[case.wall, 2]
+    du = du / np.abs(du).max()
+    centres = case.model.blocks.centres[case.wall]
+    courses = np.unique(np.round(centres[:, 1], 6))
+    return du, centres, courses
+
+
 def test_orduna_lourenco_panel_collapses_with_a_refined_bracket():
-    case = build_case("OL1")
-    h = pushover(case.model, case.settings, monitor=case.monitor)
+    case, h = _run("OL1")
     assert h.status == "collapse", h.reason
     lo, hi = h.collapse_bracket
     assert hi - lo <= 0.005 * lo * 1.0001
     # measured 0.2519; the paper's DEM gives 0.175, FEM 0.210, limit analysis 0.127
     assert 0.24 < lo < 0.26
+
+
+def test_wall_held_on_one_edge_fails_along_a_diagonal():
+    """OL1 (held on its left edge): the moving part grows away from the support in every
+    course and reaches lower at the free edge than inside, so it is bounded by a diagonal
+    rising from the free edge towards the supported top corner."""
+    du, c, courses = _mechanism("OL1")
+    assert du.max() == pytest.approx(1.0)
+    x0 = c[:, 0].min()
+    lowest = {}
+    for y in courses:
+        row = np.flatnonzero(np.isclose(c[:, 1], y))
+        row = row[np.argsort(c[row, 0])]
+        assert np.all(np.diff(du[row]) >= -1e-3)  # grows away from the support
+        assert abs(du[row[0]]) < 1e-3  # the held column does not move out of plane
+        for i in row[du[row] >= 0.25]:
+            key = round(float(c[i, 0] - x0), 3)
+            lowest[key] = min(lowest.get(key, np.inf), c[i, 1])
+    xs = sorted(lowest)
+    heights = [lowest[x] for x in xs]
+    # the boundary of the moving region goes down from the support towards the free edge
+    assert heights[-1] < heights[0]
+    top = courses[-1]
+    free_edge = np.flatnonzero(np.isclose(c[:, 1], top))
+    assert np.argmax(du) in free_edge  # the free top corner moves most
+
+
+def test_wall_held_on_both_edges_opens_on_the_axis():
+    """OL2 (held on both edges): the mechanism is symmetric, largest on the axis at the top:
+    a vertical crack on the axis with the two halves turning about diagonals."""
+    du, c, courses = _mechanism("OL2")
+    axis = (c[:, 0].min() + c[:, 0].max()) / 2
+    width = np.median(np.diff(np.unique(np.round(c[:, 0], 6))))
+    top = np.flatnonzero(np.isclose(c[:, 1], courses[-1]))
+    assert np.argmax(du) in top and abs(c[np.argmax(du), 0] - axis) <= 2 * width
+    for y in courses:
+        row = np.flatnonzero(np.isclose(c[:, 1], y))
+        if du[row].max() < 0.05:
+            continue
+        peak = row[np.argmax(du[row])]
+        assert abs(c[peak, 0] - axis) <= 2 * width  # largest on the axis in every course
+        mirror = [row[np.argmin(np.abs(c[row, 0] - (2 * axis - c[i, 0])))] for i in row]
+        assert np.allclose(du[row], du[mirror], atol=0.05)  # symmetric
+    # the top of the axis moves more than mid-height: the halves rotate about diagonals
+    mid = courses[len(courses) // 2]
+    assert du[np.isclose(c[:, 1], mid)].max() < 0.5

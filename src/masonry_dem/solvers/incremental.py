@@ -46,6 +46,9 @@ _STALL_WINDOW = 8
 _STALL_DECREASE = 0.5
 #: largest tangent floor (fraction of the elastic stiffness) of the Levenberg-Marquardt fallback
 _MAX_FLOOR = 1e-3
+#: a factorized tangent is reused for the next correction while each full step divides the
+#: residual by at least 1 / _CHORD_RATIO (modified Newton: a solve instead of a factorization)
+_CHORD_RATIO = 0.25
 
 
 @dataclass(frozen=True)
@@ -255,6 +258,7 @@ class StaticSolver:
         residual, rnorm, response = self._residual(q, lam, dead_factor)
         history = [(rnorm, radius)]
         floor = s.residual_stiffness
+        lu = None  # the factorized tangent, kept while it converges fast (chord steps)
 
         def regularise() -> bool:
             """Levenberg-Marquardt fallback: stiffen the tangent's floor (x1000, up to
@@ -264,10 +268,11 @@ class StaticSolver:
             it to nothing and the search stalls far from an equilibrium that exists. The
             floor changes only the search direction, never the residual, so a converged
             state is still an exact equilibrium of the law."""
-            nonlocal floor, history, budget
+            nonlocal floor, history, budget, lu
             if not damped or floor >= _MAX_FLOOR:
                 return False
             floor = min(floor * 1e3, _MAX_FLOOR)
+            lu = None
             history = [(rnorm, radius)]
             budget = it + s.max_iterations  # a fresh budget for the damped search
             return True
@@ -288,7 +293,9 @@ class StaticSolver:
                 )
                 return _Outcome(True, q, lam, response, it - 1)
             self.iterations += 1
-            lu = self._factor(response, floor)
+            fresh = lu is None
+            if fresh:
+                lu = self._factor(response, floor)
             dq = lu.solve(residual)
             dlam = 0.0
             if control is not None:
@@ -320,6 +327,9 @@ class StaticSolver:
                 if n_try + constraint_error(q_try) < (1.0 - 1e-4 * f) * merit:
                     accepted = (q_try, lam_try, r_try, n_try, resp_try)
                     break
+            if accepted is None and not fresh:  # a stale tangent: refactor before cutting
+                lu = None
+                continue
             if accepted is None:
                 radius = min(radius, shrink * size) / 8.0
                 if radius < 1e-12 * self.limit and regularise():
@@ -337,6 +347,10 @@ class StaticSolver:
                 continue
             if step == 1.0 and shrink < 1.0:
                 radius *= 2.0
+            # keep the factorization (modified Newton) only while a full step divides the
+            # residual by _CHORD_RATIO or more; otherwise the next iteration refactors
+            if not (step == 1.0 and shrink == 1.0 and accepted[3] < _CHORD_RATIO * rnorm):
+                lu = None
             q, lam, residual, rnorm, response = accepted
             umax = float(np.abs((q - self.q)[free][self._translation]).max(initial=0.0))
             if not math.isfinite(umax) or umax > self.limit:
