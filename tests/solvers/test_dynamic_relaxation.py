@@ -187,3 +187,53 @@ def test_time_step_budget_fails_without_lambda(small_wall):
     assert hist.status == "failed"
     assert "budget" in hist.reason
     assert hist.collapse_multiplier is None
+
+
+# ---------------------------------------------------------------------------- the study
+def test_pareto_front_and_equal_accuracy():
+    from masonry_dem.cli import study
+
+    rows = [
+        {"method": "static", "label": "a", "seconds": 1.0, "error_vs_converged": 0.05},
+        {"method": "static", "label": "b", "seconds": 2.0, "error_vs_converged": 0.001},
+        {"method": "static", "label": "c", "seconds": 3.0, "error_vs_converged": 0.002},
+        {"method": "dynamic_relaxation", "label": "d", "seconds": 40.0, "error_vs_converged": 0.0},
+        {"method": "dynamic_relaxation", "label": "e", "seconds": 5.0, "error_vs_converged": None},
+    ]
+    study.mark_pareto(rows)
+    assert [r["pareto"] for r in rows] == [True, True, False, True, False]
+    eq = study.equal_accuracy(rows, 0.01)
+    assert eq["static_label"] == "b" and eq["dynamic_relaxation_label"] == "d"
+    assert eq["time_ratio_dr_over_static"] == pytest.approx(20.0)
+
+
+def test_study_command_json_table_and_chart(tmp_path, monkeypatch, capsys, tilting_block):
+    """``masonry-dem study speed-accuracy --json`` on a one-block case (grids cut short)."""
+    from masonry_dem.cli import main, study
+    from masonry_dem.solvers.incremental import StaticSettings
+
+    case = study.StudyCase("block", tilting_block, S / A, StaticSettings())
+    monkeypatch.setattr(study, "load_study_case", lambda name: case)
+    monkeypatch.setattr(study, "STATIC_GRID", study.STATIC_GRID[:2])
+    monkeypatch.setattr(study, "DR_GRID", (("bracket 2%", {"bracket_tolerance": 0.02}),))
+    code = main(["study", "speed-accuracy", "--cases", "block", "--json", "--out", str(tmp_path)])
+    assert code == 0
+    runs = json.loads(capsys.readouterr().out)
+    assert {r["method"] for r in runs} == {"static", "dynamic_relaxation"}
+    for r in runs:
+        for key in (
+            "case",
+            "method",
+            "settings",
+            "seconds",
+            "lambda",
+            "error_vs_converged",
+            "error_vs_test",
+        ):
+            assert key in r
+        assert r["lambda"] == pytest.approx(S / A, rel=0.02)
+        assert r["error_vs_test"] <= 0.02
+    assert (tmp_path / "speed_accuracy.png").stat().st_size > 10_000
+    saved = json.loads((tmp_path / "speed_accuracy.json").read_text())
+    assert saved["summary"]["block"]["lambda_converged"] == pytest.approx(S / A, rel=1e-3)
+    assert "Pareto" in (tmp_path / "speed_accuracy.txt").read_text()

@@ -3,10 +3,12 @@ reduction and the dry-joint stiffness sweep.
 
 * ``study speed-accuracy [--cases ...] [--quick] [--json] [--out DIR]``: runs each case with
   every setting of the static solver and of dynamic relaxation, measures the run time and the
-  error in lambda against a converged reference of the same model (the static solver with a
-  bracket of 1e-4) and against the test; writes a table, ``speed_accuracy.json`` and a PNG
-  chart of time against error with the Pareto front marked; prints the static / DR time ratio
-  at equal (1 %) accuracy per case.
+  error in lambda against a converged reference of the same model and against the test; writes
+  a table, ``speed_accuracy.json`` and a PNG chart of time against error with the Pareto front
+  marked; prints the DR / static time ratio at equal (1 %) accuracy per case. The converged
+  reference is the highest load level at which an equilibrium was verified (residual 1e-4 or
+  tighter) by any run of the case, a static run with a 1e-4 bracket included: every run's
+  lambda is a verified equilibrium, hence a lower bound of the model's collapse multiplier.
 * ``study reduction [--json]``: in-plane scenes solved with the full 6-DOF model and with the
   3-DOF in-plane model (lambda, time, DOFs), and what the fixed-block DOFs and the closed-form
   interface domain save.
@@ -31,6 +33,7 @@ log = logging.getLogger(__name__)
 
 DEFAULT_CASES = ("S15", "OL1", "14-15")
 ACCURACY = 0.01  # the "equal accuracy" of the static / DR comparison
+PRESSURE_STEPS = (1.0, 4.0)  # initial and largest step of Table 3 cases, in load scales
 
 #: settings of each method on the chart: (label, changes to the defaults)
 STATIC_GRID: tuple[tuple[str, dict], ...] = (
@@ -82,7 +85,13 @@ def load_study_case(name: str) -> StudyCase:
     from masonry_dem.cases.paper import build_case
 
     pc = build_case(name)
-    return StudyCase(pc.name, pc.model, float(pc.reference), pc.settings, pc.unit)
+    settings = pc.settings
+    if pc.unit == "Pa" and (settings.initial_step, settings.max_step) == (0.02, 0.2):
+        # pressure cases collapse at ~30 load scales (|F_D| / |F_L| = weight per unit of
+        # pressure): default steps would take ~150 of them; the refined bracket does not
+        # depend on the steps, so both methods start with larger ones here
+        settings = replace(settings, initial_step=PRESSURE_STEPS[0], max_step=PRESSURE_STEPS[1])
+    return StudyCase(pc.name, pc.model, float(pc.reference), settings, pc.unit)
 
 
 def _settings(cls, base, changes: dict):
@@ -137,7 +146,8 @@ def _rel(value: float | None, ref: float | None) -> float | None:
 
 
 def converged_reference(case: StudyCase) -> tuple[float | None, str]:
-    """lambda of the same model, converged: static with a 1e-4 bracket (DR if static fails)."""
+    """lambda of the same model with a tight bracket: the static solver with a 1e-4 bracket
+    (dynamic relaxation with a 1e-3 bracket if the static solver finds no collapse)."""
     from masonry_dem.solvers.dynamic_relaxation import DRSettings
     from masonry_dem.solvers.incremental import StaticSettings
 
@@ -150,6 +160,26 @@ def converged_reference(case: StudyCase) -> tuple[float | None, str]:
     dr = _settings(DRSettings, _dr_base(case.static), {"bracket_tolerance": 1e-3})
     hist, _, _ = _run("dynamic_relaxation", case.model, dr)
     return _lambda(hist), "dynamic relaxation, bracket 1e-3"
+
+
+def best_equilibrium(
+    rows: list[dict], tight: float | None, tolerance: float = 1e-4
+) -> float | None:
+    """The converged lambda of the chart: the highest load level at which any run verified an
+    equilibrium at a residual tolerance of ``tolerance`` or tighter, the tight static run
+    included. Every run's lambda is the last load level it brought to equilibrium, so each is
+    a lower bound of the collapse multiplier of the model; the highest is the best estimate.
+    (Runs with a looser tolerance are left out: their last state may still be creeping.)"""
+    from masonry_dem.solvers.dynamic_relaxation import DRSettings
+    from masonry_dem.solvers.incremental import StaticSettings
+
+    best = tight
+    for r in rows:
+        default = StaticSettings().tolerance if r["method"] == "static" else DRSettings().tolerance
+        tol = r["settings"].get("tolerance", default)
+        if r["lambda"] is not None and tol <= max(tolerance, default):
+            best = r["lambda"] if best is None else max(best, r["lambda"])
+    return best
 
 
 def speed_accuracy(
@@ -190,8 +220,8 @@ def speed_accuracy(
                     "settings": {k: v for k, v in changes.items()},
                     "seconds": round(seconds, 4),
                     "lambda": lam,
-                    "lambda_converged": lam_ref,
-                    "error_vs_converged": _rel(lam, lam_ref),
+                    "lambda_converged": None,  # set once every run of the case is done
+                    "error_vs_converged": None,
                     "lambda_test": case.reference,
                     "error_vs_test": _rel(lam, case.reference),
                     "unit": case.unit,
@@ -203,10 +233,17 @@ def speed_accuracy(
                 if progress is not None:
                     progress(row)
         case_rows = [r for r in rows if r["case"] == case.name]
+        best = best_equilibrium(case_rows, lam_ref)
+        for r in case_rows:
+            r["lambda_converged"] = best
+            r["error_vs_converged"] = _rel(r["lambda"], best)
         mark_pareto(case_rows)
         summary[case.name] = {
-            "lambda_converged": lam_ref,
-            "reference_method": ref_how,
+            "lambda_converged": best,
+            "lambda_static_tight": lam_ref,
+            "reference_method": ref_how
+            if best == lam_ref
+            else "highest equilibrium verified by any run (above the tight static run)",
             "lambda_test": case.reference,
             **equal_accuracy(case_rows, ACCURACY),
         }

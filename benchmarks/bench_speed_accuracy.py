@@ -1,0 +1,100 @@
+"""Benchmark: speed against accuracy of the static solver and dynamic relaxation (issue 6).
+
+Run:  python benchmarks/bench_speed_accuracy.py [--cases S15 OL1 14-15] [--quick]
+                                                [--out results/study] [--skip-sweeps]
+
+One command for every figure of docs/solvers.md:
+
+1. the speed-accuracy study (``masonry-dem study speed-accuracy``): every setting of both
+   solvers on each case, the table, ``speed_accuracy.json`` and the chart with the Pareto
+   front, and the time ratio DR / static at equal (1 %) accuracy, measured in this run;
+2. the in-plane reduction (``masonry-dem study reduction``): lambda and time of the 3-DOF
+   model against the 6-DOF model, and what the never-assembled fixed DOFs and the closed-form
+   interface domain save;
+3. the dry-joint stiffness sweep (``masonry-dem study kn-sweep``): lambda as kn grows by 10^4.
+
+``--check`` makes the exit status 1 when a target of issue 6 is missed (DR / static >= 10 at
+1 % on every case; 3-DOF lambda within 0.1 %; kn sweep within 1 %).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import platform
+import sys
+import time
+from pathlib import Path
+
+from masonry_dem.cli import study
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
+    p.add_argument("--cases", nargs="+", default=list(study.DEFAULT_CASES))
+    p.add_argument("--quick", action="store_true", help="a few settings per method")
+    p.add_argument("--budget", type=int, default=400_000, help="DR time-step budget per run")
+    p.add_argument("--out", default="results/study")
+    p.add_argument("--skip-sweeps", action="store_true", help="speed-accuracy study only")
+    p.add_argument("--kn-case", default="S15")
+    p.add_argument("--check", action="store_true")
+    args = p.parse_args(argv)
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    print(f"python {platform.python_version()} on {platform.machine()}, {time.ctime()}")
+    failures: list[str] = []
+
+    t0 = time.perf_counter()
+    res = study.speed_accuracy(
+        args.cases,
+        quick=args.quick,
+        budget=args.budget,
+        progress=lambda r: print(
+            f"  {r['case']} {r['method']} [{r['label']}]: {r['status']} "
+            f"lambda={study._fmt(r['lambda'], '.5g')} in {r['seconds']:.2f} s",
+            flush=True,
+        ),
+    )
+    (out / "speed_accuracy.json").write_text(json.dumps(res, indent=2))
+    text = study.table(res["rows"]) + "\n\n" + study.summary_lines(res["summary"], res["accuracy"])
+    (out / "speed_accuracy.txt").write_text(text + "\n")
+    png = study.chart(res["rows"], out / "speed_accuracy.png")
+    print(text)
+    print(f"chart: {png} ({time.perf_counter() - t0:.0f} s)")
+    for name, s in res["summary"].items():
+        ratio = s["time_ratio_dr_over_static"]
+        if ratio is None or ratio < 10:
+            failures.append(f"{name}: DR / static at 1 % = {ratio}")
+
+    if not args.skip_sweeps:
+        red = study.reduction_study(repeats=3)
+        (out / "reduction.json").write_text(json.dumps(red, indent=2))
+        print()
+        print(study.reduction_text(red))
+        for r in red["in_plane"]:
+            d = r["lambda_relative_difference"]
+            if d is None or d > 1e-3:
+                failures.append(f"{r['scene']}: 3-DOF lambda differs by {d}")
+        factors = [1.0, 10.0, 100.0, 1000.0, 10000.0]
+        sweep = study.kn_sweep(args.kn_case, factors)
+        (out / "kn_sweep.json").write_text(json.dumps(sweep, indent=2))
+        print()
+        print(f"{args.kn_case}: lambda as the dry-joint kn grows (static)")
+        for r in sweep["rows"]:
+            print(
+                f"  kn = {r['kn']:9.3g}  lambda = {study._fmt(r['lambda'], '.5g'):>9}  "
+                f"drift {study._fmt(r['drift'], '.2%'):>7}  {r['seconds']:6.2f} s  {r['status']}"
+            )
+        print(f"  spread: {study._fmt(sweep['spread'], '.2%')}")
+        if sweep["spread"] is None or sweep["spread"] > 0.01:
+            failures.append(f"kn sweep spread {sweep['spread']}")
+
+    if failures:
+        print("\ntargets missed:\n  " + "\n  ".join(failures))
+    else:
+        print("\nall targets met")
+    return 1 if (failures and args.check) else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
