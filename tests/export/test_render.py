@@ -297,6 +297,12 @@ def test_cli_render(results_copy):
     assert iio.imread(results_copy / "animation_side.gif", index=None).shape[0] == 5
 
 
+def test_cli_view_choices_are_the_presets():
+    from masonry_dem.cli import render as cli_render
+
+    assert cli_render.VIEW_CHOICES == tuple(render.VIEWS)
+
+
 def test_cli_render_errors(results_copy, tmp_path, capsys):
     from masonry_dem.cli import main
 

@@ -86,9 +86,10 @@ def run(args: argparse.Namespace) -> int:
         )
     if args.animate:
         size = args.size if args.size != (1200, 900) else (800, 600)
+        anim_view = "oblique" if "oblique" in views else views[0]
         written.append(
             render.render_animation(
-                args.results, fps=args.fps, view=views[0], scale=args.scale, window_size=size
+                args.results, fps=args.fps, view=anim_view, scale=args.scale, window_size=size
             )
         )
     if args.pushover:
