@@ -237,3 +237,18 @@ def test_study_command_json_table_and_chart(tmp_path, monkeypatch, capsys, tilti
     saved = json.loads((tmp_path / "speed_accuracy.json").read_text())
     assert saved["summary"]["block"]["lambda_converged"] == pytest.approx(S / A, rel=1e-3)
     assert "Pareto" in (tmp_path / "speed_accuracy.txt").read_text()
+    # the chart and table are regenerated from the saved runs without running anything
+    (tmp_path / "speed_accuracy.png").unlink()
+    again = tmp_path / "again"
+    code = main(
+        [
+            "study",
+            "speed-accuracy",
+            "--from-json",
+            str(tmp_path / "speed_accuracy.json"),
+            "--out",
+            str(again),
+        ]
+    )
+    assert code == 0 and (again / "speed_accuracy.png").is_file()
+    assert "DR / static" in capsys.readouterr().out
