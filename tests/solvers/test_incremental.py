@@ -149,3 +149,28 @@ def test_mechanism_under_dead_load_fails_clearly_and_keeps_its_steps(tmp_path):
     assert summary["status"] == "failed" and summary["reason"] == h.reason
     assert summary["steps_written"] == len(h.steps) >= 1
     assert list((tmp_path / "steps").glob("*.vtu"))
+
+
+def test_robust_strategy_finds_the_equilibrium_newton_finds():
+    """The second strategy (initial stiffness + Anderson) that re-tries failed load steps
+    converges to the same dead-load equilibrium as Newton, to the same tolerance."""
+    from masonry_dem.solvers.incremental import StaticSolver
+
+    newton = StaticSolver(_panel())._equilibrate(0.0, radius=None, damped=True)
+    solver = StaticSolver(_panel(), StaticSettings(robust_iterations=2000))
+    robust = solver._robust(0.0)
+    assert newton.ok and robust.ok, robust.reason
+    scale = np.abs(newton.q).max()
+    assert np.abs(robust.q - newton.q).max() <= 1e-4 * scale
+
+
+def test_robust_iterations_must_not_be_negative():
+    with pytest.raises(ValueError, match="robust_iterations"):
+        StaticSettings(robust_iterations=-1)
+
+
+def test_free_standing_wall_tilts_at_s_over_h_with_slip_memory():
+    a, s, courses = 0.081, 0.07, 9
+    blocks, base = add_base(running_bond_wall(4, courses, a, 0.21, s, 20e3))
+    lam = _collapse(_tilt(blocks, base), memory="slip")
+    assert lam == pytest.approx(s / (courses * a), rel=TOL)

@@ -49,6 +49,11 @@ _MAX_FLOOR = 1e-3
 #: a factorized tangent is reused for the next correction while each full step divides the
 #: residual by at least 1 / _CHORD_RATIO (modified Newton: a solve instead of a factorization)
 _CHORD_RATIO = 0.25
+#: the robust re-try of a failed load step mixes the last _ANDERSON corrections, and stops when
+#: the residual has not fallen by x10 in _DIVERGENCE_WINDOW iterations with corrections that do
+#: not shrink
+_ANDERSON = 5
+_DIVERGENCE_WINDOW = 60
 
 
 @dataclass(frozen=True)
@@ -65,6 +70,8 @@ class StaticSettings:
         (None: half the smallest block dimension); beyond it the step has found a mechanism.
     tension, memory: interface law options (see :mod:`masonry_dem.constitutive.law`).
     residual_stiffness: fraction of the elastic stiffness kept on the diagonal of the tangent.
+    robust_iterations: budget of the second strategy (initial-stiffness iterations with
+        Anderson acceleration) that re-tries a load step Newton could not solve; 0 disables it.
     """
 
     initial_step: float = 0.02
@@ -80,6 +87,7 @@ class StaticSettings:
     tension: str = "brittle"
     memory: str = "none"
     residual_stiffness: float = 1e-9
+    robust_iterations: int = 400
 
     def __post_init__(self) -> None:
         for name in (
@@ -94,6 +102,8 @@ class StaticSettings:
                 raise ValueError(f"{name} must be a positive number, got {value!r}")
         if self.growth < 1:
             raise ValueError(f"growth must be >= 1, got {self.growth!r}")
+        if self.robust_iterations < 0:
+            raise ValueError(f"robust_iterations must be >= 0, got {self.robust_iterations!r}")
         if self.max_iterations < 1 or self.max_steps < 1:
             raise ValueError("max_iterations and max_steps must be at least 1")
         if self.displacement_limit is not None and not self.displacement_limit > 0:
@@ -198,6 +208,7 @@ class StaticSolver:
         self.factorizations = 0
         self.iterations = 0
         self._last_increment = 0.0
+        self._elastic_lu = None
 
     # ------------------------------------------------------------------ one equilibrium
     def _residual(self, q: np.ndarray, lam: float, dead_factor: float = 1.0):
@@ -393,6 +404,89 @@ class StaticSolver:
             f"no convergence in {it} iterations (residual {rnorm:.2e})",
         )
 
+    def _robust(self, load_factor: float, start: np.ndarray | None = None) -> _Outcome:
+        """Second strategy for a load step Newton could not solve: initial-stiffness
+        iterations (the elastic matrix of the assembly, factorized once per analysis) with
+        Anderson acceleration over the last _ANDERSON corrections, no line search.
+
+        Newton stalls where the yielded tangent is nearly singular or flips between contact
+        states of zero-gap joints; the fixed point of q <- q + K0^-1 R(q) does not depend on
+        the tangent, so it converges (slowly, hence the larger budget) wherever an equilibrium
+        is near. It gives up when the displacements pass the limit (a mechanism) or when the
+        residual has not decreased by a tenth over _DIVERGENCE_WINDOW iterations while the
+        corrections do not shrink (the iterates drift: no equilibrium)."""
+        s = self.settings
+        free = self.asm.free_index
+        if self._elastic_lu is None:
+            idx = np.arange(6)
+            m = self.model.interfaces.count
+            T = np.zeros((m, 6, 6))
+            T[:, idx, idx] = self.law.kbar
+            self.factorizations += 1
+            self._elastic_lu = splu(self._tangents.matrix(T), permc_spec="COLAMD")
+        lu = self._elastic_lu
+        x = (self.q if start is None else start)[free].copy()
+        q = self.q.copy()
+
+        def g(xx):
+            q[free] = xx
+            r, n, resp = self._residual(q, load_factor)
+            return lu.solve(r), n, resp
+
+        f, rnorm, response = g(x)
+        xs, fs = [x.copy()], [f.copy()]
+        best = (rnorm, x.copy(), response)
+        hist: list[tuple[float, float]] = []
+        for it in range(1, s.robust_iterations + 1):
+            self.iterations += 1
+            if len(xs) > 1:
+                dX = np.diff(np.array(xs), axis=0).T
+                dF = np.diff(np.array(fs), axis=0).T
+                gamma = np.linalg.lstsq(dF, f, rcond=1e-10)[0]
+                x_new = x + f - (dX + dF) @ gamma
+            else:
+                x_new = x + f
+            if not np.all(np.isfinite(x_new)):
+                xs, fs = [x.copy()], [f.copy()]
+                x_new = x + f
+            x = x_new
+            f, rnorm, response = g(x)
+            xs.append(x.copy())
+            fs.append(f.copy())
+            if len(xs) > _ANDERSON + 1:
+                xs.pop(0)
+                fs.pop(0)
+            if rnorm < best[0]:
+                best = (rnorm, x.copy(), response)
+            q_now = self.q.copy()
+            q_now[free] = x
+            umax = float(np.abs((q_now - self.q)[free][self._translation]).max(initial=0.0))
+            if rnorm <= s.tolerance:
+                self._last_increment = umax
+                return _Outcome(True, q_now, load_factor, response, it)
+            if not math.isfinite(umax) or umax > self.limit:
+                return _Outcome(
+                    False, q_now, load_factor, response, it,
+                    f"displacements exceed the limit {self.limit:.3g} m (a mechanism)",
+                )
+            step = float(np.abs(f[self._translation]).max(initial=0.0))
+            hist.append((rnorm, step))
+            if len(hist) > _DIVERGENCE_WINDOW:
+                r0, s0 = hist[-1 - _DIVERGENCE_WINDOW]
+                if best[0] > 0.1 * r0 and step >= s0:
+                    return _Outcome(
+                        False, q_now, load_factor, response, it,
+                        f"no equilibrium found: the robust iterations drift (residual "
+                        f"{rnorm:.2e}, correction {step:.2e} m not shrinking)",
+                    )
+        q_best = self.q.copy()
+        q_best[free] = best[1]
+        return _Outcome(
+            False, q_best, load_factor, best[2], s.robust_iterations,
+            f"no convergence in {s.robust_iterations} robust iterations "
+            f"(residual {best[0]:.2e})",
+        )
+
     def _accept(self, out: _Outcome, step: int, control_value: float) -> StepResult:
         rel = self.asm.relative_displacements(out.q)
         resp = out.response
@@ -471,6 +565,15 @@ class StaticSolver:
         for _ in range(s.max_steps):
             target = min(lam + dlam, s.max_load_factor)
             out = self._equilibrate(target)
+            robust_ok = False
+            if not out.ok and s.robust_iterations > 0 and "exceed the limit" not in out.reason:
+                second = self._robust(target)
+                log.debug("Newton failed at lambda=%.6g (%s); robust: %s", target, out.reason,
+                          "ok" if second.ok else second.reason)
+                if second.ok:
+                    out, robust_ok = second, True
+                else:
+                    out = replace(out, reason=f"{out.reason}; {second.reason}")
             if out.ok:
                 record(out)
                 lam = target
@@ -482,7 +585,8 @@ class StaticSolver:
                     lam_fail, verified = math.inf, False
                 if math.isfinite(lam_fail):
                     dlam = (lam_fail - lam) / 2
-                elif out.iterations <= 6:
+                elif out.iterations <= 6 or robust_ok:
+                    # the robust strategy copes with long steps: grow them after it too
                     dlam = min(dlam * s.growth, max_dlam)
             else:
                 last_reason = out.reason
