@@ -19,7 +19,9 @@ class LinearSolution:
     relative: np.ndarray  # (m, 6) relative displacements
 
 
-def solve_linear(model: Model, load_factor: float = 1.0, assembly: Assembly | None = None) -> LinearSolution:
+def solve_linear(
+    model: Model, load_factor: float = 1.0, assembly: Assembly | None = None
+) -> LinearSolution:
     """Solve K q = F_dead + load_factor F_live on the free DOFs."""
     asm = Assembly.of(model) if assembly is None else assembly
     F = (model.dead + load_factor * model.live).reshape(-1)
