@@ -560,6 +560,7 @@ class StaticSolver:
         dlam = s.initial_step * self.load_scale
         max_dlam = s.max_step * self.load_scale
         lam_fail = math.inf
+        failed_step = dlam
         last_reason = ""
         verified = False  # the first failure was re-tried from the end of the bracket
         for _ in range(s.max_steps):
@@ -583,6 +584,9 @@ class StaticSolver:
                 if lam >= lam_fail:  # the earlier failure came from a long step only
                     log.debug("lambda=%.6g passed after an earlier failure", lam)
                     lam_fail, verified = math.inf, False
+                    # the bracket's halvings came from a long step only: resume with half
+                    # the step that failed instead of creeping on at the bracket width
+                    dlam = max(dlam, min(failed_step / 2, max_dlam))
                 if math.isfinite(lam_fail):
                     dlam = (lam_fail - lam) / 2
                 elif out.iterations <= 6 or robust_ok:
@@ -593,6 +597,7 @@ class StaticSolver:
                 log.debug("step to lambda=%.6g failed: %s", target, out.reason)
                 if target < lam_fail:
                     lam_fail, verified = target, False
+                    failed_step = target - lam
                 elif target == lam_fail:
                     verified = True
                 if not s.refine:
