@@ -36,8 +36,10 @@ Loading (``loading``): ``"steps"`` raises lambda in steps exactly as the static 
 converged state with the plastic state of that state held (the same holonomic step problem as
 the static solver); ``"ramp"`` raises lambda continuously at ``ramp_rate`` per unit of pseudo
 time, updates the plastic state every time step (the classical explicit DEM) and records the
-quasi-static states it passes through; with ``refine`` the collapse bracket is then refined in
-steps from the last quasi-static state.
+quasi-static states it passes through, verified afterwards by relaxing them at their own
+lambda; with ``refine`` the collapse bracket is then refined in steps from the highest verified
+state. Tensile cracks are held during the ramp (an inertial overshoot would crack joints that
+the quasi-static path leaves intact) and enter at verified states only.
 
 Convergence: relative residual ||F_ext - F_int|| / ||F_ext|| <= ``tolerance`` (moments
 measured as forces at the median block size, as in the static solver) and kinetic
@@ -356,7 +358,8 @@ class DynamicRelaxation:
         )
         window = self._stall_window()
         best_before, best_now = math.inf, math.inf
-        for cycle in range(1, s.max_cycles + 1):
+        # a ramp runs until a mechanism forms or lambda reaches its top: only the budget ends it
+        for cycle in range(1, (s.max_time_steps if ramp else s.max_cycles) + 1):
             self.stats.time_steps += 1
             if self.stats.time_steps > s.max_time_steps:
                 return _Relaxed(
@@ -425,8 +428,10 @@ class DynamicRelaxation:
             fint = fint_new
             R = F - fint
             if ramp:
+                # slip memory follows the motion; tensile cracks do not: an inertial overshoot
+                # of the ramp would crack mortar joints that the quasi-static path leaves
+                # intact and lower lambda for good. Cracks enter at verified states only.
                 plastic = self.law.plastic_part(rel, resp.actions)
-                cracked = self.law.cracked_after(cracked, resp)
             # blow-up check: Rayleigh quotient of the increment against the stability limit
             dmd = float(dx @ (M * dx))
             omega2 = float(dx @ df) / dmd if dmd > 0 else 0.0
