@@ -289,15 +289,11 @@ def summarise(rows: list[dict], refs: dict[str, dict]) -> dict:
 
 
 def mark_pareto(rows: list[dict]) -> None:
-    """Set ``pareto`` on each row: no other run of the case is both faster and more accurate."""
-    ok = [r for r in rows if r["error_vs_converged"] is not None]
+    """Set ``pareto`` on each row: no other run of the case is both faster and more accurate
+    (against the converged lambda of the case)."""
+    front = {id(r) for r in pareto_front(rows, "error_vs_converged")}
     for r in rows:
-        r["pareto"] = False
-    best = math.inf
-    for r in sorted(ok, key=lambda r: (r["seconds"], r["error_vs_converged"])):
-        if r["error_vs_converged"] < best:
-            r["pareto"] = True
-            best = r["error_vs_converged"]
+        r["pareto"] = id(r) in front
 
 
 def equal_accuracy(rows: list[dict], accuracy: float, error: str = "error_vs_converged") -> dict:
@@ -366,77 +362,82 @@ def summary_lines(summary: dict, accuracy: float) -> str:
     return "\n".join(lines)
 
 
+def pareto_front(rows: list[dict], error: str) -> list[dict]:
+    """Runs that no other run beats on both time and ``error``, fastest first."""
+    front, best = [], math.inf
+    ok = [r for r in rows if r.get(error) is not None]
+    for r in sorted(ok, key=lambda r: (r["seconds"], r[error])):
+        if r[error] < best:
+            front.append(r)
+            best = r[error]
+    return front
+
+
 def chart(rows: list[dict], path: Path, floor: float = 1e-5) -> Path:
-    """Run time against error in lambda, one panel per case, Pareto front joined."""
+    """Run time against error in lambda, one column per case; top row against the converged
+    lambda of the case, bottom row against each method's own converged lambda. The Pareto
+    front of each panel is joined and ringed."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     cases = list(dict.fromkeys(r["case"] for r in rows))
-    fig, axes = plt.subplots(1, max(len(cases), 1), figsize=(5.0 * max(len(cases), 1), 4.4))
-    axes = np.atleast_1d(axes)
+    ncol = max(len(cases), 1)
+    fig, axes = plt.subplots(2, ncol, figsize=(5.0 * ncol, 8.2), squeeze=False)
     style = {
         "static": dict(marker="o", color="tab:blue", label="static (paper's method)"),
         "dynamic_relaxation": dict(marker="^", color="tab:orange", label="dynamic relaxation"),
     }
-    for ax, name in zip(axes, cases, strict=False):
-        rs = [r for r in rows if r["case"] == name]
-        for method, st in style.items():
-            ok = [r for r in rs if r["method"] == method and r["error_vs_converged"] is not None]
-            bad = [r for r in rs if r["method"] == method and r["error_vs_converged"] is None]
-            ax.scatter(
-                [r["seconds"] for r in ok],
-                [max(r["error_vs_converged"], floor) for r in ok],
-                s=36,
-                **st,
-            )
-            if bad:
+    panels = (
+        ("error_vs_converged", "error vs converged lambda of the case"),
+        ("error_vs_own", "error vs the method's own converged lambda"),
+    )
+    for row, (error, ylabel) in enumerate(panels):
+        for col, name in enumerate(cases):
+            ax = axes[row, col]
+            rs = [r for r in rows if r["case"] == name]
+            for method, st in style.items():
+                ok = [r for r in rs if r["method"] == method and r.get(error) is not None]
+                bad = [r for r in rs if r["method"] == method and r.get(error) is None]
                 ax.scatter(
-                    [r["seconds"] for r in bad],
-                    [1.0] * len(bad),
-                    marker="x",
-                    color=st["color"],
-                    label=f"{method.replace('_', ' ')}: no lambda (failed)",
+                    [r["seconds"] for r in ok], [max(r[error], floor) for r in ok], s=36, **st
                 )
-            for r in ok:
-                ax.annotate(
-                    r["label"],
-                    (r["seconds"], max(r["error_vs_converged"], floor)),
-                    fontsize=6,
-                    xytext=(3, 2),
-                    textcoords="offset points",
-                )
-        front = sorted((r for r in rs if r.get("pareto")), key=lambda r: r["seconds"])
-        if front:
-            ax.step(
-                [r["seconds"] for r in front],
-                [max(r["error_vs_converged"], floor) for r in front],
-                where="post",
-                color="k",
-                lw=1,
-                label="Pareto front",
-            )
-            ax.scatter(
-                [r["seconds"] for r in front],
-                [max(r["error_vs_converged"], floor) for r in front],
-                s=110,
-                facecolors="none",
-                edgecolors="k",
-            )
-        ax.axhline(ACCURACY, color="grey", ls=":", lw=1)
-        ax.set_xscale("log")
-        ax.set_yscale("log")
-        ax.set_ylim(floor / 2, 2.0)
-        ax.set_xlabel("run time [s]")
-        ax.set_title(name)
-        ax.grid(True, which="both", alpha=0.2)
-    axes[0].set_ylabel(f"|lambda - converged| / converged (floor {floor:g})")
-    axes[0].legend(fontsize=7, loc="lower left")
-    fig.suptitle("Speed against accuracy: every solver setting (dotted: 1 %)")
+                if bad:
+                    ax.scatter(
+                        [r["seconds"] for r in bad],
+                        [1.0] * len(bad),
+                        marker="x",
+                        color=st["color"],
+                        label=f"{method.replace('_', ' ')}: no lambda (failed)",
+                    )
+                for r in ok:
+                    ax.annotate(
+                        r["label"],
+                        (r["seconds"], max(r[error], floor)),
+                        fontsize=6,
+                        xytext=(3, 2),
+                        textcoords="offset points",
+                    )
+            front = pareto_front(rs, error)
+            if front:
+                xs = [r["seconds"] for r in front]
+                ys = [max(r[error], floor) for r in front]
+                ax.step(xs, ys, where="post", color="k", lw=1, label="Pareto front")
+                ax.scatter(xs, ys, s=110, facecolors="none", edgecolors="k")
+            ax.axhline(ACCURACY, color="grey", ls=":", lw=1)
+            ax.set_xscale("log")
+            ax.set_yscale("log")
+            ax.set_ylim(floor / 2, 2.0)
+            ax.set_xlabel("run time [s]")
+            ax.set_title(name if row == 0 else f"{name} (own answer)")
+            ax.grid(True, which="both", alpha=0.2)
+        axes[row, 0].set_ylabel(f"{ylabel}\n(floor {floor:g}; dotted: 1 %)")
+    axes[0, 0].legend(fontsize=7, loc="lower left")
+    fig.suptitle("Speed against accuracy of every solver setting")
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=130)
+    fig.savefig(path, dpi=120)
     plt.close(fig)
     return path
 
