@@ -8,7 +8,7 @@ tuned: docs/validation.md explains why it is above the paper's FEM reference).
 
 from __future__ import annotations
 
-from functools import lru_cache
+from functools import cache
 from importlib import resources
 from pathlib import Path
 
@@ -71,7 +71,7 @@ def test_assumptions_are_overridable_in_one_place():
     assert Assumptions().dry_kn == reference_data()["interface_spring_model"]["kn"]
 
 
-@lru_cache(maxsize=None)
+@cache
 def _run(name: str):
     case = build_case(name)
     return case, pushover(case.model, case.settings, monitor=case.monitor)
