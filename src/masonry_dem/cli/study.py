@@ -521,15 +521,32 @@ def reduction_text(res: dict) -> str:
 
 
 # ---------------------------------------------------------------------------- kn sweep
-def kn_sweep(case_name: str, factors, method: str = "static", budget: int | None = None) -> dict:
-    """lambda of a dry-joint case as the dry normal stiffness is multiplied by ``factors``."""
+def kn_sweep(
+    case_name: str,
+    factors,
+    method: str = "static",
+    budget: int | None = None,
+    scale_kt: bool = False,
+) -> dict:
+    """lambda of a dry-joint case as the dry normal stiffness is multiplied by ``factors``.
+
+    ``scale_kt``: scale the shear stiffness too. The law is then exactly invariant (actions
+    depend on kbar x relative displacement only, and displacements scale by 1/factor), so any
+    drift is numerical: conditioning, tolerances, the absolute displacement limit. With kn
+    alone the ratio kt/kn changes, and with it the elastic share of shear and normal forces
+    from which the non-associative friction of the joints starts: a physical change too.
+    """
     from masonry_dem.cases.paper import Assumptions, build_case
     from masonry_dem.solvers.dynamic_relaxation import DRSettings
 
-    kn0 = Assumptions().dry_kn
+    base = Assumptions()
+    kn0 = base.dry_kn
     rows = []
     for f in factors:
-        pc = build_case(case_name, dry_kn=kn0 * f)
+        changes = {"dry_kn": kn0 * f}
+        if scale_kt:
+            changes["dry_kt"] = base.dry_kt * f
+        pc = build_case(case_name, **changes)
         if method == "static":
             settings = pc.settings
         else:
@@ -541,6 +558,7 @@ def kn_sweep(case_name: str, factors, method: str = "static", budget: int | None
                 "case": case_name,
                 "method": method,
                 "kn": kn0 * f,
+                "kt": base.dry_kt * (f if scale_kt else 1.0),
                 "factor": f,
                 "lambda": _lambda(hist),
                 "status": hist.status,
@@ -608,6 +626,11 @@ def add_parser(subparsers) -> None:
     )
     kn.add_argument("--method", choices=("static", "dynamic_relaxation"), default="static")
     kn.add_argument("--budget", type=int, default=400_000, help="DR time-step budget")
+    kn.add_argument(
+        "--scale-kt",
+        action="store_true",
+        help="scale kt with kn (a pure conditioning test: the law is then invariant)",
+    )
     kn.add_argument("--json", action="store_true")
     kn.set_defaults(func=kn_sweep_command)
     p.set_defaults(func=lambda args: _help(p))
@@ -654,16 +677,19 @@ def reduction_command(args: argparse.Namespace) -> int:
 
 
 def kn_sweep_command(args: argparse.Namespace) -> int:
-    res = kn_sweep(args.case, args.factors, args.method, args.budget)
+    res = kn_sweep(args.case, args.factors, args.method, args.budget, args.scale_kt)
     if args.json:
         print(json.dumps(res, indent=1))
         return 0
-    print(f"{args.case}: lambda as the dry-joint kn grows ({args.method})")
-    print(f"  {'kn [N/m^3]':>11} {'lambda':>10} {'drift':>8} {'seconds':>8}  status")
+    what = "kn and kt" if args.scale_kt else "kn (kt held)"
+    print(f"{args.case}: lambda as the dry-joint {what} grow ({args.method})")
+    print(
+        f"  {'kn [N/m^3]':>11} {'kt [N/m^3]':>11} {'lambda':>10} {'drift':>8} {'seconds':>8}  status"
+    )
     for r in res["rows"]:
         print(
-            f"  {r['kn']:11.3g} {_fmt(r['lambda'], '10.5g')} {_fmt(r['drift'], '8.2%')} "
-            f"{r['seconds']:8.2f}  {r['status']}"
+            f"  {r['kn']:11.3g} {r['kt']:11.3g} {_fmt(r['lambda'], '10.5g')} "
+            f"{_fmt(r['drift'], '8.2%')} {r['seconds']:8.2f}  {r['status']}"
         )
     print(f"  spread of lambda over the sweep: {_fmt(res['spread'], '.2%')}")
     return 0
