@@ -256,6 +256,7 @@ class DynamicRelaxation:
         )
         self._slowest = 0
         self._courant = 0.0
+        self._ramp_fail = math.inf  # first failure met by a ramp (refined in steps after it)
 
     # ------------------------------------------------------------------ masses and time step
     def _masses(self) -> np.ndarray:
@@ -704,7 +705,7 @@ class DynamicRelaxation:
         lam = state.load_factor
         dlam = s.initial_step * self.load_scale
         max_dlam = s.max_step * self.load_scale
-        lam_fail = getattr(self, "_ramp_fail", math.inf)
+        lam_fail = self._ramp_fail
         if math.isfinite(lam_fail):
             dlam = (lam_fail - lam) / 2
         last_reason = hist.reason if math.isfinite(lam_fail) else ""
