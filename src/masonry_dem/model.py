@@ -261,6 +261,14 @@ class Model:
         """(6n,) bool mask of free DOFs (block-major)."""
         return ~self.fixed.reshape(-1)
 
+    def dof_index(self, block: int, dof: str) -> int:
+        """Global DOF number of ``dof`` (``u1`` ... ``w3``) of ``block``."""
+        if dof not in DOF_NAMES:
+            raise ValueError(f"dof must be one of {DOF_NAMES}, got {dof!r}")
+        if not 0 <= block < self.blocks.count:
+            raise ValueError(f"block must be in 0..{self.blocks.count - 1}, got {block!r}")
+        return 6 * int(block) + DOF_NAMES.index(dof)
+
     def check_supported(self) -> None:
         """Refuse an assembly with a rigid-body mechanism before any solve: every connected
         group of blocks needs fixed DOFs in it (a free-floating part is a mechanism)."""

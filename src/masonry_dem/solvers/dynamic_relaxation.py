@@ -79,7 +79,7 @@ from scipy import sparse
 
 from masonry_dem.assembly.stiffness import Assembly
 from masonry_dem.constitutive.law import InterfaceLaw, LawResponse
-from masonry_dem.model import DOF_NAMES, Model
+from masonry_dem.model import Model
 from masonry_dem.results import History, StepResult
 
 log = logging.getLogger(__name__)
@@ -758,11 +758,7 @@ class DynamicRelaxation:
         return self._finish(hist, "failed", reason, t0)
 
     def _global_dof(self, block: int, dof: str) -> int:
-        if dof not in DOF_NAMES:
-            raise ValueError(f"dof must be one of {DOF_NAMES}, got {dof!r}")
-        if not 0 <= block < self.model.blocks.count:
-            raise ValueError(f"block must be in 0..{self.model.blocks.count - 1}, got {block!r}")
-        return 6 * int(block) + DOF_NAMES.index(dof)
+        return self.model.dof_index(block, dof)
 
     def _finish(self, hist: History, status: str, reason: str, t0: float) -> History:
         hist.status, hist.reason = status, reason

@@ -33,7 +33,7 @@ from scipy.sparse.linalg import splu
 
 from masonry_dem.assembly.stiffness import Assembly
 from masonry_dem.constitutive.law import MEMORY, TENSION, InterfaceLaw, LawResponse
-from masonry_dem.model import DOF_NAMES, Model
+from masonry_dem.model import Model
 from masonry_dem.results import History, StepResult
 
 log = logging.getLogger(__name__)
@@ -661,11 +661,7 @@ class StaticSolver:
         hist.collapse_bracket = (float(lams[peak]), float(lams[peak]))
 
     def _global_dof(self, block: int, dof: str) -> int:
-        if dof not in DOF_NAMES:
-            raise ValueError(f"dof must be one of {DOF_NAMES}, got {dof!r}")
-        if not 0 <= block < self.model.blocks.count:
-            raise ValueError(f"block must be in 0..{self.model.blocks.count - 1}, got {block!r}")
-        return 6 * int(block) + DOF_NAMES.index(dof)
+        return self.model.dof_index(block, dof)
 
     def _finish(self, hist: History, status: str, reason: str, t0: float) -> History:
         hist.status, hist.reason = status, reason
