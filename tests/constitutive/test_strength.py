@@ -170,13 +170,17 @@ def test_torsion_reduced_by_bending_figure_10():
     # rocking moments are clipped before the reduced rectangle is formed: zero side, cT = l1'/4
     r = check_strength([[0, 0, FN, 100.0, 0, 20.0]], L1, L2, MU, 0.0)
     assert r.projected[0, 5] == pytest.approx(L1 / 4 * MU * cap, rel=1e-12)
-    # both moments at their limits: no torsion capacity; the radial projection's limit drops
-    # the shear too, whereas without torsion the shear alone is kept
-    r = check_strength(
-        [[50.0, 0, FN, 100.0, 100.0, 10.0], [50.0, 0, FN, 100, 100, 0]], L1, L2, MU, 0
-    )
-    np.testing.assert_allclose(r.projected, [[0, 0, FN, 24.0, 36.0, 0], [50.0, 0, FN, 24, 36, 0]])
+    # both moments at their limits: the joint bears on a corner, no torsion capacity. A point
+    # contact still carries shear up to mu |fn|: the energy projection keeps it and drops the
+    # torsion; the radial projection's limit drops the shear too
+    trial = [[50.0, 0, FN, 100.0, 100.0, 10.0], [50.0, 0, FN, 100, 100, 0]]
+    r = check_strength(trial, L1, L2, MU, 0)
+    np.testing.assert_allclose(r.projected, [[50, 0, FN, 24.0, 36.0, 0], [50.0, 0, FN, 24, 36, 0]])
     np.testing.assert_allclose(r.utilisation, [np.inf, 100.0 / 24.0])  # trial rocking ratio
+    r = check_strength([[500.0, 0, FN, 100.0, 100.0, 10.0]], L1, L2, MU, 0)
+    np.testing.assert_allclose(r.projected, [[MU * cap, 0, FN, 24.0, 36.0, 0]])
+    r = check_strength(trial, L1, L2, MU, 0, projection="radial")
+    np.testing.assert_allclose(r.projected, [[0, 0, FN, 24.0, 36.0, 0], [50.0, 0, FN, 24, 36, 0]])
 
 
 @pytest.mark.parametrize("alpha", [1.0, 1.43, 2.0, 2.56, 3.7])
@@ -185,7 +189,7 @@ def test_shear_torsion_projection_lands_on_eq_a5(alpha):
     trial = np.zeros((200, 6))
     trial[:, [0, 1, 5]] = rng.normal(size=(200, 3)) * [200.0, 200.0, 20.0]
     trial[:, 2] = FN
-    r = check_strength(trial, L1, L2, MU, 0.0, alpha=alpha)
+    r = check_strength(trial, L1, L2, MU, 0.0, alpha=alpha, projection="radial")
     sl = r.state == STATE_SLIDING
     assert sl.sum() > 50
     phi = _phi(r.projected[sl], L1, L2, MU, 0.0, alpha)
@@ -337,3 +341,32 @@ def test_domain_scales_linearly_with_compression(data, geom, k):
 
 def test_tolerance_is_tiny():
     assert 0 < SHEAR_TORSION_TOLERANCE <= 1e-8
+
+
+@pytest.mark.parametrize("alpha", [1.0, 1.43, 2.0, 2.56, 3.7])
+def test_energy_projection_is_the_closest_boundary_point(alpha):
+    """The default return lands on Eq. (A5) at the point of least elastic energy of the
+    correction, |df|^2 / (kt A) + dm3^2 / (kt J): checked against 200 001 points sampled on
+    the boundary (shear direction kept, so the problem is two-dimensional)."""
+    rng = np.random.default_rng(2)
+    trial = np.zeros((100, 6))
+    trial[:, [0, 1, 5]] = rng.normal(size=(100, 3)) * [200.0, 200.0, 20.0]
+    trial[:, 2] = FN
+    r = check_strength(trial, L1, L2, MU, 0.0, alpha=alpha)
+    sl = r.state == STATE_SLIDING
+    assert sl.sum() > 30
+    p, t = r.projected[sl], trial[sl]
+    np.testing.assert_allclose(_phi(p, L1, L2, MU, 0.0, alpha), 1.0, atol=1e-9)
+    rho2 = (L1**2 + L2**2) / 12.0  # J / A
+    fsu = MU * -FN
+    m3u = torsion_constant(L1, L2) * fsu
+    s = np.linspace(0.0, 1.0, 200_001)
+    z, rr = m3u * s, fsu * np.sqrt(1.0 - s**alpha)
+    r0, z0 = np.hypot(t[:, 0], t[:, 1]), np.abs(t[:, 5])
+    best = ((rr[None] - r0[:, None]) ** 2 + (z[None] - z0[:, None]) ** 2 / rho2).min(axis=1)
+    got = (np.hypot(p[:, 0], p[:, 1]) - r0) ** 2 + (np.abs(p[:, 5]) - z0) ** 2 / rho2
+    assert np.all(got <= best * (1 + 1e-6) + 1e-12)
+    # the shear keeps its direction, the torsion its sign
+    cross = p[:, 0] * t[:, 1] - p[:, 1] * t[:, 0]
+    np.testing.assert_allclose(cross, 0.0, atol=1e-9)
+    assert np.all(p[:, 5] * t[:, 5] >= 0)

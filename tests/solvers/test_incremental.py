@@ -13,6 +13,8 @@ from __future__ import annotations
 
 import json
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -131,9 +133,25 @@ def test_displacement_control_reaches_the_rocking_limit():
     h = pushover(_tilt(blocks, base), settings, control=DisplacementControl(0, "u3", 2e-3, 20))
     lams = h.load_factors
     assert lams.max() == pytest.approx(s / a, rel=1e-3)
-    assert lams.max() <= s / a * (1 + 1e-9)
+    # never above the limit by more than the equilibrium tolerance (1e-8 of the load)
+    assert lams.max() <= s / a * (1 + 1e-7)
     # the control displacement grows monotonically along the curve
     assert np.all(np.diff(h.control_displacements) >= 0)
+
+
+def test_work_control_follows_the_plateau_past_the_load_control_failure():
+    """Load control fails at the first step above the sliding limit mu of a block on a
+    base; the work-controlled continuation then moves along the plateau lambda = mu and
+    stops when the curve is flat, never above mu."""
+    mu = 0.3
+    blocks, base = add_base(single_block(0.1, 0.25, 0.2, 20e3))
+    model = _tilt(blocks, base, material=replace(DRY, friction=mu))
+    h = pushover(model, StaticSettings(continuation="work"))
+    assert h.status == "collapse"
+    assert h.collapse_multiplier == pytest.approx(mu, rel=5e-3)
+    assert h.load_factors.max() <= mu * (1 + 1e-7)
+    bracket_only = pushover(model, StaticSettings(continuation="bracket"))
+    assert h.collapse_multiplier >= bracket_only.collapse_multiplier * (1 - 1e-9)
 
 
 # ------------------------------------------------------------------ failures

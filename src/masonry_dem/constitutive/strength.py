@@ -70,6 +70,11 @@ ALPHA_TABLE_A1: Final[dict[str, tuple[float, ...]]] = {
 }
 DIRECTIONS: Final[tuple[str, ...]] = ("f1", "f2", "f1=f2")
 
+#: ways back onto the shear-torsion boundary (see ``check_strength``)
+PROJECTIONS: Final[tuple[str, ...]] = ("energy", "radial")
+#: bisection steps of the energy projection (2^-60: below double precision in t)
+_BISECTION_STEPS: Final[int] = 60
+
 #: A trial violates Eq. (A5) only if its radial demand/capacity ratio (see ``check_strength``)
 #: exceeds 1 by more than this. The radial projection lands on the boundary to ~1e-13, so
 #: re-checking projected actions reports them elastic (and returns them unchanged).
@@ -228,6 +233,41 @@ def _radial_factor(a: NDArray, c: NDArray, alpha: NDArray) -> NDArray:
     return s
 
 
+def _energy_closest_point(
+    r0: NDArray, z0: NDArray, a: NDArray, b: NDArray, alpha: NDArray
+) -> tuple[NDArray, NDArray]:
+    """Closest point (r, z) of the curve (z/b)^alpha + (r/a)^2 = 1 to (r0, z0) outside it.
+
+    r = |f| and z = |m3| / rho, with rho^2 = J / A: Euclidean distance in (r, z) is the
+    elastic energy of the correction (kt A for shear, kt J for torsion), so this is the
+    textbook return mapping. The curve is parametrised by t in [0, 1]: z = b t,
+    r = a sqrt(1 - t^alpha); the squared distance is unimodal in t for the convex domain
+    (alpha >= 1), so the root of its derivative is bracketed by bisection.
+    Degenerate capacities: b = 0 (no torsion, e.g. a joint rocking on a corner) keeps
+    the shear up to a and drops the torsion; a = 0 drops both.
+    """
+    lo = np.zeros(r0.shape)
+    hi = np.ones(r0.shape)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        for _ in range(_BISECTION_STEPS):
+            t = 0.5 * (lo + hi)
+            ta = t**alpha
+            r = a * np.sqrt(1.0 - ta)
+            dr = -0.5 * a * alpha * ta / (t * np.sqrt(1.0 - ta))
+            slope = (r - r0) * dr + (b * t - z0) * b
+            up = slope > 0
+            hi = np.where(up, t, hi)
+            lo = np.where(up, lo, t)
+    t = 0.5 * (lo + hi)
+    t = np.where(r0 == 0, np.minimum(1.0, _safe_ratio(z0, b)), t)
+    t = np.where(z0 == 0, 0.0, t)
+    r = a * np.sqrt(np.maximum(1.0 - t**alpha, 0.0))
+    z = b * t
+    r = np.where(b == 0, np.minimum(r0, a), r)
+    z = np.where(b == 0, 0.0, z)
+    return r, z
+
+
 def _safe_ratio(demand: NDArray, capacity: NDArray) -> NDArray:
     """demand/capacity with 0/0 = 0 and d/0 = inf (demand >= 0, capacity >= 0)."""
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
@@ -333,6 +373,7 @@ def check_strength(
     tensile_force: ArrayLike,
     alpha: ArrayLike | None = None,
     torsion_bending_interaction: bool = True,
+    projection: str = "energy",
 ) -> StrengthCheck:
     """Check m interfaces against the closed-form domain and project the actions back on it.
 
@@ -344,12 +385,17 @@ def check_strength(
         tensile_force: ft = tensile strength x area (N) >= 0; scalar or (m,).
         alpha: exponent of Eq. (A5), >= 1 (a convex domain); None means ``DEFAULT_ALPHA``.
         torsion_bending_interaction: evaluate cT on the reduced rectangle (Figure 10).
+        projection: how (f1, f2, m3) outside Eq. (A5) return to it. ``"energy"`` (default):
+            the closest point in the elastic energy of the correction (kt A for shear, kt J
+            for torsion; the usual return mapping), shear direction kept. ``"radial"``: the
+            three scaled by one factor. They differ most where the torsion capacity vanishes
+            (a joint rocking about both axes bears on a corner): the energy projection keeps
+            the shear up to mu (ft - fn) and drops the torsion, as a point contact does; the
+            radial one drops both, which lets a lightly loaded block spin free.
 
     Projection order: fn > ft -> detached, projected to ``[0, 0, ft, 0, 0, 0]``; then m1, m2
-    clipped to their rocking limits; then (f1, f2, m3) scaled radially onto the shear-torsion
-    boundary. Where m3 != 0 meets a zero torsion capacity (both reduced sides zero), the
-    scale factor is 0, the limit of the radial projection as the capacity vanishes: f1, f2 and
-    m3 are all dropped. Actions inside the domain are returned unchanged (bitwise).
+    clipped to their rocking limits; then (f1, f2, m3) returned onto the shear-torsion
+    boundary (see ``projection``). Actions inside the domain are returned unchanged (bitwise).
 
     Utilisation: the largest of the demand/capacity ratios of the trial actions, namely
     ``max(fn, 0)/ft`` (or, for ft = 0, 1 at fn = 0 and 0 in compression), ``|m1|/(cap l2/2)``,
@@ -388,6 +434,8 @@ def check_strength(
         c_t = _torsion_constant(l1r, l2r)
     else:
         c_t = _torsion_constant(l1_, l2_)
+    if projection not in PROJECTIONS:
+        raise ValueError(f"projection must be one of {PROJECTIONS}, got {projection!r}")
     m3u = c_t * fsu
     a = _safe_ratio(np.abs(m3), m3u)
     c = _safe_ratio(np.hypot(f1, f2), fsu)
@@ -397,15 +445,29 @@ def check_strength(
     with np.errstate(divide="ignore"):
         u_st = 1.0 / s  # radial demand/capacity ratio of Eq. (A5)
     sliding = ~detached & (u_st > 1.0 + SHEAR_TORSION_TOLERANCE)
-    scale = np.where(sliding, s, 1.0)  # keep non-sliding rows finite (they are not scaled)
 
     # projection (np.where keeps untouched entries bitwise)
     proj = act.copy()
-    proj[:, 0] = np.where(sliding, f1 * scale, f1)
-    proj[:, 1] = np.where(sliding, f2 * scale, f2)
+    if projection == "radial":
+        scale = np.where(sliding, s, 1.0)  # keep non-sliding rows finite (not scaled)
+        proj[:, 0] = np.where(sliding, f1 * scale, f1)
+        proj[:, 1] = np.where(sliding, f2 * scale, f2)
+        proj[:, 5] = np.where(sliding, m3 * scale, m3)
+    else:
+        rows = np.flatnonzero(sliding)
+        if rows.size:
+            rho = np.sqrt((l1_[rows] ** 2 + l2_[rows] ** 2) / 12.0)  # sqrt(J / A)
+            r0 = np.hypot(f1[rows], f2[rows])
+            r, z = _energy_closest_point(
+                r0, np.abs(m3[rows]) / rho, fsu[rows], m3u[rows] / rho, al[rows]
+            )
+            shear_scale = _safe_ratio(r, r0)
+            shear_scale = np.where(np.isfinite(shear_scale), shear_scale, 0.0)
+            proj[rows, 0] = f1[rows] * shear_scale
+            proj[rows, 1] = f2[rows] * shear_scale
+            proj[rows, 5] = np.copysign(z * rho, m3[rows])
     proj[:, 3] = m1_c
     proj[:, 4] = m2_c
-    proj[:, 5] = np.where(sliding, m3 * scale, m3)
     proj[detached] = 0.0
     proj[detached, 2] = ft[detached]
 

@@ -54,6 +54,14 @@ _CHORD_RATIO = 0.25
 #: not shrink
 _ANDERSON = 5
 _DIVERGENCE_WINDOW = 60
+CONTINUATION = ("work", "bracket")
+#: a controlled displacement is reached when within this fraction of the displacement limit
+#: (each converged state is an exact equilibrium at its own lambda whatever the tolerance)
+_CONTROL_TOLERANCE = 1e-7
+#: work control gives up after this many halvings of its step in a row
+_MAX_CUTS = 10
+#: a step whose d(lambda)/dw is below this fraction of the elastic one gains nothing
+_FLAT_SLOPE = 1e-3
 
 
 @dataclass(frozen=True)
@@ -72,6 +80,12 @@ class StaticSettings:
     residual_stiffness: fraction of the elastic stiffness kept on the diagonal of the tangent.
     robust_iterations: budget of the second strategy (initial-stiffness iterations with
         Anderson acceleration) that re-tries a load step Newton could not solve; 0 disables it.
+    continuation: what load control does at its first failed step. ``"work"`` (default):
+        go on from the last converged state under control of the work-conjugate displacement
+        of the live load (lambda free), which passes limit points and long plastic plateaus,
+        until the pushover curve has flattened: lambda gains less than ``bracket_tolerance``
+        while that displacement doubles. ``"bracket"``: stay in load control and refine the
+        bracket [last converged, first failed] by step cutting.
     """
 
     initial_step: float = 0.02
@@ -88,6 +102,8 @@ class StaticSettings:
     memory: str = "none"
     residual_stiffness: float = 1e-9
     robust_iterations: int = 400
+    continuation: str = "work"
+    rescue_time_steps: int = 0
 
     def __post_init__(self) -> None:
         for name in (
@@ -114,6 +130,10 @@ class StaticSettings:
             raise ValueError(f"tension must be one of {TENSION}, got {self.tension!r}")
         if self.memory not in MEMORY:
             raise ValueError(f"memory must be one of {MEMORY}, got {self.memory!r}")
+        if self.continuation not in CONTINUATION:
+            raise ValueError(
+                f"continuation must be one of {CONTINUATION}, got {self.continuation!r}"
+            )
 
 
 @dataclass(frozen=True)
@@ -209,6 +229,7 @@ class StaticSolver:
         self.iterations = 0
         self._last_increment = 0.0
         self._elastic_lu = None
+        self._dr = None
 
     # ------------------------------------------------------------------ one equilibrium
     def _residual(self, q: np.ndarray, lam: float, dead_factor: float = 1.0):
@@ -249,12 +270,15 @@ class StaticSolver:
         self,
         load_factor: float,
         dead_factor: float = 1.0,
-        control: tuple[int, float] | None = None,
+        control: tuple[np.ndarray, float] | None = None,
         radius: float | None = None,
         damped: bool = False,
+        start: np.ndarray | None = None,
     ) -> _Outcome:
         """Newton iterations from the last converged state to equilibrium at ``load_factor``
-        (load control) or with the free DOF ``control[0]`` at ``control[1]`` (lambda free).
+        (load control) or with the generalised displacement ``control[0] . q_free`` at
+        ``control[1]`` (lambda free: displacement control of one DOF, or of the work-conjugate
+        displacement of the live load).
 
         Safeguards: the translation part of each correction is held within a trust radius
         (grown after full steps, cut by 8 when no step along the direction lowers the
@@ -262,7 +286,7 @@ class StaticSolver:
         """
         s = self.settings
         free = self.asm.free_index
-        q = self.q.copy()
+        q = (self.q if start is None else start).copy()
         lam = load_factor
         if radius is None:
             radius = max(4.0 * self._last_increment, 1e-4 * self.limit)
@@ -291,14 +315,14 @@ class StaticSolver:
         def constraint_error(qq: np.ndarray) -> float:
             if control is None:
                 return 0.0
-            return abs(qq[free[control[0]]] - control[1]) / self.limit
+            return abs(float(control[0] @ qq[free]) - control[1]) / self.limit
 
         budget = s.max_iterations
         it = 0
         while it < budget:
             it += 1
             cerr = constraint_error(q)
-            if rnorm <= s.tolerance and cerr <= 1e-12:
+            if rnorm <= s.tolerance and cerr <= _CONTROL_TOLERANCE:
                 self._last_increment = float(
                     np.abs((q - self.q)[free][self._translation]).max(initial=0.0)
                 )
@@ -310,18 +334,19 @@ class StaticSolver:
             dq = lu.solve(residual)
             dlam = 0.0
             if control is not None:
-                k = control[0]
+                c = control[0]
                 a = lu.solve(self.F_live)
-                if abs(a[k]) < 1e-300:
+                ca = float(c @ a)
+                if abs(ca) < 1e-300:
                     return _Outcome(
                         False,
                         q,
                         lam,
                         response,
                         it,
-                        "the controlled DOF does not move under the live load",
+                        "the controlled displacement does not move under the live load",
                     )
-                dlam = (control[1] - q[free[k]] - dq[k]) / a[k]
+                dlam = (control[1] - float(c @ q[free]) - float(c @ dq)) / ca
                 dq = dq + dlam * a
             if not np.all(np.isfinite(dq)):
                 return _Outcome(False, q, lam, response, it, "singular tangent stiffness")
@@ -373,11 +398,11 @@ class StaticSolver:
                     it,
                     f"displacements exceed the limit {self.limit:.3g} m (a mechanism)",
                 )
-            history.append((rnorm, radius))
+            history.append((rnorm + constraint_error(q), radius))
             if len(history) > _STALL_WINDOW:
                 window = history[-1 - _STALL_WINDOW :]
                 steady = all(rad >= window[0][1] for _, rad in window)  # no cut in the window
-                stalled = steady and rnorm > (1.0 - _STALL_DECREASE) * window[0][0]
+                stalled = steady and history[-1][0] > (1.0 - _STALL_DECREASE) * window[0][0]
             if len(history) > _STALL_WINDOW and stalled and regularise():
                 continue
             if len(history) > _STALL_WINDOW and stalled:
@@ -390,7 +415,7 @@ class StaticSolver:
                     f"no equilibrium found: the residual stalls at {rnorm:.2e} "
                     f"(displacement increment {umax:.2e} m)",
                 )
-        if rnorm <= s.tolerance and constraint_error(q) <= 1e-12:
+        if rnorm <= s.tolerance and constraint_error(q) <= _CONTROL_TOLERANCE:
             self._last_increment = float(
                 np.abs((q - self.q)[free][self._translation]).max(initial=0.0)
             )
@@ -487,6 +512,50 @@ class StaticSolver:
             f"(residual {best[0]:.2e})",
         )
 
+    def _dynamic_rescue(self, target: float, last: float) -> _Outcome | None:
+        """Dynamic relaxation of a load step Newton could not solve, from the last converged
+        state, then Newton from where it came to rest (so an accepted state meets the static
+        tolerance). Newton stops at kinks of the projection (joints on the edge between two
+        states) where no correction lowers the residual; the damped motion goes round them."""
+        from masonry_dem.solvers.dynamic_relaxation import (
+            DRSettings,
+            DynamicRelaxation,
+            _State,
+        )
+
+        s = self.settings
+        free = self.asm.free_index
+        if self._dr is None:
+            self._dr = DynamicRelaxation(
+                self.model,
+                DRSettings(
+                    tension=s.tension,
+                    memory=s.memory,
+                    tolerance=1e-6,
+                    max_cycles=s.rescue_time_steps,
+                    min_stall_window=s.rescue_time_steps // 4,
+                    displacement_limit=self.limit,
+                ),
+            )
+        start = _State(
+            self.q[free].copy(),
+            self.plastic.copy(),
+            self.cracked.copy(),
+            last,
+            np.ones((self.model.interfaces.count, 6)),
+        )
+        relaxed = self._dr._relax_with_cuts(start, target, None)
+        self.iterations += relaxed.cycles
+        if not relaxed.ok:
+            log.debug("dynamic rescue at lambda=%.6g failed: %s", target, relaxed.reason)
+            return None
+        q = self.q.copy()
+        q[free] = relaxed.x
+        polished = self._equilibrate(target, start=q)
+        log.debug("dynamic rescue at lambda=%.6g: %d time steps, Newton %s", target,
+                  relaxed.cycles, "ok" if polished.ok else polished.reason)
+        return polished if polished.ok else None
+
     def _accept(self, out: _Outcome, step: int, control_value: float) -> StepResult:
         rel = self.asm.relative_displacements(out.q)
         resp = out.response
@@ -567,6 +636,10 @@ class StaticSolver:
             target = min(lam + dlam, s.max_load_factor)
             out = self._equilibrate(target)
             robust_ok = False
+            if not out.ok and s.rescue_time_steps > 0 and "exceed the limit" not in out.reason:
+                rescued = self._dynamic_rescue(target, lam)
+                if rescued is not None:
+                    out, robust_ok = rescued, True
             if not out.ok and s.robust_iterations > 0 and "exceed the limit" not in out.reason:
                 second = self._robust(target)
                 log.debug("Newton failed at lambda=%.6g (%s); robust: %s", target, out.reason,
@@ -619,6 +692,121 @@ class StaticSolver:
             f"no equilibrium beyond lambda={lam:.6g} (first failure at {lam_fail:.6g}: "
             f"{last_reason})"
         )
+        if s.continuation == "work" and len(hist.steps) > 2:
+            self._work_control(hist, record)
+
+    def _control_radius(self, c: np.ndarray, dw: float) -> float:
+        """Trust radius for a controlled step: room for the requested increment."""
+        return max(
+            4.0 * self._last_increment,
+            1e-4 * self.limit,
+            4.0 * abs(dw) / max(float(np.abs(c).max()), 1e-300),
+        )
+
+    def _work_control(self, hist: History, record) -> None:
+        """Continue past the refined load-control bracket with lambda free and the
+        work-conjugate displacement w = c . q (c = F_L / |F_L|) prescribed, from the last
+        converged state.
+
+        Load control fails where the pushover curve turns flat (a plastic plateau or a
+        limit point); under work control the same equilibria are found with bounded
+        increments, so the curve is followed until it has flattened: lambda at w has risen
+        less than ``bracket_tolerance`` x lambda since w / 2 (w measured from the
+        dead-load state). The collapse multiplier is the highest lambda on the path."""
+        s = self.settings
+        free = self.asm.free_index
+        c = self.F_live / float(np.linalg.norm(self.F_live))
+        q0 = hist.steps[0].q.reshape(-1)[free]
+        path_w = [float(c @ (st.q.reshape(-1)[free] - q0)) for st in hist.steps]
+        path_lam = [float(st.load_factor) for st in hist.steps]
+        w = path_w[-1]
+        dw = max(w - path_w[-2], 1e-6 * self.limit)
+        lam = path_lam[-1]
+        first_lambda = hist.collapse_bracket[1] if hist.collapse_bracket else lam
+        peak = max(path_lam)
+        # the first live-load step is elastic for walls that stand: its secant is the scale
+        elastic_slope = (path_lam[1] - path_lam[0]) / max(path_w[1] - path_w[0], 1e-300)
+        flat_steps = 0
+        cuts = 0
+        reason = ""
+        while len(hist.steps) < s.max_steps:
+            goal = w + dw
+            out = self._equilibrate(
+                lam, control=(c, goal + float(c @ q0)), radius=self._control_radius(c, dw)
+            )
+            if not out.ok and "exceed the limit" not in out.reason:
+                # on a plateau the search may meet equilibria short of the goal (lambda is
+                # free, so any converged state on the way is a point of the curve)
+                reached = float(c @ (out.q[free] - q0))
+                _, rnorm, response = self._residual(out.q, out.load_factor)
+                if rnorm <= s.tolerance and reached > w + 0.1 * dw:
+                    out = replace(out, ok=True, response=response)
+                    goal = reached
+            if not out.ok:
+                log.debug("work step to w=%.6g failed: %s", goal, out.reason)
+                if "exceed the limit" in out.reason:
+                    reason = f"a mechanism at lambda={peak:.6g}: {out.reason}"
+                    break
+                cuts += 1
+                dw /= 2
+                # a step below this cannot be told from no step (the control tolerance)
+                tiny = max(1e-4 * abs(w), 10 * _CONTROL_TOLERANCE * self.limit)
+                if cuts > _MAX_CUTS or dw < tiny:
+                    reason = (
+                        f"no equilibrium beyond lambda={lam:.6g} under work control "
+                        f"({out.reason})"
+                    )
+                    break
+                continue
+            record(out)
+            w, lam = goal, float(out.load_factor)
+            path_w.append(w)
+            path_lam.append(lam)
+            peak = max(peak, lam)
+            if lam >= s.max_load_factor:
+                hist.status, hist.reason = "completed", f"reached max_load_factor {lam:.6g}"
+                return
+            total = float(np.abs(out.q - hist.steps[0].q.reshape(-1))[free][self._translation].max())
+            if total > self.limit:
+                reason = (
+                    f"a mechanism: displacements {total:.3g} m exceed the limit "
+                    f"{self.limit:.3g} m at lambda={lam:.6g}"
+                )
+                break
+            half = float(np.interp(w / 2, path_w, path_lam))
+            if w > 0 and lam - half <= s.bracket_tolerance * abs(peak) and lam < peak + 1e-12:
+                reason = (
+                    f"the pushover curve is flat: lambda rose {lam - half:.3g} while the "
+                    f"work-conjugate displacement doubled to {w:.3g} m (peak {peak:.6g})"
+                )
+                break
+            # a formed mechanism: the last steps gained (almost) nothing for their
+            # displacement, compared with the elastic stiffness of the live load
+            slope = (path_lam[-1] - path_lam[-2]) / max(path_w[-1] - path_w[-2], 1e-300)
+            flat_steps = flat_steps + 1 if slope < _FLAT_SLOPE * elastic_slope else 0
+            if flat_steps >= 3:
+                tiny = path_w[-1] - path_w[-4] < 1e-3 * w
+                reason = (
+                    f"no equilibrium beyond lambda={peak:.6g}: work control creeps "
+                    f"(w {path_w[-4]:.6g} -> {w:.6g} m in 3 steps)"
+                    if tiny
+                    else f"a mechanism: lambda gains {slope / elastic_slope:.1e} of the "
+                    f"elastic stiffness per unit displacement over 3 steps (peak {peak:.6g})"
+                )
+                break
+            if cuts == 0 and out.iterations <= 6:
+                dw *= s.growth
+            cuts = 0
+        else:
+            hist.status = "failed"
+            hist.reason = f"max_steps={s.max_steps} reached at lambda={lam:.6g}"
+            return
+        if peak <= hist.collapse_bracket[0]:
+            hist.reason += f"; work control found no higher equilibrium ({reason})"
+            return
+        hist.collapse_bracket = (peak, peak)
+        hist.status = "collapse"
+        hist.reason = f"{reason}; load control first failed at {first_lambda:.6g}"
 
     def _displacement_control(
         self, hist: History, record, control: DisplacementControl, dof: int
@@ -630,6 +818,8 @@ class StaticSolver:
         k = int(position[0])
         if control.steps < 1:
             raise ValueError(f"control steps must be at least 1, got {control.steps!r}")
+        unit = np.zeros(self.asm.n_free)
+        unit[k] = 1.0
         du_nominal = control.target / control.steps
         du = du_nominal
         lam = 0.0
@@ -641,7 +831,9 @@ class StaticSolver:
             goal = u + du
             if (goal - control.target) * np.sign(du_nominal) > 0:
                 goal = control.target
-            out = self._equilibrate(lam, control=(k, goal))
+            out = self._equilibrate(
+                lam, control=(unit, goal), radius=self._control_radius(unit, goal - u)
+            )
             if out.ok:
                 record(out)
                 lam, u = out.load_factor, goal
