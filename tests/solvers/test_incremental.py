@@ -12,7 +12,6 @@ own weight stops with status "failed", a reason that says so, and the step it wr
 from __future__ import annotations
 
 import json
-
 from dataclasses import replace
 
 import numpy as np
