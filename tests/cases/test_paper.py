@@ -8,15 +8,15 @@ tuned: docs/validation.md explains why it is above the paper's FEM reference).
 
 from __future__ import annotations
 
-from functools import cache
 from importlib import resources
 from pathlib import Path
 
 import numpy as np
 import pytest
+from paper_runs import run_case
 
 from masonry_dem.cases.paper import Assumptions, build_case, case_names, reference_data
-from masonry_dem.solvers.incremental import pushover
+from masonry_dem.mechanism import last_increment, out_of_plane
 
 SHARED = Path(__file__).resolve().parents[3] / "shared" / "reference" / "baraldi_cecchi_2016.toml"
 
@@ -71,20 +71,17 @@ def test_assumptions_are_overridable_in_one_place():
     assert Assumptions().dry_kn == reference_data()["interface_spring_model"]["kn"]
 
 
-@cache
-def _run(name: str):
-    case = build_case(name)
-    return case, pushover(case.model, case.settings, monitor=case.monitor)
+_run = run_case
 
 
 def _mechanism(name: str):
     """The collapse mechanism as the out-of-plane displacement increment of the last step
     (normalised to 1): which blocks move, not the state flags (a dry head joint is flagged
-    at zero compression before anything happens)."""
+    at zero compression before anything happens). The joint-by-joint checks of the same
+    runs are in test_mechanisms.py."""
     case, h = _run(name)
     assert h.status == "collapse", h.reason
-    du = (h.steps[-1].q - h.steps[-2].q)[case.wall, 2]
-    du = du / np.abs(du).max()
+    du = out_of_plane(last_increment(h), case.wall)
     centres = case.model.blocks.centres[case.wall]
     courses = np.unique(np.round(centres[:, 1], 6))
     return du, centres, courses

@@ -1,0 +1,201 @@
+"""Where a wall cracks at collapse: the joints that open in the last increment of a run.
+
+The interface states are not a good map of the mechanism of a dry-jointed wall: a head joint
+with no compression is "detached" from the first step, long before anything moves. What
+shows the mechanism is the last displacement increment dq = q[-1] - q[-2] of a run that
+ended in collapse: the blocks that move, and the joints across which they move apart
+(opening) or turn (relative rotation). This module measures that increment and locates the
+cracks in it:
+
+* :func:`last_increment`, :func:`out_of_plane` - the increment and its normalised u3 field;
+* :func:`joint_motion` - opening, sliding and relative rotation of every interface;
+* :func:`row_peaks` - in each row of joints, the one that opens most (a crack path);
+* :func:`fit_crack` - a straight crack line fitted through such points (total least squares);
+* :func:`opening_by_row` - the largest opening of each row of joints (horizontal hinges);
+* :func:`mirror_mismatch` - how far a block field is from symmetric about a vertical axis.
+
+Axes: e1 along the wall (x), e2 up (y), e3 out of plane.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from masonry_dem.assembly.compatibility import compatibility_matrix
+from masonry_dem.model import Model
+from masonry_dem.results import History
+
+HEAD, BED = 0, 1  # normal axis of the head (vertical) and bed (horizontal) joints
+
+
+def last_increment(history: History) -> np.ndarray:
+    """(n, 6) displacement increment of the last converged step: the collapse mechanism."""
+    if len(history.steps) < 2:
+        raise ValueError("the mechanism needs two converged steps; the run has fewer")
+    return history.steps[-1].q - history.steps[-2].q
+
+
+def out_of_plane(dq: np.ndarray, blocks: np.ndarray | None = None) -> np.ndarray:
+    """u3 of the increment on ``blocks`` (default: all), divided by its largest magnitude."""
+    du = dq[:, 2] if blocks is None else dq[np.asarray(blocks), 2]
+    peak = np.abs(du).max()
+    if peak == 0.0:
+        raise ValueError("the increment has no out-of-plane motion")
+    return du / peak
+
+
+@dataclass(frozen=True)
+class JointMotion:
+    """Per interface, in the increment: ``opening`` the largest normal separation over the
+    interface rectangle (negative: the joint closes everywhere), ``sliding`` the tangential
+    relative translation at its centre, ``rotation`` the norm of the relative rotation."""
+
+    opening: np.ndarray
+    sliding: np.ndarray
+    rotation: np.ndarray
+
+
+def joint_motion(model: Model, dq: np.ndarray) -> JointMotion:
+    """Opening, sliding and relative rotation of every interface for the increment ``dq``."""
+    itf = model.interfaces
+    d = (compatibility_matrix(model.blocks, itf) @ np.asarray(dq).ravel()).reshape(-1, 6)
+    # [d1, d2, dn, delta1, delta2, delta3]: delta1 (about y1) tilts the normal gap along y2
+    opening = d[:, 2] + np.abs(d[:, 3]) * itf.l2 / 2 + np.abs(d[:, 4]) * itf.l1 / 2
+    return JointMotion(
+        opening=opening,
+        sliding=np.linalg.norm(d[:, :2], axis=1),
+        rotation=np.linalg.norm(d[:, 3:], axis=1),
+    )
+
+
+def between(model: Model, blocks: np.ndarray) -> np.ndarray:
+    """(m,) mask of the interfaces joining two of ``blocks`` (e.g. the wall, not the base)."""
+    inside = np.zeros(model.blocks.count, dtype=bool)
+    inside[np.asarray(blocks)] = True
+    return inside[model.interfaces.block_i] & inside[model.interfaces.block_j]
+
+
+def _rows(model: Model, mask: np.ndarray) -> list[np.ndarray]:
+    idx = np.flatnonzero(mask)
+    y = np.round(model.interfaces.centre[idx, 1], 9)
+    return [idx[y == h] for h in np.unique(y)]
+
+
+def row_peaks(
+    model: Model,
+    value: np.ndarray,
+    mask: np.ndarray,
+    axis: int = BED,
+    threshold: float = 0.2,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The crack path through one family of joints.
+
+    Among the interfaces in ``mask`` with normal ``axis`` (``BED``: horizontal joints,
+    ``HEAD``: vertical ones), take in each row (same height) the one where ``value`` is
+    largest, and keep it if that peak is at least ``threshold`` times the largest of all.
+    Returns the (k, 2) in-plane points (x, y) of those joints and their values (the weights
+    of :func:`fit_crack`). A field with no opening at all gives no points.
+    """
+    value = np.asarray(value, dtype=float)
+    fam = mask & (model.interfaces.axis == axis)
+    if not fam.any():
+        return np.empty((0, 2)), np.empty(0)
+    top = value[fam].max()
+    if top <= 0.0:
+        return np.empty((0, 2)), np.empty(0)
+    pts, w = [], []
+    for row in _rows(model, fam):
+        k = row[np.argmax(value[row])]
+        if value[k] >= threshold * top:
+            pts.append(model.interfaces.centre[k, :2])
+            w.append(value[k])
+    return np.reshape(pts, (-1, 2)), np.asarray(w)
+
+
+def opening_by_row(model: Model, value: np.ndarray, mask: np.ndarray, axis: int = BED):
+    """Heights of the rows of joints (normal ``axis``) in ``mask`` and the largest ``value``
+    in each: a horizontal hinge is the row whose every joint opens, far above the others."""
+    rows = _rows(model, mask & (model.interfaces.axis == axis))
+    heights = np.array([model.interfaces.centre[r[0], 1] for r in rows])
+    return heights, np.array([np.max(value[r]) for r in rows])
+
+
+@dataclass(frozen=True)
+class CrackLine:
+    """A straight crack through weighted points: ``centre`` (x, y), unit ``direction``,
+    ``angle`` in degrees from the horizontal in [0, 180) (0 horizontal, 90 vertical, below 90
+    rising to the right, above 90 falling to the right), ``rms`` distance of the points from
+    the line, and the ``y_range`` (lowest, highest) of the points."""
+
+    centre: np.ndarray
+    direction: np.ndarray
+    angle: float
+    rms: float
+    y_range: tuple[float, float]
+    count: int
+
+    def x_at(self, y: float) -> float:
+        """x of the line at height y (the line must not be horizontal)."""
+        if abs(self.direction[1]) < 1e-12:
+            raise ValueError("a horizontal crack line has no single x at a height")
+        return float(self.centre[0] + (y - self.centre[1]) * self.direction[0] / self.direction[1])
+
+    def distance(self, point) -> float:
+        """Distance of an in-plane point (x, y) from the line."""
+        r = np.asarray(point, dtype=float) - self.centre
+        return float(abs(r[0] * self.direction[1] - r[1] * self.direction[0]))
+
+
+def fit_crack(points: np.ndarray, weights: np.ndarray | None = None) -> CrackLine:
+    """Weighted total-least-squares line through in-plane points (vertical lines allowed)."""
+    pts = np.asarray(points, dtype=float).reshape(-1, 2)
+    if pts.shape[0] < 2:
+        raise ValueError(f"a crack line needs at least 2 points, got {pts.shape[0]}")
+    w = np.ones(len(pts)) if weights is None else np.asarray(weights, dtype=float)
+    w = w / w.sum()
+    centre = w @ pts
+    r = pts - centre
+    cov = (r * w[:, None]).T @ r
+    vals, vecs = np.linalg.eigh(cov)
+    direction = vecs[:, 1]
+    if direction[1] < 0 or (direction[1] == 0 and direction[0] < 0):
+        direction = -direction  # pointing up (or right)
+    normal = np.array([-direction[1], direction[0]])
+    angle = float(np.degrees(np.arctan2(direction[1], direction[0]))) % 180.0
+    rms = float(np.sqrt(np.average((r @ normal) ** 2, weights=w)))
+    return CrackLine(
+        centre, direction, angle, rms, (float(pts[:, 1].min()), float(pts[:, 1].max())), len(pts)
+    )
+
+
+def mirror_mismatch(centres: np.ndarray, field: np.ndarray, axis_x: float) -> float:
+    """Largest |field(block) - field(mirror block)| about the vertical line x = axis_x, the
+    mirror block being the one nearest to the reflected centre (inf if none lies within a
+    millimetre: the layout itself is not symmetric)."""
+    c = np.asarray(centres, dtype=float)[:, :2]
+    f = np.asarray(field, dtype=float)
+    mirrored = c.copy()
+    mirrored[:, 0] = 2.0 * axis_x - c[:, 0]
+    d = np.linalg.norm(mirrored[:, None, :] - c[None, :, :], axis=2)
+    j = np.argmin(d, axis=1)
+    if np.any(d[np.arange(len(c)), j] > 1e-3):
+        return float("inf")
+    return float(np.max(np.abs(f - f[j])))
+
+
+__all__ = [
+    "BED",
+    "HEAD",
+    "CrackLine",
+    "JointMotion",
+    "between",
+    "fit_crack",
+    "joint_motion",
+    "last_increment",
+    "mirror_mismatch",
+    "opening_by_row",
+    "out_of_plane",
+    "row_peaks",
+]
