@@ -16,12 +16,27 @@ Prints one table, best of ``--repeat`` runs:
   running-bond wall of about ``--wall-blocks`` blocks on a fixed base, built with the package's
   own pipeline (``running_bond_wall`` + ``detect_interfaces`` + ``Model`` + ``Assembly``): the
   matrix a panel solver factorizes at every stiffness update.
+
+With ``--law`` it times instead the batched interface law of the solvers,
+``InterfaceLaw.respond`` and ``InterfaceLaw.tangent``, on the paper's cases (``--cases``,
+default S15 OL2 2-3) at the last step of their pushover (many joints sliding, rocking or
+detached), against the law of git revision ``--baseline`` (default: the commit before the law
+was optimised). Both run in fresh subprocesses on the same saved inputs, alternately,
+``--rounds`` times; the fastest call is kept and the outputs are compared::
+
+    python benchmarks/bench_constitutive.py --law [--cases S15 OL2 2-3] [--baseline REV]
 """
 
 from __future__ import annotations
 
 import argparse
+import io
+import os
 import platform
+import subprocess
+import sys
+import tarfile
+import tempfile
 import time
 from collections.abc import Callable
 
@@ -41,6 +56,10 @@ from masonry_dem.geometry.interfaces import detect_interfaces
 from masonry_dem.model import InterfaceMaterial, Model, SelfWeight, Support
 
 A, B, S, GAMMA = 0.081, 0.21, 0.07, 20_000.0  # Orduna & Lourenco bricks
+#: the last commit with the unoptimised InterfaceLaw / check_strength
+LAW_BASELINE = "635b871988f6fcc5453a5b2d14ea5170c6ff4a12"
+LAW_FIELDS = ("kbar", "l1", "l2", "friction", "tensile_force", "alpha")
+LAW_OUTPUTS = ("actions", "state", "flags", "tangent", "utilisation")
 MATERIAL = InterfaceMaterial(kn=2.4e9, kt=1.0e9, friction=0.7)
 
 
@@ -81,6 +100,144 @@ def wall_stiffness(n_blocks: int):
     return asm.stiffness(), blocks.count, its.count
 
 
+# --------------------------------------------------------------------------------------------
+# the interface law of the solvers: respond() and tangent() per call, against a git revision
+
+
+def law_inputs(name: str, folder: str) -> str:
+    """Save the law of case ``name`` and its state at the last pushover step to an .npz."""
+    from masonry_dem.assembly.stiffness import Assembly
+    from masonry_dem.cases.paper import build_case
+    from masonry_dem.constitutive.law import InterfaceLaw
+    from masonry_dem.solvers.incremental import pushover
+
+    case = build_case(name)
+    settings = case.settings
+    history = pushover(case.model, settings)
+    asm = Assembly.of(case.model)
+    law = InterfaceLaw.of(case.model, asm.kbar, settings.tension, settings.memory)
+    rel = asm.relative_displacements(np.asarray(history.steps[-1].q).reshape(-1))
+    m = rel.shape[0]
+    first = law.respond(rel, np.zeros((m, 6)), np.zeros(m, dtype=bool))
+    plastic = law.plastic_part(rel, first.actions)
+    cracked = law.cracked_after(np.zeros(m, dtype=bool), first)  # opened joints lose ft
+    path = os.path.join(folder, f"law_{name}.npz")
+    np.savez(
+        path,
+        **{
+            f: np.broadcast_to(getattr(law, f), (m,) if f != "kbar" else (m, 6)) for f in LAW_FIELDS
+        },
+        tension=law.tension,
+        memory=law.memory,
+        relative=rel,
+        plastic=plastic,
+        cracked=cracked,
+        history_steps=len(history.steps),
+    )
+    return path
+
+
+def per_call(fn: Callable[[], object], seconds: float = 1.0) -> float:
+    """Fastest single call of ``fn`` in about ``seconds`` of calls (robust to a busy machine:
+    some calls run uninterrupted)."""
+    fn()
+    best = np.inf
+    end = time.perf_counter() + seconds
+    while True:
+        t0 = time.perf_counter()
+        fn()
+        t1 = time.perf_counter()
+        best = min(best, t1 - t0)
+        if t1 > end:
+            return best
+
+
+def law_timings(path: str) -> dict[str, np.ndarray]:
+    """Time per call of respond() and tangent() on one saved input, with their outputs."""
+    from masonry_dem.constitutive.law import InterfaceLaw
+
+    d = np.load(path)
+    law = InterfaceLaw(*(np.array(d[f]) for f in LAW_FIELDS), str(d["tension"]), str(d["memory"]))
+    rel, plastic, cracked = d["relative"], d["plastic"], d["cracked"]
+    r = law.respond(rel, plastic, cracked)
+    out = {f: getattr(r, f) for f in LAW_OUTPUTS if f != "tangent"}
+    out["tangent"] = law.tangent(r)
+    out["yielded"] = np.array(float(np.mean(r.flags > 0)))
+    out["respond"] = np.array(per_call(lambda: law.respond(rel, plastic, cracked)))
+    out["tangent_time"] = np.array(per_call(lambda: law.tangent(r)))
+    return out
+
+
+def law_worker(inputs: list[str], out: str) -> None:
+    """Time the law of the imported masonry_dem on each input; write times and outputs."""
+    result = {}
+    for path in inputs:
+        tag = os.path.basename(path)
+        result.update({f"{tag}:{k}": v for k, v in law_timings(path).items()})
+    np.savez(out, **result)
+
+
+def baseline_source(rev: str, folder: str) -> str:
+    """Extract ``src/`` of git revision ``rev`` of this repository into ``folder``."""
+    repo = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    tar = subprocess.run(
+        ["git", "-C", repo, "archive", rev, "src"], check=True, capture_output=True
+    ).stdout
+    with tarfile.open(fileobj=io.BytesIO(tar)) as tf:
+        if hasattr(tarfile, "data_filter"):  # Python >= 3.11.4
+            tf.extractall(folder, filter="data")
+        else:  # pragma: no cover
+            tf.extractall(folder)
+    return os.path.join(folder, "src")
+
+
+def run_worker(src: str, inputs: list[str], out: str) -> dict[str, np.ndarray]:
+    env = dict(os.environ, PYTHONPATH=src)
+    cmd = [sys.executable, os.path.abspath(__file__), "--law-worker", out, *inputs]
+    subprocess.run(cmd, check=True, env=env)
+    with np.load(out) as d:
+        return {k: d[k] for k in d.files}
+
+
+def max_rel_diff(x: np.ndarray, y: np.ndarray) -> float:
+    x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+    same = (x == y) | (np.isnan(x) & np.isnan(y))
+    if same.all():
+        return 0.0
+    return float(np.max(np.abs(x - y)[~same] / np.maximum(np.abs(y)[~same], 1e-300)))
+
+
+def law_main(cases: list[str], baseline: str, rounds: int) -> int:
+    import masonry_dem
+
+    current = os.path.dirname(os.path.dirname(os.path.abspath(masonry_dem.__file__)))
+    with tempfile.TemporaryDirectory() as tmp:
+        old = baseline_source(baseline, os.path.join(tmp, "baseline"))
+        inputs = [law_inputs(name, tmp) for name in cases]
+        runs: dict[str, list[dict]] = {"before": [], "after": []}
+        for k in range(rounds):  # alternate, so both see the same machine load
+            for label, src in (("before", old), ("after", current)):
+                runs[label].append(run_worker(src, inputs, os.path.join(tmp, f"{label}{k}.npz")))
+
+    print(f"python {platform.python_version()}, numpy {np.__version__}, {platform.machine()}")
+    print(f"baseline {baseline[:12]}; fastest call over {rounds} alternating rounds")
+    header = f"{'case':6s} {'m':>5s} {'yielded':>7s}  {'call':8s} {'before [us]':>11s} "
+    print(header + f"{'after [us]':>10s} {'ratio':>6s}  max rel. diff of outputs")
+    for name, path in zip(cases, inputs, strict=True):
+        tag = os.path.basename(path)
+        before, after = runs["before"][0], runs["after"][0]
+        m = before[f"{tag}:actions"].shape[0]
+        diff = max(max_rel_diff(after[f"{tag}:{f}"], before[f"{tag}:{f}"]) for f in LAW_OUTPUTS)
+        for call, key in (("respond", "respond"), ("tangent", "tangent_time")):
+            tb = min(float(r[f"{tag}:{key}"]) for r in runs["before"])
+            ta = min(float(r[f"{tag}:{key}"]) for r in runs["after"])
+            print(
+                f"{name:6s} {m:5d} {float(after[f'{tag}:yielded']):7.2f}  {call:8s} "
+                f"{tb * 1e6:11.1f} {ta * 1e6:10.1f} {tb / ta:6.2f}  {diff:.1e}"
+            )
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--interfaces", type=int, default=1_000_000)
@@ -88,7 +245,17 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--n", type=int, default=32, help="springs per side")
     p.add_argument("--wall-blocks", type=int, default=10_000)
     p.add_argument("--repeat", type=int, default=3)
+    p.add_argument("--law", action="store_true", help="time InterfaceLaw only (see above)")
+    p.add_argument("--cases", nargs="+", default=["S15", "OL2", "2-3"])
+    p.add_argument("--baseline", default=LAW_BASELINE, help="git revision to compare with")
+    p.add_argument("--rounds", type=int, default=3)
+    p.add_argument("--law-worker", nargs="+", help=argparse.SUPPRESS)  # OUT INPUT...
     args = p.parse_args(argv)
+    if args.law_worker:
+        law_worker(args.law_worker[1:], args.law_worker[0])
+        return 0
+    if args.law:
+        return law_main(args.cases, args.baseline, args.rounds)
 
     rows: list[tuple[str, str, float, str]] = []
 

@@ -25,10 +25,18 @@ its tensile strength for good, as a cracked mortar joint does) or ``"plastic"`` 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
-from masonry_dem.constitutive.strength import FLAG_DETACHED, check_strength
+from masonry_dem.constitutive.strength import (
+    FLAG_DETACHED,
+    StrengthCheck,
+    _actions,
+    _Domain,
+    _evaluate,
+    _field,
+)
 from masonry_dem.model import Model
 
 DETACHED_FLAG = FLAG_DETACHED
@@ -67,6 +75,7 @@ class InterfaceLaw:
     alpha: np.ndarray
     tension: str = "brittle"
     memory: str = "none"
+    projection: str = "energy"  # shear-torsion return (see check_strength)
 
     def __post_init__(self) -> None:
         if self.tension not in TENSION:
@@ -90,10 +99,18 @@ class InterfaceLaw:
             memory,
         )
 
-    def _check(self, trial: np.ndarray, ft: np.ndarray, rows=slice(None)):
-        return check_strength(
-            trial, self.l1[rows], self.l2[rows], self.friction[rows], ft, alpha=self.alpha[rows]
-        )
+    @cached_property
+    def _domain(self) -> _Domain:
+        """Validated per-interface constants of the strength check, built on the first call
+        (the arrays are not meant to change afterwards)."""
+        m = self.kbar.shape[0]
+        _field("tensile_force", self.tensile_force, m, minimum=0.0, strict=False)
+        return _Domain.of(m, self.l1, self.l2, self.friction, self.alpha)
+
+    def _check(self, trial: np.ndarray, ft: np.ndarray) -> StrengthCheck:
+        if not np.isfinite(trial.sum()):  # one cheap test; _actions says what is wrong
+            trial = _actions(trial)
+        return _evaluate(trial, ft, self._domain, projection=self.projection)
 
     def respond(
         self, relative: np.ndarray, plastic: np.ndarray, cracked: np.ndarray
@@ -103,10 +120,9 @@ class InterfaceLaw:
         trial = self.kbar * (relative - plastic)
         ft = np.where(cracked, 0.0, self.tensile_force)
         chk = self._check(trial, ft)
-        actions = chk.projected
+        actions = chk.projected  # a fresh array: zeroed in place
         if self.tension == "brittle":
-            opened = (chk.flags & DETACHED_FLAG) > 0
-            actions = np.where(opened[:, None], 0.0, actions)
+            actions[(chk.flags & DETACHED_FLAG) > 0] = 0.0
         return LawResponse(
             trial, ft, actions, chk.stiffness_factors, chk.state, chk.flags, chk.utilisation
         )
@@ -126,11 +142,12 @@ class InterfaceLaw:
         m = k.shape[0]
         idx = np.arange(6)
         T = np.zeros((m, 6, 6))
-        T[:, idx, idx] = k
+        diagonal = T.reshape(m, 36)[:, ::7]  # a view on T[:, i, i]
+        diagonal[...] = k
         trial, ft = r.trial, r.tensile_force
         band = _CONTACT_BAND * float(np.abs(trial[:, 2]).max(initial=0.0))
         open_ = trial[:, 2] > ft + band
-        T[open_] = 0.0
+        diagonal[open_] = 0.0
         rows = np.flatnonzero((r.flags > 0) & ~open_)
         if rows.size:
             n = rows.size
@@ -142,11 +159,14 @@ class InterfaceLaw:
             probe = np.repeat(t[None], 7, axis=0)  # row 0: base point; rows 1-6: perturbed
             probe[idx + 1, :, idx] += h.T
             ftr = np.tile(ft[rows], 7)
-            rows7 = np.tile(rows, 7)
-            proj = self._check(probe.reshape(-1, 6), ftr, rows7).projected.reshape(7, n, 6)
+            domain = self._domain.take(np.tile(rows, 7))
+            proj = _evaluate(
+                probe.reshape(-1, 6), ftr, domain, projection_only=True, projection=self.projection
+            )
+            proj = proj.reshape(7, n, 6)
             D = (proj[1:] - proj[:1]) / h.T[:, :, None]  # (6 perturbed, n, 6 actions)
             T[rows] = np.transpose(D, (1, 2, 0)) * k[rows][:, None, :]
-        T[:, idx, idx] += floor * k
+        diagonal += floor * k
         return T
 
     def plastic_part(self, relative: np.ndarray, actions: np.ndarray) -> np.ndarray:

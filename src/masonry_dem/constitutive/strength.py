@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import logging
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Final
 
 import numpy as np
@@ -154,6 +155,32 @@ def _torsion_constant(l1: NDArray, l2: NDArray) -> NDArray:
     return (0.5 * c + t1 + t2) / 3.0
 
 
+def _torsion_constant_fast(l1: NDArray, l2: NDArray) -> NDArray:
+    """:func:`_torsion_constant` with the same arithmetic, bit for bit, in fewer array passes
+    (the limits of asinh(x)/x are patched in only where a side is below 1e-8 of the other)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        x = l2 / l1
+        y = l1 / l2
+        r1 = np.arcsinh(x)
+        r1 /= x
+        r2 = np.arcsinh(y)
+        r2 /= y
+    odd = ~((x >= 1e-8) & (y >= 1e-8))  # a tiny or zero side, or both zero (NaN ratios)
+    if odd.any():
+        for ratio, r in ((x, r1), (y, r2)):
+            small = ratio < 1e-8
+            r[small] = 1.0 - ratio[small] * ratio[small] / 6.0
+            r[ratio == np.inf] = 0.0  # that side is zero: its term vanishes
+    c = np.hypot(l1, l2)
+    c *= 0.5
+    c += (0.25 * l1) * r1
+    c += (0.25 * l2) * r2
+    c /= 3.0
+    if odd.any():
+        c[np.isnan(x)] = 0.0  # both sides zero
+    return c
+
+
 def torsion_constant(l1: ArrayLike, l2: ArrayLike) -> NDArray:
     """Torsion constant cT (m) of an ``l1 x l2`` rectangle: mean distance from its centre.
 
@@ -187,49 +214,28 @@ def alpha_from_table(aspect: ArrayLike, direction: str = "f1") -> NDArray:
 # radial factor on the shear-torsion boundary
 
 
-def _radial_factor(a: NDArray, c: NDArray, alpha: NDArray) -> NDArray:
+def _radial_factor(a: NDArray, c: NDArray, alpha: NDArray | float) -> NDArray:
     """The s > 0 solving ``(s a)^alpha + (s c)^2 = 1`` for a, c >= 0 and alpha >= 1.
 
     ``a = |m3|/m3u`` and ``c = |f|/fsu`` (not squared, so tiny forces do not underflow). Returns
     inf where a = c = 0 and 0 where a or c is inf. With ``m = max(a, c)`` the problem is solved
     for ``t = s m`` in (0, 1] on O(1) numbers, ``(t A)^alpha + (t C)^2 = 1`` with ``A = a/m``
     and ``C = c/m``: closed forms for alpha = 1, 2 and when a or c vanishes, otherwise Newton's
-    method on the logarithm of the left-hand side, in ln t.
+    method on the logarithm of the left-hand side, in ln t. ``alpha`` is an array like ``a``
+    or one float for all rows.
     """
-    a, c, alpha = np.broadcast_arrays(a, c, alpha)
+    if np.ndim(alpha):
+        a, c, alpha = np.broadcast_arrays(a, c, alpha)
     m = np.maximum(a, c)
-    both = (a > 0) & (c > 0) & np.isfinite(m)
-    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        big_a = np.where(both, a / m, 0.0)
-        big_c = np.where(both, c / m, 0.0)
-        t = np.ones(m.shape)
-        two = both & (alpha == 2.0)
-        t = np.where(two, 1.0 / np.hypot(big_a, big_c), t)
-        one = both & (alpha == 1.0)
-        t = np.where(one, 2.0 / (big_a + np.sqrt(big_a * big_a + 4.0 * big_c * big_c)), t)
-        s = t / m  # t = 1 unless both > 0: s = 1/max(a, c), inf at a = c = 0, 0 at inf
-    idx = np.flatnonzero(both & ~one & ~two)
-    if idx.size:
-        # Newton on G(tau) = ln((t A)^alpha + (t C)^2), tau = ln t: G is convex, increasing and
-        # nearly linear (slope between 2 and alpha), G(0) >= 0, so from tau = 0 the iterates
-        # decrease monotonically to the root in a few steps.
-        with np.errstate(divide="ignore"):  # A or C may underflow to 0: ln = -inf is fine
-            ln_a, ln_c, al = np.log(big_a[idx]), np.log(big_c[idx]), alpha[idx]
-        tau = np.zeros(idx.size)
-        for _ in range(_NEWTON_MAX_ITER):  # iterate on the rows not yet converged
-            p = np.exp(al * (tau + ln_a))
-            q = np.exp(2.0 * (tau + ln_c))
-            total = p + q
-            step = np.log(total) * total / (al * p + 2.0 * q)
-            tau = tau - step
-            with np.errstate(over="ignore"):  # subnormal demands: s = inf, utilisation 0
-                s[idx] = np.exp(tau) / m[idx]
-            keep = np.abs(step) > _NEWTON_RTOL
-            if not keep.any():
-                break
-            idx, tau, ln_a, ln_c, al = idx[keep], tau[keep], ln_a[keep], ln_c[keep], al[keep]
-        else:  # pragma: no cover - Newton on a convex increasing function always converges
-            logger.warning("radial factor: Newton did not converge to %g", _NEWTON_RTOL)
+    with np.errstate(divide="ignore", over="ignore"):
+        s = 1.0 / m  # t = 1 unless both > 0: s = 1/max(a, c), inf at a = c = 0, 0 at inf
+    both = np.flatnonzero((np.minimum(a, c) > 0) & (m < np.inf))
+    if both.size:
+        mb = m[both]
+        al = alpha[both] if np.ndim(alpha) else float(alpha)
+        t = _radial_t(a[both] / mb, c[both] / mb, al)
+        with np.errstate(over="ignore"):  # subnormal demands: s = inf, utilisation 0
+            s[both] = t / mb
     return s
 
 
@@ -266,6 +272,63 @@ def _energy_closest_point(
     r = np.where(b == 0, np.minimum(r0, a), r)
     z = np.where(b == 0, 0.0, z)
     return r, z
+
+
+def _radial_t(big_a: NDArray, big_c: NDArray, alpha: NDArray | float) -> NDArray:
+    """t in (0, 1] solving ``(t A)^alpha + (t C)^2 = 1`` for max(A, C) = 1, A, C > 0."""
+    if not np.ndim(alpha):  # one exponent for all rows: no masks
+        if alpha == 2.0:
+            return 1.0 / np.hypot(big_a, big_c)
+        if alpha == 1.0:
+            return 2.0 / (big_a + np.sqrt(big_a * big_a + 4.0 * big_c * big_c))
+        return _radial_newton(big_a, big_c, alpha)
+    t = np.empty(big_a.shape)
+    two = alpha == 2.0
+    one = alpha == 1.0
+    if two.any():
+        t[two] = 1.0 / np.hypot(big_a[two], big_c[two])
+    if one.any():
+        a1, c1 = big_a[one], big_c[one]
+        t[one] = 2.0 / (a1 + np.sqrt(a1 * a1 + 4.0 * c1 * c1))
+    rest = np.flatnonzero(~(one | two))
+    if rest.size:
+        t[rest] = _radial_newton(big_a[rest], big_c[rest], alpha[rest])
+    return t
+
+
+def _radial_newton(big_a: NDArray, big_c: NDArray, alpha: NDArray | float) -> NDArray:
+    """Newton on G(tau) = ln((t A)^alpha + (t C)^2), tau = ln t: G is convex, increasing and
+    nearly linear (slope between 2 and alpha), G(0) >= 0, so from tau = 0 the iterates
+    decrease monotonically to the root in a few steps. Each row stops at its own first step
+    below the tolerance (so results do not depend on the other rows)."""
+    with np.errstate(divide="ignore"):  # A or C may underflow to 0: ln = -inf is fine
+        ln_a, ln_c = np.log(big_a), np.log(big_c)
+    al = alpha
+    t = np.empty(big_a.shape)
+    rows = np.arange(big_a.size)
+    tau = np.zeros(big_a.size)
+    for _ in range(_NEWTON_MAX_ITER):  # iterate on the rows not yet converged
+        p = np.exp(al * (tau + ln_a))
+        q = np.exp(2.0 * (tau + ln_c))
+        total = p + q
+        step = np.log(total) * total / (al * p + 2.0 * q)
+        tau = tau - step
+        keep = np.abs(step) > _NEWTON_RTOL
+        if keep.all():
+            continue
+        done = ~keep
+        with np.errstate(over="ignore"):
+            t[rows[done]] = np.exp(tau[done])
+        if not keep.any():
+            break
+        rows, tau, ln_a, ln_c = rows[keep], tau[keep], ln_a[keep], ln_c[keep]
+        if np.ndim(al):
+            al = al[keep]
+    else:  # pragma: no cover - Newton on a convex increasing function always converges
+        logger.warning("radial factor: Newton did not converge to %g", _NEWTON_RTOL)
+        with np.errstate(over="ignore"):
+            t[rows] = np.exp(tau)
+    return t
 
 
 def _safe_ratio(demand: NDArray, capacity: NDArray) -> NDArray:
@@ -406,95 +469,219 @@ def check_strength(
     """
     act = _actions(actions)
     m = act.shape[0]
-    l1_ = _field("l1", l1, m, minimum=0.0, strict=True)
-    l2_ = _field("l2", l2, m, minimum=0.0, strict=True)
-    mu = _field("friction", friction, m, minimum=0.0, strict=False)
     ft = _field("tensile_force", tensile_force, m, minimum=0.0, strict=False)
-    al = _field("alpha", DEFAULT_ALPHA if alpha is None else alpha, m, minimum=1.0, strict=False)
+    domain = _Domain.of(m, l1, l2, friction, alpha)
+    if projection not in PROJECTIONS:
+        raise ValueError(f"projection must be one of {PROJECTIONS}, got {projection!r}")
+    return _evaluate(act, ft, domain, torsion_bending_interaction, projection=projection)
 
+
+# --------------------------------------------------------------------------------------------
+# the batched check itself (inputs already validated)
+
+_SLIDE_COLUMNS: Final = np.array([0, 1, 5])  # f1, f2, m3: scaled by sliding
+
+
+def _flag_tables() -> tuple[NDArray, NDArray]:
+    """State code and stiffness factors of every combination of the bit flags."""
+    flags = np.arange(16)
+    sliding = (flags & FLAG_SHEAR_TORSION) > 0
+    rock1 = (flags & FLAG_ROCKING_1) > 0
+    rock2 = (flags & FLAG_ROCKING_2) > 0
+    detached = (flags & FLAG_DETACHED) > 0
+    state = sliding * STATE_SLIDING + (rock1 | rock2) * STATE_ROCKING
+    state[detached] = STATE_DETACHED
+    factors = np.ones((16, 6))
+    factors[np.ix_(sliding, _SLIDE_COLUMNS)] = 0.0
+    factors[rock1, 3] = 0.0
+    factors[rock2, 4] = 0.0
+    factors[detached] = 0.0
+    return state.astype(np.int8), factors
+
+
+_STATE_OF_FLAGS, _FACTORS_OF_FLAGS = _flag_tables()
+
+
+@dataclass(frozen=True)
+class _Domain:
+    """Per-interface constants of the check, validated once: an
+    :class:`~masonry_dem.constitutive.law.InterfaceLaw` keeps one for all its calls."""
+
+    l1: NDArray
+    l2: NDArray
+    friction: NDArray
+    alpha: NDArray | float  # one float when every row has the same (no gathers in Newton)
+    snap1: NDArray  # a reduced side at or below these is zero
+    snap2: NDArray
+
+    @classmethod
+    def of(cls, m: int, l1: ArrayLike, l2: ArrayLike, friction: ArrayLike, alpha=None) -> _Domain:
+        l1_ = np.array(_field("l1", l1, m, minimum=0.0, strict=True))
+        l2_ = np.array(_field("l2", l2, m, minimum=0.0, strict=True))
+        mu = np.array(_field("friction", friction, m, minimum=0.0, strict=False))
+        al = _field(
+            "alpha", DEFAULT_ALPHA if alpha is None else alpha, m, minimum=1.0, strict=False
+        )
+        uniform = m > 0 and bool((al == al[0]).all())
+        return cls(
+            l1_, l2_, mu, float(al[0]) if uniform else np.array(al), _SNAP * l1_, _SNAP * l2_
+        )
+
+    def take(self, rows: NDArray) -> _Domain:
+        al = self.alpha[rows] if np.ndim(self.alpha) else self.alpha
+        return _Domain(
+            self.l1[rows],
+            self.l2[rows],
+            self.friction[rows],
+            al,
+            self.snap1[rows],
+            self.snap2[rows],
+        )
+
+    @cached_property
+    def torsion_constant(self) -> NDArray:
+        """cT of the whole rectangles (without the torsion-bending interaction)."""
+        return _torsion_constant(self.l1, self.l2)
+
+
+def _evaluate(
+    act: NDArray,
+    ft: NDArray,
+    dom: _Domain,
+    torsion_bending_interaction: bool = True,
+    projection_only: bool = False,
+    projection: str = "energy",
+) -> StrengthCheck | NDArray:
+    """:func:`check_strength` on validated inputs (``act`` (m, 6), ``ft`` (m,) >= 0).
+
+    Every projected value comes out of the same floating-point operations as the plain
+    formulas (the finite-difference tangent of the law divides their differences by 1e-7 and
+    must not see a changed last bit); the work is only restricted to the rows that need it.
+    ``projection_only`` returns just the projected actions and skips the radial factor of
+    rows well inside Eq. (A5), where it is only needed for the utilisation.
+    """
+    m = act.shape[0]
     f1, f2, fn, m1, m2, m3 = np.ascontiguousarray(act.T)
 
     # detachment
     detached = fn > ft
-    cap = np.where(detached, 0.0, ft - fn)  # >= 0
+    live = ~detached
+    cap = ft - fn
+    cap[detached] = 0.0
 
     # rocking: clip the bending moments to the eccentricity limits
-    m1_lim = 0.5 * cap * l2_
-    m2_lim = 0.5 * cap * l1_
+    half = 0.5 * cap
+    m1_lim = half * dom.l2
+    m2_lim = half * dom.l1
     abs_m1, abs_m2 = np.abs(m1), np.abs(m2)
-    rock1 = ~detached & (abs_m1 > m1_lim)
-    rock2 = ~detached & (abs_m2 > m2_lim)
-    m1_c = np.where(rock1, np.copysign(m1_lim, m1), m1)
-    m2_c = np.where(rock2, np.copysign(m2_lim, m2), m2)
+    rock1 = abs_m1 > m1_lim
+    rock1 &= live
+    rock2 = abs_m2 > m2_lim
+    rock2 &= live
+    abs_m1c = np.minimum(abs_m1, m1_lim)  # |clipped moment|: the limit itself where rocking
+    abs_m2c = np.minimum(abs_m2, m2_lim)
 
-    # shear and torsion
-    fsu = mu * cap
-    if torsion_bending_interaction:
-        l1r, l2r = _reduced_sides(l1_, l2_, cap, np.abs(m1_c), np.abs(m2_c))
-        c_t = _torsion_constant(l1r, l2r)
-    else:
-        c_t = _torsion_constant(l1_, l2_)
-    if projection not in PROJECTIONS:
-        raise ValueError(f"projection must be one of {PROJECTIONS}, got {projection!r}")
-    m3u = c_t * fsu
-    a = _safe_ratio(np.abs(m3), m3u)
-    c = _safe_ratio(np.hypot(f1, f2), fsu)
-    # s = 0 (all of f1, f2, m3 dropped) where m3 != 0 meets a zero torsion or shear capacity:
-    # the limit of the radial projection as the capacity vanishes
-    s = _radial_factor(a, c, al)
-    with np.errstate(divide="ignore"):
-        u_st = 1.0 / s  # radial demand/capacity ratio of Eq. (A5)
-    sliding = ~detached & (u_st > 1.0 + SHEAR_TORSION_TOLERANCE)
-
-    # projection (np.where keeps untouched entries bitwise)
-    proj = act.copy()
-    if projection == "radial":
-        scale = np.where(sliding, s, 1.0)  # keep non-sliding rows finite (not scaled)
-        proj[:, 0] = np.where(sliding, f1 * scale, f1)
-        proj[:, 1] = np.where(sliding, f2 * scale, f2)
-        proj[:, 5] = np.where(sliding, m3 * scale, m3)
-    else:
-        rows = np.flatnonzero(sliding)
-        if rows.size:
-            rho = np.sqrt((l1_[rows] ** 2 + l2_[rows] ** 2) / 12.0)  # sqrt(J / A)
-            r0 = np.hypot(f1[rows], f2[rows])
-            r, z = _energy_closest_point(
-                r0, np.abs(m3[rows]) / rho, fsu[rows], m3u[rows] / rho, al[rows]
+    # shear and torsion: demand/capacity ratios a = |m3|/m3u, c = |f|/fsu
+    fsu = dom.friction * cap
+    abs_m3 = np.abs(m3)
+    m3u = np.zeros(m)
+    # m3u only matters where m3 != 0; with cap = 0 it is 0 (a = inf)
+    tor = np.flatnonzero((abs_m3 > 0) & (cap > 0))
+    if tor.size:
+        if torsion_bending_interaction:
+            c_t = _torsion_constant_fast(
+                *_reduced_sides_fast(dom, tor, cap[tor], abs_m1c[tor], abs_m2c[tor])
             )
-            shear_scale = _safe_ratio(r, r0)
-            shear_scale = np.where(np.isfinite(shear_scale), shear_scale, 0.0)
-            proj[rows, 0] = f1[rows] * shear_scale
-            proj[rows, 1] = f2[rows] * shear_scale
-            proj[rows, 5] = np.copysign(z * rho, m3[rows])
-    proj[:, 3] = m1_c
-    proj[:, 4] = m2_c
-    proj[detached] = 0.0
-    proj[detached, 2] = ft[detached]
+        else:
+            c_t = dom.torsion_constant[tor]
+        m3u[tor] = c_t * fsu[tor]
+    shear = np.hypot(f1, f2)
+    with np.errstate(divide="ignore", over="ignore"):  # 0/0 = 0, d/0 = inf (no capacity)
+        a = np.divide(abs_m3, m3u, out=np.zeros(m), where=abs_m3 > 0)
+        c = np.divide(shear, fsu, out=np.zeros(m), where=shear > 0)
+
+    if projection_only:
+        # a + c^2 >= a^alpha + c^2 for a, c <= 1 and alpha >= 1: below 1 no row slides
+        rows = np.flatnonzero(live & ~(a + c * c < 0.999))
+        al = dom.alpha[rows] if np.ndim(dom.alpha) else dom.alpha
+        s = _radial_factor(a[rows], c[rows], al)
+        with np.errstate(divide="ignore"):
+            slide = 1.0 / s > 1.0 + SHEAR_TORSION_TOLERANCE
+        sliding_rows, scale = rows[slide], s[slide]
+    else:
+        # s = 0 (all of f1, f2, m3 dropped) where m3 != 0 meets a zero torsion or shear
+        # capacity: the limit of the radial projection as the capacity vanishes
+        s = _radial_factor(a, c, dom.alpha)
+        with np.errstate(divide="ignore"):
+            u_st = 1.0 / s  # radial demand/capacity ratio of Eq. (A5)
+        sliding = u_st > 1.0 + SHEAR_TORSION_TOLERANCE
+        sliding &= live
+        sliding_rows = np.flatnonzero(sliding)
+        scale = s[sliding_rows]
+
+    # projection (untouched entries are kept bitwise)
+    proj = act.copy()
+    proj[:, 3] = np.copysign(abs_m1c, m1)
+    proj[:, 4] = np.copysign(abs_m2c, m2)
+    if sliding_rows.size and projection == "radial":
+        flat = proj.reshape(-1)
+        entries = (6 * sliding_rows)[:, None] + _SLIDE_COLUMNS
+        flat[entries] *= scale[:, None]
+    elif sliding_rows.size:
+        rows = sliding_rows
+        rho = np.sqrt((dom.l1[rows] ** 2 + dom.l2[rows] ** 2) / 12.0)  # sqrt(J / A)
+        r0 = shear[rows]
+        al = dom.alpha[rows] if np.ndim(dom.alpha) else dom.alpha
+        r, z = _energy_closest_point(r0, abs_m3[rows] / rho, fsu[rows], m3u[rows] / rho, al)
+        shear_scale = _safe_ratio(r, r0)
+        shear_scale[~np.isfinite(shear_scale)] = 0.0
+        proj[rows, 0] = f1[rows] * shear_scale
+        proj[rows, 1] = f2[rows] * shear_scale
+        proj[rows, 5] = np.copysign(z * rho, m3[rows])
+    det = np.flatnonzero(detached)
+    if det.size:
+        proj[det] = 0.0
+        proj[det, 2] = ft[det]
+    if projection_only:
+        return proj
 
     # codes
-    flags = (
-        sliding.astype(np.uint8) * FLAG_SHEAR_TORSION
-        | rock1.astype(np.uint8) * FLAG_ROCKING_1
-        | rock2.astype(np.uint8) * FLAG_ROCKING_2
-        | detached.astype(np.uint8) * FLAG_DETACHED
-    ).astype(np.uint8)
-    state = (sliding.astype(np.int8) * STATE_SLIDING + (rock1 | rock2).astype(np.int8) * 2).astype(
-        np.int8
-    )
-    state[detached] = STATE_DETACHED
-
-    factors = np.ones((m, 6))
-    factors[sliding[:, None] & np.array([True, True, False, False, False, True])] = 0.0
-    factors[rock1, 3] = 0.0
-    factors[rock2, 4] = 0.0
-    factors[detached] = 0.0
+    u8 = np.uint8
+    flags = sliding.view(u8) | (rock1.view(u8) << 1) | (rock2.view(u8) << 2)
+    flags |= detached.view(u8) << 3
 
     # utilisation
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        u_tension = np.where(ft > 0, np.maximum(fn, 0.0) / ft, np.where(fn >= 0, 1.0, 0.0))
-        u_tension = np.where(detached & (ft == 0), np.inf, u_tension)
-    u_rock = np.maximum(_safe_ratio(abs_m1, m1_lim), _safe_ratio(abs_m2, m2_lim))
-    util = np.where(detached, u_tension, np.maximum(np.maximum(u_tension, u_rock), u_st))
+        u_tension = np.maximum(fn, 0.0) / ft  # ft = 0: inf in tension, NaN otherwise
+        u_rock = np.divide(abs_m1, m1_lim, out=np.zeros(m), where=abs_m1 > 0)
+        u_rock2 = np.divide(abs_m2, m2_lim, out=np.zeros(m), where=abs_m2 > 0)
+    zero_ft = np.isnan(u_tension)
+    if zero_ft.any():  # ft = 0: 1 at fn = 0, 0 in compression
+        u_tension[zero_ft] = fn[zero_ft] >= 0
+    np.maximum(u_rock, u_rock2, out=u_rock)
+    np.maximum(u_rock, u_tension, out=u_rock)
+    util = np.maximum(u_rock, u_st, out=u_rock)
+    if det.size:
+        util[det] = u_tension[det]
     return StrengthCheck(
-        projected=proj, state=state, flags=flags, stiffness_factors=factors, utilisation=util
+        projected=proj,
+        state=_STATE_OF_FLAGS[flags],
+        flags=flags,
+        stiffness_factors=_FACTORS_OF_FLAGS[flags],
+        utilisation=util,
     )
+
+
+def _reduced_sides_fast(
+    dom: _Domain, rows: NDArray, cap: NDArray, abs_m1: NDArray, abs_m2: NDArray
+) -> tuple[NDArray, NDArray]:
+    """:func:`_reduced_sides` on ``rows`` with cap > 0 (same arithmetic)."""
+    l1, l2 = dom.l1[rows], dom.l2[rows]
+    l1r = l1 - 2.0 * abs_m2 / cap
+    l2r = l2 - 2.0 * abs_m1 / cap
+    # a moment clipped to its rocking limit gives l - 2 |m| / cap = 0 up to rounding: snap it
+    np.minimum(l1r, l1, out=l1r)
+    np.minimum(l2r, l2, out=l2r)
+    l1r[l1r <= dom.snap1[rows]] = 0.0
+    l2r[l2r <= dom.snap2[rows]] = 0.0
+    return l1r, l2r
