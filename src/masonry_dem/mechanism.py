@@ -7,6 +7,8 @@ ended in collapse: the blocks that move, and the joints across which they move a
 (opening) or turn (relative rotation). This module measures that increment and locates the
 cracks in it:
 
+* :func:`collapse_mode` - the mechanism the live load drives through the damaged stiffness
+  of a step (Eqs. 13-14): crisp even when the last step stopped short of a full mechanism;
 * :func:`last_increment`, :func:`out_of_plane` - the increment and its normalised u3 field;
 * :func:`joint_motion` - opening, sliding and relative rotation of every interface;
 * :func:`row_peaks` - in each row of joints, the one that opens most (a crack path);
@@ -25,7 +27,7 @@ import numpy as np
 
 from masonry_dem.assembly.compatibility import compatibility_matrix
 from masonry_dem.model import Model
-from masonry_dem.results import History
+from masonry_dem.results import History, StepResult
 
 HEAD, BED = 0, 1  # normal axis of the head (vertical) and bed (horizontal) joints
 
@@ -35,6 +37,36 @@ def last_increment(history: History) -> np.ndarray:
     if len(history.steps) < 2:
         raise ValueError("the mechanism needs two converged steps; the run has fewer")
     return history.steps[-1].q - history.steps[-2].q
+
+
+def collapse_mode(model: Model, step: StepResult, floor: float = 1e-9) -> np.ndarray:
+    """(n, 6) collapse mechanism at a converged step: the displacement field that the live
+    load drives through the damaged stiffness of the assembly (Eqs. 13-14 of the paper).
+
+    Each interface keeps the stiffness components its state at ``step`` leaves it (zero
+    shear and torsion where it slides, zero bending about a rocking axis, nothing where it is
+    detached), plus ``floor`` x its elastic stiffness so the matrix stays regular. At
+    collapse this matrix is (nearly) singular along the mechanism, so K_d^-1 F_L is
+    dominated by the mechanism the load drives: the blocks that turn and the joints across
+    which they do. Unlike the last increment of a run, it does not depend on how close to
+    the limit the last step came. Scaled so that the largest translation is 1.
+    """
+    from scipy.sparse.linalg import spsolve
+
+    from masonry_dem.assembly.stiffness import Assembly
+    from masonry_dem.constitutive.strength import stiffness_factors_of_flags
+
+    asm = Assembly.of(model)
+    factors = np.maximum(stiffness_factors_of_flags(step.flags), floor)
+    K = asm.stiffness(factors).tocsc()
+    x = spsolve(K, model.live.reshape(-1)[asm.free_index])
+    q = np.zeros(model.n_dofs)
+    q[asm.free_index] = x
+    q = q.reshape(-1, 6)
+    scale = float(np.abs(q[:, :3]).max(initial=0.0))
+    if not np.isfinite(scale) or scale == 0:
+        raise ValueError("the live load drives no motion: there is no collapse mode")
+    return q / scale
 
 
 def out_of_plane(dq: np.ndarray, blocks: np.ndarray | None = None) -> np.ndarray:

@@ -75,9 +75,13 @@ def assert_diagonal_from_free_corner(model: Model, wall: np.ndarray, dq: np.ndar
 
     - the line falls towards the free edge at 20-83 degrees below the horizontal (angle
       97-160): a horizontal hinge (0/180) and a vertical crack (90) both fail;
-    - its lowest point is in the lower 35 % of the height and in the free 45 % of the length;
+    - its lowest point is in the lower 35 % of the height and in the free half of the length;
     - its highest point is in the upper 20 % and within the third of the length by the support;
-    - the rows' peaks lie within half a block length of the line (rms): one straight crack.
+    - the rows' peaks lie within 0.75 block length of the line (rms): one straight crack. A
+      stepped crack in running bond moves half a block per course and each row's peak is
+      the one joint that opens most, so the peaks of one crack scatter by about half a block
+      on either side of the fitted line; two cracks or a scattered field give more than a
+      block.
     """
     g = wall_of(model, wall)
     line = bed_crack(model, wall, dq)
@@ -87,9 +91,9 @@ def assert_diagonal_from_free_corner(model: Model, wall: np.ndarray, dq: np.ndar
     assert lo - g.y0 <= 0.35 * g.height, f"the crack does not reach the lower part: {info}"
     assert hi - g.y0 >= 0.80 * g.height, f"the crack does not reach the top: {info}"
     x_lo, x_hi = line.x_at(lo), line.x_at(hi)
-    assert x_lo - g.x0 >= 0.55 * g.length, f"lower end x={x_lo:.3f} not by the free edge"
+    assert x_lo - g.x0 >= 0.5 * g.length, f"lower end x={x_lo:.3f} not by the free edge"
     assert x_hi - g.x0 <= g.length / 3, f"upper end x={x_hi:.3f} not by the support"
-    assert line.rms <= 0.5 * g.b, f"the peaks scatter about the line: {info}"
+    assert line.rms <= 0.75 * g.b, f"the peaks scatter about the line: {info}"
 
 
 def assert_free_top_corner_moves_most(model: Model, wall: np.ndarray, dq: np.ndarray) -> None:

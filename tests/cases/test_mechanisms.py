@@ -38,10 +38,12 @@ def _collapse(name: str):
 
 
 # ------------------------------------------------------------------ held on one edge
-@pytest.fixture(scope="module", params=["OL1", "S13"])
+@pytest.fixture(scope="module", params=["S12", "S13"])
 def one_edge(request):
-    """OL1 (3 blocks x 13 courses) and S13 (6 x 21): the two cheapest one-edge walls that are
-    wider than a block column (S15, 4 blocks, cracks from mid-height of its free edge)."""
+    """S12 (8 blocks x 21 courses) and S13 (6 x 21). OL1 (3 x 13) is too narrow for a crack
+    line through one joint per row: its last increment spreads over the whole width (its
+    diagonal is checked in test_paper.py by the moving region); S15 (4 blocks) cracks from
+    mid-height of its free edge."""
     return _collapse(request.param)
 
 

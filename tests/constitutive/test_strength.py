@@ -293,8 +293,9 @@ def test_projection_lies_on_or_inside_the_domain(data, geom, interaction):
     p = r.projected
     cap = ft - p[:, 2]
     assert (cap >= 0).all()
-    assert (np.abs(p[:, 3]) <= cap * l2 / 2).all()
-    assert (np.abs(p[:, 4]) <= cap * l1 / 2).all()
+    # limits computed as 0.5 cap l: (cap l) / 2 rounds differently only for subnormal cap
+    assert (np.abs(p[:, 3]) <= cap * l2 / 2 * (1 + 1e-12) + 1e-300).all()
+    assert (np.abs(p[:, 4]) <= cap * l1 / 2 * (1 + 1e-12) + 1e-300).all()
     again = check_strength(p, l1, l2, mu, ft, alpha, interaction)
     assert (again.state == STATE_ELASTIC).all()
     assert (again.utilisation <= 1.0 + 1e-9).all()

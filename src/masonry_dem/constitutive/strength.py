@@ -52,6 +52,7 @@ __all__ = [
     "alpha_from_table",
     "check_strength",
     "shear_strength",
+    "stiffness_factors_of_flags",
     "torsion_constant",
     "torsion_strength",
 ]
@@ -73,8 +74,11 @@ DIRECTIONS: Final[tuple[str, ...]] = ("f1", "f2", "f1=f2")
 
 #: ways back onto the shear-torsion boundary (see ``check_strength``)
 PROJECTIONS: Final[tuple[str, ...]] = ("energy", "radial")
-#: bisection steps of the energy projection (2^-60: below double precision in t)
-_BISECTION_STEPS: Final[int] = 60
+#: safeguarded Newton of the energy projection: iteration cap and relative step tolerance
+_PROJECTION_MAX_ITER: Final[int] = 100
+_PROJECTION_TOL: Final[float] = 1e-15
+#: capacities near the subnormal range lose digits in the energy return: radial there
+_TINY_CAPACITY: Final[float] = 1e-280
 
 #: A trial violates Eq. (A5) only if its radial demand/capacity ratio (see ``check_strength``)
 #: exceeds 1 by more than this. The radial projection lands on the boundary to ~1e-13, so
@@ -240,7 +244,7 @@ def _radial_factor(a: NDArray, c: NDArray, alpha: NDArray | float) -> NDArray:
 
 
 def _energy_closest_point(
-    r0: NDArray, z0: NDArray, a: NDArray, b: NDArray, alpha: NDArray
+    r0: NDArray, z0: NDArray, a: NDArray, b: NDArray, alpha: NDArray | float
 ) -> tuple[NDArray, NDArray]:
     """Closest point (r, z) of the curve (z/b)^alpha + (r/a)^2 = 1 to (r0, z0) outside it.
 
@@ -248,26 +252,50 @@ def _energy_closest_point(
     elastic energy of the correction (kt A for shear, kt J for torsion), so this is the
     textbook return mapping. The curve is parametrised by t in [0, 1]: z = b t,
     r = a sqrt(1 - t^alpha); the squared distance is unimodal in t for the convex domain
-    (alpha >= 1), so the root of its derivative is bracketed by bisection.
+    (alpha >= 1), so the root of its derivative g(t) is bracketed in [0, 1] and found by
+    Newton's method kept inside the bracket (bisection where a step would leave it).
     Degenerate capacities: b = 0 (no torsion, e.g. a joint rocking on a corner) keeps
     the shear up to a and drops the torsion; a = 0 drops both.
     """
-    lo = np.zeros(r0.shape)
-    hi = np.ones(r0.shape)
+    n = r0.shape[0]
+    al = np.broadcast_to(np.asarray(alpha, dtype=float), (n,))
+    lo = np.zeros(n)
+    hi = np.ones(n)
+    t = np.full(n, 0.5)
+    rows = np.flatnonzero((r0 > 0) & (z0 > 0) & (a > 0) & (b > 0))
+    tr, lor, hir = t[rows], lo[rows], hi[rows]
+    ar, br, r0r, z0r, alr = a[rows], b[rows], r0[rows], z0[rows], al[rows]
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        for _ in range(_BISECTION_STEPS):
-            t = 0.5 * (lo + hi)
-            ta = t**alpha
-            r = a * np.sqrt(1.0 - ta)
-            dr = -0.5 * a * alpha * ta / (t * np.sqrt(1.0 - ta))
-            slope = (r - r0) * dr + (b * t - z0) * b
-            up = slope > 0
-            hi = np.where(up, t, hi)
-            lo = np.where(up, lo, t)
-    t = 0.5 * (lo + hi)
+        for _ in range(_PROJECTION_MAX_ITER):
+            ta = tr**alr
+            u = 1.0 - ta
+            su = np.sqrt(u)
+            du = -alr * ta / tr
+            d2u = du * (alr - 1.0) / tr
+            r = ar * su
+            dr = 0.5 * ar * du / su
+            d2r = ar * (0.5 * d2u / su - 0.25 * du * du / (u * su))
+            g = (r - r0r) * dr + (br * tr - z0r) * br
+            dg = dr * dr + (r - r0r) * d2r + br * br
+            up = g > 0
+            hir = np.where(up, tr, hir)
+            lor = np.where(up, lor, tr)
+            newton = tr - g / dg
+            inside = (newton > lor) & (newton < hir) & np.isfinite(newton)
+            t_new = np.where(inside, newton, 0.5 * (lor + hir))
+            done = np.abs(t_new - tr) <= _PROJECTION_TOL * np.maximum(tr, 1e-300)
+            done |= hir - lor <= 4.0 * np.spacing(hir)  # bracket at round-off
+            t[rows] = t_new
+            if done.all():
+                break
+            keep = ~done
+            rows, tr, lor, hir = rows[keep], t_new[keep], lor[keep], hir[keep]
+            ar, br, r0r, z0r, alr = ar[keep], br[keep], r0r[keep], z0r[keep], alr[keep]
+        else:  # rows at round-off; the caller falls back to the radial return off the boundary
+            logger.debug("energy projection: %d rows did not converge", rows.size)
     t = np.where(r0 == 0, np.minimum(1.0, _safe_ratio(z0, b)), t)
     t = np.where(z0 == 0, 0.0, t)
-    r = a * np.sqrt(np.maximum(1.0 - t**alpha, 0.0))
+    r = a * np.sqrt(np.maximum(1.0 - t**al, 0.0))
     z = b * t
     r = np.where(b == 0, np.minimum(r0, a), r)
     z = np.where(b == 0, 0.0, z)
@@ -502,6 +530,11 @@ def _flag_tables() -> tuple[NDArray, NDArray]:
 _STATE_OF_FLAGS, _FACTORS_OF_FLAGS = _flag_tables()
 
 
+def stiffness_factors_of_flags(flags: ArrayLike) -> NDArray:
+    """(m, 6) stiffness factors of Eqs. (13)-(14) (0 or 1) for the bit flags of m interfaces."""
+    return _FACTORS_OF_FLAGS[np.asarray(flags, dtype=np.int64)]
+
+
 @dataclass(frozen=True)
 class _Domain:
     """Per-interface constants of the check, validated once: an
@@ -635,9 +668,20 @@ def _evaluate(
         r, z = _energy_closest_point(r0, abs_m3[rows] / rho, fsu[rows], m3u[rows] / rho, al)
         shear_scale = _safe_ratio(r, r0)
         shear_scale[~np.isfinite(shear_scale)] = 0.0
+        m3_new = np.copysign(z * rho, m3[rows])
+        # capacities at the edge of floating point (subnormal friction or sides): the
+        # radial return, which lands on the boundary by construction
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            phi = _safe_ratio(z * rho, m3u[rows]) ** al + _safe_ratio(r, fsu[rows]) ** 2
+        off = ~(np.abs(phi - 1.0) <= 1e-9) & (m3u[rows] > 0) & (fsu[rows] > 0)
+        off |= abs_m3[rows] == 0  # pure shear: the same point, with the radial round-off
+        off |= fsu[rows] < _TINY_CAPACITY
+        if off.any():
+            shear_scale[off] = scale[off]
+            m3_new[off] = m3[rows][off] * scale[off]
         proj[rows, 0] = f1[rows] * shear_scale
         proj[rows, 1] = f2[rows] * shear_scale
-        proj[rows, 5] = np.copysign(z * rho, m3[rows])
+        proj[rows, 5] = m3_new
     det = np.flatnonzero(detached)
     if det.size:
         proj[det] = 0.0
