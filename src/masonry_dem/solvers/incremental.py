@@ -17,6 +17,14 @@ small-displacement range. The collapse multiplier is then bracketed: [last conve
 failed], the step is halved from the last converged state until the bracket is narrower than
 ``bracket_tolerance`` x lambda, and the first failure is re-tried from the end of the bracket,
 so a failure caused only by a long step does not stop the analysis.
+
+Load control cannot pass a limit point, and near a plastic plateau it creeps; so from the end
+of the bracket the curve is followed with the work-conjugate displacement of the live load
+prescribed and lambda free (``continuation="work"``) until it is flat. Newton can still stop
+where many joints sit on the edge between two states (a kink of the law) even for tiny
+increments; the answer is then a lower bound of the model's collapse load that may move with
+the steps taken (a few per cent, docs/validation.md), and ``rescue_time_steps`` lets dynamic
+relaxation take such steps.
 """
 
 from __future__ import annotations
@@ -80,12 +88,14 @@ class StaticSettings:
     residual_stiffness: fraction of the elastic stiffness kept on the diagonal of the tangent.
     robust_iterations: budget of the second strategy (initial-stiffness iterations with
         Anderson acceleration) that re-tries a load step Newton could not solve; 0 disables it.
-    continuation: what load control does at its first failed step. ``"work"`` (default):
-        go on from the last converged state under control of the work-conjugate displacement
-        of the live load (lambda free), which passes limit points and long plastic plateaus,
-        until the pushover curve has flattened: lambda gains less than ``bracket_tolerance``
-        while that displacement doubles. ``"bracket"``: stay in load control and refine the
-        bracket [last converged, first failed] by step cutting.
+    continuation: what follows the refined load-control bracket. ``"work"`` (default): go
+        on from the last converged state under control of the work-conjugate displacement of
+        the live load (lambda free), which passes limit points and long plastic plateaus,
+        until the pushover curve is flat or no equilibrium is found for tiny increments; the
+        collapse multiplier is the peak of the curve. ``"bracket"``: stop at the bracket.
+    rescue_time_steps: budget of a dynamic relaxation of a load step that Newton could not
+        solve (then polished by Newton); 0 (default) disables it. It finds equilibria Newton
+        misses at kinks of the interface law, at about the cost of dynamic relaxation.
     """
 
     initial_step: float = 0.02
@@ -118,6 +128,8 @@ class StaticSettings:
                 raise ValueError(f"{name} must be a positive number, got {value!r}")
         if self.growth < 1:
             raise ValueError(f"growth must be >= 1, got {self.growth!r}")
+        if self.rescue_time_steps < 0:
+            raise ValueError(f"rescue_time_steps must be >= 0, got {self.rescue_time_steps!r}")
         if self.robust_iterations < 0:
             raise ValueError(f"robust_iterations must be >= 0, got {self.robust_iterations!r}")
         if self.max_iterations < 1 or self.max_steps < 1:
