@@ -46,12 +46,17 @@ def pvbatch() -> list[str]:
 
 
 def run_pvbatch(cmd: list[str], *args) -> dict:
-    proc = subprocess.run(
-        [*cmd, str(CHECK), *map(str, args)],
-        capture_output=True,
-        text=True,
-        timeout=PVBATCH_TIMEOUT,
-    )
+    for _ in range(2):
+        proc = subprocess.run(
+            [*cmd, str(CHECK), *map(str, args)],
+            capture_output=True,
+            text=True,
+            timeout=PVBATCH_TIMEOUT,
+        )
+        # a busy machine sometimes gives xvfb-run a display that the X window then cannot
+        # open (pvbatch aborts in CreateAWindow before loading anything): start it once more
+        if not (proc.returncode != 0 and "CreateAWindow" in proc.stdout + proc.stderr):
+            break
     lines = [ln for ln in proc.stdout.splitlines() if ln.startswith("RESULT ")]
     assert proc.returncode == 0 and lines, (
         f"pvbatch failed ({proc.returncode}):\n{proc.stdout[-3000:]}\n{proc.stderr[-3000:]}"
