@@ -63,9 +63,11 @@ _CHORD_RATIO = 0.25
 _ANDERSON = 5
 _DIVERGENCE_WINDOW = 60
 CONTINUATION = ("work", "bracket")
-#: a controlled displacement is reached when within this fraction of the displacement limit
-#: (each converged state is an exact equilibrium at its own lambda whatever the tolerance)
-_CONTROL_TOLERANCE = 1e-7
+#: a controlled displacement is reached when within this fraction of the step asked for (each
+#: converged state is an exact equilibrium at its own lambda whatever the tolerance); relative
+#: to the step, not to the block size, so that stiff joints (tiny displacements) are followed
+#: as closely as soft ones
+_CONTROL_TOLERANCE = 1e-6
 #: work control gives up after this many halvings of its step in a row
 _MAX_CUTS = 10
 #: a step whose d(lambda)/dw is below this fraction of the elastic one gains nothing
@@ -282,7 +284,7 @@ class StaticSolver:
         self,
         load_factor: float,
         dead_factor: float = 1.0,
-        control: tuple[np.ndarray, float] | None = None,
+        control: tuple[np.ndarray, float, float] | None = None,
         radius: float | None = None,
         damped: bool = False,
         start: np.ndarray | None = None,
@@ -290,7 +292,8 @@ class StaticSolver:
         """Newton iterations from the last converged state to equilibrium at ``load_factor``
         (load control) or with the generalised displacement ``control[0] . q_free`` at
         ``control[1]`` (lambda free: displacement control of one DOF, or of the work-conjugate
-        displacement of the live load).
+        displacement of the live load), reached within ``_CONTROL_TOLERANCE`` x ``control[2]``
+        (the size of the step asked for).
 
         Safeguards: the translation part of each correction is held within a trust radius
         (grown after full steps, cut by 8 when no step along the direction lowers the
@@ -327,7 +330,7 @@ class StaticSolver:
         def constraint_error(qq: np.ndarray) -> float:
             if control is None:
                 return 0.0
-            return abs(float(control[0] @ qq[free]) - control[1]) / self.limit
+            return abs(float(control[0] @ qq[free]) - control[1]) / max(control[2], 1e-300)
 
         budget = s.max_iterations
         it = 0
@@ -732,7 +735,7 @@ class StaticSolver:
         path_w = [float(c @ (st.q.reshape(-1)[free] - q0)) for st in hist.steps]
         path_lam = [float(st.load_factor) for st in hist.steps]
         w = path_w[-1]
-        dw = max(w - path_w[-2], 1e-6 * self.limit)
+        dw = max(w - path_w[-2], 1e-3 * abs(w), 1e-12 * self.limit)
         lam = path_lam[-1]
         first_lambda = hist.collapse_bracket[1] if hist.collapse_bracket else lam
         peak = max(path_lam)
@@ -744,7 +747,9 @@ class StaticSolver:
         while len(hist.steps) < s.max_steps:
             goal = w + dw
             out = self._equilibrate(
-                lam, control=(c, goal + float(c @ q0)), radius=self._control_radius(c, dw)
+                lam,
+                control=(c, goal + float(c @ q0), dw),
+                radius=self._control_radius(c, dw),
             )
             if not out.ok and "exceed the limit" not in out.reason:
                 # on a plateau the search may meet equilibria short of the goal (lambda is
@@ -762,7 +767,7 @@ class StaticSolver:
                 cuts += 1
                 dw /= 2
                 # a step below this cannot be told from no step (the control tolerance)
-                tiny = max(1e-4 * abs(w), 10 * _CONTROL_TOLERANCE * self.limit)
+                tiny = 1e-4 * max(abs(w), path_w[1] - path_w[0], 1e-8 * self.limit)
                 if cuts > _MAX_CUTS or dw < tiny:
                     reason = (
                         f"no equilibrium beyond lambda={lam:.6g} under work control "
@@ -844,7 +849,9 @@ class StaticSolver:
             if (goal - control.target) * np.sign(du_nominal) > 0:
                 goal = control.target
             out = self._equilibrate(
-                lam, control=(unit, goal), radius=self._control_radius(unit, goal - u)
+                lam,
+                control=(unit, goal, abs(goal - u)),
+                radius=self._control_radius(unit, goal - u),
             )
             if out.ok:
                 record(out)
