@@ -26,15 +26,36 @@ import json
 import platform
 import sys
 import time
+from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 from masonry_dem.cli import study
+
+
+def _progress(r: dict) -> None:
+    print(
+        f"  {r['case']} {r['method']} [{r['label']}]: {r['status']} "
+        f"lambda={study._fmt(r['lambda'], '.5g')} in {r['seconds']:.2f} s",
+        flush=True,
+    )
+
+
+def _one_case(case: str, options: dict) -> dict:
+    return study.speed_accuracy([case], progress=_progress, **options)
 
 
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
     p.add_argument("--cases", nargs="+", default=list(study.DEFAULT_CASES))
     p.add_argument("--quick", action="store_true", help="a few settings per method")
+    p.add_argument("--full", action="store_true", help="also the DR settings that only cost time")
+    p.add_argument(
+        "--jobs",
+        type=int,
+        default=1,
+        help="cases run in parallel processes (each case's runs stay sequential, so the "
+        "time ratios within a case share the same load)",
+    )
     p.add_argument("--budget", type=int, default=400_000, help="DR time-step budget per run")
     p.add_argument("--out", default="results/study")
     p.add_argument("--skip-sweeps", action="store_true", help="speed-accuracy study only")
@@ -48,16 +69,15 @@ def main(argv: list[str] | None = None) -> int:
     failures: list[str] = []
 
     t0 = time.perf_counter()
-    res = study.speed_accuracy(
-        args.cases,
-        quick=args.quick,
-        budget=args.budget,
-        progress=lambda r: print(
-            f"  {r['case']} {r['method']} [{r['label']}]: {r['status']} "
-            f"lambda={study._fmt(r['lambda'], '.5g')} in {r['seconds']:.2f} s",
-            flush=True,
-        ),
-    )
+    options = {"quick": args.quick, "full": args.full, "budget": args.budget}
+    if args.jobs > 1 and len(args.cases) > 1:
+        with ProcessPoolExecutor(max_workers=args.jobs) as pool:
+            parts = list(pool.map(_one_case, args.cases, [options] * len(args.cases)))
+        rows = [r for part in parts for r in part["rows"]]
+        refs = {k: v for part in parts for k, v in part["summary"].items()}
+        res = study.summarise(rows, refs)
+    else:
+        res = study.speed_accuracy(args.cases, progress=_progress, **options)
     (out / "speed_accuracy.json").write_text(json.dumps(res, indent=2))
     text = study.table(res["rows"]) + "\n\n" + study.summary_lines(res["summary"], res["accuracy"])
     (out / "speed_accuracy.txt").write_text(text + "\n")

@@ -216,6 +216,7 @@ def test_study_command_json_table_and_chart(tmp_path, monkeypatch, capsys, tilti
     monkeypatch.setattr(study, "load_study_case", lambda name: case)
     monkeypatch.setattr(study, "STATIC_GRID", study.STATIC_GRID[:2])
     monkeypatch.setattr(study, "DR_GRID", (("bracket 2%", {"bracket_tolerance": 0.02}),))
+    monkeypatch.setattr(study, "FULL_ONLY", {"static": (), "dynamic_relaxation": ()})
     code = main(["study", "speed-accuracy", "--cases", "block", "--json", "--out", str(tmp_path)])
     assert code == 0
     runs = json.loads(capsys.readouterr().out)
