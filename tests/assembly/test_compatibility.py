@@ -83,7 +83,7 @@ def test_rigid_body_modes_span_the_null_space_of_the_unsupported_stiffness():
     assert H.shape[1] - rank == 6
 
 
-@settings(max_examples=30, deadline=None)
+@settings(max_examples=30, deadline=None, derandomize=True)
 @given(
     n=st.integers(1, 6),
     nc=st.integers(1, 6),

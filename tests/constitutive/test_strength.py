@@ -282,7 +282,7 @@ geometry = st.tuples(
 )
 
 
-@settings(max_examples=150, deadline=None)
+@settings(max_examples=150, deadline=None, derandomize=True)
 @given(rows, geometry, st.booleans())
 def test_projection_lies_on_or_inside_the_domain(data, geom, interaction):
     l1, l2, mu, ft, alpha = geom
@@ -308,7 +308,7 @@ def test_projection_lies_on_or_inside_the_domain(data, geom, interaction):
     np.testing.assert_array_equal(r.state[live], (sliding * 1 + rocking * 2)[live])
 
 
-@settings(max_examples=150, deadline=None)
+@settings(max_examples=150, deadline=None, derandomize=True)
 @given(rows, geometry, st.floats(0.0, 1.0), st.floats(0.0, 1.0))
 def test_actions_inside_are_returned_unchanged(data, geom, shrink_st, shrink_m):
     l1, l2, mu, ft, alpha = geom
@@ -322,11 +322,13 @@ def test_actions_inside_are_returned_unchanged(data, geom, shrink_st, shrink_m):
     assert (r.stiffness_factors == 1.0).all()
 
 
-@settings(max_examples=150, deadline=None)
+@settings(max_examples=150, deadline=None, derandomize=True)
 @given(rows, geometry, st.floats(0.01, 100.0))
 def test_domain_scales_linearly_with_compression(data, geom, k):
     l1, l2, mu, ft, alpha = geom
     trial = np.array(data)
+    # scaling is exact only while no entry underflows to zero (e.g. a subnormal torsion)
+    assume(np.array_equal(k * trial == 0, trial == 0) and (k * ft == 0) == (ft == 0))
     base = check_strength(trial, l1, l2, mu, ft, alpha)
     scaled = check_strength(k * trial, l1, l2, mu, k * ft, alpha)
     # away from the boundary (where rounding may flip a state) the answers scale exactly
