@@ -725,9 +725,13 @@ class StaticSolver:
 
         Load control fails where the pushover curve turns flat (a plastic plateau or a
         limit point); under work control the same equilibria are found with bounded
-        increments, so the curve is followed until it has flattened: lambda at w has risen
-        less than ``bracket_tolerance`` x lambda since w / 2 (w measured from the
-        dead-load state). The collapse multiplier is the highest lambda on the path."""
+        increments. The curve is followed until one of: lambda at w has risen less than
+        ``bracket_tolerance`` x lambda since w / 2 (w measured from the dead-load state);
+        three steps in a row gain less than ``_FLAT_SLOPE`` of the elastic d(lambda)/dw (a
+        formed mechanism, or creeping steps when Newton stalls at a kink); the step has been
+        halved ``_MAX_CUTS`` times or below what the control tolerance can resolve; the
+        displacements pass the limit. The collapse multiplier is the highest lambda on the
+        path; if it is not above the load-control bracket, the bracket and its reason stay."""
         s = self.settings
         free = self.asm.free_index
         c = self.F_live / float(np.linalg.norm(self.F_live))
