@@ -373,3 +373,27 @@ def test_energy_projection_is_the_closest_boundary_point(alpha):
     cross = p[:, 0] * t[:, 1] - p[:, 1] * t[:, 0]
     np.testing.assert_allclose(cross, 0.0, atol=1e-9)
     assert np.all(p[:, 5] * t[:, 5] >= 0)
+
+
+@pytest.mark.parametrize("alpha", [1.0, 1.5, 2.0, 2.7, 3.7])
+def test_energy_projection_converges_at_both_ends_of_the_curve(alpha, caplog):
+    """Trials near pure torsion (where sqrt(1 - t^alpha) is singular in the shear-end
+    parameter) and near pure shear (alpha = 1 has a vertex there) converge, every row, to the
+    closest boundary point; no row is left to the radial fallback."""
+    from masonry_dem.constitutive.strength import _energy_closest_point
+
+    ang = np.concatenate([np.geomspace(1e-9, 1e-2, 40), np.pi / 2 - np.geomspace(1e-9, 1e-2, 40)])
+    ang = np.concatenate([ang, np.linspace(0.01, np.pi / 2 - 0.01, 40)])
+    scale = np.repeat([1.02, 3.0, 50.0], ang.size)
+    ang = np.tile(ang, 3)
+    a, b = np.full(ang.size, 2.0), np.full(ang.size, 0.7)
+    r0, z0 = a * scale * np.cos(ang), b * scale * np.sin(ang)
+    with caplog.at_level("DEBUG", logger="masonry_dem.constitutive.strength"):
+        r, z = _energy_closest_point(r0, z0, a, b, alpha)
+    assert "did not converge" not in caplog.text
+    np.testing.assert_allclose((z / b) ** alpha + (r / a) ** 2, 1.0, atol=1e-12)
+    s = np.linspace(0.0, 1.0, 400_001)
+    zz, rr = b[0] * s, a[0] * np.sqrt(1.0 - s**alpha)
+    best = np.array([((rr - x) ** 2 + (zz - y) ** 2).min() for x, y in zip(r0, z0, strict=True)])
+    got = (r - r0) ** 2 + (z - z0) ** 2
+    assert np.all(got <= best * (1 + 1e-6) + 1e-14)

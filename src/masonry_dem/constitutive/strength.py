@@ -250,56 +250,111 @@ def _energy_closest_point(
 
     r = |f| and z = |m3| / rho, with rho^2 = J / A: Euclidean distance in (r, z) is the
     elastic energy of the correction (kt A for shear, kt J for torsion), so this is the
-    textbook return mapping. The curve is parametrised by t in [0, 1]: z = b t,
-    r = a sqrt(1 - t^alpha); the squared distance is unimodal in t for the convex domain
-    (alpha >= 1), so the root of its derivative g(t) is bracketed in [0, 1] and found by
-    Newton's method kept inside the bracket (bisection where a step would leave it).
+    textbook return mapping. The squared distance is unimodal along the convex curve
+    (alpha >= 1). Each half of the curve gets the parameter in which it is smooth: near pure
+    shear z = b t, r = a sqrt(1 - t^alpha); near pure torsion (where sqrt(1 - t^alpha) is
+    singular) r = a x, z = b (1 - x^2)^(1/alpha). The sign of the distance's derivative at the
+    switch point x^2 = t^alpha = 1/2 says which half holds the minimum; there Newton's method
+    is kept inside the bracket (bisection where a step would leave it), a few steps each.
     Degenerate capacities: b = 0 (no torsion, e.g. a joint rocking on a corner) keeps
     the shear up to a and drops the torsion; a = 0 drops both.
     """
     n = r0.shape[0]
     al = np.broadcast_to(np.asarray(alpha, dtype=float), (n,))
-    lo = np.zeros(n)
-    hi = np.ones(n)
-    t = np.full(n, 0.5)
+    r = np.zeros(n)
+    z = np.zeros(n)
     rows = np.flatnonzero((r0 > 0) & (z0 > 0) & (a > 0) & (b > 0))
-    tr, lor, hir = t[rows], lo[rows], hi[rows]
-    ar, br, r0r, z0r, alr = a[rows], b[rows], r0[rows], z0[rows], al[rows]
-    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        for _ in range(_PROJECTION_MAX_ITER):
-            ta = tr**alr
-            u = 1.0 - ta
-            su = np.sqrt(u)
-            du = -alr * ta / tr
-            d2u = du * (alr - 1.0) / tr
-            r = ar * su
-            dr = 0.5 * ar * du / su
-            d2r = ar * (0.5 * d2u / su - 0.25 * du * du / (u * su))
-            g = (r - r0r) * dr + (br * tr - z0r) * br
-            dg = dr * dr + (r - r0r) * d2r + br * br
-            up = g > 0
-            hir = np.where(up, tr, hir)
-            lor = np.where(up, lor, tr)
-            newton = tr - g / dg
-            inside = (newton > lor) & (newton < hir) & np.isfinite(newton)
-            t_new = np.where(inside, newton, 0.5 * (lor + hir))
-            done = np.abs(t_new - tr) <= _PROJECTION_TOL * np.maximum(tr, 1e-300)
-            done |= hir - lor <= 4.0 * np.spacing(hir)  # bracket at round-off
-            t[rows] = t_new
-            if done.all():
-                break
-            keep = ~done
-            rows, tr, lor, hir = rows[keep], t_new[keep], lor[keep], hir[keep]
-            ar, br, r0r, z0r, alr = ar[keep], br[keep], r0r[keep], z0r[keep], alr[keep]
-        else:  # rows at round-off; the caller falls back to the radial return off the boundary
-            logger.debug("energy projection: %d rows did not converge", rows.size)
-    t = np.where(r0 == 0, np.minimum(1.0, _safe_ratio(z0, b)), t)
-    t = np.where(z0 == 0, 0.0, t)
-    r = a * np.sqrt(np.maximum(1.0 - t**al, 0.0))
-    z = b * t
+    if rows.size:
+        ar, br, r0r, z0r, alr = a[rows], b[rows], r0[rows], z0[rows], al[rows]
+        t_switch = 0.5 ** (1.0 / alr)
+        x_switch = np.sqrt(0.5)
+        near_shear = _shear_half(t_switch, ar, br, r0r, z0r, alr)[0] >= 0.0
+        # alpha = 1 has a vertex on the shear axis; points in its normal cone return to it
+        vertex = (alr == 1.0) & ((r0r - ar) * 0.5 * ar >= z0r * br)
+        r[rows[vertex]] = ar[vertex]
+        sh = np.flatnonzero(near_shear & ~vertex)
+        to = np.flatnonzero(~near_shear)
+        if sh.size:
+            args = (ar[sh], br[sh], r0r[sh], z0r[sh], alr[sh])
+            t = _bracketed_newton(_shear_half, args, t_switch[sh])
+            r[rows[sh]] = ar[sh] * np.sqrt(np.maximum(1.0 - t ** alr[sh], 0.0))
+            z[rows[sh]] = br[sh] * t
+        if to.size:
+            args = (ar[to], br[to], r0r[to], z0r[to], alr[to])
+            x = _bracketed_newton(_torsion_half, args, np.full(to.size, x_switch))
+            r[rows[to]] = ar[to] * x
+            z[rows[to]] = br[to] * np.maximum(1.0 - x * x, 0.0) ** (1.0 / alr[to])
+    # one of r0, z0 zero: the point is on an axis and so is its closest point
+    pure_torsion = (r0 == 0) & (b > 0)
+    z = np.where(pure_torsion, b * np.minimum(1.0, _safe_ratio(z0, b)), z)
+    r = np.where(z0 == 0, np.minimum(r0, a), r)
     r = np.where(b == 0, np.minimum(r0, a), r)
     z = np.where(b == 0, 0.0, z)
     return r, z
+
+
+def _shear_half(t: NDArray, a: NDArray, b: NDArray, r0: NDArray, z0: NDArray, alpha: NDArray):
+    """g = d/dt of half the squared distance from (a sqrt(1 - t^alpha), b t) to (r0, z0),
+    and g'; smooth on t in [0, 2^(-1/alpha)]."""
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        ta = t**alpha
+        u = 1.0 - ta
+        su = np.sqrt(u)
+        du = -alpha * ta / t
+        d2u = du * (alpha - 1.0) / t
+        r = a * su
+        dr = 0.5 * a * du / su
+        d2r = a * (0.5 * d2u / su - 0.25 * du * du / (u * su))
+    g = (r - r0) * dr + (b * t - z0) * b
+    dg = dr * dr + (r - r0) * d2r + b * b
+    return g, dg
+
+
+def _torsion_half(x: NDArray, a: NDArray, b: NDArray, r0: NDArray, z0: NDArray, alpha: NDArray):
+    """g = d/dx of half the squared distance from (a x, b (1 - x^2)^(1/alpha)) to (r0, z0),
+    and g'; smooth on x in [0, sqrt(1/2)]."""
+    w = 1.0 - x * x
+    p = 1.0 / alpha
+    wp = w**p
+    z = b * wp
+    dz = -2.0 * p * b * x * wp / w
+    d2z = 2.0 * p * b * wp / w * (2.0 * (p - 1.0) * x * x / w - 1.0)
+    g = (a * x - r0) * a + (z - z0) * dz
+    dg = a * a + dz * dz + (z - z0) * d2z
+    return g, dg
+
+
+def _bracketed_newton(fun, args: tuple, hi: NDArray) -> NDArray:
+    """Root of the increasing g = fun(x, *args) on [0, hi] (g(0) < 0 < g(hi)), by Newton's
+    method kept inside the shrinking bracket; each row stops on its own."""
+    n = hi.shape[0]
+    out = np.empty(n)
+    lo = np.zeros(n)
+    hi = hi.copy()
+    x = 0.5 * hi
+    rows = np.arange(n)
+    for _ in range(_PROJECTION_MAX_ITER):
+        g, dg = fun(x, *args)
+        up = g > 0
+        hi = np.where(up, x, hi)
+        lo = np.where(up, lo, x)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            step = g / dg
+        newton = x - step
+        # a step below tolerance is taken even where it rounds onto the bracket's end
+        done = np.abs(step) <= _PROJECTION_TOL * np.maximum(x, 1e-300)
+        inside = (newton > lo) & (newton < hi) & np.isfinite(newton)
+        x_new = np.where(inside | done, newton, 0.5 * (lo + hi))
+        done |= hi - lo <= 4.0 * np.spacing(hi)  # bracket at round-off
+        out[rows] = x_new
+        if done.all():
+            return out
+        keep = ~done
+        rows, x, lo, hi = rows[keep], x_new[keep], lo[keep], hi[keep]
+        args = tuple(v[keep] for v in args)
+    # rows at round-off; the caller falls back to the radial return off the boundary
+    logger.debug("energy projection: %d rows did not converge", rows.size)
+    return out
 
 
 def _radial_t(big_a: NDArray, big_c: NDArray, alpha: NDArray | float) -> NDArray:
