@@ -74,9 +74,11 @@ DIRECTIONS: Final[tuple[str, ...]] = ("f1", "f2", "f1=f2")
 
 #: ways back onto the shear-torsion boundary (see ``check_strength``)
 PROJECTIONS: Final[tuple[str, ...]] = ("energy", "radial")
-#: safeguarded Newton of the energy projection: iteration cap and relative step tolerance
+#: safeguarded Newton of the energy projection: iteration cap, and the relative step below
+#: which the last step is taken and the row stops (Newton's quadratic convergence leaves an
+#: error of the order of its square, at round-off)
 _PROJECTION_MAX_ITER: Final[int] = 100
-_PROJECTION_TOL: Final[float] = 1e-15
+_PROJECTION_TOL: Final[float] = 1e-9
 #: capacities near the subnormal range lose digits in the energy return: radial there
 _TINY_CAPACITY: Final[float] = 1e-280
 
@@ -244,7 +246,12 @@ def _radial_factor(a: NDArray, c: NDArray, alpha: NDArray | float) -> NDArray:
 
 
 def _energy_closest_point(
-    r0: NDArray, z0: NDArray, a: NDArray, b: NDArray, alpha: NDArray | float
+    r0: NDArray,
+    z0: NDArray,
+    a: NDArray,
+    b: NDArray,
+    alpha: NDArray | float,
+    radial: NDArray | None = None,
 ) -> tuple[NDArray, NDArray]:
     """Closest point (r, z) of the curve (z/b)^alpha + (r/a)^2 = 1 to (r0, z0) outside it.
 
@@ -256,6 +263,8 @@ def _energy_closest_point(
     singular) r = a x, z = b (1 - x^2)^(1/alpha). The sign of the distance's derivative at the
     switch point x^2 = t^alpha = 1/2 says which half holds the minimum; there Newton's method
     is kept inside the bracket (bisection where a step would leave it), a few steps each.
+    ``radial`` (the factor that takes the trial radially onto the curve), if given, starts
+    Newton at the radial point, usually a few steps from the answer.
     Degenerate capacities: b = 0 (no torsion, e.g. a joint rocking on a corner) keeps
     the shear up to a and drops the torsion; a = 0 drops both.
     """
@@ -276,12 +285,14 @@ def _energy_closest_point(
         to = np.flatnonzero(~near_shear)
         if sh.size:
             args = (ar[sh], br[sh], r0r[sh], z0r[sh], alr[sh])
-            t = _bracketed_newton(_shear_half, args, t_switch[sh])
+            start = None if radial is None else radial[rows[sh]] * z0r[sh] / br[sh]
+            t = _bracketed_newton(_shear_half, args, t_switch[sh], start)
             r[rows[sh]] = ar[sh] * np.sqrt(np.maximum(1.0 - t ** alr[sh], 0.0))
             z[rows[sh]] = br[sh] * t
         if to.size:
             args = (ar[to], br[to], r0r[to], z0r[to], alr[to])
-            x = _bracketed_newton(_torsion_half, args, np.full(to.size, x_switch))
+            start = None if radial is None else radial[rows[to]] * r0r[to] / ar[to]
+            x = _bracketed_newton(_torsion_half, args, np.full(to.size, x_switch), start)
             r[rows[to]] = ar[to] * x
             z[rows[to]] = br[to] * np.maximum(1.0 - x * x, 0.0) ** (1.0 / alr[to])
     # one of r0, z0 zero: the point is on an axis and so is its closest point
@@ -324,14 +335,18 @@ def _torsion_half(x: NDArray, a: NDArray, b: NDArray, r0: NDArray, z0: NDArray, 
     return g, dg
 
 
-def _bracketed_newton(fun, args: tuple, hi: NDArray) -> NDArray:
-    """Root of the increasing g = fun(x, *args) on [0, hi] (g(0) < 0 < g(hi)), by Newton's
-    method kept inside the shrinking bracket; each row stops on its own."""
+def _bracketed_newton(fun, args: tuple, hi: NDArray, start: NDArray | None = None) -> NDArray:
+    """Root of g = fun(x, *args) on [0, hi] (g(0) < 0 < g(hi), one sign change), by Newton's
+    method from ``start`` (default: mid-bracket) kept inside the shrinking bracket; each row
+    stops on its own."""
     n = hi.shape[0]
     out = np.empty(n)
     lo = np.zeros(n)
     hi = hi.copy()
     x = 0.5 * hi
+    if start is not None:
+        inside = (start > 0.0) & (start < hi)
+        x[inside] = start[inside]
     rows = np.arange(n)
     for _ in range(_PROJECTION_MAX_ITER):
         g, dg = fun(x, *args)
@@ -720,7 +735,9 @@ def _evaluate(
         rho = np.sqrt((dom.l1[rows] ** 2 + dom.l2[rows] ** 2) / 12.0)  # sqrt(J / A)
         r0 = shear[rows]
         al = dom.alpha[rows] if np.ndim(dom.alpha) else dom.alpha
-        r, z = _energy_closest_point(r0, abs_m3[rows] / rho, fsu[rows], m3u[rows] / rho, al)
+        r, z = _energy_closest_point(
+            r0, abs_m3[rows] / rho, fsu[rows], m3u[rows] / rho, al, radial=scale
+        )
         shear_scale = _safe_ratio(r, r0)
         shear_scale[~np.isfinite(shear_scale)] = 0.0
         m3_new = np.copysign(z * rho, m3[rows])
