@@ -33,7 +33,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
         description="Render a results folder off-screen. Interfaces coloured by state: green "
         "elastic, red sliding, magenta rocking, orange sliding+rocking, blue detached. Files are "
         "written next to the results: render_<view>_<step>.png, animation_<view>.gif, "
-        "pushover.png.",
+        "pushover.png, mechanism_<view>.png.",
     )
     p.add_argument("results", help="results folder (blocks.pvd, interfaces.pvd, steps/, ...)")
     p.add_argument(
@@ -55,6 +55,12 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
         "--animate", action="store_true", help="also write an animation (GIF) of every step"
     )
     p.add_argument("--pushover", action="store_true", help="also plot the pushover curve")
+    p.add_argument(
+        "--mechanism",
+        action="store_true",
+        help="also render the collapse mechanism (mechanism_<view>.png: the collapse mode, "
+        "joints coloured by the relative motion across them)",
+    )
     p.add_argument(
         "--size",
         type=_size,
@@ -92,6 +98,13 @@ def run(args: argparse.Namespace) -> int:
                 args.results, fps=args.fps, view=anim_view, scale=args.scale, window_size=size
             )
         )
+    if args.mechanism:
+        for view in views:
+            written.append(
+                render.render_mechanism(
+                    args.results, view=view, scale=args.scale, window_size=args.size
+                )
+            )
     if args.pushover:
         written.append(render.plot_pushover(args.results))
     for path in written:

@@ -1,8 +1,9 @@
 """``masonry-dem validate [CASE] [--json] [--out DIR]``: run the paper's validation cases
 (Tables 1-3) and print ours against the paper's DEM and the reference (test / FEM) values.
 
-Each case writes its VTU/PVD series, pushover.csv, summary.json, the pushover plot and a PNG
-of the collapse mechanism with the damage map to ``DIR/<case>/``.
+Each case writes its VTU/PVD series, pushover.csv, summary.json, the pushover plot, the
+collapse mechanism (``mechanism.png``: the collapse mode, joints coloured by the relative
+motion across them) and the damage map (``damage.png``: interface states) to ``DIR/<case>/``.
 """
 
 from __future__ import annotations
@@ -73,14 +74,17 @@ def run_case(name: str, out: Path | None = None, render: bool = True) -> dict:
 
 def _render(folder: Path, view: str) -> str | None:
     try:
-        from masonry_dem.export.render import plot_pushover, render_step
+        from masonry_dem.export.render import plot_pushover, render_mechanism, render_step
     except ImportError as exc:
         log.warning("no PNG for %s: the render module is unavailable (%s)", folder, exc)
         return None
     try:
         plot_pushover(folder)
-        png = render_step(folder, step="last", view="oblique", out=folder / "mechanism.png")
-        render_step(folder, step="last", view=view, out=folder / f"mechanism_{view}.png")
+        png = render_step(folder, step="last", view="oblique", out=folder / "damage.png")
+        render_step(folder, step="last", view=view, out=folder / f"damage_{view}.png")
+        if (folder / "mechanism_blocks.vtu").is_file():  # the run ended in collapse
+            png = render_mechanism(folder, view="oblique", out=folder / "mechanism.png")
+            render_mechanism(folder, view=view, out=folder / f"mechanism_{view}.png")
     except Exception as exc:  # rendering must never lose the analysis
         log.warning("no PNG for %s: %s", folder, exc)
         return None

@@ -47,6 +47,16 @@ STATE_COLOURS: tuple[tuple[int, int, int], ...] = (
     (255, 140, 0),  # 3 sliding + rocking: orange
     (0, 70, 255),  # 4 detached: blue
 )
+#: the mechanism picture colours joints by their relative motion in the collapse mode, as a
+#: share of the largest: bins (upper edges) and colours, light grey for joints that stay shut
+MECHANISM_BINS: tuple[float, ...] = (0.05, 0.25, 0.5)
+MECHANISM_LABELS: tuple[str, ...] = ("< 5 % (shut)", "5-25 %", "25-50 %", "> 50 % (crack)")
+MECHANISM_COLOURS: tuple[tuple[int, int, int], ...] = (
+    (205, 205, 205),
+    (250, 200, 0),
+    (250, 110, 0),
+    (190, 0, 0),
+)
 #: colour of an interface whose state code is unknown
 UNKNOWN_STATE_COLOUR = (128, 128, 128)
 BLOCK_COLOUR = (222, 214, 200)
@@ -288,6 +298,14 @@ def _read_cells(pv, path: Path, celltype: int, per_cell: int):
     return grid, pts, disp
 
 
+def _point_field(grid, path: Path, name: str, per_cell: int) -> np.ndarray:
+    """Point data ``name`` of ``grid`` per cell corner (cells, per_cell, 3)."""
+    if name not in grid.point_data:
+        raise ValueError(f"{path}: point data {name!r} is missing")
+    conn = np.asarray(grid.cell_connectivity).reshape(grid.n_cells, per_cell)
+    return np.asarray(grid.point_data[name], dtype=float)[conn]
+
+
 def _read_step(series: ResultsSeries, index: int, interfaces: bool = True) -> _StepData:
     pv = _pyvista()
     grid, bpts, bdisp = _read_cells(pv, series.block_files[index], _VTK_HEXAHEDRON, 8)
@@ -375,11 +393,13 @@ def _hex_faces(n: int, faces: np.ndarray = _HEX_FACES) -> np.ndarray:
     return (8 * np.arange(n)[:, None, None] + faces[None]).reshape(-1, 4)
 
 
-def state_colours(state: np.ndarray) -> np.ndarray:
-    """(m, 3) uint8 RGB of interface states (unknown codes grey)."""
-    table = np.array(list(STATE_COLOURS) + [UNKNOWN_STATE_COLOUR], dtype=np.uint8)
+def state_colours(
+    state: np.ndarray, colours: Sequence[tuple[int, int, int]] = STATE_COLOURS
+) -> np.ndarray:
+    """(m, 3) uint8 RGB of interface codes in the table ``colours`` (unknown codes grey)."""
+    table = np.array(list(colours) + [UNKNOWN_STATE_COLOUR], dtype=np.uint8)
     code = np.asarray(state, dtype=int)
-    code = np.where((code >= 0) & (code < len(STATE_COLOURS)), code, len(STATE_COLOURS))
+    code = np.where((code >= 0) & (code < len(colours)), code, len(colours))
     return table[code]
 
 
@@ -435,8 +455,13 @@ class _Scene:
         window_size: tuple[int, int],
         gap: float,
         legend: bool = True,
+        palette: tuple[Sequence[str], Sequence[tuple[int, int, int]]] = (
+            STATE_NAMES,
+            STATE_COLOURS,
+        ),
     ) -> None:
         pv = _pyvista()
+        self.palette = palette
         self.pv = pv
         self.view = _check_view(view)
         self.gap = gap
@@ -469,13 +494,15 @@ class _Scene:
             self.joints = pv.PolyData.from_regular_faces(
                 _joint_surface(first, 0.0, gap), _hex_faces(m, _JOINT_FACES)
             )
-            self.joints.cell_data["rgb"] = np.repeat(state_colours(first.state), 4, axis=0)
+            self.joints.cell_data["rgb"] = np.repeat(
+                state_colours(first.state, palette[1]), 4, axis=0
+            )
             p.add_mesh(self.joints, scalars="rgb", rgb=True, lighting=False, show_scalar_bar=False)
         if legend:
             box = p.add_legend(
                 labels=[
                     [name, [c / 255 for c in col]]
-                    for name, col in zip(STATE_NAMES, STATE_COLOURS, strict=True)
+                    for name, col in zip(*palette, strict=True)
                 ],
                 bcolor=(1.0, 1.0, 1.0),
                 border=True,
@@ -488,7 +515,9 @@ class _Scene:
         self.blocks.points = _block_surface(data, scale, self.gap)
         if self.joints is not None and data.state is not None:
             self.joints.points = _joint_surface(data, scale, self.gap)
-            self.joints.cell_data["rgb"] = np.repeat(state_colours(data.state), 4, axis=0)
+            self.joints.cell_data["rgb"] = np.repeat(
+                state_colours(data.state, self.palette[1]), 4, axis=0
+            )
 
     def frame_camera(self, points: np.ndarray) -> None:
         """Place the camera of the view preset so that ``points`` (k, 3) fill the picture."""
@@ -812,4 +841,79 @@ def plot_pushover(folder: Path | str, out: Path | str | None = None) -> Path:
     finally:
         tmp.unlink(missing_ok=True)
     log.info("pushover curve of %s written to %s", folder, path)
+    return path
+
+
+def render_mechanism(
+    folder: Path | str,
+    view: str = "oblique",
+    scale: float | None = None,
+    out: Path | str | None = None,
+    window_size: Sequence[int] = (1200, 900),
+    last_increment: bool = False,
+) -> Path:
+    """PNG of the collapse mechanism of a results folder: the blocks moved by the collapse
+    mode (``mechanism_blocks.vtu``, written when a run ends in collapse) and every joint
+    coloured by the relative motion across it, as a share of the largest
+    (:data:`MECHANISM_BINS`): the cracks and hinges of the mechanism. ``last_increment``
+    uses the last displacement increment of the run instead of the mode. Written to ``out``
+    or ``<folder>/mechanism_<view>.png``; returns the path."""
+    from masonry_dem.export.vtu import MECHANISM_FILES
+
+    _check_view(view)
+    scale = _check_scale(scale)
+    wsize = _check_window(window_size)
+    folder = Path(folder)
+    bfile, ifile = (folder / f for f in MECHANISM_FILES)
+    if not bfile.is_file():
+        raise FileNotFoundError(
+            f"no collapse mechanism in {folder}: {bfile.name} is missing (it is written when "
+            "a run ends in collapse)"
+        )
+    pv = _pyvista()
+    grid, bpts, bdisp = _read_cells(pv, bfile, _VTK_HEXAHEDRON, 8)
+    field = "joint_motion_last_increment" if last_increment else "joint_motion"
+    if last_increment:
+        bdisp = _point_field(grid, bfile, "last_increment", 8)
+    fixed = np.asarray(grid.cell_data["fixed"]).astype(bool)
+    jp = jd = axis = code = None
+    if ifile.is_file():
+        igrid, jp, jd = _read_cells(pv, ifile, _VTK_QUAD, 4)
+        if field not in igrid.cell_data:
+            raise ValueError(f"{ifile}: cell data {field!r} is missing")
+        if last_increment:
+            jd = _point_field(igrid, ifile, "last_increment", 4)
+        motion = np.asarray(igrid.cell_data[field], dtype=float)
+        code = np.searchsorted(np.asarray(MECHANISM_BINS), motion, side="right")
+        axis = np.asarray(igrid.cell_data["normal_axis"]).astype(int)
+    data = _StepData(bpts, bdisp, fixed, jp, jd, axis, code, None)
+    lam = None
+    summary_file = folder / "summary.json"
+    name = folder.name
+    if summary_file.is_file():
+        try:
+            summary = json.loads(summary_file.read_text())
+            name = str(summary.get("name", name))
+            lam = summary.get("lambda", lam)
+        except (OSError, ValueError):
+            pass
+    s = auto_scale(_max_displacement(data), _wall_size(data)) if scale is None else scale
+    gap = _gap(data, wsize)
+    path = _check_out(out, folder / f"mechanism_{view}.png", _IMAGE_SUFFIXES, "render_mechanism")
+    scene = _Scene(data, view, wsize, gap, palette=(MECHANISM_LABELS, MECHANISM_COLOURS))
+    try:
+        scene.update(data, s)
+        scene.frame_camera(_deformed_extent(data, s, gap))
+        what = "last increment" if last_increment else "collapse mode"
+        lam_txt = "" if lam is None else f" at lambda = {lam:.4g}"
+        scene.title(f"{name}: mechanism{lam_txt}\n{what}; joints by relative motion")
+        tmp = _atomic_target(path)
+        try:
+            scene.save(tmp)
+            tmp.replace(path)
+        finally:
+            tmp.unlink(missing_ok=True)
+    finally:
+        scene.close()
+    log.info("rendered the collapse mechanism of %s (%s view) to %s", folder, view, path)
     return path

@@ -10,10 +10,17 @@ two blocks' motion there); cell data ``interface_id``, ``block_i``, ``block_j``,
 ``normal_axis``, ``area``, ``actions`` (local [f1, f2, fn, m1, m2, m3]), ``normal_force``,
 ``shear_force`` (|f1, f2|), ``bending_moment`` (|m1, m2|), ``torsion``, ``state`` (0 elastic,
 1 sliding, 2 rocking, 3 sliding and rocking, 4 detached), ``flags``, ``utilisation``.
+
+mechanism (``mechanism_blocks.vtu``, ``mechanism_interfaces.vtu``, once per run that ends in
+collapse): the same meshes with the collapse mode as ``displacement`` (largest translation 1)
+and ``joint_motion``, the relative motion across each joint in that mode over its largest
+value: the crack pattern of the mechanism, which the states do not show (an unloaded dry head
+joint is "detached" from the first step).
 """
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import meshio
@@ -89,3 +96,51 @@ def write_step_vtu(folder: Path, model: Model, step: StepResult) -> tuple[str, s
     if model.interfaces.count:
         meshio.write(Path(folder) / names[1], interfaces_mesh(model, step), binary=True)
     return names
+
+
+#: file names of the collapse mechanism in a results folder
+MECHANISM_FILES = ("mechanism_blocks.vtu", "mechanism_interfaces.vtu")
+
+
+def joint_relative_motion(model: Model, dq: np.ndarray) -> np.ndarray:
+    """(m,) largest relative displacement between the two faces of each interface, over its
+    corners, for the block motion ``dq`` (n, 6): how much the joint opens, slides or turns."""
+    its = model.interfaces
+    blocks = model.blocks
+    corners = its.corner_points()
+    d_i = rigid_motion(dq[its.block_i], blocks.centres[its.block_i], corners)
+    d_j = rigid_motion(dq[its.block_j], blocks.centres[its.block_j], corners)
+    return np.linalg.norm(d_j - d_i, axis=2).max(axis=1)
+
+
+def write_mechanism_vtu(
+    folder: Path, model: Model, step: StepResult, mode: np.ndarray, increment: np.ndarray | None
+) -> tuple[str, str | None]:
+    """Write the collapse mechanism at ``step``: blocks moved by ``mode`` (n, 6) (point data
+    ``displacement``; ``last_increment`` too when given) and the interfaces with
+    ``joint_motion`` (relative displacement across the joint in the mode, divided by its
+    largest value) and, when given, ``joint_motion_last_increment``."""
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    moved = replace(step, q=mode)
+    bmesh = blocks_mesh(model, moved)
+    imesh = interfaces_mesh(model, moved) if model.interfaces.count else None
+    fields = {"joint_motion": mode}
+    if increment is not None:
+        fields["joint_motion_last_increment"] = increment
+        bmesh.point_data["last_increment"] = blocks_mesh(
+            model, replace(step, q=increment)
+        ).point_data["displacement"]
+        if imesh is not None:
+            imesh.point_data["last_increment"] = interfaces_mesh(
+                model, replace(step, q=increment)
+            ).point_data["displacement"]
+    meshio.write(folder / MECHANISM_FILES[0], bmesh, binary=True)
+    if imesh is None:
+        return MECHANISM_FILES[0], None
+    for name, field in fields.items():
+        motion = joint_relative_motion(model, field)
+        peak = float(motion.max(initial=0.0))
+        imesh.cell_data[name] = [motion / peak if peak > 0 else motion]
+    meshio.write(folder / MECHANISM_FILES[1], imesh, binary=True)
+    return MECHANISM_FILES

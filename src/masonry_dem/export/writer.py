@@ -1,7 +1,8 @@
 """Write an analysis to a results folder as it runs, so a failed run keeps every step.
 
 Folder layout: ``blocks.pvd``, ``interfaces.pvd``, ``steps/*.vtu``, ``pushover.csv``,
-``summary.json`` (and PNG renders next to them).
+``summary.json``, the collapse mechanism ``mechanism_blocks.vtu`` / ``mechanism_interfaces.vtu``
+when the run ends in collapse (and PNG renders next to them).
 """
 
 from __future__ import annotations
@@ -13,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from masonry_dem.export.pvd import write_pvd
-from masonry_dem.export.vtu import write_step_vtu
+from masonry_dem.export.vtu import write_mechanism_vtu, write_step_vtu
 from masonry_dem.model import Model
 from masonry_dem.results import History, StepResult, write_pushover_csv
 
@@ -61,6 +62,8 @@ class ResultsWriter:
         ):
             self(history.last, force=True)
         write_pushover_csv(self.folder / "pushover.csv", history)
+        if history.status == "collapse" and history.steps:
+            self._write_mechanism(history)
         summary = history.summary(
             blocks=self.model.blocks.count,
             interfaces=self.model.interfaces.count,
@@ -71,3 +74,16 @@ class ResultsWriter:
         (self.folder / "summary.json").write_text(json.dumps(summary, indent=2))
         log.info("results written to %s", self.folder)
         return summary
+
+    def _write_mechanism(self, history: History) -> None:
+        """The collapse mode at the last converged step (and the last increment) as VTU;
+        a mode that cannot be computed is logged, never fatal: the steps are already on disk."""
+        from masonry_dem.mechanism import collapse_mode
+
+        try:
+            mode = collapse_mode(self.model, history.last)
+        except (ValueError, RuntimeError, ArithmeticError) as exc:
+            log.warning("no collapse mechanism written to %s: %s", self.folder, exc)
+            return
+        increment = history.steps[-1].q - history.steps[-2].q if len(history.steps) > 1 else None
+        write_mechanism_vtu(self.folder, self.model, history.last, mode, increment)
