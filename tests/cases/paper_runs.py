@@ -11,6 +11,7 @@ from masonry_dem.solvers.incremental import pushover
 
 
 @cache
-def run_case(name: str) -> tuple[PaperCase, History]:
-    case = build_case(name)
+def run_case(name: str, **assumptions) -> tuple[PaperCase, History]:
+    """``assumptions``: changes to :class:`masonry_dem.cases.paper.Assumptions`."""
+    case = build_case(name, **assumptions)
     return case, pushover(case.model, case.settings, monitor=case.monitor)

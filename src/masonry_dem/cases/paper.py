@@ -74,8 +74,16 @@ class Assumptions:
         beams of a floor rest on the wall at the height of the hinge the paper reports
         (between courses 15 and 16), and transmit their weight vertically (dead) and, tilted
         with the table, lambda times it horizontally (live).
-    s32_top_restrained: whether the beams also hold the wall's top out of plane (False: the
-        panel is free-standing, as the paper says).
+    s32_top_restrained: whether the wall's top is also held out of plane (False).
+    s32_beams_hold: whether the beams hold the blocks they bear on out of plane (True). The
+        paper calls the panel free-standing on its base yet reports a hinge between courses
+        15 and 16 (Figure 17), which a panel that the beams only load cannot form: it turns
+        as a whole about its base at lambda 0.0615 (hand check, and ours). Beams tied at
+        their far ends, as floor joists are, hold the wall where they bear; the six courses
+        above then turn about the joint between courses 15 and 16 at lambda = s / (6 a) =
+        0.234. The beams then carry 156 N out of plane at collapse (8-19 N each), more than
+        dry friction under their own weight could (0.7 x 16.46 = 11.5 N): the reading needs
+        beams fixed to the wall or nailed, which the paper does not say.
     brick_unit_weight [N/m^3]: Chee Liang's clay bricks (not given): 18 kN/m^3, a common
         solid clay brick.
     simple_support_dofs: "simply supported" edges of Table 3 fix the out-of-plane translation
@@ -92,6 +100,7 @@ class Assumptions:
     sill_courses: int = 6
     s32_beam_course: int = 15
     s32_top_restrained: bool = False
+    s32_beams_hold: bool = True
     brick_unit_weight: float = 18.0e3
     simple_support_dofs: tuple[str, ...] = ("u3",)
 
@@ -265,6 +274,8 @@ def _restrepo_velez(spec: dict, data: dict, a: Assumptions) -> PaperCase:
         for blk, off in zip(under, offsets, strict=True):
             loads.append(PointLoad([blk], (0.0, -P, 0.0), tuple(off)))
             loads.append(PointLoad([blk], (0.0, 0.0, P), tuple(off), live=True))
+        if a.s32_beams_hold:
+            supports.append(Support(np.unique(under), ["u3"]))
         if a.s32_top_restrained:
             supports.append(Support(sel.edge(wall, "top"), ["u3"]))
         extra["beams_on_course"] = a.s32_beam_course
