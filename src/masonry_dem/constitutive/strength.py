@@ -277,16 +277,22 @@ def _energy_closest_point(
         ar, br, r0r, z0r, alr = a[rows], b[rows], r0[rows], z0[rows], al[rows]
         t_switch = 0.5 ** (1.0 / alr)
         x_switch = np.sqrt(0.5)
-        near_shear = _shear_half(t_switch, ar, br, r0r, z0r, alr)[0] >= 0.0
+        # the shear half in tau with t = tau^p: p = 2 below alpha = 2 makes t^alpha and its
+        # derivatives smooth at t = 0 (sqrt-like in t for alpha near 1.5)
+        power = np.where(alr < 2.0, 2.0, 1.0)
+        ones = np.ones_like(alr)
+        near_shear = _shear_half(t_switch, ar, br, r0r, z0r, alr, ones)[0] >= 0.0
         # alpha = 1 has a vertex on the shear axis; points in its normal cone return to it
         vertex = (alr == 1.0) & ((r0r - ar) * 0.5 * ar >= z0r * br)
         r[rows[vertex]] = ar[vertex]
         sh = np.flatnonzero(near_shear & ~vertex)
         to = np.flatnonzero(~near_shear)
         if sh.size:
-            args = (ar[sh], br[sh], r0r[sh], z0r[sh], alr[sh])
-            start = None if radial is None else radial[rows[sh]] * z0r[sh] / br[sh]
-            t = _bracketed_newton(_shear_half, args, t_switch[sh], start)
+            p = power[sh]
+            args = (ar[sh], br[sh], r0r[sh], z0r[sh], alr[sh], p)
+            start = None if radial is None else (radial[rows[sh]] * z0r[sh] / br[sh]) ** (1 / p)
+            tau = _bracketed_newton(_shear_half, args, t_switch[sh] ** (1 / p), start)
+            t = tau**p
             r[rows[sh]] = ar[sh] * np.sqrt(np.maximum(1.0 - t ** alr[sh], 0.0))
             z[rows[sh]] = br[sh] * t
         if to.size:
@@ -304,10 +310,19 @@ def _energy_closest_point(
     return r, z
 
 
-def _shear_half(t: NDArray, a: NDArray, b: NDArray, r0: NDArray, z0: NDArray, alpha: NDArray):
-    """g = d/dt of half the squared distance from (a sqrt(1 - t^alpha), b t) to (r0, z0),
-    and g'; smooth on t in [0, 2^(-1/alpha)]."""
+def _shear_half(
+    tau: NDArray,
+    a: NDArray,
+    b: NDArray,
+    r0: NDArray,
+    z0: NDArray,
+    alpha: NDArray,
+    power: NDArray,
+):
+    """g = d/dt of half the squared distance from (a sqrt(1 - t^alpha), b t) to (r0, z0) at
+    t = tau^power, and dg/dtau; smooth on t in [0, 2^(-1/alpha)]."""
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        t = tau**power
         ta = t**alpha
         u = 1.0 - ta
         su = np.sqrt(u)
@@ -316,8 +331,8 @@ def _shear_half(t: NDArray, a: NDArray, b: NDArray, r0: NDArray, z0: NDArray, al
         r = a * su
         dr = 0.5 * a * du / su
         d2r = a * (0.5 * d2u / su - 0.25 * du * du / (u * su))
-    g = (r - r0) * dr + (b * t - z0) * b
-    dg = dr * dr + (r - r0) * d2r + b * b
+        g = (r - r0) * dr + (b * t - z0) * b
+        dg = (dr * dr + (r - r0) * d2r + b * b) * power * t / tau
     return g, dg
 
 
