@@ -76,3 +76,15 @@ def test_mechanism_picture_shows_the_crack_at_the_base_only(tilted, tmp_path):
 def test_missing_mechanism_is_a_clear_error(tmp_path):
     with pytest.raises(FileNotFoundError, match="mechanism_blocks.vtu"):
         render.render_mechanism(tmp_path)
+
+
+def test_side_by_side_gallery_of_mechanisms(tilted, tmp_path):
+    _, _, folder = tilted
+    out = render.render_side_by_side(
+        [folder, folder], tmp_path / "g.png", view=["front", "side"], window_size=(200, 150),
+        mechanism=True,
+    )
+    img = iio.imread(out)[..., :3].astype(int)
+    assert img.shape[:2] == (150, 400)
+    crack = np.all(np.abs(img - np.array(render.MECHANISM_COLOURS[-1])) <= 12, axis=2)
+    assert crack[:, :200].any() and crack[:, 200:].any()  # the base crack in both panels

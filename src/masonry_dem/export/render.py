@@ -500,10 +500,7 @@ class _Scene:
             p.add_mesh(self.joints, scalars="rgb", rgb=True, lighting=False, show_scalar_bar=False)
         if legend:
             box = p.add_legend(
-                labels=[
-                    [name, [c / 255 for c in col]]
-                    for name, col in zip(*palette, strict=True)
-                ],
+                labels=[[name, [c / 255 for c in col]] for name, col in zip(*palette, strict=True)],
                 bcolor=(1.0, 1.0, 1.0),
                 border=True,
                 face="rectangle",
@@ -674,11 +671,13 @@ def render_side_by_side(
     step: int | str = "last",
     columns: int | None = None,
     window_size: Sequence[int] = (600, 450),
+    mechanism: bool = False,
 ) -> Path:
     """One PNG with several results folders (or several views of one: repeat the folder and
     give a list of views) rendered side by side, ``columns`` per row (default: all in one
     row), each panel ``window_size`` with its own title and automatic scale. For galleries
-    such as the paper's collapse mechanisms."""
+    such as the paper's collapse mechanisms (``mechanism=True``: the collapse mode of each
+    folder, as :func:`render_mechanism`, instead of ``step``)."""
     folders = [Path(f) for f in folders]
     if not folders:
         raise ValueError("render_side_by_side needs at least one results folder")
@@ -692,11 +691,21 @@ def render_side_by_side(
     if ncol < 1:
         raise ValueError(f"columns must be >= 1, got {columns!r}")
     path = _check_out(out, Path(out), _IMAGE_SUFFIXES, "render_side_by_side")
-    series = [open_results(f) for f in folders]
-    indices = [s.index_of(step) for s in series]
+    if mechanism:
+        scenes = [
+            lambda f=f, v=v: _mechanism_scene(f, v, None, wsize, False)
+            for f, v in zip(folders, views, strict=True)
+        ]
+    else:
+        series = [open_results(f) for f in folders]
+        indices = [s.index_of(step) for s in series]
+        scenes = [
+            lambda ser=ser, idx=idx, v=v: _step_scene(ser, idx, v, None, wsize)[0]
+            for ser, idx, v in zip(series, indices, views, strict=True)
+        ]
     panels = []
-    for ser, idx, v in zip(series, indices, views, strict=True):
-        scene, _ = _step_scene(ser, idx, v, None, wsize)
+    for make in scenes:
+        scene = make()
         try:
             panels.append(np.asarray(scene.image())[..., :3])
         finally:
@@ -844,26 +853,13 @@ def plot_pushover(folder: Path | str, out: Path | str | None = None) -> Path:
     return path
 
 
-def render_mechanism(
-    folder: Path | str,
-    view: str = "oblique",
-    scale: float | None = None,
-    out: Path | str | None = None,
-    window_size: Sequence[int] = (1200, 900),
-    last_increment: bool = False,
-) -> Path:
-    """PNG of the collapse mechanism of a results folder: the blocks moved by the collapse
-    mode (``mechanism_blocks.vtu``, written when a run ends in collapse) and every joint
-    coloured by the relative motion across it, as a share of the largest
-    (:data:`MECHANISM_BINS`): the cracks and hinges of the mechanism. ``last_increment``
-    uses the last displacement increment of the run instead of the mode. Written to ``out``
-    or ``<folder>/mechanism_<view>.png``; returns the path."""
+def _mechanism_scene(
+    folder: Path, view: str, scale: float | None, wsize: tuple[int, int], last_increment: bool
+) -> _Scene:
+    """A scene of the collapse mechanism of ``folder``, camera and title set; the caller
+    closes it."""
     from masonry_dem.export.vtu import MECHANISM_FILES
 
-    _check_view(view)
-    scale = _check_scale(scale)
-    wsize = _check_window(window_size)
-    folder = Path(folder)
     bfile, ifile = (folder / f for f in MECHANISM_FILES)
     if not bfile.is_file():
         raise FileNotFoundError(
@@ -887,19 +883,17 @@ def render_mechanism(
         code = np.searchsorted(np.asarray(MECHANISM_BINS), motion, side="right")
         axis = np.asarray(igrid.cell_data["normal_axis"]).astype(int)
     data = _StepData(bpts, bdisp, fixed, jp, jd, axis, code, None)
-    lam = None
+    name, lam = folder.name, None
     summary_file = folder / "summary.json"
-    name = folder.name
     if summary_file.is_file():
         try:
             summary = json.loads(summary_file.read_text())
             name = str(summary.get("name", name))
-            lam = summary.get("lambda", lam)
-        except (OSError, ValueError):
-            pass
+            lam = summary.get("lambda")
+        except (OSError, ValueError) as exc:
+            log.warning("summary.json of %s unreadable (%s): no title data", folder, exc)
     s = auto_scale(_max_displacement(data), _wall_size(data)) if scale is None else scale
     gap = _gap(data, wsize)
-    path = _check_out(out, folder / f"mechanism_{view}.png", _IMAGE_SUFFIXES, "render_mechanism")
     scene = _Scene(data, view, wsize, gap, palette=(MECHANISM_LABELS, MECHANISM_COLOURS))
     try:
         scene.update(data, s)
@@ -907,6 +901,33 @@ def render_mechanism(
         what = "last increment" if last_increment else "collapse mode"
         lam_txt = "" if lam is None else f" at lambda = {lam:.4g}"
         scene.title(f"{name}: mechanism{lam_txt}\n{what}; joints by relative motion")
+    except BaseException:
+        scene.close()
+        raise
+    return scene
+
+
+def render_mechanism(
+    folder: Path | str,
+    view: str = "oblique",
+    scale: float | None = None,
+    out: Path | str | None = None,
+    window_size: Sequence[int] = (1200, 900),
+    last_increment: bool = False,
+) -> Path:
+    """PNG of the collapse mechanism of a results folder: the blocks moved by the collapse
+    mode (``mechanism_blocks.vtu``, written when a run ends in collapse) and every joint
+    coloured by the relative motion across it, as a share of the largest
+    (:data:`MECHANISM_BINS`): the cracks and hinges of the mechanism. ``last_increment``
+    uses the last displacement increment of the run instead of the mode. Written to ``out``
+    or ``<folder>/mechanism_<view>.png``; returns the path."""
+    _check_view(view)
+    scale = _check_scale(scale)
+    wsize = _check_window(window_size)
+    folder = Path(folder)
+    path = _check_out(out, folder / f"mechanism_{view}.png", _IMAGE_SUFFIXES, "render_mechanism")
+    scene = _mechanism_scene(folder, view, scale, wsize, last_increment)
+    try:
         tmp = _atomic_target(path)
         try:
             scene.save(tmp)
