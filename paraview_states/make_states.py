@@ -19,6 +19,11 @@ States (all time-aware: the PVD readers give ParaView every step, the animation 
   interface lines coloured by state.
 * ``force_view.pvsm``: two front views side by side: interface ``normal_force`` (diverging map,
   compression blue) and ``utilisation`` (0..1).
+* ``mechanism.pvsm``: oblique view of the collapse mechanism (``mechanism_blocks.vtu`` and
+  ``mechanism_interfaces.vtu``, one mode, no time steps): blocks and interfaces through Warp By
+  Vector on ``displacement`` (the mode; sources ``warp blocks`` and ``warp interfaces``), blocks
+  plain, interface lines coloured by ``joint_motion`` through a 4-colour step lookup table equal
+  to the pyvista mechanism picture's bins and colours (``MECHANISM_BINS``/``MECHANISM_COLOURS``).
 
 Under pvbatch (internal use): ``pvbatch make_states.py --build DATA OUTDIR COLOURS_JSON``.
 """
@@ -34,7 +39,10 @@ import tempfile
 from pathlib import Path
 
 PLACEHOLDER = "/path/to/your/results"
-STATES = ("damage_map", "deformed_shape", "force_view")
+STATES = ("damage_map", "deformed_shape", "force_view", "mechanism")
+#: width of the ramp before each bin edge of the mechanism lookup table (a colour transfer
+#: function cannot hold two colours at one value): joint_motion >= edge gets the upper colour
+STEP = 1e-6
 HERE = Path(__file__).resolve().parent
 PACKAGE_COPY = HERE.parent / "src" / "masonry_dem" / "paraview_states"
 
@@ -231,15 +239,64 @@ def _build(data: str, outdir: str, colours_json: str) -> None:  # pragma: no cov
     pvs.AddCameraLink(left, right, "forces camera")
     time_aware()
     pvs.SaveState(os.path.join(outdir, "force_view.pvsm"))
+    pvs.RemoveCameraLink("forces camera")  # links outlive ResetSession: keep it out of the next
+
+    # ------------------------------------------------------------------ mechanism
+    reset()
+    mblocks = pvs.XMLUnstructuredGridReader(
+        registrationName="mechanism_blocks.vtu", FileName=[f"{data}/mechanism_blocks.vtu"]
+    )
+    minterfaces = pvs.XMLUnstructuredGridReader(
+        registrationName="mechanism_interfaces.vtu",
+        FileName=[f"{data}/mechanism_interfaces.vtu"],
+    )
+    layout = pvs.CreateLayout("mechanism")
+    view = new_view(axes=True)
+    pvs.AssignViewToLayout(view=view, layout=layout, hint=0)
+    wb = pvs.WarpByVector(registrationName="warp blocks", Input=mblocks)
+    wb.Vectors = ["POINTS", "displacement"]
+    wb.ScaleFactor = float(spec["mechanism_scale"])
+    wi = pvs.WarpByVector(registrationName="warp interfaces", Input=minterfaces)
+    wi.Vectors = ["POINTS", "displacement"]
+    wi.ScaleFactor = float(spec["mechanism_scale"])
+    blocks_display(wb, view, outlines=True)
+    lut = pvs.GetColorTransferFunction("joint_motion")
+    lines_display(wi, view, "joint_motion", lut, width=4.0)
+    # a step function: bin k (edges 0, *bins, 1) in colour k, as render_mechanism's
+    # searchsorted(bins, motion, side="right"); fixed range 0..1 (joint_motion / largest)
+    edges = [0.0, *spec["mechanism_bins"], 1.0]
+    points = []
+    for k, col in enumerate(spec["mechanism_colours"]):
+        rgb = [c / 255 for c in col]
+        upper = edges[k + 1] - (STEP if k + 2 < len(edges) else 0.0)
+        points += [edges[k], *rgb, upper, *rgb]
+    lut.Discretize = 0
+    lut.ColorSpace = "RGB"
+    lut.RGBPoints = points
+    lut.ScalarRangeInitialized = 1.0
+    lut.AutomaticRescaleRangeMode = "Never"
+    bar = scalar_bar(lut, view, "joint motion / largest")
+    bar.AutomaticLabelFormat = 0
+    bar.LabelFormat = "%-#.2f"
+    bar.RangeLabelFormat = "%-#.2f"
+    bar.UseCustomLabels = 1
+    bar.CustomLabels = list(spec["mechanism_bins"])
+    bar.AddRangeLabels = 1
+    annotate(view, "masonry_dem collapse mechanism: joints by relative motion in the mode")
+    oblique(view)
+    pvs.SaveState(os.path.join(outdir, "mechanism.pvsm"))
 
 
 # =========================================================================== driver side
-def _sample_results(folder: Path) -> float:
-    """A 6 x 6 running-bond wall, 4 steps, every damage state present; returns a warp scale."""
+def _sample_results(folder: Path) -> tuple[float, float]:
+    """A 6 x 6 running-bond wall, 4 steps, every damage state present, and a collapse
+    mechanism (the wall overturning out of plane about its base, its top three courses
+    turning further about the joint below them); returns the warp scales of the last step
+    and of the mechanism."""
     import numpy as np
 
     from masonry_dem.export.render import auto_scale
-    from masonry_dem.export.vtu import rigid_motion
+    from masonry_dem.export.vtu import rigid_motion, write_mechanism_vtu
     from masonry_dem.export.writer import ResultsWriter
     from masonry_dem.geometry.builders import add_base, running_bond_wall
     from masonry_dem.model import InterfaceMaterial, Model, SelfWeight, Support, WeightProportional
@@ -272,13 +329,40 @@ def _sample_results(folder: Path) -> float:
         hist.steps.append(step)
         writer(step)
     writer.finish(hist)
-    disp = rigid_motion(hist.last.q, model.blocks.centres, model.blocks.corner_points())
+    corners = model.blocks.corner_points()
+    disp = rigid_motion(hist.last.q, model.blocks.centres, corners)
     size = float(np.max(model.blocks.upper.max(axis=0) - model.blocks.lower.min(axis=0)))
-    return auto_scale(float(np.linalg.norm(disp, axis=2).max()), size)
+    scale = auto_scale(float(np.linalg.norm(disp, axis=2).max()), size)
+
+    # the mechanism: rotations about e1 (out of plane) about the base's and mid-height's front
+    centres, lower, upper = model.blocks.centres, model.blocks.lower, model.blocks.upper
+    moving = ~model.fixed.all(axis=1)
+    y_base = float(upper[~moving, 1].max())
+    y_mid = float(np.median(lower[moving, 1]))
+    z_front = float(upper[:, 2].max())
+    mode = np.zeros((model.blocks.count, 6))
+    for pivot_y, turn, sel in (
+        (y_base, 1.0, moving),
+        (y_mid, 0.6, moving & (lower[:, 1] >= y_mid - 1e-9)),
+    ):
+        w = np.array([-turn, 0.0, 0.0])
+        arm = centres[sel] - np.array([0.0, pivot_y, z_front])
+        mode[sel, :3] += np.cross(w, arm)
+        mode[sel, 3:] += w
+    mode /= np.linalg.norm(mode[:, :3], axis=1).max()
+    write_mechanism_vtu(folder, model, hist.last, mode, None)
+    mdisp = rigid_motion(mode, centres, corners)
+    return scale, auto_scale(float(np.linalg.norm(mdisp, axis=2).max()), size)
 
 
 def main() -> int:
-    from masonry_dem.export.render import BLOCK_COLOUR, STATE_COLOURS, SUPPORT_COLOUR
+    from masonry_dem.export.render import (
+        BLOCK_COLOUR,
+        MECHANISM_BINS,
+        MECHANISM_COLOURS,
+        STATE_COLOURS,
+        SUPPORT_COLOUR,
+    )
     from masonry_dem.results import STATE_NAMES
 
     for tool in ("pvbatch", "xvfb-run"):
@@ -287,7 +371,7 @@ def main() -> int:
             return 1
     with tempfile.TemporaryDirectory() as tmp:
         data = Path(tmp) / "sample"
-        scale = _sample_results(data)
+        scale, mechanism_scale = _sample_results(data)
         out = Path(tmp) / "states"
         out.mkdir()
         spec = json.dumps(
@@ -297,6 +381,9 @@ def main() -> int:
                 "block": list(BLOCK_COLOUR),
                 "support": list(SUPPORT_COLOUR),
                 "scale": scale,
+                "mechanism_bins": list(MECHANISM_BINS),
+                "mechanism_colours": [list(c) for c in MECHANISM_COLOURS],
+                "mechanism_scale": mechanism_scale,
             }
         )
         proc = subprocess.run(

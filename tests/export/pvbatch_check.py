@@ -47,7 +47,11 @@ def _state(path, data_dir, out, reset):
     files = {}
     for (name, _), src in pvs.GetSources().items():
         if hasattr(src, "FileName"):
-            files[name] = src.FileName
+            name_ = src.FileName  # a string (PVD reader) or a list (XML VTU reader)
+            if not isinstance(name_, str):
+                name_ = [str(f) for f in name_]
+                name_ = name_[0] if len(name_) == 1 else name_
+            files[name] = name_
     pvs.SaveScreenshot(out, layout, ImageResolution=[1200, 900])
     return {
         "timesteps": list(pvs.GetTimeKeeper().TimestepValues),

@@ -1,5 +1,7 @@
 """ParaView state files, tested in a real ParaView (``xvfb-run -a pvbatch``) against a results
-folder that is not the one the states were made from (other wall, other number of steps).
+folder that is not the one the states were made from (other wall, other number of steps); the
+mechanism state against a free-standing wall that collapsed by tilting about its base (its mode
+moves only the base joints: the crack colour must show there and nowhere else).
 
 Without pvbatch or xvfb-run the ParaView tests skip, saying so (they fail instead when
 MASONRY_DEM_REQUIRE_PARAVIEW=1, for CI); the tests of copy_state and of the shipped files run
@@ -22,13 +24,22 @@ from damage_pattern import build_model, states_at, write_results
 
 from masonry_dem.export import paraview_state
 from masonry_dem.export.pvd import read_pvd
-from masonry_dem.export.render import STATE_COLOURS
+from masonry_dem.export.render import (
+    MECHANISM_BINS,
+    MECHANISM_COLOURS,
+    STATE_COLOURS,
+    auto_scale,
+)
+from masonry_dem.export.vtu import MECHANISM_FILES
 from masonry_dem.results import STATE_NAMES
 
 REPO = Path(__file__).resolve().parents[2]
 USER_STATES = REPO / "paraview_states"
 CHECK = Path(__file__).with_name("pvbatch_check.py")
 PVBATCH_TIMEOUT = 300
+#: the time-aware states (blocks.pvd, interfaces.pvd); the mechanism state reads one mode
+STEP_STATES = tuple(n for n in paraview_state.STATES if n != "mechanism")
+TILT_COURSES = 6
 
 
 # --------------------------------------------------------------------------- helpers
@@ -101,6 +112,61 @@ def pv_results(tmp_path_factory):
     return model, folder
 
 
+@pytest.fixture(scope="module")
+def mech_results(tmp_path_factory):
+    """A free-standing 3 x 6 running-bond wall pushed out of plane: it tilts about its base
+    (lambda = s/H), the mode moves the base joints only (as in test_mechanism_render)."""
+    from masonry_dem.geometry.builders import add_base, running_bond_wall
+    from masonry_dem.model import (
+        InterfaceMaterial,
+        Model,
+        SelfWeight,
+        Support,
+        WeightProportional,
+    )
+    from masonry_dem.solvers.incremental import pushover
+
+    blocks, base = add_base(running_bond_wall(3, TILT_COURSES, 0.081, 0.21, 0.07, 20e3))
+    model = Model.build(
+        blocks,
+        InterfaceMaterial(kn=2.4e9, kt=1.0e9, friction=0.7),
+        supports=[Support([base])],
+        loads=[SelfWeight(), WeightProportional((0.0, 0.0, 1.0))],
+        name="tilting wall",
+    )
+    folder = tmp_path_factory.mktemp("pv_mech") / "wall"
+    hist = pushover(model, out=folder)
+    assert hist.status == "collapse", hist.reason
+    return model, folder
+
+
+@pytest.fixture
+def mech_copy(tmp_path, mech_results) -> Path:
+    dst = tmp_path / "mech"
+    shutil.copytree(mech_results[1], dst)
+    return dst
+
+
+def colour_mask(img: np.ndarray, colour, tol: float = 40.0, inside: bool = False) -> np.ndarray:
+    """Pixels within ``tol`` of ``colour``, with the scalar bar (upper right) and the
+    orientation axes (lower left) masked, as in damage_codes. ``inside``: only pixels at least
+    3 pixels from the white background (a grey of the anti-aliased wall outline, white fading
+    into the support's dark grey, is no joint)."""
+    rgb = img[..., :3].astype(float)
+    mask = np.linalg.norm(rgb - np.asarray(colour, dtype=float), axis=-1) < tol
+    if inside:
+        white = np.all(rgb >= 250, axis=-1)
+        near = white.copy()
+        for dr in range(-3, 4):
+            for dc in range(-3, 4):
+                near |= np.roll(np.roll(white, dr, axis=0), dc, axis=1)
+        mask &= ~near
+    h, w = mask.shape
+    mask[: int(0.4 * h), int(0.85 * w) :] = False
+    mask[int(0.75 * h) :, : int(0.2 * w)] = False
+    return mask
+
+
 # --------------------------------------------------------------------------- shipped files
 def test_user_copies_are_identical_to_the_shipped_states():
     for name in paraview_state.STATES:
@@ -121,11 +187,49 @@ def test_shipped_states_point_only_at_the_placeholder(name):
         if p.get("name") == "FileName"
         for e in p.findall("Element")
     ]
-    assert sorted(files) == sorted(
-        f"{paraview_state.PLACEHOLDER}/{f}" for f in ("blocks.pvd", "interfaces.pvd")
+    assert sorted(set(files)) == sorted(
+        f"{paraview_state.PLACEHOLDER}/{f}" for f in paraview_state.DATA_FILES[name]
     )
     text = paraview_state.state_path(name).read_text()
     assert "/tmp/" not in text and str(REPO) not in text
+
+
+def test_mechanism_state_reads_the_mechanism_files():
+    assert paraview_state.DATA_FILES["mechanism"] == MECHANISM_FILES
+    assert set(paraview_state.DATA_FILES) == set(paraview_state.STATES)
+
+
+def _lut_points(name: str, array: str) -> np.ndarray:
+    root = ET.parse(paraview_state.state_path(name)).getroot()
+    for proxy in root.iter("Proxy"):
+        if proxy.get("group") != "lookup_tables":
+            continue
+        props = {p.get("name"): p for p in proxy.findall("Property")}
+        # the LUT the joints are coloured with: the one holding the mechanism colours
+        values = [float(e.get("value")) for e in props["RGBPoints"].findall("Element")]
+        pts = np.array(values).reshape(-1, 4)
+        if len(pts) == 2 * len(MECHANISM_COLOURS):
+            discretize = props["Discretize"].find("Element").get("value")
+            assert discretize == "0", "a discretized LUT would move the bin edges"
+            return pts
+    raise AssertionError(f"no {array} lookup table with {len(MECHANISM_COLOURS)} bins")
+
+
+def test_mechanism_lookup_table_matches_the_pyvista_bins():
+    """The ParaView picture and render_mechanism colour every joint alike."""
+    pts = _lut_points("mechanism", "joint_motion")
+    assert pts[0, 0] == 0.0 and pts[-1, 0] == 1.0
+    motion = np.array(
+        [0.0, 0.01, 0.0499, 0.05, 0.1, 0.2499, 0.25, 0.3, 0.4999, 0.5, 0.7, 0.99, 1.0]
+    )
+    want = np.searchsorted(np.asarray(MECHANISM_BINS), motion, side="right")
+    rgb = np.stack([np.interp(motion, pts[:, 0], pts[:, c]) for c in (1, 2, 3)], axis=1)
+    np.testing.assert_allclose(
+        rgb * 255, np.asarray(MECHANISM_COLOURS, dtype=float)[want], atol=0.01
+    )
+    text = paraview_state.state_path("mechanism").read_text()
+    assert 'value="joint motion / largest"' in text
+    assert 'value="joint_motion"' in text
 
 
 def test_state_names():
@@ -156,6 +260,50 @@ def test_copy_state_fills_in_the_folder(results_copy):
     assert scales == [12.5, 12.5]
 
 
+def test_copy_state_mechanism(mech_copy):
+    out = paraview_state.copy_state("mechanism", mech_copy)
+    assert out == mech_copy / "mechanism.pvsm"
+    root = ET.parse(out).getroot()
+    files = sorted(
+        {
+            e.get("value")
+            for p in root.iter("Property")
+            if p.get("name") == "FileName"
+            for e in p.findall("Element")
+        }
+    )
+    assert files == [str((mech_copy / f).resolve()) for f in MECHANISM_FILES]
+    scales = [
+        float(p.find("Element").get("value"))
+        for proxy in root.iter("Proxy")
+        if proxy.get("type") == "WarpVector"
+        for p in proxy.findall("Property")
+        if p.get("name") == "ScaleFactor"
+    ]
+    # the mode's scale (largest translation 1): its largest point motion ~6.5 % of the wall
+    points, disp = paraview_state._read_points(mech_copy / MECHANISM_FILES[0])
+    size = float(np.max(np.ptp(points, axis=0)))
+    dmax = float(np.linalg.norm(disp, axis=1).max())
+    assert scales == [auto_scale(dmax, size)] * 2
+    assert 0.03 < scales[0] * dmax / size <= 0.065
+    assert scales[0] == paraview_state.warp_scale(mech_copy, mechanism=True)
+    assert scales[0] != paraview_state.warp_scale(mech_copy)  # not the last step's
+    out = paraview_state.copy_state("mechanism", mech_copy, scale=0.5, overwrite=True)
+    assert 'value="0.5"' in out.read_text()
+
+
+def test_copy_state_mechanism_needs_the_mechanism_files(results_copy, mech_copy):
+    """A run that did not collapse has no mechanism: the error names the missing file."""
+    with pytest.raises(FileNotFoundError, match="no collapse mechanism.*mechanism_blocks.vtu"):
+        paraview_state.copy_state("mechanism", results_copy)
+    assert not (results_copy / "mechanism.pvsm").exists()
+    (mech_copy / MECHANISM_FILES[1]).unlink()
+    with pytest.raises(FileNotFoundError, match="mechanism_interfaces.vtu is missing"):
+        paraview_state.copy_state("mechanism", mech_copy)
+    with pytest.raises(FileNotFoundError, match="not found"):
+        paraview_state.copy_state("mechanism", mech_copy / "missing")
+
+
 def test_copy_state_refuses_to_overwrite(results_copy):
     out = paraview_state.copy_state("damage_map", results_copy)
     out.write_text("edited by the user")
@@ -184,13 +332,30 @@ def test_cli_paraview_state(results_copy, capsys):
     from masonry_dem.cli import main
 
     assert main(["paraview-state", "all", str(results_copy)]) == 0
-    for name in paraview_state.STATES:
+    for name in STEP_STATES:
         assert (results_copy / f"{name}.pvsm").is_file()
+    # no collapse, no mechanism: 'all' skips it and says so
+    assert not (results_copy / "mechanism.pvsm").exists()
+    assert "mechanism state skipped" in capsys.readouterr().err
     assert main(["paraview-state", "damage_map", str(results_copy)]) == 2
     assert "exists" in capsys.readouterr().err
     assert main(["paraview-state", "damage_map", str(results_copy), "--force"]) == 0
     with pytest.raises(SystemExit):
         main(["paraview-state", "nope", str(results_copy)])
+
+
+def test_cli_paraview_state_mechanism(results_copy, mech_copy, capsys):
+    from masonry_dem.cli import main
+
+    assert main(["paraview-state", "mechanism", str(results_copy)]) == 2
+    err = capsys.readouterr().err
+    assert "no collapse mechanism" in err and "mechanism_blocks.vtu is missing" in err
+    assert main(["paraview-state", "mechanism", str(mech_copy)]) == 0
+    assert (mech_copy / "mechanism.pvsm").is_file()
+    assert main(["paraview-state", "all", str(mech_copy), "--force"]) == 0
+    for name in paraview_state.STATES:
+        assert (mech_copy / f"{name}.pvsm").is_file()
+    assert "skipped" not in capsys.readouterr().err
 
 
 # --------------------------------------------------------------------------- in ParaView
@@ -236,15 +401,24 @@ def test_pvd_with_falling_lambda_opens_with_step_numbers(pvbatch, tmp_path):
 
 
 @pytest.fixture(scope="module")
-def screenshots(pvbatch, pv_results, tmp_path_factory):
+def state_folders(pv_results, mech_results) -> dict[str, Path]:
+    """The results folder each state is loaded against."""
+    return {
+        name: mech_results[1] if name == "mechanism" else pv_results[1]
+        for name in paraview_state.STATES
+    }
+
+
+@pytest.fixture(scope="module")
+def screenshots(pvbatch, state_folders, tmp_path_factory):
     """Every state loaded twice: LoadState(data_directory=folder) (then Reset Camera, as a user
     would for a wall of another size), and the copy_state copy loaded as is."""
     import imageio.v3 as iio
 
-    model, folder = pv_results
     out_dir = tmp_path_factory.mktemp("pv_shots")
     jobs, keys = [], []
     for name in paraview_state.STATES:
+        folder = state_folders[name]
         jobs.append(
             [
                 str(paraview_state.state_path(name)),
@@ -266,14 +440,18 @@ def screenshots(pvbatch, pv_results, tmp_path_factory):
 @pytest.mark.paraview
 @pytest.mark.parametrize("how", ["search", "copy"])
 @pytest.mark.parametrize("name", paraview_state.STATES)
-def test_state_loads_against_a_results_folder(screenshots, pv_results, name, how):
-    _, folder = pv_results
+def test_state_loads_against_a_results_folder(screenshots, state_folders, name, how):
+    folder = state_folders[name]
     info, img = screenshots[name, how]
-    times = [t for t, _ in read_pvd(folder / "blocks.pvd")]
     assert info["files"] == {
-        "blocks.pvd": str((folder / "blocks.pvd").resolve()),
-        "interfaces.pvd": str((folder / "interfaces.pvd").resolve()),
+        f: str((folder / f).resolve()) for f in paraview_state.DATA_FILES[name]
     }
+    if name == "mechanism":  # one mode, no time steps
+        assert info["timesteps"] == [] and info["views"] == 1
+        assert {"warp blocks", "warp interfaces"} <= set(info["sources"])
+        assert_not_blank(img)
+        return
+    times = [t for t, _ in read_pvd(folder / "blocks.pvd")]
     # time-aware: ParaView knows every step of this folder (5, the states were made with 4)
     assert info["timesteps"] == pytest.approx(times)
     assert info["end_time"] == pytest.approx(times[-1])
@@ -308,3 +486,28 @@ def test_force_view_shows_both_fields(screenshots):
         h = img.shape[0]
         for half in (img[: h // 2], img[h // 2 :]):  # normal force above, utilisation below
             assert_not_blank(half)
+
+
+@pytest.mark.paraview
+@pytest.mark.parametrize("how", ["search", "copy"])
+def test_mechanism_crack_colour_along_the_base_only(screenshots, how):
+    """The wall tilts about its base: the base joints move the most (joint_motion 1, dark red),
+    every other joint < 5 % (light grey); the picture shows exactly that."""
+    _, img = screenshots["mechanism", how]
+    crack = colour_mask(img, MECHANISM_COLOURS[-1])
+    shut = colour_mask(img, MECHANISM_COLOURS[0], tol=12.0, inside=True)
+    assert crack.sum() > 150, f"crack colour missing ({crack.sum()} pixels)"
+    assert shut.sum() > 1000, f"the shut joints above the base are missing ({shut.sum()} pixels)"
+    for colour in MECHANISM_COLOURS[1:3]:  # no joint between 5 and 50 %
+        assert colour_mask(img, colour, tol=30.0).sum() < 20
+    rows, cols = np.nonzero(crack)
+    # the crack is the lowest joint line in every column it crosses (image rows grow down) ...
+    for c in np.unique(cols):
+        above = np.nonzero(shut[:, c])[0]
+        if above.size:
+            assert rows[cols == c].min() >= above.max() - 4, f"crack above a shut joint, x={c}"
+    # ... and it runs along the wall's length, below the shut joints of the wall above
+    shut_rows, shut_cols = np.nonzero(shut)
+    span = np.ptp(shut_cols)
+    assert np.ptp(cols) > 0.7 * span
+    assert np.median(rows) > np.percentile(shut_rows, 90)

@@ -12,11 +12,14 @@ from masonry_dem.export.paraview_state import STATES
 def add_parser(subparsers) -> argparse.ArgumentParser:
     p = subparsers.add_parser(
         "paraview-state",
-        help="write a ParaView state (damage map, deformed shape, forces) into a results folder",
+        help="write a ParaView state (damage map, deformed shape, forces, mechanism) into a "
+        "results folder",
         description="Copy a ParaView state into a results folder with the data file paths, "
         "the camera and the warp scale filled in. States: damage_map (interfaces coloured by "
         "state), deformed_shape (Warp By Vector on displacement), force_view (normal force and "
-        "utilisation). 'all' writes the three.",
+        "utilisation), mechanism (the collapse mode, joints by relative motion; needs "
+        "mechanism_blocks.vtu and mechanism_interfaces.vtu, written when a run ends in "
+        "collapse). 'all' writes every state the folder has the data for.",
     )
     p.add_argument("name", choices=STATES + ("all",), help="state to copy")
     p.add_argument("results", help="results folder (blocks.pvd, interfaces.pvd, steps/)")
@@ -29,9 +32,11 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
 
 
 def run(args: argparse.Namespace) -> int:
-    from masonry_dem.export.paraview_state import copy_state
+    from masonry_dem.export.paraview_state import copy_state, has_data
 
-    names = STATES if args.name == "all" else (args.name,)
+    names = (args.name,)
+    if args.name == "all":  # the mechanism state only for a run that ended in collapse
+        names = tuple(n for n in STATES if n != "mechanism" or has_data(n, args.results))
     try:
         paths = [copy_state(n, args.results, scale=args.scale, overwrite=args.force) for n in names]
     except FileExistsError as exc:
@@ -39,6 +44,12 @@ def run(args: argparse.Namespace) -> int:
         return 2
     for path in paths:
         print(path)
+    if args.name == "all" and "mechanism" not in names:
+        print(
+            "mechanism state skipped: no collapse mechanism in this folder "
+            "(mechanism_*.vtu are written when a run ends in collapse)",
+            file=sys.stderr,
+        )
     if paths:
         print(f"open with: paraview --state={paths[0]}")
     return 0
