@@ -72,6 +72,15 @@ _CONTROL_TOLERANCE = 1e-6
 _MAX_CUTS = 10
 #: a step whose d(lambda)/dw is below this fraction of the elastic one gains nothing
 _FLAT_SLOPE = 1e-3
+#: pseudo-transient step (see StaticSolver._pseudo_transient): tried once work control has
+#: halved its step _TRANSIENT_AFTER times in a row; the first pseudo time step is
+#: 1 / _TRANSIENT_START (the floor of the tangent, in units of the elastic stiffness), divided
+#: by _TRANSIENT_SHRINK beyond the residual ratio after a step that lowers the residual; it
+#: gives up when the residual has not halved in _TRANSIENT_WINDOW steps
+_TRANSIENT_AFTER = 2
+_TRANSIENT_START = 1e-3
+_TRANSIENT_SHRINK = 0.25
+_TRANSIENT_WINDOW = 50
 
 
 @dataclass(frozen=True)
@@ -98,6 +107,10 @@ class StaticSettings:
     rescue_time_steps: budget of a dynamic relaxation of a load step that Newton could not
         solve (then polished by Newton); 0 (default) disables it. It finds equilibria Newton
         misses at kinks of the interface law, at about the cost of dynamic relaxation.
+    transient_steps: budget of the pseudo-transient step that work control takes where
+        Newton stops at a fold of the path (see ``StaticSolver._pseudo_transient``): lambda
+        raised by ``bracket_tolerance`` and the state relaxed by implicit, overdamped pseudo
+        time steps; 0 disables it (work control then stops there).
     """
 
     initial_step: float = 0.02
@@ -116,6 +129,7 @@ class StaticSettings:
     robust_iterations: int = 400
     continuation: str = "work"
     rescue_time_steps: int = 0
+    transient_steps: int = 300
 
     def __post_init__(self) -> None:
         for name in (
@@ -132,6 +146,8 @@ class StaticSettings:
             raise ValueError(f"growth must be >= 1, got {self.growth!r}")
         if self.rescue_time_steps < 0:
             raise ValueError(f"rescue_time_steps must be >= 0, got {self.rescue_time_steps!r}")
+        if self.transient_steps < 0:
+            raise ValueError(f"transient_steps must be >= 0, got {self.transient_steps!r}")
         if self.robust_iterations < 0:
             raise ValueError(f"robust_iterations must be >= 0, got {self.robust_iterations!r}")
         if self.max_iterations < 1 or self.max_steps < 1:
@@ -527,6 +543,77 @@ class StaticSolver:
             f"(residual {best[0]:.2e})",
         )
 
+    def _pseudo_transient(self, target: float) -> _Outcome:
+        """Pseudo-transient continuation to equilibrium at ``target`` from the last converged
+        state: backward-Euler steps of the overdamped motion D dq/dt = R(q), with D the
+        elastic stiffness of the joints (the floor of the tangent),
+
+            (K_t + D / dt) dq = R(q),
+
+        the pseudo time step dt grown as the residual falls (switched evolution relaxation,
+        dt ~ 1 / |R|, grown faster while the residual falls) until the steps are Newton's.
+        There is no line search: the residual may rise on the way.
+
+        Work control stops where the equilibrium path folds at a kink of the law (a joint that
+        changes state turns the path back in w, or a block between two sliding joints is left
+        with almost no stiffness along a mode the load does not drive): no Newton correction
+        lowers the residual from the last state, for any step. A damped motion goes round
+        such a fold as dynamic relaxation does, to a stable equilibrium at the higher load,
+        with few steps since each is implicit. Every accepted state meets the static
+        tolerance on the exact residual. It fails when the displacements pass the limit
+        (a mechanism), or the residual has not halved in _TRANSIENT_WINDOW steps, or the
+        budget ``transient_steps`` runs out."""
+        s = self.settings
+        free = self.asm.free_index
+        q = self.q.copy()
+        residual, rnorm, response = self._residual(q, target)
+        floor = _TRANSIENT_START
+        best = [rnorm]
+        for it in range(1, s.transient_steps + 1):
+            if rnorm <= s.tolerance:
+                self._last_increment = float(
+                    np.abs((q - self.q)[free][self._translation]).max(initial=0.0)
+                )
+                return _Outcome(True, q, target, response, it - 1)
+            self.iterations += 1
+            dq = self._factor(response, floor).solve(residual)
+            if not np.all(np.isfinite(dq)):
+                floor = min(10.0 * floor, 1.0)
+                continue
+            size = float(np.abs(dq[self._translation]).max(initial=0.0))
+            if size > 0.1 * self.limit:  # no pseudo time step moves a block that far
+                dq *= 0.1 * self.limit / size
+            q_new = q.copy()
+            q_new[free] += dq
+            r_new, n_new, resp_new = self._residual(q_new, target)
+            if not n_new < 10.0 * rnorm:  # too long a time step: repeat it shorter
+                floor = min(10.0 * floor, 1.0)
+                continue
+            ratio = n_new / rnorm
+            q, residual, rnorm, response = q_new, r_new, n_new, resp_new
+            if ratio < 1.0:
+                ratio *= _TRANSIENT_SHRINK
+            floor = min(max(floor * ratio, s.residual_stiffness), 1.0)
+            umax = float(np.abs((q - self.q)[free][self._translation]).max(initial=0.0))
+            if umax > self.limit:
+                return _Outcome(
+                    False, q, target, response, it,
+                    f"displacements exceed the limit {self.limit:.3g} m (a mechanism)",
+                )
+            best.append(min(best[-1], rnorm))
+            if len(best) > _TRANSIENT_WINDOW and best[-1] > 0.5 * best[-1 - _TRANSIENT_WINDOW]:
+                return _Outcome(
+                    False, q, target, response, it,
+                    f"no rest: the residual {rnorm:.2e} has not halved in "
+                    f"{_TRANSIENT_WINDOW} pseudo time steps",
+                )
+        if rnorm <= s.tolerance:
+            return _Outcome(True, q, target, response, s.transient_steps)
+        return _Outcome(
+            False, q, target, response, s.transient_steps,
+            f"no rest in {s.transient_steps} pseudo time steps (residual {rnorm:.2e})",
+        )
+
     def _dynamic_rescue(self, target: float, last: float) -> _Outcome | None:
         """Dynamic relaxation of a load step Newton could not solve, from the last converged
         state, then Newton from where it came to rest (so an accepted state meets the static
@@ -747,6 +834,8 @@ class StaticSolver:
         elastic_slope = (path_lam[1] - path_lam[0]) / max(path_w[1] - path_w[0], 1e-300)
         flat_steps = 0
         cuts = 0
+        first_dw = dw
+        transient_from = -1  # the step from which the last pseudo-transient step started
         reason = ""
         while len(hist.steps) < s.max_steps:
             goal = w + dw
@@ -772,7 +861,30 @@ class StaticSolver:
                 dw /= 2
                 # a step below this cannot be told from no step (the control tolerance)
                 tiny = 1e-4 * max(abs(w), path_w[1] - path_w[0], 1e-8 * self.limit)
-                if cuts > _MAX_CUTS or dw < tiny:
+                stuck = cuts > _MAX_CUTS or dw < tiny
+                if (
+                    (stuck or cuts == _TRANSIENT_AFTER)
+                    and s.transient_steps > 0
+                    and transient_from != len(hist.steps)
+                ):
+                    # Newton stops at a fold of the path: a pseudo-transient step to a
+                    # lambda a little higher, once from each state
+                    transient_from = len(hist.steps)
+                    target = lam + s.bracket_tolerance * abs(lam)
+                    moved = self._pseudo_transient(target)
+                    log.debug("work control stuck at lambda=%.6g (%s); pseudo-transient step "
+                              "to %.6g: %s", lam, out.reason, target,
+                              f"ok in {moved.iterations}" if moved.ok else moved.reason)
+                    if moved.ok:
+                        record(moved)
+                        lam = float(moved.load_factor)
+                        w = float(c @ (moved.q[free] - q0))
+                        path_w.append(w)
+                        path_lam.append(lam)
+                        peak = max(peak, lam)
+                        dw, cuts, flat_steps = first_dw, 0, 0
+                        continue
+                if stuck:
                     reason = (
                         f"no equilibrium beyond lambda={lam:.6g} under work control "
                         f"({out.reason})"
