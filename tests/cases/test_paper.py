@@ -92,8 +92,11 @@ def test_orduna_lourenco_panel_collapses_with_a_refined_bracket():
     assert h.status == "collapse", h.reason
     lo, hi = h.collapse_bracket
     assert hi - lo <= 0.005 * lo * 1.0001
-    # measured 0.2519; the paper's DEM gives 0.175, FEM 0.210, limit analysis 0.127
-    assert 0.24 < lo < 0.26
+    # measured 0.2824: the peak of this model's pushover curve (dynamic relaxation finds
+    # 0.2817-0.2826), which work control reaches since it takes pseudo-transient steps where
+    # Newton stops at folds of the path (0.2527 before). Not the paper's value: its DEM gives
+    # 0.175, FEM 0.210, limit analysis 0.127
+    assert 0.275 < lo < 0.29
 
 
 def test_wall_held_on_one_edge_fails_along_a_diagonal():

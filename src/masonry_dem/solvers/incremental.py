@@ -20,11 +20,13 @@ so a failure caused only by a long step does not stop the analysis.
 
 Load control cannot pass a limit point, and near a plastic plateau it creeps; so from the end
 of the bracket the curve is followed with the work-conjugate displacement of the live load
-prescribed and lambda free (``continuation="work"``) until it is flat. Newton can still stop
-where many joints sit on the edge between two states (a kink of the law) even for tiny
-increments; the answer is then a lower bound of the model's collapse load that may move with
-the steps taken (a few per cent, docs/validation.md), and ``rescue_time_steps`` lets dynamic
-relaxation take such steps.
+prescribed and lambda free (``continuation="work"``) until it is flat. Newton still stops
+where the path folds at a kink of the law (a joint changing state turns the path back, or
+leaves a block with almost no stiffness along a mode the load does not drive), for any
+increment; there work control takes a pseudo-transient step (implicit overdamped relaxation
+to a slightly higher lambda, ``transient_steps``) and goes on from where it comes to rest, so
+that the answer is the peak of the curve and does not move with the steps taken
+(docs/solvers.md). ``rescue_time_steps`` lets dynamic relaxation take failed load steps.
 """
 
 from __future__ import annotations
@@ -73,14 +75,15 @@ _MAX_CUTS = 10
 #: a step whose d(lambda)/dw is below this fraction of the elastic one gains nothing
 _FLAT_SLOPE = 1e-3
 #: pseudo-transient step (see StaticSolver._pseudo_transient): tried once work control has
-#: halved its step _TRANSIENT_AFTER times in a row; the first pseudo time step is
+#: halved its step _TRANSIENT_AFTER times in a row (after one has failed: only where work
+#: control would stop), once from each state; the first pseudo time step is
 #: 1 / _TRANSIENT_START (the floor of the tangent, in units of the elastic stiffness), divided
 #: by _TRANSIENT_SHRINK beyond the residual ratio after a step that lowers the residual; it
 #: gives up when the residual has not halved in _TRANSIENT_WINDOW steps
 _TRANSIENT_AFTER = 2
 _TRANSIENT_START = 1e-3
 _TRANSIENT_SHRINK = 0.25
-_TRANSIENT_WINDOW = 50
+_TRANSIENT_WINDOW = 30
 
 
 @dataclass(frozen=True)
@@ -129,7 +132,7 @@ class StaticSettings:
     robust_iterations: int = 400
     continuation: str = "work"
     rescue_time_steps: int = 0
-    transient_steps: int = 300
+    transient_steps: int = 100
 
     def __post_init__(self) -> None:
         for name in (
@@ -816,8 +819,11 @@ class StaticSolver:
         ``bracket_tolerance`` x lambda since w / 2 (w measured from the dead-load state);
         three steps in a row gain less than ``_FLAT_SLOPE`` of the elastic d(lambda)/dw (a
         formed mechanism, or creeping steps when Newton stalls at a kink); the step has been
-        halved ``_MAX_CUTS`` times or below what the control tolerance can resolve; the
-        displacements pass the limit. The collapse multiplier is the highest lambda on the
+        halved ``_MAX_CUTS`` times or below what the control tolerance can resolve, and a
+        pseudo-transient step to lambda x (1 + ``bracket_tolerance``) finds no rest either
+        (one is tried as soon as the step has been halved ``_TRANSIENT_AFTER`` times in a
+        row: a fold of the path, which no shorter step passes); the displacements pass the
+        limit. The collapse multiplier is the highest lambda on the
         path; if it is not above the load-control bracket, the bracket and its reason stay."""
         s = self.settings
         free = self.asm.free_index
@@ -836,6 +842,7 @@ class StaticSolver:
         cuts = 0
         first_dw = dw
         transient_from = -1  # the step from which the last pseudo-transient step started
+        transient_failed = False
         reason = ""
         while len(hist.steps) < s.max_steps:
             goal = w + dw
@@ -863,7 +870,7 @@ class StaticSolver:
                 tiny = 1e-4 * max(abs(w), path_w[1] - path_w[0], 1e-8 * self.limit)
                 stuck = cuts > _MAX_CUTS or dw < tiny
                 if (
-                    (stuck or cuts == _TRANSIENT_AFTER)
+                    (stuck or (cuts == _TRANSIENT_AFTER and not transient_failed))
                     and s.transient_steps > 0
                     and transient_from != len(hist.steps)
                 ):
@@ -884,6 +891,7 @@ class StaticSolver:
                         peak = max(peak, lam)
                         dw, cuts, flat_steps = first_dw, 0, 0
                         continue
+                    transient_failed = True
                 if stuck:
                     reason = (
                         f"no equilibrium beyond lambda={lam:.6g} under work control "
