@@ -46,6 +46,7 @@ STATIC_GRID: tuple[tuple[str, dict], ...] = (
     ("fine steps", {"initial_step": 0.01, "max_step": 0.05}),
     ("tolerance 1e-5", {"tolerance": 1e-5}),
     ("load control only", {"continuation": "bracket"}),
+    ("no pseudo-transient", {"transient_steps": 0}),
     ("DR rescue 4000", {"rescue_time_steps": 4000}),
     ("DR rescue 16000", {"rescue_time_steps": 16_000}),
     ("modified iteration", {"iteration": "modified"}),
