@@ -22,11 +22,15 @@ SENSITIVITY = [
     ("S13", {"dry_kn": 2.4e8, "dry_kt": 1.0e8}),
     ("S13", {"column_dofs_table2": ("u1", "u3")}),
     ("S5", {"column_dofs_table2": ("u1", "u3")}),
+    ("S32", {"s32_beams_hold": False}),
     ("S32", {"s32_beam_course": 16}),
     ("S32", {"s32_top_restrained": True}),
     ("9-13", {"brick_unit_weight": 16e3}),
     ("9-13", {"brick_unit_weight": 20e3}),
-    ("9-13", {"simple_support_dofs": ("u3", "w2")}),
+    ("9-13", {"simple_support": "dofs"}),
+    ("2-3", {"simple_support": "dofs"}),
+    ("2-3", {"support_strip_width": 0.02}),
+    ("2-3", {"support_strip_width": 0.04}),
 ]
 
 

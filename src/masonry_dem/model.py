@@ -257,6 +257,14 @@ class Model:
         return 6 * self.blocks.count
 
     @property
+    def smallest_moving_size(self) -> float:
+        """Smallest dimension of the blocks that can move (fully fixed supports excluded,
+        so a thin support strip does not shrink the solvers' displacement limit)."""
+        moving = ~self.fixed.all(axis=1)
+        sizes = self.blocks.sizes[moving] if moving.any() else self.blocks.sizes
+        return float(sizes.min())
+
+    @property
     def free(self) -> np.ndarray:
         """(6n,) bool mask of free DOFs (block-major)."""
         return ~self.fixed.reshape(-1)

@@ -143,3 +143,29 @@ def test_wall_held_on_both_edges_opens_on_the_axis():
     # the top of the axis moves more than mid-height: the halves rotate about diagonals
     mid = courses[len(courses) // 2]
     assert du[np.isclose(c[:, 1], mid)].max() < 0.5
+
+
+def test_simple_support_strips_hold_the_edges_at_the_face():
+    """Table 3 supports: fixed strips behind the leeward face along the supported edges (and
+    a slab under the wall), joined by dry contacts; bad values are named."""
+    case = build_case("4-5")  # top edge free: strips on bottom, left, right
+    model = case.model
+    n_wall = case.wall.size
+    supports = np.arange(n_wall, model.blocks.count)
+    assert supports.size == 4
+    assert model.fixed[supports].all() and not model.fixed[case.wall].any()
+    its = model.interfaces
+    touch = np.isin(its.block_i, supports) | np.isin(its.block_j, supports)
+    assert touch.sum() > 0
+    assert np.all(model.tensile_strength[touch] == 0.0)  # dry contacts: no tension
+    assert np.all(model.tensile_strength[~touch] > 0.0)  # mortar joints
+    # each strip lies behind the leeward face (z beyond the wall), the slab under it
+    wall_hi = model.blocks.upper[case.wall].max(axis=0)
+    wall_lo = model.blocks.lower[case.wall].min(axis=0)
+    behind = model.blocks.lower[supports, 2] >= wall_hi[2] - 1e-12
+    under = model.blocks.upper[supports, 1] <= wall_lo[1] + 1e-12
+    assert behind.sum() == 3 and under.sum() == 1
+    with pytest.raises(ValueError, match="simple_support"):
+        build_case("4-5", simple_support="pinned")
+    with pytest.raises(ValueError, match="support_strip_width"):
+        build_case("4-5", support_strip_width=-1.0)

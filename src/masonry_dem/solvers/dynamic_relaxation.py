@@ -47,8 +47,8 @@ energy below ``energy_tolerance`` times its peak in the step.
 
 Failure, never a wrong lambda:
 
-* a mechanism: displacements beyond ``displacement_limit`` (default half the smallest block
-  size), or a residual that does not halve within ``stall_factor`` times the time steps of the
+* a mechanism: displacements beyond ``displacement_limit`` (default half the smallest size of
+  the blocks that can move), or a residual that does not halve within ``stall_factor`` times the time steps of the
   slowest converged step: the load step fails and the bracket is refined as in the static
   solver; the run ends with status ``"collapse"``;
 * blow-up (the time step is above the stability limit): a stable central-difference step never
@@ -237,7 +237,7 @@ class DynamicRelaxation:
         self.limit = (
             s.displacement_limit
             if s.displacement_limit is not None
-            else 0.5 * float(model.blocks.sizes.min())
+            else 0.5 * model.smallest_moving_size
         )
         self._translation = (free % 6) < 3
         # residual norm: moments as forces at the median block size (as the static solver)

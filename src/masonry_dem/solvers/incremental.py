@@ -97,7 +97,8 @@ class StaticSettings:
         median block size) below which a state is in equilibrium.
     max_iterations: Newton iterations per attempt.
     displacement_limit: largest translation [m] still in the small-displacement range
-        (None: half the smallest block dimension); beyond it the step has found a mechanism.
+        (None: half the smallest dimension of the blocks that can move); beyond it the step
+        has found a mechanism.
     tension, memory: interface law options (see :mod:`masonry_dem.constitutive.law`).
     residual_stiffness: fraction of the elastic stiffness kept on the diagonal of the tangent.
     robust_iterations: budget of the second strategy (initial-stiffness iterations with
@@ -248,7 +249,7 @@ class StaticSolver:
         self.limit = (
             s.displacement_limit
             if s.displacement_limit is not None
-            else 0.5 * float(blocks.sizes.min())
+            else 0.5 * model.smallest_moving_size
         )
         # residual norm: moments as forces at the median block size
         length = float(np.median(blocks.sizes))
