@@ -81,6 +81,10 @@ _FLAT_SLOPE = 1e-3
 #: by _TRANSIENT_SHRINK beyond the residual ratio after a step that lowers the residual; it
 #: gives up when the residual has not halved in _TRANSIENT_WINDOW steps
 _TRANSIENT_AFTER = 2
+#: the pseudo-transient step relaxes to lambda x (1 + _TRANSIENT_RISE): far enough to leave
+#: the fold, near enough not to jump past the peak (the bracket tolerance is no measure of
+#: that: at 1e-4 the step does not leave the fold, at 2 % it passes the peak)
+_TRANSIENT_RISE = 0.005
 _TRANSIENT_START = 1e-3
 _TRANSIENT_SHRINK = 0.25
 _TRANSIENT_WINDOW = 30
@@ -113,7 +117,7 @@ class StaticSettings:
         misses at kinks of the interface law, at about the cost of dynamic relaxation.
     transient_steps: budget of the pseudo-transient step that work control takes where
         Newton stops at a fold of the path (see ``StaticSolver._pseudo_transient``): lambda
-        raised by ``bracket_tolerance`` and the state relaxed by implicit, overdamped pseudo
+        raised by 0.5 % and the state relaxed by implicit, overdamped pseudo
         time steps; 0 disables it (work control then stops there).
     """
 
@@ -821,7 +825,7 @@ class StaticSolver:
         three steps in a row gain less than ``_FLAT_SLOPE`` of the elastic d(lambda)/dw (a
         formed mechanism, or creeping steps when Newton stalls at a kink); the step has been
         halved ``_MAX_CUTS`` times or below what the control tolerance can resolve, and a
-        pseudo-transient step to lambda x (1 + ``bracket_tolerance``) finds no rest either
+        pseudo-transient step to lambda x (1 + _TRANSIENT_RISE) finds no rest either
         (one is tried as soon as the step has been halved ``_TRANSIENT_AFTER`` times in a
         row: a fold of the path, which no shorter step passes); the displacements pass the
         limit. The collapse multiplier is the highest lambda on the
@@ -878,7 +882,7 @@ class StaticSolver:
                     # Newton stops at a fold of the path: a pseudo-transient step to a
                     # lambda a little higher, once from each state
                     transient_from = len(hist.steps)
-                    target = lam + s.bracket_tolerance * abs(lam)
+                    target = lam + _TRANSIENT_RISE * abs(lam)
                     moved = self._pseudo_transient(target)
                     log.debug("work control stuck at lambda=%.6g (%s); pseudo-transient step "
                               "to %.6g: %s", lam, out.reason, target,
