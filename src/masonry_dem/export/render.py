@@ -592,6 +592,19 @@ class _Scene:
         self.plotter.close()
 
 
+def _save_and_close(scene: _Scene, path: Path) -> None:
+    """Write the scene to ``path`` atomically (no half-written PNG), then close it."""
+    try:
+        tmp = _atomic_target(path)
+        try:
+            scene.save(tmp)
+            tmp.replace(path)
+        finally:
+            tmp.unlink(missing_ok=True)
+    finally:
+        scene.close()
+
+
 def _title(series: ResultsSeries, index: int, data: _StepData, scale: float) -> str:
     lam = data.load_factor if data.load_factor is not None else series.load_factors[index]
     lam_txt = "n/a" if lam is None or not np.isfinite(lam) else f"{lam:.4g}"
@@ -644,15 +657,7 @@ def render_step(
     default = series.folder / f"render_{view}_{int(series.steps[index]):04d}.png"
     path = _check_out(out, default, _IMAGE_SUFFIXES, "render_step")
     scene, s = _step_scene(series, index, view, scale, wsize)
-    try:
-        tmp = _atomic_target(path)
-        try:
-            scene.save(tmp)
-            tmp.replace(path)
-        finally:
-            tmp.unlink(missing_ok=True)
-    finally:
-        scene.close()
+    _save_and_close(scene, path)
     log.info(
         "rendered step %d of %s (%s view, scale %g) to %s",
         int(series.steps[index]),
@@ -927,14 +932,6 @@ def render_mechanism(
     folder = Path(folder)
     path = _check_out(out, folder / f"mechanism_{view}.png", _IMAGE_SUFFIXES, "render_mechanism")
     scene = _mechanism_scene(folder, view, scale, wsize, last_increment)
-    try:
-        tmp = _atomic_target(path)
-        try:
-            scene.save(tmp)
-            tmp.replace(path)
-        finally:
-            tmp.unlink(missing_ok=True)
-    finally:
-        scene.close()
+    _save_and_close(scene, path)
     log.info("rendered the collapse mechanism of %s (%s view) to %s", folder, view, path)
     return path
