@@ -451,6 +451,7 @@ def chart(rows: list[dict], path: Path, floor: float = 1e-5) -> Path:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.ticker import NullFormatter
 
     cases = list(dict.fromkeys(r["case"] for r in rows))
     ncol = max(len(cases), 1)
@@ -497,6 +498,7 @@ def chart(rows: list[dict], path: Path, floor: float = 1e-5) -> Path:
                 ax.scatter(xs, ys, s=110, facecolors="none", edgecolors="k")
             ax.axhline(ACCURACY, color="grey", ls=":", lw=1)
             ax.set_xscale("log")
+            ax.xaxis.set_minor_formatter(NullFormatter())  # no crowded labels
             ax.set_yscale("log")
             ax.set_ylim(floor / 2, 2.0)
             ax.set_xlabel("run time [s]")
