@@ -128,3 +128,13 @@ def test_quickstart_example_runs(tmp_path, capsys):
     )
     assert summary["status"] == "collapse"
     assert (tmp_path / "q" / "summary.json").exists()
+
+
+def test_run_renders_the_last_step_and_the_collapse_mechanism(tmp_path):
+    case = _write_case(tmp_path, SINGLE_BLOCK)
+    out = tmp_path / "res"
+    assert main(["run", str(case), "--out", str(out), "--quiet"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert (out / summary["png"]).is_file()
+    assert summary["mechanism_png"] == "mechanism_oblique.png"
+    assert (out / summary["mechanism_png"]).is_file()

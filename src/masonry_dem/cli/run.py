@@ -19,7 +19,11 @@ def add_parser(subparsers) -> None:
     )
     p.add_argument("case", nargs="?", help="TOML case file (see README, 'Case files')")
     p.add_argument("--out", default="results/default", help="results folder (default: %(default)s)")
-    p.add_argument("--no-render", action="store_true", help="skip the PNG of the last step")
+    p.add_argument(
+        "--no-render",
+        action="store_true",
+        help="skip the PNGs of the last step and of the collapse mechanism",
+    )
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=run_command)
 
@@ -50,12 +54,14 @@ def run_command(args: argparse.Namespace) -> int:
     )
     if not args.no_render:
         try:
-            from masonry_dem.export.render import render_step
+            from masonry_dem.export.render import render_mechanism, render_step
         except ImportError as exc:  # rendering is optional for the analysis itself
             log.warning("no PNG: the render module is unavailable (%s)", exc)
         else:
             png = render_step(out, step="last")
             summary["png"] = str(Path(png).name)
+            if (out / "mechanism_blocks.vtu").is_file():  # the run ended in collapse
+                summary["mechanism_png"] = render_mechanism(out).name
             (out / "summary.json").write_text(json.dumps(summary, indent=2))
     print(
         json.dumps(
