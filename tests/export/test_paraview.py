@@ -239,24 +239,34 @@ def test_state_names():
 
 
 # --------------------------------------------------------------------------- copy_state
-def test_copy_state_fills_in_the_folder(results_copy):
-    out = paraview_state.copy_state("deformed_shape", results_copy, scale=12.5)
-    assert out == results_copy / "deformed_shape.pvsm"
-    root = ET.parse(out).getroot()
-    files = sorted(
+def _file_names(root: ET.Element) -> list[str]:
+    """Every FileName value of a state, sorted."""
+    return sorted(
         e.get("value")
         for p in root.iter("Property")
         if p.get("name") == "FileName"
         for e in p.findall("Element")
     )
-    assert files == [str((results_copy / f).resolve()) for f in ("blocks.pvd", "interfaces.pvd")]
-    scales = [
+
+
+def _warp_scales(root: ET.Element) -> list[float]:
+    """The ScaleFactor of every Warp By Vector of a state, in order."""
+    return [
         float(p.find("Element").get("value"))
         for proxy in root.iter("Proxy")
         if proxy.get("type") == "WarpVector"
         for p in proxy.findall("Property")
         if p.get("name") == "ScaleFactor"
     ]
+
+
+def test_copy_state_fills_in_the_folder(results_copy):
+    out = paraview_state.copy_state("deformed_shape", results_copy, scale=12.5)
+    assert out == results_copy / "deformed_shape.pvsm"
+    root = ET.parse(out).getroot()
+    files = _file_names(root)
+    assert files == [str((results_copy / f).resolve()) for f in ("blocks.pvd", "interfaces.pvd")]
+    scales = _warp_scales(root)
     assert scales == [12.5, 12.5]
 
 
@@ -264,22 +274,9 @@ def test_copy_state_mechanism(mech_copy):
     out = paraview_state.copy_state("mechanism", mech_copy)
     assert out == mech_copy / "mechanism.pvsm"
     root = ET.parse(out).getroot()
-    files = sorted(
-        {
-            e.get("value")
-            for p in root.iter("Property")
-            if p.get("name") == "FileName"
-            for e in p.findall("Element")
-        }
-    )
+    files = sorted(set(_file_names(root)))
     assert files == [str((mech_copy / f).resolve()) for f in MECHANISM_FILES]
-    scales = [
-        float(p.find("Element").get("value"))
-        for proxy in root.iter("Proxy")
-        if proxy.get("type") == "WarpVector"
-        for p in proxy.findall("Property")
-        if p.get("name") == "ScaleFactor"
-    ]
+    scales = _warp_scales(root)
     # the mode's scale (largest translation 1): its largest point motion ~6.5 % of the wall
     points, disp = paraview_state._read_points(mech_copy / MECHANISM_FILES[0])
     size = float(np.max(np.ptp(points, axis=0)))

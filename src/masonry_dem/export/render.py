@@ -592,15 +592,21 @@ class _Scene:
         self.plotter.close()
 
 
-def _save_and_close(scene: _Scene, path: Path) -> None:
-    """Write the scene to ``path`` atomically (no half-written PNG), then close it."""
+def _write_atomically(path: Path, write) -> None:
+    """``write(tmp)`` to a temporary file next to ``path``, then move it onto ``path``: a
+    reader never sees a half-written picture, and a failed write leaves nothing behind."""
+    tmp = _atomic_target(path)
     try:
-        tmp = _atomic_target(path)
-        try:
-            scene.save(tmp)
-            tmp.replace(path)
-        finally:
-            tmp.unlink(missing_ok=True)
+        write(tmp)
+        tmp.replace(path)
+    finally:
+        tmp.unlink(missing_ok=True)
+
+
+def _save_and_close(scene: _Scene, path: Path) -> None:
+    """Write the scene to ``path`` atomically, then close it."""
+    try:
+        _write_atomically(path, scene.save)
     finally:
         scene.close()
 
@@ -723,12 +729,7 @@ def render_side_by_side(
         sheet[r * h : (r + 1) * h, c * w : (c + 1) * w] = img
     import imageio.v3 as iio
 
-    tmp = _atomic_target(path)
-    try:
-        iio.imwrite(tmp, sheet, extension=".png")
-        tmp.replace(path)
-    finally:
-        tmp.unlink(missing_ok=True)
+    _write_atomically(path, lambda tmp: iio.imwrite(tmp, sheet, extension=".png"))
     log.info("%d panels written to %s", len(panels), path)
     return path
 
@@ -793,15 +794,13 @@ def render_animation(
             frames.append(np.asarray(scene.image()))
     finally:
         scene.close()
-    tmp = _atomic_target(path)
-    try:
+    def write(tmp: Path) -> None:
         if path.suffix.lower() == ".gif":
             iio.imwrite(tmp, np.stack(frames), extension=".gif", duration=1000.0 / fps, loop=0)
         else:
             iio.imwrite(tmp, np.stack(frames), extension=".mp4", fps=fps)
-        tmp.replace(path)
-    finally:
-        tmp.unlink(missing_ok=True)
+
+    _write_atomically(path, write)
     log.info("animation of %d steps of %s written to %s", len(frames), series.folder, path)
     return path
 
@@ -848,12 +847,7 @@ def plot_pushover(folder: Path | str, out: Path | str | None = None) -> Path:
     status = summary.get("status")
     ax.set_title(f"{name}" + (f" ({status})" if status else ""))
     fig.tight_layout()
-    tmp = _atomic_target(path)
-    try:
-        fig.savefig(tmp)
-        tmp.replace(path)
-    finally:
-        tmp.unlink(missing_ok=True)
+    _write_atomically(path, fig.savefig)
     log.info("pushover curve of %s written to %s", folder, path)
     return path
 
