@@ -160,6 +160,16 @@ def _build(data: str, outdir: str, colours_json: str) -> None:  # pragma: no cov
         blocks.PointArrays = ["displacement"]
         return blocks, interfaces
 
+    def warped(blocks, interfaces, scale):
+        """Warp By Vector on ``displacement`` of both meshes, by ``scale``."""
+        out = []
+        for name, src in (("warp blocks", blocks), ("warp interfaces", interfaces)):
+            warp = pvs.WarpByVector(registrationName=name, Input=src)
+            warp.Vectors = ["POINTS", "displacement"]
+            warp.ScaleFactor = scale
+            out.append(warp)
+        return out
+
     def time_aware():
         scene = pvs.GetAnimationScene()
         scene.UpdateAnimationUsingDataTimeSteps()
@@ -191,12 +201,7 @@ def _build(data: str, outdir: str, colours_json: str) -> None:  # pragma: no cov
     layout = pvs.CreateLayout("deformed shape")
     view = new_view(axes=True)
     pvs.AssignViewToLayout(view=view, layout=layout, hint=0)
-    wb = pvs.WarpByVector(registrationName="warp blocks", Input=blocks)
-    wb.Vectors = ["POINTS", "displacement"]
-    wb.ScaleFactor = float(spec["scale"])
-    wi = pvs.WarpByVector(registrationName="warp interfaces", Input=interfaces)
-    wi.Vectors = ["POINTS", "displacement"]
-    wi.ScaleFactor = float(spec["scale"])
+    wb, wi = warped(blocks, interfaces, float(spec["scale"]))
     blocks_display(wb, view, outlines=True)
     lut = state_lut()
     lines_display(wi, view, "state", lut, width=3.0)
@@ -253,12 +258,7 @@ def _build(data: str, outdir: str, colours_json: str) -> None:  # pragma: no cov
     layout = pvs.CreateLayout("mechanism")
     view = new_view(axes=True)
     pvs.AssignViewToLayout(view=view, layout=layout, hint=0)
-    wb = pvs.WarpByVector(registrationName="warp blocks", Input=mblocks)
-    wb.Vectors = ["POINTS", "displacement"]
-    wb.ScaleFactor = float(spec["mechanism_scale"])
-    wi = pvs.WarpByVector(registrationName="warp interfaces", Input=minterfaces)
-    wi.Vectors = ["POINTS", "displacement"]
-    wi.ScaleFactor = float(spec["mechanism_scale"])
+    wb, wi = warped(mblocks, minterfaces, float(spec["mechanism_scale"]))
     blocks_display(wb, view, outlines=True)
     lut = pvs.GetColorTransferFunction("joint_motion")
     lines_display(wi, view, "joint_motion", lut, width=4.0)

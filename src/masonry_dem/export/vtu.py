@@ -55,13 +55,20 @@ def blocks_mesh(model: Model, step: StepResult) -> meshio.Mesh:
     )
 
 
+def _interface_corner_motion(model: Model, q: np.ndarray):
+    """Corners (m, 4, 3) of the interfaces and the motion there of block i and of block j."""
+    its = model.interfaces
+    corners = its.corner_points()
+    centres = model.blocks.centres
+    d_i = rigid_motion(q[its.block_i], centres[its.block_i], corners)
+    d_j = rigid_motion(q[its.block_j], centres[its.block_j], corners)
+    return corners, d_i, d_j
+
+
 def interfaces_mesh(model: Model, step: StepResult) -> meshio.Mesh:
     its = model.interfaces
     m = its.count
-    corners = its.corner_points()  # (m, 4, 3)
-    blocks = model.blocks
-    d_i = rigid_motion(step.q[its.block_i], blocks.centres[its.block_i], corners)
-    d_j = rigid_motion(step.q[its.block_j], blocks.centres[its.block_j], corners)
+    corners, d_i, d_j = _interface_corner_motion(model, step.q)
     a = step.actions
     flags = step.flags if step.flags is not None else np.zeros(m, dtype=np.int32)
     return meshio.Mesh(
@@ -105,11 +112,7 @@ MECHANISM_FILES = ("mechanism_blocks.vtu", "mechanism_interfaces.vtu")
 def joint_relative_motion(model: Model, dq: np.ndarray) -> np.ndarray:
     """(m,) largest relative displacement between the two faces of each interface, over its
     corners, for the block motion ``dq`` (n, 6): how much the joint opens, slides or turns."""
-    its = model.interfaces
-    blocks = model.blocks
-    corners = its.corner_points()
-    d_i = rigid_motion(dq[its.block_i], blocks.centres[its.block_i], corners)
-    d_j = rigid_motion(dq[its.block_j], blocks.centres[its.block_j], corners)
+    _, d_i, d_j = _interface_corner_motion(model, dq)
     return np.linalg.norm(d_j - d_i, axis=2).max(axis=1)
 
 
@@ -128,13 +131,12 @@ def write_mechanism_vtu(
     fields = {"joint_motion": mode}
     if increment is not None:
         fields["joint_motion_last_increment"] = increment
-        bmesh.point_data["last_increment"] = blocks_mesh(
-            model, replace(step, q=increment)
-        ).point_data["displacement"]
+        blocks = model.blocks
+        moved_corners = rigid_motion(increment, blocks.centres, blocks.corner_points())
+        bmesh.point_data["last_increment"] = moved_corners.reshape(-1, 3)
         if imesh is not None:
-            imesh.point_data["last_increment"] = interfaces_mesh(
-                model, replace(step, q=increment)
-            ).point_data["displacement"]
+            _, d_i, d_j = _interface_corner_motion(model, increment)
+            imesh.point_data["last_increment"] = (0.5 * (d_i + d_j)).reshape(-1, 3)
     meshio.write(folder / MECHANISM_FILES[0], bmesh, binary=True)
     if imesh is None:
         return MECHANISM_FILES[0], None
