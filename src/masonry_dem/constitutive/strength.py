@@ -28,10 +28,12 @@ printed Eq. (11) is garbled and the correct form is used here (see ``DESIGN.md``
 from __future__ import annotations
 
 import logging
+import math
 from dataclasses import dataclass
 from functools import cached_property
 from typing import Final
 
+import numba
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -657,12 +659,19 @@ class _Domain:
         )
 
     @cached_property
+    def alpha_rows(self) -> NDArray:
+        """alpha of every row, (m,) even when the domain holds one float (the compiled check)."""
+        if np.ndim(self.alpha):
+            return _writable_c(np.asarray(self.alpha))
+        return np.full(self.l1.shape[0], float(self.alpha))
+
+    @cached_property
     def torsion_constant(self) -> NDArray:
         """cT of the whole rectangles (without the torsion-bending interaction)."""
         return _torsion_constant(self.l1, self.l2)
 
 
-def _evaluate(
+def _evaluate_numpy(
     act: NDArray,
     ft: NDArray,
     dom: _Domain,
@@ -670,7 +679,8 @@ def _evaluate(
     projection_only: bool = False,
     projection: str = "energy",
 ) -> StrengthCheck | NDArray:
-    """:func:`check_strength` on validated inputs (``act`` (m, 6), ``ft`` (m,) >= 0).
+    """:func:`check_strength` on validated inputs (``act`` (m, 6), ``ft`` (m,) >= 0), in numpy:
+    the reference of the compiled :func:`_evaluate` (used by the tests).
 
     Every projected value comes out of the same floating-point operations as the plain
     formulas (the finite-difference tangent of the law divides their differences by 1e-7 and
@@ -816,3 +826,384 @@ def _reduced_sides_fast(
     l1r[l1r <= dom.snap1[rows]] = 0.0
     l2r[l2r <= dom.snap2[rows]] = 0.0
     return l1r, l2r
+
+
+# --------------------------------------------------------------------------------------------
+# the same check compiled, one interface at a time
+#
+# Each function below is the scalar transcription of the numpy helper of the same name without
+# the ``_nb`` prefix, operation for operation and in the same order (no fast-math, so no
+# reassociation or fused multiply-adds), so that a row comes out as the numpy reference gives it
+# up to the last bit of the libm functions. Compiled on the first call (cache=True: once per
+# machine); importing this module compiles nothing.
+
+_jit = numba.njit(cache=True, error_model="numpy")  # x/0 = inf or nan, as numpy gives
+
+
+@_jit
+def _nb_torsion_constant(l1: float, l2: float) -> float:
+    """:func:`_torsion_constant_fast` of one rectangle (sides >= 0)."""
+    x = l2 / l1
+    y = l1 / l2
+    r1 = math.asinh(x) / x
+    r2 = math.asinh(y) / y
+    odd = not (x >= 1e-8 and y >= 1e-8)  # a tiny or zero side, or both zero (NaN ratios)
+    if odd:
+        if x < 1e-8:
+            r1 = 1.0 - x * x / 6.0
+        if x == math.inf:
+            r1 = 0.0  # l1 = 0: its term vanishes
+        if y < 1e-8:
+            r2 = 1.0 - y * y / 6.0
+        if y == math.inf:
+            r2 = 0.0
+    c = math.hypot(l1, l2)
+    c *= 0.5
+    c += (0.25 * l1) * r1
+    c += (0.25 * l2) * r2
+    c /= 3.0
+    if odd and math.isnan(x):
+        c = 0.0  # both sides zero
+    return c
+
+
+@_jit
+def _nb_radial_t(big_a: float, big_c: float, alpha: float) -> tuple[float, bool]:
+    """:func:`_radial_t` and :func:`_radial_newton` of one row; False if Newton did not
+    converge."""
+    if alpha == 2.0:
+        return 1.0 / math.hypot(big_a, big_c), True
+    if alpha == 1.0:
+        return 2.0 / (big_a + math.sqrt(big_a * big_a + 4.0 * big_c * big_c)), True
+    ln_a = math.log(big_a)  # -inf where A underflowed to 0
+    ln_c = math.log(big_c)
+    tau = 0.0
+    for _ in range(_NEWTON_MAX_ITER):
+        p = math.exp(alpha * (tau + ln_a))
+        q = math.exp(2.0 * (tau + ln_c))
+        total = p + q
+        step = math.log(total) * total / (alpha * p + 2.0 * q)
+        tau = tau - step
+        if not abs(step) > _NEWTON_RTOL:
+            return math.exp(tau), True
+    return math.exp(tau), False
+
+
+@_jit
+def _nb_radial_factor(a: float, c: float, alpha: float) -> tuple[float, bool]:
+    """:func:`_radial_factor` of one row."""
+    m = max(a, c)
+    s = 1.0 / m  # inf at a = c = 0, 0 at inf
+    ok = True
+    if min(a, c) > 0 and m < math.inf:
+        t, ok = _nb_radial_t(a / m, c / m, alpha)
+        s = t / m
+    return s, ok
+
+
+@_jit
+def _nb_safe_ratio(demand: float, capacity: float) -> float:
+    """:func:`_safe_ratio` of one row."""
+    if demand == 0:
+        return 0.0
+    if capacity > 0:
+        return demand / capacity
+    return math.inf
+
+
+@_jit
+def _nb_shear_half(tau, a, b, r0, z0, alpha, power) -> tuple[float, float]:
+    """:func:`_shear_half` of one row."""
+    t = tau**power
+    ta = t**alpha
+    u = 1.0 - ta
+    su = math.sqrt(u)
+    du = -alpha * ta / t
+    d2u = du * (alpha - 1.0) / t
+    r = a * su
+    dr = 0.5 * a * du / su
+    d2r = a * (0.5 * d2u / su - 0.25 * du * du / (u * su))
+    g = (r - r0) * dr + (b * t - z0) * b
+    dg = (dr * dr + (r - r0) * d2r + b * b) * power * t / tau
+    return g, dg
+
+
+@_jit
+def _nb_torsion_half(x, a, b, r0, z0, alpha) -> tuple[float, float]:
+    """:func:`_torsion_half` of one row."""
+    w = 1.0 - x * x
+    p = 1.0 / alpha
+    wp = w**p
+    z = b * wp
+    dz = -2.0 * p * b * x * wp / w
+    d2z = 2.0 * p * b * wp / w * (2.0 * (p - 1.0) * x * x / w - 1.0)
+    g = (a * x - r0) * a + (z - z0) * dz
+    dg = a * a + dz * dz + (z - z0) * d2z
+    return g, dg
+
+
+@_jit
+def _nb_bracketed_newton(torsion, a, b, r0, z0, alpha, power, hi, start) -> tuple[float, bool]:
+    """:func:`_bracketed_newton` of one row, on :func:`_nb_torsion_half` if ``torsion`` else
+    on :func:`_nb_shear_half`; False if it did not converge."""
+    lo = 0.0
+    x = 0.5 * hi
+    if start > 0.0 and start < hi:
+        x = start
+    for _ in range(_PROJECTION_MAX_ITER):
+        if torsion:
+            g, dg = _nb_torsion_half(x, a, b, r0, z0, alpha)
+        else:
+            g, dg = _nb_shear_half(x, a, b, r0, z0, alpha, power)
+        if g > 0:
+            hi = x
+        else:
+            lo = x
+        step = g / dg
+        newton = x - step
+        # a step below tolerance is taken even where it rounds onto the bracket's end
+        done = abs(step) <= _PROJECTION_TOL * (x if x > 1e-300 else 1e-300)
+        inside = newton > lo and newton < hi and math.isfinite(newton)
+        x = newton if (inside or done) else 0.5 * (lo + hi)
+        if done or hi - lo <= 4.0 * np.spacing(hi):  # converged, or bracket at round-off
+            return x, True
+    return x, False
+
+
+@_jit
+def _nb_energy_closest_point(r0, z0, a, b, alpha, radial) -> tuple[float, float, bool]:
+    """:func:`_energy_closest_point` of one row (Newton started at the radial point)."""
+    r = 0.0
+    z = 0.0
+    ok = True
+    if r0 > 0 and z0 > 0 and a > 0 and b > 0:
+        t_switch = 0.5 ** (1.0 / alpha)
+        x_switch = math.sqrt(0.5)
+        power = 2.0 if alpha < 2.0 else 1.0
+        near_shear = _nb_shear_half(t_switch, a, b, r0, z0, alpha, 1.0)[0] >= 0.0
+        # alpha = 1 has a vertex on the shear axis; points in its normal cone return to it
+        vertex = alpha == 1.0 and (r0 - a) * 0.5 * a >= z0 * b
+        if vertex:
+            r = a
+        if near_shear and not vertex:
+            p = power
+            start = (radial * z0 / b) ** (1 / p)
+            tau, ok = _nb_bracketed_newton(
+                False, a, b, r0, z0, alpha, p, t_switch ** (1 / p), start
+            )
+            t = tau**p
+            r = a * math.sqrt(max(1.0 - t**alpha, 0.0))
+            z = b * t
+        if not near_shear:  # (after the vertex, as the numpy version does)
+            start = radial * r0 / a
+            x, ok = _nb_bracketed_newton(True, a, b, r0, z0, alpha, 1.0, x_switch, start)
+            r = a * x
+            z = b * max(1.0 - x * x, 0.0) ** (1.0 / alpha)
+    # one of r0, z0 zero: the point is on an axis and so is its closest point
+    if r0 == 0 and b > 0:
+        z = b * min(1.0, _nb_safe_ratio(z0, b))
+    if z0 == 0:
+        r = min(r0, a)
+    if b == 0:
+        r = min(r0, a)
+        z = 0.0
+    return r, z, ok
+
+
+@_jit
+def _nb_evaluate(
+    act,
+    ft,
+    l1,
+    l2,
+    friction,
+    alpha,
+    snap1,
+    snap2,
+    torsion_bending_interaction,
+    projection_only,
+    energy,
+    proj,
+    flags,
+    util,
+):
+    """:func:`_evaluate_numpy` row by row, into ``proj`` (m, 6), ``flags`` (m,) uint8 and
+    (unless ``projection_only``) ``util`` (m,). Returns the numbers of rows whose radial
+    factor and whose energy projection did not converge."""
+    n_radial = 0
+    n_energy = 0
+    for i in range(act.shape[0]):
+        f1 = act[i, 0]
+        f2 = act[i, 1]
+        fn = act[i, 2]
+        m1 = act[i, 3]
+        m2 = act[i, 4]
+        m3 = act[i, 5]
+        fti = ft[i]
+        al = alpha[i]
+
+        # detachment
+        detached = fn > fti
+        live = not detached
+        cap = 0.0 if detached else fti - fn
+
+        # rocking: clip the bending moments to the eccentricity limits
+        half = 0.5 * cap
+        m1_lim = half * l2[i]
+        m2_lim = half * l1[i]
+        abs_m1 = abs(m1)
+        abs_m2 = abs(m2)
+        rock1 = abs_m1 > m1_lim and live
+        rock2 = abs_m2 > m2_lim and live
+        abs_m1c = min(abs_m1, m1_lim)
+        abs_m2c = min(abs_m2, m2_lim)
+
+        # shear and torsion: demand/capacity ratios a = |m3|/m3u, c = |f|/fsu
+        fsu = friction[i] * cap
+        abs_m3 = abs(m3)
+        m3u = 0.0
+        if abs_m3 > 0 and cap > 0:
+            if torsion_bending_interaction:
+                l1r = l1[i] - 2.0 * abs_m2c / cap
+                l2r = l2[i] - 2.0 * abs_m1c / cap
+                l1r = min(l1r, l1[i])
+                l2r = min(l2r, l2[i])
+                if l1r <= snap1[i]:
+                    l1r = 0.0
+                if l2r <= snap2[i]:
+                    l2r = 0.0
+                c_t = _nb_torsion_constant(l1r, l2r)
+            else:
+                c_t = _nb_torsion_constant(l1[i], l2[i])
+            m3u = c_t * fsu
+        shear = math.hypot(f1, f2)
+        a = abs_m3 / m3u if abs_m3 > 0 else 0.0  # 0/0 = 0, d/0 = inf (no capacity)
+        c = shear / fsu if shear > 0 else 0.0
+
+        u_st = 0.0
+        s = 1.0
+        sliding = False
+        if projection_only:
+            # a + c^2 >= a^alpha + c^2 for a, c <= 1 and alpha >= 1: below 1 no row slides
+            if live and not a + c * c < 0.999:
+                s, ok = _nb_radial_factor(a, c, al)
+                n_radial += not ok
+                sliding = 1.0 / s > 1.0 + SHEAR_TORSION_TOLERANCE
+        else:
+            s, ok = _nb_radial_factor(a, c, al)
+            n_radial += not ok
+            u_st = 1.0 / s  # radial demand/capacity ratio of Eq. (A5)
+            sliding = u_st > 1.0 + SHEAR_TORSION_TOLERANCE and live
+
+        # projection (untouched entries are kept bitwise)
+        for j in range(6):
+            proj[i, j] = act[i, j]
+        proj[i, 3] = math.copysign(abs_m1c, m1)
+        proj[i, 4] = math.copysign(abs_m2c, m2)
+        if sliding and not energy:
+            proj[i, 0] *= s
+            proj[i, 1] *= s
+            proj[i, 5] *= s
+        elif sliding:
+            rho = math.sqrt((l1[i] * l1[i] + l2[i] * l2[i]) / 12.0)  # sqrt(J / A)
+            r, z, ok = _nb_energy_closest_point(shear, abs_m3 / rho, fsu, m3u / rho, al, s)
+            n_energy += not ok
+            shear_scale = _nb_safe_ratio(r, shear)
+            if not math.isfinite(shear_scale):
+                shear_scale = 0.0
+            m3_new = math.copysign(z * rho, m3)
+            # capacities at the edge of floating point (subnormal friction or sides): the
+            # radial return, which lands on the boundary by construction
+            phi = _nb_safe_ratio(z * rho, m3u) ** al + _nb_safe_ratio(r, fsu) ** 2
+            off = not abs(phi - 1.0) <= 1e-9 and m3u > 0 and fsu > 0
+            off = off or abs_m3 == 0  # pure shear: the same point, with the radial round-off
+            off = off or fsu < _TINY_CAPACITY
+            if off:
+                shear_scale = s
+                m3_new = m3 * s
+            proj[i, 0] = f1 * shear_scale
+            proj[i, 1] = f2 * shear_scale
+            proj[i, 5] = m3_new
+        if detached:
+            for j in range(6):
+                proj[i, j] = 0.0
+            proj[i, 2] = fti
+
+        flags[i] = (
+            (FLAG_SHEAR_TORSION if sliding else 0)
+            | (FLAG_ROCKING_1 if rock1 else 0)
+            | (FLAG_ROCKING_2 if rock2 else 0)
+            | (FLAG_DETACHED if detached else 0)
+        )
+        if projection_only:
+            continue
+
+        # utilisation
+        u_tension = max(fn, 0.0) / fti  # ft = 0: inf in tension, NaN otherwise
+        if math.isnan(u_tension):  # ft = 0: 1 at fn = 0, 0 in compression
+            u_tension = 1.0 if fn >= 0 else 0.0
+        if detached:
+            util[i] = u_tension
+            continue
+        u_rock = abs_m1 / m1_lim if abs_m1 > 0 else 0.0
+        u_rock2 = abs_m2 / m2_lim if abs_m2 > 0 else 0.0
+        util[i] = max(max(max(u_rock, u_rock2), u_tension), u_st)
+    return n_radial, n_energy
+
+
+def _writable_c(x: NDArray) -> NDArray:
+    """``x`` as a writable C-contiguous float64 array (one compiled signature for all calls)."""
+    if x.dtype == np.float64 and x.flags.c_contiguous and x.flags.writeable:
+        return x
+    return np.array(x, dtype=np.float64, order="C")
+
+
+def _evaluate(
+    act: NDArray,
+    ft: NDArray,
+    dom: _Domain,
+    torsion_bending_interaction: bool = True,
+    projection_only: bool = False,
+    projection: str = "energy",
+) -> StrengthCheck | NDArray:
+    """:func:`check_strength` on validated inputs (``act`` (m, 6), ``ft`` (m,) >= 0).
+
+    The compiled :func:`_nb_evaluate`, which gives what :func:`_evaluate_numpy` gives (the
+    same floating-point operations row by row: the finite-difference tangent of the law
+    divides differences of projections by 1e-7 and must not see a changed last bit).
+    ``projection_only`` returns just the projected actions and skips the radial factor of
+    rows well inside Eq. (A5), where it is only needed for the utilisation.
+    """
+    m = act.shape[0]
+    proj = np.empty((m, 6))
+    flags = np.empty(m, dtype=np.uint8)
+    util = np.empty(0 if projection_only else m)
+    n_radial, n_energy = _nb_evaluate(
+        _writable_c(act),
+        _writable_c(ft),
+        dom.l1,
+        dom.l2,
+        dom.friction,
+        dom.alpha_rows,
+        dom.snap1,
+        dom.snap2,
+        bool(torsion_bending_interaction),
+        bool(projection_only),
+        projection == "energy",
+        proj,
+        flags,
+        util,
+    )
+    if n_radial:  # pragma: no cover - Newton on a convex increasing function converges
+        logger.warning("radial factor: Newton did not converge to %g", _NEWTON_RTOL)
+    if n_energy:  # rows at round-off; they fell back to the radial return off the boundary
+        logger.debug("energy projection: %d rows did not converge", n_energy)
+    if projection_only:
+        return proj
+    return StrengthCheck(
+        projected=proj,
+        state=_STATE_OF_FLAGS[flags],
+        flags=flags,
+        stiffness_factors=_FACTORS_OF_FLAGS[flags],
+        utilisation=util,
+    )
