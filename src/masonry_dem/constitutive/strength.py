@@ -23,6 +23,10 @@ Criteria, with ``ft`` the tensile force of the whole interface (tensile strength
 
 The torsion constant ``cT`` is the mean distance of the rectangle's points from its centre; the
 printed Eq. (11) is garbled and the correct form is used here (see ``DESIGN.md``).
+
+The batched check runs compiled (numba), one interface at a time (``_nb_evaluate``); the numpy
+version of the same operations (``_evaluate_numpy``) is its reference in the tests. The kernel
+is compiled on the first check and cached on disk (a few seconds, once per machine).
 """
 
 from __future__ import annotations
