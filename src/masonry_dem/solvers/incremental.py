@@ -61,9 +61,9 @@ _MAX_FLOOR = 1e-3
 _CHORD_RATIO = 0.25
 #: the robust re-try of a failed load step mixes the last _ANDERSON corrections, and stops when
 #: the residual has not fallen by x10 in _DIVERGENCE_WINDOW iterations with corrections that do
-#: not shrink. Over all validation cases it succeeds in 4 of 114 calls, each within 30
-#: iterations of a x10 fall; a window of 60 only made the failures twice as long (11 % of the
-#: validation time), one of 15 loses two of the successes
+#: not shrink. Over all validation cases it succeeds in 4 of 114 calls, all four with this
+#: window; 60 only made the failures twice as long (11 % of the validation time), 15 loses
+#: two of the successes
 _ANDERSON = 5
 _DIVERGENCE_WINDOW = 30
 CONTINUATION = ("work", "bracket")
