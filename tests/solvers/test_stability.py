@@ -87,6 +87,16 @@ def test_load_control_past_the_limit_point(block):
         assert hist.collapse_multiplier <= S / A * (1 + 1e-9)  # a converged state, not beyond
 
 
+def test_unrefined_bracket_says_so(block):
+    """Without refinement a first step beyond collapse stops the run at [0, 3]: the status is
+    a collapse bracket, and the reason says it is not a refined collapse load."""
+    hist = StaticSolver(block, StaticSettings(initial_step=3.0, max_step=3.0, refine=False)).run()
+    assert_clean(hist)
+    assert hist.status == "collapse"
+    assert hist.collapse_bracket == (0.0, pytest.approx(3.0))
+    assert "refine=False" in hist.reason
+
+
 def test_near_singular_stiffness_before_collapse():
     """Just before collapse the paper's damaged stiffness (Eqs. 13-14 factors of the last
     converged state) is singular: yielded joints leave a mechanism that is not yet driven.

@@ -806,6 +806,9 @@ class StaticSolver:
             f"no equilibrium beyond lambda={lam:.6g} (first failure at {lam_fail:.6g}: "
             f"{last_reason})"
         )
+        if not s.refine:  # a long step may fail where a shorter one would not
+            hist.reason += "; refine=False: the failed step was not cut, so this is an upper "
+            hist.reason += "bracket of the first failure only, not a refined collapse load"
         if s.continuation == "work" and len(hist.steps) > 2:
             self._work_control(hist, record)
 
