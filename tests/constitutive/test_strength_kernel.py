@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from numpy_reference import _evaluate_numpy
 
 from masonry_dem.constitutive import law as law_module
 from masonry_dem.constitutive.law import InterfaceLaw
@@ -19,7 +20,6 @@ from masonry_dem.constitutive.strength import (
     STATE_ELASTIC,
     _Domain,
     _evaluate,
-    _evaluate_numpy,
     shear_strength,
     torsion_constant,
     torsion_strength,
