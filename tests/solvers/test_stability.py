@@ -97,6 +97,26 @@ def test_unrefined_bracket_says_so(block):
     assert "refine=False" in hist.reason
 
 
+def test_bracket_refined_when_work_control_finds_nothing_higher(block, monkeypatch):
+    """Work control takes over at the first failure of load control; where it finds no
+    equilibrium above the last load step, the load-control bracket is refined after all,
+    from the state it was handed (the block still tilts over at s/a, bracket <= 0.5 %)."""
+    calls = []
+
+    def nothing_higher(self, hist, record, first_failure):
+        calls.append(hist.steps[-1].load_factor)
+        return "forced"
+
+    monkeypatch.setattr(StaticSolver, "_work_control", nothing_higher)
+    hist = StaticSolver(block, StaticSettings(initial_step=0.1)).run()
+    assert_clean(hist)
+    assert len(calls) == 1 and calls[0] < S / A  # handed over once, below the collapse
+    lo, hi = hist.collapse_bracket
+    assert lo <= S / A * (1 + 1e-9) <= hi
+    assert hi - lo <= 0.005 * lo * (1 + 1e-9)
+    assert "work control found no higher equilibrium (forced)" in hist.reason
+
+
 def test_near_singular_stiffness_before_collapse():
     """Just before collapse the paper's damaged stiffness (Eqs. 13-14 factors of the last
     converged state) is singular: yielded joints leave a mechanism that is not yet driven.

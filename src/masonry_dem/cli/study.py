@@ -106,7 +106,13 @@ def load_study_case(name: str) -> StudyCase:
 
     pc = build_case(name)
     settings = pc.settings
-    if pc.unit == "Pa" and (settings.initial_step, settings.max_step) == (0.02, 0.2):
+    from masonry_dem.solvers.incremental import StaticSettings
+
+    default = StaticSettings()
+    if pc.unit == "Pa" and (settings.initial_step, settings.max_step) == (
+        default.initial_step,
+        default.max_step,
+    ):
         # pressure cases collapse at ~30 load scales (|F_D| / |F_L| = weight per unit of
         # pressure): default steps would take ~150 of them; the refined bracket does not
         # depend on the steps, so both methods start with larger ones here
