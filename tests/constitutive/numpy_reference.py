@@ -350,3 +350,21 @@ def _reduced_sides_fast(
     l1r[l1r <= dom.snap1[rows]] = 0.0
     l2r[l2r <= dom.snap2[rows]] = 0.0
     return l1r, l2r
+
+
+def fd_tangent_numpy(trial, h, ft, rows, dom, kbar, projection="energy", evaluate=None):
+    """The law's forward-difference tangent as one batched numpy difference over the 7 probes
+    of every row (the library's version before it was compiled): row 0 the base point, rows
+    1-6 each component perturbed by ``h``. ``evaluate``: the check used for the probes
+    (default the numpy reference; the compiled ``_evaluate`` gives the same bits)."""
+    evaluate = evaluate or _evaluate_numpy
+    n = trial.shape[0]
+    idx = np.arange(6)
+    probe = np.repeat(trial[None], 7, axis=0)
+    probe[idx + 1, :, idx] += h.T
+    domain = dom.take(np.tile(rows, 7))
+    proj = evaluate(
+        probe.reshape(-1, 6), np.tile(ft, 7), domain, projection_only=True, projection=projection
+    ).reshape(7, n, 6)
+    D = (proj[1:] - proj[:1]) / h.T[:, :, None]  # (6 perturbed, n, 6 actions)
+    return np.transpose(D, (1, 2, 0)) * kbar[:, None, :]

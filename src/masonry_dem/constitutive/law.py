@@ -36,6 +36,7 @@ from masonry_dem.constitutive.strength import (
     _Domain,
     _evaluate,
     _field,
+    fd_tangent,
 )
 from masonry_dem.model import Model
 
@@ -140,7 +141,6 @@ class InterfaceLaw:
         """
         k = self.kbar
         m = k.shape[0]
-        idx = np.arange(6)
         T = np.zeros((m, 6, 6))
         diagonal = T.reshape(m, 36)[:, ::7]  # a view on T[:, i, i]
         diagonal[...] = k
@@ -150,22 +150,12 @@ class InterfaceLaw:
         diagonal[open_] = 0.0
         rows = np.flatnonzero((r.flags > 0) & ~open_)
         if rows.size:
-            n = rows.size
             t = trial[rows].copy()
             t[:, 2] = np.minimum(t[:, 2], ft[rows])  # in the contact band: at the contact side
             big = np.abs(t).max(axis=1, keepdims=True)
             h = _FD_STEP * (np.abs(t) + 1e-2 * big) + 1e-300  # (n, 6)
             h[:, 2] = -h[:, 2]  # perturb the normal force towards compression
-            probe = np.repeat(t[None], 7, axis=0)  # row 0: base point; rows 1-6: perturbed
-            probe[idx + 1, :, idx] += h.T
-            ftr = np.tile(ft[rows], 7)
-            domain = self._domain.take(np.tile(rows, 7))
-            proj = _evaluate(
-                probe.reshape(-1, 6), ftr, domain, projection_only=True, projection=self.projection
-            )
-            proj = proj.reshape(7, n, 6)
-            D = (proj[1:] - proj[:1]) / h.T[:, :, None]  # (6 perturbed, n, 6 actions)
-            T[rows] = np.transpose(D, (1, 2, 0)) * k[rows][:, None, :]
+            T[rows] = fd_tangent(t, h, ft[rows], rows, self._domain, k[rows], self.projection)
         diagonal += floor * k
         return T
 
