@@ -834,8 +834,9 @@ class StaticSolver:
                 last_reason = out.reason
                 log.debug("step to lambda=%.6g failed: %s", target, out.reason)
                 if target < lam_fail:
+                    if not math.isfinite(lam_fail):  # the step that opened this bracket
+                        failed_step = target - lam
                     lam_fail, verified = target, False
-                    failed_step = target - lam
                 elif target == lam_fail:
                     verified = True
                 if not s.refine:
