@@ -503,6 +503,12 @@ class _Domain:
         return np.full(self.l1.shape[0], float(self.alpha))
 
     @cached_property
+    def kernel_arrays(self) -> tuple[NDArray, ...]:
+        """The per-row arrays of the compiled kernels, in their order: l1, l2, friction,
+        alpha, snap1, snap2."""
+        return (self.l1, self.l2, self.friction, self.alpha_rows, self.snap1, self.snap2)
+
+    @cached_property
     def torsion_constant(self) -> NDArray:
         """cT of the whole rectangles (without the torsion-bending interaction)."""
         return _torsion_constant(self.l1, self.l2)
@@ -907,12 +913,7 @@ def fd_tangent(
         _writable_c(h),
         _writable_c(ft),
         np.ascontiguousarray(rows, dtype=np.int64),
-        dom.l1,
-        dom.l2,
-        dom.friction,
-        dom.alpha_rows,
-        dom.snap1,
-        dom.snap2,
+        *dom.kernel_arrays,
         projection == "energy",
         _writable_c(kbar),
         out,
@@ -950,12 +951,7 @@ def _evaluate(
     n_radial, n_energy = _nb_evaluate(
         _writable_c(act),
         _writable_c(ft),
-        dom.l1,
-        dom.l2,
-        dom.friction,
-        dom.alpha_rows,
-        dom.snap1,
-        dom.snap2,
+        *dom.kernel_arrays,
         bool(torsion_bending_interaction),
         bool(projection_only),
         projection == "energy",
