@@ -117,6 +117,29 @@ def test_bracket_refined_when_work_control_finds_nothing_higher(block, monkeypat
     assert "work control found no higher equilibrium (forced)" in hist.reason
 
 
+def test_dead_load_settles_by_relaxation_where_newton_stalls(block, monkeypatch):
+    """Where the damped Newton search of the dead load stalls, the pseudo-transient
+    relaxation brings the wall to rest, and the analysis goes on from there (the block
+    still tilts over at s/a); the reason of a run that fails both names both."""
+    from dataclasses import replace as _replace
+
+    newton = StaticSolver._equilibrate
+
+    def stalls_under_dead_load(self, load_factor, dead_factor=1.0, **kw):
+        out = newton(self, load_factor, dead_factor, **kw)
+        if kw.get("damped"):
+            return _replace(out, ok=False, reason="no equilibrium found: forced stall")
+        return out
+
+    monkeypatch.setattr(StaticSolver, "_equilibrate", stalls_under_dead_load)
+    hist = StaticSolver(block).run()
+    assert_clean(hist)
+    assert hist.status == "collapse"
+    assert hist.collapse_multiplier == pytest.approx(S / A, rel=0.01)
+    failed = StaticSolver(block, StaticSettings(transient_steps=0)).run()
+    assert failed.status == "failed" and "forced stall" in failed.reason
+
+
 def test_near_singular_stiffness_before_collapse():
     """Just before collapse the paper's damaged stiffness (Eqs. 13-14 factors of the last
     converged state) is singular: yielded joints leave a mechanism that is not yet driven.

@@ -780,6 +780,15 @@ class StaticSolver:
 
         # the dead-load state exists (the specimens stood): the damped fallback may be used
         dead = self._equilibrate(0.0, 1.0, radius=self.limit, damped=True)
+        if not dead.ok and self.settings.transient_steps > 0 and "exceed" not in dead.reason:
+            # where the damped Newton search stalls (a wall with openings, blocks settling
+            # on their neighbours), an overdamped relaxation may still come to rest
+            settled = self._pseudo_transient(0.0)
+            log.debug("dead load: Newton %s; pseudo-transient: %s", dead.reason,
+                      "ok" if settled.ok else settled.reason)
+            dead = settled if settled.ok else replace(
+                dead, reason=f"{dead.reason}; pseudo-transient: {settled.reason}"
+            )
         if not dead.ok:
             reason = f"no equilibrium under the dead load: {dead.reason}"
             zero = self._residual(np.zeros_like(self.q), 0.0, 0.0)[2]
