@@ -169,3 +169,23 @@ def test_simple_support_strips_hold_the_edges_at_the_face():
         build_case("4-5", simple_support="pinned")
     with pytest.raises(ValueError, match="support_strip_width"):
         build_case("4-5", support_strip_width=-1.0)
+
+
+@pytest.mark.parametrize(
+    "changes",
+    [{}, {"opening_height": 8}, {"sill_courses": 5}, {"opening_width": 2}, {"opening_width": 4}],
+)
+@pytest.mark.parametrize("name", ["S23", "S34"])
+def test_every_lintel_bears_on_both_piers(name, changes):
+    """The lintel over an opening reaches past both jambs, whatever the running bond does at
+    them (with head joints on the jambs, a lintel as wide as the opening had no bearing and
+    fell in under the dead load)."""
+    case = build_case(name, **changes)
+    blocks = case.model.blocks
+    for x0, _, x1, y1 in case.extra["openings"]:
+        lintel = np.flatnonzero(
+            np.isclose(blocks.lower[:, 1], y1) & (blocks.upper[:, 0] > x0) & (blocks.lower[:, 0] < x1)
+        )
+        assert lintel.size == 1, lintel  # one block spans the opening
+        (i,) = lintel
+        assert blocks.lower[i, 0] < x0 - 1e-9 and blocks.upper[i, 0] > x1 + 1e-9

@@ -247,14 +247,16 @@ def _split_at_jambs(wall: Blocks, rects) -> Blocks:
 
 def _with_lintels(wall: Blocks, rects, course: float) -> Blocks:
     """A lintel over each opening: the blocks of the course above it that overlap the opening
-    become one block (dry joints cannot span an opening; the specimens had lintels)."""
+    become one block (dry joints cannot span an opening; the specimens had lintels). Where
+    head joints of that course fall on the jambs, the blocks beside them are taken in too, so
+    that a lintel always bears on both piers (one exactly as wide as the opening fell in)."""
     keep = np.ones(wall.count, dtype=bool)
     lintels = []
     for x0, _, x1, y1 in rects:
         over = (
             (np.abs(wall.lower[:, 1] - y1) < 1e-6 * course)
-            & (wall.upper[:, 0] > x0 + 1e-9)
-            & (wall.lower[:, 0] < x1 - 1e-9)
+            & (wall.upper[:, 0] > x0 - 1e-9)
+            & (wall.lower[:, 0] < x1 + 1e-9)
         )
         lo = np.array([wall.lower[over, 0].min(), y1, wall.lower[over, 2].min()])
         hi = np.array([wall.upper[over, 0].max(), y1 + course, wall.upper[over, 2].max()])
