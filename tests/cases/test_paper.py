@@ -189,3 +189,22 @@ def test_every_lintel_bears_on_both_piers(name, changes):
         assert lintel.size == 1, lintel  # one block spans the opening
         (i,) = lintel
         assert blocks.lower[i, 0] < x0 - 1e-9 and blocks.upper[i, 0] > x1 + 1e-9
+
+
+def test_a_stuck_path_is_checked_before_it_is_called_a_collapse():
+    """S34 with 10-course windows: Newton and the pseudo-transient step both stop at lambda
+    0.040, below the overturning of the whole wall as one free-standing block (s/H = 0.067),
+    which its return walls can only raise. Dynamic relaxation from that state finds rest a
+    little higher, and the checked path goes on (0.147 measured; DR alone 0.118)."""
+    from dataclasses import replace
+
+    from masonry_dem.solvers.incremental import pushover
+
+    case = build_case("S34", opening_height=10)
+    data = reference_data()["restrepo_velez"]
+    overturning = data["block_thickness_s"] / (data["courses"] * data["block_height_a"])
+    unchecked = pushover(case.model, replace(case.settings, stop_check_time_steps=0))
+    assert unchecked.collapse_multiplier < overturning  # the premature stop, as it was
+    checked = pushover(case.model, case.settings)
+    assert checked.status == "collapse", checked.reason
+    assert checked.collapse_multiplier > 1.5 * overturning

@@ -205,3 +205,8 @@ def test_free_standing_wall_tilts_at_s_over_h_with_slip_memory():
     blocks, base = add_base(running_bond_wall(4, courses, a, 0.21, s, 20e3))
     lam = _collapse(_tilt(blocks, base), memory="slip")
     assert lam == pytest.approx(s / (courses * a), rel=TOL)
+
+
+def test_stop_check_time_steps_must_not_be_negative():
+    with pytest.raises(ValueError, match="stop_check_time_steps"):
+        StaticSettings(stop_check_time_steps=-1)

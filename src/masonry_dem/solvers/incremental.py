@@ -139,6 +139,13 @@ class StaticSettings:
         Newton stops at a fold of the path (see ``StaticSolver._pseudo_transient``): lambda
         raised by 0.5 % and the state relaxed by implicit, overdamped pseudo
         time steps; 0 disables it (work control then stops there).
+    stop_check_time_steps: budget of the dynamic relaxation that checks a stop of work
+        control where neither Newton nor the pseudo-transient step finds an equilibrium: it
+        relaxes from the last state to lambda x 1.005 and, if it comes to rest (polished by
+        Newton to the static tolerance), the path goes on from there; 0 disables it. Without
+        it a wall with openings (S34 with 10-course windows) stopped at lambda 0.040, below
+        the overturning of the whole wall as one block (s/H = 0.067); dynamic relaxation
+        finds 0.118 and the checked static path 0.122.
     """
 
     initial_step: float = 0.02
@@ -158,6 +165,7 @@ class StaticSettings:
     continuation: str = "work"
     rescue_time_steps: int = 0
     transient_steps: int = 100
+    stop_check_time_steps: int = 4000
 
     def __post_init__(self) -> None:
         for name in (
@@ -176,6 +184,10 @@ class StaticSettings:
             raise ValueError(f"rescue_time_steps must be >= 0, got {self.rescue_time_steps!r}")
         if self.transient_steps < 0:
             raise ValueError(f"transient_steps must be >= 0, got {self.transient_steps!r}")
+        if self.stop_check_time_steps < 0:
+            raise ValueError(
+                f"stop_check_time_steps must be >= 0, got {self.stop_check_time_steps!r}"
+            )
         if self.robust_iterations < 0:
             raise ValueError(f"robust_iterations must be >= 0, got {self.robust_iterations!r}")
         if self.max_iterations < 1 or self.max_steps < 1:
@@ -685,7 +697,9 @@ class StaticSolver:
             f"no rest in {s.transient_steps} pseudo time steps (residual {rnorm:.2e})",
         )
 
-    def _dynamic_rescue(self, target: float, last: float) -> _Outcome | None:
+    def _dynamic_rescue(
+        self, target: float, last: float, budget: int | None = None
+    ) -> _Outcome | None:
         """Dynamic relaxation of a load step Newton could not solve, from the last converged
         state, then Newton from where it came to rest (so an accepted state meets the static
         tolerance). Newton stops at kinks of the projection (joints on the edge between two
@@ -698,15 +712,16 @@ class StaticSolver:
 
         s = self.settings
         free = self.asm.free_index
-        if self._dr is None:
+        budget = s.rescue_time_steps if budget is None else budget
+        if self._dr is None or self._dr.settings.max_cycles != budget:
             self._dr = DynamicRelaxation(
                 self.model,
                 DRSettings(
                     tension=s.tension,
                     memory=s.memory,
                     tolerance=1e-6,
-                    max_cycles=s.rescue_time_steps,
-                    min_stall_window=s.rescue_time_steps // 4,
+                    max_cycles=budget,
+                    min_stall_window=budget // 4,
                     displacement_limit=self.limit,
                 ),
             )
@@ -947,17 +962,22 @@ class StaticSolver:
         transient_failed = False
         reason = ""
 
+        checked_from = -1  # the step from which the last dynamic-relaxation check started
+
         def transient(why: str) -> bool:
             """A pseudo-transient step to a lambda a little higher, once from each state."""
-            nonlocal transient_from, lam, w, peak, dw, cuts, flat_steps
+            nonlocal transient_from
             transient_from = len(hist.steps)
             target = lam + _TRANSIENT_RISE * abs(lam)
             moved = self._pseudo_transient(target)
             log.debug("work control stuck at lambda=%.6g (%s); pseudo-transient step to %.6g: "
                       "%s", lam, why, target,
                       f"ok in {moved.iterations}" if moved.ok else moved.reason)
-            if not moved.ok:
-                return False
+            return moved.ok and accept_moved(moved)
+
+        def accept_moved(moved: _Outcome) -> bool:
+            """Go on from a state found at a higher lambda (not by a work step)."""
+            nonlocal lam, w, peak, dw, cuts, flat_steps
             record(moved)
             lam = float(moved.load_factor)
             w = float(c @ (moved.q[free] - q0))
@@ -1001,6 +1021,17 @@ class StaticSolver:
                     if transient(out.reason):
                         continue
                     transient_failed = True
+                if stuck and s.stop_check_time_steps > 0 and checked_from != len(hist.steps):
+                    # neither Newton nor the pseudo-transient step passes: before calling
+                    # this a collapse, let dynamic relaxation look for rest a little higher
+                    checked_from = len(hist.steps)
+                    target = lam + _TRANSIENT_RISE * abs(lam)
+                    rescued = self._dynamic_rescue(target, lam, s.stop_check_time_steps)
+                    log.debug("work control stuck at lambda=%.6g; dynamic relaxation to "
+                              "%.6g: %s", lam, target, "ok" if rescued else "no rest")
+                    if rescued is not None and accept_moved(rescued):
+                        transient_failed = False
+                        continue
                 if stuck:
                     reason = (
                         f"no equilibrium beyond lambda={lam:.6g} under work control "
