@@ -797,8 +797,16 @@ class StaticSolver:
         dead = self._equilibrate(0.0, 1.0, radius=self.limit, damped=True)
         if not dead.ok and self.settings.transient_steps > 0 and "exceed" not in dead.reason:
             # where the damped Newton search stalls (a wall with openings, blocks settling
-            # on their neighbours), an overdamped relaxation may still come to rest
-            settled = self._pseudo_transient(0.0)
+            # on their neighbours), an overdamped relaxation may still come to rest: from
+            # where Newton stopped (often a few pseudo time steps away), else from the start
+            start = self.q
+            settled = _Outcome(False, start, 0.0, dead.response, 0, "not tried")
+            if np.all(np.isfinite(dead.q)):
+                self.q = dead.q  # the relaxation starts from (and measures from) self.q
+                settled = self._pseudo_transient(0.0)
+                self.q = start
+            if not settled.ok:
+                settled = self._pseudo_transient(0.0)
             log.debug("dead load: Newton %s; pseudo-transient: %s", dead.reason,
                       "ok" if settled.ok else settled.reason)
             dead = settled if settled.ok else replace(
