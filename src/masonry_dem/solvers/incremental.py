@@ -620,9 +620,9 @@ class StaticSolver:
             f"(residual {best[0]:.2e})",
         )
 
-    def _pseudo_transient(self, target: float) -> _Outcome:
+    def _pseudo_transient(self, target: float, start: np.ndarray | None = None) -> _Outcome:
         """Pseudo-transient continuation to equilibrium at ``target`` from the last converged
-        state: backward-Euler steps of the overdamped motion D dq/dt = R(q), with D the
+        state (or from ``start``; displacements are measured from the last converged state): backward-Euler steps of the overdamped motion D dq/dt = R(q), with D the
         elastic stiffness of the joints (the floor of the tangent),
 
             (K_t + D / dt) dq = R(q),
@@ -642,7 +642,7 @@ class StaticSolver:
         budget ``transient_steps`` runs out."""
         s = self.settings
         free = self.asm.free_index
-        q = self.q.copy()
+        q = (self.q if start is None else start).copy()
         residual, rnorm, response = self._residual(q, target)
         floor = _TRANSIENT_START
         best = [rnorm]
@@ -793,13 +793,10 @@ class StaticSolver:
             # where the damped Newton search stalls (a wall with openings, blocks settling
             # on their neighbours), an overdamped relaxation may still come to rest: from
             # where Newton stopped (often a few pseudo time steps away), else from the start
-            start = self.q
-            settled = _Outcome(False, start, 0.0, dead.response, 0, "not tried")
+            settled = None
             if np.all(np.isfinite(dead.q)):
-                self.q = dead.q  # the relaxation starts from (and measures from) self.q
-                settled = self._pseudo_transient(0.0)
-                self.q = start
-            if not settled.ok:
+                settled = self._pseudo_transient(0.0, start=dead.q)
+            if settled is None or not settled.ok:
                 settled = self._pseudo_transient(0.0)
             log.debug("dead load: Newton %s; pseudo-transient: %s", dead.reason,
                       "ok" if settled.ok else settled.reason)
@@ -963,7 +960,6 @@ class StaticSolver:
         transient_from = -1  # the step from which the last pseudo-transient step started
         transient_failed = False
         reason = ""
-
         checked_from = -1  # the step from which the last dynamic-relaxation check started
 
         def transient(why: str) -> bool:
@@ -975,9 +971,11 @@ class StaticSolver:
             log.debug("work control stuck at lambda=%.6g (%s); pseudo-transient step to %.6g: "
                       "%s", lam, why, target,
                       f"ok in {moved.iterations}" if moved.ok else moved.reason)
-            return moved.ok and accept_moved(moved)
+            if moved.ok:
+                accept_moved(moved)
+            return moved.ok
 
-        def accept_moved(moved: _Outcome) -> bool:
+        def accept_moved(moved: _Outcome) -> None:
             """Go on from a state found at a higher lambda (not by a work step)."""
             nonlocal lam, w, peak, dw, cuts, flat_steps
             record(moved)
@@ -987,7 +985,6 @@ class StaticSolver:
             path_lam.append(lam)
             peak = max(peak, lam)
             dw, cuts, flat_steps = first_dw, 0, 0
-            return True
 
         while len(hist.steps) < s.max_steps:
             goal = w + dw
@@ -1031,7 +1028,8 @@ class StaticSolver:
                     rescued = self._dynamic_rescue(target, lam, s.stop_check_time_steps)
                     log.debug("work control stuck at lambda=%.6g; dynamic relaxation to "
                               "%.6g: %s", lam, target, "ok" if rescued else "no rest")
-                    if rescued is not None and accept_moved(rescued):
+                    if rescued is not None:
+                        accept_moved(rescued)
                         transient_failed = False
                         continue
                 if stuck:
