@@ -400,6 +400,7 @@ class StaticSolver:
         history = [(rnorm, radius)]
         floor = s.residual_stiffness
         lu = None  # the factorized tangent, kept while it converges fast (chord steps)
+        here = False  # lu was factorized at the current state
 
         def regularise() -> bool:
             """Levenberg-Marquardt fallback: stiffen the tangent's floor (x1000, up to
@@ -437,6 +438,7 @@ class StaticSolver:
             fresh = lu is None
             if fresh:
                 lu = self._factor(response, floor)
+                here = True  # the tangent of this state (False once a step is taken with it)
             dq = lu.solve(residual)
             dlam = 0.0
             if control is not None:
@@ -469,10 +471,18 @@ class StaticSolver:
                 if n_try + constraint_error(q_try) < (1.0 - 1e-4 * f) * merit:
                     accepted = (q_try, lam_try, r_try, n_try, resp_try)
                     break
-            if accepted is None and not fresh:  # a stale tangent: refactor before cutting
+            if accepted is None and not here:  # a stale tangent: refactor before cutting
                 lu = None
                 continue
             if accepted is None:
+                if not fresh:
+                    # a search after a cut, with the tangent of this state: refactoring here
+                    # would give the same matrix and the same failed search, so the radius is
+                    # cut at once; that repeat still counts against the budget, which thus
+                    # ends the same searches (a cut costs two iterations of it)
+                    if it >= budget:
+                        break
+                    it += 1
                 radius = min(radius, shrink * size) / 8.0
                 if radius < 1e-12 * self.limit and regularise():
                     radius = max(4.0 * self._last_increment, 1e-4 * self.limit)
@@ -494,6 +504,7 @@ class StaticSolver:
             if not (step == 1.0 and shrink == 1.0 and accepted[3] < _CHORD_RATIO * rnorm):
                 lu = None
             q, lam, residual, rnorm, response = accepted
+            here = False
             umax = float(np.abs((q - self.q)[free][self._translation]).max(initial=0.0))
             if not math.isfinite(umax) or umax > self.limit:
                 return _Outcome(
