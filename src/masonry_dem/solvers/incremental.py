@@ -397,7 +397,6 @@ class StaticSolver:
         if radius is None:
             radius = max(4.0 * self._last_increment, 1e-4 * self.limit)
         residual, rnorm, response = self._residual(q, lam, dead_factor)
-        history = [(rnorm, radius)]
         floor = s.residual_stiffness
         lu = None  # the factorized tangent, kept while it converges fast (chord steps)
         here = False  # lu was factorized at the current state
@@ -415,7 +414,7 @@ class StaticSolver:
                 return False
             floor = min(floor * 1e3, _MAX_FLOOR)
             lu = None
-            history = [(rnorm, radius)]
+            history = [(rnorm + constraint_error(q), radius)]
             budget = it + s.max_iterations  # a fresh budget for the damped search
             return True
 
@@ -424,6 +423,9 @@ class StaticSolver:
                 return 0.0
             return abs(float(control[0] @ qq[free]) - control[1]) / max(control[2], 1e-300)
 
+        # the merit of the start includes the control's error: a controlled step starts at
+        # an equilibrium (tiny residual) one whole step away from its goal
+        history = [(rnorm + constraint_error(q), radius)]
         budget = s.max_iterations
         it = 0
         while it < budget:
