@@ -129,6 +129,20 @@ def test_peak_does_not_depend_on_the_bracket_tolerance(panel_lambda, bracket):
     assert h.collapse_multiplier == pytest.approx(panel_lambda, rel=TOL)
 
 
+def test_kept_factorization_while_creeping_changes_nothing(panel_lambda, monkeypatch):
+    """Where work control creeps along a fold (steps of 1e-10 of the Newton correction, no
+    joint changing state) the factorized tangent is kept instead of refactored: the same
+    peak (bit for bit on this machine), and fewer than half the factorizations on this panel."""
+    from masonry_dem.solvers import incremental
+
+    kept = pushover(_panel(), StaticSettings())
+    monkeypatch.setattr(incremental, "_CREEP", 0.0)  # refactor after every step
+    refactored = pushover(_panel(), StaticSettings())
+    assert kept.collapse_multiplier == pytest.approx(refactored.collapse_multiplier, rel=1e-9)
+    assert kept.collapse_multiplier == pytest.approx(panel_lambda, rel=1e-9)
+    assert kept.factorizations < 0.5 * refactored.factorizations
+
+
 def test_collapse_multiplier_does_not_depend_on_numbering(panel_lambda):
     order = np.random.default_rng(3).permutation(3 * 13 + 6)
     assert _collapse(_panel(order)) == pytest.approx(panel_lambda, rel=TOL)
