@@ -142,8 +142,10 @@ def test_interface_quads_lie_on_the_contact_planes(vtu_model):
     assert "flags" in mesh.cell_data and not mesh.cell_data["flags"][0].any()
 
 
-def _run(folder: Path, model: Model, lams, every: int = 1) -> tuple[ResultsWriter, History]:
-    writer = ResultsWriter(folder, model, every=every)
+def _run(
+    folder: Path, model: Model, lams, every: int = 1, background: bool = False
+) -> tuple[ResultsWriter, History]:
+    writer = ResultsWriter(folder, model, every=every, background=background)
     hist = History()
     for k, lam in enumerate(lams):
         step = _step(model, k, lam)
@@ -210,3 +212,38 @@ def test_write_pvd_checks_lengths_and_is_atomic(tmp_path):
     write_pvd(tmp_path / "x.pvd", ["a.vtu", "sub/b.vtu"], [0.5, 1.5])
     assert read_pvd(tmp_path / "x.pvd") == [(0.5, "a.vtu"), (1.5, "sub/b.vtu")]
     assert not list(tmp_path.glob("*.tmp"))
+
+
+def test_background_writer_writes_the_same_files(tmp_path, vtu_model):
+    """Steps written by the background thread are the synchronous writer's, byte for byte,
+    in the same order, and every one is on disk once finish() returns."""
+    lams = [0.0, 0.1, 0.25, 0.3, 0.45]
+    _run(tmp_path / "sync", vtu_model, lams)
+    writer, _ = _run(tmp_path / "thread", vtu_model, lams, background=True)
+    assert writer.steps_written == list(range(len(lams)))
+    names = sorted(p.relative_to(tmp_path / "sync") for p in (tmp_path / "sync").rglob("*"))
+    assert names == sorted(
+        p.relative_to(tmp_path / "thread") for p in (tmp_path / "thread").rglob("*")
+    )
+    for name in names:
+        if (tmp_path / "sync" / name).is_file() and name.name != "summary.json":
+            assert (tmp_path / "sync" / name).read_bytes() == (
+                tmp_path / "thread" / name
+            ).read_bytes(), name
+
+
+def test_background_writer_keeps_the_steps_of_a_run_that_raises(tmp_path, vtu_model):
+    """A solver that raises after three steps: close() still puts all three on disk."""
+    writer = ResultsWriter(tmp_path, vtu_model, background=True)
+    with pytest.raises(RuntimeError, match="solver broke"):
+        try:
+            for k in range(3):
+                writer(_step(vtu_model, k, 0.1 * k))
+            raise RuntimeError("solver broke")
+        finally:
+            writer.close()
+    assert [f for _, f in read_pvd(tmp_path / "blocks.pvd")] == [
+        f"steps/blocks_{k:04d}.vtu" for k in range(3)
+    ]
+    for k in range(3):
+        assert meshio.read(tmp_path / f"steps/interfaces_{k:04d}.vtu").cells

@@ -37,7 +37,7 @@ def run_command(args: argparse.Namespace) -> int:
 
     case = load_case(args.case)
     out = Path(args.out)
-    writer = ResultsWriter(out, case.model)
+    writer = ResultsWriter(out, case.model, background=True)
     bar = tqdm(desc=case.model.name[:40], unit="step", disable=args.quiet)
 
     def on_step(step) -> None:
@@ -47,8 +47,11 @@ def run_command(args: argparse.Namespace) -> int:
 
     t0 = time.perf_counter()
     solver = StaticSolver(case.model, case.settings)
-    history = solver.run(control=case.control, callback=on_step, monitor=case.monitor)
-    bar.close()
+    try:
+        history = solver.run(control=case.control, callback=on_step, monitor=case.monitor)
+    finally:  # the steps handed to the writer reach the disk whatever happens
+        writer.close()
+        bar.close()
     summary = writer.finish(
         history, case=case.source, wall_seconds=round(time.perf_counter() - t0, 4)
     )

@@ -790,9 +790,13 @@ def relax(
     if out is not None:
         from masonry_dem.export.writer import ResultsWriter
 
-        writer = ResultsWriter(out, model, every=write_every)
+        writer = ResultsWriter(out, model, every=write_every, background=True)
     solver = DynamicRelaxation(model, settings)
-    history = solver.run(callback=writer, monitor=monitor)
+    try:
+        history = solver.run(callback=writer, monitor=monitor)
+    finally:  # the steps handed to the writer reach the disk whatever happens
+        if writer is not None:
+            writer.close()
     if writer is not None:
         writer.finish(history, method="dynamic_relaxation", time_steps=solver.stats.time_steps)
     return history

@@ -1190,7 +1190,7 @@ def pushover(
     if out is not None:
         from masonry_dem.export.writer import ResultsWriter
 
-        writer = ResultsWriter(out, model, every=write_every)
+        writer = ResultsWriter(out, model, every=write_every, background=True)
 
     def on_step(step: StepResult) -> None:
         if writer is not None:
@@ -1199,7 +1199,11 @@ def pushover(
             callback(step)
 
     solver = StaticSolver(model, settings)
-    history = solver.run(control=control, callback=on_step, monitor=monitor)
+    try:
+        history = solver.run(control=control, callback=on_step, monitor=monitor)
+    finally:  # the steps handed to the writer reach the disk whatever happens
+        if writer is not None:
+            writer.close()
     if writer is not None:
         writer.finish(history)
     return history
