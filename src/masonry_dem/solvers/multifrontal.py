@@ -1,0 +1,250 @@
+"""Multifrontal LU without pivoting, for the tangent stiffness of the static solver.
+
+The tangent of an assembly keeps one sparsity pattern for a whole analysis, is structurally
+symmetric and is factorized with diagonal pivots (SuperLU's ``diag_pivot_thresh=0``): so the
+elimination tree, the fronts and where every entry goes are worked out once
+(:class:`Symbolic`), and each factorization only adds numbers into dense fronts, eliminates
+their pivot columns and passes the Schur complement to the parent front, the bulk of it in
+one matrix product (BLAS). On the validation walls this is 1.4-2.4x faster than SuperLU
+(which runs these small block-sparse matrices at about 1 GFlop/s); the answers agree to the
+rounding of the arithmetic.
+
+A zero or non-finite pivot raises :class:`ZeroPivot`: the caller then factorizes with
+SuperLU, which pivots.
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+from scipy import sparse
+
+_jit = numba.njit(cache=True)
+
+
+class ZeroPivot(RuntimeError):
+    """A pivot of the factorization without pivoting is zero (or not finite)."""
+
+
+@_jit
+def _elimination_tree(n, indptr, indices):
+    """Parent of each column in the elimination tree of a structurally symmetric pattern
+    (Liu's algorithm with path compression; -1 for a root)."""
+    parent = np.full(n, -1, np.int64)
+    ancestor = np.full(n, -1, np.int64)
+    for j in range(n):
+        for t in range(indptr[j], indptr[j + 1]):
+            i = indices[t]
+            while i != -1 and i < j:
+                nxt = ancestor[i]
+                ancestor[i] = j
+                if nxt == -1:
+                    parent[i] = j
+                i = nxt
+    return parent
+
+
+class Symbolic:
+    """Fronts of the multifrontal factorization of matrices with the pattern of ``A``
+    (square CSC, structurally symmetric, rows and columns in elimination order)."""
+
+    def __init__(self, A: sparse.csc_matrix) -> None:
+        A = sparse.csc_matrix(A)
+        if A.shape[0] != A.shape[1]:
+            raise ValueError(f"the matrix must be square, got shape {A.shape}")
+        A.sort_indices()
+        n = A.shape[0]
+        indptr = A.indptr.astype(np.int64)
+        indices = A.indices.astype(np.int64)
+        parent = _elimination_tree(n, indptr, indices)
+        # rows below the diagonal of each column of L: its own, and its children's
+        children: list[list[int]] = [[] for _ in range(n)]
+        for j in np.flatnonzero(parent >= 0):
+            children[parent[j]].append(int(j))
+        below: list[np.ndarray] = []
+        for j in range(n):
+            col = indices[indptr[j] : indptr[j + 1]]
+            parts = [col[col > j]] + [below[c][below[c] > j] for c in children[j]]
+            below.append(np.unique(np.concatenate(parts)) if len(parts) > 1 else parts[0])
+        # supernodes: consecutive columns with nested structures share one front
+        starts = [0] + [
+            j + 1
+            for j in range(n - 1)
+            if not (parent[j] == j + 1 and below[j + 1].size == below[j].size - 1)
+        ]
+        first = np.array(starts + [n], dtype=np.int64)
+        ns = first.size - 1
+        pivots = np.diff(first)
+        owner_of_column = np.repeat(np.arange(ns), pivots)
+        fronts = [
+            np.concatenate([np.arange(first[s], first[s + 1]), below[first[s + 1] - 1]])
+            for s in range(ns)
+        ]
+        updates = np.array([f.size for f in fronts], dtype=np.int64) - pivots
+        front_parent = np.array(
+            [
+                owner_of_column[f[p]] if f.size > p else -1
+                for f, p in zip(fronts, pivots, strict=True)
+            ],
+            dtype=np.int64,
+        )
+        # where each stored entry of A is added: the front of its first eliminated index
+        cols = np.repeat(np.arange(n), np.diff(indptr))
+        owner = owner_of_column[np.minimum(indices, cols)]
+        entry = np.argsort(owner, kind="stable").astype(np.int64)
+        entry_ptr = np.concatenate([[0], np.cumsum(np.bincount(owner, minlength=ns))])
+        where = np.empty(entry.size, np.int64)
+        for s in range(ns):
+            sl = entry[entry_ptr[s] : entry_ptr[s + 1]]
+            local_row = np.searchsorted(fronts[s], indices[sl])
+            local_col = np.searchsorted(fronts[s], cols[sl])
+            where[entry_ptr[s] : entry_ptr[s + 1]] = local_row * fronts[s].size + local_col
+        # each front's Schur complement goes to its parent front: its rows there
+        kids: list[list[int]] = [[] for _ in range(ns)]
+        for s in np.flatnonzero(front_parent >= 0):
+            kids[front_parent[s]].append(int(s))
+        kid_ptr = np.concatenate([[0], np.cumsum([len(k) for k in kids])])
+        kid = np.array([c for k in kids for c in k], dtype=np.int64)
+        rel_ptr = np.concatenate([[0], np.cumsum(updates)])
+        rel = np.zeros(rel_ptr[-1], np.int64)
+        for s in np.flatnonzero(front_parent >= 0):
+            rows = fronts[s][pivots[s] :]
+            rel[rel_ptr[s] : rel_ptr[s + 1]] = np.searchsorted(fronts[front_parent[s]], rows)
+        sizes = pivots + updates
+        self.n = n
+        self.fronts = ns
+        self.pattern = (indptr, indices)
+        self.arrays = (
+            pivots.astype(np.int64),
+            updates,
+            entry_ptr.astype(np.int64),
+            entry,
+            where,
+            kid_ptr.astype(np.int64),
+            kid,
+            rel_ptr.astype(np.int64),
+            rel,
+            np.concatenate([[0], np.cumsum(updates**2)]).astype(np.int64),
+            np.concatenate([[0], np.cumsum(sizes**2 - updates**2)]).astype(np.int64),
+        )
+        self.front_rows = np.concatenate(fronts).astype(np.int64)
+        self.front_ptr = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
+        #: floating-point operations of one factorization
+        self.flops = float(
+            np.sum(2 * updates**2 * pivots + 2 * updates * pivots**2 + 2 * pivots**3 / 3)
+        )
+
+    def factorize(self, A: sparse.csc_matrix) -> LU:
+        """LU factors of ``A`` (the pattern this was built for, indices sorted)."""
+        if A.shape != (self.n, self.n) or not (
+            np.array_equal(A.indptr, self.pattern[0]) and np.array_equal(A.indices, self.pattern[1])
+        ):
+            raise ValueError("the matrix does not have the pattern of the symbolic factorization")
+        factors, failed = _factorize(np.asarray(A.data, dtype=float), *self.arrays)
+        if failed >= 0:
+            raise ZeroPivot(f"zero or non-finite pivot in front {failed} of {self.fronts}")
+        return LU(self, factors)
+
+
+class LU:
+    """Factors of one matrix; :meth:`solve` solves A x = b."""
+
+    def __init__(self, symbolic: Symbolic, factors: np.ndarray) -> None:
+        self.symbolic = symbolic
+        self.factors = factors
+
+    def solve(self, b: np.ndarray) -> np.ndarray:
+        sym = self.symbolic
+        b = np.asarray(b, dtype=float)
+        if b.shape != (sym.n,):
+            raise ValueError(f"the right-hand side must have shape ({sym.n},), got {b.shape}")
+        pivots, updates = sym.arrays[0], sym.arrays[1]
+        return _solve(
+            self.factors, b, pivots, updates, sym.arrays[10], sym.front_rows, sym.front_ptr
+        )
+
+
+@_jit
+def _factorize(
+    data, pivots, updates, entry_ptr, entry, where, kid_ptr, kid, rel_ptr, rel, upd_ptr, fac_ptr
+):
+    """Fronts in elimination order (children before parents). Returns the factors, front by
+    front: the p pivot rows (U11 with L11 below its diagonal, then U12; p x f), then L21
+    (u x p); and -1, or the front whose pivot was zero."""
+    schur = np.empty(upd_ptr[-1])
+    factors = np.empty(fac_ptr[-1])
+    for s in range(pivots.size):
+        p = pivots[s]
+        u = updates[s]
+        f = p + u
+        F = np.zeros((f, f))
+        flat = F.reshape(-1)
+        for t in range(entry_ptr[s], entry_ptr[s + 1]):
+            flat[where[t]] += data[entry[t]]
+        for kk in range(kid_ptr[s], kid_ptr[s + 1]):  # extend-add the children's complements
+            c = kid[kk]
+            uc = updates[c]
+            o = upd_ptr[c]
+            r0 = rel_ptr[c]
+            for a in range(uc):
+                ra = rel[r0 + a]
+                for b in range(uc):
+                    F[ra, rel[r0 + b]] += schur[o + a * uc + b]
+        for k in range(p):
+            piv = F[k, k]
+            if piv == 0.0 or not np.isfinite(piv):
+                return factors, s
+            inv = 1.0 / piv
+            for i in range(k + 1, f):
+                F[i, k] *= inv
+            for i in range(k + 1, f):
+                lik = F[i, k]
+                if lik != 0.0:
+                    end = f if i < p else p  # the complement waits for one product
+                    for m in range(k + 1, end):
+                        F[i, m] -= lik * F[k, m]
+        if u > 0:
+            complement = F[p:, p:] - np.dot(
+                np.ascontiguousarray(F[p:, :p]), np.ascontiguousarray(F[:p, p:])
+            )
+            schur[upd_ptr[s] : upd_ptr[s + 1]] = complement.reshape(-1)
+        o = fac_ptr[s]
+        factors[o : o + p * f] = flat[: p * f]
+        o += p * f
+        for a in range(p, f):
+            for b in range(p):
+                factors[o] = F[a, b]
+                o += 1
+    return factors, -1
+
+
+@_jit
+def _solve(factors, b, pivots, updates, fac_ptr, front_rows, front_ptr):
+    x = b.copy()
+    for s in range(pivots.size):  # L y = b
+        p = pivots[s]
+        f = p + updates[s]
+        o = fac_ptr[s]
+        rows = front_rows[front_ptr[s] : front_ptr[s + 1]]
+        for k in range(p):
+            acc = x[rows[k]]
+            for m in range(k):
+                acc -= factors[o + k * f + m] * x[rows[m]]
+            x[rows[k]] = acc
+        o += p * f
+        for a in range(f - p):
+            acc = 0.0
+            for m in range(p):
+                acc += factors[o + a * p + m] * x[rows[m]]
+            x[rows[p + a]] -= acc
+    for s in range(pivots.size - 1, -1, -1):  # U x = y
+        p = pivots[s]
+        f = p + updates[s]
+        o = fac_ptr[s]
+        rows = front_rows[front_ptr[s] : front_ptr[s + 1]]
+        for k in range(p - 1, -1, -1):
+            acc = x[rows[k]]
+            for m in range(k + 1, f):
+                acc -= factors[o + k * f + m] * x[rows[m]]
+            x[rows[k]] = acc / factors[o + k * f + k]
+    return x
