@@ -11,7 +11,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy import sparse
 from scipy.sparse.linalg import splu
+from test_stability import A, B, S, on_base
 
+from masonry_dem.geometry import builders
+from masonry_dem.solvers.incremental import StaticSolver
 from masonry_dem.solvers.multifrontal import Symbolic, ZeroPivot
 
 
@@ -21,11 +24,11 @@ def random_matrix(n: int, density: float, seed: int) -> sparse.csc_matrix:
     mask = sparse.random(n, n, density=density, random_state=rng, format="csc")
     pattern = (mask + mask.T).tocoo()
     values = rng.uniform(-1.0, 1.0, pattern.nnz)  # a different value on each side
-    A = sparse.csc_matrix((values, (pattern.row, pattern.col)), shape=(n, n))
-    A = A + sparse.diags(np.abs(A).sum(axis=1).A1 + 1.0)
-    A = sparse.csc_matrix(A)
-    A.sort_indices()
-    return A
+    M = sparse.csc_matrix((values, (pattern.row, pattern.col)), shape=(n, n))
+    M = M + sparse.diags(np.abs(M).sum(axis=1).A1 + 1.0)
+    M = sparse.csc_matrix(M)
+    M.sort_indices()
+    return M
 
 
 @settings(max_examples=25, deadline=None)
@@ -35,16 +38,15 @@ def random_matrix(n: int, density: float, seed: int) -> sparse.csc_matrix:
     seed=st.integers(0, 2**31 - 1),
 )
 def test_solves_agree_with_dense_lu(n, density, seed):
-    A = random_matrix(n, density, seed)
+    M = random_matrix(n, density, seed)
     b = np.random.default_rng(seed + 1).uniform(-1.0, 1.0, n)
-    x = Symbolic(A).factorize(A).solve(b)
-    np.testing.assert_allclose(x, np.linalg.solve(A.toarray(), b), rtol=1e-10, atol=1e-12)
+    x = Symbolic(M).factorize(M).solve(b)
+    np.testing.assert_allclose(x, np.linalg.solve(M.toarray(), b), rtol=1e-10, atol=1e-12)
 
 
 def test_a_tangent_of_a_validation_wall_solves_as_superlu_does():
     """A tangent with yielded joints (unsymmetric) in the solver's kept ordering."""
     from masonry_dem.cases.paper import build_case
-    from masonry_dem.solvers.incremental import StaticSolver
 
     case = build_case("S15")
     solver = StaticSolver(case.model, case.settings)
@@ -64,13 +66,9 @@ def test_a_tangent_of_a_validation_wall_solves_as_superlu_does():
 
 
 def test_zero_pivot_is_reported_and_the_solver_falls_back_to_superlu(monkeypatch):
-    A = sparse.csc_matrix(np.array([[0.0, 1.0], [1.0, 0.0]]))
+    swap = sparse.csc_matrix(np.array([[0.0, 1.0], [1.0, 0.0]]))
     with pytest.raises(ZeroPivot, match="zero or non-finite pivot"):
-        Symbolic(A).factorize(A)
-
-    from masonry_dem.geometry import builders
-    from masonry_dem.model import InterfaceMaterial, Model, SelfWeight, Support, WeightProportional
-    from masonry_dem.solvers.incremental import StaticSolver
+        Symbolic(swap).factorize(swap)
 
     calls = []
 
@@ -79,23 +77,17 @@ def test_zero_pivot_is_reported_and_the_solver_falls_back_to_superlu(monkeypatch
         raise ZeroPivot("forced")
 
     monkeypatch.setattr(Symbolic, "factorize", zero_pivot)
-    blocks, base = builders.add_base(builders.single_block(0.2, 0.3, 0.1, 20e3))
-    model = Model.build(
-        blocks,
-        InterfaceMaterial(1e9, 0.4e9, 0.7),
-        [Support(np.array([base]))],
-        [SelfWeight(), WeightProportional((0.0, 0.0, 1.0))],
-    )
+    model = on_base(builders.single_block(A, B, S, 20e3))
     hist = StaticSolver(model).run()
     assert calls  # the multifrontal LU was asked, and SuperLU took over
     assert hist.status == "collapse"
-    assert hist.collapse_multiplier == pytest.approx(0.1 / 0.2, rel=0.005)
+    assert hist.collapse_multiplier == pytest.approx(S / A, rel=0.005)
 
 
 def test_a_matrix_of_another_pattern_is_refused():
-    A = random_matrix(10, 0.2, 1)
-    symbolic = Symbolic(A)
+    M = random_matrix(10, 0.2, 1)
+    symbolic = Symbolic(M)
     with pytest.raises(ValueError, match="pattern"):
         symbolic.factorize(sparse.csc_matrix(sparse.identity(10)))
     with pytest.raises(ValueError, match="right-hand side must have shape"):
-        symbolic.factorize(A).solve(np.ones(9))
+        symbolic.factorize(M).solve(np.ones(9))
