@@ -47,11 +47,8 @@ def run_command(args: argparse.Namespace) -> int:
 
     t0 = time.perf_counter()
     solver = StaticSolver(case.model, case.settings)
-    try:
+    with writer, bar:  # the steps handed to the writer reach the disk
         history = solver.run(control=case.control, callback=on_step, monitor=case.monitor)
-    finally:  # the steps handed to the writer reach the disk whatever happens
-        writer.close()
-        bar.close()
     summary = writer.finish(
         history, case=case.source, wall_seconds=round(time.perf_counter() - t0, 4)
     )

@@ -89,23 +89,31 @@ def run_case(name: str, out: Path | None = None, render: bool = True) -> dict:
     return row
 
 
-def run_cases(names, out: Path | None, render: bool, jobs: int, done=None) -> list[dict]:
-    """Run cases side by side in ``jobs`` processes; the rows in the order of ``names``.
+def run_cases(names, out: Path | None, render: bool, jobs: int = 1, done=None) -> list[dict]:
+    """Run cases, side by side in ``jobs`` processes when more than one; the rows in the
+    order of ``names``; ``done(row)`` after each case.
 
     Fresh (spawned) processes: a forked copy of a process that has started VTK or BLAS
     threads may hang."""
+    if jobs <= 1 or len(names) <= 1:
+        rows = []
+        for name in names:
+            rows.append(run_case(name, out, render=render))
+            if done is not None:
+                done(rows[-1])
+        return rows
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor, as_completed
 
     context = multiprocessing.get_context("spawn")
     with ProcessPoolExecutor(max_workers=min(jobs, len(names)), mp_context=context) as pool:
         futures = {pool.submit(run_case, name, out, render): name for name in names}
-        rows = {}
+        by_name = {}
         for future in as_completed(futures):
-            rows[futures[future]] = future.result()
+            by_name[futures[future]] = future.result()
             if done is not None:
-                done(rows[futures[future]])
-    return [rows[name] for name in names]
+                done(by_name[futures[future]])
+    return [by_name[name] for name in names]
 
 
 def _render(folder: Path, view: str) -> str | None:
@@ -170,17 +178,13 @@ def validate_command(args: argparse.Namespace) -> int:
     if args.case and args.case not in case_names():
         raise ValueError(f"unknown case {args.case!r}; the cases are {', '.join(case_names())}")
     out = Path(args.out)
-    render = not args.no_render
-    bar = tqdm(total=len(names), unit="case", disable=args.quiet or args.json)
-    if args.jobs > 1 and len(names) > 1:
-        rows = run_cases(names, out, render, args.jobs, done=lambda row: bar.update())
-    else:
-        rows = []
-        for name in names:
-            bar.set_description(name)
-            rows.append(run_case(name, out, render=render))
+    with tqdm(total=len(names), unit="case", disable=args.quiet or args.json) as bar:
+
+        def done(row: dict) -> None:
+            bar.set_description(row["case"])
             bar.update()
-    bar.close()
+
+        rows = run_cases(names, out, not args.no_render, args.jobs, done)
     if args.json:
         print(json.dumps(rows, indent=1))
     else:

@@ -28,7 +28,8 @@ class ResultsWriter:
     ``background=True``: the steps are written in order by one thread while the solver goes
     on (zlib, which meshio compresses with, runs outside the GIL: a quarter of a run's time
     went into writing). :meth:`flush` waits for them and raises a write's error;
-    :meth:`finish` and :meth:`close` flush first, so every step handed over is on disk."""
+    :meth:`finish`, :meth:`close` and leaving a ``with`` block flush first, so every step
+    handed over is on disk, also when the solver raises."""
 
     def __init__(
         self, folder: Path | str, model: Model, every: int = 1, background: bool = False
@@ -68,6 +69,12 @@ class ResultsWriter:
             if self._pool is not None:
                 self._pool.shutdown(wait=True)
                 self._pool = None
+
+    def __enter__(self) -> ResultsWriter:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
 
     def _write(self, step: StepResult) -> None:
         bfile, ifile = write_step_vtu(self.folder, self.model, step)

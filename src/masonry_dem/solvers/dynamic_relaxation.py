@@ -72,6 +72,7 @@ import logging
 import math
 import time
 from collections.abc import Callable
+from contextlib import nullcontext
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -792,11 +793,8 @@ def relax(
 
         writer = ResultsWriter(out, model, every=write_every, background=True)
     solver = DynamicRelaxation(model, settings)
-    try:
+    with writer or nullcontext():  # the steps handed to the writer reach the disk
         history = solver.run(callback=writer, monitor=monitor)
-    finally:  # the steps handed to the writer reach the disk whatever happens
-        if writer is not None:
-            writer.close()
     if writer is not None:
         writer.finish(history, method="dynamic_relaxation", time_steps=solver.stats.time_steps)
     return history

@@ -37,6 +37,7 @@ import logging
 import math
 import time
 from collections.abc import Callable
+from contextlib import nullcontext
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -1215,11 +1216,8 @@ def pushover(
             callback(step)
 
     solver = StaticSolver(model, settings)
-    try:
+    with writer or nullcontext():  # the steps handed to the writer reach the disk
         history = solver.run(control=control, callback=on_step, monitor=monitor)
-    finally:  # the steps handed to the writer reach the disk whatever happens
-        if writer is not None:
-            writer.close()
     if writer is not None:
         writer.finish(history)
     return history
