@@ -132,15 +132,31 @@ def test_peak_does_not_depend_on_the_bracket_tolerance(panel_lambda, bracket):
 def test_kept_factorization_while_creeping_changes_nothing(panel_lambda, monkeypatch):
     """Where work control creeps along a fold (steps of 1e-10 of the Newton correction, no
     joint changing state) the factorized tangent is kept instead of refactored: the same
-    peak (bit for bit on this machine), and fewer than half the factorizations on this panel."""
+    peak (bit for bit on this machine), and fewer than half the factorizations on this panel
+    (searches left to creep as long as the trust radius allows, as before the cap on cuts)."""
     from masonry_dem.solvers import incremental
 
+    monkeypatch.setattr(incremental, "_SEARCH_CUTS", 10**6)
     kept = pushover(_panel(), StaticSettings())
     monkeypatch.setattr(incremental, "_CREEP", 0.0)  # refactor after every step
     refactored = pushover(_panel(), StaticSettings())
     assert kept.collapse_multiplier == pytest.approx(refactored.collapse_multiplier, rel=1e-9)
     assert kept.collapse_multiplier == pytest.approx(panel_lambda, rel=1e-9)
     assert kept.factorizations < 0.5 * refactored.factorizations
+
+
+def test_a_search_that_keeps_cutting_gives_up_without_changing_the_answer(monkeypatch):
+    """A Newton search gives up after _SEARCH_CUTS cuts of its trust radius instead of
+    creeping on with steps of 1e-7..1e-13 of the correction until the radius is gone: the
+    searches that converge never needed more, so the peak is the same bit for bit and
+    the failing searches end sooner (fewer iterations in all)."""
+    from masonry_dem.solvers import incremental
+
+    capped = pushover(_panel(), StaticSettings())
+    monkeypatch.setattr(incremental, "_SEARCH_CUTS", 10**6)
+    uncapped = pushover(_panel(), StaticSettings())
+    assert capped.collapse_multiplier == uncapped.collapse_multiplier
+    assert capped.iterations < 0.9 * uncapped.iterations
 
 
 def test_collapse_multiplier_does_not_depend_on_numbering(panel_lambda):
