@@ -4,6 +4,7 @@ K = H^T Kbar H on the free DOFs; internal forces and reactions."""
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 from scipy import sparse
@@ -45,6 +46,12 @@ class Assembly:
         free_index = np.flatnonzero(model.free)
         H_free = H.tocsc()[:, free_index].tocsr()
         return cls(H, H_free, free_index, interface_stiffness(model))
+
+    @cached_property
+    def H_free_T(self) -> sparse.csr_matrix:
+        """(nf, 6m) H_f^T as its own CSR matrix: ``H_free.T`` is a new CSC view at every use,
+        whose construction cost more than the product in a Newton residual."""
+        return self.H_free.T.tocsr()
 
     @property
     def n_free(self) -> int:

@@ -229,7 +229,6 @@ class DynamicRelaxation:
         self.law = InterfaceLaw.of(model, self.asm.kbar, s.tension, **extra)
         free = self.asm.free_index
         self.Hf = self.asm.H_free.tocsr()
-        self.HfT = self.asm.H_free.T.tocsr()
         self.F_dead = model.dead.reshape(-1)[free]
         self.F_live = model.live.reshape(-1)[free]
         dead_norm = float(np.linalg.norm(self.F_dead))
@@ -316,7 +315,7 @@ class DynamicRelaxation:
         rel = (self.Hf @ x).reshape(-1, 6)
         resp = self.law.respond(rel, plastic, cracked)
         self.stats.law_evaluations += 1
-        return rel, resp, self.HfT @ resp.actions.reshape(-1)
+        return rel, resp, self.asm.H_free_T @ resp.actions.reshape(-1)
 
     # ------------------------------------------------------------------ one relaxation
     def _relax(

@@ -349,7 +349,7 @@ class StaticSolver:
         rel = self.asm.relative_displacements(q)
         response = self.law.respond(rel, self.plastic, self.cracked)
         F_ext = dead_factor * self.F_dead + lam * self.F_live
-        residual = F_ext - self.asm.H_free.T @ response.actions.reshape(-1)
+        residual = F_ext - self.asm.H_free_T @ response.actions.reshape(-1)
         scale = max(float(np.linalg.norm(self._weight * F_ext)), 1e-30)
         return residual, float(np.linalg.norm(self._weight * residual)) / scale, response
 
