@@ -459,6 +459,8 @@ class StaticSolver:
         budget = s.max_iterations
         it = 0
         cuts = 0  # cuts of the trust radius in this search
+        cut = False  # the last iteration cut the radius
+        direction = (np.zeros(0), 0.0)  # (dq, dlam) of the search that was cut
         while it < budget:
             it += 1
             cerr = constraint_error(q)
@@ -472,9 +474,14 @@ class StaticSolver:
             if fresh:
                 lu = self._factor(response, floor)
                 here = True  # the tangent of this state (False once a step is taken with it)
-            dq = lu.solve(residual)
-            dlam = 0.0
-            if control is not None:
+            repeat = cut and not fresh  # same state, same tangent: the same direction
+            cut = False
+            if repeat:
+                dq, dlam = direction
+            else:
+                dq = lu.solve(residual)
+                dlam = 0.0
+            if control is not None and not repeat:
                 c = control[0]
                 a = lu.solve(self.F_live)
                 ca = float(c @ a)
@@ -495,7 +502,8 @@ class StaticSolver:
             shrink = min(1.0, radius / size) if size > 0 else 1.0
             merit = rnorm + cerr
             accepted = None
-            for step in (1.0, 0.5, 0.25, 0.125):
+            # after a cut the full step is the last backtrack of the search before it (x 1/8)
+            for step in (0.5, 0.25, 0.125) if repeat else (1.0, 0.5, 0.25, 0.125):
                 f = shrink * step
                 q_try = q.copy()
                 q_try[free] += f * dq
@@ -531,6 +539,7 @@ class StaticSolver:
                         it,
                         f"no equilibrium found: no correction lowers the residual {rnorm:.2e}",
                     )
+                cut, direction = True, (dq, dlam)
                 continue
             if step == 1.0 and shrink < 1.0:
                 radius *= 2.0
