@@ -159,6 +159,38 @@ def test_a_search_that_keeps_cutting_gives_up_without_changing_the_answer(monkey
     assert capped.iterations < 0.9 * uncapped.iterations
 
 
+def test_work_control_passes_a_fold_it_meets_twice(panel_lambda, monkeypatch):
+    """Two failed work steps in a row whose searches stop at the same lambda stop at one fold
+    of the path: the pseudo-transient step then goes just past that lambda at once (a target
+    above the usual 0.5 % rise from the current state) instead of closing in on the fold by
+    halved steps. The peak is the one found without the rule, within the bracket tolerance."""
+    from masonry_dem.solvers import incremental
+
+    targets: list[tuple[float, float]] = []
+    original = incremental.StaticSolver._pseudo_transient
+
+    def recording(self, target, start=None):
+        targets.append((target, self._last_lambda_for_test))
+        return original(self, target, start)
+
+    def record_accept(self, out, step, control_value):
+        self._last_lambda_for_test = float(out.load_factor)
+        return accept(self, out, step, control_value)
+
+    accept = incremental.StaticSolver._accept
+    monkeypatch.setattr(incremental.StaticSolver, "_accept", record_accept)
+    monkeypatch.setattr(incremental.StaticSolver, "_pseudo_transient", recording)
+    h = pushover(_panel(), StaticSettings())
+    rise = incremental._TRANSIENT_RISE
+    assert any(t > lam * (1 + rise) * (1 + 1e-9) for t, lam in targets)
+    assert h.collapse_multiplier == pytest.approx(panel_lambda, rel=TOL)
+    monkeypatch.setattr(incremental, "_FOLD_MATCH", -1.0)  # never the same fold
+    targets.clear()
+    without = pushover(_panel(), StaticSettings())
+    assert all(t == pytest.approx(lam * (1 + rise), rel=1e-12) for t, lam in targets)
+    assert h.collapse_multiplier == pytest.approx(without.collapse_multiplier, rel=TOL)
+
+
 def test_collapse_multiplier_does_not_depend_on_numbering(panel_lambda):
     order = np.random.default_rng(3).permutation(3 * 13 + 6)
     assert _collapse(_panel(order)) == pytest.approx(panel_lambda, rel=TOL)

@@ -112,6 +112,8 @@ _TRANSIENT_AFTER = 2
 #: the fold, near enough not to jump past the peak (the bracket tolerance is no measure of
 #: that: at 1e-4 the step does not leave the fold, at 2 % it passes the peak)
 _TRANSIENT_RISE = 0.005
+#: two failed work steps whose searches stop at lambdas this close (relative) stop at one fold
+_FOLD_MATCH = 1e-3
 _TRANSIENT_START = 1e-3
 _TRANSIENT_SHRINK = 0.25
 _TRANSIENT_WINDOW = 30
@@ -1023,12 +1025,17 @@ class StaticSolver:
         transient_failed = False
         reason = ""
         checked_from = -1  # the step from which the last dynamic-relaxation check started
+        last_fold: float | None = None  # lambda where the last failed search stopped
+        fold_failed = False  # a pseudo-transient step past a fold found no rest
 
-        def transient(why: str) -> bool:
-            """A pseudo-transient step to a lambda a little higher, once from each state."""
+        def transient(why: str, above: float | None = None) -> bool:
+            """A pseudo-transient step to a lambda a little higher (and past ``above``),
+            once from each state."""
             nonlocal transient_from
             transient_from = len(hist.steps)
             target = lam + _TRANSIENT_RISE * abs(lam)
+            if above is not None:  # just past a fold known to within _FOLD_MATCH
+                target = max(target, above + _FOLD_MATCH * abs(above))
             moved = self._pseudo_transient(target)
             log.debug("work control stuck at lambda=%.6g (%s); pseudo-transient step to %.6g: "
                       "%s", lam, why, target,
@@ -1073,15 +1080,28 @@ class StaticSolver:
                 # a step below this cannot be told from no step (the control tolerance)
                 tiny = 1e-4 * max(abs(w), path_w[1] - path_w[0], 1e-8 * self.limit)
                 stuck = cuts > _MAX_CUTS or dw < tiny
+                # the search stops where the one before it stopped: a fold of the path that
+                # halved steps only close in on (each half converges, the next full step
+                # fails there again), so the pseudo-transient step goes past it at once
+                fold = float(out.load_factor)
+                refold = (
+                    last_fold is not None
+                    and abs(fold - last_fold) <= _FOLD_MATCH * abs(lam)
+                    and not fold_failed
+                )
+                last_fold = fold
                 if (
-                    (stuck or (cuts == _TRANSIENT_AFTER and not transient_failed))
+                    (stuck or refold or (cuts == _TRANSIENT_AFTER and not transient_failed))
                     and s.transient_steps > 0
                     and transient_from != len(hist.steps)
                 ):
                     # Newton stops at a fold of the path
-                    if transient(out.reason):
+                    if transient(out.reason, above=fold if refold else None):
                         continue
-                    transient_failed = True
+                    if refold:
+                        fold_failed = True
+                    else:
+                        transient_failed = True
                 if stuck and s.stop_check_time_steps > 0 and checked_from != len(hist.steps):
                     # neither Newton nor the pseudo-transient step passes: before calling
                     # this a collapse, let dynamic relaxation look for rest a little higher
