@@ -56,11 +56,13 @@ def collapse_mode(model: Model, step: StepResult, floor: float = 1e-9) -> np.nda
     from masonry_dem.assembly.stiffness import Assembly
     from masonry_dem.constitutive.strength import stiffness_factors_of_flags
 
+    if step.flags is None:
+        raise ValueError("the step has no interface flags: there is no collapse mode")
     asm = Assembly.of(model)
     factors = np.maximum(stiffness_factors_of_flags(step.flags), floor)
     K = asm.stiffness(factors).tocsc()
     x = spsolve(K, model.live.reshape(-1)[asm.free_index])
-    q = np.zeros(model.n_dofs)
+    q: np.ndarray = np.zeros(model.n_dofs)
     q[asm.free_index] = x
     q = q.reshape(-1, 6)
     scale = float(np.abs(q[:, :3]).max(initial=0.0))

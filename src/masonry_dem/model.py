@@ -11,6 +11,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from masonry_dem._validation import as_finite_array, positive_scalar
 from masonry_dem.geometry.blocks import Blocks
@@ -71,7 +72,7 @@ def dof_mask(dofs: str | Sequence[str]) -> np.ndarray:
 class Support:
     """Fix ``dofs`` of the given blocks (indices)."""
 
-    blocks: np.ndarray
+    blocks: ArrayLike
     dofs: str | Sequence[str] = "all"
 
     def mask(self, n_blocks: int) -> np.ndarray:
@@ -107,7 +108,7 @@ class WeightProportional:
 
     direction: Sequence[float] = (0.0, 0.0, 1.0)
     live: bool = True
-    blocks: np.ndarray | None = None
+    blocks: ArrayLike | None = None
 
     def vector(self, blocks: Blocks) -> np.ndarray:
         d = as_finite_array("direction", self.direction, (3,))
@@ -129,7 +130,7 @@ class Pressure:
     axis: int = 2
     sign: int = 1
     live: bool = True
-    blocks: np.ndarray | None = None
+    blocks: ArrayLike | None = None
 
     def vector(self, blocks: Blocks) -> np.ndarray:
         p = float(as_finite_array("pressure", self.value))
@@ -150,7 +151,7 @@ class PointLoad:
     """Point forces (3,) on each selected block, applied at ``point`` offsets from the block
     centres (default: the centre). Dead by default (e.g. the timber beams of S32)."""
 
-    blocks: np.ndarray
+    blocks: ArrayLike
     force: Sequence[float]
     offset: Sequence[float] = (0.0, 0.0, 0.0)
     live: bool = False

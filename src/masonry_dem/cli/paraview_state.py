@@ -34,7 +34,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
 def run(args: argparse.Namespace) -> int:
     from masonry_dem.export.paraview_state import copy_state, has_data
 
-    names = (args.name,)
+    names: tuple[str, ...] = (args.name,)
     if args.name == "all":  # the mechanism state only for a run that ended in collapse
         names = tuple(n for n in STATES if n != "mechanism" or has_data(n, args.results))
     try:

@@ -36,7 +36,7 @@ import logging
 import math
 from dataclasses import dataclass
 from functools import cached_property
-from typing import Final
+from typing import Final, Literal, overload
 
 import numba
 import numpy as np
@@ -219,7 +219,7 @@ def _radial_factor(a: NDArray, c: NDArray, alpha: NDArray | float) -> NDArray:
     both = np.flatnonzero((np.minimum(a, c) > 0) & (m < np.inf))
     if both.size:
         mb = m[both]
-        al = alpha[both] if np.ndim(alpha) else float(alpha)
+        al = np.asarray(alpha)[both] if np.ndim(alpha) else float(alpha)
         t = _radial_t(a[both] / mb, c[both] / mb, al)
         with np.errstate(over="ignore"):  # subnormal demands: s = inf, utilisation 0
             s[both] = t / mb
@@ -234,6 +234,7 @@ def _radial_t(big_a: NDArray, big_c: NDArray, alpha: NDArray | float) -> NDArray
         if alpha == 1.0:
             return 2.0 / (big_a + np.sqrt(big_a * big_a + 4.0 * big_c * big_c))
         return _radial_newton(big_a, big_c, alpha)
+    alpha = np.asarray(alpha)
     t = np.empty(big_a.shape)
     two = alpha == 2.0
     one = alpha == 1.0
@@ -275,7 +276,7 @@ def _radial_newton(big_a: NDArray, big_c: NDArray, alpha: NDArray | float) -> ND
             break
         rows, tau, ln_a, ln_c = rows[keep], tau[keep], ln_a[keep], ln_c[keep]
         if np.ndim(al):
-            al = al[keep]
+            al = np.asarray(al)[keep]
     else:  # pragma: no cover - Newton on a convex increasing function always converges
         logger.warning("radial factor: Newton did not converge to %g", _NEWTON_RTOL)
         with np.errstate(over="ignore"):
@@ -485,7 +486,7 @@ class _Domain:
         )
 
     def take(self, rows: NDArray) -> _Domain:
-        al = self.alpha[rows] if np.ndim(self.alpha) else self.alpha
+        al = np.asarray(self.alpha)[rows] if np.ndim(self.alpha) else self.alpha
         return _Domain(
             self.l1[rows],
             self.l2[rows],
@@ -503,7 +504,7 @@ class _Domain:
         return np.full(self.l1.shape[0], float(self.alpha))
 
     @cached_property
-    def kernel_arrays(self) -> tuple[NDArray, ...]:
+    def kernel_arrays(self) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray, NDArray]:
         """The per-row arrays of the compiled kernels, in their order: l1, l2, friction,
         alpha, snap1, snap2."""
         return (self.l1, self.l2, self.friction, self.alpha_rows, self.snap1, self.snap2)
@@ -926,6 +927,40 @@ def _writable_c(x: NDArray) -> NDArray:
     if x.dtype == np.float64 and x.flags.c_contiguous and x.flags.writeable:
         return x
     return np.array(x, dtype=np.float64, order="C")
+
+
+@overload
+def _evaluate(
+    act: NDArray,
+    ft: NDArray,
+    dom: _Domain,
+    torsion_bending_interaction: bool = ...,
+    projection_only: Literal[False] = ...,
+    projection: str = ...,
+) -> StrengthCheck: ...
+
+
+@overload
+def _evaluate(
+    act: NDArray,
+    ft: NDArray,
+    dom: _Domain,
+    torsion_bending_interaction: bool = ...,
+    *,
+    projection_only: Literal[True],
+    projection: str = ...,
+) -> NDArray: ...
+
+
+@overload
+def _evaluate(
+    act: NDArray,
+    ft: NDArray,
+    dom: _Domain,
+    torsion_bending_interaction: bool = ...,
+    projection_only: bool = ...,
+    projection: str = ...,
+) -> StrengthCheck | NDArray: ...
 
 
 def _evaluate(

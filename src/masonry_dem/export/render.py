@@ -689,34 +689,33 @@ def render_side_by_side(
     row), each panel ``window_size`` with its own title and automatic scale. For galleries
     such as the paper's collapse mechanisms (``mechanism=True``: the collapse mode of each
     folder, as :func:`render_mechanism`, instead of ``step``)."""
-    folders = [Path(f) for f in folders]
-    if not folders:
+    dirs = [Path(f) for f in folders]
+    if not dirs:
         raise ValueError("render_side_by_side needs at least one results folder")
-    views = [view] * len(folders) if isinstance(view, str) else list(view)
-    if len(views) != len(folders):
-        raise ValueError(f"{len(folders)} folders but {len(views)} views")
+    views = [view] * len(dirs) if isinstance(view, str) else list(view)
+    if len(views) != len(dirs):
+        raise ValueError(f"{len(dirs)} folders but {len(views)} views")
     for v in views:
         _check_view(v)
     wsize = _check_window(window_size)
-    ncol = len(folders) if columns is None else int(columns)
+    ncol = len(dirs) if columns is None else int(columns)
     if ncol < 1:
         raise ValueError(f"columns must be >= 1, got {columns!r}")
     path = _check_out(out, Path(out), _IMAGE_SUFFIXES, "render_side_by_side")
+    # generators: each scene is made only when the previous one is closed
     if mechanism:
-        scenes = [
-            lambda f=f, v=v: _mechanism_scene(f, v, None, wsize, False)
-            for f, v in zip(folders, views, strict=True)
-        ]
+        scenes = (
+            _mechanism_scene(f, v, None, wsize, False) for f, v in zip(dirs, views, strict=True)
+        )
     else:
-        series = [open_results(f) for f in folders]
+        series = [open_results(f) for f in dirs]
         indices = [s.index_of(step) for s in series]
-        scenes = [
-            lambda ser=ser, idx=idx, v=v: _step_scene(ser, idx, v, None, wsize)[0]
+        scenes = (
+            _step_scene(ser, idx, v, None, wsize)[0]
             for ser, idx, v in zip(series, indices, views, strict=True)
-        ]
+        )
     panels = []
-    for make in scenes:
-        scene = make()
+    for scene in scenes:
         try:
             panels.append(np.asarray(scene.image())[..., :3])
         finally:

@@ -546,7 +546,9 @@ class DynamicRelaxation:
         dt_limit, _ = self._stability_limit(self.asm.stiffness(f).tocsr())
         return s.dt_fraction * dt_limit
 
-    def _relax_with_cuts(self, start: _State, target: float, hist: History, **kw) -> _Relaxed:
+    def _relax_with_cuts(
+        self, start: _State, target: float, hist: History | None, **kw
+    ) -> _Relaxed:
         s = self.settings
         dt = self._step_for(start)
         for _ in range(s.max_cuts + 1):

@@ -39,6 +39,7 @@ import time
 from collections.abc import Callable
 from contextlib import nullcontext
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy import sparse
@@ -49,6 +50,9 @@ from masonry_dem.constitutive.law import MEMORY, TENSION, InterfaceLaw, LawRespo
 from masonry_dem.model import Model
 from masonry_dem.results import History, StepResult
 from masonry_dem.solvers.multifrontal import Symbolic, ZeroPivot
+
+if TYPE_CHECKING:
+    from masonry_dem.solvers.dynamic_relaxation import DynamicRelaxation
 
 log = logging.getLogger(__name__)
 
@@ -342,8 +346,8 @@ class StaticSolver:
         self.factorizations = 0
         self.iterations = 0
         self._last_increment = 0.0
-        self._elastic_lu = None
-        self._dr = None
+        self._elastic_lu: _Factorized | None = None
+        self._dr: DynamicRelaxation | None = None
         self._fronts: Symbolic | None = None  # once the ordering is known
 
     # ------------------------------------------------------------------ one equilibrium
@@ -431,6 +435,9 @@ class StaticSolver:
         floor = s.residual_stiffness
         lu = None  # the factorized tangent, kept while it converges fast (chord steps)
         here = False  # lu was factorized at the current state
+        history: list[tuple[float, float]]  # (merit, trust radius) of the iterates; set below
+        budget: int
+        cuts: int
 
         def regularise() -> bool:
             """Levenberg-Marquardt fallback: stiffen the tangent's floor (x1000, up to
@@ -443,6 +450,7 @@ class StaticSolver:
             nonlocal floor, history, budget, lu, cuts
             if not damped or floor >= _MAX_FLOOR:
                 return False
+            assert radius is not None  # set above when not given
             floor = min(floor * 1e3, _MAX_FLOOR)
             lu = None
             cuts = 0
@@ -473,7 +481,7 @@ class StaticSolver:
                 return _Outcome(True, q, lam, response, it - 1)
             self.iterations += 1
             fresh = lu is None
-            if fresh:
+            if lu is None:
                 lu = self._factor(response, floor)
                 here = True  # the tangent of this state (False once a step is taken with it)
             repeat = cut and not fresh  # same state, same tangent: the same direction
@@ -880,6 +888,7 @@ class StaticSolver:
         if control is None:
             self._load_control(hist, record)
         else:
+            assert monitor_dof is not None  # the control DOF, set above
             self._displacement_control(hist, record, control, monitor_dof)
         return self._finish(hist, hist.status, hist.reason, t0)
 
@@ -1164,6 +1173,7 @@ class StaticSolver:
             hist.status = "failed"
             hist.reason = f"max_steps={s.max_steps} reached at lambda={lam:.6g}"
             return None
+        assert hist.collapse_bracket is not None  # set by the caller
         if peak <= hist.collapse_bracket[0]:
             return reason
         hist.collapse_bracket = (peak, peak)

@@ -59,8 +59,8 @@ class Symbolic:
         parent = _elimination_tree(n, indptr, indices)
         # rows below the diagonal of each column of L: its own, and its children's
         children: list[list[int]] = [[] for _ in range(n)]
-        for j in np.flatnonzero(parent >= 0):
-            children[parent[j]].append(int(j))
+        for j in np.flatnonzero(parent >= 0).tolist():
+            children[parent[j]].append(j)
         below: list[np.ndarray] = []
         for j in range(n):
             col = indices[indptr[j] : indptr[j + 1]]
@@ -101,13 +101,13 @@ class Symbolic:
             where[entry_ptr[s] : entry_ptr[s + 1]] = local_row * fronts[s].size + local_col
         # each front's Schur complement goes to its parent front: its rows there
         kids: list[list[int]] = [[] for _ in range(ns)]
-        for s in np.flatnonzero(front_parent >= 0):
-            kids[front_parent[s]].append(int(s))
+        for s in np.flatnonzero(front_parent >= 0).tolist():
+            kids[front_parent[s]].append(s)
         kid_ptr = np.concatenate([[0], np.cumsum([len(k) for k in kids])])
         kid = np.array([c for k in kids for c in k], dtype=np.int64)
         rel_ptr = np.concatenate([[0], np.cumsum(updates)])
         rel = np.zeros(rel_ptr[-1], np.int64)
-        for s in np.flatnonzero(front_parent >= 0):
+        for s in np.flatnonzero(front_parent >= 0).tolist():
             rows = fronts[s][pivots[s] :]
             rel[rel_ptr[s] : rel_ptr[s + 1]] = np.searchsorted(fronts[front_parent[s]], rows)
         sizes = pivots + updates
