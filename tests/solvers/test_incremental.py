@@ -148,14 +148,15 @@ def test_kept_factorization_while_creeping_changes_nothing(panel_lambda, monkeyp
 def test_a_search_that_keeps_cutting_gives_up_without_changing_the_answer(monkeypatch):
     """A Newton search gives up after _SEARCH_CUTS cuts of its trust radius instead of
     creeping on with steps of 1e-7..1e-13 of the correction until the radius is gone: the
-    searches that converge never needed more, so the peak is the same bit for bit and
-    the failing searches end sooner (fewer iterations in all)."""
+    searches that converge never needed more, so the peak is the same (to 1e-9: work
+    control reads the lambda where a failed search stops, which moves by the creep it no
+    longer takes) and the failing searches end sooner (fewer iterations in all)."""
     from masonry_dem.solvers import incremental
 
     capped = pushover(_panel(), StaticSettings())
     monkeypatch.setattr(incremental, "_SEARCH_CUTS", 10**6)
     uncapped = pushover(_panel(), StaticSettings())
-    assert capped.collapse_multiplier == uncapped.collapse_multiplier
+    assert capped.collapse_multiplier == pytest.approx(uncapped.collapse_multiplier, rel=1e-9)
     assert capped.iterations < 0.9 * uncapped.iterations
 
 
