@@ -105,9 +105,14 @@ def run_cases(names, out: Path | None, render: bool, jobs: int = 1, done=None) -
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor, as_completed
 
+    from masonry_dem.cases.paper import build_case
+
+    # the largest models first (the time of a case grows with its joints), so that no
+    # worker is left with a long case while the others wait
+    largest_first = sorted(names, key=lambda name: -build_case(name).model.interfaces.count)
     context = multiprocessing.get_context("spawn")
     with ProcessPoolExecutor(max_workers=min(jobs, len(names)), mp_context=context) as pool:
-        futures = {pool.submit(run_case, name, out, render): name for name in names}
+        futures = {pool.submit(run_case, name, out, render): name for name in largest_first}
         by_name = {}
         for future in as_completed(futures):
             by_name[futures[future]] = future.result()
