@@ -20,6 +20,8 @@ SENSITIVITY = [
     ("OL1", {"dry_kn": 2.4e8, "dry_kt": 1.0e8}),
     ("OL1", {"dry_kn": 2.4e10, "dry_kt": 1.0e10}),
     ("OL1", {"dry_kt": 0.4e9}),
+    ("OL1", {"column_dofs_table1": ("u1", "u2", "u3")}),
+    ("OL2", {"column_dofs_table1": ("u1", "u2", "u3")}),
     ("S13", {"dry_kn": 2.4e8, "dry_kt": 1.0e8}),
     ("S13", {"column_dofs_table2": ("u1", "u3")}),
     ("S5", {"column_dofs_table2": ("u1", "u3")}),
