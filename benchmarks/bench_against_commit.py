@@ -45,7 +45,10 @@ def _run(src: Path, case: str, repeat: int) -> dict:
     env = dict(os.environ, PYTHONPATH=str(src))
     out = subprocess.run(
         [sys.executable, "-c", _CHILD, case, str(repeat)],
-        env=env, capture_output=True, text=True, check=True,
+        env=env,
+        capture_output=True,
+        text=True,
+        check=True,
     )
     return json.loads(out.stdout.strip().splitlines()[-1])
 
@@ -64,15 +67,15 @@ def main() -> int:
     with tempfile.TemporaryDirectory() as tmp:
         worktree = Path(tmp) / "ref"
         subprocess.run(
-            ["git", "-C", str(ROOT), "worktree", "add", "--detach", "-q", str(worktree),
-             args.ref],
+            ["git", "-C", str(ROOT), "worktree", "add", "--detach", "-q", str(worktree), args.ref],
             check=True,
         )
         try:
             trees = {args.ref[:10]: worktree / "src", "this tree": ROOT / "src"}
             total = {name: [0.0, 0, 0] for name in trees}
-            print(f"{'case':6} " + " | ".join(f"{n:>10} s  fac    lambda" for n in trees)
-                  + " | ratio")
+            print(
+                f"{'case':6} " + " | ".join(f"{n:>10} s  fac    lambda" for n in trees) + " | ratio"
+            )
             for case in cases:
                 rows = {name: _run(src, case, args.repeat) for name, src in trees.items()}
                 for name, r in rows.items():
@@ -80,9 +83,14 @@ def main() -> int:
                     total[name][1] += r["fac"]
                     total[name][2] += r["its"]
                 (old, new) = rows.values()
-                print(f"{case:6} " + " | ".join(
-                    f"{r['s']:12.2f} {r['fac']:4d} {r['lam']:9.6g}" for r in rows.values()
-                ) + f" | {old['s'] / new['s']:.2f}x", flush=True)
+                print(
+                    f"{case:6} "
+                    + " | ".join(
+                        f"{r['s']:12.2f} {r['fac']:4d} {r['lam']:9.6g}" for r in rows.values()
+                    )
+                    + f" | {old['s'] / new['s']:.2f}x",
+                    flush=True,
+                )
             (old_t, new_t) = total.values()
             for name, (s, fac, its) in total.items():
                 print(f"{name}: {s:.1f} CPU s, {fac} factorizations, {its} iterations")

@@ -206,7 +206,6 @@ def test_s32_hinges_between_courses_15_and_16(s32):
     assert np.all(peaks[:hinge] <= 0.02 * peaks.max()), peaks.round(4)
 
 
-
 # ------------------------------------------------------------------ the checks can fail
 @pytest.fixture(scope="module")
 def ol1_model():

@@ -184,7 +184,9 @@ def test_every_lintel_bears_on_both_piers(name, changes):
     blocks = case.model.blocks
     for x0, _, x1, y1 in case.extra["openings"]:
         lintel = np.flatnonzero(
-            np.isclose(blocks.lower[:, 1], y1) & (blocks.upper[:, 0] > x0) & (blocks.lower[:, 0] < x1)
+            np.isclose(blocks.lower[:, 1], y1)
+            & (blocks.upper[:, 0] > x0)
+            & (blocks.lower[:, 0] < x1)
         )
         assert lintel.size == 1, lintel  # one block spans the opening
         (i,) = lintel

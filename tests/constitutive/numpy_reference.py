@@ -26,7 +26,6 @@ from masonry_dem.constitutive.strength import (
 logger = logging.getLogger(__name__)
 
 
-
 def _torsion_constant_fast(l1: NDArray, l2: NDArray) -> NDArray:
     """:func:`_torsion_constant` with the same arithmetic, bit for bit, in fewer array passes
     (the limits of asinh(x)/x are patched in only where a side is below 1e-8 of the other)."""

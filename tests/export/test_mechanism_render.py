@@ -81,7 +81,10 @@ def test_missing_mechanism_is_a_clear_error(tmp_path):
 def test_side_by_side_gallery_of_mechanisms(tilted, tmp_path):
     _, _, folder = tilted
     out = render.render_side_by_side(
-        [folder, folder], tmp_path / "g.png", view=["front", "side"], window_size=(200, 150),
+        [folder, folder],
+        tmp_path / "g.png",
+        view=["front", "side"],
+        window_size=(200, 150),
         mechanism=True,
     )
     img = iio.imread(out)[..., :3].astype(int)

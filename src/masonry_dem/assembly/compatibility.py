@@ -17,7 +17,9 @@ from masonry_dem.geometry.blocks import Blocks
 from masonry_dem.geometry.interfaces import Interfaces
 
 # structural non-zeros of the skew matrix [r]x: (row, col, component of r, sign)
-_SKEW = np.array([(0, 1, 2, -1), (0, 2, 1, 1), (1, 0, 2, 1), (1, 2, 0, -1), (2, 0, 1, -1), (2, 1, 0, 1)])
+_SKEW = np.array(
+    [(0, 1, 2, -1), (0, 2, 1, 1), (1, 0, 2, 1), (1, 2, 0, -1), (2, 0, 1, -1), (2, 1, 0, 1)]
+)
 
 
 def compatibility_matrix(blocks: Blocks, interfaces: Interfaces) -> sparse.csr_matrix:

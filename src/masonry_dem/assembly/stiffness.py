@@ -70,9 +70,7 @@ class Assembly:
         base = 6 * np.arange(m)[:, None, None]
         rows = np.broadcast_to(base + np.arange(6)[None, :, None], (m, 6, 6))
         cols = np.broadcast_to(base + np.arange(6)[None, None, :], (m, 6, 6))
-        T = sparse.csr_matrix(
-            (blocks6.ravel(), (rows.ravel(), cols.ravel())), shape=(6 * m, 6 * m)
-        )
+        T = sparse.csr_matrix((blocks6.ravel(), (rows.ravel(), cols.ravel())), shape=(6 * m, 6 * m))
         return (self.H_free.T @ (T @ self.H_free)).tocsc()
 
     def internal_forces(self, actions: np.ndarray) -> np.ndarray:

@@ -891,9 +891,7 @@ def _nb_fd_tangent(t, h, ft, rows, l1, l2, friction, alpha, snap1, snap2, energy
     proj = np.empty((7 * n, 6))
     flags = np.empty(7 * n, dtype=np.uint8)
     util = np.empty(0)
-    _nb_evaluate(
-        act, ft7, l1_7, l2_7, mu7, al7, s1_7, s2_7, True, True, energy, proj, flags, util
-    )
+    _nb_evaluate(act, ft7, l1_7, l2_7, mu7, al7, s1_7, s2_7, True, True, energy, proj, flags, util)
     for r in range(n):
         for a in range(6):
             for p in range(6):
@@ -902,7 +900,12 @@ def _nb_fd_tangent(t, h, ft, rows, l1, l2, friction, alpha, snap1, snap2, energy
 
 
 def fd_tangent(
-    trial: NDArray, h: NDArray, ft: NDArray, rows: NDArray, dom: _Domain, kbar: NDArray,
+    trial: NDArray,
+    h: NDArray,
+    ft: NDArray,
+    rows: NDArray,
+    dom: _Domain,
+    kbar: NDArray,
     projection: str = "energy",
 ) -> NDArray:
     """(n, 6, 6) forward-difference tangent of the projection at ``trial`` (n, 6), steps ``h``

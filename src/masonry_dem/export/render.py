@@ -793,6 +793,7 @@ def render_animation(
             frames.append(np.asarray(scene.image()))
     finally:
         scene.close()
+
     def write(tmp: Path) -> None:
         if path.suffix.lower() == ".gif":
             iio.imwrite(tmp, np.stack(frames), extension=".gif", duration=1000.0 / fps, loop=0)

@@ -175,9 +175,7 @@ def detect_interfaces(blocks: Blocks, tol: float | None = None) -> Interfaces:
     l1 = (hi - lo)[rows, t1]
     l2 = (hi - lo)[rows, t2]
     order = np.lexsort((j, i))
-    return Interfaces(
-        i[order], j[order], axis[order], centre[order], l1[order], l2[order]
-    )
+    return Interfaces(i[order], j[order], axis[order], centre[order], l1[order], l2[order])
 
 
 def _empty_interfaces() -> Interfaces:

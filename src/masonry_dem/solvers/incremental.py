@@ -291,7 +291,9 @@ class _TangentAssembler:
     def symbolic(self) -> Symbolic:
         """The fronts of the multifrontal factorization of :meth:`matrix`."""
         ones = np.ones(self.indices.size)
-        return Symbolic(sparse.csc_matrix((ones, self.indices, self.indptr), shape=(self.n, self.n)))
+        return Symbolic(
+            sparse.csc_matrix((ones, self.indices, self.indptr), shape=(self.n, self.n))
+        )
 
     def factorized(self, lu) -> _Factorized:
         """A factorization of :meth:`matrix` that solves in the DOF numbering."""
@@ -562,7 +564,9 @@ class StaticSolver:
                 and np.array_equal(accepted[4].flags, response.flags)
                 and np.array_equal(accepted[4].state, response.state)
             )
-            if not (crept or (step == 1.0 and shrink == 1.0 and accepted[3] < _CHORD_RATIO * rnorm)):
+            if not (
+                crept or (step == 1.0 and shrink == 1.0 and accepted[3] < _CHORD_RATIO * rnorm)
+            ):
                 lu = None
             q, lam, residual, rnorm, response = accepted
             here = here and crept
@@ -671,7 +675,11 @@ class StaticSolver:
                 return _Outcome(True, q_now, load_factor, response, it)
             if not math.isfinite(umax) or umax > self.limit:
                 return _Outcome(
-                    False, q_now, load_factor, response, it,
+                    False,
+                    q_now,
+                    load_factor,
+                    response,
+                    it,
                     f"displacements exceed the limit {self.limit:.3g} m (a mechanism)",
                 )
             step = float(np.abs(f[self._translation]).max(initial=0.0))
@@ -680,16 +688,23 @@ class StaticSolver:
                 r0, s0 = hist[-1 - _DIVERGENCE_WINDOW]
                 if best[0] > 0.1 * r0 and step >= s0:
                     return _Outcome(
-                        False, q_now, load_factor, response, it,
+                        False,
+                        q_now,
+                        load_factor,
+                        response,
+                        it,
                         f"no equilibrium found: the robust iterations drift (residual "
                         f"{rnorm:.2e}, correction {step:.2e} m not shrinking)",
                     )
         q_best = self.q.copy()
         q_best[free] = best[1]
         return _Outcome(
-            False, q_best, load_factor, best[2], s.robust_iterations,
-            f"no convergence in {s.robust_iterations} robust iterations "
-            f"(residual {best[0]:.2e})",
+            False,
+            q_best,
+            load_factor,
+            best[2],
+            s.robust_iterations,
+            f"no convergence in {s.robust_iterations} robust iterations (residual {best[0]:.2e})",
         )
 
     def _pseudo_transient(self, target: float, start: np.ndarray | None = None) -> _Outcome:
@@ -746,20 +761,32 @@ class StaticSolver:
             umax = float(np.abs((q - self.q)[free][self._translation]).max(initial=0.0))
             if umax > self.limit:
                 return _Outcome(
-                    False, q, target, response, it,
+                    False,
+                    q,
+                    target,
+                    response,
+                    it,
                     f"displacements exceed the limit {self.limit:.3g} m (a mechanism)",
                 )
             best.append(min(best[-1], rnorm))
             if len(best) > _TRANSIENT_WINDOW and best[-1] > 0.5 * best[-1 - _TRANSIENT_WINDOW]:
                 return _Outcome(
-                    False, q, target, response, it,
+                    False,
+                    q,
+                    target,
+                    response,
+                    it,
                     f"no rest: the residual {rnorm:.2e} has not halved in "
                     f"{_TRANSIENT_WINDOW} pseudo time steps",
                 )
         if rnorm <= s.tolerance:
             return _Outcome(True, q, target, response, s.transient_steps)
         return _Outcome(
-            False, q, target, response, s.transient_steps,
+            False,
+            q,
+            target,
+            response,
+            s.transient_steps,
             f"no rest in {s.transient_steps} pseudo time steps (residual {rnorm:.2e})",
         )
 
@@ -806,8 +833,12 @@ class StaticSolver:
         q = self.q.copy()
         q[free] = relaxed.x
         polished = self._equilibrate(target, start=q)
-        log.debug("dynamic rescue at lambda=%.6g: %d time steps, Newton %s", target,
-                  relaxed.cycles, "ok" if polished.ok else polished.reason)
+        log.debug(
+            "dynamic rescue at lambda=%.6g: %d time steps, Newton %s",
+            target,
+            relaxed.cycles,
+            "ok" if polished.ok else polished.reason,
+        )
         return polished if polished.ok else None
 
     def _accept(self, out: _Outcome, step: int, control_value: float) -> StepResult:
@@ -870,10 +901,15 @@ class StaticSolver:
                 settled = self._pseudo_transient(0.0, start=dead.q)
             if settled is None or not settled.ok:
                 settled = self._pseudo_transient(0.0)
-            log.debug("dead load: Newton %s; pseudo-transient: %s", dead.reason,
-                      "ok" if settled.ok else settled.reason)
-            dead = settled if settled.ok else replace(
-                dead, reason=f"{dead.reason}; pseudo-transient: {settled.reason}"
+            log.debug(
+                "dead load: Newton %s; pseudo-transient: %s",
+                dead.reason,
+                "ok" if settled.ok else settled.reason,
+            )
+            dead = (
+                settled
+                if settled.ok
+                else replace(dead, reason=f"{dead.reason}; pseudo-transient: {settled.reason}")
             )
         if not dead.ok:
             reason = f"no equilibrium under the dead load: {dead.reason}"
@@ -913,8 +949,12 @@ class StaticSolver:
                     out, robust_ok = rescued, True
             if not out.ok and s.robust_iterations > 0 and "exceed the limit" not in out.reason:
                 second = self._robust(target)
-                log.debug("Newton failed at lambda=%.6g (%s); robust: %s", target, out.reason,
-                          "ok" if second.ok else second.reason)
+                log.debug(
+                    "Newton failed at lambda=%.6g (%s); robust: %s",
+                    target,
+                    out.reason,
+                    "ok" if second.ok else second.reason,
+                )
                 if second.ok:
                     out, robust_ok = second, True
                 else:
@@ -952,14 +992,22 @@ class StaticSolver:
                     # refining this bracket would only cost failing steps; if it finds
                     # nothing higher, the bracket is refined after all (below)
                     hand_over = False
-                    kept = (self.q.copy(), self.plastic.copy(), self.cracked.copy(),
-                            self._last_increment)
+                    kept = (
+                        self.q.copy(),
+                        self.plastic.copy(),
+                        self.cracked.copy(),
+                        self._last_increment,
+                    )
                     hist.collapse_bracket = (lam, lam_fail)
                     work_reason = self._work_control(hist, record, first_failure=out.reason)
                     if work_reason is None:
                         return
-                    log.debug("work control found nothing above lambda=%.6g (%s): refining "
-                              "the load-control bracket", lam, work_reason)
+                    log.debug(
+                        "work control found nothing above lambda=%.6g (%s): refining "
+                        "the load-control bracket",
+                        lam,
+                        work_reason,
+                    )
                     self.q, self.plastic, self.cracked, self._last_increment = kept
                     hist.collapse_bracket = None
                 dlam = (lam_fail - lam) / 2
@@ -1046,9 +1094,13 @@ class StaticSolver:
             if above is not None:  # just past a fold known to within _FOLD_MATCH
                 target = max(target, above + _FOLD_MATCH * abs(above))
             moved = self._pseudo_transient(target)
-            log.debug("work control stuck at lambda=%.6g (%s); pseudo-transient step to %.6g: "
-                      "%s", lam, why, target,
-                      f"ok in {moved.iterations}" if moved.ok else moved.reason)
+            log.debug(
+                "work control stuck at lambda=%.6g (%s); pseudo-transient step to %.6g: %s",
+                lam,
+                why,
+                target,
+                f"ok in {moved.iterations}" if moved.ok else moved.reason,
+            )
             if moved.ok:
                 accept_moved(moved)
             return moved.ok
@@ -1117,16 +1169,19 @@ class StaticSolver:
                     checked_from = len(hist.steps)
                     target = lam + _TRANSIENT_RISE * abs(lam)
                     rescued = self._dynamic_rescue(target, lam, s.stop_check_time_steps)
-                    log.debug("work control stuck at lambda=%.6g; dynamic relaxation to "
-                              "%.6g: %s", lam, target, "ok" if rescued else "no rest")
+                    log.debug(
+                        "work control stuck at lambda=%.6g; dynamic relaxation to %.6g: %s",
+                        lam,
+                        target,
+                        "ok" if rescued else "no rest",
+                    )
                     if rescued is not None:
                         accept_moved(rescued)
                         transient_failed = False
                         continue
                 if stuck:
                     reason = (
-                        f"no equilibrium beyond lambda={lam:.6g} under work control "
-                        f"({out.reason})"
+                        f"no equilibrium beyond lambda={lam:.6g} under work control ({out.reason})"
                     )
                     break
                 continue
@@ -1138,7 +1193,9 @@ class StaticSolver:
             if lam >= s.max_load_factor:
                 hist.status, hist.reason = "completed", f"reached max_load_factor {lam:.6g}"
                 return None
-            total = float(np.abs(out.q - hist.steps[0].q.reshape(-1))[free][self._translation].max())
+            total = float(
+                np.abs(out.q - hist.steps[0].q.reshape(-1))[free][self._translation].max()
+            )
             if total > self.limit:
                 reason = (
                     f"a mechanism: displacements {total:.3g} m exceed the limit "
@@ -1178,9 +1235,7 @@ class StaticSolver:
             return reason
         hist.collapse_bracket = (peak, peak)
         hist.status = "collapse"
-        hist.reason = (
-            f"{reason}; load control first failed at {first_lambda:.6g} ({first_failure})"
-        )
+        hist.reason = f"{reason}; load control first failed at {first_lambda:.6g} ({first_failure})"
         return None
 
     def _displacement_control(
