@@ -345,3 +345,39 @@ def test_interface_law_rejects_non_finite_trials():
     rel[1, 3] = np.nan
     with pytest.raises(ValueError, match="finite"):
         law.respond(rel, np.zeros((2, 6)), np.zeros(2, dtype=bool))
+
+
+@pytest.mark.parametrize("projection", ["energy", "radial"])
+@pytest.mark.parametrize("seed", [5, 6])
+def test_response_without_utilisation_is_the_same_bits(seed, projection):
+    """The residuals of the solvers ask for no utilisation (the radial factor of rows well
+    inside Eq. (A5) is skipped): actions, flags, states and stiffness factors are those of
+    the full response bit for bit, and the utilisation computed later is the full one."""
+    rng = np.random.default_rng(seed)
+    m = 1500
+    l1, l2, mu, ft = _interfaces(m, rng)
+    kbar = np.column_stack(
+        [
+            np.full(m, 1e9),
+            np.full(m, 1e9),
+            np.full(m, 2.4e9),
+            np.full(m, 1e6),
+            np.full(m, 3e5),
+            np.full(m, 5e5),
+        ]
+    )
+    law = InterfaceLaw(kbar, l1, l2, mu, ft, 1.5, "brittle", "none", projection=projection)
+    relative = _actions(m, l1, l2, mu, ft, rng) / kbar
+    plastic = np.zeros((m, 6))
+    cracked = rng.random(m) < 0.2
+    full = law.respond(relative, plastic, cracked)
+    lean = law.respond(relative, plastic, cracked, utilisation=False)
+    assert lean.utilisation is None
+    for name in ("trial", "actions", "tangent", "state", "flags"):
+        assert np.array_equal(getattr(lean, name), getattr(full, name)), name
+    assert np.array_equal(law.utilisation(lean), full.utilisation)
+    assert (full.flags & 1).mean() > 0.1  # many rows slide: the skipped factor matters
+    with pytest.raises(ValueError, match="finite"):
+        bad = relative.copy()
+        bad[0, 0] = np.inf
+        law.respond(bad, plastic, cracked, utilisation=False)

@@ -925,6 +925,33 @@ def fd_tangent(
     return out
 
 
+def _projection_and_flags(
+    act: NDArray, ft: NDArray, dom: _Domain, projection: str = "energy"
+) -> tuple[NDArray, NDArray]:
+    """The projected actions (m, 6) and bit flags (m,) of :func:`_evaluate`, bit for bit,
+    without the utilisation: the radial factor of the rows well inside Eq. (A5) is skipped.
+    For the residuals of a Newton search or a time step, where only the forces count."""
+    m = act.shape[0]
+    proj = np.empty((m, 6))
+    flags = np.empty(m, dtype=np.uint8)
+    n_radial, n_energy = _nb_evaluate(
+        _writable_c(act),
+        _writable_c(ft),
+        *dom.kernel_arrays,
+        True,
+        True,
+        projection == "energy",
+        proj,
+        flags,
+        np.empty(0),
+    )
+    if n_radial:  # pragma: no cover - Newton on a convex increasing function converges
+        logger.warning("radial factor: Newton did not converge to %g", _NEWTON_RTOL)
+    if n_energy:
+        logger.debug("energy projection: %d rows did not converge", n_energy)
+    return proj, flags
+
+
 def _writable_c(x: NDArray) -> NDArray:
     """``x`` as a writable C-contiguous float64 array (one compiled signature for all calls)."""
     if x.dtype == np.float64 and x.flags.c_contiguous and x.flags.writeable:

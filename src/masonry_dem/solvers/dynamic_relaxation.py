@@ -313,7 +313,7 @@ class DynamicRelaxation:
     # ------------------------------------------------------------------ forces
     def _forces(self, x: np.ndarray, plastic: np.ndarray, cracked: np.ndarray):
         rel = (self.Hf @ x).reshape(-1, 6)
-        resp = self.law.respond(rel, plastic, cracked)
+        resp = self.law.respond(rel, plastic, cracked, utilisation=False)
         self.stats.law_evaluations += 1
         return rel, resp, self.asm.H_free_T @ resp.actions.reshape(-1)
 
@@ -520,7 +520,7 @@ class DynamicRelaxation:
             q=q.reshape(-1, 6),
             actions=resp.actions.copy(),
             state=resp.state.astype(np.int32),
-            utilisation=np.minimum(resp.utilisation, 1.0),
+            utilisation=np.minimum(self.law.utilisation(resp), 1.0),
             flags=resp.flags.astype(np.int32),
             control_displacement=disp,
             iterations=int(cycles),

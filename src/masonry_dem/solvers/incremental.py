@@ -355,7 +355,7 @@ class StaticSolver:
     # ------------------------------------------------------------------ one equilibrium
     def _residual(self, q: np.ndarray, lam: float, dead_factor: float = 1.0):
         rel = self.asm.relative_displacements(q)
-        response = self.law.respond(rel, self.plastic, self.cracked)
+        response = self.law.respond(rel, self.plastic, self.cracked, utilisation=False)
         F_ext = dead_factor * self.F_dead + lam * self.F_live
         residual = F_ext - self.asm.H_free_T @ response.actions.reshape(-1)
         scale = max(float(np.linalg.norm(self._weight * F_ext)), 1e-30)
@@ -853,7 +853,7 @@ class StaticSolver:
             q=out.q.reshape(-1, 6).copy(),
             actions=resp.actions.copy(),
             state=resp.state.astype(np.int32),
-            utilisation=np.minimum(resp.utilisation, 1.0),
+            utilisation=np.minimum(self.law.utilisation(resp), 1.0),
             flags=resp.flags.astype(np.int32),
             control_displacement=float(control_value),
             iterations=out.iterations,
