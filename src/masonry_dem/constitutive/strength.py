@@ -925,30 +925,45 @@ def fd_tangent(
     return out
 
 
+def _run_kernel(
+    act: NDArray,
+    ft: NDArray,
+    dom: _Domain,
+    torsion_bending_interaction: bool,
+    projection_only: bool,
+    projection: str,
+) -> tuple[NDArray, NDArray, NDArray]:
+    """:func:`_nb_evaluate` on fresh output arrays: (projected (m, 6), flags (m,), utilisation
+    (m,), empty when ``projection_only``)."""
+    m = act.shape[0]
+    proj = np.empty((m, 6))
+    flags = np.empty(m, dtype=np.uint8)
+    util = np.empty(0 if projection_only else m)
+    n_radial, n_energy = _nb_evaluate(
+        _writable_c(act),
+        _writable_c(ft),
+        *dom.kernel_arrays,
+        bool(torsion_bending_interaction),
+        bool(projection_only),
+        projection == "energy",
+        proj,
+        flags,
+        util,
+    )
+    if n_radial:  # pragma: no cover - Newton on a convex increasing function converges
+        logger.warning("radial factor: Newton did not converge to %g", _NEWTON_RTOL)
+    if n_energy:  # rows at round-off; they fell back to the radial return off the boundary
+        logger.debug("energy projection: %d rows did not converge", n_energy)
+    return proj, flags, util
+
+
 def _projection_and_flags(
     act: NDArray, ft: NDArray, dom: _Domain, projection: str = "energy"
 ) -> tuple[NDArray, NDArray]:
     """The projected actions (m, 6) and bit flags (m,) of :func:`_evaluate`, bit for bit,
     without the utilisation: the radial factor of the rows well inside Eq. (A5) is skipped.
     For the residuals of a Newton search or a time step, where only the forces count."""
-    m = act.shape[0]
-    proj = np.empty((m, 6))
-    flags = np.empty(m, dtype=np.uint8)
-    n_radial, n_energy = _nb_evaluate(
-        _writable_c(act),
-        _writable_c(ft),
-        *dom.kernel_arrays,
-        True,
-        True,
-        projection == "energy",
-        proj,
-        flags,
-        np.empty(0),
-    )
-    if n_radial:  # pragma: no cover - Newton on a convex increasing function converges
-        logger.warning("radial factor: Newton did not converge to %g", _NEWTON_RTOL)
-    if n_energy:
-        logger.debug("energy projection: %d rows did not converge", n_energy)
+    proj, flags, _ = _run_kernel(act, ft, dom, True, True, projection)
     return proj, flags
 
 
@@ -1009,25 +1024,9 @@ def _evaluate(
     ``projection_only`` returns just the projected actions and skips the radial factor of
     rows well inside Eq. (A5), where it is only needed for the utilisation.
     """
-    m = act.shape[0]
-    proj = np.empty((m, 6))
-    flags = np.empty(m, dtype=np.uint8)
-    util = np.empty(0 if projection_only else m)
-    n_radial, n_energy = _nb_evaluate(
-        _writable_c(act),
-        _writable_c(ft),
-        *dom.kernel_arrays,
-        bool(torsion_bending_interaction),
-        bool(projection_only),
-        projection == "energy",
-        proj,
-        flags,
-        util,
+    proj, flags, util = _run_kernel(
+        act, ft, dom, torsion_bending_interaction, projection_only, projection
     )
-    if n_radial:  # pragma: no cover - Newton on a convex increasing function converges
-        logger.warning("radial factor: Newton did not converge to %g", _NEWTON_RTOL)
-    if n_energy:  # rows at round-off; they fell back to the radial return off the boundary
-        logger.debug("energy projection: %d rows did not converge", n_energy)
     if projection_only:
         return proj
     return StrengthCheck(
