@@ -118,6 +118,12 @@ _TRANSIENT_AFTER = 2
 _TRANSIENT_RISE = 0.005
 #: two failed work steps whose searches stop at lambdas this close (relative) stop at one fold
 _FOLD_MATCH = 1e-3
+#: after a pseudo-transient (or dynamic-relaxation) step has moved the state past a fold, work
+#: control goes on with this fraction of its first step (or the present step if longer): the
+#: full first step right after a fold failed 3 times in 4 on S15 (each failure ~20 iterations);
+#: half of it saves 3 % of the factorizations and 10 % of the iterations of the validation set
+#: (no step kept at its halved length: S34 stops 0.6 % lower, after a longer search)
+_RESUME_STEP = 0.5
 _TRANSIENT_START = 1e-3
 _TRANSIENT_SHRINK = 0.25
 _TRANSIENT_WINDOW = 30
@@ -1114,7 +1120,7 @@ class StaticSolver:
             path_w.append(w)
             path_lam.append(lam)
             peak = max(peak, lam)
-            dw, cuts, flat_steps = first_dw, 0, 0
+            dw, cuts, flat_steps = max(dw, first_dw * _RESUME_STEP), 0, 0
 
         while len(hist.steps) < s.max_steps:
             goal = w + dw
