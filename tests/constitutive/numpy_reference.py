@@ -355,7 +355,7 @@ def fd_tangent_numpy(trial, h, ft, rows, dom, kbar, projection="energy", evaluat
     """The law's forward-difference tangent as one batched numpy difference over the 7 probes
     of every row (the library's version before it was compiled): row 0 the base point, rows
     1-6 each component perturbed by ``h``. ``evaluate``: the check used for the probes
-    (default the numpy reference; the compiled ``_evaluate`` gives the same bits)."""
+    (default the numpy reference; the compiled ``_projection_and_flags`` gives the same bits)."""
     evaluate = evaluate or _evaluate_numpy
     n = trial.shape[0]
     idx = np.arange(6)

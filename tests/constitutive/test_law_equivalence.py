@@ -226,6 +226,20 @@ def _interfaces(m: int, rng: np.random.Generator):
     return l1, l2, mu, ft
 
 
+def _kbar(m: int) -> np.ndarray:
+    """(m, 6) elastic joint stiffness of the law tests (shear, normal, bending, torsion)."""
+    return np.column_stack(
+        [
+            np.full(m, 1e9),
+            np.full(m, 1e9),
+            np.full(m, 2.4e9),
+            np.full(m, 1e6),
+            np.full(m, 3e5),
+            np.full(m, 5e5),
+        ]
+    )
+
+
 def _actions(m: int, l1, l2, mu, ft, rng: np.random.Generator) -> np.ndarray:
     """Random trials around the domain plus the edge cases, scaled to the capacity."""
     fn = -rng.uniform(0.0, 800.0, m)
@@ -306,16 +320,7 @@ def test_interface_law_matches_reference(seed, tension, memory):
     rng = np.random.default_rng(seed)
     m = 1500
     l1, l2, mu, ft = _interfaces(m, rng)
-    kbar = np.column_stack(
-        [
-            np.full(m, 1e9),
-            np.full(m, 1e9),
-            np.full(m, 2.4e9),
-            np.full(m, 1e6),
-            np.full(m, 3e5),
-            np.full(m, 5e5),
-        ]
-    ) * rng.uniform(0.5, 2.0, (m, 1))
+    kbar = _kbar(m) * rng.uniform(0.5, 2.0, (m, 1))
     alpha = rng.choice([1.5, 2.0], m) if seed % 2 else 1.5
     law = InterfaceLaw(kbar, l1, l2, mu, ft, alpha, tension, memory, projection="radial")
     ref_law = _ReferenceLaw(law)
@@ -356,16 +361,7 @@ def test_response_without_utilisation_is_the_same_bits(seed, projection):
     rng = np.random.default_rng(seed)
     m = 1500
     l1, l2, mu, ft = _interfaces(m, rng)
-    kbar = np.column_stack(
-        [
-            np.full(m, 1e9),
-            np.full(m, 1e9),
-            np.full(m, 2.4e9),
-            np.full(m, 1e6),
-            np.full(m, 3e5),
-            np.full(m, 5e5),
-        ]
-    )
+    kbar = _kbar(m)
     law = InterfaceLaw(kbar, l1, l2, mu, ft, 1.5, "brittle", "none", projection=projection)
     relative = _actions(m, l1, l2, mu, ft, rng) / kbar
     plastic = np.zeros((m, 6))

@@ -20,6 +20,7 @@ from masonry_dem.constitutive.strength import (
     STATE_ELASTIC,
     _Domain,
     _evaluate,
+    _projection_and_flags,
     fd_tangent,
     shear_strength,
     torsion_constant,
@@ -124,9 +125,10 @@ def _assert_agree(act, ft, dom, interaction, projection):
     # actions inside the domain come back unchanged, bitwise
     inside = ref.flags == 0
     assert got.projected[inside].tobytes() == act[inside].tobytes()
-    # the projection-only path of the tangent gives the same actions
-    only = _evaluate(act, ft, dom, interaction, projection_only=True, projection=projection)
+    # the projection-only path of the residuals gives the same actions and flags
+    only, only_flags = _projection_and_flags(act, ft, dom, projection, interaction)
     assert only.tobytes() == got.projected.tobytes()
+    np.testing.assert_array_equal(only_flags, got.flags)
     only_ref = _evaluate_numpy(act, ft, dom, interaction, True, projection)
     assert (np.abs(only - only_ref) <= 1e-12 * np.abs(only_ref) + 1e-12 * np.abs(act).max()).all()
     return got
@@ -269,6 +271,12 @@ def test_law_tangent_matches_the_numpy_reference(monkeypatch):
     assert (np.abs(tangent - ref_tangent) <= 1e-6 * np.abs(ref_tangent) + 1e-9 * scale).all()
 
 
+def _compiled_projection(act, ft, dom, projection_only, projection):
+    """The compiled projection, with the reference check's signature (probes only)."""
+    assert projection_only
+    return _projection_and_flags(act, ft, dom, projection)[0]
+
+
 @pytest.mark.parametrize("projection", ["energy", "radial"])
 def test_compiled_tangent_is_the_batched_difference_bit_for_bit(projection):
     """The compiled tangent evaluates the same 7 probes per row as the batched numpy
@@ -288,7 +296,7 @@ def test_compiled_tangent_is_the_batched_difference_bit_for_bit(projection):
     h[:, 2] = -h[:, 2]
     kbar = rng.uniform(1e5, 1e9, (n, 6))
     compiled = fd_tangent(t, h, ft, rows, dom, kbar, projection)
-    batched = fd_tangent_numpy(t, h, ft, rows, dom, kbar, projection, evaluate=_evaluate)
+    batched = fd_tangent_numpy(t, h, ft, rows, dom, kbar, projection, evaluate=_compiled_projection)
     np.testing.assert_array_equal(compiled, batched)
     assert np.abs(compiled).max() > 0
 

@@ -36,7 +36,7 @@ import logging
 import math
 from dataclasses import dataclass
 from functools import cached_property
-from typing import Final, Literal, overload
+from typing import Final
 
 import numba
 import numpy as np
@@ -958,12 +958,16 @@ def _run_kernel(
 
 
 def _projection_and_flags(
-    act: NDArray, ft: NDArray, dom: _Domain, projection: str = "energy"
+    act: NDArray,
+    ft: NDArray,
+    dom: _Domain,
+    projection: str = "energy",
+    torsion_bending_interaction: bool = True,
 ) -> tuple[NDArray, NDArray]:
     """The projected actions (m, 6) and bit flags (m,) of :func:`_evaluate`, bit for bit,
     without the utilisation: the radial factor of the rows well inside Eq. (A5) is skipped.
     For the residuals of a Newton search or a time step, where only the forces count."""
-    proj, flags, _ = _run_kernel(act, ft, dom, True, True, projection)
+    proj, flags, _ = _run_kernel(act, ft, dom, torsion_bending_interaction, True, projection)
     return proj, flags
 
 
@@ -974,61 +978,21 @@ def _writable_c(x: NDArray) -> NDArray:
     return np.array(x, dtype=np.float64, order="C")
 
 
-@overload
-def _evaluate(
-    act: NDArray,
-    ft: NDArray,
-    dom: _Domain,
-    torsion_bending_interaction: bool = ...,
-    projection_only: Literal[False] = ...,
-    projection: str = ...,
-) -> StrengthCheck: ...
-
-
-@overload
-def _evaluate(
-    act: NDArray,
-    ft: NDArray,
-    dom: _Domain,
-    torsion_bending_interaction: bool = ...,
-    *,
-    projection_only: Literal[True],
-    projection: str = ...,
-) -> NDArray: ...
-
-
-@overload
-def _evaluate(
-    act: NDArray,
-    ft: NDArray,
-    dom: _Domain,
-    torsion_bending_interaction: bool = ...,
-    projection_only: bool = ...,
-    projection: str = ...,
-) -> StrengthCheck | NDArray: ...
-
-
 def _evaluate(
     act: NDArray,
     ft: NDArray,
     dom: _Domain,
     torsion_bending_interaction: bool = True,
-    projection_only: bool = False,
     projection: str = "energy",
-) -> StrengthCheck | NDArray:
+) -> StrengthCheck:
     """:func:`check_strength` on validated inputs (``act`` (m, 6), ``ft`` (m,) >= 0).
 
     The compiled :func:`_nb_evaluate`, which gives what the numpy reference of the tests gives
     (the same floating-point operations row by row: the finite-difference tangent of the law
     divides differences of projections by 1e-7 and must not see a changed last bit).
-    ``projection_only`` returns just the projected actions and skips the radial factor of
-    rows well inside Eq. (A5), where it is only needed for the utilisation.
+    :func:`_projection_and_flags` is the same check without the utilisation.
     """
-    proj, flags, util = _run_kernel(
-        act, ft, dom, torsion_bending_interaction, projection_only, projection
-    )
-    if projection_only:
-        return proj
+    proj, flags, util = _run_kernel(act, ft, dom, torsion_bending_interaction, False, projection)
     return StrengthCheck(
         projected=proj,
         state=_STATE_OF_FLAGS[flags],
