@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import multiprocessing
 import platform
 import sys
 import time
@@ -30,6 +31,7 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 from masonry_dem.cli import study
+from masonry_dem.cli.validate import one_kernel_thread
 
 
 def _progress(r: dict) -> None:
@@ -71,7 +73,11 @@ def main(argv: list[str] | None = None) -> int:
     t0 = time.perf_counter()
     options = {"quick": args.quick, "full": args.full, "budget": args.budget}
     if args.jobs > 1 and len(args.cases) > 1:
-        with ProcessPoolExecutor(max_workers=args.jobs) as pool:
+        with ProcessPoolExecutor(
+            max_workers=args.jobs,
+            mp_context=multiprocessing.get_context("spawn"),  # no fork of a threaded process
+            initializer=one_kernel_thread,
+        ) as pool:
             parts = list(pool.map(_one_case, args.cases, [options] * len(args.cases)))
         rows = [r for part in parts for r in part["rows"]]
         refs = {k: v for part in parts for k, v in part["summary"].items()}

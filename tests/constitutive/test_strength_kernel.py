@@ -6,6 +6,7 @@ from __future__ import annotations
 import subprocess
 import sys
 
+import numba
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -164,6 +165,15 @@ def test_kernel_agrees_with_numpy_on_many_rows(alpha, projection):
     l1, l2 = rng.uniform(0.05, 0.5, m), rng.uniform(0.05, 0.5, m)
     got = _assert_agree(act, ft, _Domain.of(m, l1, l2, mu, alpha), True, projection)
     assert {0, 1, 2, 3, 4} <= set(got.state.tolist())
+    # the rows are shared among the threads: one thread gives the same bits
+    threads = numba.get_num_threads()
+    numba.set_num_threads(1)
+    try:
+        alone = _evaluate(act, ft, _Domain.of(m, l1, l2, mu, alpha), projection=projection)
+    finally:
+        numba.set_num_threads(threads)
+    for field in ("projected", "flags", "utilisation"):
+        assert getattr(alone, field).tobytes() == getattr(got, field).tobytes()
 
 
 # ------------------------------------------------------------------------------------------

@@ -5,6 +5,7 @@ another pattern."""
 
 from __future__ import annotations
 
+import numba
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -91,3 +92,60 @@ def test_a_matrix_of_another_pattern_is_refused():
         symbolic.factorize(sparse.csc_matrix(sparse.identity(10)))
     with pytest.raises(ValueError, match="right-hand side must have shape"):
         symbolic.factorize(M).solve(np.ones(9))
+
+
+def check_split(symbolic: Symbolic) -> tuple[float, float, float]:
+    """The fronts of the two halves (factorized side by side) and of the top: every front once,
+    children before parents in each list, and no front of a half whose parent lies in the
+    other half. Returns the work of the halves and of the top."""
+    tasks, ptr = symbolic.tasks, symbolic.task_ptr
+    pivots, updates = symbolic.arrays[0], symbolic.arrays[1]
+    n = pivots.size
+    assert np.array_equal(np.sort(tasks), np.arange(n))
+    part = np.empty(n, dtype=np.int64)
+    for i in range(3):
+        fronts = tasks[ptr[i] : ptr[i + 1]]
+        assert np.all(np.diff(fronts) > 0)  # in elimination order
+        part[fronts] = i
+    parent = np.full(n, -1, dtype=np.int64)
+    kid_ptr, kid = symbolic.arrays[5], symbolic.arrays[6]
+    for s in range(n):
+        parent[kid[kid_ptr[s] : kid_ptr[s + 1]]] = s
+    for s in range(n):
+        if part[s] < 2 and parent[s] >= 0:
+            assert part[parent[s]] in (part[s], 2), "a subtree is cut between the halves"
+        if part[s] == 2 and parent[s] >= 0:
+            assert part[parent[s]] == 2, "a front of the top has its parent in a half"
+    work = 2 * updates**2 * pivots + 2 * updates * pivots**2 + 2 * pivots**3 / 3
+    return tuple(float(work[part == i].sum()) for i in range(3))  # type: ignore[return-value]
+
+
+@settings(max_examples=25, deadline=None)
+@given(
+    n=st.integers(1, 60),
+    density=st.floats(0.0, 0.3),
+    seed=st.integers(0, 2**31 - 1),
+)
+def test_the_halves_factorized_side_by_side_are_whole_subtrees(n, density, seed):
+    check_split(Symbolic(random_matrix(n, density, seed)))
+
+
+def test_a_wall_splits_into_halves_of_equal_work_and_gives_the_same_bits_on_one_thread():
+    from masonry_dem.cases.paper import build_case
+
+    case = build_case("S12")
+    solver = StaticSolver(case.model, case.settings)
+    out = solver._equilibrate(0.0, radius=solver.limit, damped=True)
+    solver._factor(out.response)  # the first factorization fixes the ordering
+    half_a, half_b, top = check_split(solver._fronts)
+    assert min(half_a, half_b) >= 0.8 * max(half_a, half_b)
+    assert top <= 0.5 * (half_a + half_b + top)  # so that two threads gain at least 1.33x
+    K = solver._tangents.matrix(solver.law.tangent(out.response, 1e-9))
+    two = solver._fronts.factorize(K).factors
+    threads = numba.get_num_threads()
+    numba.set_num_threads(1)
+    try:
+        one = solver._fronts.factorize(K).factors
+    finally:
+        numba.set_num_threads(threads)
+    assert np.array_equal(one, two)

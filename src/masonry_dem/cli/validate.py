@@ -111,7 +111,9 @@ def run_cases(names, out: Path | None, render: bool, jobs: int = 1, done=None) -
     # worker is left with a long case while the others wait
     largest_first = sorted(names, key=lambda name: -build_case(name).model.interfaces.count)
     context = multiprocessing.get_context("spawn")
-    with ProcessPoolExecutor(max_workers=min(jobs, len(names)), mp_context=context) as pool:
+    with ProcessPoolExecutor(
+        max_workers=min(jobs, len(names)), mp_context=context, initializer=one_kernel_thread
+    ) as pool:
         futures = {pool.submit(run_case, name, out, render): name for name in largest_first}
         by_name = {}
         for future in as_completed(futures):
@@ -119,6 +121,14 @@ def run_cases(names, out: Path | None, render: bool, jobs: int = 1, done=None) -
             if done is not None:
                 done(by_name[futures[future]])
     return [by_name[name] for name in names]
+
+
+def one_kernel_thread() -> None:
+    """In a worker process of a pool: the compiled kernels (interface law, factorization) on
+    one thread, since the workers already share the cores."""
+    import numba
+
+    numba.set_num_threads(1)
 
 
 def _render(folder: Path, view: str) -> str | None:

@@ -24,10 +24,11 @@ Criteria, with ``ft`` the tensile force of the whole interface (tensile strength
 The torsion constant ``cT`` is the mean distance of the rectangle's points from its centre; the
 printed Eq. (11) is garbled and the correct form is used here (see ``DESIGN.md``).
 
-The batched check runs compiled (numba), one interface at a time (``_nb_evaluate``); the numpy
-version of the same operations, batched with masks, is its reference in the tests
-(``tests/constitutive/numpy_reference.py``). The kernel
-is compiled on the first check and cached on disk (a few seconds, once per machine).
+The batched check runs compiled (numba), one interface at a time, the rows shared among the
+threads (``_nb_evaluate``: each row is worked out alone, so the answer is the same bits on any
+number of threads); the numpy version of the same operations, batched with masks, is its
+reference in the tests (``tests/constitutive/numpy_reference.py``). The kernel is compiled on
+the first check and cached on disk (a few seconds, once per machine).
 """
 
 from __future__ import annotations
@@ -526,6 +527,7 @@ class _Domain:
 # machine); importing this module compiles nothing.
 
 _jit = numba.njit(cache=True, error_model="numpy")  # x/0 = inf or nan, as numpy gives
+_pjit = numba.njit(cache=True, error_model="numpy", parallel=True)  # rows over threads
 
 
 @_jit
@@ -716,7 +718,7 @@ def _nb_energy_closest_point(r0, z0, a, b, alpha, radial) -> tuple[float, float,
     return r, z, ok
 
 
-@_jit
+@_pjit
 def _nb_evaluate(
     act,
     ft,
@@ -738,7 +740,7 @@ def _nb_evaluate(
     factor and whose energy projection did not converge."""
     n_radial = 0
     n_energy = 0
-    for i in range(act.shape[0]):
+    for i in numba.prange(act.shape[0]):
         f1 = act[i, 0]
         f2 = act[i, 1]
         fn = act[i, 2]
@@ -793,11 +795,11 @@ def _nb_evaluate(
             # a + c^2 >= a^alpha + c^2 for a, c <= 1 and alpha >= 1: below 1 no row slides
             if live and not a + c * c < 0.999:
                 s, ok = _nb_radial_factor(a, c, al)
-                n_radial += not ok
+                n_radial += 0 if ok else 1
                 sliding = 1.0 / s > 1.0 + SHEAR_TORSION_TOLERANCE
         else:
             s, ok = _nb_radial_factor(a, c, al)
-            n_radial += not ok
+            n_radial += 0 if ok else 1
             u_st = 1.0 / s  # radial demand/capacity ratio of Eq. (A5)
             sliding = u_st > 1.0 + SHEAR_TORSION_TOLERANCE and live
 
@@ -813,7 +815,7 @@ def _nb_evaluate(
         elif sliding:
             rho = math.sqrt((l1[i] * l1[i] + l2[i] * l2[i]) / 12.0)  # sqrt(J / A)
             r, z, ok = _nb_energy_closest_point(shear, abs_m3 / rho, fsu, m3u / rho, al, s)
-            n_energy += not ok
+            n_energy += 0 if ok else 1
             shear_scale = _nb_safe_ratio(r, shear)
             if not math.isfinite(shear_scale):
                 shear_scale = 0.0

@@ -41,6 +41,7 @@ from contextlib import nullcontext
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
+import numba
 import numpy as np
 from scipy import sparse
 from scipy.sparse.linalg import splu
@@ -253,6 +254,19 @@ class _Outcome:
     reason: str = ""
 
 
+@numba.njit(cache=True, parallel=True)
+def _sum_terms(values: np.ndarray, terms: np.ndarray, ptr: np.ndarray) -> np.ndarray:
+    """``out[j] = sum(values[terms[ptr[j] : ptr[j + 1]]])``, added in that order from 0 (as
+    np.bincount adds them, so the same bits), the entries shared among the threads."""
+    out = np.empty(ptr.size - 1)
+    for j in numba.prange(ptr.size - 1):
+        total = 0.0
+        for t in range(ptr[j], ptr[j + 1]):
+            total += values[terms[t]]
+        out[j] = total
+    return out
+
+
 class _TangentAssembler:
     """K_ff = H_f^T T H_f for per-interface 6x6 tangents T, with the sparsity pattern built
     once: each interface adds B = H_loc^T T H_loc (12 x 12, the DOFs of its two blocks) and
@@ -282,7 +296,11 @@ class _TangentAssembler:
         self.keep = np.flatnonzero((rows >= 0) & (cols >= 0))
         nf = asm.n_free
         key = cols[self.keep] * nf + rows[self.keep]  # column-major
-        unique, self.inverse = np.unique(key, return_inverse=True)
+        unique, inverse = np.unique(key, return_inverse=True)
+        # the terms of each stored entry, in the order np.bincount would add them
+        by_entry = np.argsort(inverse, kind="stable")
+        self.terms = self.keep[by_entry]
+        self.term_ptr = np.concatenate([[0], np.cumsum(np.bincount(inverse))]).astype(np.int64)
         self.indices = (unique % nf).astype(np.int32)
         counts = np.bincount(unique // nf, minlength=nf)
         self.indptr = np.concatenate([[0], np.cumsum(counts)]).astype(np.int32)
@@ -291,7 +309,7 @@ class _TangentAssembler:
 
     def matrix(self, T: np.ndarray) -> sparse.csc_matrix:
         B = np.matmul(np.matmul(self.H_loc.transpose(0, 2, 1), T), self.H_loc)
-        data = np.bincount(self.inverse, B.reshape(-1)[self.keep], minlength=self.nnz)
+        data = _sum_terms(B.reshape(-1), self.terms, self.term_ptr)
         return sparse.csc_matrix((data, self.indices, self.indptr), shape=(self.n, self.n))
 
     def symbolic(self) -> Symbolic:
