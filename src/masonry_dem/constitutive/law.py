@@ -61,10 +61,19 @@ class LawResponse:
     trial: np.ndarray  # (m, 6) elastic trial actions
     tensile_force: np.ndarray  # (m,) ft in force at this iterate (0 once cracked)
     actions: np.ndarray  # (m, 6) corrected actions
-    tangent: np.ndarray  # (m, 6) stiffness factors of Eqs. (13)-(14), 0 or 1
-    state: np.ndarray  # (m,) damage code
     flags: np.ndarray  # (m,) violated-criteria bit flags
     utilisation: np.ndarray | None  # (m,); None when not asked for (InterfaceLaw.utilisation)
+
+    # derived from the flags when asked for: most residuals of a search never need them
+    @cached_property
+    def tangent(self) -> np.ndarray:
+        """(m, 6) stiffness factors of Eqs. (13)-(14), 0 or 1."""
+        return _FACTORS_OF_FLAGS[self.flags]
+
+    @cached_property
+    def state(self) -> np.ndarray:
+        """(m,) damage code."""
+        return _STATE_OF_FLAGS[self.flags]
 
 
 @dataclass(frozen=True)
@@ -131,16 +140,15 @@ class InterfaceLaw:
         ft = np.where(cracked, 0.0, self.tensile_force)
         if utilisation:
             chk = self._check(trial, ft)
-            actions, flags = chk.projected, chk.flags  # actions: a fresh array
-            state, factors, util = chk.state, chk.stiffness_factors, chk.utilisation
+            actions, flags, util = chk.projected, chk.flags, chk.utilisation  # fresh arrays
         else:
             if not np.isfinite(trial.sum()):  # one cheap test; _actions says what is wrong
                 trial = _actions(trial)
             actions, flags = _projection_and_flags(trial, ft, self._domain, self.projection)
-            state, factors, util = _STATE_OF_FLAGS[flags], _FACTORS_OF_FLAGS[flags], None
+            util = None
         if self.tension == "brittle":
             actions[(flags & DETACHED_FLAG) > 0] = 0.0
-        return LawResponse(trial, ft, actions, factors, state, flags, util)
+        return LawResponse(trial, ft, actions, flags, util)
 
     def utilisation(self, r: LawResponse) -> np.ndarray:
         """(m,) utilisation of the trial actions of ``r`` (see :func:`check_strength`)."""

@@ -497,6 +497,7 @@ class StaticSolver:
         cuts = 0  # cuts of the trust radius in this search
         cut = False  # the last iteration cut the radius
         direction = (np.zeros(0), 0.0)  # (dq, dlam) of the search that was cut
+        live_solved: tuple[_Factorized | None, np.ndarray] = (None, np.zeros(0))  # K^-1 F_live
         while it < budget:
             it += 1
             cerr = constraint_error(q)
@@ -519,7 +520,9 @@ class StaticSolver:
                 dlam = 0.0
             if control is not None and not repeat:
                 c = control[0]
-                a = lu.solve(self.F_live)
+                if live_solved[0] is not lu:  # once per factorization: chord steps reuse it
+                    live_solved = (lu, lu.solve(self.F_live))
+                a = live_solved[1]
                 ca = float(c @ a)
                 if abs(ca) < 1e-300:
                     return _Outcome(
@@ -583,11 +586,9 @@ class StaticSolver:
             # by _CHORD_RATIO or more, and after a creep (a step too short to change the
             # tangent: under _CREEP of the correction, no joint changing state); otherwise the
             # next iteration refactors
-            crept = (
-                shrink * step < _CREEP
-                and np.array_equal(accepted[4].flags, response.flags)
-                and np.array_equal(accepted[4].state, response.state)
-            )
+            crept = shrink * step < _CREEP and np.array_equal(
+                accepted[4].flags, response.flags
+            )  # the same flags: the same states
             if not (
                 crept or (step == 1.0 and shrink == 1.0 and accepted[3] < _CHORD_RATIO * rnorm)
             ):
