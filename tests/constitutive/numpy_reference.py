@@ -351,11 +351,15 @@ def _reduced_sides_fast(
     return l1r, l2r
 
 
-def fd_tangent_numpy(trial, h, ft, rows, dom, kbar, projection="energy", evaluate=None):
+def fd_tangent_numpy(
+    trial, h, ft, rows, dom, kbar, projection="energy", evaluate=None, normal_only=None
+):
     """The law's forward-difference tangent as one batched numpy difference over the 7 probes
     of every row (the library's version before it was compiled): row 0 the base point, rows
     1-6 each component perturbed by ``h``. ``evaluate``: the check used for the probes
-    (default the numpy reference; the compiled ``_projection_and_flags`` gives the same bits)."""
+    (default the numpy reference; the compiled ``_projection_and_flags`` gives the same bits).
+    ``normal_only`` is ignored: every row gets all its probes (the library's shortcut for
+    rows at zero capacity must give the same numbers)."""
     evaluate = evaluate or _evaluate_numpy
     n = trial.shape[0]
     idx = np.arange(6)

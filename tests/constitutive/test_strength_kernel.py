@@ -311,6 +311,30 @@ def test_compiled_tangent_is_the_batched_difference_bit_for_bit(projection):
     assert np.abs(compiled).max() > 0
 
 
+@pytest.mark.parametrize("projection", ["energy", "radial"])
+def test_a_joint_at_zero_capacity_moves_only_with_fn(projection):
+    """Rows at fn = ft (a detached joint taken at the contact side) probed along fn alone
+    give the tangent of all six probes: the other columns are zero, the fn column the same."""
+    rng = np.random.default_rng(13)
+    m = 200
+    dom = _Domain.of(m, rng.uniform(0.05, 0.4, m), rng.uniform(0.05, 0.3, m),
+                     rng.uniform(0.0, 0.9, m), rng.choice([1.0, 1.5, 2.56], m))  # fmt: skip
+    rows = np.arange(m)
+    t = rng.normal(size=(m, 6)) * [300, 300, 400, 20, 20, 30]
+    ft = np.where(rng.random(m) < 0.5, 0.0, 50.0)
+    at_zero = rng.random(m) < 0.5
+    t[:, 2] = np.where(at_zero, ft, -np.abs(t[:, 2]))
+    big = np.abs(t).max(axis=1, keepdims=True)
+    h = 1e-7 * (np.abs(t) + 1e-2 * big) + 1e-300
+    h[:, 2] = -h[:, 2]
+    kbar = rng.uniform(1e5, 1e9, (m, 6))
+    full = fd_tangent(t, h, ft, rows, dom, kbar, projection)
+    lean = fd_tangent(t, h, ft, rows, dom, kbar, projection, normal_only=at_zero)
+    np.testing.assert_array_equal(lean, full)
+    assert np.abs(full[at_zero][:, :, 2]).max() > 0  # fn does move them
+    assert np.abs(full[~at_zero][:, :, [0, 1, 3, 4, 5]]).max() > 0
+
+
 def test_import_compiles_nothing():
     code = (
         "import masonry_dem, masonry_dem.constitutive.law\n"

@@ -183,7 +183,19 @@ class InterfaceLaw:
             big = np.abs(t).max(axis=1, keepdims=True)
             h = _FD_STEP * (np.abs(t) + 1e-2 * big) + 1e-300  # (n, 6)
             h[:, 2] = -h[:, 2]  # perturb the normal force towards compression
-            T[rows] = fd_tangent(t, h, ft[rows], rows, self._domain, k[rows], self.projection)
+            # detached joints in the contact band sit at zero capacity (fn = ft): only fn moves
+            # their projection
+            normal_only = r.flags[rows] == DETACHED_FLAG
+            T[rows] = fd_tangent(
+                t,
+                h,
+                ft[rows],
+                rows,
+                self._domain,
+                k[rows],
+                self.projection,
+                normal_only=normal_only,
+            )
         diagonal += floor * k
         return T
 

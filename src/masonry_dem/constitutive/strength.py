@@ -860,45 +860,62 @@ def _nb_evaluate(
 
 
 @_jit
-def _nb_fd_tangent(t, h, ft, rows, l1, l2, friction, alpha, snap1, snap2, energy, k, out):
+def _nb_fd_tangent(
+    t, h, ft, rows, l1, l2, friction, alpha, snap1, snap2, energy, k, normal_only, out
+):
     """Forward-difference derivative of the projection at the rows ``rows`` of a domain, into
     ``out`` (n, 6, 6): ``out[r, a, p] = (proj(t_r + h_rp e_p)_a - proj(t_r)_a) / h_rp * k_rp``
-    (the chain rule through the elastic trial ``k * relative``). Probe ``p`` of row ``r`` is
-    row ``p * n + r`` of one call of :func:`_nb_evaluate` on 7 n rows, so the result is the
-    one the batched numpy difference over the same probes gives, bit for bit."""
+    (the chain rule through the elastic trial ``k * relative``). The trials and their probes
+    go through one call of :func:`_nb_evaluate`, so the result is the one the batched numpy
+    difference over the same probes gives, bit for bit. Rows with ``normal_only`` are probed
+    along fn alone (their other columns are zero): a joint at zero capacity (fn = ft) projects
+    every other action to zero, and a probe of any of them leaves it there."""
     n = t.shape[0]
-    act = np.empty((7 * n, 6))
-    ft7 = np.empty(7 * n)
-    l1_7 = np.empty(7 * n)
-    l2_7 = np.empty(7 * n)
-    mu7 = np.empty(7 * n)
-    al7 = np.empty(7 * n)
-    s1_7 = np.empty(7 * n)
-    s2_7 = np.empty(7 * n)
-    for p in range(7):
-        for r in range(n):
-            row = p * n + r
+    probe_row = np.full((n, 6), -1, np.int64)
+    total = n
+    for r in range(n):
+        for p in range(6):
+            if p == 2 or not normal_only[r]:
+                probe_row[r, p] = total
+                total += 1
+    act = np.empty((total, 6))
+    ft_ = np.empty(total)
+    l1_ = np.empty(total)
+    l2_ = np.empty(total)
+    mu_ = np.empty(total)
+    al_ = np.empty(total)
+    s1_ = np.empty(total)
+    s2_ = np.empty(total)
+    for r in range(n):
+        for p in range(-1, 6):  # -1: the trial itself
+            row = r if p < 0 else probe_row[r, p]
+            if row < 0:
+                continue
             i = rows[r]
             for j in range(6):
                 act[row, j] = t[r, j]
-            if p > 0:
-                act[row, p - 1] += h[r, p - 1]
-            ft7[row] = ft[r]
-            l1_7[row] = l1[i]
-            l2_7[row] = l2[i]
-            mu7[row] = friction[i]
-            al7[row] = alpha[i]
-            s1_7[row] = snap1[i]
-            s2_7[row] = snap2[i]
-    proj = np.empty((7 * n, 6))
-    flags = np.empty(7 * n, dtype=np.uint8)
+            if p >= 0:
+                act[row, p] += h[r, p]
+            ft_[row] = ft[r]
+            l1_[row] = l1[i]
+            l2_[row] = l2[i]
+            mu_[row] = friction[i]
+            al_[row] = alpha[i]
+            s1_[row] = snap1[i]
+            s2_[row] = snap2[i]
+    proj = np.empty((total, 6))
+    flags = np.empty(total, dtype=np.uint8)
     util = np.empty(0)
-    _nb_evaluate(act, ft7, l1_7, l2_7, mu7, al7, s1_7, s2_7, True, True, energy, proj, flags, util)
+    _nb_evaluate(act, ft_, l1_, l2_, mu_, al_, s1_, s2_, True, True, energy, proj, flags, util)
     for r in range(n):
         for a in range(6):
             for p in range(6):
-                d = (proj[(p + 1) * n + r, a] - proj[r, a]) / h[r, p]
-                out[r, a, p] = d * k[r, p]
+                row = probe_row[r, p]
+                if row < 0:
+                    out[r, a, p] = 0.0
+                else:
+                    d = (proj[row, a] - proj[r, a]) / h[r, p]
+                    out[r, a, p] = d * k[r, p]
 
 
 def fd_tangent(
@@ -909,11 +926,14 @@ def fd_tangent(
     dom: _Domain,
     kbar: NDArray,
     projection: str = "energy",
+    normal_only: NDArray | None = None,
 ) -> NDArray:
     """(n, 6, 6) forward-difference tangent of the projection at ``trial`` (n, 6), steps ``h``
     (n, 6), for the rows ``rows`` of ``dom`` (``ft`` and ``kbar`` already taken at those rows);
-    see :func:`_nb_fd_tangent`."""
-    out = np.empty((trial.shape[0], 6, 6))
+    ``normal_only`` (n,) marks rows at zero capacity, probed along fn alone; see
+    :func:`_nb_fd_tangent`."""
+    n = trial.shape[0]
+    out = np.empty((n, 6, 6))
     _nb_fd_tangent(
         _writable_c(trial),
         _writable_c(h),
@@ -922,6 +942,7 @@ def fd_tangent(
         *dom.kernel_arrays,
         projection == "energy",
         _writable_c(kbar),
+        np.zeros(n, dtype=np.bool_) if normal_only is None else np.asarray(normal_only, bool),
         out,
     )
     return out
