@@ -61,6 +61,46 @@ def _elimination_tree(n, indptr, indices):
     return parent
 
 
+@_jit
+def _row_structure(n, indptr, indices, parent):
+    """Rows below the diagonal of each column j of L, sorted: ``rows[ptr[j] : ptr[j + 1]]``,
+    the rows of A's column j below j and those of j's children in the elimination tree."""
+    head = np.full(n, -1, np.int64)  # children as linked lists
+    sibling = np.full(n, -1, np.int64)
+    for j in range(n - 1, -1, -1):
+        if parent[j] >= 0:
+            sibling[j] = head[parent[j]]
+            head[parent[j]] = j
+    mark = np.full(n, -1, np.int64)
+    ptr = np.zeros(n + 1, np.int64)
+    rows = np.empty(max(indices.size, 16), np.int64)
+    found = np.empty(n, np.int64)
+    for j in range(n):
+        count = 0
+        for t in range(indptr[j], indptr[j + 1]):
+            i = indices[t]
+            if i > j and mark[i] != j:
+                mark[i] = j
+                found[count] = i
+                count += 1
+        c = head[j]
+        while c >= 0:
+            for t in range(ptr[c], ptr[c + 1]):
+                i = rows[t]
+                if i > j and mark[i] != j:
+                    mark[i] = j
+                    found[count] = i
+                    count += 1
+            c = sibling[c]
+        if ptr[j] + count > rows.size:  # grow the store
+            bigger = np.empty(2 * (ptr[j] + count), np.int64)
+            bigger[: ptr[j]] = rows[: ptr[j]]
+            rows = bigger
+        rows[ptr[j] : ptr[j] + count] = np.sort(found[:count])
+        ptr[j + 1] = ptr[j] + count
+    return ptr, rows[: ptr[n]].copy()
+
+
 class Symbolic:
     """Fronts of the multifrontal factorization of matrices with the pattern of ``A``
     (square CSC, structurally symmetric, rows and columns in elimination order)."""
@@ -74,27 +114,23 @@ class Symbolic:
         indptr = A.indptr.astype(np.int64)
         indices = A.indices.astype(np.int64)
         parent = _elimination_tree(n, indptr, indices)
-        # rows below the diagonal of each column of L: its own, and its children's
-        children: list[list[int]] = [[] for _ in range(n)]
-        for j in np.flatnonzero(parent >= 0).tolist():
-            children[parent[j]].append(j)
-        below: list[np.ndarray] = []
-        for j in range(n):
-            col = indices[indptr[j] : indptr[j + 1]]
-            parts = [col[col > j]] + [below[c][below[c] > j] for c in children[j]]
-            below.append(np.unique(np.concatenate(parts)) if len(parts) > 1 else parts[0])
+        # rows below the diagonal of each column of L (its own, and its children's)
+        below_ptr, below_rows = _row_structure(n, indptr, indices, parent)
+        count = np.diff(below_ptr)
         # supernodes: consecutive columns with nested structures share one front
-        starts = [0] + [
-            j + 1
-            for j in range(n - 1)
-            if not (parent[j] == j + 1 and below[j + 1].size == below[j].size - 1)
-        ]
+        nested = (parent[:-1] == np.arange(1, n)) & (count[1:] == count[:-1] - 1)
+        starts = [0] + (np.flatnonzero(~nested) + 1).tolist()
         first = np.array(starts + [n], dtype=np.int64)
         ns = first.size - 1
         pivots = np.diff(first)
         owner_of_column = np.repeat(np.arange(ns), pivots)
         fronts = [
-            np.concatenate([np.arange(first[s], first[s + 1]), below[first[s + 1] - 1]])
+            np.concatenate(
+                [
+                    np.arange(first[s], first[s + 1]),
+                    below_rows[below_ptr[first[s + 1] - 1] : below_ptr[first[s + 1]]],
+                ]
+            )
             for s in range(ns)
         ]
         updates = np.array([f.size for f in fronts], dtype=np.int64) - pivots
