@@ -377,3 +377,34 @@ def test_response_without_utilisation_is_the_same_bits(seed, projection):
         bad = relative.copy()
         bad[0, 0] = np.inf
         law.respond(bad, plastic, cracked, utilisation=False)
+
+
+@pytest.mark.parametrize("tension", ["brittle", "plastic"])
+def test_fused_forces_are_the_response_and_the_sparse_products_bit_for_bit(tension):
+    """``InterfaceLaw.forces`` (one compiled pass for a residual) gives the relative
+    displacements, the response and the generalised forces of ``H @ x``, ``respond`` and
+    ``H_T @ actions`` to the last bit, and names a non-finite trial as ``respond`` does."""
+    from scipy import sparse
+
+    rng = np.random.default_rng(8)
+    m, n = 800, 900
+    l1, l2, mu, ft = _interfaces(m, rng)
+    kbar = _kbar(m)
+    law = InterfaceLaw(kbar, l1, l2, mu, ft, 1.5, tension, "none")
+    H = sparse.random(6 * m, n, density=0.01, random_state=rng, format="csr")
+    target = _actions(m, l1, l2, mu, ft, rng) / kbar  # relative displacements to aim at
+    x = sparse.linalg.lsqr(H, target.reshape(-1), iter_lim=50)[0]
+    plastic = rng.normal(size=(m, 6)) * 1e-9
+    cracked = rng.random(m) < 0.2
+    H_T = H.T.tocsr()
+    rel, resp, internal = law.forces(H, x, plastic, cracked, H_T)
+    rel_ref = (H @ x).reshape(-1, 6)
+    ref = law.respond(rel_ref, plastic, cracked, utilisation=False)
+    assert rel.tobytes() == rel_ref.tobytes()
+    for name in ("trial", "tensile_force", "actions", "flags"):
+        assert getattr(resp, name).tobytes() == getattr(ref, name).tobytes(), name
+    assert internal.tobytes() == (H_T @ ref.actions.reshape(-1)).tobytes()
+    assert resp.flags.any() and (resp.flags == 0).any()  # some rows yield, some do not
+    x[np.flatnonzero(H[0].toarray())[0]] = np.nan
+    with pytest.raises(ValueError, match="finite"):
+        law.forces(H, x, plastic, cracked, H_T)

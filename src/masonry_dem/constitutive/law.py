@@ -24,10 +24,13 @@ its tensile strength for good, as a cracked mortar joint does) or ``"plastic"`` 
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from functools import cached_property
 
+import numba
 import numpy as np
+from scipy import sparse
 
 from masonry_dem.constitutive.strength import (
     _FACTORS_OF_FLAGS,
@@ -38,6 +41,7 @@ from masonry_dem.constitutive.strength import (
     _Domain,
     _evaluate,
     _field,
+    _nb_evaluate,
     _projection_and_flags,
     fd_tangent,
 )
@@ -54,6 +58,53 @@ _FD_STEP = 1e-7
 #: tangent: a joint with a zero gap and zero force must not flip between the tangents of a
 #: detached and of a closed joint on round-off (Newton's iterations would cycle)
 _CONTACT_BAND = 1e-8
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _nb_forces(
+    x, h_ptr, h_idx, h_val, kbar, plastic, cracked, tensile_force,
+    l1, l2, friction, alpha, snap1, snap2, energy, brittle, t_ptr, t_idx, t_val, n_out,
+):  # fmt: skip
+    """Relative displacements ``H x``, trial actions, their projection (flags) and the
+    generalised forces ``H^T actions`` in one pass: the operations of the sparse products
+    (row by row, from 0, in stored order) and of :meth:`InterfaceLaw.respond`, so the same
+    bits. The last value is False, with nothing projected, if a trial action is not finite."""
+    m = kbar.shape[0]
+    rel = np.empty((m, 6))
+    trial = np.empty((m, 6))
+    ft = np.empty(m)
+    actions = np.empty((m, 6))
+    flags = np.zeros(m, dtype=np.uint8)
+    internal = np.zeros(n_out)
+    bad = 0
+    for i in numba.prange(m):
+        ft[i] = 0.0 if cracked[i] else tensile_force[i]
+        for j in range(6):
+            r = 6 * i + j
+            total = 0.0
+            for t in range(h_ptr[r], h_ptr[r + 1]):
+                total += h_val[t] * x[h_idx[t]]
+            rel[i, j] = total
+            trial[i, j] = kbar[i, j] * (total - plastic[i, j])
+            bad += 0 if math.isfinite(trial[i, j]) else 1
+    if bad:
+        return rel, trial, ft, actions, flags, internal, False
+    util = np.empty(0)
+    _nb_evaluate(
+        trial, ft, l1, l2, friction, alpha, snap1, snap2, True, True, energy, actions, flags, util
+    )
+    if brittle:
+        for i in numba.prange(m):
+            if flags[i] & FLAG_DETACHED:
+                for j in range(6):
+                    actions[i, j] = 0.0
+    flat = actions.reshape(-1)
+    for r in numba.prange(n_out):
+        total = 0.0
+        for t in range(t_ptr[r], t_ptr[r + 1]):
+            total += t_val[t] * flat[t_idx[t]]
+        internal[r] = total
+    return rel, trial, ft, actions, flags, internal, True
 
 
 @dataclass(frozen=True)
@@ -149,6 +200,40 @@ class InterfaceLaw:
         if self.tension == "brittle":
             actions[(flags & DETACHED_FLAG) > 0] = 0.0
         return LawResponse(trial, ft, actions, flags, util)
+
+    def forces(
+        self,
+        H: sparse.csr_matrix,
+        x: np.ndarray,
+        plastic: np.ndarray,
+        cracked: np.ndarray,
+        H_T: sparse.csr_matrix,
+    ) -> tuple[np.ndarray, LawResponse, np.ndarray]:
+        """(relative displacements ``H @ x``, ``respond(H @ x, plastic, cracked,
+        utilisation=False)``, generalised forces ``H_T @ actions``), the same bits, in one
+        compiled pass: a Newton residual or a time step without its intermediate arrays and
+        calls."""
+        dom = self._domain
+        rel, trial, ft, actions, flags, internal, finite = _nb_forces(
+            np.ascontiguousarray(x, dtype=float),
+            H.indptr,
+            H.indices,
+            H.data,
+            self.kbar,
+            np.ascontiguousarray(plastic, dtype=float),
+            np.ascontiguousarray(cracked, dtype=bool),
+            np.ascontiguousarray(self.tensile_force, dtype=float),
+            *dom.kernel_arrays,
+            self.projection == "energy",
+            self.tension == "brittle",
+            H_T.indptr,
+            H_T.indices,
+            H_T.data,
+            H_T.shape[0],
+        )
+        if not finite:
+            _actions(trial)  # says which action is not finite
+        return rel, LawResponse(trial, ft, actions, flags, None), internal
 
     def utilisation(self, r: LawResponse) -> np.ndarray:
         """(m,) utilisation of the trial actions of ``r`` (see :func:`check_strength`)."""

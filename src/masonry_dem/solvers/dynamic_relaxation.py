@@ -312,10 +312,9 @@ class DynamicRelaxation:
 
     # ------------------------------------------------------------------ forces
     def _forces(self, x: np.ndarray, plastic: np.ndarray, cracked: np.ndarray):
-        rel = (self.Hf @ x).reshape(-1, 6)
-        resp = self.law.respond(rel, plastic, cracked, utilisation=False)
+        rel, resp, internal = self.law.forces(self.Hf, x, plastic, cracked, self.asm.H_free_T)
         self.stats.law_evaluations += 1
-        return rel, resp, self.asm.H_free_T @ resp.actions.reshape(-1)
+        return rel, resp, internal
 
     # ------------------------------------------------------------------ one relaxation
     def _relax(

@@ -378,10 +378,11 @@ class StaticSolver:
 
     # ------------------------------------------------------------------ one equilibrium
     def _residual(self, q: np.ndarray, lam: float, dead_factor: float = 1.0):
-        rel = self.asm.relative_displacements(q)
-        response = self.law.respond(rel, self.plastic, self.cracked, utilisation=False)
+        _, response, internal = self.law.forces(
+            self.asm.H, q, self.plastic, self.cracked, self.asm.H_free_T
+        )
         F_ext = dead_factor * self.F_dead + lam * self.F_live
-        residual = F_ext - self.asm.H_free_T @ response.actions.reshape(-1)
+        residual = F_ext - internal
         scale = max(float(np.linalg.norm(self._weight * F_ext)), 1e-30)
         return residual, float(np.linalg.norm(self._weight * residual)) / scale, response
 
