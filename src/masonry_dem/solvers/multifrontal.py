@@ -300,18 +300,28 @@ def _front(
             ra = rel[r0 + a]
             for b in range(uc):
                 F[ra, rel[r0 + b]] += schur[o + a * uc + b]
-    for k in range(p):
+    inverse = np.empty(p)
+    for k in range(p):  # the pivot rows: L11 and U11, U12
         piv = F[k, k]
         if piv == 0.0 or not np.isfinite(piv):
             return False
         inv = 1.0 / piv
-        for i in range(k + 1, f):
+        inverse[k] = inv
+        for i in range(k + 1, p):
             F[i, k] *= inv
-        for i in range(k + 1, f):
             lik = F[i, k]
             if lik != 0.0:
-                end = f if i < p else p  # the complement waits for the update below
-                for m in range(k + 1, end):
+                for m in range(k + 1, f):
+                    F[i, m] -= lik * F[k, m]
+    # L21 = F21 U11^-1 row by row (each row stays in cache while its p columns are done;
+    # every entry sees the same operations in the same order as column by column); the
+    # complement waits for the product below
+    for i in range(p, f):
+        for k in range(p):
+            F[i, k] *= inverse[k]
+            lik = F[i, k]
+            if lik != 0.0:
+                for m in range(k + 1, p):
                     F[i, m] -= lik * F[k, m]
     if u > 0:
         # the complement in place: F22 -= L21 U12 by BLAS (row-major F seen column-major:
