@@ -136,3 +136,26 @@ def test_material_override_changes_the_base_joints_only():
     np.testing.assert_allclose(model.kn[~on_base], KN)
     np.testing.assert_allclose(kbar[on_base, 2], KN / 10 * its.area[on_base], rtol=1e-15)
     np.testing.assert_allclose(kbar[~on_base, 0], KT * its.area[~on_base], rtol=1e-15)
+
+
+@pytest.mark.parametrize("ordered", [False, True])
+def test_the_solver_assembles_per_interface_tangents_as_the_sparse_product(model, ordered):
+    """The static solver's compiled assembly of H_f^T T H_f (T: one unsymmetric 6 x 6 block per
+    interface, its entries summed in a pattern built once) against the sparse product, in
+    the numbering of the free DOFs or in a permuted one."""
+    from masonry_dem.solvers.incremental import _TangentAssembler
+
+    asm = Assembly.of(model)
+    rng = np.random.default_rng(4)
+    T = rng.normal(size=(model.interfaces.count, 6, 6)) * KN
+    reference = asm.tangent_stiffness(T).toarray()
+    order = rng.permutation(asm.n_free) if ordered else None
+    K = _TangentAssembler(asm, model, order).matrix(T)
+    assert K.shape == reference.shape
+    if order is not None:  # row and column order[d] hold free DOF d
+        reference_permuted = np.empty_like(reference)
+        reference_permuted[np.ix_(order, order)] = reference
+        reference = reference_permuted
+    scale = np.abs(reference).max()
+    assert np.abs(K.toarray() - reference).max() <= 1e-12 * scale
+    assert np.abs(K.toarray() - K.toarray().T).max() > 1e-3 * scale  # unsymmetric, as T
