@@ -60,7 +60,7 @@ _FD_STEP = 1e-7
 _CONTACT_BAND = 1e-8
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _nb_forces(
     x, h_ptr, h_idx, h_val, kbar, plastic, cracked, tensile_force,
     l1, l2, friction, alpha, snap1, snap2, energy, brittle, t_ptr, t_idx, t_val, n_out,
@@ -77,7 +77,7 @@ def _nb_forces(
     flags = np.zeros(m, dtype=np.uint8)
     internal = np.zeros(n_out)
     bad = 0
-    for i in numba.prange(m):
+    for i in range(m):
         ft[i] = 0.0 if cracked[i] else tensile_force[i]
         for j in range(6):
             r = 6 * i + j
@@ -90,16 +90,17 @@ def _nb_forces(
     if bad:
         return rel, trial, ft, actions, flags, internal, False
     util = np.empty(0)
+    on = bad == 0  # True, as a variable: a literal True would compile _nb_evaluate again
     _nb_evaluate(
-        trial, ft, l1, l2, friction, alpha, snap1, snap2, True, True, energy, actions, flags, util
+        trial, ft, l1, l2, friction, alpha, snap1, snap2, on, on, energy, actions, flags, util
     )
     if brittle:
-        for i in numba.prange(m):
+        for i in range(m):
             if flags[i] & FLAG_DETACHED:
                 for j in range(6):
                     actions[i, j] = 0.0
     flat = actions.reshape(-1)
-    for r in numba.prange(n_out):
+    for r in range(n_out):
         total = 0.0
         for t in range(t_ptr[r], t_ptr[r + 1]):
             total += t_val[t] * flat[t_idx[t]]

@@ -718,6 +718,146 @@ def _nb_energy_closest_point(r0, z0, a, b, alpha, radial) -> tuple[float, float,
     return r, z, ok
 
 
+@_jit
+def _nb_evaluate_row(
+    i,
+    act,
+    ft,
+    l1,
+    l2,
+    friction,
+    alpha,
+    snap1,
+    snap2,
+    torsion_bending_interaction,
+    projection_only,
+    energy,
+    proj,
+    flags,
+    util,
+):
+    """Row ``i`` of :func:`_nb_evaluate`; returns whether its radial factor and its energy
+    projection did not converge (0 or 1 each)."""
+    n_radial = 0
+    n_energy = 0
+    f1 = act[i, 0]
+    f2 = act[i, 1]
+    fn = act[i, 2]
+    m1 = act[i, 3]
+    m2 = act[i, 4]
+    m3 = act[i, 5]
+    fti = ft[i]
+    al = alpha[i]
+
+    # detachment
+    detached = fn > fti
+    live = not detached
+    cap = 0.0 if detached else fti - fn
+
+    # rocking: clip the bending moments to the eccentricity limits
+    half = 0.5 * cap
+    m1_lim = half * l2[i]
+    m2_lim = half * l1[i]
+    abs_m1 = abs(m1)
+    abs_m2 = abs(m2)
+    rock1 = abs_m1 > m1_lim and live
+    rock2 = abs_m2 > m2_lim and live
+    abs_m1c = min(abs_m1, m1_lim)
+    abs_m2c = min(abs_m2, m2_lim)
+
+    # shear and torsion: demand/capacity ratios a = |m3|/m3u, c = |f|/fsu
+    fsu = friction[i] * cap
+    abs_m3 = abs(m3)
+    m3u = 0.0
+    if abs_m3 > 0 and cap > 0:
+        if torsion_bending_interaction:
+            l1r = l1[i] - 2.0 * abs_m2c / cap
+            l2r = l2[i] - 2.0 * abs_m1c / cap
+            l1r = min(l1r, l1[i])
+            l2r = min(l2r, l2[i])
+            if l1r <= snap1[i]:
+                l1r = 0.0
+            if l2r <= snap2[i]:
+                l2r = 0.0
+            c_t = _nb_torsion_constant(l1r, l2r)
+        else:
+            c_t = _nb_torsion_constant(l1[i], l2[i])
+        m3u = c_t * fsu
+    shear = math.hypot(f1, f2)
+    a = abs_m3 / m3u if abs_m3 > 0 else 0.0  # 0/0 = 0, d/0 = inf (no capacity)
+    c = shear / fsu if shear > 0 else 0.0
+
+    u_st = 0.0
+    s = 1.0
+    sliding = False
+    if projection_only:
+        # a + c^2 >= a^alpha + c^2 for a, c <= 1 and alpha >= 1: below 1 no row slides
+        if live and not a + c * c < 0.999:
+            s, ok = _nb_radial_factor(a, c, al)
+            n_radial += 0 if ok else 1
+            sliding = 1.0 / s > 1.0 + SHEAR_TORSION_TOLERANCE
+    else:
+        s, ok = _nb_radial_factor(a, c, al)
+        n_radial += 0 if ok else 1
+        u_st = 1.0 / s  # radial demand/capacity ratio of Eq. (A5)
+        sliding = u_st > 1.0 + SHEAR_TORSION_TOLERANCE and live
+
+    # projection (untouched entries are kept bitwise)
+    for j in range(6):
+        proj[i, j] = act[i, j]
+    proj[i, 3] = math.copysign(abs_m1c, m1)
+    proj[i, 4] = math.copysign(abs_m2c, m2)
+    if sliding and not energy:
+        proj[i, 0] *= s
+        proj[i, 1] *= s
+        proj[i, 5] *= s
+    elif sliding:
+        rho = math.sqrt((l1[i] * l1[i] + l2[i] * l2[i]) / 12.0)  # sqrt(J / A)
+        r, z, ok = _nb_energy_closest_point(shear, abs_m3 / rho, fsu, m3u / rho, al, s)
+        n_energy += 0 if ok else 1
+        shear_scale = _nb_safe_ratio(r, shear)
+        if not math.isfinite(shear_scale):
+            shear_scale = 0.0
+        m3_new = math.copysign(z * rho, m3)
+        # capacities at the edge of floating point (subnormal friction or sides): the
+        # radial return, which lands on the boundary by construction
+        phi = _nb_safe_ratio(z * rho, m3u) ** al + _nb_safe_ratio(r, fsu) ** 2
+        off = not abs(phi - 1.0) <= 1e-9 and m3u > 0 and fsu > 0
+        off = off or abs_m3 == 0  # pure shear: the same point, with the radial round-off
+        off = off or fsu < _TINY_CAPACITY
+        if off:
+            shear_scale = s
+            m3_new = m3 * s
+        proj[i, 0] = f1 * shear_scale
+        proj[i, 1] = f2 * shear_scale
+        proj[i, 5] = m3_new
+    if detached:
+        for j in range(6):
+            proj[i, j] = 0.0
+        proj[i, 2] = fti
+
+    flags[i] = (
+        (FLAG_SHEAR_TORSION if sliding else 0)
+        | (FLAG_ROCKING_1 if rock1 else 0)
+        | (FLAG_ROCKING_2 if rock2 else 0)
+        | (FLAG_DETACHED if detached else 0)
+    )
+    if projection_only:
+        return n_radial, n_energy
+
+    # utilisation
+    u_tension = max(fn, 0.0) / fti  # ft = 0: inf in tension, NaN otherwise
+    if math.isnan(u_tension):  # ft = 0: 1 at fn = 0, 0 in compression
+        u_tension = 1.0 if fn >= 0 else 0.0
+    if detached:
+        util[i] = u_tension
+        return n_radial, n_energy
+    u_rock = abs_m1 / m1_lim if abs_m1 > 0 else 0.0
+    u_rock2 = abs_m2 / m2_lim if abs_m2 > 0 else 0.0
+    util[i] = max(max(max(u_rock, u_rock2), u_tension), u_st)
+    return n_radial, n_energy
+
+
 @_pjit
 def _nb_evaluate(
     act,
@@ -741,121 +881,13 @@ def _nb_evaluate(
     n_radial = 0
     n_energy = 0
     for i in numba.prange(act.shape[0]):
-        f1 = act[i, 0]
-        f2 = act[i, 1]
-        fn = act[i, 2]
-        m1 = act[i, 3]
-        m2 = act[i, 4]
-        m3 = act[i, 5]
-        fti = ft[i]
-        al = alpha[i]
-
-        # detachment
-        detached = fn > fti
-        live = not detached
-        cap = 0.0 if detached else fti - fn
-
-        # rocking: clip the bending moments to the eccentricity limits
-        half = 0.5 * cap
-        m1_lim = half * l2[i]
-        m2_lim = half * l1[i]
-        abs_m1 = abs(m1)
-        abs_m2 = abs(m2)
-        rock1 = abs_m1 > m1_lim and live
-        rock2 = abs_m2 > m2_lim and live
-        abs_m1c = min(abs_m1, m1_lim)
-        abs_m2c = min(abs_m2, m2_lim)
-
-        # shear and torsion: demand/capacity ratios a = |m3|/m3u, c = |f|/fsu
-        fsu = friction[i] * cap
-        abs_m3 = abs(m3)
-        m3u = 0.0
-        if abs_m3 > 0 and cap > 0:
-            if torsion_bending_interaction:
-                l1r = l1[i] - 2.0 * abs_m2c / cap
-                l2r = l2[i] - 2.0 * abs_m1c / cap
-                l1r = min(l1r, l1[i])
-                l2r = min(l2r, l2[i])
-                if l1r <= snap1[i]:
-                    l1r = 0.0
-                if l2r <= snap2[i]:
-                    l2r = 0.0
-                c_t = _nb_torsion_constant(l1r, l2r)
-            else:
-                c_t = _nb_torsion_constant(l1[i], l2[i])
-            m3u = c_t * fsu
-        shear = math.hypot(f1, f2)
-        a = abs_m3 / m3u if abs_m3 > 0 else 0.0  # 0/0 = 0, d/0 = inf (no capacity)
-        c = shear / fsu if shear > 0 else 0.0
-
-        u_st = 0.0
-        s = 1.0
-        sliding = False
-        if projection_only:
-            # a + c^2 >= a^alpha + c^2 for a, c <= 1 and alpha >= 1: below 1 no row slides
-            if live and not a + c * c < 0.999:
-                s, ok = _nb_radial_factor(a, c, al)
-                n_radial += 0 if ok else 1
-                sliding = 1.0 / s > 1.0 + SHEAR_TORSION_TOLERANCE
-        else:
-            s, ok = _nb_radial_factor(a, c, al)
-            n_radial += 0 if ok else 1
-            u_st = 1.0 / s  # radial demand/capacity ratio of Eq. (A5)
-            sliding = u_st > 1.0 + SHEAR_TORSION_TOLERANCE and live
-
-        # projection (untouched entries are kept bitwise)
-        for j in range(6):
-            proj[i, j] = act[i, j]
-        proj[i, 3] = math.copysign(abs_m1c, m1)
-        proj[i, 4] = math.copysign(abs_m2c, m2)
-        if sliding and not energy:
-            proj[i, 0] *= s
-            proj[i, 1] *= s
-            proj[i, 5] *= s
-        elif sliding:
-            rho = math.sqrt((l1[i] * l1[i] + l2[i] * l2[i]) / 12.0)  # sqrt(J / A)
-            r, z, ok = _nb_energy_closest_point(shear, abs_m3 / rho, fsu, m3u / rho, al, s)
-            n_energy += 0 if ok else 1
-            shear_scale = _nb_safe_ratio(r, shear)
-            if not math.isfinite(shear_scale):
-                shear_scale = 0.0
-            m3_new = math.copysign(z * rho, m3)
-            # capacities at the edge of floating point (subnormal friction or sides): the
-            # radial return, which lands on the boundary by construction
-            phi = _nb_safe_ratio(z * rho, m3u) ** al + _nb_safe_ratio(r, fsu) ** 2
-            off = not abs(phi - 1.0) <= 1e-9 and m3u > 0 and fsu > 0
-            off = off or abs_m3 == 0  # pure shear: the same point, with the radial round-off
-            off = off or fsu < _TINY_CAPACITY
-            if off:
-                shear_scale = s
-                m3_new = m3 * s
-            proj[i, 0] = f1 * shear_scale
-            proj[i, 1] = f2 * shear_scale
-            proj[i, 5] = m3_new
-        if detached:
-            for j in range(6):
-                proj[i, j] = 0.0
-            proj[i, 2] = fti
-
-        flags[i] = (
-            (FLAG_SHEAR_TORSION if sliding else 0)
-            | (FLAG_ROCKING_1 if rock1 else 0)
-            | (FLAG_ROCKING_2 if rock2 else 0)
-            | (FLAG_DETACHED if detached else 0)
-        )
-        if projection_only:
-            continue
-
-        # utilisation
-        u_tension = max(fn, 0.0) / fti  # ft = 0: inf in tension, NaN otherwise
-        if math.isnan(u_tension):  # ft = 0: 1 at fn = 0, 0 in compression
-            u_tension = 1.0 if fn >= 0 else 0.0
-        if detached:
-            util[i] = u_tension
-            continue
-        u_rock = abs_m1 / m1_lim if abs_m1 > 0 else 0.0
-        u_rock2 = abs_m2 / m2_lim if abs_m2 > 0 else 0.0
-        util[i] = max(max(max(u_rock, u_rock2), u_tension), u_st)
+        # one compiled row function: the parallel loop stays small to compile
+        radial_failed, energy_failed = _nb_evaluate_row(
+            i, act, ft, l1, l2, friction, alpha, snap1, snap2, torsion_bending_interaction,
+            projection_only, energy, proj, flags, util,
+        )  # fmt: skip
+        n_radial += radial_failed
+        n_energy += energy_failed
     return n_radial, n_energy
 
 
@@ -906,7 +938,8 @@ def _nb_fd_tangent(
     proj = np.empty((total, 6))
     flags = np.empty(total, dtype=np.uint8)
     util = np.empty(0)
-    _nb_evaluate(act, ft_, l1_, l2_, mu_, al_, s1_, s2_, True, True, energy, proj, flags, util)
+    on = total >= 0  # True, as a variable: a literal True would compile _nb_evaluate again
+    _nb_evaluate(act, ft_, l1_, l2_, mu_, al_, s1_, s2_, on, on, energy, proj, flags, util)
     for r in range(n):
         for a in range(6):
             for p in range(6):

@@ -94,11 +94,23 @@ def _row_structure(n, indptr, indices, parent):
             c = sibling[c]
         if ptr[j] + count > rows.size:  # grow the store
             bigger = np.empty(2 * (ptr[j] + count), np.int64)
-            bigger[: ptr[j]] = rows[: ptr[j]]
+            for a in range(ptr[j]):
+                bigger[a] = rows[a]
             rows = bigger
-        rows[ptr[j] : ptr[j] + count] = np.sort(found[:count])
+        for a in range(1, count):  # insertion sort: short lists, and no sort to compile
+            value = found[a]
+            b = a - 1
+            while b >= 0 and found[b] > value:
+                found[b + 1] = found[b]
+                b -= 1
+            found[b + 1] = value
+        for a in range(count):
+            rows[ptr[j] + a] = found[a]
         ptr[j + 1] = ptr[j] + count
-    return ptr, rows[: ptr[n]].copy()
+    out = np.empty(ptr[n], np.int64)
+    for a in range(ptr[n]):
+        out[a] = rows[a]
+    return ptr, out
 
 
 class Symbolic:
@@ -326,7 +338,10 @@ def _front(
     if u > 0:
         # the complement in place: F22 -= L21 U12 by BLAS (row-major F seen column-major:
         # F22^T -= U12^T L21^T), without the temporaries of a product and a difference
-        ints = np.array([u, p, f], np.int32)
+        ints = np.empty(3, np.int32)
+        ints[0] = u
+        ints[1] = p
+        ints[2] = f
         base = F.ctypes.data
         _dgemm(
             _NO_TRANSPOSE.ctypes,
@@ -348,7 +363,8 @@ def _front(
             for b in range(u):
                 schur[o + a * u + b] = F[p + a, p + b]
     o = fac_ptr[s]
-    factors[o : o + p * f] = flat[: p * f]
+    for a in range(p * f):  # (loops rather than slices: nothing shape-checked to compile)
+        factors[o + a] = flat[a]
     o += p * f
     for a in range(p, f):
         for b in range(p):
