@@ -371,3 +371,35 @@ def fd_tangent_numpy(
     ).reshape(7, n, 6)
     D = (proj[1:] - proj[:1]) / h.T[:, :, None]  # (6 perturbed, n, 6 actions)
     return np.transpose(D, (1, 2, 0)) * kbar[:, None, :]
+
+
+def law_tangent_numpy(law, r, floor=1e-9, fd=None):
+    """``InterfaceLaw.tangent`` as batched numpy operations (the library's version before it was
+    compiled into one call): diag(kbar), zero for open joints, the forward difference ``fd``
+    (default :func:`fd_tangent_numpy`; the compiled ``fd_tangent`` gives the library's bits)
+    at yielded rows taken at the contact side, and floor x kbar."""
+    from masonry_dem.constitutive.law import _CONTACT_BAND, _FD_STEP, DETACHED_FLAG
+
+    fd = fd or fd_tangent_numpy
+    k = law.kbar
+    m = k.shape[0]
+    T = np.zeros((m, 6, 6))
+    diagonal = T.reshape(m, 36)[:, ::7]  # a view on T[:, i, i]
+    diagonal[...] = k
+    trial, ft = r.trial, r.tensile_force
+    band = _CONTACT_BAND * float(np.abs(trial[:, 2]).max(initial=0.0))
+    open_ = trial[:, 2] > ft + band
+    diagonal[open_] = 0.0
+    rows = np.flatnonzero((r.flags > 0) & ~open_)
+    if rows.size:
+        t = trial[rows].copy()
+        t[:, 2] = np.minimum(t[:, 2], ft[rows])
+        big = np.abs(t).max(axis=1, keepdims=True)
+        h = _FD_STEP * (np.abs(t) + 1e-2 * big) + 1e-300
+        h[:, 2] = -h[:, 2]
+        normal_only = r.flags[rows] == DETACHED_FLAG
+        T[rows] = fd(
+            t, h, ft[rows], rows, law._domain, k[rows], law.projection, normal_only=normal_only
+        )
+    diagonal += floor * k
+    return T

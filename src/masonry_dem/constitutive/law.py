@@ -24,11 +24,9 @@ its tensile strength for good, as a cracked mortar joint does) or ``"plastic"`` 
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from functools import cached_property
 
-import numba
 import numpy as np
 from scipy import sparse
 
@@ -41,9 +39,9 @@ from masonry_dem.constitutive.strength import (
     _Domain,
     _evaluate,
     _field,
-    _nb_evaluate,
+    _nb_forces,
+    _nb_law_tangent,
     _projection_and_flags,
-    fd_tangent,
 )
 from masonry_dem.model import Model
 
@@ -58,54 +56,6 @@ _FD_STEP = 1e-7
 #: tangent: a joint with a zero gap and zero force must not flip between the tangents of a
 #: detached and of a closed joint on round-off (Newton's iterations would cycle)
 _CONTACT_BAND = 1e-8
-
-
-@numba.njit(cache=True, error_model="numpy")
-def _nb_forces(
-    x, h_ptr, h_idx, h_val, kbar, plastic, cracked, tensile_force,
-    l1, l2, friction, alpha, snap1, snap2, energy, brittle, t_ptr, t_idx, t_val, n_out,
-):  # fmt: skip
-    """Relative displacements ``H x``, trial actions, their projection (flags) and the
-    generalised forces ``H^T actions`` in one pass: the operations of the sparse products
-    (row by row, from 0, in stored order) and of :meth:`InterfaceLaw.respond`, so the same
-    bits. The last value is False, with nothing projected, if a trial action is not finite."""
-    m = kbar.shape[0]
-    rel = np.empty((m, 6))
-    trial = np.empty((m, 6))
-    ft = np.empty(m)
-    actions = np.empty((m, 6))
-    flags = np.zeros(m, dtype=np.uint8)
-    internal = np.zeros(n_out)
-    bad = 0
-    for i in range(m):
-        ft[i] = 0.0 if cracked[i] else tensile_force[i]
-        for j in range(6):
-            r = 6 * i + j
-            total = 0.0
-            for t in range(h_ptr[r], h_ptr[r + 1]):
-                total += h_val[t] * x[h_idx[t]]
-            rel[i, j] = total
-            trial[i, j] = kbar[i, j] * (total - plastic[i, j])
-            bad += 0 if math.isfinite(trial[i, j]) else 1
-    if bad:
-        return rel, trial, ft, actions, flags, internal, False
-    util = np.empty(0)
-    on = bad == 0  # True, as a variable: a literal True would compile _nb_evaluate again
-    _nb_evaluate(
-        trial, ft, l1, l2, friction, alpha, snap1, snap2, on, on, energy, actions, flags, util
-    )
-    if brittle:
-        for i in range(m):
-            if flags[i] & FLAG_DETACHED:
-                for j in range(6):
-                    actions[i, j] = 0.0
-    flat = actions.reshape(-1)
-    for r in range(n_out):
-        total = 0.0
-        for t in range(t_ptr[r], t_ptr[r + 1]):
-            total += t_val[t] * flat[t_idx[t]]
-        internal[r] = total
-    return rel, trial, ft, actions, flags, internal, True
 
 
 @dataclass(frozen=True)
@@ -253,37 +203,17 @@ class InterfaceLaw:
         with a zero gap and zero force are differentiated on the contact side. ``floor`` x
         kbar is added to the diagonal so that the matrix of a mechanism stays regular.
         """
-        k = self.kbar
-        m = k.shape[0]
-        T = np.zeros((m, 6, 6))
-        diagonal = T.reshape(m, 36)[:, ::7]  # a view on T[:, i, i]
-        diagonal[...] = k
-        trial, ft = r.trial, r.tensile_force
-        band = _CONTACT_BAND * float(np.abs(trial[:, 2]).max(initial=0.0))
-        open_ = trial[:, 2] > ft + band
-        diagonal[open_] = 0.0
-        rows = np.flatnonzero((r.flags > 0) & ~open_)
-        if rows.size:
-            t = trial[rows].copy()
-            t[:, 2] = np.minimum(t[:, 2], ft[rows])  # in the contact band: at the contact side
-            big = np.abs(t).max(axis=1, keepdims=True)
-            h = _FD_STEP * (np.abs(t) + 1e-2 * big) + 1e-300  # (n, 6)
-            h[:, 2] = -h[:, 2]  # perturb the normal force towards compression
-            # detached joints in the contact band sit at zero capacity (fn = ft): only fn moves
-            # their projection
-            normal_only = r.flags[rows] == DETACHED_FLAG
-            T[rows] = fd_tangent(
-                t,
-                h,
-                ft[rows],
-                rows,
-                self._domain,
-                k[rows],
-                self.projection,
-                normal_only=normal_only,
-            )
-        diagonal += floor * k
-        return T
+        return _nb_law_tangent(
+            r.trial,
+            r.tensile_force,
+            r.flags,
+            self.kbar,
+            float(floor),
+            _CONTACT_BAND,
+            _FD_STEP,
+            *self._domain.kernel_arrays,
+            self.projection == "energy",
+        )
 
     def plastic_part(self, relative: np.ndarray, actions: np.ndarray) -> np.ndarray:
         """Plastic relative displacements to store at a converged state (see ``memory``)."""

@@ -951,6 +951,121 @@ def _nb_fd_tangent(
                     out[r, a, p] = d * k[r, p]
 
 
+# the interface law's kernels (masonry_dem.constitutive.law), here beside the check they call:
+# numba's disk cache is renewed when a function's own file changes, not its callees' files
+
+
+@_jit
+def _nb_forces(
+    x, h_ptr, h_idx, h_val, kbar, plastic, cracked, tensile_force,
+    l1, l2, friction, alpha, snap1, snap2, energy, brittle, t_ptr, t_idx, t_val, n_out,
+):  # fmt: skip
+    """Relative displacements ``H x``, trial actions, their projection (flags) and the
+    generalised forces ``H^T actions`` in one pass: the operations of the sparse products
+    (row by row, from 0, in stored order) and of :meth:`InterfaceLaw.respond`, so the same
+    bits. The last value is False, with nothing projected, if a trial action is not finite."""
+    m = kbar.shape[0]
+    rel = np.empty((m, 6))
+    trial = np.empty((m, 6))
+    ft = np.empty(m)
+    actions = np.empty((m, 6))
+    flags = np.zeros(m, dtype=np.uint8)
+    internal = np.zeros(n_out)
+    bad = 0
+    for i in range(m):
+        ft[i] = 0.0 if cracked[i] else tensile_force[i]
+        for j in range(6):
+            r = 6 * i + j
+            total = 0.0
+            for t in range(h_ptr[r], h_ptr[r + 1]):
+                total += h_val[t] * x[h_idx[t]]
+            rel[i, j] = total
+            trial[i, j] = kbar[i, j] * (total - plastic[i, j])
+            bad += 0 if math.isfinite(trial[i, j]) else 1
+    if bad:
+        return rel, trial, ft, actions, flags, internal, False
+    util = np.empty(0)
+    on = bad == 0  # True, as a variable: a literal True would compile _nb_evaluate again
+    _nb_evaluate(
+        trial, ft, l1, l2, friction, alpha, snap1, snap2, on, on, energy, actions, flags, util
+    )
+    if brittle:
+        for i in range(m):
+            if flags[i] & FLAG_DETACHED:
+                for j in range(6):
+                    actions[i, j] = 0.0
+    flat = actions.reshape(-1)
+    for r in range(n_out):
+        total = 0.0
+        for t in range(t_ptr[r], t_ptr[r + 1]):
+            total += t_val[t] * flat[t_idx[t]]
+        internal[r] = total
+    return rel, trial, ft, actions, flags, internal, True
+
+
+@_jit
+def _nb_law_tangent(
+    trial, ft, flags, k, floor, contact_band, fd_step, l1, l2, friction, alpha, snap1, snap2, energy
+):
+    """:meth:`InterfaceLaw.tangent` in one compiled call (the operations of its batched numpy
+    version, so the same bits): diag(kbar), zero for open joints, the forward difference of
+    the projection at yielded rows (taken at the contact side), and floor x kbar."""
+    m = k.shape[0]
+    T = np.zeros((m, 6, 6))
+    peak = 0.0
+    for i in range(m):
+        peak = max(peak, abs(trial[i, 2]))
+    band = contact_band * peak
+    count = 0
+    for i in range(m):
+        open_ = trial[i, 2] > ft[i] + band
+        for j in range(6):
+            T[i, j, j] = 0.0 if open_ else k[i, j]
+        if flags[i] > 0 and not open_:
+            count += 1
+    rows = np.empty(count, np.int64)
+    count = 0
+    for i in range(m):
+        if flags[i] > 0 and not trial[i, 2] > ft[i] + band:
+            rows[count] = i
+            count += 1
+    if count:
+        t = np.empty((count, 6))
+        h = np.empty((count, 6))
+        ft_rows = np.empty(count)
+        k_rows = np.empty((count, 6))
+        normal_only = np.empty(count, np.bool_)
+        for r in range(count):
+            i = rows[r]
+            big = 0.0
+            for j in range(6):
+                t[r, j] = trial[i, j]
+                k_rows[r, j] = k[i, j]
+            t[r, 2] = min(t[r, 2], ft[i])  # in the contact band: at the contact side
+            for j in range(6):
+                big = max(big, abs(t[r, j]))
+            for j in range(6):
+                h[r, j] = fd_step * (abs(t[r, j]) + 1e-2 * big) + 1e-300
+            h[r, 2] = -h[r, 2]  # perturb the normal force towards compression
+            ft_rows[r] = ft[i]
+            # detached joints in the contact band sit at zero capacity (fn = ft): only fn
+            # moves their projection
+            normal_only[r] = flags[i] == FLAG_DETACHED
+        out = np.empty((count, 6, 6))
+        _nb_fd_tangent(
+            t, h, ft_rows, rows, l1, l2, friction, alpha, snap1, snap2, energy, k_rows,
+            normal_only, out,
+        )  # fmt: skip
+        for r in range(count):
+            for a in range(6):
+                for b in range(6):
+                    T[rows[r], a, b] = out[r, a, b]
+    for i in range(m):
+        for j in range(6):
+            T[i, j, j] += floor * k[i, j]
+    return T
+
+
 def fd_tangent(
     trial: NDArray,
     h: NDArray,
