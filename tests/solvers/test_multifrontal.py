@@ -73,11 +73,11 @@ def test_zero_pivot_is_reported_and_the_solver_falls_back_to_superlu(monkeypatch
 
     calls = []
 
-    def zero_pivot(self, matrix):
-        calls.append(matrix.shape)
+    def zero_pivot(self, entries):
+        calls.append(entries.shape)
         raise ZeroPivot("forced")
 
-    monkeypatch.setattr(Symbolic, "factorize", zero_pivot)
+    monkeypatch.setattr(Symbolic, "factorize_entries", zero_pivot)
     model = on_base(builders.single_block(A, B, S, 20e3))
     hist = StaticSolver(model).run()
     assert calls  # the multifrontal LU was asked, and SuperLU took over
@@ -92,6 +92,12 @@ def test_a_matrix_of_another_pattern_is_refused():
         symbolic.factorize(sparse.csc_matrix(sparse.identity(10)))
     with pytest.raises(ValueError, match="right-hand side must have shape"):
         symbolic.factorize(M).solve(np.ones(9))
+    with pytest.raises(ValueError, match="entries must have shape"):
+        symbolic.factorize_entries(np.ones(M.nnz + 1))
+    b = np.arange(10.0)  # the entries alone give the matrix's factors
+    assert np.array_equal(
+        symbolic.factorize_entries(M.data).solve(b), symbolic.factorize(M).solve(b)
+    )
 
 
 def check_split(symbolic: Symbolic) -> tuple[float, float, float]:

@@ -327,8 +327,14 @@ class _TangentAssembler:
         self.nnz = unique.size
         self.n = nf
 
-    def matrix(self, T: np.ndarray) -> sparse.csc_matrix:
-        data = _assemble_tangent(self.H_loc, np.ascontiguousarray(T), self.terms, self.term_ptr)
+    def data(self, T: np.ndarray) -> np.ndarray:
+        """The stored entries of :meth:`matrix`, in its CSC order."""
+        return _assemble_tangent(self.H_loc, np.ascontiguousarray(T), self.terms, self.term_ptr)
+
+    def matrix(self, T: np.ndarray, data: np.ndarray | None = None) -> sparse.csc_matrix:
+        """K_ff for the tangents T (or for entries ``data`` assembled already)."""
+        if data is None:
+            data = self.data(T)
         return sparse.csc_matrix((data, self.indices, self.indptr), shape=(self.n, self.n))
 
     def symbolic(self) -> Symbolic:
@@ -420,14 +426,15 @@ class StaticSolver:
         if floor is None:
             floor = self.settings.residual_stiffness
         T = self.law.tangent(response, floor)
-        K = self._tangents.matrix(T)
+        data = self._tangents.data(T)
         self.factorizations += 1
         ordered = self._tangents.order is not None
-        if self._fronts is not None:
+        if self._fronts is not None:  # the entries go straight to the fronts (same pattern)
             try:
-                return self._tangents.factorized(self._fronts.factorize(K))
+                return self._tangents.factorized(self._fronts.factorize_entries(data))
             except ZeroPivot:  # SuperLU pivots where the diagonal is zero
                 pass
+        K = self._tangents.matrix(T, data)
         try:
             lu = splu(
                 K,

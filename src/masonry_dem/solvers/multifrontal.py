@@ -209,9 +209,16 @@ class Symbolic:
             np.array_equal(A.indptr, self.pattern[0]) and np.array_equal(A.indices, self.pattern[1])
         ):
             raise ValueError("the matrix does not have the pattern of the symbolic factorization")
-        factors, failed = _factorize(
-            np.asarray(A.data, dtype=float), self.tasks, self.task_ptr, *self.arrays
-        )
+        return self.factorize_entries(np.asarray(A.data, dtype=float))
+
+    def factorize_entries(self, data: np.ndarray) -> LU:
+        """LU factors of the matrix of this pattern whose stored entries (CSC order, indices
+        sorted) are ``data``: :meth:`factorize` without building or checking a matrix."""
+        if data.shape != self.pattern[1].shape:
+            raise ValueError(
+                f"the entries must have shape {self.pattern[1].shape}, got {data.shape}"
+            )
+        factors, failed = _factorize(data, self.tasks, self.task_ptr, *self.arrays)
         if failed >= 0:
             raise ZeroPivot(f"zero or non-finite pivot in front {failed} of {self.fronts}")
         return LU(self, factors)
