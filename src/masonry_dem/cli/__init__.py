@@ -9,12 +9,9 @@ from __future__ import annotations
 import argparse
 import importlib
 import logging
-import os
 import sys
 
 COMMANDS = ("run", "validate", "interface", "render", "paraview_state", "study")
-#: commands that write results while they solve
-WRITING_COMMANDS = ("run", "validate")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -45,11 +42,6 @@ def main(argv: list[str] | None = None) -> int:
     if not getattr(args, "func", None):
         parser.print_help()
         return 2
-    if args.command in WRITING_COMMANDS:
-        # the results are written by a background thread while the solver runs: kernel
-        # threads that wait without spinning leave it the core (S11, S6, S15 with their files:
-        # 7.3 -> 6.6 s); must be set before the first parallel kernel starts OpenMP
-        os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
     try:
         return int(args.func(args) or 0)
     except (ValueError, FileNotFoundError) as exc:
