@@ -380,78 +380,47 @@ def _front(
     return True
 
 
+@_jit
+def _front_list(
+    first, last, tasks, data, schur, factors, pivots, updates, entry_ptr, entry, where,
+    kid_ptr, kid, rel_ptr, rel, upd_ptr, fac_ptr,
+):  # fmt: skip
+    """Fronts ``tasks[first:last]`` in that order; -1, or the first whose pivot was zero."""
+    for t in range(first, last):
+        ok = _front(
+            tasks[t], data, schur, factors, pivots, updates, entry_ptr, entry, where,
+            kid_ptr, kid, rel_ptr, rel, upd_ptr, fac_ptr,
+        )  # fmt: skip
+        if not ok:
+            return tasks[t]
+    return -1
+
+
 @numba.njit(cache=True, parallel=True)
 def _factorize(
-    data,
-    tasks,
-    task_ptr,
-    pivots,
-    updates,
-    entry_ptr,
-    entry,
-    where,
-    kid_ptr,
-    kid,
-    rel_ptr,
-    rel,
-    upd_ptr,
-    fac_ptr,
-):
+    data, tasks, task_ptr, pivots, updates, entry_ptr, entry, where, kid_ptr, kid, rel_ptr,
+    rel, upd_ptr, fac_ptr,
+):  # fmt: skip
     """Fronts in elimination order (children before parents): the two sets of subtrees of
     ``tasks`` side by side, then the top. Returns the factors, front by front: the p pivot
     rows (U11 with L11 below its diagonal, then U12; p x f), then L21 (u x p); and -1, or a
     front whose pivot was zero."""
     schur = np.empty(upd_ptr[-1])
     factors = np.empty(fac_ptr[-1])
-    failed = np.full(3, -1, np.int64)
-    for part in numba.prange(2):
-        for t in range(task_ptr[part], task_ptr[part + 1]):
-            s = tasks[t]
-            ok = _front(
-                s,
-                data,
-                schur,
-                factors,
-                pivots,
-                updates,
-                entry_ptr,
-                entry,
-                where,
-                kid_ptr,
-                kid,
-                rel_ptr,
-                rel,
-                upd_ptr,
-                fac_ptr,
-            )
-            if not ok:
-                failed[part] = s
-                break
+    failed = np.full(2, -1, np.int64)
+    for part in numba.prange(2):  # the two halves side by side, then the top
+        failed[part] = _front_list(
+            task_ptr[part], task_ptr[part + 1], tasks, data, schur, factors, pivots, updates,
+            entry_ptr, entry, where, kid_ptr, kid, rel_ptr, rel, upd_ptr, fac_ptr,
+        )  # fmt: skip
     for part in range(2):
         if failed[part] >= 0:
             return factors, failed[part]
-    for t in range(task_ptr[2], task_ptr[3]):
-        s = tasks[t]
-        ok = _front(
-            s,
-            data,
-            schur,
-            factors,
-            pivots,
-            updates,
-            entry_ptr,
-            entry,
-            where,
-            kid_ptr,
-            kid,
-            rel_ptr,
-            rel,
-            upd_ptr,
-            fac_ptr,
-        )
-        if not ok:
-            return factors, s
-    return factors, -1
+    top = _front_list(
+        task_ptr[2], task_ptr[3], tasks, data, schur, factors, pivots, updates, entry_ptr,
+        entry, where, kid_ptr, kid, rel_ptr, rel, upd_ptr, fac_ptr,
+    )  # fmt: skip
+    return factors, top
 
 
 @_jit
