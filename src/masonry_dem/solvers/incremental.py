@@ -390,6 +390,7 @@ class StaticSolver:
         length = float(np.median(blocks.sizes))
         self._weight = np.where(free % 6 < 3, 1.0, 1.0 / length)
         self._translation = (free % 6) < 3
+        self._moving_translations = free[self._translation]  # DOF numbers
         m = model.interfaces.count
         self.plastic = np.zeros((m, 6))
         self.cracked = np.zeros(m, dtype=bool)
@@ -402,6 +403,11 @@ class StaticSolver:
         self._fronts: Symbolic | None = None  # once the ordering is known
 
     # ------------------------------------------------------------------ one equilibrium
+    def _increment(self, q: np.ndarray) -> float:
+        """Largest translation of ``q`` away from the last converged state."""
+        idx = self._moving_translations
+        return float(np.abs(q[idx] - self.q[idx]).max(initial=0.0))
+
     def _residual(self, q: np.ndarray, lam: float, dead_factor: float = 1.0):
         _, response, internal = self.law.forces(
             self.asm.H, q, self.plastic, self.cracked, self.asm.H_free_T
@@ -525,13 +531,11 @@ class StaticSolver:
         cut = False  # the last iteration cut the radius
         direction = (np.zeros(0), 0.0)  # (dq, dlam) of the search that was cut
         live_solved: tuple[_Factorized | None, np.ndarray] = (None, np.zeros(0))  # K^-1 F_live
+        cerr = constraint_error(q)  # of the present iterate q, kept with it
         while it < budget:
             it += 1
-            cerr = constraint_error(q)
             if rnorm <= s.tolerance and cerr <= _CONTROL_TOLERANCE:
-                self._last_increment = float(
-                    np.abs((q - self.q)[free][self._translation]).max(initial=0.0)
-                )
+                self._last_increment = self._increment(q)
                 return _Outcome(True, q, lam, response, it - 1)
             self.iterations += 1
             fresh = lu is None
@@ -575,8 +579,9 @@ class StaticSolver:
                 q_try[free] += f * dq
                 lam_try = lam + f * dlam
                 r_try, n_try, resp_try = self._residual(q_try, lam_try, dead_factor)
-                if n_try + constraint_error(q_try) < (1.0 - 1e-4 * f) * merit:
-                    accepted = (q_try, lam_try, r_try, n_try, resp_try)
+                c_try = constraint_error(q_try)
+                if n_try + c_try < (1.0 - 1e-4 * f) * merit:
+                    accepted = (q_try, lam_try, r_try, n_try, resp_try, c_try)
                     break
             if accepted is None and not here:  # a stale tangent: refactor before cutting
                 lu = None
@@ -620,9 +625,9 @@ class StaticSolver:
                 crept or (step == 1.0 and shrink == 1.0 and accepted[3] < _CHORD_RATIO * rnorm)
             ):
                 lu = None
-            q, lam, residual, rnorm, response = accepted
+            q, lam, residual, rnorm, response, cerr = accepted
             here = here and crept
-            umax = float(np.abs((q - self.q)[free][self._translation]).max(initial=0.0))
+            umax = self._increment(q)
             if not math.isfinite(umax) or umax > self.limit:
                 return _Outcome(
                     False,
@@ -632,7 +637,7 @@ class StaticSolver:
                     it,
                     f"displacements exceed the limit {self.limit:.3g} m (a mechanism)",
                 )
-            history.append((rnorm + constraint_error(q), radius))
+            history.append((rnorm + cerr, radius))
             if len(history) > _STALL_WINDOW:
                 window = history[-1 - _STALL_WINDOW :]
                 steady = all(rad >= window[0][1] for _, rad in window)  # no cut in the window
@@ -650,9 +655,7 @@ class StaticSolver:
                     f"(displacement increment {umax:.2e} m)",
                 )
         if rnorm <= s.tolerance and constraint_error(q) <= _CONTROL_TOLERANCE:
-            self._last_increment = float(
-                np.abs((q - self.q)[free][self._translation]).max(initial=0.0)
-            )
+            self._last_increment = self._increment(q)
             return _Outcome(True, q, lam, response, it)
         return _Outcome(
             False,
@@ -721,7 +724,7 @@ class StaticSolver:
                 best = (rnorm, x.copy(), response)
             q_now = self.q.copy()
             q_now[free] = x
-            umax = float(np.abs((q_now - self.q)[free][self._translation]).max(initial=0.0))
+            umax = self._increment(q_now)
             if rnorm <= s.tolerance:
                 self._last_increment = umax
                 return _Outcome(True, q_now, load_factor, response, it)
@@ -787,9 +790,7 @@ class StaticSolver:
         best = [rnorm]
         for it in range(1, s.transient_steps + 1):
             if rnorm <= s.tolerance:
-                self._last_increment = float(
-                    np.abs((q - self.q)[free][self._translation]).max(initial=0.0)
-                )
+                self._last_increment = self._increment(q)
                 return _Outcome(True, q, target, response, it - 1)
             self.iterations += 1
             dq = self._factor(response, floor).solve(residual)
@@ -810,7 +811,7 @@ class StaticSolver:
             if ratio < 1.0:
                 ratio *= _TRANSIENT_SHRINK
             floor = min(max(floor * ratio, s.residual_stiffness), 1.0)
-            umax = float(np.abs((q - self.q)[free][self._translation]).max(initial=0.0))
+            umax = self._increment(q)
             if umax > self.limit:
                 return _Outcome(
                     False,
