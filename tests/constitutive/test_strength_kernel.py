@@ -282,6 +282,19 @@ def test_law_tangent_matches_the_numpy_reference(monkeypatch):
     assert (np.abs(tangent - ref_tangent) <= 1e-6 * np.abs(ref_tangent) + 1e-9 * scale).all()
 
 
+def _random_domain(m: int, rng: np.random.Generator) -> _Domain:
+    return _Domain.of(m, rng.uniform(0.05, 0.4, m), rng.uniform(0.05, 0.3, m),
+                      rng.uniform(0.0, 0.9, m), rng.choice([1.0, 1.5, 2.56], m))  # fmt: skip
+
+
+def _fd_steps(t: np.ndarray) -> np.ndarray:
+    """The law's finite-difference steps for trials ``t`` (fn towards compression)."""
+    big = np.abs(t).max(axis=1, keepdims=True)
+    h = 1e-7 * (np.abs(t) + 1e-2 * big) + 1e-300
+    h[:, 2] = -h[:, 2]
+    return h
+
+
 def _compiled_projection(act, ft, dom, projection_only, projection):
     """The compiled projection, with the reference check's signature (probes only)."""
     assert projection_only
@@ -295,16 +308,13 @@ def test_compiled_tangent_is_the_batched_difference_bit_for_bit(projection):
     would be amplified 1e7 times by the difference)."""
     rng = np.random.default_rng(11)
     m = 300
-    dom = _Domain.of(m, rng.uniform(0.05, 0.4, m), rng.uniform(0.05, 0.3, m),
-                     rng.uniform(0.0, 0.9, m), rng.choice([1.0, 1.5, 2.56], m))  # fmt: skip
+    dom = _random_domain(m, rng)
     rows = np.flatnonzero(rng.random(m) < 0.6)
     n = rows.size
     t = rng.normal(size=(n, 6)) * [300, 300, 400, 20, 20, 30]
     t[:, 2] = -np.abs(t[:, 2])
     ft = np.where(rng.random(n) < 0.5, 0.0, 50.0)
-    big = np.abs(t).max(axis=1, keepdims=True)
-    h = 1e-7 * (np.abs(t) + 1e-2 * big) + 1e-300
-    h[:, 2] = -h[:, 2]
+    h = _fd_steps(t)
     kbar = rng.uniform(1e5, 1e9, (n, 6))
     compiled = fd_tangent(t, h, ft, rows, dom, kbar, projection)
     batched = fd_tangent_numpy(t, h, ft, rows, dom, kbar, projection, evaluate=_compiled_projection)
@@ -318,16 +328,13 @@ def test_a_joint_at_zero_capacity_moves_only_with_fn(projection):
     give the tangent of all six probes: the other columns are zero, the fn column the same."""
     rng = np.random.default_rng(13)
     m = 200
-    dom = _Domain.of(m, rng.uniform(0.05, 0.4, m), rng.uniform(0.05, 0.3, m),
-                     rng.uniform(0.0, 0.9, m), rng.choice([1.0, 1.5, 2.56], m))  # fmt: skip
+    dom = _random_domain(m, rng)
     rows = np.arange(m)
     t = rng.normal(size=(m, 6)) * [300, 300, 400, 20, 20, 30]
     ft = np.where(rng.random(m) < 0.5, 0.0, 50.0)
     at_zero = rng.random(m) < 0.5
     t[:, 2] = np.where(at_zero, ft, -np.abs(t[:, 2]))
-    big = np.abs(t).max(axis=1, keepdims=True)
-    h = 1e-7 * (np.abs(t) + 1e-2 * big) + 1e-300
-    h[:, 2] = -h[:, 2]
+    h = _fd_steps(t)
     kbar = rng.uniform(1e5, 1e9, (m, 6))
     full = fd_tangent(t, h, ft, rows, dom, kbar, projection)
     lean = fd_tangent(t, h, ft, rows, dom, kbar, projection, normal_only=at_zero)

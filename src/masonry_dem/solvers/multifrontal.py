@@ -62,6 +62,19 @@ def _elimination_tree(n, indptr, indices):
 
 
 @_jit
+def _gather_below(j, source, start, stop, mark, found, count):
+    """Append to ``found[:count]`` the rows of ``source[start:stop]`` below ``j`` not yet
+    marked for column j; returns the new count."""
+    for t in range(start, stop):
+        i = source[t]
+        if i > j and mark[i] != j:
+            mark[i] = j
+            found[count] = i
+            count += 1
+    return count
+
+
+@_jit
 def _row_structure(n, indptr, indices, parent):
     """Rows below the diagonal of each column j of L, sorted: ``rows[ptr[j] : ptr[j + 1]]``,
     the rows of A's column j below j and those of j's children in the elimination tree."""
@@ -76,21 +89,10 @@ def _row_structure(n, indptr, indices, parent):
     rows = np.empty(max(indices.size, 16), np.int64)
     found = np.empty(n, np.int64)
     for j in range(n):
-        count = 0
-        for t in range(indptr[j], indptr[j + 1]):
-            i = indices[t]
-            if i > j and mark[i] != j:
-                mark[i] = j
-                found[count] = i
-                count += 1
+        count = _gather_below(j, indices, indptr[j], indptr[j + 1], mark, found, 0)
         c = head[j]
         while c >= 0:
-            for t in range(ptr[c], ptr[c + 1]):
-                i = rows[t]
-                if i > j and mark[i] != j:
-                    mark[i] = j
-                    found[count] = i
-                    count += 1
+            count = _gather_below(j, rows, ptr[c], ptr[c + 1], mark, found, count)
             c = sibling[c]
         if ptr[j] + count > rows.size:  # grow the store
             bigger = np.empty(2 * (ptr[j] + count), np.int64)
@@ -192,16 +194,13 @@ class Symbolic:
             np.concatenate([[0], np.cumsum(updates**2)]).astype(np.int64),
             np.concatenate([[0], np.cumsum(sizes**2 - updates**2)]).astype(np.int64),
         )
-        self.tasks, self.task_ptr = _split_in_two(
-            2 * updates**2 * pivots + 2 * updates * pivots**2 + 2 * pivots**3 / 3 + updates**2,
-            front_parent,
-        )
+        #: floating-point operations of each front, and of one factorization
+        self.front_flops = 2 * updates**2 * pivots + 2 * updates * pivots**2 + 2 * pivots**3 / 3
+        self.flops = float(self.front_flops.sum())
+        # the work of a front: its operations and the extend-add of its complement
+        self.tasks, self.task_ptr = _split_in_two(self.front_flops + updates**2, front_parent)
         self.front_rows = np.concatenate(fronts).astype(np.int64)
         self.front_ptr = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
-        #: floating-point operations of one factorization
-        self.flops = float(
-            np.sum(2 * updates**2 * pivots + 2 * updates * pivots**2 + 2 * pivots**3 / 3)
-        )
 
     def factorize(self, A: sparse.csc_matrix) -> LU:
         """LU factors of ``A`` (the pattern this was built for, indices sorted)."""
