@@ -18,6 +18,11 @@ from masonry_dem.constitutive import check_strength
 from masonry_dem.constitutive.law import InterfaceLaw
 
 RTOL = 1e-12
+#: The tangents are divided differences with probe steps down to 1e-9 of a row's largest
+#: action (law._FD_STEP = 1e-7 of 1e-2 of it), so a last-bit difference between the compiled
+#: projection and numpy's (another libm or fused multiply-add on another CPU) comes out up to
+#: ~1e-7 of the row's scale: tangents are compared against each interface's largest entry.
+TANGENT_RTOL = 1e-6
 SLIDE = np.array([True, True, False, False, False, True])
 
 
@@ -217,6 +222,16 @@ def _max_rel_diff(x, y) -> float:
     return float(np.max(np.abs(x - y)[~same] / np.abs(y)[~same]))
 
 
+def _max_tangent_diff(T, T_ref) -> float:
+    """Largest |T - T_ref| of each interface's 6 x 6 block over that block's largest entry."""
+    T, T_ref = np.asarray(T, dtype=float), np.asarray(T_ref, dtype=float)
+    assert T.shape == T_ref.shape and T.shape[1:] == (6, 6)
+    assert np.isfinite(T).all() and np.isfinite(T_ref).all()
+    scale = np.abs(T_ref).max(axis=(1, 2))
+    diff = np.abs(T - T_ref).max(axis=(1, 2))
+    return float(np.max(np.where(diff == 0.0, 0.0, diff / np.maximum(scale, 1e-300))))
+
+
 def _interfaces(m: int, rng: np.random.Generator):
     """Sides, friction, tensile force (half the rows cracked, ft = 0) and alpha per row."""
     l1 = rng.uniform(0.05, 0.4, m)
@@ -337,11 +352,12 @@ def test_interface_law_matches_reference(seed, tension, memory):
         assert _max_rel_diff(getattr(got, name), value) < RTOL, name
     assert (got.flags > 0).mean() > 0.3  # many rows go through the finite differences
     T, T_ref = law.tangent(got), ref_law.tangent(ref)
-    assert _max_rel_diff(T, T_ref) < RTOL
+    assert _max_tangent_diff(T, T_ref) < TANGENT_RTOL
     # again on the converged actions (on the boundary) and with another floor
     again = law.respond(got.actions / kbar + plastic, plastic, cracked)
     ref_again = ref_law.respond(got.actions / kbar + plastic, plastic, cracked)
-    assert _max_rel_diff(law.tangent(again, 1e-6), ref_law.tangent(ref_again, 1e-6)) < RTOL
+    T, T_ref = law.tangent(again, 1e-6), ref_law.tangent(ref_again, 1e-6)
+    assert _max_tangent_diff(T, T_ref) < TANGENT_RTOL
 
 
 def test_interface_law_rejects_non_finite_trials():
