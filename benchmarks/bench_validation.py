@@ -4,16 +4,18 @@ assumptions of masonry_dem.cases.paper.Assumptions.
     python benchmarks/bench_validation.py                 # time per case and in total
     python benchmarks/bench_validation.py OL1 S11         # some cases
     python benchmarks/bench_validation.py --sensitivity   # lambda when each assumption moves
+    python benchmarks/bench_validation.py --settings memory=slip   # other static settings
 """
 
 from __future__ import annotations
 
 import argparse
 import time
+from dataclasses import fields, replace
 
 from masonry_dem.cases.paper import build_case, case_names
 from masonry_dem.cli.study import warm_up
-from masonry_dem.solvers.incremental import pushover
+from masonry_dem.solvers.incremental import StaticSettings, pushover
 
 # (case, assumption changes): a sensible move of each value the paper does not give
 SENSITIVITY = [
@@ -21,6 +23,8 @@ SENSITIVITY = [
     ("OL1", {"dry_kn": 2.4e10, "dry_kt": 1.0e10}),
     ("OL1", {"dry_kt": 0.4e9}),
     ("OL1", {"column_dofs_table1": ("u1", "u2", "u3")}),
+    ("OL1", {"column_dofs_table1": ("u3",)}),
+    ("OL1", {"column_dofs_table1": ("u1", "u3", "w1", "w2", "w3")}),
     ("OL2", {"column_dofs_table1": ("u1", "u2", "u3")}),
     ("S13", {"dry_kn": 2.4e8, "dry_kt": 1.0e8}),
     ("S13", {"column_dofs_table2": ("u1", "u3")}),
@@ -50,10 +54,13 @@ SENSITIVITY = [
 ]
 
 
-def run(name: str, **changes) -> tuple[float | None, int, int, float, float, str]:
+def run(
+    name: str, settings: dict | None = None, **changes
+) -> tuple[float | None, int, int, float, float, str]:
+    """One case with ``changes`` to its Assumptions and ``settings`` to its StaticSettings."""
     case = build_case(name, **changes)
     t0, c0 = time.perf_counter(), time.process_time()
-    h = pushover(case.model, case.settings, monitor=case.monitor)
+    h = pushover(case.model, replace(case.settings, **(settings or {})), monitor=case.monitor)
     return (
         h.collapse_multiplier,
         len(h.steps),
@@ -64,11 +71,41 @@ def run(name: str, **changes) -> tuple[float | None, int, int, float, float, str
     )
 
 
+def _parse_settings(items: list[str]) -> dict:
+    """``FIELD=VALUE`` pairs as StaticSettings changes, values typed like the field's default."""
+    defaults = {f.name: getattr(StaticSettings(), f.name) for f in fields(StaticSettings)}
+    out: dict = {}
+    for item in items:
+        key, sep, text = item.partition("=")
+        if not sep or key not in defaults:
+            raise SystemExit(f"--settings: {item!r} is not FIELD=VALUE with a StaticSettings field")
+        default = defaults[key]
+        if isinstance(default, bool):
+            out[key] = text.lower() in ("1", "true", "yes")
+        elif isinstance(default, (str, int)):
+            out[key] = type(default)(text)
+        else:  # floats, and None (a length)
+            out[key] = float(text)
+    try:
+        StaticSettings(**out)
+    except ValueError as err:  # the message names the field and the value
+        raise SystemExit(f"--settings: {err}") from None
+    return out
+
+
 def main(argv: list[str] | None = None) -> None:
     p = argparse.ArgumentParser(description=__doc__)
     p.add_argument("cases", nargs="*")
     p.add_argument("--sensitivity", action="store_true")
+    p.add_argument(
+        "--settings",
+        nargs="+",
+        default=[],
+        metavar="FIELD=VALUE",
+        help="StaticSettings fields for every case (e.g. memory=slip tension=plastic)",
+    )
     args = p.parse_args(argv)
+    settings = _parse_settings(args.settings)
     if args.sensitivity:
         base: dict[str, float | None] = {}
         print(f"{'case':6s} {'change':45s} {'lambda':>10s} {'base':>10s} {'move':>7s}")
@@ -84,7 +121,7 @@ def main(argv: list[str] | None = None) -> None:
     total = 0.0
     print(f"{'case':6s} {'lambda':>10s} {'steps':>5s} {'iters':>5s} {'wall s':>7s} {'cpu s':>6s}")
     for name in args.cases or case_names():
-        lam, steps, its, wall, cpu, status = run(name)
+        lam, steps, its, wall, cpu, status = run(name, settings)
         total += wall
         print(f"{name:6s} {lam!s:>10.8s} {steps:5d} {its:5d} {wall:7.2f} {cpu:6.2f} {status}")
     print(f"total wall time {total:.1f} s")
