@@ -58,7 +58,9 @@ def main(argv: list[str] | None = None) -> int:
         help="cases run in parallel processes (each case's runs stay sequential, so the "
         "time ratios within a case share the same load)",
     )
-    p.add_argument("--budget", type=int, default=400_000, help="DR time-step budget per run")
+    p.add_argument(
+        "--budget", type=int, default=None, help="DR time-step budget per run (default: DR's own)"
+    )
     p.add_argument("--out", default="results/study")
     p.add_argument("--skip-sweeps", action="store_true", help="speed-accuracy study only")
     p.add_argument("--kn-case", default="S15")

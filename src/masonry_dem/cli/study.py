@@ -707,8 +707,9 @@ def add_parser(subparsers) -> None:
     sa.add_argument(
         "--budget",
         type=int,
-        default=400_000,
-        help="time-step budget of each DR run (default: %(default)s)",
+        default=None,
+        help="time-step budget of each DR run (default: DRSettings.max_time_steps, 2 000 000: "
+        "DR needs about 1e6 on the mortar wall 14-15)",
     )
     sa.add_argument("--json", action="store_true", help="print the runs as a JSON array")
     sa.add_argument(
@@ -734,7 +735,9 @@ def add_parser(subparsers) -> None:
         help="multipliers of the assumed dry kn (default: %(default)s)",
     )
     kn.add_argument("--method", choices=("static", "dynamic_relaxation"), default="static")
-    kn.add_argument("--budget", type=int, default=400_000, help="DR time-step budget")
+    kn.add_argument(
+        "--budget", type=int, default=None, help="DR time-step budget (default: DRSettings')"
+    )
     kn.add_argument(
         "--scale-kt",
         action="store_true",
