@@ -78,6 +78,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import sparse
 
+from masonry_dem._threads import kernel_threads_for
 from masonry_dem.assembly.stiffness import Assembly
 from masonry_dem.constitutive.law import InterfaceLaw, LawResponse
 from masonry_dem.model import Model
@@ -592,6 +593,14 @@ class DynamicRelaxation:
         monitor: tuple[int, str] | None = None,
     ) -> History:
         """Dead load, then lambda raised in steps or ramped until a mechanism forms."""
+        with kernel_threads_for(self.m):
+            return self._run(callback, monitor)
+
+    def _run(
+        self,
+        callback: Callable[[StepResult], None] | None,
+        monitor: tuple[int, str] | None,
+    ) -> History:
         t0 = time.perf_counter()
         s = self.settings
         hist = History()

@@ -46,6 +46,7 @@ import numpy as np
 from scipy import sparse
 from scipy.sparse.linalg import splu
 
+from masonry_dem._threads import kernel_threads_for
 from masonry_dem.assembly.stiffness import Assembly
 from masonry_dem.constitutive.law import MEMORY, TENSION, InterfaceLaw, LawResponse
 from masonry_dem.model import Model
@@ -929,6 +930,15 @@ class StaticSolver:
         ``monitor`` = (block, dof name) picks the displacement stored on the pushover curve
         (default: the largest block translation).
         """
+        with kernel_threads_for(self.model.interfaces.count):
+            return self._run(control, callback, monitor)
+
+    def _run(
+        self,
+        control: DisplacementControl | None,
+        callback: Callable[[StepResult], None] | None,
+        monitor: tuple[int, str] | None,
+    ) -> History:
         t0 = time.perf_counter()
         hist = History()
         monitor_dof = None
