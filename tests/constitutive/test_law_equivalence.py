@@ -179,7 +179,9 @@ class _ReferenceLaw:
             "utilisation": chk["utilisation"],
         }
 
-    def tangent(self, r, floor=1e-9):
+    def tangent(self, r, floor=1e-9, compiled_probes=False):
+        """The forward difference of the law's tangent; ``compiled_probes``: the probes
+        projected by the compiled check instead of the numpy reference."""
         k = self.law.kbar
         m = k.shape[0]
         idx = np.arange(6)
@@ -200,7 +202,19 @@ class _ReferenceLaw:
             probe = np.repeat(t[None], 7, axis=0)
             probe[idx + 1, :, idx] += h.T
             ftr = np.tile(ft[rows], 7)
-            proj = self._check(probe.reshape(-1, 6), ftr, np.tile(rows, 7))["projected"]
+            rows7 = np.tile(rows, 7)
+            if compiled_probes:
+                proj = check_strength(
+                    probe.reshape(-1, 6),
+                    self.l1[rows7],
+                    self.l2[rows7],
+                    self.mu[rows7],
+                    ftr,
+                    alpha=self.alpha[rows7],
+                    projection=self.law.projection,
+                ).projected
+            else:
+                proj = self._check(probe.reshape(-1, 6), ftr, rows7)["projected"]
             proj = proj.reshape(7, n, 6)
             D = (proj[1:] - proj[:1]) / h.T[:, :, None]
             T[rows] = np.transpose(D, (1, 2, 0)) * k[rows][:, None, :]
@@ -353,11 +367,15 @@ def test_interface_law_matches_reference(seed, tension, memory):
     assert (got.flags > 0).mean() > 0.3  # many rows go through the finite differences
     T, T_ref = law.tangent(got), ref_law.tangent(ref)
     assert _max_tangent_diff(T, T_ref) < TANGENT_RTOL
+    # the same differences of the compiled projection: the kernel's probes, steps and chain
+    # rule, to round-off
+    assert _max_rel_diff(T, ref_law.tangent(ref, compiled_probes=True)) < RTOL
     # again on the converged actions (on the boundary) and with another floor
     again = law.respond(got.actions / kbar + plastic, plastic, cracked)
     ref_again = ref_law.respond(got.actions / kbar + plastic, plastic, cracked)
     T, T_ref = law.tangent(again, 1e-6), ref_law.tangent(ref_again, 1e-6)
     assert _max_tangent_diff(T, T_ref) < TANGENT_RTOL
+    assert _max_rel_diff(T, ref_law.tangent(ref_again, 1e-6, compiled_probes=True)) < RTOL
 
 
 def test_interface_law_rejects_non_finite_trials():
