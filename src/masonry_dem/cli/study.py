@@ -736,7 +736,10 @@ def add_parser(subparsers) -> None:
     )
     kn.add_argument("--method", choices=("static", "dynamic_relaxation"), default="static")
     kn.add_argument(
-        "--budget", type=int, default=None, help="DR time-step budget (default: DRSettings')"
+        "--budget",
+        type=int,
+        default=None,
+        help="DR time-step budget (default: DRSettings.max_time_steps)",
     )
     kn.add_argument(
         "--scale-kt",
