@@ -26,18 +26,20 @@ def smallest_real_eigenvalues(name: str, count: int = 2) -> list[tuple[float, np
     history = solver.run()
     asm, law = solver.asm, solver.law
     tangents = _TangentAssembler(asm, case.model)
+    scale = 1.0 / np.sqrt(asm.stiffness().diagonal())  # the elastic diagonal
     m = case.model.interfaces.count
-    none, intact = np.zeros((m, 6)), np.zeros(m, dtype=bool)
-    elastic = tangents.matrix(law.tangent(law.respond(none, none, intact), 0.0))
-    scale = 1.0 / np.sqrt(elastic.diagonal())
+    plastic = np.zeros((m, 6))  # the default law keeps no slip (memory="none")
+    cracked = np.zeros(m, dtype=bool)
     steps = history.steps[1:]
-    picked = sorted(set(range(0, len(steps), 4)) | set(range(max(0, len(steps) - 10), len(steps))))
+    picked = set(range(0, len(steps), 4)) | set(range(max(0, len(steps) - 10), len(steps)))
     rows = []
-    for step in (steps[i] for i in picked):
+    for i, step in enumerate(steps):
         x = step.q.reshape(-1)[asm.free_index]
-        response = law.respond((asm.H_free @ x).reshape(-1, 6), none, intact)
-        K = tangents.matrix(law.tangent(response, 0.0)).toarray() * scale[:, None] * scale
-        rows.append((step.load_factor, np.sort(np.linalg.eigvals(K).real)[:count]))
+        response = law.respond((asm.H_free @ x).reshape(-1, 6), plastic, cracked)
+        if i in picked:
+            K = tangents.matrix(law.tangent(response, 0.0)).toarray() * scale[:, None] * scale
+            rows.append((step.load_factor, np.sort(np.linalg.eigvals(K).real)[:count]))
+        cracked = law.cracked_after(cracked, response)  # mortar joints stay cracked
     return rows
 
 

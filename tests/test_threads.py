@@ -8,7 +8,6 @@ import pytest
 
 import masonry_dem as md
 from masonry_dem import _threads
-from masonry_dem.solvers import incremental
 
 
 def test_a_small_model_runs_its_kernels_on_one_thread_and_restores_the_setting():
@@ -48,4 +47,3 @@ def test_one_kernel_thread_gives_the_same_bits(monkeypatch):
     assert serial.collapse_multiplier == parallel.collapse_multiplier
     assert np.array_equal(serial.steps[-1].q, parallel.steps[-1].q)
     assert serial.iterations == parallel.iterations
-    assert incremental.kernel_threads_for is _threads.kernel_threads_for
