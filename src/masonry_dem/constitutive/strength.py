@@ -951,6 +951,259 @@ def _nb_fd_tangent(
                     out[r, a, p] = d * k[r, p]
 
 
+@_jit
+def _nb_torsion_constant_slope(l1: float, l2: float) -> float:
+    """d cT / d l1 of an ``l1 x l2`` rectangle (sides >= 0): with x = l2 / l1,
+    ``(1/3) [(sqrt(1 + x^2) - x^2 asinh(1/x)) / 4 + asinh(x) / (2 x)]``; 1/4 at x = 0 (a
+    segment, cT = l1/4), 0 at l1 = 0 (its limit). The bracket cancels for large x: there its
+    series ``2/(3x) - 1/(5x^3)``."""
+    if not l1 > 0.0:
+        return 0.0
+    x = l2 / l1
+    if x == 0.0:
+        return 0.25
+    if x > 1e3:
+        g = 2.0 / (3.0 * x) - 1.0 / (5.0 * x * x * x)
+    else:
+        g = math.sqrt(1.0 + x * x) - x * x * math.asinh(1.0 / x)
+    return (0.25 * g + 0.5 * math.asinh(x) / x) / 3.0
+
+
+@_jit
+def _nb_contact_tangent(t, fti, mu, l1, l2, al, snap1, snap2, k, fd_step, out) -> bool:
+    """Derivative of the projection of a detached joint in the contact band, taken at zero
+    capacity (fn = ft) towards compression: only fn moves it, and every action it returns
+    grows in proportion to a small capacity ``cap = ft - fn``.
+
+    "Small" is the capacity of the forward difference's probe (``fd_step`` of the row's
+    scale), so that the rows come out as that difference gives them: a bending moment above
+    that probe's rocking limit is clipped, m' = sign(m) cap l / 2; one below it (round-off
+    in a symmetric wall) is kept and shortens the other side of the torsion rectangle by
+    2 |m| / probe. The shear-torsion return from a trial far outside a domain of size cap
+    lands where the curve's normal points at the trial: with u = r0 mu and
+    v = z0 cT mu / rho, the point (R, Z) of Z^alpha + R^2 = 1 that maximises u R + v Z,
+    R = s u / 2, Z = (s v / alpha)^(1/(alpha-1)) with s from (s u/2)^2 + (s v/alpha)^beta = 1,
+    beta = alpha / (alpha - 1) (the radial factor's equation). False (differenced) for
+    alpha = 1. ``out`` as :func:`_nb_row_tangent`."""
+    if not al > 1.0:
+        return False
+    m1 = t[3]
+    m2 = t[4]
+    big = abs(fti)
+    for j in (0, 1, 3, 4, 5):
+        big = max(big, abs(t[j]))
+    probe = fd_step * (abs(fti) + 1e-2 * big)
+    rock1 = abs(m1) > probe * 0.5 * l2
+    rock2 = abs(m2) > probe * 0.5 * l1
+    for a in range(6):
+        for q in range(6):
+            out[a, q] = 0.0
+    k2 = k[2]
+    out[2, 2] = k2
+    if rock1:
+        out[3, 2] = -math.copysign(0.5 * l2, m1) * k2
+    if rock2:
+        out[4, 2] = -math.copysign(0.5 * l1, m2) * k2
+    l1r = 0.0 if rock2 else min(l1 - 2.0 * abs(m2) / probe, l1)
+    l2r = 0.0 if rock1 else min(l2 - 2.0 * abs(m1) / probe, l2)
+    if l1r <= snap1:
+        l1r = 0.0
+    if l2r <= snap2:
+        l2r = 0.0
+    c_t = _nb_torsion_constant(l1r, l2r)
+    rho = math.sqrt((l1 * l1 + l2 * l2) / 12.0)
+    r0 = math.hypot(t[0], t[1])
+    u = r0 * mu
+    v = abs(t[5]) / rho * c_t * mu / rho
+    if not (u > 0.0 or v > 0.0):
+        return True  # nothing to return: no shear, no torsion
+    s, ok = _nb_radial_factor(v / al, 0.5 * u, al / (al - 1.0))
+    if not ok:
+        return False
+    big_r = s * 0.5 * u
+    big_z = (s * v / al) ** (1.0 / (al - 1.0))
+    if r0 > 0.0:  # f' = f / r0 mu cap R
+        out[0, 2] = -t[0] / r0 * mu * big_r * k2
+        out[1, 2] = -t[1] / r0 * mu * big_r * k2
+    out[5, 2] = -math.copysign(c_t * mu * big_z, t[5]) * k2  # m3' = sign(m3) cT mu cap Z
+    for a in range(6):
+        if not math.isfinite(out[a, 2]):
+            return False
+    return True
+
+
+@_jit
+def _nb_row_tangent(t, p, fti, l1, l2, mu, al, snap1, snap2, flag, k, fd_step, out, g) -> bool:
+    """Analytic derivative of the energy projection of one live row, ``out[a, q] =
+    d p_a / d t_q * k_q`` (the chain rule through the trial ``k * relative``), at the trial
+    ``t`` (6,) whose projection is ``p`` (6,) and flags ``flag``; ``g`` (9, 6) is scratch;
+    ``fd_step`` is the relative step of the forward difference (see
+    :func:`_nb_contact_tangent`).
+
+    The rocking clip gives m' = sign(m) (ft - fn) l / 2. A sliding row is differentiated
+    through its closest point: on the curve (z/b)^alpha + (r/a)^2 = 1 written as
+    (a R(theta), b Z(theta)), the stationarity of the distance to (r0, z0),
+    ``phi = (a R - r0) a R' + (b Z - z0) b Z' = 0``, gives d theta by the implicit function
+    theorem; a = mu (ft - fn) and b = cT(l1', l2') a / rho carry the capacities' dependence on
+    fn, m1 and m2 (the reduced sides of the torsion-bending interaction).
+    Returns False, with ``out`` undefined, where the row needs the finite difference: zero
+    capacity, alpha = 1 (a vertex), no shear (r0 = 0), capacities near the subnormal range,
+    or a projection that is not the closest point (the radial fallback)."""
+    f1 = t[0]
+    f2 = t[1]
+    fn = t[2]
+    m1 = t[3]
+    m2 = t[4]
+    m3 = t[5]
+    if flag & FLAG_DETACHED:
+        return _nb_contact_tangent(t, fti, mu, l1, l2, al, snap1, snap2, k, fd_step, out)
+    cap = fti - fn
+    if not cap > 0.0 or not al > 1.0:
+        return False
+    for a in range(6):
+        for q in range(6):
+            out[a, q] = 0.0
+        out[a, a] = 1.0
+    # a moment at its rocking limit to round-off (a hinge pinned there by the mechanism)
+    # takes the elastic side, as a shear within SHEAR_TORSION_TOLERANCE of Eq. (A5) does: the
+    # rocking side's zero stiffness made S34 take 3.5x the iterations
+    lean = 1.0 + SHEAR_TORSION_TOLERANCE
+    rock1 = (flag & FLAG_ROCKING_1) > 0 and abs(m1) > lean * (0.5 * cap * l2)
+    rock2 = (flag & FLAG_ROCKING_2) > 0 and abs(m2) > lean * (0.5 * cap * l1)
+    sign1 = math.copysign(1.0, m1)  # +0: the forward difference's side
+    sign2 = math.copysign(1.0, m2)
+    if rock1:  # m1' = sign(m1) (ft - fn) l2 / 2
+        out[3, 3] = 0.0
+        out[3, 2] = -sign1 * 0.5 * l2
+    if rock2:
+        out[4, 4] = 0.0
+        out[4, 2] = -sign2 * 0.5 * l1
+    if flag & FLAG_SHEAR_TORSION:
+        fsu = mu * cap
+        r0 = math.hypot(f1, f2)
+        if fsu < _TINY_CAPACITY or not r0 > 0.0:
+            return False
+        rho = math.sqrt((l1 * l1 + l2 * l2) / 12.0)
+        # gradients over the six trial actions: 0 cap, 1 |m1'|, 2 |m2'|, 3 l1', 4 l2',
+        # 5 a, 6 b, 7 r0, 8 z0
+        for j in range(9):
+            for q in range(6):
+                g[j, q] = 0.0
+        g[0, 2] = -1.0
+        abs_m1c = abs(p[3])
+        abs_m2c = abs(p[4])
+        if rock1:
+            g[1, 2] = -0.5 * l2
+        else:
+            g[1, 3] = sign1
+        if rock2:
+            g[2, 2] = -0.5 * l1
+        else:
+            g[2, 4] = sign2
+        l1r = min(l1 - 2.0 * abs_m2c / cap, l1)
+        l2r = min(l2 - 2.0 * abs_m1c / cap, l2)
+        pinned1 = l1r <= snap1  # snapped to zero: stays there under a small change
+        pinned2 = l2r <= snap2
+        if pinned1:
+            l1r = 0.0
+        if pinned2:
+            l2r = 0.0
+        for q in range(6):
+            if not pinned1:
+                g[3, q] = -2.0 * g[2, q] / cap + 2.0 * abs_m2c / (cap * cap) * g[0, q]
+            if not pinned2:
+                g[4, q] = -2.0 * g[1, q] / cap + 2.0 * abs_m1c / (cap * cap) * g[0, q]
+        c_t = _nb_torsion_constant(l1r, l2r)
+        d1 = _nb_torsion_constant_slope(l1r, l2r)
+        d2 = _nb_torsion_constant_slope(l2r, l1r)
+        big_a = fsu
+        big_b = c_t * fsu / rho
+        for q in range(6):
+            g[5, q] = mu * g[0, q]
+            g[6, q] = (fsu * (d1 * g[3, q] + d2 * g[4, q]) + c_t * g[5, q]) / rho
+        g[7, 0] = f1 / r0
+        g[7, 1] = f2 / r0
+        sign3 = math.copysign(1.0, m3)
+        g[8, 5] = sign3 / rho
+        z0 = abs(m3) / rho
+        r = math.hypot(p[0], p[1])
+        z = abs(p[5]) / rho
+        if big_b == 0.0:  # no torsion capacity (on a corner): torsion dropped, |f| <= a
+            for q in range(6):
+                out[5, q] = 0.0
+            if r0 > big_a:  # f' = f a / r0
+                for a in range(2):
+                    fa = t[a]
+                    for q in range(6):
+                        out[a, q] = fa * (g[5, q] / r0 - big_a * g[7, q] / (r0 * r0))
+                    out[a, a] += big_a / r0
+        else:
+            unit_r = r / big_a
+            unit_z = z / big_b
+            if z0 == 0.0:  # pure shear: the radial return, at (a, 0) of the same curve
+                unit_r = 1.0
+                unit_z = 0.0
+            elif not abs(unit_z**al + unit_r * unit_r - 1.0) <= 1e-9:
+                return False  # not on the curve
+            if unit_z**al <= 0.5:  # shear half, theta = Z: R = sqrt(1 - Z^alpha)
+                za = unit_z ** (al - 1.0)
+                rp = -0.5 * al * za / unit_r
+                rpp = -0.5 * al * (al - 1.0) * unit_z ** (al - 2.0) / unit_r + (
+                    0.5 * al * za * rp / (unit_r * unit_r)
+                )
+                zp = 1.0
+                zpp = 0.0
+            else:  # torsion half, theta = R: Z = (1 - R^2)^(1/alpha)
+                w = 1.0 - unit_r * unit_r
+                pw = 1.0 / al
+                rp = 1.0
+                rpp = 0.0
+                zp = -2.0 * pw * unit_r * w ** (pw - 1.0)
+                zpp = -2.0 * pw * w ** (pw - 1.0) + 4.0 * pw * (pw - 1.0) * unit_r * unit_r * w ** (
+                    pw - 2.0
+                )
+            res_r = big_a * unit_r - r0
+            res_z = big_b * unit_z - z0
+            # the closest point, not the radial fallback of an energy return that failed:
+            # the correction is normal to the curve
+            tan_r = big_a * rp
+            tan_z = big_b * zp
+            dot = res_r * tan_r + res_z * tan_z
+            if z0 > 0.0 and not abs(dot) <= 1e-6 * math.hypot(res_r, res_z) * math.hypot(
+                tan_r, tan_z
+            ):
+                return False
+            phi_t = (
+                big_a * big_a * rp * rp + res_r * big_a * rpp + big_b * big_b * zp * zp
+            ) + res_z * big_b * zpp
+            if not (phi_t > 0.0 and math.isfinite(phi_t)) and not phi_t == math.inf:
+                return False
+            for q in range(6):
+                dphi = (
+                    -big_a * rp * g[7, q]
+                    - big_b * zp * g[8, q]
+                    + (2.0 * big_a * unit_r - r0) * rp * g[5, q]
+                    + (2.0 * big_b * unit_z - z0) * zp * g[6, q]
+                )
+                dtheta = -dphi / phi_t  # 0 where the curvature is infinite (phi_t = inf)
+                dr = unit_r * g[5, q] + big_a * rp * dtheta
+                dz = unit_z * g[6, q] + big_b * zp * dtheta
+                # f' = f r / r0, m3' = sign(m3) rho z
+                out[0, q] = f1 * (dr / r0 - r * g[7, q] / (r0 * r0))
+                out[1, q] = f2 * (dr / r0 - r * g[7, q] / (r0 * r0))
+                out[5, q] = sign3 * rho * dz
+            out[0, 0] += r / r0
+            out[1, 1] += r / r0
+    for a in range(6):
+        for q in range(6):
+            out[a, q] *= k[q]
+    for a in range(6):
+        for q in range(6):
+            if not math.isfinite(out[a, q]):
+                return False
+    return True
+
+
 # the interface law's kernels (masonry_dem.constitutive.law), here beside the check they call:
 # numba's disk cache is renewed when a function's own file changes, not its callees' files
 
@@ -1005,28 +1258,47 @@ def _nb_forces(
 
 @_jit
 def _nb_law_tangent(
-    trial, ft, flags, k, floor, contact_band, fd_step, l1, l2, friction, alpha, snap1, snap2, energy
-):
-    """:meth:`InterfaceLaw.tangent` in one compiled call (the operations of its batched numpy
-    version, so the same bits): diag(kbar), zero for open joints, the forward difference of
-    the projection at yielded rows (taken at the contact side), and floor x kbar."""
+    trial, ft, flags, actions, k, floor, contact_band, fd_step, l1, l2, friction, alpha, snap1,
+    snap2, energy, analytic,
+):  # fmt: skip
+    """:meth:`InterfaceLaw.tangent` in one compiled call: diag(kbar), zero for open joints,
+    the derivative of the projection at yielded rows (taken at the contact side) and floor x
+    kbar. The derivative is analytic (:func:`_nb_row_tangent`) where ``analytic`` and the row
+    allows it, else the forward difference (the operations of the batched numpy version, so
+    the same bits)."""
     m = k.shape[0]
     T = np.zeros((m, 6, 6))
     peak = 0.0
     for i in range(m):
         peak = max(peak, abs(trial[i, 2]))
     band = contact_band * peak
+    block = np.empty((6, 6))
+    scratch = np.empty((9, 6))
+    differenced = np.zeros(m, np.bool_)
     count = 0
     for i in range(m):
         open_ = trial[i, 2] > ft[i] + band
         for j in range(6):
             T[i, j, j] = 0.0 if open_ else k[i, j]
-        if flags[i] > 0 and not open_:
+        if flags[i] == 0 or open_:
+            continue
+        done = analytic and energy and _nb_row_tangent(
+            trial[i], actions[i], ft[i], l1[i], l2[i], friction[i], alpha[i], snap1[i],
+            snap2[i], flags[i], k[i], fd_step, block, scratch,
+        )  # fmt: skip
+        # (a detached row in the contact band is taken at fn = ft: _nb_contact_tangent reads
+        # neither its fn nor its actions)
+        if done:
+            for a in range(6):
+                for b in range(6):
+                    T[i, a, b] = block[a, b]
+        else:
+            differenced[i] = True
             count += 1
     rows = np.empty(count, np.int64)
     count = 0
     for i in range(m):
-        if flags[i] > 0 and not trial[i, 2] > ft[i] + band:
+        if differenced[i]:
             rows[count] = i
             count += 1
     if count:

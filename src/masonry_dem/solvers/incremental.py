@@ -48,7 +48,13 @@ from scipy.sparse.linalg import splu
 
 from masonry_dem._threads import kernel_threads_for
 from masonry_dem.assembly.stiffness import Assembly
-from masonry_dem.constitutive.law import MEMORY, TENSION, InterfaceLaw, LawResponse
+from masonry_dem.constitutive.law import (
+    MEMORY,
+    TANGENT_METHODS,
+    TENSION,
+    InterfaceLaw,
+    LawResponse,
+)
 from masonry_dem.model import Model
 from masonry_dem.results import History, StepResult
 from masonry_dem.solvers.multifrontal import Symbolic, ZeroPivot
@@ -149,6 +155,11 @@ class StaticSettings:
         has found a mechanism.
     tension, memory: interface law options (see :mod:`masonry_dem.constitutive.law`).
     residual_stiffness: fraction of the elastic stiffness kept on the diagonal of the tangent.
+    tangent: how the tangent of yielded joints is computed (see
+        :meth:`~masonry_dem.constitutive.law.InterfaceLaw.tangent`): ``"analytic"``
+        (default; the closed-form derivative of the return, 1.4x faster on S15 than
+        ``"difference"``, the forward difference of every yielded joint, with the same
+        lambdas to 1e-6).
     robust_iterations: budget of the second strategy (initial-stiffness iterations with
         Anderson acceleration) that re-tries a load step Newton could not solve; 0 (default)
         disables it. Since work control takes over at the first failure it changes no
@@ -190,6 +201,7 @@ class StaticSettings:
     tension: str = "brittle"
     memory: str = "none"
     residual_stiffness: float = 1e-9
+    tangent: str = "analytic"
     robust_iterations: int = 0
     continuation: str = "work"
     rescue_time_steps: int = 0
@@ -229,6 +241,8 @@ class StaticSettings:
             raise ValueError(f"tension must be one of {TENSION}, got {self.tension!r}")
         if self.memory not in MEMORY:
             raise ValueError(f"memory must be one of {MEMORY}, got {self.memory!r}")
+        if self.tangent not in TANGENT_METHODS:
+            raise ValueError(f"tangent must be one of {TANGENT_METHODS}, got {self.tangent!r}")
         if self.continuation not in CONTINUATION:
             raise ValueError(
                 f"continuation must be one of {CONTINUATION}, got {self.continuation!r}"
@@ -432,7 +446,7 @@ class StaticSolver:
         where a pivot is zero."""
         if floor is None:
             floor = self.settings.residual_stiffness
-        T = self.law.tangent(response, floor)
+        T = self.law.tangent(response, floor, self.settings.tangent)
         data = self._tangents.data(T)
         self.factorizations += 1
         ordered = self._tangents.order is not None
