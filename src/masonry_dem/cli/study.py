@@ -50,6 +50,7 @@ STATIC_GRID: tuple[tuple[str, dict], ...] = (
     ("DR rescue 4000", {"rescue_time_steps": 4000}),
     ("DR rescue 16000", {"rescue_time_steps": 16_000}),
     ("modified iteration", {"iteration": "modified"}),
+    ("difference tangent", {"tangent": "difference"}),
 )
 DR_GRID: tuple[tuple[str, dict], ...] = (
     ("default", {}),
