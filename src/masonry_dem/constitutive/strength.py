@@ -1176,7 +1176,7 @@ def _nb_row_tangent(t, p, fti, l1, l2, mu, al, snap1, snap2, flag, k, fd_step, o
             phi_t = (
                 big_a * big_a * rp * rp + res_r * big_a * rpp + big_b * big_b * zp * zp
             ) + res_z * big_b * zpp
-            if not (phi_t > 0.0 and math.isfinite(phi_t)) and not phi_t == math.inf:
+            if not phi_t > 0.0:  # (+inf is fine: infinite curvature, d theta = 0)
                 return False
             for q in range(6):
                 dphi = (
