@@ -133,21 +133,22 @@ def test_peak_does_not_depend_on_the_bracket_tolerance(panel_lambda, bracket):
 def test_kept_factorization_while_creeping_changes_nothing(panel_lambda, monkeypatch):
     """Where work control creeps along a fold (steps of 1e-10 of the Newton correction, no
     joint changing state) the factorized tangent is kept instead of refactored: the same
-    peak (bit for bit on this machine), and about half the factorizations on this panel
-    (searches left to creep as long as the trust radius allows, as before the cap on cuts):
-    293 against 551 with the analytic tangent (295 against 661 with the forward-difference
-    one, whose refactored path took more Newton steps)."""
+    peak (bit for bit on this machine), and fewer than half the factorizations on this panel
+    (searches left to creep as long as the trust radius allows, as before the cap on cuts),
+    on the path this was measured on: the forward-difference tangent, 295 against 661. (With
+    the analytic tangent the refactored path itself takes fewer steps: 293 against 551.)"""
     from masonry_dem.solvers import incremental
 
     monkeypatch.setattr(incremental, "_SEARCH_CUTS", 10**6)
     monkeypatch.setattr(incremental, "_RESUME_STEP", 1.0)  # the path this was measured on
-    kept = pushover(_panel(), StaticSettings())
+    measured_on = StaticSettings(tangent="difference")
+    kept = pushover(_panel(), measured_on)
     monkeypatch.setattr(incremental, "_CREEP", 0.0)  # refactor after every step
-    refactored = pushover(_panel(), StaticSettings())
+    refactored = pushover(_panel(), measured_on)
     assert kept.collapse_multiplier == pytest.approx(refactored.collapse_multiplier, rel=1e-9)
     # the default path resumes with half a step after a fold: the same peak within the bracket
     assert kept.collapse_multiplier == pytest.approx(panel_lambda, rel=TOL)
-    assert kept.factorizations < 0.6 * refactored.factorizations
+    assert kept.factorizations < 0.5 * refactored.factorizations
 
 
 def test_a_search_that_keeps_cutting_gives_up_without_changing_the_answer(monkeypatch):

@@ -719,6 +719,25 @@ def _nb_energy_closest_point(r0, z0, a, b, alpha, radial) -> tuple[float, float,
 
 
 @_jit
+def _nb_energy_radius(l1: float, l2: float) -> float:
+    """rho = sqrt(J / A) of an l1 x l2 rectangle: z = |m3| / rho puts torsion in the units of
+    shear so that distance in (|f|, z) is the elastic energy of a correction (kt A, kt J)."""
+    return math.sqrt((l1 * l1 + l2 * l2) / 12.0)
+
+
+@_jit
+def _nb_reduced_side(side: float, abs_moment: float, cap: float, snap: float) -> float:
+    """Side of the rectangle of uniform compression ``cap`` carrying the bending moment
+    ``abs_moment`` about the other axis (:func:`_reduced_sides` of one row): zero at or
+    below ``snap`` (a moment clipped to its rocking limit leaves round-off)."""
+    reduced = side - 2.0 * abs_moment / cap
+    reduced = min(reduced, side)
+    if reduced <= snap:
+        reduced = 0.0
+    return reduced
+
+
+@_jit
 def _nb_evaluate_row(
     i,
     act,
@@ -771,14 +790,8 @@ def _nb_evaluate_row(
     m3u = 0.0
     if abs_m3 > 0 and cap > 0:
         if torsion_bending_interaction:
-            l1r = l1[i] - 2.0 * abs_m2c / cap
-            l2r = l2[i] - 2.0 * abs_m1c / cap
-            l1r = min(l1r, l1[i])
-            l2r = min(l2r, l2[i])
-            if l1r <= snap1[i]:
-                l1r = 0.0
-            if l2r <= snap2[i]:
-                l2r = 0.0
+            l1r = _nb_reduced_side(l1[i], abs_m2c, cap, snap1[i])
+            l2r = _nb_reduced_side(l2[i], abs_m1c, cap, snap2[i])
             c_t = _nb_torsion_constant(l1r, l2r)
         else:
             c_t = _nb_torsion_constant(l1[i], l2[i])
@@ -812,7 +825,7 @@ def _nb_evaluate_row(
         proj[i, 1] *= s
         proj[i, 5] *= s
     elif sliding:
-        rho = math.sqrt((l1[i] * l1[i] + l2[i] * l2[i]) / 12.0)  # sqrt(J / A)
+        rho = _nb_energy_radius(l1[i], l2[i])
         r, z, ok = _nb_energy_closest_point(shear, abs_m3 / rho, fsu, m3u / rho, al, s)
         n_energy += 0 if ok else 1
         shear_scale = _nb_safe_ratio(r, shear)
@@ -952,6 +965,23 @@ def _nb_fd_tangent(
 
 
 @_jit
+def _nb_contact_side(trial, fti, fd_step, t, h) -> None:
+    """The point ``t`` (6,) where the tangent of a row is taken, and the forward difference's
+    steps ``h`` (6,) there: the trial with fn at most ft (a joint in the contact band is
+    differentiated on the contact side), steps of ``fd_step`` of each action plus 1e-2 of the
+    row's largest, the one along fn towards compression."""
+    big = 0.0
+    for j in range(6):
+        t[j] = trial[j]
+    t[2] = min(t[2], fti)
+    for j in range(6):
+        big = max(big, abs(t[j]))
+    for j in range(6):
+        h[j] = fd_step * (abs(t[j]) + 1e-2 * big) + 1e-300
+    h[2] = -h[2]
+
+
+@_jit
 def _nb_torsion_constant_slope(l1: float, l2: float) -> float:
     """d cT / d l1 of an ``l1 x l2`` rectangle (sides >= 0): with x = l2 / l1,
     ``(1/3) [(sqrt(1 + x^2) - x^2 asinh(1/x)) / 4 + asinh(x) / (2 x)]``; 1/4 at x = 0 (a
@@ -970,7 +1000,7 @@ def _nb_torsion_constant_slope(l1: float, l2: float) -> float:
 
 
 @_jit
-def _nb_contact_tangent(t, fti, mu, l1, l2, al, snap1, snap2, k, fd_step, out) -> bool:
+def _nb_contact_tangent(t, fti, mu, l1, l2, al, snap1, snap2, k, fd_step, out, g) -> bool:
     """Derivative of the projection of a detached joint in the contact band, taken at zero
     capacity (fn = ft) towards compression: only fn moves it, and every action it returns
     grows in proportion to a small capacity ``cap = ft - fn``.
@@ -984,15 +1014,13 @@ def _nb_contact_tangent(t, fti, mu, l1, l2, al, snap1, snap2, k, fd_step, out) -
     v = z0 cT mu / rho, the point (R, Z) of Z^alpha + R^2 = 1 that maximises u R + v Z,
     R = s u / 2, Z = (s v / alpha)^(1/(alpha-1)) with s from (s u/2)^2 + (s v/alpha)^beta = 1,
     beta = alpha / (alpha - 1) (the radial factor's equation). False (differenced) for
-    alpha = 1. ``out`` as :func:`_nb_row_tangent`."""
+    alpha = 1. ``out`` and the scratch ``g`` as :func:`_nb_row_tangent`."""
     if not al > 1.0:
         return False
     m1 = t[3]
     m2 = t[4]
-    big = abs(fti)
-    for j in (0, 1, 3, 4, 5):
-        big = max(big, abs(t[j]))
-    probe = fd_step * (abs(fti) + 1e-2 * big)
+    _nb_contact_side(t, fti, fd_step, g[0], g[1])
+    probe = -g[1, 2]
     rock1 = abs(m1) > probe * 0.5 * l2
     rock2 = abs(m2) > probe * 0.5 * l1
     for a in range(6):
@@ -1004,14 +1032,10 @@ def _nb_contact_tangent(t, fti, mu, l1, l2, al, snap1, snap2, k, fd_step, out) -
         out[3, 2] = -math.copysign(0.5 * l2, m1) * k2
     if rock2:
         out[4, 2] = -math.copysign(0.5 * l1, m2) * k2
-    l1r = 0.0 if rock2 else min(l1 - 2.0 * abs(m2) / probe, l1)
-    l2r = 0.0 if rock1 else min(l2 - 2.0 * abs(m1) / probe, l2)
-    if l1r <= snap1:
-        l1r = 0.0
-    if l2r <= snap2:
-        l2r = 0.0
+    l1r = 0.0 if rock2 else _nb_reduced_side(l1, abs(m2), probe, snap1)
+    l2r = 0.0 if rock1 else _nb_reduced_side(l2, abs(m1), probe, snap2)
     c_t = _nb_torsion_constant(l1r, l2r)
-    rho = math.sqrt((l1 * l1 + l2 * l2) / 12.0)
+    rho = _nb_energy_radius(l1, l2)
     r0 = math.hypot(t[0], t[1])
     u = r0 * mu
     v = abs(t[5]) / rho * c_t * mu / rho
@@ -1056,7 +1080,7 @@ def _nb_row_tangent(t, p, fti, l1, l2, mu, al, snap1, snap2, flag, k, fd_step, o
     m2 = t[4]
     m3 = t[5]
     if flag & FLAG_DETACHED:
-        return _nb_contact_tangent(t, fti, mu, l1, l2, al, snap1, snap2, k, fd_step, out)
+        return _nb_contact_tangent(t, fti, mu, l1, l2, al, snap1, snap2, k, fd_step, out, g)
     cap = fti - fn
     if not cap > 0.0 or not al > 1.0:
         return False
@@ -1083,7 +1107,7 @@ def _nb_row_tangent(t, p, fti, l1, l2, mu, al, snap1, snap2, flag, k, fd_step, o
         r0 = math.hypot(f1, f2)
         if fsu < _TINY_CAPACITY or not r0 > 0.0:
             return False
-        rho = math.sqrt((l1 * l1 + l2 * l2) / 12.0)
+        rho = _nb_energy_radius(l1, l2)
         # gradients over the six trial actions: 0 cap, 1 |m1'|, 2 |m2'|, 3 l1', 4 l2',
         # 5 a, 6 b, 7 r0, 8 z0
         for j in range(9):
@@ -1100,14 +1124,10 @@ def _nb_row_tangent(t, p, fti, l1, l2, mu, al, snap1, snap2, flag, k, fd_step, o
             g[2, 2] = -0.5 * l1
         else:
             g[2, 4] = sign2
-        l1r = min(l1 - 2.0 * abs_m2c / cap, l1)
-        l2r = min(l2 - 2.0 * abs_m1c / cap, l2)
-        pinned1 = l1r <= snap1  # snapped to zero: stays there under a small change
-        pinned2 = l2r <= snap2
-        if pinned1:
-            l1r = 0.0
-        if pinned2:
-            l2r = 0.0
+        l1r = _nb_reduced_side(l1, abs_m2c, cap, snap1)
+        l2r = _nb_reduced_side(l2, abs_m1c, cap, snap2)
+        pinned1 = l1r == 0.0  # snapped to zero: stays there under a small change
+        pinned2 = l2r == 0.0
         for q in range(6):
             if not pinned1:
                 g[3, q] = -2.0 * g[2, q] / cap + 2.0 * abs_m2c / (cap * cap) * g[0, q]
@@ -1197,8 +1217,6 @@ def _nb_row_tangent(t, p, fti, l1, l2, mu, al, snap1, snap2, flag, k, fd_step, o
     for a in range(6):
         for q in range(6):
             out[a, q] *= k[q]
-    for a in range(6):
-        for q in range(6):
             if not math.isfinite(out[a, q]):
                 return False
     return True
@@ -1309,16 +1327,9 @@ def _nb_law_tangent(
         normal_only = np.empty(count, np.bool_)
         for r in range(count):
             i = rows[r]
-            big = 0.0
             for j in range(6):
-                t[r, j] = trial[i, j]
                 k_rows[r, j] = k[i, j]
-            t[r, 2] = min(t[r, 2], ft[i])  # in the contact band: at the contact side
-            for j in range(6):
-                big = max(big, abs(t[r, j]))
-            for j in range(6):
-                h[r, j] = fd_step * (abs(t[r, j]) + 1e-2 * big) + 1e-300
-            h[r, 2] = -h[r, 2]  # perturb the normal force towards compression
+            _nb_contact_side(trial[i], ft[i], fd_step, t[r], h[r])
             ft_rows[r] = ft[i]
             # detached joints in the contact band sit at zero capacity (fn = ft): only fn
             # moves their projection
