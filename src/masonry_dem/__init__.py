@@ -27,6 +27,7 @@ from masonry_dem.geometry.builders import (
     single_block,
     stack_bond_column,
 )
+from masonry_dem.geometry.interfaces import detect_interfaces, subdivide_interfaces
 from masonry_dem.model import (
     InterfaceMaterial,
     Model,
@@ -55,6 +56,7 @@ __all__ = [
     "add_base",
     "boxes",
     "cut_openings",
+    "detect_interfaces",
     "pushover",
     "running_bond_wall",
     "running_bond_wall_of_size",
@@ -62,4 +64,5 @@ __all__ = [
     "single_block",
     "solve_linear",
     "stack_bond_column",
+    "subdivide_interfaces",
 ]
