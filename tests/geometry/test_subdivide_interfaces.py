@@ -10,9 +10,11 @@ pieces make blocks rock about their edges as rigid blocks do:
   longer than the gap, so a rigid block must lift the plate to turn. With one interface per
   joint the law turns it about the joint centres (no lift) at the free-standing b/h; cut into
   pieces it carries three times that (and any load, in the rigid limit);
-* the in-plane peer wall (issue 18): cut into pieces it lands in LMGC90's bracket
+* the in-plane peer wall (issue 18): cut into pieces it collapses as the rigid wedge of its
+  right end tipping about its toe (11/19 = 0.5789, closed form), inside LMGC90's bracket
   [0.575, 0.580] g and below the associative rigid-block bound (an LP solved here), where one
-  interface per joint gives 0.546 (``docs/peer_wall.md``).
+  interface per joint gives 0.546 with its blocks turning about the joint centres
+  (``docs/peer_wall.md``).
 """
 
 from __future__ import annotations
@@ -210,15 +212,47 @@ def associative_bound(model: md.Model) -> float:
     return float(-res.fun)
 
 
-@pytest.mark.parametrize("pieces", [(1, 2), (2, 2)])
-def test_peer_wall_in_pieces_lands_in_lmgc90_bracket(pieces):
+def wedge_overturning() -> float:
+    """The rigid stair-stepped wedge of the right end turning about its toe.
+
+    The wedge: the half block of course 1 and the blocks above it along the diagonal, nine
+    blocks (x, y; weight in half blocks): (1.9, 0.3; 1), (1.8, 0.5; 2), (1.6, 0.7; 2),
+    (1.9, 0.7; 1), (1.4, 0.9; 2), (1.8, 0.9; 2), (1.2, 1.1; 2), (1.6, 1.1; 2), (1.9, 1.1; 1).
+    Its centroid is (24.5 / 15, 12.5 / 15); with the crack open along its whole boundary it
+    tips about the toe (2.0, 0.2) when lambda = (x0 - xg) / (yg - y0) = (11/30) / (19/30).
+    """
+    x = np.array([1.9, 1.8, 1.6, 1.9, 1.4, 1.8, 1.2, 1.6, 1.9])
+    y = np.array([0.3, 0.5, 0.7, 0.7, 0.9, 0.9, 1.1, 1.1, 1.1])
+    w = np.array([1, 2, 2, 1, 2, 2, 2, 2, 1], dtype=float)
+    xg, yg = (w @ x) / w.sum(), (w @ y) / w.sum()
+    return (2.0 - xg) / (yg - 0.2)
+
+
+@pytest.mark.parametrize("pieces", [(1, 2), (2, 2), (1, 4)])
+def test_peer_wall_in_pieces_tips_the_rigid_wedge(pieces):
+    """Cut in pieces, the wall collapses by the rigid wedge tipping about its toe (11/19), inside
+    LMGC90's bracket and under the associative bound of the LP (0.584 in the issue)."""
+    assert wedge_overturning() == pytest.approx(11 / 19, rel=1e-12)
     bound = associative_bound(peer_wall())
-    assert bound == pytest.approx(0.584, abs=5e-4)  # the issue's associative LP
+    assert bound == pytest.approx(0.584, abs=5e-4)
     history = md.pushover(peer_wall(pieces))
     assert history.status == "collapse"
     lam = history.collapse_multiplier
+    assert lam == pytest.approx(wedge_overturning(), rel=1e-4)
     assert LMGC90_BRACKET[0] <= lam <= LMGC90_BRACKET[1]
     assert lam <= bound
+    # the mode: the nine blocks of the wedge turn together (one w3), the rest stay
+    dq = history.steps[-1].q - history.steps[-2].q
+    moving = np.flatnonzero(np.abs(dq[:, :3]).max(axis=1) > 1e-3 * np.abs(dq[:, :3]).max())
+    centres = peer_wall().blocks.centres[moving, :2]
+    assert sorted(map(tuple, np.round(centres, 2))) == sorted(
+        zip(
+            [1.9, 1.8, 1.6, 1.9, 1.4, 1.8, 1.2, 1.6, 1.9],
+            [0.3, 0.5, 0.7, 0.7, 0.9, 0.9, 1.1, 1.1, 1.1],
+            strict=True,
+        )
+    )
+    np.testing.assert_allclose(dq[moving, 5], dq[moving[0], 5], rtol=1e-3)
 
 
 def test_peer_wall_whole_joints_rock_about_their_centres():
@@ -227,6 +261,12 @@ def test_peer_wall_whole_joints_rock_about_their_centres():
     history = md.pushover(peer_wall())
     assert history.status == "collapse"
     assert history.collapse_multiplier < 0.96 * LMGC90_BRACKET[0]
+    assert history.collapse_multiplier < 0.95 * wedge_overturning()
+    # its mode is no rigid wedge: blocks of it turn the other way (about their joint centres)
+    dq = history.steps[-1].q - history.steps[-2].q
+    moving = np.abs(dq[:, :3]).max(axis=1) > 1e-3 * np.abs(dq[:, :3]).max()
+    w3 = dq[moving, 5]
+    assert w3.max() > 0.1 * np.abs(w3).max() and w3.min() < -0.1 * np.abs(w3).max()
     assert associative_bound(peer_wall((2, 2))) == pytest.approx(
         associative_bound(peer_wall()), rel=1e-6
     )
