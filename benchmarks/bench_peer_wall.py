@@ -4,6 +4,8 @@
     python benchmarks/bench_peer_wall.py --no-peers           # package and LP only
     python benchmarks/bench_peer_wall.py --dr                 # dynamic relaxation as well
     python benchmarks/bench_peer_wall.py --mechanism --no-peers   # the two collapse modes
+    python benchmarks/bench_peer_wall.py --pieces --no-peers      # lambda against pieces
+    python benchmarks/bench_peer_wall.py --validation --no-peers  # Tables 1-3 in pieces
     python benchmarks/bench_peer_wall.py --peer-python /work/peer-venv/bin/python
 
 The wall: 5 x 6 running bond of 0.4 x 0.2 x 0.2 m blocks (half blocks at both ends of every
@@ -64,6 +66,77 @@ def package_model(pieces=(1, 1)):
         interfaces=md.subdivide_interfaces(md.detect_interfaces(blocks), *pieces),
         name=f"peer wall, joints in {pieces[0]} x {pieces[1]}",
     )
+
+
+def in_plane_pieces(interfaces, k: int):
+    """Every joint cut into ``k`` pieces along its side in the plane of the wall (e1 for bed
+    joints, e2 for head joints), none across the thickness."""
+    import masonry_dem as md
+    from masonry_dem.geometry.interfaces import Interfaces
+
+    bed = md.subdivide_interfaces(interfaces.subset(np.flatnonzero(interfaces.axis == 1)), 1, k)
+    head = md.subdivide_interfaces(interfaces.subset(np.flatnonzero(interfaces.axis == 0)), k, 1)
+    return Interfaces(
+        *(
+            np.concatenate([getattr(bed, f), getattr(head, f)])
+            for f in Interfaces.__dataclass_fields__
+        )
+    )
+
+
+def print_pieces_sweep() -> None:
+    """lambda against the number of pieces along the in-plane side, for two ratios kt/kn."""
+    import masonry_dem as md
+    from masonry_dem.solvers.incremental import pushover
+
+    wall = md.running_bond_wall(N_ALONG, COURSES, a=A, b=B, s=S, unit_weight=DENSITY * G)
+    blocks, base = md.add_base(wall)
+    print(f"{'pieces':>6} {'kt/kn':>6} {'lambda':>8} {'seconds':>8}  status")
+    for k in (1, 2, 3, 4, 5, 6, 8, 12):
+        for ratio in (0.4, 0.1):
+            model = md.Model.build(
+                blocks,
+                md.InterfaceMaterial(kn=1e9, kt=ratio * 1e9, friction=FRICTION),
+                [md.Support([base])],
+                [md.SelfWeight(), md.WeightProportional(direction=(1.0, 0.0, 0.0))],
+                interfaces=in_plane_pieces(md.detect_interfaces(blocks), k),
+            )
+            t0 = time.perf_counter()
+            history = pushover(model)
+            seconds = time.perf_counter() - t0
+            lam = history.collapse_multiplier
+            value = "-" if lam is None else f"{lam:.4f}"
+            print(f"{k:6d} {ratio:6.1f} {value:>8} {seconds:8.2f}  {history.status}")
+
+
+def print_validation_in_pieces() -> None:
+    """The paper's validation cases with whole joints and with every joint in 2 x 2 pieces."""
+    from dataclasses import replace
+
+    import masonry_dem as md
+    from masonry_dem.cases.paper import build_case, case_names
+    from masonry_dem.solvers.incremental import pushover
+
+    print(f"{'case':6} {'whole':>9} {'2x2':>9} {'paper DEM':>9} {'reference':>9}  status 2x2")
+    for name in case_names():
+        case = build_case(name)
+        whole = pushover(case.model, case.settings).collapse_multiplier
+        m = case.model
+        cut = replace(
+            m,
+            interfaces=md.subdivide_interfaces(m.interfaces, 2, 2),
+            **{
+                f: np.repeat(getattr(m, f), 4)
+                for f in ("kn", "kt", "friction", "tensile_strength", "alpha")
+            },
+        )
+        history = pushover(cut, case.settings)
+        lam = history.collapse_multiplier
+        print(
+            f"{name:6} {whole!s:>9.7} {lam!s:>9.7} {case.paper_dem:9.4g} {case.reference:9.4g}"
+            f"  {history.status}",
+            flush=True,
+        )
 
 
 def associative_lp(model) -> float:
@@ -328,6 +401,10 @@ def main() -> int:
     p.add_argument("--no-peers", action="store_true", help="skip LMGC90 and CRA")
     p.add_argument("--dr", action="store_true", help="dynamic relaxation too (about 30 s)")
     p.add_argument("--mechanism", action="store_true", help="print the two collapse modes")
+    p.add_argument("--pieces", action="store_true", help="lambda against the number of pieces")
+    p.add_argument(
+        "--validation", action="store_true", help="the validation cases in 2 x 2 pieces (minutes)"
+    )
     p.add_argument("--peer-python", default=os.environ.get("PEER_PYTHON", DEFAULT_PEER_PYTHON))
     p.add_argument("--low", type=float, default=0.55, help="LMGC90 bracket: a stable lambda")
     p.add_argument("--high", type=float, default=0.60, help="LMGC90 bracket: a collapse")
@@ -341,6 +418,10 @@ def main() -> int:
     print(f"peer wall: {N_ALONG} x {COURSES} running bond, {B} x {A} x {S} m, mu {FRICTION}")
     if args.mechanism:
         print_mechanisms()
+    if args.pieces:
+        print_pieces_sweep()
+    if args.validation:
+        print_validation_in_pieces()
     rows = package_rows(args.dr)
     if not args.no_peers:
         rows += peer_rows(args.peer_python, args)
