@@ -428,7 +428,8 @@ def main() -> int:
     width = max(len(r[0]) for r in rows)
     print(f"{'method':{width}}  {'lambda [g]':>16}  {'seconds':>8}  note")
     for name, value, seconds, note in rows:
-        print(f"{name:{width}}  {value:>16}  {seconds:8.2f}  {note}")
+        time_text = "-" if np.isnan(seconds) else f"{seconds:.2f}"
+        print(f"{name:{width}}  {value:>16}  {time_text:>8}  {note}")
     return 0
 
 
