@@ -5,6 +5,7 @@
     python benchmarks/bench_peer_wall.py --dr                 # dynamic relaxation as well
     python benchmarks/bench_peer_wall.py --mechanism --no-peers   # the two collapse modes
     python benchmarks/bench_peer_wall.py --pieces --no-peers      # lambda against pieces
+    python benchmarks/bench_peer_wall.py --stiffness --no-peers   # whole joints, kn and kt
     python benchmarks/bench_peer_wall.py --validation --no-peers  # Tables 1-3 in pieces
     python benchmarks/bench_peer_wall.py --peer-python /work/peer-venv/bin/python
 
@@ -107,6 +108,27 @@ def print_pieces_sweep() -> None:
             lam = history.collapse_multiplier
             value = "-" if lam is None else f"{lam:.4f}"
             print(f"{k:6d} {ratio:6.1f} {value:>8} {seconds:8.2f}  {history.status}")
+
+
+def print_stiffness_sweep() -> None:
+    """lambda with whole joints for joint stiffnesses over four decades of kt/kn."""
+    import masonry_dem as md
+    from masonry_dem.solvers.incremental import pushover
+
+    wall = md.running_bond_wall(N_ALONG, COURSES, a=A, b=B, s=S, unit_weight=DENSITY * G)
+    blocks, base = md.add_base(wall)
+    print(f"{'kn':>8} {'kt':>8} {'lambda':>12}  status")
+    for kn, kt in ((1e9, 1e7), (1e9, 1e8), (1e9, 4e8), (1e9, 1e9), (1e9, 1e10), (1e11, 1e8)):
+        model = md.Model.build(
+            blocks,
+            md.InterfaceMaterial(kn=kn, kt=kt, friction=FRICTION),
+            [md.Support([base])],
+            [md.SelfWeight(), md.WeightProportional(direction=(1.0, 0.0, 0.0))],
+        )
+        history = pushover(model)
+        lam = history.collapse_multiplier
+        value = "-" if lam is None else f"{lam:.8f}"
+        print(f"{kn:8.0e} {kt:8.0e} {value:>12}  {history.status}")
 
 
 def print_validation_in_pieces() -> None:
@@ -402,6 +424,7 @@ def main() -> int:
     p.add_argument("--dr", action="store_true", help="dynamic relaxation too (about 30 s)")
     p.add_argument("--mechanism", action="store_true", help="print the two collapse modes")
     p.add_argument("--pieces", action="store_true", help="lambda against the number of pieces")
+    p.add_argument("--stiffness", action="store_true", help="whole joints, kn and kt swept")
     p.add_argument(
         "--validation", action="store_true", help="the validation cases in 2 x 2 pieces (minutes)"
     )
@@ -420,6 +443,8 @@ def main() -> int:
         print_mechanisms()
     if args.pieces:
         print_pieces_sweep()
+    if args.stiffness:
+        print_stiffness_sweep()
     if args.validation:
         print_validation_in_pieces()
     rows = package_rows(args.dr)
