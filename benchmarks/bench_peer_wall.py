@@ -292,8 +292,9 @@ def _peer_boxes() -> list[tuple[list[float], list[float]]]:
     return boxes
 
 
-def _lmgc90_run(lam: float, dt: float, t_rest: float, t_hold: float) -> float:
-    """Largest displacement of any block during the held lateral acceleration lambda g."""
+def _lmgc90_run(lam: float, dt: float, t_rest: float, t_hold: float) -> tuple[float, list]:
+    """Largest displacement of any block during the held lateral acceleration lambda g, and
+    the centres (x along, y up) of the blocks that moved more than a fifth of it (the mode)."""
     from compas_lmgc90.solver import Solver
 
     boxes = _peer_boxes()
@@ -327,16 +328,23 @@ def _lmgc90_run(lam: float, dt: float, t_rest: float, t_hold: float) -> float:
     at_rest = np.array([solver.last_result.bodies[i] for i in range(slab)])
     limit = 0.25 * min(A, B, S)
     moved = 0.0
+    each = np.zeros(slab)
     steps = int(round(t_hold / dt))
     for k in range(steps):
         solver.run(1)
         if k % 50 == 49 or k == steps - 1:
             now = np.array([solver.last_result.bodies[i] for i in range(slab)])
-            moved = float(np.abs(now - at_rest).max())
+            each = np.linalg.norm(now - at_rest, axis=1)
+            moved = float(each.max())
             if moved > limit:
                 break
     solver.finalize()
-    return moved
+    mode = [
+        [round(0.5 * (lo[0] + hi[0]), 3), round(0.5 * (lo[2] + hi[2]), 3)]
+        for (lo, hi), d in zip(boxes[:-1], each, strict=True)
+        if moved > 0 and d > 0.2 * moved
+    ]
+    return moved, mode
 
 
 def peer_lmgc90(low: float, high: float, width: float, dt: float) -> dict:
@@ -347,11 +355,13 @@ def peer_lmgc90(low: float, high: float, width: float, dt: float) -> dict:
     t0 = time.perf_counter()
     limit = 0.25 * min(A, B, S)
     runs = []
+    modes = {}
 
     def collapses(lam: float) -> bool:
         with contextlib.redirect_stdout(io.StringIO()):  # the wrapper prints progress
-            moved = _lmgc90_run(lam, dt, t_rest=0.5, t_hold=2.0)
+            moved, mode = _lmgc90_run(lam, dt, t_rest=0.5, t_hold=2.0)
         runs.append((lam, moved))
+        modes[lam] = mode
         return moved > limit
 
     if collapses(low) or not collapses(high):
@@ -362,7 +372,8 @@ def peer_lmgc90(low: float, high: float, width: float, dt: float) -> dict:
             high = mid
         else:
             low = mid
-    return {"bracket": [low, high], "seconds": time.perf_counter() - t0, "runs": runs}
+    seconds = time.perf_counter() - t0
+    return {"bracket": [low, high], "seconds": seconds, "runs": runs, "mode": modes[high]}
 
 
 def peer_side(args) -> int:
@@ -413,6 +424,9 @@ def peer_rows(python: str, args) -> list[tuple[str, str, float, str]]:
     else:
         note = lm.get("skipped") or lm.get("error", "")
         rows.append(("LMGC90 (compas_lmgc90)", "skipped", 0.0, note))
+    if lm.get("mode"):
+        blocks = " ".join(f"({x:.2f}, {y:.2f})" for x, y in sorted(map(tuple, lm["mode"])))
+        print(f"LMGC90 collapse mode at lambda {lm['bracket'][1]:.4f}, blocks (x, y): {blocks}")
     rows.append(("CRA / RBE (compas_cra)", "skipped", 0.0, f"{result['cra']['skipped']}"))
     rows.append(("CRA / RBE, reported", "[0.583, 0.589]", float("nan"), CRA_REPORTED))
     return rows
