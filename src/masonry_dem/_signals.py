@@ -1,19 +1,25 @@
 """Stopping a run cleanly on SIGINT (Ctrl-C) and SIGTERM.
 
-:func:`stop_on_signals` turns both into :class:`Interrupted` (a KeyboardInterrupt) raised in
-the main thread, so the solver stops at once and the results writer, on its way out, records
-the run as ``interrupted`` with every step written so far. :func:`deferred_signals` holds a
+:func:`stop_on_signals` records the first signal and :func:`check_stop` (called by the run
+command after each step) raises it as :class:`Interrupted` (a KeyboardInterrupt): the solver
+stops between steps and the results writer, on its way out, records the run as
+``interrupted`` with every step written so far. An exception raised from the handler itself
+would land inside a compiled kernel's call and come out as a SystemError (seen with SIGTERM
+in the residual), so only a second signal stops at once. :func:`deferred_signals` holds a
 signal back while files that must agree are being finished, and raises it afterwards.
 """
 
 from __future__ import annotations
 
+import logging
 import signal
 import threading
 from collections.abc import Iterator
 from contextlib import contextmanager
 
-__all__ = ["Interrupted", "deferred_signals", "exit_code", "stop_on_signals"]
+__all__ = ["Interrupted", "check_stop", "deferred_signals", "exit_code", "stop_on_signals"]
+
+log = logging.getLogger(__name__)
 
 _SIGNALS = tuple(s for s in (signal.SIGINT, getattr(signal, "SIGTERM", None)) if s is not None)
 
@@ -31,20 +37,37 @@ def exit_code(exc: BaseException) -> int:
     return 128 + int(getattr(exc, "signum", signal.SIGINT))
 
 
-def _raise(signum: int, frame) -> None:
-    raise Interrupted(signum)
+_received: list[int] = []
+
+
+def _request_stop(signum: int, frame) -> None:
+    if _received:  # the second signal: at once
+        raise Interrupted(signum)
+    _received.append(signum)
+    log.warning(
+        "%s: stopping after the current step (again to stop at once)",
+        signal.Signals(signum).name,
+    )
+
+
+def check_stop() -> None:
+    """Raise :class:`Interrupted` if a signal came since :func:`stop_on_signals` began."""
+    if _received:
+        raise Interrupted(_received[0])
 
 
 @contextmanager
 def stop_on_signals() -> Iterator[None]:
-    """SIGINT and SIGTERM raise :class:`Interrupted` in the main thread while inside."""
+    """SIGINT and SIGTERM request a stop (:func:`check_stop`) while inside."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
-    previous = {s: signal.signal(s, _raise) for s in _SIGNALS}
+    _received.clear()
+    previous = {s: signal.signal(s, _request_stop) for s in _SIGNALS}
     try:
         yield
     finally:
+        _received.clear()
         for s, handler in previous.items():
             signal.signal(s, handler if handler is not None else signal.SIG_DFL)
 

@@ -61,6 +61,11 @@ def main(argv: list[str] | None = None) -> int:
             traceback.print_exc()
         print(f"masonry-dem: interrupted ({exc or 'Ctrl-C'})", file=sys.stderr)
         return exit_code(exc)
+    except SystemError as exc:  # a second signal raised inside a compiled kernel's call
+        if not isinstance(exc.__cause__ or exc.__context__, KeyboardInterrupt):
+            raise
+        print("masonry-dem: interrupted", file=sys.stderr)
+        return exit_code(exc.__cause__ or exc.__context__)  # type: ignore[arg-type]
     except USER_ERRORS as exc:
         if args.debug:
             traceback.print_exc()

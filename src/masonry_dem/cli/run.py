@@ -37,7 +37,7 @@ def add_parser(subparsers) -> None:
 def run_command(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
-    from masonry_dem._signals import deferred_signals
+    from masonry_dem._signals import check_stop, deferred_signals
     from masonry_dem.cases.casefile import load_case
     from masonry_dem.export.results_folder import MECHANISM_FILES
     from masonry_dem.export.writer import ResultsWriter
@@ -57,6 +57,7 @@ def run_command(args: argparse.Namespace) -> int:
             writer(step)
             bar.set_postfix(lam=f"{step.load_factor:.4g}")
             bar.update(1)
+            check_stop()  # Ctrl-C or SIGTERM: stop here, between steps, all of them written
 
         solver = StaticSolver(case.model, case.settings)
         # the steps handed to the writer reach the disk; an exception (Ctrl-C, SIGTERM, a

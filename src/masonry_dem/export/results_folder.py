@@ -84,6 +84,8 @@ OWN_FILES = (
 
 #: statuses of summary.json: while the run goes, and how it can end
 RUNNING, INTERRUPTED = "running", "interrupted"
+#: folder states whose files may stop short of a whole run (see :func:`state`)
+UNFINISHED = ("running", "unfinished", INTERRUPTED, "failed")
 
 
 class ResultsFolderError(OSError):

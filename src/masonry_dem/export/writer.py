@@ -136,26 +136,33 @@ class ResultsWriter:
         # ParaView needs increasing times; past a load peak lambda falls, so use step numbers.
         if times.size > 1 and np.any(np.diff(times) <= 0):
             times = np.asarray(self.steps_written, dtype=float)
-        targets = {
-            self.folder / rf.BLOCKS_PVD: lambda tmp: write_pvd(
-                tmp, self.block_files, times, atomic=False
-            )
-        }
+        # both written first, then renamed back to back; blocks.pvd, the index readers start
+        # from, last: a run killed between the two renames leaves interfaces.pvd one step
+        # ahead, never behind, and the readers use the steps both list
+        targets = {}
         if self.model.interfaces.count:
             targets[self.folder / rf.INTERFACES_PVD] = lambda tmp: write_pvd(
                 tmp, self.interface_files, times, atomic=False
             )
+        targets[self.folder / rf.BLOCKS_PVD] = lambda tmp: write_pvd(
+            tmp, self.block_files, times, atomic=False
+        )
         rf.replace_together(targets)
 
     def finish(self, history: History, release: bool = True, **summary_extra) -> dict:
         """Write the last step if skipped, pushover.csv, the collapse mechanism and the final
         summary.json (``summary_extra``: keys added to it); ``release``: unlock the folder
-        (the command line keeps it while it renders)."""
-        self.close()
-        if history.steps and (
-            not self.steps_written or self.steps_written[-1] != history.last.step
-        ):
-            self(history.last, force=True)
+        (the command line keeps it while it renders). A write that fails (full disk) marks
+        the run ``failed`` as far as the disk allows, and is raised."""
+        try:
+            self.close()
+            if history.steps and (
+                not self.steps_written or self.steps_written[-1] != history.last.step
+            ):
+                self(history.last, force=True)
+        except OSError as exc:
+            self.abort(exc)
+            raise
         rf.write_pushover(
             self.folder,
             np.arange(len(history.steps)),
