@@ -115,7 +115,9 @@ def select_blocks(
         return idx
     if spec == "base":
         if base is None:
-            raise ValueError("select='base' but the geometry has no base (set base = true)")
+            raise ValueError(
+                'select = "base" but the geometry has no base (set [geometry].base = true)'
+            )
         return np.array([base])
     if spec == "all":
         return np.flatnonzero(wall)

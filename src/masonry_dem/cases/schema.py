@@ -473,8 +473,12 @@ def _message(err: Mapping[str, Any], table: tuple, allowed: list[str]) -> str:
     value = err.get("input")
     if kind == "extra_forbidden":
         key = str(loc[-1])
-        close = difflib.get_close_matches(key, allowed, n=1)
-        hint = f" (did you mean {close[0]}?)" if close else ""
+        close = [a for a in allowed if a.lower() == key.lower()]
+        close = close or difflib.get_close_matches(key.lower(), allowed, n=1)
+        table = not table and isinstance(value, (dict, list))  # a [table] of the file
+        hint = f" (did you mean {f'[{close[0]}]' if table else close[0]}?)" if close else ""
+        if table:
+            where = f"[{key}]"
         return f"{where}: unknown key{hint}; allowed: {', '.join(sorted(allowed))}"
     if kind == "missing":
         return f"{where} is missing"
