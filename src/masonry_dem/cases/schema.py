@@ -475,9 +475,9 @@ def _message(err: Mapping[str, Any], table: tuple, allowed: list[str]) -> str:
         key = str(loc[-1])
         close = [a for a in allowed if a.lower() == key.lower()]
         close = close or difflib.get_close_matches(key.lower(), allowed, n=1)
-        table = not table and isinstance(value, (dict, list))  # a [table] of the file
-        hint = f" (did you mean {f'[{close[0]}]' if table else close[0]}?)" if close else ""
-        if table:
+        top_table = not table and isinstance(value, (dict, list))  # a [table] of the file
+        hint = f" (did you mean {f'[{close[0]}]' if top_table else close[0]}?)" if close else ""
+        if top_table:
             where = f"[{key}]"
         return f"{where}: unknown key{hint}; allowed: {', '.join(sorted(allowed))}"
     if kind == "missing":
