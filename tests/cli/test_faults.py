@@ -252,3 +252,41 @@ def test_read_only_folder_is_one_line(tmp_path, capsys, monkeypatch):
     err = capsys.readouterr().err
     assert rc == 2 and len(err.strip().splitlines()) == 1
     assert str(out) in err and "permission denied" in err
+
+
+def test_python_api_rerun_replaces_the_previous_run_whole(tmp_path):
+    """``pushover(out=...)`` twice into one folder (a script re-run): the second run's folder
+    holds its own steps only; 7022155 left the first run's later steps and mechanism beside."""
+    from masonry_dem.cases.casefile import load_case
+    from masonry_dem.solvers.incremental import pushover
+
+    out = tmp_path / "api"
+    wall = load_case(None)
+    first = pushover(wall.model, wall.settings, out=out)
+    block = load_case(_small(tmp_path))
+    second = pushover(block.model, block.settings, out=out)
+    assert len(second.steps) < len(first.steps)
+    assert len(_pvd_files(out / "blocks.pvd")) == len(second.steps)
+    assert len(list((out / "steps").glob("blocks_*.vtu"))) == len(second.steps)
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["name"] == block.model.name and summary["blocks"] == 2
+    assert rf.state(out).kind == second.status
+
+
+def test_concurrent_pvd_writes_use_unique_temporary_names(tmp_path):
+    """Two writers of one index never share a temporary file (7022155: a fixed ``.pvd.tmp``
+    that the second writer renamed from under the first)."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    from masonry_dem.export.pvd import read_pvd, write_pvd
+
+    target = tmp_path / "blocks.pvd"
+
+    def write(k: int) -> None:
+        for i in range(50):
+            write_pvd(target, [f"steps/b_{k}_{j}.vtu" for j in range(i + 1)], range(i + 1))
+
+    with ThreadPoolExecutor(2) as pool:
+        list(pool.map(write, [0, 1]))  # raises if a rename lost its temporary file
+    assert len(read_pvd(target)) == 50
+    assert not list(tmp_path.glob(".*.tmp"))
