@@ -213,7 +213,7 @@ def test_schema_reads_the_builder_registry(monkeypatch):
 def test_readme_case_file_passes_the_schema(tmp_path):
     """The case file of the README, as printed, is read (its optional lines commented)."""
     readme = (Path(__file__).resolve().parents[2] / "README.md").read_text()
-    block = readme.split("A case file is TOML.")[1].split("```toml")[1].split("```")[0]
+    block = readme.split("## Case files")[1].split("```toml")[1].split("```")[0]
     block = block.replace("openings = [[0.2, 0.3, 0.4, 0.6]]", "# openings")
     from masonry_dem.cases.casefile import case_from_dict
 
