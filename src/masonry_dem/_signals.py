@@ -17,7 +17,14 @@ import threading
 from collections.abc import Iterator
 from contextlib import contextmanager
 
-__all__ = ["Interrupted", "check_stop", "deferred_signals", "exit_code", "stop_on_signals"]
+__all__ = [
+    "Interrupted",
+    "check_stop",
+    "deferred_signals",
+    "exit_code",
+    "raise_on_signals",
+    "stop_on_signals",
+]
 
 log = logging.getLogger(__name__)
 
@@ -40,6 +47,29 @@ def exit_code(exc: BaseException) -> int:
 _received: list[int] = []
 
 
+def _raise(signum: int, frame) -> None:
+    raise Interrupted(signum)
+
+
+@contextmanager
+def raise_on_signals() -> Iterator[None]:
+    """SIGINT and SIGTERM raise :class:`Interrupted` at once while inside (commands with no
+    steps to finish: render, validate, study)."""
+    yield from _handled(_raise)
+
+
+def _handled(handler) -> Iterator[None]:
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = {s: signal.signal(s, handler) for s in _SIGNALS}
+    try:
+        yield
+    finally:
+        for s, old in previous.items():
+            signal.signal(s, old if old is not None else signal.SIG_DFL)
+
+
 def _request_stop(signum: int, frame) -> None:
     if _received:  # the second signal: at once
         raise Interrupted(signum)
@@ -58,18 +88,13 @@ def check_stop() -> None:
 
 @contextmanager
 def stop_on_signals() -> Iterator[None]:
-    """SIGINT and SIGTERM request a stop (:func:`check_stop`) while inside."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
+    """SIGINT and SIGTERM request a stop (:func:`check_stop`) while inside; a second one
+    raises at once."""
     _received.clear()
-    previous = {s: signal.signal(s, _request_stop) for s in _SIGNALS}
     try:
-        yield
+        yield from _handled(_request_stop)
     finally:
         _received.clear()
-        for s, handler in previous.items():
-            signal.signal(s, handler if handler is not None else signal.SIG_DFL)
 
 
 @contextmanager

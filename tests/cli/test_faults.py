@@ -290,3 +290,28 @@ def test_concurrent_pvd_writes_use_unique_temporary_names(tmp_path):
         list(pool.map(write, [0, 1]))  # raises if a rename lost its temporary file
     assert len(read_pvd(target)) == 50
     assert not list(tmp_path.glob(".*.tmp"))
+
+
+def test_ctrl_c_in_another_command_stops_at_once(tmp_path):
+    """Commands with no steps to finish (validate here) stop at the first Ctrl-C: one line,
+    exit code 130, no traceback (7022155 printed a 60-line numba traceback)."""
+    env = {**os.environ, "PYTHONPATH": str(ROOT / "src"), "NUMBA_NUM_THREADS": "1"}
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "masonry_dem.cli", "validate", "--out", str(tmp_path / "v")]
+        + ["--no-render", "--quiet"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+    )
+    deadline = time.monotonic() + 300
+    while not list((tmp_path / "v").glob("*/steps/*.vtu")) and time.monotonic() < deadline:
+        assert proc.poll() is None, proc.communicate()
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 130, err
+    assert err.strip().splitlines()[-1] == "masonry-dem: interrupted by SIGINT"
+    assert "Traceback" not in err
+    interrupted = [rf.state(f).kind for f in (tmp_path / "v").iterdir()]
+    assert "interrupted" in interrupted  # the case it was running says so

@@ -51,15 +51,15 @@ def main(argv: list[str] | None = None) -> int:
     if not getattr(args, "func", None):
         parser.print_help()
         return 2
-    from masonry_dem._signals import exit_code, stop_on_signals
+    from masonry_dem._signals import exit_code, raise_on_signals
 
     try:
-        with stop_on_signals():
+        with raise_on_signals():  # the run command stops between steps instead
             return int(args.func(args) or 0)
     except KeyboardInterrupt as exc:  # Ctrl-C, SIGTERM: the results folder says so too
         if args.debug:
             traceback.print_exc()
-        print(f"masonry-dem: interrupted ({exc or 'Ctrl-C'})", file=sys.stderr)
+        print(f"masonry-dem: {exc or 'interrupted'}", file=sys.stderr)
         return exit_code(exc)
     except SystemError as exc:  # a second signal raised inside a compiled kernel's call
         if not isinstance(exc.__cause__ or exc.__context__, KeyboardInterrupt):

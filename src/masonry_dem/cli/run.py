@@ -37,7 +37,7 @@ def add_parser(subparsers) -> None:
 def run_command(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
-    from masonry_dem._signals import check_stop, deferred_signals
+    from masonry_dem._signals import check_stop, deferred_signals, stop_on_signals
     from masonry_dem.cases.casefile import load_case
     from masonry_dem.export.results_folder import MECHANISM_FILES
     from masonry_dem.export.writer import ResultsWriter
@@ -62,7 +62,7 @@ def run_command(args: argparse.Namespace) -> int:
         solver = StaticSolver(case.model, case.settings)
         # the steps handed to the writer reach the disk; an exception (Ctrl-C, SIGTERM, a
         # full disk) leaves the folder marked interrupted or failed with every step written
-        with writer, bar:
+        with writer, bar, stop_on_signals():
             history = solver.run(control=case.control, callback=on_step, monitor=case.monitor)
         with deferred_signals():  # pushover.csv, the mechanism and summary.json agree
             summary = writer.finish(
