@@ -315,3 +315,38 @@ def test_ctrl_c_in_another_command_stops_at_once(tmp_path):
     assert "Traceback" not in err
     interrupted = [rf.state(f).kind for f in (tmp_path / "v").iterdir()]
     assert "interrupted" in interrupted  # the case it was running says so
+
+
+@pytest.mark.parametrize("background", [False, True])
+def test_a_write_failing_after_the_last_step_marks_the_run_failed(tmp_path, background):
+    """The last step's write fails after the solver has returned (the background writer
+    still busy): leaving the writer's block records 'failed' and raises, naming the path."""
+    import masonry_dem.export.vtu as vtu
+    from masonry_dem.cases.casefile import load_case
+    from masonry_dem.export.writer import ResultsWriter
+
+    case = load_case(_small(tmp_path))
+    writer = ResultsWriter(tmp_path / "w", case.model, background=background)
+    from masonry_dem.solvers.incremental import StaticSolver
+
+    history_steps: list = []
+    history = StaticSolver(case.model, case.settings).run(callback=history_steps.append)
+    real = vtu.meshio.write
+    try:
+        with pytest.raises(rf.ResultsFolderError, match="no space left on the device"):
+            with writer:
+                for step in history_steps[:-1]:
+                    writer(step)
+                writer.flush()
+                vtu.meshio.write = _full_disk  # type: ignore[assignment]
+                writer(history_steps[-1])
+    finally:
+        vtu.meshio.write = real  # type: ignore[assignment]
+    summary = json.loads((tmp_path / "w" / "summary.json").read_text())
+    assert summary["status"] == "failed" and summary["steps"] == len(history.steps)
+    assert len(_pvd_files(tmp_path / "w" / "blocks.pvd")) == len(history.steps) - 1
+    assert rf.state(tmp_path / "w").kind == "failed"
+
+
+def _full_disk(path, *args, **kwargs):
+    raise OSError(errno.ENOSPC, "No space left on device", str(path))

@@ -109,7 +109,11 @@ class ResultsWriter:
 
     def __exit__(self, exc_type, exc, tb) -> None:
         if exc is None:
-            self.close()
+            try:
+                self.close()  # a write that failed after the solver's last step
+            except OSError as err:
+                self.abort(err)
+                raise
             return
         try:
             self.close()
