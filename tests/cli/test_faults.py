@@ -350,3 +350,39 @@ def test_a_write_failing_after_the_last_step_marks_the_run_failed(tmp_path, back
 
 def _full_disk(path, *args, **kwargs):
     raise OSError(errno.ENOSPC, "No space left on device", str(path))
+
+
+def test_a_real_full_disk(tmp_path):
+    """On a 64 KiB tmpfs (where the machine lets the tests mount one; the simulated ENOSPC
+    above runs everywhere) the run stops with one line naming the file, exit code 2, and
+    the folder holds whole files only, its summary saying why."""
+    mount = tmp_path / "small"
+    mount.mkdir()
+    if os.geteuid() != 0:
+        pytest.skip("mounting a tmpfs needs root")
+    done = subprocess.run(
+        ["mount", "-t", "tmpfs", "-o", "size=64k", "tmpfs", str(mount)], capture_output=True
+    )
+    if done.returncode != 0:
+        pytest.skip(f"no tmpfs here: {done.stderr.decode().strip()}")
+    try:
+        out = mount / "out"
+        env = {**os.environ, "PYTHONPATH": str(ROOT / "src"), "NUMBA_NUM_THREADS": "1"}
+        run = subprocess.run(
+            [sys.executable, "-m", "masonry_dem.cli", "run", str(DEFAULT), "--out", str(out)]
+            + ["--no-render", "--quiet"],
+            capture_output=True,
+            text=True,
+            env=env,
+            timeout=600,
+        )
+        assert run.returncode == 2, run.stderr
+        assert run.stderr.strip().splitlines() == [
+            line for line in run.stderr.strip().splitlines() if line.startswith("masonry-dem")
+        ]
+        assert "no space left on the device" in run.stderr and str(out) in run.stderr
+        _assert_whole(out)
+        summary = json.loads((out / "summary.json").read_text())
+        assert summary["status"] == "failed" and "no space left" in summary["reason"]
+    finally:
+        subprocess.run(["umount", str(mount)], check=False)

@@ -199,7 +199,7 @@ class ResultsWriter:
         failing disk is logged: the exception that stopped the run is the one to report."""
         interrupted = isinstance(exc, KeyboardInterrupt)
         status = rf.INTERRUPTED if interrupted else "failed"
-        why = str(exc) or type(exc).__name__
+        why = (exc.strerror if isinstance(exc, OSError) else None) or str(exc) or type(exc).__name__
         reason = (
             f"{why} after {len(self._curve)} steps"
             if interrupted
@@ -223,7 +223,7 @@ class ResultsWriter:
             log.warning("%s: the run's end is not recorded (%s)", self.folder, err)
         finally:
             self.release()
-        log.warning("%s: %s", self.folder, reason)
+        log.info("%s: %s", self.folder, reason)  # the command line says it in its one line
 
     def release(self) -> None:
         """Unlock the folder (another run may then claim it)."""
