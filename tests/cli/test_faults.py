@@ -386,3 +386,13 @@ def test_a_real_full_disk(tmp_path):
         assert summary["status"] == "failed" and "no space left" in summary["reason"]
     finally:
         subprocess.run(["umount", str(mount)], check=False)
+
+
+def test_out_inside_a_file_is_one_line(tmp_path, capsys):
+    target = tmp_path / "file.txt"
+    target.write_text("x")
+    assert main(["run", str(_small(tmp_path)), "--out", str(target / "sub"), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert err.strip() == (
+        f"masonry-dem: error: cannot create results folder {target / 'sub'}: not a directory"
+    )

@@ -149,14 +149,17 @@ def _quiet() -> Iterator[None]:
 def _os_error(path: Path, exc: OSError) -> ResultsFolderError:
     if isinstance(exc, ResultsFolderError):
         return exc
-    why = {
+    return ResultsFolderError(exc.errno or 0, f"cannot write {path}: {_why(exc)}")
+
+
+def _why(exc: OSError) -> str:
+    return {
         errno.ENOSPC: "no space left on the device",
         errno.EDQUOT: "disk quota exceeded",
         errno.EROFS: "the file system is read-only",
         errno.EACCES: "permission denied",
         errno.EPERM: "permission denied",
-    }.get(exc.errno or 0, exc.strerror or str(exc))
-    return ResultsFolderError(exc.errno or 0, f"cannot write {path}: {why}")
+    }.get(exc.errno or 0, (exc.strerror or str(exc)).lower())
 
 
 def write_summary(
@@ -319,7 +322,7 @@ def _refuse_path(folder: Path) -> None:
     except OSError as exc:
         raise ResultsFolderError(
             exc.errno or 0,
-            f"cannot create results folder {folder}: {_os_error(folder, exc).strerror}",
+            f"cannot create results folder {folder}: {_why(exc)}",
         ) from exc
     if not os.access(folder, os.W_OK | os.X_OK):
         raise ResultsFolderError(
