@@ -83,6 +83,13 @@ def test_api_refuses_block_selections_it_cannot_read_plainly(wall):
         WeightProportional(blocks=[0.5]).vector(blocks)
     with pytest.raises(ValueError, match="Pressure.blocks: block index -1 is out of range"):
         Pressure(1.0, blocks=[-1]).vector(blocks)
+    with pytest.raises(ValueError, match="kn must be a number, got the boolean true"):
+        InterfaceMaterial(kn=True, kt=1e9, friction=0.7)
+    model = Model.build(blocks, MAT, [Support([ib])])
+    for bad in (True, 1.5, "3"):
+        with pytest.raises(ValueError, match="block must be a whole block index"):
+            model.dof_index(bad, "u3")  # type: ignore[arg-type]
+    assert model.dof_index(np.int64(1), "u3") == 8
     # whole numbers stored as floats are read plainly
     np.testing.assert_array_equal(
         Support([float(ib)]).mask(blocks.count), Support([ib]).mask(blocks.count)

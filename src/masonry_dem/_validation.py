@@ -35,6 +35,8 @@ def require_positive(name: str, arr: np.ndarray, strict: bool = True) -> None:
 
 
 def positive_scalar(name: str, value, strict: bool = True) -> float:
+    if isinstance(value, (bool, np.bool_)):  # True would be read as 1.0
+        raise ValueError(f"{name} must be a number, got the boolean {plain(value)}")
     arr = as_finite_array(name, value)
     if arr.ndim != 0:
         raise ValueError(f"{name} must be a scalar, got shape {arr.shape}")

@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike
 
-from masonry_dem._validation import as_finite_array, block_indices, positive_scalar
+from masonry_dem._validation import as_finite_array, block_indices, plain, positive_scalar
 from masonry_dem.geometry.blocks import Blocks
 from masonry_dem.geometry.interfaces import Interfaces, detect_interfaces
 
@@ -278,8 +278,10 @@ class Model:
         """Global DOF number of ``dof`` (``u1`` ... ``w3``) of ``block``."""
         if dof not in DOF_NAMES:
             raise ValueError(f"dof must be one of {DOF_NAMES}, got {dof!r}")
+        if isinstance(block, (bool, np.bool_)) or not isinstance(block, (int, np.integer)):
+            raise ValueError(f"block must be a whole block index, got {plain(block)}")
         if not 0 <= block < self.blocks.count:
-            raise ValueError(f"block must be in 0..{self.blocks.count - 1}, got {block!r}")
+            raise ValueError(f"block must be in 0..{self.blocks.count - 1}, got {int(block)}")
         return 6 * int(block) + DOF_NAMES.index(dof)
 
     def check_supported(self) -> None:
