@@ -135,9 +135,9 @@ class Pressure:
     def vector(self, blocks: Blocks) -> np.ndarray:
         p = float(as_finite_array("pressure", self.value))
         if self.axis not in (0, 1, 2):
-            raise ValueError(f"pressure axis must be 0, 1 or 2, got {self.axis!r}")
+            raise ValueError(f"pressure axis must be 0, 1 or 2, got {plain(self.axis)}")
         if self.sign not in (-1, 1):
-            raise ValueError(f"pressure sign must be +1 or -1, got {self.sign!r}")
+            raise ValueError(f"pressure sign must be +1 or -1, got {plain(self.sign)}")
         others = [k for k in range(3) if k != self.axis]
         area = blocks.sizes[:, others[0]] * blocks.sizes[:, others[1]]
         out = np.zeros((blocks.count, 6))

@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from masonry_dem._validation import plain
 from masonry_dem.cases.schema import CaseError, check_case, located
 from masonry_dem.geometry import builders
 from masonry_dem.geometry import selectors as sel
@@ -110,7 +111,7 @@ def select_blocks(
         idx = np.asarray(spec, dtype=np.int64)
         if idx.size == 0 or idx.min() < 0 or idx.max() >= blocks.count:
             raise ValueError(
-                f"select: block indices must be in 0..{blocks.count - 1}, got {spec!r}"
+                f"select: block indices must be in 0..{blocks.count - 1}, got {plain(spec)}"
             )
         return idx
     if spec == "base":
@@ -128,13 +129,13 @@ def select_blocks(
         try:
             k = int(arg)
         except ValueError:
-            raise ValueError(f"select: course needs an integer, got {spec!r}") from None
+            raise ValueError(f"select: course needs an integer, got {plain(spec)}") from None
         return sel.course(blocks, k, among=wall)
     if kind == "edge":
         return sel.edge(blocks, arg, among=wall)
     raise ValueError(
         f"select must be 'base', 'all', 'column:left|right', 'course:K', 'edge:NAME' or a list of "
-        f"block indices, got {spec!r}"
+        f"block indices, got {plain(spec)}"
     )
 
 
