@@ -22,6 +22,7 @@ __all__ = [
     "check_stop",
     "deferred_signals",
     "exit_code",
+    "interruption",
     "raise_on_signals",
     "stop_on_signals",
 ]
@@ -37,6 +38,19 @@ class Interrupted(KeyboardInterrupt):
     def __init__(self, signum: int = signal.SIGINT) -> None:
         super().__init__(f"interrupted by {signal.Signals(signum).name}")
         self.signum = signum
+
+
+def interruption(exc: BaseException | None) -> KeyboardInterrupt | None:
+    """The Ctrl-C or signal behind ``exc``: itself, or the cause of the SystemErrors a compiled
+    kernel's call wraps an exception raised inside it in (several, one per nested call)."""
+    seen = 0
+    while exc is not None and seen < 100:
+        if isinstance(exc, KeyboardInterrupt):
+            return exc
+        if not isinstance(exc, SystemError):
+            return None
+        exc, seen = exc.__cause__ or exc.__context__, seen + 1
+    return None
 
 
 def exit_code(exc: BaseException) -> int:

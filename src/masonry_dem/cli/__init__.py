@@ -51,7 +51,7 @@ def main(argv: list[str] | None = None) -> int:
     if not getattr(args, "func", None):
         parser.print_help()
         return 2
-    from masonry_dem._signals import exit_code, raise_on_signals
+    from masonry_dem._signals import exit_code, interruption, raise_on_signals
 
     try:
         with raise_on_signals():  # the run command stops between steps instead
@@ -61,11 +61,14 @@ def main(argv: list[str] | None = None) -> int:
             traceback.print_exc()
         print(f"masonry-dem: {exc or 'interrupted'}", file=sys.stderr)
         return exit_code(exc)
-    except SystemError as exc:  # a second signal raised inside a compiled kernel's call
-        if not isinstance(exc.__cause__ or exc.__context__, KeyboardInterrupt):
+    except SystemError as exc:  # a signal raised inside a compiled kernel's call
+        signal = interruption(exc)
+        if signal is None:
             raise
-        print("masonry-dem: interrupted", file=sys.stderr)
-        return exit_code(exc.__cause__ or exc.__context__)  # type: ignore[arg-type]
+        if args.debug:
+            traceback.print_exc()
+        print(f"masonry-dem: {signal or 'interrupted'}", file=sys.stderr)
+        return exit_code(signal)
     except USER_ERRORS as exc:
         if args.debug:
             traceback.print_exc()

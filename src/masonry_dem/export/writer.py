@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from masonry_dem._signals import interruption
 from masonry_dem.export import results_folder as rf
 from masonry_dem.export.pvd import write_pvd
 from masonry_dem.export.vtu import write_mechanism_vtu, write_step_vtu
@@ -197,7 +198,9 @@ class ResultsWriter:
         """Record a run stopped by ``exc``: pushover.csv of the steps handed over and
         summary.json ``interrupted`` (a signal) or ``failed``; then unlock the folder. A
         failing disk is logged: the exception that stopped the run is the one to report."""
-        interrupted = isinstance(exc, KeyboardInterrupt)
+        signal = interruption(exc)
+        interrupted = signal is not None
+        exc = signal or exc
         status = rf.INTERRUPTED if interrupted else "failed"
         why = (exc.strerror if isinstance(exc, OSError) else None) or str(exc) or type(exc).__name__
         reason = (
