@@ -397,3 +397,20 @@ def test_out_inside_a_file_is_one_line(tmp_path, capsys):
     assert err.strip() == (
         f"masonry-dem: error: cannot create results folder {target / 'sub'}: not a directory"
     )
+
+
+def test_an_interrupt_wrapped_by_compiled_calls_is_found():
+    """numba wraps an exception raised inside its dispatcher in SystemErrors, one per nested
+    call: the interrupt under them is what the command line reports (exit 128 + signal)."""
+    from masonry_dem._signals import Interrupted, exit_code, interruption
+
+    inner = Interrupted(signal.SIGTERM)
+    wrapped: BaseException = inner
+    for _ in range(3):
+        outer = SystemError("returned a result with an exception set")
+        outer.__cause__ = wrapped
+        wrapped = outer
+    assert interruption(wrapped) is inner and exit_code(inner) == 143
+    plain_error = SystemError("x")
+    plain_error.__cause__ = ValueError("y")
+    assert interruption(plain_error) is None and interruption(None) is None
