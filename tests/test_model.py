@@ -60,10 +60,40 @@ def test_supports_fix_exactly_the_chosen_dofs(wall):
     np.testing.assert_array_equal(model.fixed, expect)
     np.testing.assert_array_equal(model.free, ~expect.ravel())
     assert model.n_dofs == 6 * blocks.count
-    with pytest.raises(ValueError, match="support blocks: index out of range"):
+    with pytest.raises(ValueError, match=rf"Support.blocks: block index {blocks.count} is out"):
         Support([blocks.count]).mask(blocks.count)
-    with pytest.raises(ValueError, match="support blocks: the selection is empty"):
+    with pytest.raises(ValueError, match="Support.blocks: the selection is empty"):
         Support([]).mask(blocks.count)
+
+
+def test_api_refuses_block_selections_it_cannot_read_plainly(wall):
+    """A boolean mask read as indices fixed blocks 0 and 1 (issue 24); 15.7 was read as 15."""
+    blocks, ib = wall
+    mask = np.zeros(blocks.count, dtype=bool)
+    mask[[ib]] = True
+    with pytest.raises(ValueError, match="Support.blocks: got a boolean mask of"):
+        Support(mask).mask(blocks.count)
+    with pytest.raises(
+        ValueError, match=r"Support.blocks: block indices must be whole numbers, got 15.7"
+    ):
+        Support([15.7]).mask(blocks.count)
+    with pytest.raises(ValueError, match="PointLoad.blocks: got a boolean mask"):
+        PointLoad(mask, (0.0, -1.0, 0.0)).vector(blocks)
+    with pytest.raises(ValueError, match="WeightProportional.blocks: block indices must be whole"):
+        WeightProportional(blocks=[0.5]).vector(blocks)
+    with pytest.raises(ValueError, match="Pressure.blocks: block index -1 is out of range"):
+        Pressure(1.0, blocks=[-1]).vector(blocks)
+    with pytest.raises(ValueError, match="kn must be a number, got the boolean true"):
+        InterfaceMaterial(kn=True, kt=1e9, friction=0.7)
+    model = Model.build(blocks, MAT, [Support([ib])])
+    for bad in (True, 1.5, "3"):
+        with pytest.raises(ValueError, match="block must be a whole block index"):
+            model.dof_index(bad, "u3")  # type: ignore[arg-type]
+    assert model.dof_index(np.int64(1), "u3") == 8
+    # whole numbers stored as floats are read plainly
+    np.testing.assert_array_equal(
+        Support([float(ib)]).mask(blocks.count), Support([ib]).mask(blocks.count)
+    )
 
 
 # ------------------------------------------------------------------------------ loads

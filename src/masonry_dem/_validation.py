@@ -10,7 +10,7 @@ def as_finite_array(name: str, value, shape: tuple[int | None, ...] | None = Non
     try:
         arr = np.asarray(value, dtype=float)
     except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} must be numeric, got {value!r}") from exc
+        raise ValueError(f"{name} must be numeric, got {plain(value)}") from exc
     if shape is not None:
         if arr.ndim != len(shape) or any(
             want is not None and got != want for got, want in zip(arr.shape, shape, strict=False)
@@ -18,25 +18,85 @@ def as_finite_array(name: str, value, shape: tuple[int | None, ...] | None = Non
             raise ValueError(f"{name} must have shape {shape}, got {arr.shape}")
     bad = ~np.isfinite(arr)
     if bad.any():
-        first = np.argwhere(bad)[0]
-        raise ValueError(
-            f"{name} contains a non-finite value {arr[tuple(first)]!r} at {tuple(first)}"
-        )
+        first = tuple(int(i) for i in np.argwhere(bad)[0])
+        where = f" at index {', '.join(map(str, first))}" if first else ""
+        raise ValueError(f"{name} contains a non-finite value {plain(arr[first])}{where}")
     return arr
 
 
 def require_positive(name: str, arr: np.ndarray, strict: bool = True) -> None:
     bad = arr <= 0 if strict else arr < 0
     if np.any(bad):
-        first = np.argwhere(np.atleast_1d(bad))[0]
-        value = np.atleast_1d(arr)[tuple(first)]
+        first = tuple(int(i) for i in np.argwhere(np.atleast_1d(bad))[0])
+        value = np.atleast_1d(arr)[first]
         sign = "positive" if strict else "non-negative"
-        raise ValueError(f"{name} must be {sign}, got {value!r} at {tuple(first)}")
+        where = f" at index {', '.join(map(str, first))}" if np.ndim(arr) else ""
+        raise ValueError(f"{name} must be {sign}, got {plain(value)}{where}")
 
 
 def positive_scalar(name: str, value, strict: bool = True) -> float:
+    if isinstance(value, (bool, np.bool_)):  # True would be read as 1.0
+        raise ValueError(f"{name} must be a number, got the boolean {plain(value)}")
     arr = as_finite_array(name, value)
     if arr.ndim != 0:
         raise ValueError(f"{name} must be a scalar, got shape {arr.shape}")
     require_positive(name, arr, strict)
     return float(arr)
+
+
+def plain(value) -> str:
+    """``value`` as a user wrote it: plain numbers (no numpy reprs), TOML's true/false."""
+    if isinstance(value, (bool, np.bool_)):
+        return "true" if value else "false"
+    if isinstance(value, (int, np.integer)):
+        return str(int(value))
+    if isinstance(value, (float, np.floating)):
+        text = repr(float(value))
+        if "e" in text:  # 1e+300 -> 1e300, 1e-05 -> 1e-5 (TOML reads both)
+            mantissa, exponent = text.split("e")
+            text = f"{mantissa.removesuffix('.0')}e{int(exponent)}"
+        return text
+    if isinstance(value, str):
+        return '"' + value + '"' if len(value) <= 60 else '"' + value[:57] + '..."'
+    if isinstance(value, dict):
+        return (
+            "a table {"
+            + ", ".join(f"{k} = {plain(v)}" for k, v in list(value.items())[:4])
+            + (", ...}" if len(value) > 4 else "}")
+        )
+    if isinstance(value, (list, tuple, np.ndarray)):
+        items = list(value)
+        text = ", ".join(plain(v) for v in items[:8])
+        return "[" + text + (", ..." if len(items) > 8 else "") + "]"
+    return repr(value)
+
+
+def block_indices(name: str, value, count: int | None = None) -> np.ndarray:
+    """``value`` as an array of block indices, refusing what cannot be read plainly as one:
+    a boolean mask (``np.asarray(mask, int64)`` would select blocks 0 and 1), fractional or
+    non-finite numbers, text; with ``count``, indices outside 0..count-1 too."""
+    arr = np.atleast_1d(np.asarray(value))
+    if arr.dtype == bool:
+        raise ValueError(
+            f"{name}: got a boolean mask of {arr.size} values where block indices are expected; "
+            "pass np.flatnonzero(mask)"
+        )
+    if arr.ndim != 1:
+        raise ValueError(f"{name}: block indices must be a flat list, got shape {arr.shape}")
+    if arr.dtype.kind in "iu":
+        idx = arr.astype(np.int64)
+    elif arr.dtype.kind == "f":
+        whole = np.isfinite(arr) & (arr == np.round(arr))
+        if not whole.all():
+            bad = arr[np.argmin(whole)]
+            raise ValueError(
+                f"{name}: block indices must be whole numbers, got {plain(bad)} "
+                f"(in {plain(arr.tolist())})"
+            )
+        idx = arr.astype(np.int64)
+    else:
+        raise ValueError(f"{name}: block indices must be integers, got {plain(arr.tolist())}")
+    if count is not None and idx.size and (idx.min() < 0 or idx.max() >= count):
+        bad = idx[(idx < 0) | (idx >= count)][0]
+        raise ValueError(f"{name}: block index {int(bad)} is out of range 0..{count - 1}")
+    return idx

@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike
 
-from masonry_dem._validation import as_finite_array, positive_scalar
+from masonry_dem._validation import as_finite_array, block_indices, plain, positive_scalar
 from masonry_dem.geometry.blocks import Blocks
 from masonry_dem.geometry.interfaces import Interfaces, detect_interfaces
 
@@ -76,13 +76,9 @@ class Support:
     dofs: str | Sequence[str] = "all"
 
     def mask(self, n_blocks: int) -> np.ndarray:
-        idx = np.atleast_1d(np.asarray(self.blocks, dtype=np.int64))
+        idx = block_indices("Support.blocks", self.blocks, n_blocks)
         if idx.size == 0:
-            raise ValueError("support blocks: the selection is empty")
-        if idx.min() < 0 or idx.max() >= n_blocks:
-            raise ValueError(
-                f"support blocks: index out of range 0..{n_blocks - 1}: {idx.tolist()}"
-            )
+            raise ValueError("Support.blocks: the selection is empty")
         out = np.zeros((n_blocks, 6), dtype=bool)
         out[np.ix_(idx, np.flatnonzero(dof_mask(self.dofs)))] = True
         return out
@@ -116,7 +112,11 @@ class WeightProportional:
         if norm == 0:
             raise ValueError("direction must be a non-zero vector, got (0, 0, 0)")
         out = np.zeros((blocks.count, 6))
-        sel = slice(None) if self.blocks is None else np.asarray(self.blocks)
+        sel = (
+            slice(None)
+            if self.blocks is None
+            else block_indices("WeightProportional.blocks", self.blocks, blocks.count)
+        )
         out[sel, :3] = blocks.weights[sel, None] * (d / norm)[None, :]
         return out
 
@@ -135,13 +135,17 @@ class Pressure:
     def vector(self, blocks: Blocks) -> np.ndarray:
         p = float(as_finite_array("pressure", self.value))
         if self.axis not in (0, 1, 2):
-            raise ValueError(f"pressure axis must be 0, 1 or 2, got {self.axis!r}")
+            raise ValueError(f"pressure axis must be 0, 1 or 2, got {plain(self.axis)}")
         if self.sign not in (-1, 1):
-            raise ValueError(f"pressure sign must be +1 or -1, got {self.sign!r}")
+            raise ValueError(f"pressure sign must be +1 or -1, got {plain(self.sign)}")
         others = [k for k in range(3) if k != self.axis]
         area = blocks.sizes[:, others[0]] * blocks.sizes[:, others[1]]
         out = np.zeros((blocks.count, 6))
-        sel = slice(None) if self.blocks is None else np.asarray(self.blocks)
+        sel = (
+            slice(None)
+            if self.blocks is None
+            else block_indices("Pressure.blocks", self.blocks, blocks.count)
+        )
         out[sel, self.axis] = self.sign * p * area[sel]
         return out
 
@@ -157,7 +161,7 @@ class PointLoad:
     live: bool = False
 
     def vector(self, blocks: Blocks) -> np.ndarray:
-        idx = np.atleast_1d(np.asarray(self.blocks, dtype=np.int64))
+        idx = block_indices("PointLoad.blocks", self.blocks, blocks.count)
         f = as_finite_array("force", self.force, (3,))
         r = as_finite_array("offset", self.offset, (3,))
         out = np.zeros((blocks.count, 6))
@@ -274,8 +278,10 @@ class Model:
         """Global DOF number of ``dof`` (``u1`` ... ``w3``) of ``block``."""
         if dof not in DOF_NAMES:
             raise ValueError(f"dof must be one of {DOF_NAMES}, got {dof!r}")
+        if isinstance(block, (bool, np.bool_)) or not isinstance(block, (int, np.integer)):
+            raise ValueError(f"block must be a whole block index, got {plain(block)}")
         if not 0 <= block < self.blocks.count:
-            raise ValueError(f"block must be in 0..{self.blocks.count - 1}, got {block!r}")
+            raise ValueError(f"block must be in 0..{self.blocks.count - 1}, got {int(block)}")
         return 6 * int(block) + DOF_NAMES.index(dof)
 
     def check_supported(self) -> None:

@@ -1,20 +1,26 @@
 """Case files: a TOML description of a scene (geometry, material, supports, loads, analysis).
 
-The schema is documented in the README ("Case files"). Unknown keys are errors, so a typo is
-never silently ignored.
+The schema is documented in the README ("Case files") and checked by :mod:`.schema` before
+anything is built: unknown keys, values of the wrong type and values out of range are errors
+(:class:`~masonry_dem.cases.schema.CaseError`, a ValueError) naming the file, the table path
+and the value. A new builder is one line in ``_BUILDERS``: the schema reads its signature.
 """
 
 from __future__ import annotations
 
 import inspect
 import sys
-from dataclasses import dataclass, fields
+from collections.abc import Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from masonry_dem._validation import plain
+from masonry_dem.cases.schema import CaseError, check_case, located
 from masonry_dem.geometry import builders
 from masonry_dem.geometry import selectors as sel
 from masonry_dem.geometry.blocks import Blocks
@@ -105,12 +111,14 @@ def select_blocks(
         idx = np.asarray(spec, dtype=np.int64)
         if idx.size == 0 or idx.min() < 0 or idx.max() >= blocks.count:
             raise ValueError(
-                f"select: block indices must be in 0..{blocks.count - 1}, got {spec!r}"
+                f"select: block indices must be in 0..{blocks.count - 1}, got {plain(spec)}"
             )
         return idx
     if spec == "base":
         if base is None:
-            raise ValueError("select='base' but the geometry has no base (set base = true)")
+            raise ValueError(
+                'select = "base" but the geometry has no base (set [geometry].base = true)'
+            )
         return np.array([base])
     if spec == "all":
         return np.flatnonzero(wall)
@@ -121,13 +129,13 @@ def select_blocks(
         try:
             k = int(arg)
         except ValueError:
-            raise ValueError(f"select: course needs an integer, got {spec!r}") from None
+            raise ValueError(f"select: course needs an integer, got {plain(spec)}") from None
         return sel.course(blocks, k, among=wall)
     if kind == "edge":
         return sel.edge(blocks, arg, among=wall)
     raise ValueError(
         f"select must be 'base', 'all', 'column:left|right', 'course:K', 'edge:NAME' or a list of "
-        f"block indices, got {spec!r}"
+        f"block indices, got {plain(spec)}"
     )
 
 
@@ -136,12 +144,12 @@ def _load(spec: dict, blocks: Blocks, wall: np.ndarray, base: int | None, k: int
     section = f"loads[{k}]"
     if kind == "self_weight":
         _unknown(section, spec, {"type", "live"})
-        return SelfWeight(live=bool(spec.get("live", False)))
+        return SelfWeight(live=spec.get("live", False))
     if kind == "weight_proportional":
         _unknown(section, spec, {"type", "direction", "live", "select"})
         chosen = select_blocks(blocks, spec.get("select", "all"), wall, base)
         return WeightProportional(
-            tuple(spec.get("direction", (0, 0, 1))), bool(spec.get("live", True)), chosen
+            tuple(spec.get("direction", (0, 0, 1))), spec.get("live", True), chosen
         )
     if kind == "pressure":
         _unknown(section, spec, {"type", "value", "axis", "sign", "live", "select"})
@@ -150,7 +158,7 @@ def _load(spec: dict, blocks: Blocks, wall: np.ndarray, base: int | None, k: int
             float(_require(section, spec, "value")),
             int(spec.get("axis", 2)),
             int(spec.get("sign", 1)),
-            bool(spec.get("live", True)),
+            spec.get("live", True),
             chosen,
         )
     if kind == "point":
@@ -160,7 +168,7 @@ def _load(spec: dict, blocks: Blocks, wall: np.ndarray, base: int | None, k: int
             chosen,
             tuple(_require(section, spec, "force")),
             tuple(spec.get("offset", (0, 0, 0))),
-            bool(spec.get("live", False)),
+            spec.get("live", False),
         )
     raise ValueError(
         f"case file [{section}] type must be self_weight, weight_proportional, pressure or point, got {kind!r}"
@@ -168,56 +176,80 @@ def _load(spec: dict, blocks: Blocks, wall: np.ndarray, base: int | None, k: int
 
 
 def case_from_dict(data: dict, source: str = "<dict>") -> Case:
-    _unknown(
-        "top level",
-        data,
-        {"name", "description", "geometry", "material", "supports", "loads", "analysis"},
-    )
-    blocks, base, wall = build_blocks(_require("top level", data, "geometry"))
-    mat = dict(_require("top level", data, "material"))
-    _unknown("material", mat, {f.name for f in fields(InterfaceMaterial)})
-    try:
-        material = InterfaceMaterial(**mat)
-    except TypeError as exc:
-        raise ValueError(f"case file [material]: {exc}") from exc
+    """The scene of a parsed case file; raises CaseError (a ValueError) naming ``source``, the
+    table path and the value for anything the schema or the builders refuse."""
+    check_case(data, source, _BUILDERS, StaticSettings)
+    with _at(source, "[geometry]"):
+        blocks, base, wall = build_blocks(data["geometry"])
+    with _at(source, "[material]"):
+        material = InterfaceMaterial(**data["material"])
     supports = []
     for k, spec in enumerate(data.get("supports", [])):
-        _unknown(f"supports[{k}]", spec, {"select", "dofs"})
-        idx = select_blocks(blocks, _require(f"supports[{k}]", spec, "select"), wall, base)
+        with _at(source, f"[supports][{k}].select"):
+            idx = select_blocks(blocks, spec["select"], wall, base)
         supports.append(Support(idx, spec.get("dofs", "all")))
-    loads = [
-        _load(spec, blocks, wall, base, k)
-        for k, spec in enumerate(data.get("loads", [{"type": "self_weight"}]))
-    ]
+    loads = []
+    for k, spec in enumerate(data.get("loads", [{"type": "self_weight"}])):
+        with _at(source, f"[loads][{k}]"):
+            loads.append(_load(spec, blocks, wall, base, k))
     analysis = dict(data.get("analysis", {}))
     control_spec = analysis.pop("control", None)
     monitor_spec = analysis.pop("monitor", None)
-    _unknown("analysis", analysis, {f.name for f in fields(StaticSettings)})
-    settings = StaticSettings(**analysis)
-    model = Model.build(
-        blocks, material, supports, loads, name=str(data.get("name", Path(source).stem))
-    )
+    with _at(source, "[analysis]"):
+        settings = StaticSettings(**analysis)
+    with _at(source, "[supports]"):  # what Model.build refuses is a mechanism or a support
+        model = Model.build(
+            blocks, material, supports, loads, name=str(data.get("name", Path(source).stem))
+        )
     control = None
     if control_spec is not None:
-        _unknown("analysis.control", control_spec, {"block", "dof", "target", "steps"})
+        with _at(source, "[analysis].control.block"):
+            model.dof_index(control_spec["block"], control_spec["dof"])
         control = DisplacementControl(**control_spec)
     monitor = None
     if monitor_spec is not None:
-        _unknown("analysis.monitor", monitor_spec, {"block", "dof"})
+        with _at(source, "[analysis].monitor.block"):
+            model.dof_index(monitor_spec["block"], monitor_spec["dof"])
         monitor = (int(monitor_spec["block"]), str(monitor_spec["dof"]))
     return Case(model, settings, control, monitor, source)
 
 
+@contextmanager
+def _at(source: str, where: str) -> Iterator[None]:
+    """Name the file and the table path in what the builders refuse."""
+    try:
+        yield
+    except CaseError:
+        raise
+    except (ValueError, TypeError) as exc:
+        raise located(source, where)(exc) from exc
+
+
 def load_case(path: str | Path | None = None) -> Case:
-    """Read a case file; with no path, the bundled default wall."""
+    """Read a case file; with no path, the bundled default wall. Raises FileNotFoundError
+    (no such file) or CaseError naming the file (a folder, unreadable, not UTF-8, not TOML,
+    or refused by the schema)."""
     if path is None:
         text = resources.files("masonry_dem.cases").joinpath("data", DEFAULT_CASE).read_text()
         return case_from_dict(tomllib.loads(text), source=f"bundled:{DEFAULT_CASE}")
     p = Path(path)
-    if not p.is_file():
+    if p.is_dir():
+        raise CaseError(f"case file {p} is a folder; give the TOML file in it")
+    if not p.exists():
         raise FileNotFoundError(f"case file not found: {p}")
     try:
-        data = tomllib.loads(p.read_text())
+        raw = p.read_bytes()
+    except OSError as exc:
+        raise CaseError(f"case file {p} cannot be read: {exc.strerror or exc}") from exc
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise CaseError(
+            f"case file {p} is not UTF-8 text (byte {exc.start}: {raw[exc.start : exc.start + 1]!r}); "
+            "save it as UTF-8"
+        ) from exc
+    try:
+        data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
-        raise ValueError(f"case file {p} is not valid TOML: {exc}") from exc
+        raise CaseError(f"case file {p} is not valid TOML: {exc}") from exc
     return case_from_dict(data, source=str(p))

@@ -2,6 +2,11 @@
 
 Each command lives in its own module of this package and exposes ``add_parser(subparsers)``
 (which registers the sub-command and sets ``func``) so commands stay independent.
+
+Errors that come from the input, the file system or the machine's resources end the command
+with one line on stderr and exit code 2 (``--debug``: with the traceback); Ctrl-C and SIGTERM
+end it with "interrupted" and 128 + the signal's number (130 for Ctrl-C). Any other exception
+is a bug in the package and keeps its traceback.
 """
 
 from __future__ import annotations
@@ -10,6 +15,7 @@ import argparse
 import importlib
 import logging
 import sys
+import traceback
 
 COMMANDS = ("run", "validate", "interface", "render", "paraview_state", "study")
 
@@ -20,6 +26,9 @@ def build_parser() -> argparse.ArgumentParser:
         description="Nonlinear 3D discrete element analysis of masonry walls.",
     )
     parser.add_argument("-v", "--verbose", action="store_true", help="log progress details")
+    parser.add_argument(
+        "--debug", action="store_true", help="show the traceback of an error, not one line"
+    )
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name in COMMANDS:
         try:
@@ -42,11 +51,46 @@ def main(argv: list[str] | None = None) -> int:
     if not getattr(args, "func", None):
         parser.print_help()
         return 2
+    from masonry_dem._signals import exit_code, interruption, raise_on_signals
+
     try:
-        return int(args.func(args) or 0)
-    except (ValueError, FileNotFoundError) as exc:
-        print(f"masonry-dem: error: {exc}", file=sys.stderr)
+        with raise_on_signals():  # the run command stops between steps instead
+            return int(args.func(args) or 0)
+    except KeyboardInterrupt as exc:  # Ctrl-C, SIGTERM: the results folder says so too
+        if args.debug:
+            traceback.print_exc()
+        print(f"masonry-dem: {exc or 'interrupted'}", file=sys.stderr)
+        return exit_code(exc)
+    except SystemError as exc:  # a signal raised inside a compiled kernel's call
+        signal = interruption(exc)
+        if signal is None:
+            raise
+        if args.debug:
+            traceback.print_exc()
+        print(f"masonry-dem: {signal or 'interrupted'}", file=sys.stderr)
+        return exit_code(signal)
+    except USER_ERRORS as exc:
+        if args.debug:
+            traceback.print_exc()
+        print(f"masonry-dem: error: {one_line(exc)}", file=sys.stderr)
         return 2
+
+
+#: what a user's input, the file system or the machine can cause: never a traceback
+USER_ERRORS = (ValueError, OSError, MemoryError, RecursionError)
+
+
+def one_line(exc: BaseException) -> str:
+    """The message of ``exc`` on one line; an OS error with the path it concerns."""
+    if isinstance(exc, MemoryError):
+        return "out of memory: the model is too large for this machine" + (
+            f" ({exc})" if str(exc) else ""
+        )
+    if isinstance(exc, OSError) and exc.strerror:
+        text = f"{exc.filename}: {exc.strerror}" if exc.filename else exc.strerror
+    else:
+        text = str(exc) or type(exc).__name__
+    return " ".join(part.strip() for part in text.splitlines() if part.strip())
 
 
 if __name__ == "__main__":  # pragma: no cover

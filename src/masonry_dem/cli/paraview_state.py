@@ -33,7 +33,9 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
 
 def run(args: argparse.Namespace) -> int:
     from masonry_dem.export.paraview_state import copy_state, has_data
+    from masonry_dem.export.results_folder import warn_if_unfinished
 
+    warn_if_unfinished(args.results)  # a killed or running run: named, its steps still used
     names: tuple[str, ...] = (args.name,)
     if args.name == "all":  # the mechanism state only for a run that ended in collapse
         names = tuple(n for n in STATES if n != "mechanism" or has_data(n, args.results))

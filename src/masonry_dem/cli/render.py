@@ -75,6 +75,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
 
 def run(args: argparse.Namespace) -> int:
     from masonry_dem.export import render  # imports pyvista lazily, only when rendering
+    from masonry_dem.export.results_folder import warn_if_unfinished
 
     views = args.view or ["oblique"]
     if "all" in views:
@@ -82,6 +83,7 @@ def run(args: argparse.Namespace) -> int:
     views = list(dict.fromkeys(views))
     written = []
     # check the folder, step and views before writing anything
+    warn_if_unfinished(args.results)  # a killed or running run: named, its steps still drawn
     series = render.open_results(args.results)
     series.index_of(args.step)
     for view in views:

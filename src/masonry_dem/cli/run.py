@@ -25,44 +25,56 @@ def add_parser(subparsers) -> None:
         help="skip the PNGs of the last step and of the collapse mechanism",
     )
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="replace the run already in --out (removes the package's own files there, and "
+        "only those); without it such a folder is refused",
+    )
     p.set_defaults(func=run_command)
 
 
 def run_command(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
+    from masonry_dem._signals import check_stop, deferred_signals, stop_on_signals
     from masonry_dem.cases.casefile import load_case
+    from masonry_dem.export.results_folder import MECHANISM_FILES
     from masonry_dem.export.writer import ResultsWriter
     from masonry_dem.solvers.incremental import StaticSolver
 
     case = load_case(args.case)
     out = Path(args.out)
-    writer = ResultsWriter(out, case.model, background=True)
-    bar = tqdm(desc=case.model.name[:40], unit="step", disable=args.quiet)
-
-    def on_step(step) -> None:
-        writer(step)
-        bar.set_postfix(lam=f"{step.load_factor:.4g}")
-        bar.update(1)
-
     t0 = time.perf_counter()
-    solver = StaticSolver(case.model, case.settings)
-    with writer, bar:  # the steps handed to the writer reach the disk
-        history = solver.run(control=case.control, callback=on_step, monitor=case.monitor)
-    summary = writer.finish(
-        history, case=case.source, wall_seconds=round(time.perf_counter() - t0, 4)
+    # claims the folder: refused if it holds another run (without --overwrite) or is in use
+    writer = ResultsWriter(
+        out, case.model, background=True, overwrite=args.overwrite, start={"case": case.source}
     )
-    if not args.no_render:
-        try:
-            from masonry_dem.export.render import render_mechanism, render_step
-        except ImportError as exc:  # rendering is optional for the analysis itself
-            log.warning("no PNG: the render module is unavailable (%s)", exc)
-        else:
-            png = render_step(out, step="last")
-            summary["png"] = str(Path(png).name)
-            if (out / "mechanism_blocks.vtu").is_file():  # the run ended in collapse
-                summary["mechanism_png"] = render_mechanism(out).name
-            (out / "summary.json").write_text(json.dumps(summary, indent=2))
+    try:
+        bar = tqdm(desc=case.model.name[:40], unit="step", disable=args.quiet)
+
+        def on_step(step) -> None:
+            writer(step)
+            bar.set_postfix(lam=f"{step.load_factor:.4g}")
+            bar.update(1)
+            check_stop()  # Ctrl-C or SIGTERM: stop here, between steps, all of them written
+
+        solver = StaticSolver(case.model, case.settings)
+        # the steps handed to the writer reach the disk; an exception (Ctrl-C, SIGTERM, a
+        # full disk) leaves the folder marked interrupted or failed with every step written
+        with writer, bar, stop_on_signals():
+            history = solver.run(control=case.control, callback=on_step, monitor=case.monitor)
+        with deferred_signals():  # pushover.csv, the mechanism and summary.json agree
+            summary = writer.finish(
+                history,
+                release=False,
+                case=case.source,
+                wall_seconds=round(time.perf_counter() - t0, 4),
+            )
+        if not args.no_render:
+            summary = _render(out, summary, writer, MECHANISM_FILES[0])
+    finally:
+        writer.release()
     print(
         json.dumps(
             {
@@ -74,3 +86,16 @@ def run_command(args: argparse.Namespace) -> int:
     print(f"{summary['status']}: {summary['reason']}")
     print(f"results in {out}/ (blocks.pvd, interfaces.pvd, summary.json, pushover.csv)")
     return 0 if summary["status"] in ("collapse", "completed") else 1
+
+
+def _render(out: Path, summary: dict, writer, mechanism_file: str) -> dict:
+    """PNGs of the last step and, after a collapse, of the mechanism, named in summary.json."""
+    try:
+        from masonry_dem.export.render import render_mechanism, render_step
+    except ImportError as exc:  # rendering is optional for the analysis itself
+        log.warning("no PNG: the render module is unavailable (%s)", exc)
+        return summary
+    pngs = {"png": Path(render_step(out, step="last")).name}
+    if (out / mechanism_file).is_file():  # the run ended in collapse
+        pngs["mechanism_png"] = render_mechanism(out).name
+    return writer.write_summary(summary, pngs)

@@ -141,7 +141,9 @@ def _render(folder: Path, view: str) -> str | None:
         plot_pushover(folder)
         png = render_step(folder, step="last", view="oblique", out=folder / "damage.png")
         render_step(folder, step="last", view=view, out=folder / f"damage_{view}.png")
-        if (folder / "mechanism_blocks.vtu").is_file():  # the run ended in collapse
+        from masonry_dem.export.results_folder import MECHANISM_FILES
+
+        if (folder / MECHANISM_FILES[0]).is_file():  # the run ended in collapse
             png = render_mechanism(folder, view="oblique", out=folder / "mechanism.png")
             render_mechanism(folder, view=view, out=folder / f"mechanism_{view}.png")
     except Exception as exc:  # rendering must never lose the analysis

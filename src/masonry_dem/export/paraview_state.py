@@ -29,14 +29,16 @@ from pathlib import Path
 
 import numpy as np
 
+from masonry_dem.export import results_folder as rf
+
 log = logging.getLogger(__name__)
 
 #: names of the shipped states
 STATES = ("damage_map", "deformed_shape", "force_view", "mechanism")
 #: the folder the shipped states point to (a placeholder; ParaView searches by file name)
 PLACEHOLDER = "/path/to/your/results"
-_STEP_FILES = ("blocks.pvd", "interfaces.pvd")
-_MECHANISM_FILES = ("mechanism_blocks.vtu", "mechanism_interfaces.vtu")  # = vtu.MECHANISM_FILES
+_STEP_FILES = (rf.BLOCKS_PVD, rf.INTERFACES_PVD)
+_MECHANISM_FILES = rf.MECHANISM_FILES
 #: the data files each state reads (file names in a results folder)
 DATA_FILES: dict[str, tuple[str, str]] = {
     "damage_map": _STEP_FILES,

@@ -21,7 +21,6 @@ from __future__ import annotations
 import copy
 import csv
 import ctypes.util
-import json
 import logging
 import math
 import os
@@ -35,6 +34,7 @@ from typing import Any
 
 import numpy as np
 
+from masonry_dem.export import results_folder as rf
 from masonry_dem.results import STATE_NAMES
 
 log = logging.getLogger(__name__)
@@ -183,7 +183,7 @@ def open_results(folder: Path | str) -> ResultsSeries:
         raise FileNotFoundError(f"results folder not found: {folder}")
     if not folder.is_dir():
         raise FileNotFoundError(f"not a results folder (not a directory): {folder}")
-    bpvd, ipvd = folder / "blocks.pvd", folder / "interfaces.pvd"
+    bpvd, ipvd = folder / rf.BLOCKS_PVD, folder / rf.INTERFACES_PVD
     if not bpvd.is_file():
         raise FileNotFoundError(
             f"incomplete results folder {folder}: blocks.pvd is missing "
@@ -196,6 +196,18 @@ def open_results(folder: Path | str) -> ResultsSeries:
     interfaces: list[tuple[float, str]] | None = None
     if ipvd.is_file():
         interfaces = _read_pvd(ipvd)
+        if len(interfaces) != len(blocks) and rf.state(folder).kind in rf.UNFINISHED:
+            # a run killed between the renames of its two indexes: the steps both list
+            common = min(len(blocks), len(interfaces))
+            log.warning(
+                "%s: blocks.pvd lists %d steps and interfaces.pvd %d (the run stopped "
+                "between them): using the first %d",
+                folder,
+                len(blocks),
+                len(interfaces),
+                common,
+            )
+            blocks, interfaces = blocks[:common], interfaces[:common]
         if len(interfaces) != len(blocks):
             raise ValueError(
                 f"inconsistent results folder {folder}: blocks.pvd lists {len(blocks)} steps "
@@ -214,12 +226,7 @@ def open_results(folder: Path | str) -> ResultsSeries:
         steps.append(int(m.group(1)) if m else k)
     steps_a = np.asarray(steps, dtype=int)
     times = np.asarray([t for t, _ in blocks], dtype=float)
-    summary: dict = {}
-    if (folder / "summary.json").is_file():
-        try:
-            summary = json.loads((folder / "summary.json").read_text())
-        except (OSError, ValueError) as exc:
-            log.warning("summary.json of %s unreadable (%s): ignored", folder, exc)
+    summary = rf.read_summary(folder)
     return ResultsSeries(
         folder=folder,
         steps=steps_a,
@@ -248,7 +255,7 @@ def _load_factors(folder: Path, steps: np.ndarray, times: np.ndarray) -> np.ndar
 
 def read_pushover(folder: Path | str) -> dict[str, np.ndarray]:
     """Columns of ``pushover.csv`` (step, lambda, control_displacement) as arrays."""
-    path = Path(folder) / "pushover.csv"
+    path = Path(folder) / rf.PUSHOVER
     if not path.is_file():
         raise FileNotFoundError(
             f"incomplete results folder {Path(folder)}: pushover.csv is missing"
@@ -816,12 +823,7 @@ def plot_pushover(folder: Path | str, out: Path | str | None = None) -> Path:
     if table["lambda"].size == 0:
         raise ValueError(f"{folder / 'pushover.csv'} holds no step")
     path = _check_out(out, folder / "pushover.png", _PLOT_SUFFIXES, "plot_pushover")
-    summary: dict = {}
-    if (folder / "summary.json").is_file():
-        try:
-            summary = json.loads((folder / "summary.json").read_text())
-        except (OSError, ValueError):
-            summary = {}
+    summary = rf.read_summary(folder)
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
@@ -857,9 +859,7 @@ def _mechanism_scene(
 ) -> _Scene:
     """A scene of the collapse mechanism of ``folder``, camera and title set; the caller
     closes it."""
-    from masonry_dem.export.vtu import MECHANISM_FILES
-
-    bfile, ifile = (folder / f for f in MECHANISM_FILES)
+    bfile, ifile = (folder / f for f in rf.MECHANISM_FILES)
     if not bfile.is_file():
         raise FileNotFoundError(
             f"no collapse mechanism in {folder}: {bfile.name} is missing (it is written when "
@@ -882,15 +882,8 @@ def _mechanism_scene(
         code = np.searchsorted(np.asarray(MECHANISM_BINS), motion, side="right")
         axis = np.asarray(igrid.cell_data["normal_axis"]).astype(int)
     data = _StepData(bpts, bdisp, fixed, jp, jd, axis, code, None)
-    name, lam = folder.name, None
-    summary_file = folder / "summary.json"
-    if summary_file.is_file():
-        try:
-            summary = json.loads(summary_file.read_text())
-            name = str(summary.get("name", name))
-            lam = summary.get("lambda")
-        except (OSError, ValueError) as exc:
-            log.warning("summary.json of %s unreadable (%s): no title data", folder, exc)
+    summary = rf.read_summary(folder)
+    name, lam = str(summary.get("name", folder.name)), summary.get("lambda")
     s = auto_scale(_max_displacement(data), _wall_size(data)) if scale is None else scale
     gap = _gap(data, wsize)
     scene = _Scene(data, view, wsize, gap, palette=(MECHANISM_LABELS, MECHANISM_COLOURS))

@@ -26,6 +26,7 @@ from pathlib import Path
 import meshio
 import numpy as np
 
+from masonry_dem.export.results_folder import MECHANISM_FILES, STEPS, write_atomic
 from masonry_dem.model import Model
 from masonry_dem.results import StepResult
 
@@ -96,17 +97,18 @@ def interfaces_mesh(model: Model, step: StepResult) -> meshio.Mesh:
 def write_step_vtu(folder: Path, model: Model, step: StepResult) -> tuple[str, str]:
     """Write ``steps/blocks_NNNN.vtu`` and ``steps/interfaces_NNNN.vtu``; returns both
     paths relative to ``folder``."""
-    sub = Path(folder) / "steps"
+    sub = Path(folder) / STEPS
     sub.mkdir(parents=True, exist_ok=True)
-    names = (f"steps/blocks_{step.step:04d}.vtu", f"steps/interfaces_{step.step:04d}.vtu")
-    meshio.write(Path(folder) / names[0], blocks_mesh(model, step), binary=True)
+    names = (f"{STEPS}/blocks_{step.step:04d}.vtu", f"{STEPS}/interfaces_{step.step:04d}.vtu")
+    _write_vtu(Path(folder) / names[0], blocks_mesh(model, step))
     if model.interfaces.count:
-        meshio.write(Path(folder) / names[1], interfaces_mesh(model, step), binary=True)
+        _write_vtu(Path(folder) / names[1], interfaces_mesh(model, step))
     return names
 
 
-#: file names of the collapse mechanism in a results folder
-MECHANISM_FILES = ("mechanism_blocks.vtu", "mechanism_interfaces.vtu")
+def _write_vtu(path: Path, mesh: meshio.Mesh) -> None:
+    """A whole VTU file or none: written under a temporary name, renamed into place."""
+    write_atomic(path, lambda tmp: meshio.write(tmp, mesh, file_format="vtu", binary=True))
 
 
 def joint_relative_motion(model: Model, dq: np.ndarray) -> np.ndarray:
@@ -137,12 +139,12 @@ def write_mechanism_vtu(
         if imesh is not None:
             _, d_i, d_j = _interface_corner_motion(model, increment)
             imesh.point_data["last_increment"] = (0.5 * (d_i + d_j)).reshape(-1, 3)
-    meshio.write(folder / MECHANISM_FILES[0], bmesh, binary=True)
+    _write_vtu(folder / MECHANISM_FILES[0], bmesh)
     if imesh is None:
         return MECHANISM_FILES[0], None
     for name, field in fields.items():
         motion = joint_relative_motion(model, field)
         peak = float(motion.max(initial=0.0))
         imesh.cell_data[name] = [motion / peak if peak > 0 else motion]
-    meshio.write(folder / MECHANISM_FILES[1], imesh, binary=True)
+    _write_vtu(folder / MECHANISM_FILES[1], imesh)
     return MECHANISM_FILES

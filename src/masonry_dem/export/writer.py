@@ -1,59 +1,94 @@
-"""Write an analysis to a results folder as it runs, so a failed run keeps every step.
+"""Write an analysis to a results folder as it runs, so a failed or interrupted run keeps
+every step it wrote and says how it ended.
 
-Folder layout: ``blocks.pvd``, ``interfaces.pvd``, ``steps/*.vtu``, ``pushover.csv``,
-``summary.json``, the collapse mechanism ``mechanism_blocks.vtu`` / ``mechanism_interfaces.vtu``
-when the run ends in collapse (and PNG renders next to them).
+The folder's layout, its lock and every write of its index files belong to
+:mod:`masonry_dem.export.results_folder`; this module turns the solver's steps into them.
 """
 
 from __future__ import annotations
 
-import json
 import logging
 from concurrent.futures import Future, ThreadPoolExecutor
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
+from masonry_dem._signals import interruption
+from masonry_dem.export import results_folder as rf
 from masonry_dem.export.pvd import write_pvd
 from masonry_dem.export.vtu import write_mechanism_vtu, write_step_vtu
 from masonry_dem.model import Model
-from masonry_dem.results import History, StepResult, write_pushover_csv
+from masonry_dem.results import History, StepResult
 
 log = logging.getLogger(__name__)
 
 
 class ResultsWriter:
-    """Callback for the solvers: ``writer(step)`` writes one step and refreshes the PVDs.
+    """Callback for the solvers: ``writer(step)`` writes one step and refreshes both PVDs
+    together.
+
+    Opening a writer claims the folder (:func:`results_folder.claim`): a folder in use by a
+    live run is refused; one that holds a previous run is refused unless ``overwrite``
+    (the default for the Python API, where a script re-runs into its folder; the command
+    line asks for ``--overwrite``), which removes the package's own files first.
+    ``summary.json`` says ``running`` from then on.
 
     ``background=True``: the steps are written in order by one thread while the solver goes
     on (zlib, which meshio compresses with, runs outside the GIL: a quarter of a run's time
-    went into writing). :meth:`flush` waits for them and raises a write's error;
-    :meth:`finish`, :meth:`close` and leaving a ``with`` block flush first, so every step
-    handed over is on disk, also when the solver raises."""
+    went into writing). A write that failed (full disk) is raised at the next step, so the
+    solver does not go on for nothing. :meth:`flush` waits for the writes and raises a
+    write's error; :meth:`finish` and leaving a ``with`` block flush first, so every step
+    handed over is on disk, also when the solver raises. Leaving the block on an exception
+    records the run as ``interrupted`` (Ctrl-C, SIGTERM) or ``failed``."""
 
     def __init__(
-        self, folder: Path | str, model: Model, every: int = 1, background: bool = False
+        self,
+        folder: Path | str,
+        model: Model,
+        every: int = 1,
+        background: bool = False,
+        overwrite: bool = True,
+        start: dict[str, Any] | None = None,
     ) -> None:
         self.folder = Path(folder)
-        self.folder.mkdir(parents=True, exist_ok=True)
         self.model = model
         self.every = max(1, int(every))
+        self._start = {
+            "name": model.name,
+            "blocks": model.blocks.count,
+            "interfaces": model.interfaces.count,
+            **(start or {}),
+        }
+        self._run = rf.claim(self.folder, overwrite, self._start)
+        self._start = rf.read_summary(self.folder) or self._start
         self.block_files: list[str] = []
         self.interface_files: list[str] = []
         self.times: list[float] = []
         self.steps_written: list[int] = []
+        self._curve: list[tuple[int, float, float]] = []
         self._count = 0
+        self._failed: BaseException | None = None
         self._pool = ThreadPoolExecutor(1, "results-writer") if background else None
         self._pending: list[Future] = []
 
     def __call__(self, step: StepResult, force: bool = False) -> None:
+        self._raise_failed()
         self._count += 1
+        if not force:
+            self._curve.append((step.step, step.load_factor, step.control_displacement))
         if not force and (self._count - 1) % self.every:
             return
         if self._pool is None:
             self._write(step)
         else:
             self._pending.append(self._pool.submit(self._write, step))
+
+    def _raise_failed(self) -> None:
+        done = [f for f in self._pending if f.done()]
+        self._pending = [f for f in self._pending if not f.done()]
+        for future in done:
+            future.result()
 
     def flush(self) -> None:
         """Wait until every step handed over is written; raise the first write error."""
@@ -73,46 +108,129 @@ class ResultsWriter:
     def __enter__(self) -> ResultsWriter:
         return self
 
-    def __exit__(self, *exc) -> None:
-        self.close()
+    def __exit__(self, exc_type, exc, tb) -> None:
+        if exc is None:
+            try:
+                self.close()  # a write that failed after the solver's last step
+            except OSError as err:
+                self.abort(err)
+                raise
+            return
+        try:
+            self.close()
+        except OSError as err:  # the solver's exception goes on; this one is logged
+            log.warning("%s", err)
+        self.abort(exc)
 
     def _write(self, step: StepResult) -> None:
-        bfile, ifile = write_step_vtu(self.folder, self.model, step)
-        self.block_files.append(bfile)
-        self.interface_files.append(ifile)
-        self.times.append(step.load_factor)
-        self.steps_written.append(step.step)
-        self._write_indexes()
+        if self._failed is not None:  # after a failed write nothing more: keep whole files
+            return
+        try:
+            bfile, ifile = write_step_vtu(self.folder, self.model, step)
+            self.block_files.append(bfile)
+            self.interface_files.append(ifile)
+            self.times.append(step.load_factor)
+            self.steps_written.append(step.step)
+            self._write_indexes()
+        except BaseException as exc:
+            self._failed = exc
+            raise
 
     def _write_indexes(self) -> None:
         times = np.asarray(self.times)
         # ParaView needs increasing times; past a load peak lambda falls, so use step numbers.
         if times.size > 1 and np.any(np.diff(times) <= 0):
             times = np.asarray(self.steps_written, dtype=float)
-        write_pvd(self.folder / "blocks.pvd", self.block_files, times)
+        # both written first, then renamed back to back; blocks.pvd, the index readers start
+        # from, last: a run killed between the two renames leaves interfaces.pvd one step
+        # ahead, never behind, and the readers use the steps both list
+        targets = {}
         if self.model.interfaces.count:
-            write_pvd(self.folder / "interfaces.pvd", self.interface_files, times)
+            targets[self.folder / rf.INTERFACES_PVD] = lambda tmp: write_pvd(
+                tmp, self.interface_files, times, atomic=False
+            )
+        targets[self.folder / rf.BLOCKS_PVD] = lambda tmp: write_pvd(
+            tmp, self.block_files, times, atomic=False
+        )
+        rf.replace_together(targets)
 
-    def finish(self, history: History, **summary_extra) -> dict:
-        """Write the last step if skipped, pushover.csv and summary.json."""
-        self.close()
-        if history.steps and (
-            not self.steps_written or self.steps_written[-1] != history.last.step
-        ):
-            self(history.last, force=True)
-        write_pushover_csv(self.folder / "pushover.csv", history)
+    def finish(self, history: History, release: bool = True, **summary_extra) -> dict:
+        """Write the last step if skipped, pushover.csv, the collapse mechanism and the final
+        summary.json (``summary_extra``: keys added to it); ``release``: unlock the folder
+        (the command line keeps it while it renders). A write that fails (full disk) marks
+        the run ``failed`` as far as the disk allows, and is raised."""
+        try:
+            self.close()
+            if history.steps and (
+                not self.steps_written or self.steps_written[-1] != history.last.step
+            ):
+                self(history.last, force=True)
+        except OSError as exc:
+            self.abort(exc)
+            raise
+        rf.write_pushover(
+            self.folder,
+            np.arange(len(history.steps)),
+            history.load_factors,
+            history.control_displacements,
+        )
         if history.status == "collapse" and history.steps:
             self._write_mechanism(history)
-        summary = history.summary(
-            blocks=self.model.blocks.count,
-            interfaces=self.model.interfaces.count,
-            name=self.model.name,
-            steps_written=len(self.steps_written),
-            **summary_extra,
+        summary = self.write_summary(
+            history.summary(
+                blocks=self.model.blocks.count,
+                interfaces=self.model.interfaces.count,
+                name=self.model.name,
+                steps_written=len(self.steps_written),
+            ),
+            summary_extra,
         )
-        (self.folder / "summary.json").write_text(json.dumps(summary, indent=2))
         log.info("results written to %s", self.folder)
+        if release:
+            self.release()
         return summary
+
+    def write_summary(self, summary: dict, extra: dict | None = None) -> dict:
+        """summary.json: what the run started with, ``summary`` and ``extra`` over it."""
+        return rf.write_summary(self.folder, {**self._start, **summary}, extra)
+
+    def abort(self, exc: BaseException) -> None:
+        """Record a run stopped by ``exc``: pushover.csv of the steps handed over and
+        summary.json ``interrupted`` (a signal) or ``failed``; then unlock the folder. A
+        failing disk is logged: the exception that stopped the run is the one to report."""
+        signal = interruption(exc)
+        interrupted = signal is not None
+        exc = signal or exc
+        status = rf.INTERRUPTED if interrupted else "failed"
+        why = (exc.strerror if isinstance(exc, OSError) else None) or str(exc) or type(exc).__name__
+        reason = (
+            f"{why} after {len(self._curve)} steps"
+            if interrupted
+            else f"stopped by an error after {len(self._curve)} steps: {why}"
+        )
+        try:
+            if self._curve:
+                steps, lams, disp = (np.asarray(c) for c in zip(*self._curve, strict=True))
+                rf.write_pushover(self.folder, np.arange(steps.size), lams, disp)
+            self.write_summary(
+                {
+                    "status": status,
+                    "reason": reason,
+                    "steps": len(self._curve),
+                    "lambda": float(self._curve[-1][1]) if self._curve else 0.0,
+                    "lambda_bracket": None,
+                    "steps_written": len(self.steps_written),
+                }
+            )
+        except OSError as err:
+            log.warning("%s: the run's end is not recorded (%s)", self.folder, err)
+        finally:
+            self.release()
+        log.info("%s: %s", self.folder, reason)  # the command line says it in its one line
+
+    def release(self) -> None:
+        """Unlock the folder (another run may then claim it)."""
+        self._run.release()
 
     def _write_mechanism(self, history: History) -> None:
         """The collapse mode at the last converged step (and the last increment) as VTU;

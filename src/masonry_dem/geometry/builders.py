@@ -5,13 +5,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from masonry_dem._validation import as_finite_array, positive_scalar
+from masonry_dem._validation import as_finite_array, plain, positive_scalar
 from masonry_dem.geometry.blocks import Blocks
 
 
 def _count(name: str, value) -> int:
     if isinstance(value, bool) or int(value) != value or int(value) < 1:
-        raise ValueError(f"{name} must be a positive integer, got {value!r}")
+        raise ValueError(f"{name} must be a positive integer, got {plain(value)}")
     return int(value)
 
 
@@ -112,7 +112,7 @@ def cut_openings(blocks: Blocks, openings) -> Blocks:
         x0, y0, x1, y1 = as_finite_array(f"openings[{k}]", rect, (4,))
         if x1 <= x0 or y1 <= y0:
             raise ValueError(
-                f"openings[{k}] must have x_max > x_min and y_max > y_min, got {rect!r}"
+                f"openings[{k}] must have x_max > x_min and y_max > y_min, got {plain(rect)}"
             )
         c = blocks.centres
         inside = (c[:, 0] > x0) & (c[:, 0] < x1) & (c[:, 1] > y0) & (c[:, 1] < y1)

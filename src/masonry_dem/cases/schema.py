@@ -1,0 +1,570 @@
+"""The schema of a case file, checked with pydantic in strict mode before anything is built.
+
+Strict: a boolean is ``true`` or ``false`` (never the text "no"), an integer a whole number (never
+15.7 or "3"), a number a number (never "1e9"); unknown keys are errors. Every physical value has
+a range with its unit and the reason for its bounds (:data:`RANGES`); a value outside it is an
+error naming the file, the table path (``[loads][1].live``), the value as written, the range and
+the unit.
+
+The tables whose keys depend on a choice read registries, so that a new builder, load type or
+analysis key is one line elsewhere: the geometry keys are the parameters of the builder function
+named by ``builder`` (``casefile._BUILDERS``, passed in), typed by :data:`RANGES` or else by the
+function's annotations; ``[analysis]`` holds the fields of ``StaticSettings`` plus
+:data:`ANALYSIS_EXTRA`; ``[[loads]]`` tables are :data:`LOAD_TABLES` by ``type``.
+"""
+
+from __future__ import annotations
+
+import difflib
+import inspect
+import logging
+import math
+from collections.abc import Callable, Mapping
+from dataclasses import MISSING, dataclass, fields
+from typing import Annotated, Any
+
+from pydantic import AfterValidator, BaseModel, ConfigDict, ValidationError, create_model
+from pydantic_core import PydanticCustomError
+
+from masonry_dem._validation import plain
+
+log = logging.getLogger(__name__)
+
+__all__ = [
+    "ANALYSIS_EXTRA",
+    "CaseError",
+    "LOAD_TABLES",
+    "RANGES",
+    "Range",
+    "check_case",
+]
+
+
+class CaseError(ValueError):
+    """A case file that cannot be read as written; the message names the file, the table
+    path, the value, and what is allowed."""
+
+
+@dataclass(frozen=True)
+class Range:
+    """Allowed values of a number: ``lo`` <= x <= ``hi`` (``lo`` excluded when ``open_lo``),
+    always finite; ``warn_above``: allowed, but logged with ``warn`` as the reason."""
+
+    lo: float
+    hi: float
+    unit: str
+    reason: str
+    integer: bool = False
+    open_lo: bool = False
+    warn_above: float | None = None
+    warn: str = ""
+
+    def text(self) -> str:
+        lo, hi = _bound(self.lo), _bound(self.hi)
+        span = f"above {lo} up to {hi}" if self.open_lo else f"from {lo} to {hi}"
+        unit = f" {self.unit}" if self.unit else ""
+        kind = "a whole number" if self.integer else "a finite number"
+        return f"{kind} {span}{unit} ({self.reason})"
+
+    def check(self, value: float) -> float:
+        ok = math.isfinite(value) and (value > self.lo if self.open_lo else value >= self.lo)
+        if not (ok and value <= self.hi):
+            raise PydanticCustomError("range", "must be {range}", {"range": self.text()})
+        return value
+
+
+def _bound(x: float) -> str:
+    """1e14 rather than 100000000000000.0; 0.5 as it is."""
+    if x != 0 and (abs(x) >= 1e5 or abs(x) < 1e-3):
+        mantissa, exponent = f"{x:.3g}".split("e")
+        return f"{mantissa}e{int(exponent)}"
+    return plain(int(x)) if float(x).is_integer() else plain(float(x))
+
+
+_SIZE = Range(
+    0.0,
+    1e3,
+    "m",
+    "sizes are in metres; larger values are millimetres typed as metres",
+    open_lo=True,
+)
+_COUNT = Range(
+    1, 10_000, "", "10^4 blocks along one direction already make 10^8 blocks", integer=True
+)
+_BUDGET = Range(0, 10**7, "", "an iteration budget; 0 switches the strategy off", integer=True)
+_COORDINATE = Range(-1e4, 1e4, "m", "a coordinate of a wall, in metres")
+_STIFFNESS = Range(
+    1e5,
+    1e14,
+    "N/m^3",
+    "below 1e5 a joint under 1 m of masonry closes by more than 0.2 m, outside small "
+    "displacements; above 1e14 the elastic displacements under the self weight fall below "
+    "the solver's resolution and steps fail at once (kn = 1e300 gave a false collapse)",
+)
+
+#: Ranges of the physical and numerical values, by key (the same key means the same thing in
+#: every table that has it). A key not here is typed by its builder's annotation only.
+RANGES: dict[str, Range] = {
+    # geometry
+    "blocks_along_length": _COUNT,
+    "courses": _COUNT,
+    "a": _SIZE,
+    "b": _SIZE,
+    "s": _SIZE,
+    "length": _SIZE,
+    "height": _SIZE,
+    "depth": _SIZE,
+    "joint": Range(0.0, 1.0, "m", "a mortar joint thicker than 1 m is no joint"),
+    "overhang": Range(0.0, 1e3, "m", "sizes are in metres"),
+    "unit_weight": Range(
+        0.0,
+        1e5,
+        "N/m^3",
+        "0 for weightless blocks; steel, the densest building material, is 78.5e3",
+    ),
+    # material
+    "kn": _STIFFNESS,
+    "kt": _STIFFNESS,
+    "friction": Range(
+        0.0,
+        100.0,
+        "",
+        "mu = tan(phi): 0 is frictionless, 100 is phi = 89.4 degrees, a joint that cannot slide; "
+        "larger values (friction 1e10 gave a false collapse) only spoil the conditioning",
+        warn_above=2.0,
+        warn="a friction coefficient above 2 (phi > 63 degrees) stands for interlocking (shear "
+        "keys, toothed joints), not for friction between masonry units",
+    ),
+    "tensile_strength": Range(
+        0.0, 1e8, "Pa", "0 for dry joints; 100 MPa is ten times the tensile strength of granite"
+    ),
+    "alpha": Range(0.0, 10.0, "", "exponent of Eq. (A5); the paper's value is 1.5", open_lo=True),
+    # loads
+    "value": Range(
+        -1e9, 1e9, "Pa", "a pressure; 1e9 Pa is over ten times the crushing strength of masonry"
+    ),
+    "axis": Range(0, 2, "", "0: e1 along the wall, 1: e2 up, 2: e3 out of plane", integer=True),
+    # analysis (fields of StaticSettings)
+    "initial_step": Range(0.0, 1e3, "load scales", "a lambda increment", open_lo=True),
+    "max_step": Range(0.0, 1e3, "load scales", "a lambda increment", open_lo=True),
+    "growth": Range(1.0, 10.0, "", "factor on the step after an easy step; 1 keeps it"),
+    "bracket_tolerance": Range(
+        0.0, 0.5, "", "relative width of the collapse bracket", open_lo=True
+    ),
+    "tolerance": Range(
+        0.0, 1e-2, "", "relative residual of an equilibrium; above 1 % it is none", open_lo=True
+    ),
+    "max_iterations": Range(1, 10**5, "", "Newton iterations per attempt", integer=True),
+    "max_steps": Range(1, 10**7, "", "converged steps of one run", integer=True),
+    "max_load_factor": Range(
+        0.0,
+        1e12,
+        "",
+        "lambda at which a run stops as completed; leave it out for no limit "
+        "(-1 gave a collapse at 0)",
+        open_lo=True,
+    ),
+    "displacement_limit": Range(
+        0.0,
+        1e3,
+        "m",
+        "largest translation still small; leave it out for half a block",
+        open_lo=True,
+    ),
+    "residual_stiffness": Range(
+        0.0, 1.0, "", "fraction of the elastic stiffness kept in the tangent", open_lo=True
+    ),
+    "robust_iterations": _BUDGET,
+    "rescue_time_steps": _BUDGET,
+    "transient_steps": _BUDGET,
+    "stop_check_time_steps": _BUDGET,
+    # [analysis] control and monitor
+    "block": Range(0, 10**9, "", "a block index, counted from 0", integer=True),
+    "target": Range(-1e3, 1e3, "m or rad", "a displacement to reach; not 0"),
+    "steps": Range(1, 10**6, "", "steps to the target", integer=True),
+}
+
+DOF_NAMES = ("u1", "u2", "u3", "w1", "w2", "w3")
+DOF_GROUPS = ("all", "translations", "rotations", "in_plane", "out_of_plane")
+
+
+# ------------------------------------------------------------------------- field types
+def _number(key: str) -> Any:
+    rng = RANGES[key]
+    base = int if rng.integer else float
+    return Annotated[base, AfterValidator(rng.check)]
+
+
+def _finite(value: float) -> float:
+    if not math.isfinite(value):
+        raise PydanticCustomError("range", "must be a finite number")
+    return value
+
+
+def _vector(key: str, rng: Range | None = None, nonzero: bool = False) -> Any:
+    def check(v: list[float]) -> list[float]:
+        if len(v) != 3:
+            raise PydanticCustomError("shape", "must hold 3 numbers [x, y, z]")
+        for x in v:
+            if rng is not None:
+                rng.check(x)
+            else:
+                _finite(x)
+        if nonzero and not any(v):
+            raise PydanticCustomError("range", "must not be the zero vector")
+        return v
+
+    return Annotated[list[float], AfterValidator(check)]
+
+
+def _selector(value: Any) -> Any:
+    """``base``, ``all``, ``column:left``... or a list of block indices (whole numbers >= 0)."""
+    if isinstance(value, str):
+        return value
+    if isinstance(value, list) and value:
+        for x in value:
+            if isinstance(x, bool) or not isinstance(x, int) or x < 0:
+                raise PydanticCustomError(
+                    "selector",
+                    "must list block indices as whole numbers >= 0, got {item}",
+                    {"item": plain(x)},
+                )
+        return value
+    raise PydanticCustomError(
+        "selector",
+        "must be a selector in quotes (base | all | column:left | column:right | course:K | "
+        "edge:NAME) or a non-empty array of block indices",
+    )
+
+
+def _dofs(value: Any) -> Any:
+    names = [value] if isinstance(value, str) else value
+    if not isinstance(names, list) or not names or not all(isinstance(n, str) for n in names):
+        raise PydanticCustomError(
+            "dofs", "must be a DOF group in quotes or an array of DOF names in quotes"
+        )
+    for n in names:
+        if n not in DOF_GROUPS and n not in DOF_NAMES:
+            raise PydanticCustomError(
+                "dofs",
+                "names no DOF: {name} is none of the groups {groups} or DOFs {dofs}",
+                {"name": plain(n), "groups": ", ".join(DOF_GROUPS), "dofs": ", ".join(DOF_NAMES)},
+            )
+    return value
+
+
+def _choice(options: tuple[str, ...]) -> Any:
+    def check(v: str) -> str:
+        if v not in options:
+            raise PydanticCustomError(
+                "choice", "must be one of {options}", {"options": ", ".join(options)}
+            )
+        return v
+
+    return Annotated[str, AfterValidator(check)]
+
+
+def _not_zero(v: float) -> float:
+    if v == 0:
+        raise PydanticCustomError("range", "must not be 0 (a displacement to reach)")
+    return v
+
+
+def _sign(v: int) -> int:
+    if v not in (-1, 1):
+        raise PydanticCustomError("range", "must be 1 or -1 (towards +e[axis] or -e[axis])")
+    return v
+
+
+_STRICT = ConfigDict(strict=True, extra="forbid")
+_SELECT = Annotated[Any, AfterValidator(_selector)]
+_OPENING = Annotated[list[float], AfterValidator(lambda v: _opening(v))]
+
+
+def _opening(v: list[float]) -> list[float]:
+    if len(v) != 4:
+        raise PydanticCustomError("shape", "must hold 4 numbers [x_min, y_min, x_max, y_max]")
+    for x in v:
+        _COORDINATE.check(x)
+    return v
+
+
+def _table(name: str, spec: Mapping[str, Any]) -> type[BaseModel]:
+    """A strict pydantic model; ``spec``: key -> type, or (type, default)."""
+    defs: dict[str, Any] = {k: (v if isinstance(v, tuple) else (v, ...)) for k, v in spec.items()}
+    return create_model(name, __config__=_STRICT, **defs)  # type: ignore[call-overload]
+
+
+def _by_annotation(key: str, annotation: Any) -> Any:
+    """The type of a key known only by its annotation (a new builder's parameter)."""
+    if key in RANGES:
+        return _number(key)
+    text = annotation if isinstance(annotation, str) else getattr(annotation, "__name__", "")
+    text = text.replace(" ", "")
+    optional = text.endswith("|None") or text.startswith("None|")
+    core = text.replace("|None", "").replace("None|", "")
+    kind: Any = {
+        "int": Annotated[int, AfterValidator(_finite)],
+        "float": Annotated[float, AfterValidator(_finite)],
+        "bool": bool,
+        "str": str,
+    }.get(core, Any)
+    return kind | None if optional and kind is not Any else kind
+
+
+TOP = _table(
+    "CaseFile",
+    {
+        "name": (str, None),
+        "description": (str, None),
+        "geometry": dict,
+        "material": dict,
+        "supports": (list[dict], None),
+        "loads": (list[dict], None),
+        "analysis": (dict, None),
+    },
+)
+MATERIAL = _table(
+    "Material",
+    {
+        "kn": _number("kn"),
+        "kt": _number("kt"),
+        "friction": _number("friction"),
+        "tensile_strength": (_number("tensile_strength"), 0.0),
+        "alpha": (_number("alpha") | None, None),
+    },
+)
+SUPPORT = _table(
+    "Support", {"select": _SELECT, "dofs": (Annotated[Any, AfterValidator(_dofs)], "all")}
+)
+_LIVE = (bool, None)
+#: ``[[loads]]`` tables by ``type`` (the builders of the loads are in casefile)
+LOAD_TABLES: dict[str, type[BaseModel]] = {
+    "self_weight": _table("SelfWeightLoad", {"type": str, "live": _LIVE}),
+    "weight_proportional": _table(
+        "WeightProportionalLoad",
+        {
+            "type": str,
+            "direction": (_vector("direction", nonzero=True), None),
+            "live": _LIVE,
+            "select": (_SELECT, None),
+        },
+    ),
+    "pressure": _table(
+        "PressureLoad",
+        {
+            "type": str,
+            "value": _number("value"),
+            "axis": (_number("axis"), 2),
+            "sign": (Annotated[int, AfterValidator(_sign)], 1),
+            "live": _LIVE,
+            "select": (_SELECT, None),
+        },
+    ),
+    "point": _table(
+        "PointLoad",
+        {
+            "type": str,
+            "select": _SELECT,
+            "force": _vector("force", Range(-1e12, 1e12, "N", "a force on one block")),
+            "offset": (_vector("offset", _COORDINATE), None),
+            "live": _LIVE,
+        },
+    ),
+}
+CONTROL = _table(
+    "Control",
+    {
+        "block": _number("block"),
+        "dof": _choice(DOF_NAMES),
+        "target": Annotated[
+            float, AfterValidator(RANGES["target"].check), AfterValidator(_not_zero)
+        ],
+        "steps": (_number("steps"), 50),
+    },
+)
+MONITOR = _table("Monitor", {"block": _number("block"), "dof": _choice(DOF_NAMES)})
+#: ``[analysis]`` keys that are not fields of StaticSettings: key -> (type, default)
+ANALYSIS_EXTRA: dict[str, tuple[Any, Any]] = {
+    "control": (dict | None, None),
+    "monitor": (dict | None, None),
+}
+
+
+def _analysis_table(settings_type: type) -> type[BaseModel]:
+    """The ``[analysis]`` table: every field of ``settings_type`` (StaticSettings), typed by
+    :data:`RANGES` or its annotation, string options by the solver's own constants."""
+    from masonry_dem.constitutive.law import MEMORY, TANGENT_METHODS, TENSION
+
+    choices: dict[str, Any] = {"tension": TENSION, "memory": MEMORY, "tangent": TANGENT_METHODS}
+    try:  # the solver's continuation options, wherever the solver package keeps them
+        from masonry_dem.solvers import incremental
+
+        choices["continuation"] = tuple(incremental.CONTINUATION)
+    except (ImportError, AttributeError):  # pragma: no cover - a renamed constant
+        pass
+    spec: dict[str, Any] = {}
+    for f in fields(settings_type):
+        kind = _choice(choices[f.name]) if f.name in choices else _by_annotation(f.name, f.type)
+        default = None if f.default is MISSING else f.default
+        spec[f.name] = (kind | None if default is None and kind is not Any else kind, default)
+    spec.update(ANALYSIS_EXTRA)
+    return _table("Analysis", spec)
+
+
+def _geometry_table(builder: str, func: Callable) -> type[BaseModel]:
+    spec: dict[str, Any] = {
+        "builder": str,
+        "base": (bool, False),
+        "openings": (list[_OPENING] | None, None),
+    }
+    for name, p in inspect.signature(func).parameters.items():
+        kind = _by_annotation(name, p.annotation)
+        if name in ("origin",):
+            kind = _vector(name, _COORDINATE)
+        elif name in ("lower", "upper"):
+            kind = list.__class_getitem__(_vector(name, _COORDINATE))
+        has_default = p.default is not inspect.Parameter.empty
+        spec[name] = (kind, p.default) if has_default else kind
+    return _table(f"Geometry_{builder}", spec)
+
+
+# --------------------------------------------------------------------------- messages
+_KIND = {
+    bool: "a boolean",
+    int: "a whole number",
+    float: "a number",
+    str: "text",
+    list: "an array",
+    dict: "a table",
+}
+_EXPECT = {
+    "bool_type": "must be true or false (a boolean, without quotes)",
+    "int_type": "must be a whole number (no decimal point, no quotes)",
+    "float_type": "must be a number (without quotes)",
+    "string_type": "must be text in quotes",
+    "list_type": "must be an array [ ... ]",
+    "dict_type": "must be a table",
+    "model_type": "must be a table",
+    "model_attributes_type": "must be a table",
+}
+
+
+def _path(loc: tuple) -> str:
+    """``('loads', 1, 'live')`` -> ``[loads][1].live``: tables in brackets, then keys."""
+    out = ""
+    dotted = False
+    for item in loc:
+        if isinstance(item, int):
+            out += f"[{item}]"
+        elif not dotted and item in ("geometry", "material", "supports", "loads", "analysis"):
+            out += f"[{item}]"
+            dotted = True
+        else:
+            out += f".{item}" if out else str(item)
+            dotted = True
+    return out
+
+
+def _message(err: Mapping[str, Any], table: tuple, allowed: list[str]) -> str:
+    loc = table + tuple(err["loc"])
+    where = _path(loc)
+    kind = err["type"]
+    value = err.get("input")
+    if kind == "extra_forbidden":
+        key = str(loc[-1])
+        close = [a for a in allowed if a.lower() == key.lower()]
+        close = close or difflib.get_close_matches(key.lower(), allowed, n=1)
+        top_table = not table and isinstance(value, (dict, list))  # a [table] of the file
+        hint = f" (did you mean {f'[{close[0]}]' if top_table else close[0]}?)" if close else ""
+        if top_table:
+            where = f"[{key}]"
+        return f"{where}: unknown key{hint}; allowed: {', '.join(sorted(allowed))}"
+    if kind == "missing":
+        return f"{where} is missing"
+    got = _KIND.get(type(value), type(value).__name__)
+    if kind in _EXPECT:
+        return f"{where} = {plain(value)}: {_EXPECT[kind]}, not {got}"
+    if kind in ("too_short", "too_long"):
+        return f"{where} = {plain(value)}: {err['msg'].lower()}"
+    return f"{where} = {plain(value)}: {err['msg']}"
+
+
+def _validate(
+    model: type[BaseModel], data: Any, table: tuple, source: str, errors: list[str]
+) -> BaseModel | None:
+    if not isinstance(data, dict):
+        got = _KIND.get(type(data), type(data).__name__)
+        errors.append(f"{_path(table)} = {plain(data)}: must be a table, not {got}")
+        return None
+    try:
+        return model.model_validate(data)
+    except ValidationError as exc:
+        allowed = list(model.model_fields)
+        # a misspelled key first: it explains the "missing" one
+        found = sorted(exc.errors(), key=lambda e: e["type"] != "extra_forbidden")
+        errors.extend(_message(e, table, allowed) for e in found)
+        return None
+
+
+def check_case(data: Any, source: str, builders: Mapping[str, Any], settings_type: type) -> None:
+    """Raise :class:`CaseError` for the first fault of ``data`` (a parsed case file) against
+    the schema, naming ``source`` and the table path; log a warning for values allowed but
+    unusual (friction above 2)."""
+    errors: list[str] = []
+    top = _validate(TOP, data, (), source, errors)
+    if top is not None:
+        builder = data["geometry"].get("builder")
+        if not isinstance(builder, str) or builder not in builders:
+            errors.append(
+                f"[geometry].builder = {plain(builder)}: must be one of "
+                f"{', '.join(sorted(builders))}"
+            )
+        else:
+            _validate(
+                _geometry_table(builder, builders[builder]),
+                data["geometry"],
+                ("geometry",),
+                source,
+                errors,
+            )
+        material = _validate(MATERIAL, data["material"], ("material",), source, errors)
+        for k, spec in enumerate(data.get("supports") or []):
+            _validate(SUPPORT, spec, ("supports", k), source, errors)
+        for k, spec in enumerate(data.get("loads") or []):
+            kind = spec.get("type")
+            if not isinstance(kind, str) or kind not in LOAD_TABLES:
+                errors.append(
+                    f"[loads][{k}].type = {plain(kind)}: must be one of {', '.join(LOAD_TABLES)}"
+                )
+                continue
+            _validate(LOAD_TABLES[kind], spec, ("loads", k), source, errors)
+        if "analysis" in data:
+            analysis = _validate(
+                _analysis_table(settings_type), data["analysis"], ("analysis",), source, errors
+            )
+            if analysis is not None:
+                for key, table in (("control", CONTROL), ("monitor", MONITOR)):
+                    if data["analysis"].get(key) is not None:
+                        _validate(table, data["analysis"][key], ("analysis", key), source, errors)
+        if material is not None:
+            _warn_above(data["material"], "[material]", source)
+    if errors:
+        more = f" (and {len(errors) - 1} more)" if len(errors) > 1 else ""
+        raise CaseError(f"case file {source}: {errors[0]}{more}")
+
+
+def _warn_above(table: Mapping[str, Any], where: str, source: str) -> None:
+    for key, value in table.items():
+        rng = RANGES.get(key)
+        if rng is not None and rng.warn_above is not None and value > rng.warn_above:
+            log.warning("case file %s: %s.%s = %s: %s", source, where, key, plain(value), rng.warn)
+
+
+def located(source: str, where: str) -> Callable[[Exception], CaseError]:
+    """A CaseError naming the file and the table path for an error raised while building."""
+
+    def wrap(exc: Exception) -> CaseError:
+        return CaseError(f"case file {source}: {where}: {exc}")
+
+    return wrap

@@ -1,0 +1,408 @@
+"""The results folder of one run: its layout, and every write and read of its index files.
+
+Layout::
+
+    summary.json            how the run stands: "running" from its start, then how it ended
+    blocks.pvd              the step series of the blocks   } always listing the same steps
+    interfaces.pvd          the step series of the joints   }
+    steps/blocks_NNNN.vtu, steps/interfaces_NNNN.vtu
+    pushover.csv            step, lambda, control displacement
+    mechanism_blocks.vtu, mechanism_interfaces.vtu   the collapse mode (runs ending in collapse)
+    *.png, *.gif, *.pvsm    renders and ParaView states made from the folder
+    .masonry-dem.lock       held (flock) by the process writing the folder
+
+A folder belongs to one run: :func:`claim` refuses a folder that holds another run's files
+unless asked to overwrite them (and then removes the package's own files, :data:`OWN_FILES`,
+and nothing else), and a lock keeps a second process out. Every file is written under a unique
+temporary name and renamed into place (:func:`write_atomic`), so a reader, an interrupted run
+or a full disk never leaves a half-written file under a real name. A run killed outright
+(SIGKILL, power cut) leaves ``summary.json`` at ``running`` with nobody holding the lock:
+:func:`state` names such a folder ``unfinished``.
+"""
+
+from __future__ import annotations
+
+import errno
+import json
+import logging
+import os
+import socket
+import time
+import uuid
+from collections.abc import Callable, Iterator, Mapping
+from contextlib import contextmanager
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+try:
+    import fcntl
+except ImportError:  # pragma: no cover - Windows: the pid in summary.json is the only sign
+    fcntl = None  # type: ignore[assignment]
+
+log = logging.getLogger(__name__)
+
+SUMMARY = "summary.json"
+BLOCKS_PVD = "blocks.pvd"
+INTERFACES_PVD = "interfaces.pvd"
+STEPS = "steps"
+PUSHOVER = "pushover.csv"
+MECHANISM_FILES = ("mechanism_blocks.vtu", "mechanism_interfaces.vtu")
+LOCK = ".masonry-dem.lock"
+
+#: the files the package writes in a results folder (glob patterns): what ``--overwrite``
+#: removes, and what marks a folder as holding a run
+RUN_FILES = (
+    SUMMARY,
+    BLOCKS_PVD,
+    INTERFACES_PVD,
+    PUSHOVER,
+    f"{STEPS}/blocks_*.vtu",
+    f"{STEPS}/interfaces_*.vtu",
+    *MECHANISM_FILES,
+)
+OWN_FILES = (
+    *RUN_FILES,
+    "render_*.png",
+    "animation_*.gif",
+    "animation_*.mp4",
+    "mechanism_*.png",
+    "mechanism.png",
+    "damage*.png",
+    "pushover.png",
+    "pushover.svg",
+    "pushover.pdf",
+    "damage_map.pvsm",
+    "deformed_shape.pvsm",
+    "force_view.pvsm",
+    "mechanism.pvsm",
+    ".*.tmp*",
+    f"{STEPS}/.*.tmp*",
+)
+
+#: statuses of summary.json: while the run goes, and how it can end
+RUNNING, INTERRUPTED = "running", "interrupted"
+#: folder states whose files may stop short of a whole run (see :func:`state`)
+UNFINISHED = ("running", "unfinished", INTERRUPTED, "failed")
+
+
+class ResultsFolderError(OSError):
+    """A results folder that cannot be used or written: the message names the path and why."""
+
+
+# ------------------------------------------------------------------------------ writing
+def _tmp_name(path: Path) -> Path:
+    """A name beside ``path`` that no other process or thread uses (hidden, .tmp)."""
+    return path.with_name(f".{path.name}.{os.getpid()}.{uuid.uuid4().hex[:8]}.tmp")
+
+
+def write_atomic(path: Path | str, write: Callable[[Path], Any]) -> Path:
+    """``write(tmp)`` under a unique temporary name beside ``path``, then rename it onto
+    ``path``: readers see the old file or the new one, never half of one. An OS error
+    (full disk, read-only folder) removes the temporary file and is raised as
+    :class:`ResultsFolderError` naming ``path``."""
+    path = Path(path)
+    tmp = _tmp_name(path)
+    try:
+        write(tmp)
+        os.replace(tmp, path)
+    except OSError as exc:
+        raise _os_error(path, exc) from exc
+    finally:
+        with _quiet():
+            tmp.unlink(missing_ok=True)
+    return path
+
+
+def replace_together(targets: Mapping[Path, Callable[[Path], Any]]) -> None:
+    """Write every target to its temporary name first, then rename them one after the other:
+    files that must agree (the two PVD indexes) change together, and if any write fails
+    none of them changes."""
+    tmps = {path: _tmp_name(path) for path in targets}
+    try:
+        for path, write in targets.items():
+            try:
+                write(tmps[path])
+            except OSError as exc:
+                raise _os_error(path, exc) from exc
+        for path, tmp in tmps.items():
+            try:
+                os.replace(tmp, path)
+            except OSError as exc:
+                raise _os_error(path, exc) from exc
+    finally:
+        for tmp in tmps.values():
+            with _quiet():
+                tmp.unlink(missing_ok=True)
+
+
+@contextmanager
+def _quiet() -> Iterator[None]:
+    try:
+        yield
+    except OSError:
+        pass
+
+
+def _os_error(path: Path, exc: OSError) -> ResultsFolderError:
+    if isinstance(exc, ResultsFolderError):
+        return exc
+    return ResultsFolderError(exc.errno or 0, f"cannot write {path}: {_why(exc)}")
+
+
+def _why(exc: OSError) -> str:
+    return {
+        errno.ENOSPC: "no space left on the device",
+        errno.EDQUOT: "disk quota exceeded",
+        errno.EROFS: "the file system is read-only",
+        errno.EACCES: "permission denied",
+        errno.EPERM: "permission denied",
+    }.get(exc.errno or 0, (exc.strerror or str(exc)).lower())
+
+
+def write_summary(
+    folder: Path | str, summary: Mapping[str, Any], extra: Mapping | None = None
+) -> dict:
+    """The one writer of ``summary.json``: ``summary`` updated with ``extra`` (the keys other
+    parts of the package add), written atomically; returns what was written."""
+    data = dict(summary)
+    data.update(extra or {})
+    text = json.dumps(data, indent=2, default=_plain_json)
+    write_atomic(Path(folder) / SUMMARY, lambda tmp: tmp.write_text(text))
+    return data
+
+
+def _plain_json(value: Any) -> Any:
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, Path):
+        return str(value)
+    raise TypeError(f"summary.json: {type(value).__name__} is not JSON")
+
+
+def write_pushover(folder: Path | str, steps, load_factors, control_displacements) -> None:
+    """``pushover.csv``: one row per step (step, lambda, control_displacement)."""
+    rows = np.column_stack(
+        [np.asarray(steps, dtype=float), np.asarray(load_factors), control_displacements]
+    ).reshape(-1, 3)
+
+    def write(tmp: Path) -> None:
+        np.savetxt(
+            tmp,
+            rows,
+            delimiter=",",
+            header="step,lambda,control_displacement",
+            comments="",
+            fmt=["%d", "%.10g", "%.10g"],
+        )
+
+    write_atomic(Path(folder) / PUSHOVER, write)
+
+
+# ------------------------------------------------------------------------------ reading
+def read_summary(folder: Path | str) -> dict:
+    """``summary.json`` of a folder ({} when absent or unreadable: logged)."""
+    path = Path(folder) / SUMMARY
+    if not path.is_file():
+        return {}
+    try:
+        data = json.loads(path.read_text())
+    except (OSError, ValueError) as exc:
+        log.warning("%s unreadable (%s): ignored", path, exc)
+        return {}
+    return data if isinstance(data, dict) else {}
+
+
+@dataclass(frozen=True)
+class FolderState:
+    """What a folder holds: ``empty`` (no run's files), ``running`` (a live process holds
+    its lock), ``unfinished`` (a run that stopped without saying how: killed), or the
+    status the run ended with (``collapse``, ``completed``, ``failed``, ``interrupted``)."""
+
+    kind: str
+    summary: dict
+
+    def describe(self, folder: Path) -> str:
+        s = self.summary
+        started = f" started {s['started']}" if s.get("started") else ""
+        pid = f" by process {s['pid']}" if s.get("pid") else ""
+        if self.kind == "running":
+            return f"results folder {folder} is being written{pid}{started}"
+        if self.kind == "unfinished":
+            return (
+                f"results folder {folder} is unfinished: its run{started}{pid} stopped without "
+                "finishing (killed?) and its files stop at the last step written"
+            )
+        if self.kind == "empty":
+            return f"results folder {folder} holds no run"
+        return f"results folder {folder} holds a run that ended '{self.kind}'"
+
+
+def _lock_is_held(folder: Path) -> bool:
+    """Whether a live process holds the folder's lock (a lock nobody holds is free)."""
+    path = folder / LOCK
+    if fcntl is None or not path.is_file():
+        return False
+    try:
+        fd = os.open(path, os.O_RDONLY)
+    except OSError:
+        return False
+    try:
+        fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)
+    except OSError:
+        return True
+    finally:
+        os.close(fd)
+    return False
+
+
+def _holds_run(folder: Path) -> bool:
+    return any(any(folder.glob(pattern)) for pattern in RUN_FILES)
+
+
+def state(folder: Path | str, _locked_here: bool = False) -> FolderState:
+    """How the run of ``folder`` stands (see :class:`FolderState`)."""
+    folder = Path(folder)
+    if not folder.is_dir() or not _holds_run(folder):
+        return FolderState("empty", {})
+    summary = read_summary(folder)
+    status = str(summary.get("status", ""))
+    if not _locked_here and _lock_is_held(folder):
+        return FolderState("running", summary)
+    if status in ("", RUNNING):
+        return FolderState("unfinished", summary)
+    return FolderState(status, summary)
+
+
+def warn_if_unfinished(folder: Path | str) -> FolderState:
+    """For the readers of a folder (render, paraview-state): log a warning naming a folder
+    whose run is still going or never finished; the steps it holds are whole and usable."""
+    st = state(folder)
+    if st.kind in ("running", "unfinished", INTERRUPTED):
+        what = (
+            st.describe(Path(folder))
+            if st.kind != INTERRUPTED
+            else (
+                f"results folder {folder} holds an interrupted run "
+                f"({st.summary.get('reason', 'stopped')})"
+            )
+        )
+        log.warning("%s; using the steps it holds", what)
+    return st
+
+
+# ------------------------------------------------------------------------ one run, one folder
+class RunFolder:
+    """The folder of one run, claimed by :func:`claim`: locked for this process until
+    :meth:`release`."""
+
+    def __init__(self, folder: Path, lock_fd: int | None) -> None:
+        self.folder = folder
+        self._lock_fd = lock_fd
+
+    def release(self) -> None:
+        if self._lock_fd is not None:
+            with _quiet():
+                os.close(self._lock_fd)  # closing the descriptor drops the flock
+            self._lock_fd = None
+
+    def __del__(self) -> None:  # pragma: no cover - a writer dropped without finish
+        self.release()
+
+
+def _refuse_path(folder: Path) -> None:
+    if folder.exists() and not folder.is_dir():
+        raise ResultsFolderError(errno.ENOTDIR, f"results folder {folder} is a file, not a folder")
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ResultsFolderError(
+            exc.errno or 0,
+            f"cannot create results folder {folder}: {_why(exc)}",
+        ) from exc
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise ResultsFolderError(
+            errno.EACCES, f"cannot write results folder {folder}: permission denied"
+        )
+
+
+def _lock(folder: Path) -> int | None:
+    if fcntl is None:  # pragma: no cover
+        return None
+    path = folder / LOCK
+    try:
+        fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
+    except OSError as exc:
+        raise _os_error(path, exc) from exc
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        os.close(fd)
+        holder = read_summary(folder).get("pid", "another process")
+        raise ResultsFolderError(
+            errno.EBUSY,
+            f"results folder {folder} is in use by another run (process {holder}); "
+            "choose another --out or wait for it to end",
+        ) from None
+    return fd
+
+
+def remove_own_files(folder: Path) -> int:
+    """Remove the package's files from ``folder`` (:data:`OWN_FILES`), nothing else; the
+    ``steps`` folder too when that leaves it empty. Returns how many were removed."""
+    removed = 0
+    for pattern in OWN_FILES:
+        for path in folder.glob(pattern):
+            if path.is_file():
+                try:
+                    path.unlink()
+                except OSError as exc:
+                    raise _os_error(path, exc) from exc
+                removed += 1
+    steps = folder / STEPS
+    if steps.is_dir() and not any(steps.iterdir()):
+        steps.rmdir()
+    return removed
+
+
+def claim(folder: Path | str, overwrite: bool, start: Mapping[str, Any]) -> RunFolder:
+    """Make ``folder`` the folder of this run: create it, lock it, refuse it if it holds
+    another run (unless ``overwrite``: then remove the package's own files, and only them),
+    and write ``summary.json`` with status ``running`` and ``start`` (name, sizes).
+
+    Raises :class:`ResultsFolderError` (an OSError) naming the folder: a file, not
+    writable, in use by a live run, or holding another run without ``overwrite``."""
+    folder = Path(folder)
+    _refuse_path(folder)
+    fd = _lock(folder)
+    try:
+        previous = state(folder, _locked_here=True)
+        if previous.kind != "empty":
+            if not overwrite:
+                raise ResultsFolderError(
+                    errno.EEXIST,
+                    f"{previous.describe(folder)}; pass --overwrite (overwrite=True) to replace "
+                    "it, or choose another --out",
+                )
+            count = remove_own_files(folder)
+            log.info("removed %d files of the previous run from %s", count, folder)
+        write_summary(
+            folder,
+            {
+                "status": RUNNING,
+                "reason": "the analysis is running",
+                "pid": os.getpid(),
+                "host": socket.gethostname(),
+                "started": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+            },
+            start,
+        )
+    except BaseException:
+        if fd is not None:
+            os.close(fd)
+        raise
+    return RunFolder(folder, fd)
