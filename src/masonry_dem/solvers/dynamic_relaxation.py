@@ -83,6 +83,7 @@ from masonry_dem.assembly.stiffness import Assembly
 from masonry_dem.constitutive.law import InterfaceLaw, LawResponse
 from masonry_dem.model import Model
 from masonry_dem.results import History, StepResult
+from masonry_dem.solvers.static.outcome import Status
 
 log = logging.getLogger(__name__)
 
@@ -627,13 +628,13 @@ class DynamicRelaxation:
         self._record(hist, dead.x, 0.0, dead.response, dead.cycles, monitor_dof, callback)
         if not np.any(self.F_live):
             return self._finish(
-                hist, "completed", "no live load: the dead-load state is the answer", t0
+                hist, Status.COMPLETED, "no live load: the dead-load state is the answer", t0
             )
         if s.loading == "ramp":
             state = self._ramp(hist, state, monitor_dof, callback)
-            if hist.status in ("failed", "completed"):
+            if hist.status in (Status.FAILED, Status.COMPLETED):
                 return self._finish(hist, hist.status, hist.reason, t0)
-            if hist.status == "collapse" and not s.refine:
+            if hist.status is Status.COLLAPSE and not s.refine:
                 return self._finish(hist, hist.status, hist.reason, t0)
         self._load_control(hist, state, monitor_dof, callback)
         return self._finish(hist, hist.status, hist.reason, t0)
@@ -659,7 +660,7 @@ class DynamicRelaxation:
         top = s.max_load_factor if math.isfinite(s.max_load_factor) else 1e6 * self.load_scale
         out = self._relax_with_cuts(state, top, hist, ramp_to=top, on_checkpoint=checkpoint)
         if out.kind in _FATAL:
-            hist.status, hist.reason = "failed", out.reason
+            hist.status, hist.reason = Status.FAILED, out.reason
             return state
         if out.ok:
             plastic, cracked = self._plastic_of(out, state)
@@ -678,7 +679,7 @@ class DynamicRelaxation:
             cand, _ = candidates[mid]
             probe = self._relax_with_cuts(cand, cand.load_factor, hist)
             if probe.kind in _FATAL:
-                hist.status, hist.reason = "failed", probe.reason
+                hist.status, hist.reason = Status.FAILED, probe.reason
                 return state
             if probe.ok:
                 lo = mid
@@ -696,10 +697,13 @@ class DynamicRelaxation:
                 hist, probe.x, cand.load_factor, probe.response, probe.cycles, monitor_dof, callback
             )
         if out.ok and lo == len(candidates) - 1:
-            hist.status, hist.reason = "completed", f"reached max_load_factor {out.load_factor:.6g}"
+            hist.status, hist.reason = (
+                Status.COMPLETED,
+                f"reached max_load_factor {out.load_factor:.6g}",
+            )
             return state
         hist.collapse_bracket = (state.load_factor, lam_fail)
-        hist.status = "collapse"
+        hist.status = Status.COLLAPSE
         hist.reason = (
             f"ramp: no equilibrium beyond lambda={state.load_factor:.6g} "
             f"(first failure at {lam_fail:.6g}: {out.reason or 'a passed state did not settle'})"
@@ -730,7 +734,7 @@ class DynamicRelaxation:
             target = min(lam + dlam, s.max_load_factor)
             out = self._relax_with_cuts(state, target, hist)
             if out.kind in _FATAL:
-                hist.status, hist.reason = "failed", out.reason
+                hist.status, hist.reason = Status.FAILED, out.reason
                 hist.collapse_bracket = None
                 return
             if out.ok:
@@ -739,7 +743,10 @@ class DynamicRelaxation:
                 self._record(hist, out.x, target, out.response, out.cycles, monitor_dof, callback)
                 lam = target
                 if lam >= s.max_load_factor:
-                    hist.status, hist.reason = "completed", f"reached max_load_factor {lam:.6g}"
+                    hist.status, hist.reason = (
+                        Status.COMPLETED,
+                        f"reached max_load_factor {lam:.6g}",
+                    )
                     return
                 if math.isfinite(lam_fail):
                     dlam = (lam_fail - lam) / 2
@@ -754,28 +761,28 @@ class DynamicRelaxation:
                 dlam = (lam_fail - lam) / 2
         else:
             hist.status, hist.reason = (
-                "failed",
+                Status.FAILED,
                 f"max_steps={s.max_steps} reached at lambda={lam:.6g}",
             )
             return
         if not math.isfinite(lam_fail):
-            hist.status, hist.reason = "failed", "no load step failed and none converged"
+            hist.status, hist.reason = Status.FAILED, "no load step failed and none converged"
             return
         hist.collapse_bracket = (lam, lam_fail)
-        hist.status = "collapse"
+        hist.status = Status.COLLAPSE
         hist.reason = f"no equilibrium beyond lambda={lam:.6g} (first failure at {lam_fail:.6g}: {last_reason})"
 
     def _fail_empty(self, hist: History, zero: _State, reason: str, t0: float, callback) -> History:
         resp = self.law.respond(np.zeros((self.m, 6)), zero.plastic, zero.cracked)
         self._record(hist, zero.x, 0.0, resp, 0, None, callback)
-        return self._finish(hist, "failed", reason, t0)
+        return self._finish(hist, Status.FAILED, reason, t0)
 
     def _global_dof(self, block: int, dof: str) -> int:
         return self.model.dof_index(block, dof)
 
-    def _finish(self, hist: History, status: str, reason: str, t0: float) -> History:
+    def _finish(self, hist: History, status: Status, reason: str, t0: float) -> History:
         hist.status, hist.reason = status, reason
-        if status != "collapse":
+        if status is not Status.COLLAPSE:
             hist.collapse_bracket = None
         hist.seconds = time.perf_counter() - t0
         hist.iterations = self.stats.time_steps

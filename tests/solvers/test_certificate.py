@@ -1,0 +1,174 @@
+"""A collapse is a certified result, and the solver never calls its own failure a collapse.
+
+Proves: every reported collapse carries a certificate whose three conditions a test
+re-checks on its own (the residual of the state re-evaluated by a fresh discrete problem,
+the tangent's Rayleigh quotient along K_t^-1 F_L from a dense solve, the live load's work);
+a stop the certificate refuses ends ``failed`` with every step kept; the outcome is typed
+(Status, StopReason) and written to summary.json. And the defects of issue 18, each failing
+on 7022155: the displacement-control budget reported as "completed", elastic shortening of a
+tall column taken for a mechanism, a displacement limit taken for a collapse, and absurd
+friction or stiffness giving a "collapse" at lambda ~ 1e-8.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from certificate_checks import recheck, tilted_wall
+
+from masonry_dem.geometry.builders import (
+    add_base,
+    single_block,
+    stack_bond_column,
+)
+from masonry_dem.model import InterfaceMaterial, Model, SelfWeight, Support, WeightProportional
+from masonry_dem.solvers.incremental import (
+    DisplacementControl,
+    StaticSettings,
+    Status,
+    StopReason,
+    pushover,
+)
+
+
+# ------------------------------------------------------------------ certified collapses
+def test_a_tilting_block_collapse_is_certified_at_s_over_a():
+    """A block on a base tilts at s/a; the certificate holds and re-checks: the tangent of
+    its last state has almost nothing left along the rotation the load drives."""
+    a, s = 0.2, 0.1
+    blocks, base = add_base(single_block(a, 0.25, s, 20e3))
+    model = Model.build(
+        blocks,
+        InterfaceMaterial(kn=2.4e9, kt=1e9, friction=0.7),
+        supports=[Support([base])],
+        loads=[SelfWeight(), WeightProportional((0.0, 0.0, 1.0))],
+    )
+    settings = StaticSettings()
+    hist = pushover(model, settings)
+    assert hist.collapse_multiplier == pytest.approx(s / a, rel=0.005)
+    recheck(model, hist, settings)
+    assert hist.certificate.bound_status == "not checked"  # no bound given: never a pass
+    assert hist.certificate.within_bound is None
+
+
+def test_panel_collapse_is_certified_and_written_to_the_summary(tmp_path):
+    model = tilted_wall(3, 5)
+    settings = StaticSettings()
+    hist = pushover(model, settings, out=tmp_path)
+    recheck(model, hist, settings)
+    assert isinstance(hist.status, Status) and isinstance(hist.stop, StopReason)
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert summary["status"] == "collapse"
+    assert summary["stop"] == str(hist.stop)
+    cert = summary["certificate"]
+    assert cert["holds"] and cert["mode"] in ("singular tangent", "flat curve")
+    assert cert["bound_status"] == "not checked"
+    assert cert["live_work"] > 0 and cert["step"] == hist.certificate.step
+
+
+def test_a_bound_below_lambda_refuses_the_collapse():
+    """Condition (c): a collapse multiplier above the (injected) associative bound is no
+    certified collapse: the run ends failed and says which bound it exceeds."""
+    model = tilted_wall(3, 5)
+    found = pushover(model)
+    lam = found.collapse_multiplier
+    above = pushover(model, bound=1.5 * lam)
+    assert above.status == "collapse" and above.certificate.bound_status == "within"
+    below = pushover(model, bound=lambda m: 0.5 * lam)
+    assert below.status == "failed" and below.certificate.bound_status == "exceeded"
+    assert "limit-analysis bound" in below.reason
+    assert len(below.steps) == len(found.steps)  # every step kept
+
+
+# ------------------------------------------------------------------ the defects of issue 18
+def test_displacement_control_that_spends_its_budget_fails():
+    """On 7022155 the ``while ... else`` reported "completed, control displacement reached"
+    when max_steps ran out at 15 % of the target."""
+    model = tilted_wall(3, 5)
+    top = int(np.argmax(model.blocks.centres[:, 1] * 100 + model.blocks.centres[:, 0]))
+    target = 0.02
+    hist = pushover(
+        model, StaticSettings(max_steps=10), control=DisplacementControl(top, "u3", target, 50)
+    )
+    assert hist.status == "failed"
+    assert hist.stop is StopReason.CONTROL_BUDGET
+    reached = hist.last.q[top, 2]
+    assert reached < 0.5 * target and f"{reached:.6g}" in hist.reason
+    # with the budget it needs, the same control reaches its target
+    done = pushover(model, control=DisplacementControl(top, "u3", 2e-3, 10))
+    assert done.status == "completed" and done.stop is StopReason.CONTROL_REACHED
+    assert done.last.q[top, 2] == pytest.approx(2e-3, rel=1e-9)
+
+
+def test_elastic_shortening_of_a_tall_column_is_no_mechanism():
+    """A stack of 200 blocks 0.1 m high, 0.05 m square (20 m) shortens elastically under its
+    weight by w / (kn A) x n (n + 1) / 2 = 0.0402 m (the joint under course i carries the
+    n - i + 1 blocks above it), more than the displacement limit (half the smallest block
+    size, 0.025 m). On 7022155 the dead load failed as "a mechanism"."""
+    n, a, b = 200, 0.1, 0.05
+    blocks, base = add_base(stack_bond_column(n, a, b, b, 20e3))
+    kn = 1e9
+    model = Model.build(
+        blocks,
+        InterfaceMaterial(kn=kn, kt=0.4e9, friction=0.7),
+        supports=[Support([base])],
+        loads=[SelfWeight()],
+    )
+    hist = pushover(model)
+    assert hist.status == "completed", hist.reason
+    weight = 20e3 * a * b * b
+    expected = weight / (kn * b * b) * n * (n + 1) / 2
+    assert expected > 0.025
+    assert -hist.last.q[:, 1].min() == pytest.approx(expected, rel=1e-6)
+
+
+def test_a_displacement_limit_alone_is_not_a_collapse():
+    """A limit the elastic wall passes long before anything yields (1e-5 m) stops the path;
+    the state there keeps its elastic stiffness, so the run ends failed, never collapse
+    (on 7022155: collapse, "a mechanism: displacements exceed the limit")."""
+    model = tilted_wall(3, 5)
+    hist = pushover(model, StaticSettings(displacement_limit=1e-5))
+    assert hist.status == "failed"
+    assert hist.collapse_multiplier is None
+    assert hist.certificate is not None and not hist.certificate.mode_found
+    assert hist.certificate.mode_rayleigh > StaticSettings().mode_stiffness
+    assert len(hist.steps) >= 2  # every step it converged is kept
+
+
+@pytest.mark.parametrize(
+    "material",
+    [
+        InterfaceMaterial(kn=1e9, kt=0.4e9, friction=1e10),
+        InterfaceMaterial(kn=1e9, kt=0.4e9, friction=10.0),
+    ],
+    ids=["friction 1e10", "friction 10"],
+)
+def test_high_friction_never_collapses_near_zero(material):
+    """With friction that cannot slide, the held 3 x 5 panel still rocks: a certified
+    collapse well above zero, or failed; on 7022155 friction 1e10 gave "collapse" at
+    lambda = 1.6e-8. The rocking panel with friction 0.7 bounds it from below (more friction
+    can only hold more)."""
+    model = tilted_wall(3, 5, material)
+    hist = pushover(model)
+    reference = pushover(tilted_wall(3, 5)).collapse_multiplier
+    if hist.status == "collapse":
+        assert hist.collapse_multiplier >= 0.99 * reference
+        recheck(model, hist, StaticSettings())
+    else:
+        assert hist.status == "failed"
+
+
+def test_certify_false_reports_the_stop_unchecked():
+    """``certify=False`` keeps the stop of the path as the answer (no certificate)."""
+    model = tilted_wall(3, 5)
+    hist = pushover(model, StaticSettings(displacement_limit=1e-5, certify=False))
+    assert hist.status == "collapse" and hist.certificate is None
+
+
+def test_settings_name_the_bad_field():
+    for field, value in [("mode_stiffness", 0.0), ("search_cuts", 0), ("bound_tolerance", -1)]:
+        with pytest.raises(ValueError, match=field):
+            replace(StaticSettings(), **{field: value})
