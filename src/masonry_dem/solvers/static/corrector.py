@@ -60,6 +60,8 @@ class Corrector:
         self._last_increment = 0.0
         #: extra room of the displacement limit (the elastic displacement under the dead load)
         self._limit_allowance = 0.0
+        #: the limit in units of the wall's own elastic scale (set once the dead load stands)
+        self._elastic_limit = 0.0
         self._dr: DynamicRelaxation | None = None
 
     @property
@@ -69,7 +71,7 @@ class Corrector:
     @property
     def limit(self) -> float:
         """The displacement limit of the searches [m]."""
-        return self.problem.limit + self._limit_allowance
+        return max(self.problem.limit, self._elastic_limit) + self._limit_allowance
 
     def restore(self, q: np.ndarray, cracked: np.ndarray | None = None) -> None:
         """Make (q, cracked) the last converged state (e.g. a state read from a History)."""
