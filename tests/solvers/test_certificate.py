@@ -174,3 +174,36 @@ def test_settings_name_the_bad_field():
     for field, value in [("mode_stiffness", 0.0), ("search_cuts", 0), ("bound_tolerance", -1)]:
         with pytest.raises(ValueError, match=field):
             replace(StaticSettings(), **{field: value})
+
+
+def test_an_in_plane_wall_never_collapses_at_the_residual_tolerance():
+    """A held 9 x 3 wall tilted in its plane, friction 29, kn 1.1e8 (found by the property
+    sweep): Newton stalls from the dead-load state for every lambda above 1e-8, and on
+    7022155 that was a collapse at lambda 1.04e-8. Its tangent there is singular along the
+    load, but a contact closes after a small motion: dynamic relaxation carries 0.08. So
+    the run ends failed, and says why."""
+    model = tilted_wall(9, 3, InterfaceMaterial(kn=1.1e8, kt=0.44e8, friction=29.0), (1, 0, 0))
+    hist = pushover(model)
+    assert hist.status == "failed"
+    cert = hist.certificate
+    assert cert.near_zero and cert.zero_load_check == "rest found" and not cert.mode_found
+    assert "below what the residual tolerance resolves" in hist.reason
+
+
+def test_a_frictionless_block_collapses_at_zero_load_certified():
+    """No friction: the block slides under any lateral load. The multiplier (<= 1e-8) is
+    below what the residual resolves, so the certificate asks for a mechanism of the
+    dead-load state that dynamic relaxation confirms by finding no rest: it does."""
+    blocks, base = add_base(single_block(0.2, 0.3, 0.3, 20e3))
+    model = Model.build(
+        blocks,
+        InterfaceMaterial(kn=1e9, kt=0.4e9, friction=0.0),
+        supports=[Support([base])],
+        loads=[SelfWeight(), WeightProportional((1.0, 0.0, 0.0))],
+    )
+    hist = pushover(model)
+    assert hist.status == "collapse", hist.reason
+    assert hist.collapse_multiplier <= 1e-8
+    cert = hist.certificate
+    assert cert.near_zero and cert.zero_load_check == "no rest"
+    assert cert.mode == "mechanism of the dead-load state" and cert.live_work > 0

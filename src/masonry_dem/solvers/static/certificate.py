@@ -31,6 +31,13 @@ the state where the path stopped, each independently of how the path got there:
     ``bound_tolerance``. The bound is injected (a number or a function of the model); with
     none, the field says ``"not checked"``, never a pass.
 
+A multiplier the residual cannot tell from zero load (at most ZERO_LOAD x ``tolerance`` load
+scales) needs more for (b): a mechanism of the dead-load state itself (its tangent, or the
+tangent at its extension to the smallest resolvable lambda, singular along the load to
+ZERO_MODE x the tangent's floor against the bonded elastic stiffness), which dynamic
+relaxation confirms by finding no rest at that lambda (a contact may close after a small
+motion: an in-plane held wall whose tangent is singular there carries 0.08 by DR).
+
 A stop that fails (a) or (b), or exceeds the bound, is reported ``failed`` with the reason
 and every step kept.
 """
@@ -56,6 +63,11 @@ if TYPE_CHECKING:
 Bound = float | Callable[["Model"], "float | None"] | None
 
 NOT_CHECKED = "not checked"
+#: a multiplier at most ZERO_LOAD x tolerance (in load scales) cannot be told from zero load
+#: by the residual; a collapse there needs a mechanism of the dead-load state itself: its
+#: tangent singular along the load to ZERO_MODE x the tangent's floor (residual_stiffness)
+ZERO_LOAD = 100.0
+ZERO_MODE = 1e3
 
 
 @dataclass
@@ -85,6 +97,8 @@ class Certificate:
     mode_displacement: float
     live_work: float  # F_L . mode (mode scaled to a largest translation of 1 m)
     mode_found: bool
+    near_zero: bool  # lambda <= ZERO_LOAD x tolerance load scales: the stricter check applied
+    zero_load_check: str  # dynamic relaxation at the resolvable lambda: "no rest", ...
     # (c)
     bound: float | None
     bound_status: str  # "within", "exceeded", or "not checked"
@@ -114,11 +128,14 @@ def certify(
     hist: History,
     settings: StaticSettings,
     bound: Bound = None,
+    rests_at: Callable[[float], bool] | None = None,
 ) -> Certificate:
     """Check the stop of ``hist`` at its last recorded state (see the module). Only the
     model's discrete problem and the History are used: the law state of the last step (the
     joints cracked before it, the plastic part of the step before it) is rebuilt from the
-    steps, so the check does not rest on how the path got there."""
+    steps, so the check does not rest on how the path got there. ``rests_at(lambda)``: does
+    an independent method (dynamic relaxation) find rest at that lambda from the last state;
+    asked only of a multiplier the residual cannot tell from zero load."""
     s = settings
     free = problem.free
     law = problem.law
@@ -191,6 +208,29 @@ def certify(
             live_work = float(F @ dq) / size
             mode, mode_vector = "flat curve", dq / size
     mode_found = bool(mode != "none" and live_work > 0)
+    # a multiplier the residual cannot tell from zero load: the states found there are
+    # equilibria only to the tolerance, so the mode must be one of the dead-load state
+    # itself, singular to the floor of the tangent against the bonded elastic stiffness
+    near_zero = bool(lam <= ZERO_LOAD * s.tolerance * problem.load_scale)
+    zero_rho = math.nan
+    zero_check = NOT_CHECKED
+    lam_end = ZERO_LOAD * s.tolerance * problem.load_scale
+    if near_zero:
+        zero_rho, zero_mode = _dead_load_mode(problem, hist, s)
+        singular_at_zero = zero_rho <= ZERO_MODE * s.residual_stiffness
+        # a contact may close after a small motion: the mechanism must also run away
+        # where an independent method looks for rest (no rest at the resolvable lambda)
+        zero_check = (
+            NOT_CHECKED
+            if rests_at is None or not singular_at_zero
+            else ("rest found" if rests_at(lam_end) else "no rest")
+        )
+        if singular_at_zero and zero_check == "no rest" and zero_mode is not None:
+            mode, mode_vector = "mechanism of the dead-load state", zero_mode
+            live_work = float(F @ zero_mode)
+            mode_found = live_work > 0
+        else:
+            mode_found, mode, mode_vector, live_work = False, "none", None, 0.0
     # (c) the bound
     value = _bound_value(bound, problem.model)
     if value is None:
@@ -204,7 +244,15 @@ def certify(
         why.append(f"the last state is not an equilibrium (residual {rnorm:.2e} > {s.tolerance:g})")
     if not admissible:
         why.append(f"the last state is not admissible (utilisation {util:.6g})")
-    if not mode_found:
+    if not mode_found and near_zero:
+        why.append(
+            f"lambda {lam:.3g} is below what the residual tolerance resolves "
+            f"({ZERO_LOAD:g} x {s.tolerance:g} load scales) and the dead-load state shows no "
+            f"mechanism along the load (its tangent keeps {zero_rho:.3g} of the bonded "
+            f"elastic stiffness, limit {ZERO_MODE:g} x the floor {s.residual_stiffness:g}; "
+            f"dynamic relaxation at lambda {lam_end:.3g}: {zero_check})"
+        )
+    elif not mode_found:
         why.append(
             f"no collapse mode: the tangent keeps {rho:.3g} of the elastic stiffness along "
             f"the motion the load drives (> {s.mode_stiffness:g}) and the curve goes "
@@ -236,6 +284,8 @@ def certify(
         mode_displacement=s.mode_displacement,
         live_work=float(live_work),
         mode_found=mode_found,
+        near_zero=near_zero,
+        zero_load_check=zero_check,
         bound=value,
         bound_status=bound_status,
         within_bound=within,
@@ -276,6 +326,43 @@ def _dead_load_tangent(
     first = hist.steps[0].q.reshape(-1)
     _, _, response = problem.residual(first, 0.0, np.zeros((m, 6)), np.zeros(m, dtype=bool))
     return problem.law.tangent(response, settings.residual_stiffness, settings.tangent)
+
+
+def _dead_load_mode(
+    problem: DiscreteProblem, hist: History, settings: StaticSettings
+) -> tuple[float, np.ndarray | None]:
+    """The smaller rho of the dead-load state's tangent along K_0^-1 F_L, and of the tangent
+    at that state's linear extension to the smallest resolvable multiplier (ZERO_LOAD x
+    tolerance load scales: a joint with no strength along the load, e.g. no friction, is
+    elastic at zero demand and yields just past it), against the bonded elastic stiffness
+    (every joint at kbar); with that mode (free DOFs), scaled to a largest translation of 1
+    and oriented so that the live load does work on it."""
+    m = problem.model.interfaces.count
+    none = (np.zeros((m, 6)), np.zeros(m, dtype=bool))
+    first = hist.steps[0].q.reshape(-1)
+    F = problem.F_live
+    _, _, response = problem.residual(first, 0.0, *none)
+    best: tuple[float, np.ndarray | None] = (math.inf, None)
+    v0 = None
+    for _ in range(2):
+        v = problem.factor(response).solve(F)
+        compliance = float(F @ v)
+        if not (np.all(np.isfinite(v)) and math.isfinite(compliance)) or compliance == 0:
+            break
+        relative = problem.asm.relative_displacements(_full(problem, v).reshape(-1))
+        energy = float(np.sum(problem.law.kbar * relative**2))
+        x = v if compliance > 0 else -v
+        size = float(np.abs(x[problem.translation]).max(initial=0.0))
+        if energy > 0 and size > 0 and compliance / energy < best[0]:
+            best = (compliance / energy, x / size)
+        if v0 is not None:
+            break
+        v0 = v
+        lam_end = ZERO_LOAD * settings.tolerance * problem.load_scale
+        probe = first.copy()
+        probe[problem.free] += lam_end * v0
+        _, _, response = problem.residual(probe, lam_end, *none)
+    return best
 
 
 def _rayleigh(problem: DiscreteProblem, v: np.ndarray, compliance: float, T0: np.ndarray) -> float:

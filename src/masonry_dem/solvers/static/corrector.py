@@ -478,12 +478,14 @@ class Corrector:
         )
 
     def dynamic_rescue(
-        self, target: float, last: float, budget: int | None = None
+        self, target: float, last: float, budget: int | None = None, polish: bool = True
     ) -> Outcome | None:
         """Dynamic relaxation of a load step Newton could not solve, from the last converged
         state, then Newton from where it came to rest (so an accepted state meets the static
         tolerance). Newton stops at kinks of the projection (joints on the edge between two
-        states) where no correction lowers the residual; the damped motion goes round them."""
+        states) where no correction lowers the residual; the damped motion goes round them.
+        ``polish=False``: only whether the relaxation came to rest (``ok``; the state
+        returned is the last converged one)."""
         from masonry_dem.solvers.dynamic_relaxation import (
             DRSettings,
             DynamicRelaxation,
@@ -514,6 +516,8 @@ class Corrector:
         )
         relaxed = self._dr._relax_with_cuts(start, target, None)
         self.iterations += relaxed.cycles
+        if not polish:
+            return Outcome(relaxed.ok, self.q, target, self.residual(self.q, target)[2], 0)
         if not relaxed.ok:
             log.debug("dynamic rescue at lambda=%.6g failed: %s", target, relaxed.reason)
             return None

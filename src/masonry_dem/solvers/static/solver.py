@@ -193,9 +193,16 @@ class StaticSolver(Corrector):
             self._elastic_limit = self.settings.limit_elastic_multiple * elastic
         return dead
 
+    def _rests_at(self, lam: float) -> bool:
+        """Does dynamic relaxation from the last converged state come to rest at ``lam``
+        (within ``stop_check_time_steps``, at least 4000 time steps)?"""
+        budget = max(self.settings.stop_check_time_steps, 4000)
+        out = self.dynamic_rescue(lam, self.load_factor, budget, polish=False)
+        return bool(out is not None and out.ok)
+
     def _finish(self, hist: History, t0: float) -> History:
         if hist.status is Status.COLLAPSE and self.settings.certify:
-            cert = certify(self.problem, hist, self.settings, self.bound)
+            cert = certify(self.problem, hist, self.settings, self.bound, self._rests_at)
             hist.certificate = cert
             if not cert.holds:
                 hist.status = Status.FAILED
