@@ -303,7 +303,9 @@ class Corrector:
             failure=Failure.NO_CONVERGENCE,
         )
 
-    def robust(self, load_factor: float, start: np.ndarray | None = None) -> Outcome:
+    def robust(
+        self, load_factor: float, start: np.ndarray | None = None, budget: int | None = None
+    ) -> Outcome:
         """Second strategy for a load step Newton could not solve: initial-stiffness
         iterations (the elastic matrix of the assembly, factorized once per analysis) with
         Anderson acceleration over the last ``anderson`` corrections, no line search.
@@ -329,7 +331,8 @@ class Corrector:
         xs, fs = [x.copy()], [f.copy()]
         best = (rnorm, x.copy(), response)
         hist: list[tuple[float, float]] = []
-        for it in range(1, s.robust_iterations + 1):
+        budget = s.robust_iterations if budget is None else budget
+        for it in range(1, budget + 1):
             self.iterations += 1
             if len(xs) > 1:
                 dX = np.diff(np.array(xs), axis=0).T
@@ -388,8 +391,8 @@ class Corrector:
             q_best,
             load_factor,
             best[2],
-            s.robust_iterations,
-            f"no convergence in {s.robust_iterations} robust iterations (residual {best[0]:.2e})",
+            budget,
+            f"no convergence in {budget} robust iterations (residual {best[0]:.2e})",
             failure=Failure.NO_CONVERGENCE,
         )
 

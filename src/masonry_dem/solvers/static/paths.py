@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from masonry_dem.results import History
+from masonry_dem.solvers.static.certificate import ZERO_LOAD
 from masonry_dem.solvers.static.outcome import Outcome, Status, StopReason
 from masonry_dem.solvers.static.settings import DisplacementControl
 
@@ -74,8 +75,13 @@ def load_control(solver: StaticSolver, hist: History, record: Record) -> None:
             rescued = solver.dynamic_rescue(target, lam)
             if rescued is not None:
                 out, robust_ok = rescued, True
-        if not out.ok and s.robust_iterations > 0 and not out.past_limit:
-            second = solver.robust(target)
+        # the robust re-try: when asked for, or as the last resort of a bracket refined down
+        # to what the residual cannot tell from zero load (where Newton stalls from the
+        # dead-load state: in-plane walls held on one edge)
+        near_zero = target <= ZERO_LOAD * s.tolerance * solver.problem.load_scale
+        budget = s.robust_iterations or (s.zero_load_robust_iterations if near_zero else 0)
+        if not out.ok and budget > 0 and not out.past_limit:
+            second = solver.robust(target, budget=budget)
             log.debug(
                 "Newton failed at lambda=%.6g (%s); robust: %s",
                 target,

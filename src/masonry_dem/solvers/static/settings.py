@@ -96,6 +96,10 @@ class StaticSettings:
     anderson, divergence_window: the robust iterations mix the last ``anderson``
         corrections and stop when the residual has not fallen x10 in ``divergence_window``
         iterations with corrections that do not shrink.
+    zero_load_robust_iterations: the robust re-try's budget where load control has halved
+        its step down to what the residual cannot tell from zero load (100 x ``tolerance``
+        load scales) and ``robust_iterations`` is 0: Newton stalls from the dead-load state
+        of in-plane walls held on one edge (a held 9 x 3 wall: 1e-8 -> 0.93).
     rescue_time_steps: budget of a dynamic relaxation of a failed load step; 0 disables it.
     stop_check_time_steps: budget of the dynamic relaxation that checks a stop of work
         control (to lambda x (1 + transient_rise)) before the path is given up; 0 disables it.
@@ -153,6 +157,7 @@ class StaticSettings:
     transient_shrink: float = 0.25
     transient_window: int = 30
     robust_iterations: int = 0
+    zero_load_robust_iterations: int = 2000
     anderson: int = 5
     divergence_window: int = 30
     rescue_time_steps: int = 0
@@ -206,6 +211,7 @@ class StaticSettings:
             "transient_after": 0,
             "transient_window": 1,
             "robust_iterations": 0,
+            "zero_load_robust_iterations": 0,
             "anderson": 1,
             "divergence_window": 1,
             "rescue_time_steps": 0,
