@@ -79,11 +79,11 @@ import numpy as np
 from scipy import sparse
 
 from masonry_dem._threads import kernel_threads_for
-from masonry_dem.assembly.stiffness import Assembly
-from masonry_dem.constitutive.law import InterfaceLaw, LawResponse
+from masonry_dem.constitutive.law import LawResponse
 from masonry_dem.model import Model
 from masonry_dem.results import History, StepResult
 from masonry_dem.solvers.static.outcome import Status
+from masonry_dem.solvers.static.problem import DiscreteProblem
 
 log = logging.getLogger(__name__)
 
@@ -228,26 +228,20 @@ class DynamicRelaxation:
     def __init__(self, model: Model, settings: DRSettings | None = None) -> None:
         self.model = model
         self.settings = s = settings or DRSettings()
-        self.asm = Assembly.of(model)
-        # memory is passed only when asked, so the call works with laws that predate it
-        extra = {} if s.memory == "none" else {"memory": s.memory}
-        self.law = InterfaceLaw.of(model, self.asm.kbar, s.tension, **extra)
-        free = self.asm.free_index
-        self.Hf = self.asm.H_free.tocsr()
-        self.F_dead = model.dead.reshape(-1)[free]
-        self.F_live = model.live.reshape(-1)[free]
-        dead_norm = float(np.linalg.norm(self.F_dead))
-        live_norm = float(np.linalg.norm(self.F_live))
-        self.load_scale = dead_norm / live_norm if live_norm > 0 and dead_norm > 0 else 1.0
-        self.limit = (
-            s.displacement_limit
-            if s.displacement_limit is not None
-            else 0.5 * model.smallest_moving_size
+        # the discrete problem of the static solver: the same loads, law, residual norm
+        # (moments as forces at the median block size) and displacement limit
+        self.problem = DiscreteProblem(
+            model, tension=s.tension, memory=s.memory, displacement_limit=s.displacement_limit
         )
-        self._translation = (free % 6) < 3
-        # residual norm: moments as forces at the median block size (as the static solver)
-        length = float(np.median(model.blocks.sizes))
-        self._weight = np.where(self._translation, 1.0, 1.0 / length)
+        self.asm = self.problem.asm
+        self.law = self.problem.law
+        self.Hf = self.asm.H_free.tocsr()
+        self.F_dead = self.problem.F_dead
+        self.F_live = self.problem.F_live
+        self.load_scale = self.problem.load_scale
+        self.limit = self.problem.limit
+        self._translation = self.problem.translation
+        self._weight = self.problem.weight
         self.m = model.interfaces.count
         self.K_elastic = self.asm.stiffness().tocsr()
         self.mass = self._masses()

@@ -152,7 +152,7 @@ class DiscreteProblem:
         self.law = InterfaceLaw.of(model, self.asm.kbar, tension, memory)
         self.tangent_method = tangent
         self.residual_stiffness = residual_stiffness
-        self._tangents = TangentAssembler(self.asm, model)
+        self._assembler: TangentAssembler | None = None  # built on the first factorization
         free = self.asm.free_index
         self.free = free
         self.F_dead = model.dead.reshape(-1)[free]
@@ -193,6 +193,13 @@ class DiscreteProblem:
         return residual, float(np.linalg.norm(self.weight * residual)) / scale, response
 
     # ------------------------------------------------------------------ tangent
+    @property
+    def _tangents(self) -> TangentAssembler:
+        """The assembler of the tangent's fixed pattern (dynamic relaxation never needs it)."""
+        if self._assembler is None:
+            self._assembler = TangentAssembler(self.asm, self.model)
+        return self._assembler
+
     def factor(self, response: LawResponse, floor: float | None = None) -> Factorized:
         """LU of the consistent tangent at ``response`` (with ``floor`` x the elastic
         stiffness kept on the diagonal of every joint). The tangent is structurally symmetric
@@ -231,7 +238,7 @@ class DiscreteProblem:
         else:
             factors = self._tangents.factorized(lu)
             if not ordered:
-                self._tangents = TangentAssembler(self.asm, self.model, order=lu.perm_c)
+                self._assembler = TangentAssembler(self.asm, self.model, order=lu.perm_c)
                 self._fronts = self._tangents.symbolic()
             return factors
         try:
