@@ -7,7 +7,8 @@
 * :mod:`.paths` - path followers (load, work, displacement control) sharing one step rule;
 * :mod:`.outcome` - typed outcomes: :class:`Status`, :class:`StopReason`, :class:`Failure`;
 * :mod:`.certificate` - when a stop of the path is a collapse;
-* :mod:`.settings` - every number that steers it; :mod:`.solver` - the solver, ``pushover``.
+* :mod:`.settings` - every number that steers it; :mod:`.solver` - the solver, ``pushover``;
+* :mod:`.branches` - load against displacement control on one model.
 
 Names are imported lazily, so that :mod:`masonry_dem.results` can use the outcome enums.
 """
