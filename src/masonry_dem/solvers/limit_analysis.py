@@ -47,7 +47,9 @@ within the quadrature error (the default n is the smallest even n for which it i
 rocking). Convergence: none is proved (the non-associative problem is not convex and its
 solution need not be unique, and its LPs are degenerate, so the actions may jump between
 equivalent vertices); the iteration stops when its last three lambdas lie within
-``tolerance`` (relative) of each other, and reports ``failed`` with the last lambdas when ``max_iterations`` pass without it.
+``tolerance`` (relative) of each other. Where lambda turns back (it oscillates between
+degenerate LP vertices), the relaxation is halved, down to 1/64, a damping that lets the
+frozen actions settle; the iteration reports ``failed`` with the last lambdas when ``max_iterations`` pass without it.
 """
 
 from __future__ import annotations
@@ -66,6 +68,8 @@ from masonry_dem.model import Model
 log = logging.getLogger(__name__)
 
 BACKENDS = ("highs", "clarabel")
+#: the non-associative iteration halves its relaxation each time lambda turns back, down to
+_SMALLEST_RELAXATION = 1.0 / 64
 PYRAMIDS = ("circumscribed", "inscribed")
 STATUSES = ("collapse", "no collapse", "failed")
 #: grid of the associative problem: the corners are exact (module docstring)
@@ -98,7 +102,7 @@ class LimitAnalysisResult:
     backend: str
     seconds: float
     cone: str = "circumscribed"
-    friction_sides: int = 4
+    friction_sides: int = 8
     iterations: int = 1
     load_factors: tuple[float, ...] = ()  # one per solve (the non-associative iterations)
     variables: int = 0
@@ -434,7 +438,7 @@ def limit_analysis(
     grid: int | None = None,
     backend: str = "highs",
     cone: str | None = None,
-    friction_sides: int = 4,
+    friction_sides: int = 8,
     tolerance: float = 1e-3,
     max_iterations: int = 50,
     relaxation: float = 0.5,
@@ -450,9 +454,13 @@ def limit_analysis(
         backend: "highs" (LP, friction pyramid) or "clarabel" (SOCP, the exact cone).
         cone: "circumscribed" (default) or "inscribed" pyramid with "highs"; "exact" (the
             only one) with "clarabel".
-        friction_sides: faces of the pyramid (>= 3; 4 is the square).
-        tolerance, max_iterations, relaxation: the non-associative iteration (relative
-            change of lambda and of the capacities; under-relaxation of the capacities).
+        friction_sides: faces of the pyramid (>= 3). 8 by default: on the bundled wall
+            (out of plane, held on one edge) the circumscribed pyramid of 4, 8 and 16 faces
+            gives 0.587, 0.447 and 0.434 against 0.429 with the exact cone, in 0.7, 1.2
+            and 2.4 s (docs/limit_analysis.md).
+        tolerance, max_iterations, relaxation: the non-associative iteration (the last
+            three lambdas within ``tolerance``, relative; the starting under-relaxation of
+            the frozen actions between solves, halved where lambda turns back).
 
     Returns a :class:`LimitAnalysisResult`; solver trouble is a status, never an exception
     (bad arguments raise ValueError naming the argument).
@@ -667,6 +675,8 @@ def _non_associative(
         log.debug("non-associative iteration %d: lambda = %.6g", it, sol.lam)
         if settled:
             return _finish(problem, sol, size, result, iterations=it, load_factors=tuple(lams))
+        if len(lams) > 2 and (lams[-1] - lams[-2]) * (lams[-2] - lams[-3]) < 0:
+            relaxation = max(relaxation / 2, _SMALLEST_RELAXATION)  # it oscillates: damp it
         actions = actions + relaxation * (new - actions)
     tail = ", ".join(f"{x:.5g}" for x in lams[-4:])
     return result(
