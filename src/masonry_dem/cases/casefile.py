@@ -35,6 +35,8 @@ else:  # pragma: no cover
     import tomli as tomllib
 
 DEFAULT_CASE = "default_wall.toml"
+ANALYSIS_METHODS = ("pushover", "limit")
+LIMIT_OPTIONS = ("associative", "grid", "backend")
 
 _BUILDERS = {
     "running_bond_wall": builders.running_bond_wall,
@@ -55,6 +57,10 @@ class Case:
     control: DisplacementControl | None
     monitor: tuple[int, str] | None
     source: str
+    #: ``[analysis] method``: "pushover" (default) or "limit" (limit analysis); the options of
+    #: the limit analysis (``associative``, ``grid``, ``backend``) in ``limit_options``
+    method: str = "pushover"
+    limit_options: dict[str, Any] | None = None
 
 
 def _unknown(section: str, given: dict, allowed: set[str]) -> None:
@@ -192,6 +198,14 @@ def case_from_dict(data: dict, source: str = "<dict>") -> Case:
     analysis = dict(data.get("analysis", {}))
     control_spec = analysis.pop("control", None)
     monitor_spec = analysis.pop("monitor", None)
+    method = analysis.pop("method", "pushover")
+    if method not in ANALYSIS_METHODS:
+        raise ValueError(
+            f"case file [analysis] method must be one of {ANALYSIS_METHODS}, got {method!r}"
+        )
+    limit_options = {k: analysis.pop(k) for k in LIMIT_OPTIONS if k in analysis}
+    if limit_options and method != "limit":
+        raise ValueError(f'case file [analysis] {", ".join(limit_options)} need method = "limit"')
     _unknown("analysis", analysis, {f.name for f in fields(StaticSettings)})
     settings = StaticSettings(**analysis)
     model = Model.build(
@@ -205,7 +219,7 @@ def case_from_dict(data: dict, source: str = "<dict>") -> Case:
     if monitor_spec is not None:
         _unknown("analysis.monitor", monitor_spec, {"block", "dof"})
         monitor = (int(monitor_spec["block"]), str(monitor_spec["dof"]))
-    return Case(model, settings, control, monitor, source)
+    return Case(model, settings, control, monitor, source, method, limit_options)
 
 
 def load_case(path: str | Path | None = None) -> Case:

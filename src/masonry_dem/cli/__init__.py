@@ -11,7 +11,7 @@ import importlib
 import logging
 import sys
 
-COMMANDS = ("run", "validate", "interface", "render", "paraview_state", "study")
+COMMANDS = ("run", "validate", "interface", "render", "paraview_state", "study", "limit")
 
 
 def build_parser() -> argparse.ArgumentParser:

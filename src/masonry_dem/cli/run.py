@@ -28,6 +28,20 @@ def add_parser(subparsers) -> None:
     p.set_defaults(func=run_command)
 
 
+def limit_analysis_bound(model) -> dict:
+    """The associative limit-analysis multiplier of the model, an upper bound of the
+    pushover's (``limit_analysis_bound``: None unless the LA finds a collapse), and its
+    status and time."""
+    from masonry_dem.solvers.limit_analysis import limit_analysis
+
+    la = limit_analysis(model)
+    return {
+        "limit_analysis_bound": la.load_factor if la.status == "collapse" else None,
+        "limit_analysis_status": la.status,
+        "limit_analysis_seconds": round(la.seconds, 4),
+    }
+
+
 def run_command(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
@@ -37,6 +51,13 @@ def run_command(args: argparse.Namespace) -> int:
 
     case = load_case(args.case)
     out = Path(args.out)
+    if case.method == "limit":  # [analysis] method = "limit"
+        from masonry_dem.cli.limit import run_limit
+
+        summary = run_limit(case, out, dict(case.limit_options or {}), not args.no_render)
+        print(json.dumps({k: summary[k] for k in ("status", "lambda", "method", "bound")}))
+        print(f"{summary['status']}: {summary['reason']}")
+        return 0 if summary["status"] == "collapse" else 1
     writer = ResultsWriter(out, case.model, background=True)
     bar = tqdm(desc=case.model.name[:40], unit="step", disable=args.quiet)
 
@@ -49,8 +70,9 @@ def run_command(args: argparse.Namespace) -> int:
     solver = StaticSolver(case.model, case.settings)
     with writer, bar:  # the steps handed to the writer reach the disk
         history = solver.run(control=case.control, callback=on_step, monitor=case.monitor)
+    wall_seconds = round(time.perf_counter() - t0, 4)
     summary = writer.finish(
-        history, case=case.source, wall_seconds=round(time.perf_counter() - t0, 4)
+        history, case=case.source, wall_seconds=wall_seconds, **limit_analysis_bound(case.model)
     )
     if not args.no_render:
         try:
