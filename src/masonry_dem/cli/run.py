@@ -67,13 +67,13 @@ def run_command(args: argparse.Namespace) -> int:
         bar.update(1)
 
     t0 = time.perf_counter()
-    solver = StaticSolver(case.model, case.settings)
+    # the associative bound first: the certificate of a collapse checks lambda against it
+    bound = limit_analysis_bound(case.model)
+    solver = StaticSolver(case.model, case.settings, bound=bound["limit_analysis_bound"])
     with writer, bar:  # the steps handed to the writer reach the disk
         history = solver.run(control=case.control, callback=on_step, monitor=case.monitor)
     wall_seconds = round(time.perf_counter() - t0, 4)
-    summary = writer.finish(
-        history, case=case.source, wall_seconds=wall_seconds, **limit_analysis_bound(case.model)
-    )
+    summary = writer.finish(history, case=case.source, wall_seconds=wall_seconds, **bound)
     if not args.no_render:
         try:
             from masonry_dem.export.render import render_mechanism, render_step
