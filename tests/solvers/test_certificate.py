@@ -239,3 +239,18 @@ def test_a_displacement_control_stopped_short_says_so():
     assert not result.same_peak
     assert result.verdict == "displacement control stopped before the peak", result.reason
     assert result.displacement_peak < result.load_peak
+
+
+def test_a_limit_stop_on_a_soft_rising_curve_is_not_a_collapse():
+    """A held 10 x 15 panel (friction 11.3) with kn 1.5e9: the displacement limit stops its
+    path at 0.214 where the tangent keeps 2 % of its dead-load stiffness along the load and
+    the curve still rises (the same panel with kn 1.5e11, whose displacements are 100x
+    smaller, goes on to 0.256). Equilibria were still being found, so the stop needs a flat
+    curve (rho <= flat_slope): failed, not a collapse 16 % low."""
+    material = InterfaceMaterial(kn=1.5e9, kt=0.6e9, friction=11.3)
+    hist = pushover(tilted_wall(10, 15, material))
+    assert hist.stop is StopReason.DISPLACEMENT_LIMIT
+    assert hist.status == "failed"
+    cert = hist.certificate
+    assert StaticSettings().flat_slope < cert.mode_rayleigh <= StaticSettings().mode_stiffness
+    assert cert.mode_stiffness == StaticSettings().flat_slope  # the tolerance applied

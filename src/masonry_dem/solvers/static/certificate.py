@@ -24,7 +24,10 @@ the state where the path stopped, each independently of how the path got there:
     lies just past the last converged state, so the tangent is also taken at the linear
     extension of the state, q + (lambda_end - lambda) K_t^-1 F_L, across the bracket's
     tolerance, lambda_end = lambda x (1 + ``bracket_tolerance``). Either way the live
-    load does positive work along the mode (F_L.v > 0). The current stiffness parameter of Bergan, S = (d lambda / d w along the
+    load does positive work along the mode (F_L.v > 0). A path stopped by the displacement
+    limit (where equilibria were still being found) must have stopped rising: rho at most
+    ``flat_slope``, as work control measures a flat curve. The current stiffness parameter
+    of Bergan, S = (d lambda / d w along the
     tangent) / (elastic d lambda / d w of the path), is reported beside it;
 (c) **the bound** - lambda does not exceed the associative limit-analysis multiplier of the
     same model (Radenkovic: an upper bound of the non-associative one), within
@@ -91,7 +94,7 @@ class Certificate:
     # "flat curve", or "none"
     mode: str
     mode_rayleigh: float  # rho = v.K_t v / v.K_0 v along v = K_t^-1 F_L
-    mode_stiffness: float
+    mode_stiffness: float  # the tolerance applied (flat_slope after a displacement limit)
     stiffness_parameter: float  # Bergan's S along the load (reported, not a condition)
     curve_displacement: float  # w past the peak / w at the peak
     mode_displacement: float
@@ -167,7 +170,17 @@ def certify(
         stiffness = math.inf
     T0 = _dead_load_tangent(problem, hist, s)
     rho = _rayleigh(problem, v, compliance, T0)
-    singular = bool(compliance != 0 and rho <= s.mode_stiffness)
+    # a path stopped by the displacement limit still found equilibria: its curve must have
+    # stopped rising there, as work control measures flatness (flat_slope); a path that
+    # found none beyond its state needs only a near-singular tangent (mode_stiffness)
+    from masonry_dem.solvers.static.outcome import StopReason
+
+    tolerance = (
+        min(s.flat_slope, s.mode_stiffness)
+        if hist.stop is StopReason.DISPLACEMENT_LIMIT
+        else s.mode_stiffness
+    )
+    singular = bool(compliance != 0 and rho <= tolerance)
     where = "singular tangent"
     if not singular and np.all(np.isfinite(v)):
         # a kink of the law (a joint that starts to slide, rock or lift) puts the
@@ -181,7 +194,7 @@ def certify(
         v_beyond = problem.factor(beyond).solve(F)
         compliance_beyond = float(F @ v_beyond)
         rho_beyond = _rayleigh(problem, v_beyond, compliance_beyond, T0)
-        if compliance_beyond != 0 and rho_beyond <= s.mode_stiffness:
+        if compliance_beyond != 0 and rho_beyond <= tolerance:
             singular, where = True, "singular tangent at the end of the bracket"
             v, compliance, rho = v_beyond, compliance_beyond, rho_beyond
     # (b2) the curve past its peak, up to the state checked
@@ -255,7 +268,7 @@ def certify(
     elif not mode_found:
         why.append(
             f"no collapse mode: the tangent keeps {rho:.3g} of the elastic stiffness along "
-            f"the motion the load drives (> {s.mode_stiffness:g}) and the curve goes "
+            f"the motion the load drives (> {tolerance:g}) and the curve goes "
             f"{past:.3g} of its peak displacement past the peak (< {s.mode_displacement:g})"
         )
     if within is False:
@@ -278,7 +291,7 @@ def certify(
         admissible=admissible,
         mode=mode,
         mode_rayleigh=float(rho),
-        mode_stiffness=s.mode_stiffness,
+        mode_stiffness=tolerance,
         stiffness_parameter=float(stiffness),
         curve_displacement=float(past),
         mode_displacement=s.mode_displacement,
