@@ -16,7 +16,8 @@ import argparse
 import numpy as np
 
 from masonry_dem.cases.paper import build_case
-from masonry_dem.solvers.incremental import StaticSolver, _TangentAssembler
+from masonry_dem.solvers.static.problem import TangentAssembler
+from masonry_dem.solvers.static.solver import StaticSolver
 
 
 def smallest_real_eigenvalues(name: str, count: int = 2) -> list[tuple[float, np.ndarray]]:
@@ -24,8 +25,8 @@ def smallest_real_eigenvalues(name: str, count: int = 2) -> list[tuple[float, np
     case = build_case(name)
     solver = StaticSolver(case.model, case.settings)
     history = solver.run()
-    asm, law = solver.asm, solver.law
-    tangents = _TangentAssembler(asm, case.model)
+    asm, law = solver.problem.asm, solver.law
+    tangents = TangentAssembler(asm, case.model)
     scale = 1.0 / np.sqrt(asm.stiffness().diagonal())  # the elastic diagonal
     m = case.model.interfaces.count
     plastic = np.zeros((m, 6))  # the default law keeps no slip (memory="none")

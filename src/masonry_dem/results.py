@@ -5,8 +5,14 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+from masonry_dem.solvers.static.outcome import Status, StopReason
+
+if TYPE_CHECKING:
+    from masonry_dem.solvers.static.certificate import Certificate
 
 # damage state codes of the interfaces (cell data "state" in the VTU files)
 STATE_NAMES = ("elastic", "sliding", "rocking", "sliding+rocking", "detached")
@@ -34,15 +40,23 @@ class StepResult:
 
 @dataclass
 class History:
-    """All steps of a run, and how it ended."""
+    """All steps of a run, and how it ended: ``status`` (collapse only when certified),
+    ``stop`` (why the path stopped), ``reason`` (the same for people) and, for a stop the
+    solver took for a collapse, the ``certificate`` that confirmed or refused it."""
 
     steps: list[StepResult] = field(default_factory=list)
-    status: str = "running"  # "completed", "collapse", "failed"
+    status: Status = Status.RUNNING
     reason: str = ""
+    stop: StopReason = StopReason.NONE
+    certificate: Certificate | None = None
     collapse_bracket: tuple[float, float] | None = None
     seconds: float = 0.0
     iterations: int = 0
     factorizations: int = 0
+
+    def end(self, status: Status, stop: StopReason, reason: str) -> None:
+        """How the path ended (a collapse is still to be certified by the solver)."""
+        self.status, self.stop, self.reason = Status(status), stop, reason
 
     @property
     def load_factors(self) -> np.ndarray:
@@ -67,8 +81,9 @@ class History:
 
     def summary(self, **extra) -> dict:
         out = {
-            "status": self.status,
+            "status": str(self.status),
             "reason": self.reason,
+            "stop": str(self.stop),
             "steps": len(self.steps),
             "lambda": self.collapse_multiplier
             if self.collapse_multiplier is not None
@@ -77,6 +92,7 @@ class History:
             "iterations": self.iterations,
             "factorizations": self.factorizations,
             "seconds": round(self.seconds, 4),
+            "certificate": None if self.certificate is None else self.certificate.as_dict(),
         }
         out.update(extra)
         return out

@@ -143,14 +143,14 @@ def test_the_solver_assembles_per_interface_tangents_as_the_sparse_product(model
     """The static solver's compiled assembly of H_f^T T H_f (T: one unsymmetric 6 x 6 block per
     interface, its entries summed in a pattern built once) against the sparse product, in
     the numbering of the free DOFs or in a permuted one."""
-    from masonry_dem.solvers.incremental import _TangentAssembler
+    from masonry_dem.solvers.static.problem import TangentAssembler
 
     asm = Assembly.of(model)
     rng = np.random.default_rng(4)
     T = rng.normal(size=(model.interfaces.count, 6, 6)) * KN
     reference = asm.tangent_stiffness(T).toarray()
     order = rng.permutation(asm.n_free) if ordered else None
-    K = _TangentAssembler(asm, model, order).matrix(T)
+    K = TangentAssembler(asm, model, order).matrix(T)
     assert K.shape == reference.shape
     if order is not None:  # row and column order[d] hold free DOF d
         reference_permuted = np.empty_like(reference)

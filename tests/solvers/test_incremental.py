@@ -137,14 +137,10 @@ def test_kept_factorization_while_creeping_changes_nothing(panel_lambda, monkeyp
     (searches left to creep as long as the trust radius allows, as before the cap on cuts),
     on the path this was measured on: the forward-difference tangent, 295 against 661. (With
     the analytic tangent the refactored path itself takes fewer steps: 293 against 551.)"""
-    from masonry_dem.solvers import incremental
-
-    monkeypatch.setattr(incremental, "_SEARCH_CUTS", 10**6)
-    monkeypatch.setattr(incremental, "_RESUME_STEP", 1.0)  # the path this was measured on
-    measured_on = StaticSettings(tangent="difference")
+    # the path this was measured on: uncapped searches, full steps after a fold
+    measured_on = StaticSettings(tangent="difference", search_cuts=10**6, resume_step=1.0)
     kept = pushover(_panel(), measured_on)
-    monkeypatch.setattr(incremental, "_CREEP", 0.0)  # refactor after every step
-    refactored = pushover(_panel(), measured_on)
+    refactored = pushover(_panel(), replace(measured_on, creep=0.0))  # refactor every step
     assert kept.collapse_multiplier == pytest.approx(refactored.collapse_multiplier, rel=1e-9)
     # the default path resumes with half a step after a fold: the same peak within the bracket
     assert kept.collapse_multiplier == pytest.approx(panel_lambda, rel=TOL)
@@ -152,16 +148,13 @@ def test_kept_factorization_while_creeping_changes_nothing(panel_lambda, monkeyp
 
 
 def test_a_search_that_keeps_cutting_gives_up_without_changing_the_answer(monkeypatch):
-    """A Newton search gives up after _SEARCH_CUTS cuts of its trust radius instead of
+    """A Newton search gives up after ``search_cuts`` cuts of its trust radius instead of
     creeping on with steps of 1e-7..1e-13 of the correction until the radius is gone: the
     searches that converge never needed more, so the peak is the same (to 1e-9: work
     control reads the lambda where a failed search stops, which moves by the creep it no
     longer takes) and the failing searches end sooner (fewer iterations in all)."""
-    from masonry_dem.solvers import incremental
-
     capped = pushover(_panel(), StaticSettings())
-    monkeypatch.setattr(incremental, "_SEARCH_CUTS", 10**6)
-    uncapped = pushover(_panel(), StaticSettings())
+    uncapped = pushover(_panel(), StaticSettings(search_cuts=10**6))
     assert capped.collapse_multiplier == pytest.approx(uncapped.collapse_multiplier, rel=1e-9)
     assert capped.iterations < 0.9 * uncapped.iterations
 
@@ -171,10 +164,10 @@ def test_work_control_passes_a_fold_it_meets_twice(panel_lambda, monkeypatch):
     of the path: the pseudo-transient step then goes just past that lambda at once (a target
     above the usual 0.5 % rise from the current state) instead of closing in on the fold by
     halved steps. The peak is the one found without the rule, within the bracket tolerance."""
-    from masonry_dem.solvers import incremental
+    from masonry_dem.solvers.static.solver import StaticSolver
 
     targets: list[tuple[float, float]] = []
-    original = incremental.StaticSolver._pseudo_transient
+    original = StaticSolver.pseudo_transient
 
     def recording(self, target, start=None):
         targets.append((target, self._last_lambda_for_test))
@@ -184,16 +177,15 @@ def test_work_control_passes_a_fold_it_meets_twice(panel_lambda, monkeypatch):
         self._last_lambda_for_test = float(out.load_factor)
         return accept(self, out, step, control_value)
 
-    accept = incremental.StaticSolver._accept
-    monkeypatch.setattr(incremental.StaticSolver, "_accept", record_accept)
-    monkeypatch.setattr(incremental.StaticSolver, "_pseudo_transient", recording)
+    accept = StaticSolver.accept
+    monkeypatch.setattr(StaticSolver, "accept", record_accept)
+    monkeypatch.setattr(StaticSolver, "pseudo_transient", recording)
     h = pushover(_panel(), StaticSettings())
-    rise = incremental._TRANSIENT_RISE
+    rise = StaticSettings().transient_rise
     assert any(t > lam * (1 + rise) * (1 + 1e-9) for t, lam in targets)
     assert h.collapse_multiplier == pytest.approx(panel_lambda, rel=TOL)
-    monkeypatch.setattr(incremental, "_FOLD_MATCH", -1.0)  # never the same fold
     targets.clear()
-    without = pushover(_panel(), StaticSettings())
+    without = pushover(_panel(), StaticSettings(fold_match=-1.0))  # never the same fold
     assert all(t == pytest.approx(lam * (1 + rise), rel=1e-12) for t, lam in targets)
     assert h.collapse_multiplier == pytest.approx(without.collapse_multiplier, rel=TOL)
 
@@ -202,11 +194,8 @@ def test_work_control_resumes_with_half_a_step_after_a_fold(panel_lambda, monkey
     """After a pseudo-transient step has moved the state past a fold, the full first work
     step failed again most of the time; half of it finds the same peak (within the bracket
     tolerance) with fewer Newton iterations on this panel."""
-    from masonry_dem.solvers import incremental
-
     half = pushover(_panel(), StaticSettings())
-    monkeypatch.setattr(incremental, "_RESUME_STEP", 1.0)
-    full = pushover(_panel(), StaticSettings())
+    full = pushover(_panel(), StaticSettings(resume_step=1.0))
     assert half.collapse_multiplier == pytest.approx(full.collapse_multiplier, rel=TOL)
     assert half.collapse_multiplier == pytest.approx(panel_lambda, rel=1e-12)
     assert half.iterations < 0.9 * full.iterations
@@ -270,9 +259,9 @@ def test_robust_strategy_finds_the_equilibrium_newton_finds():
     converges to the same dead-load equilibrium as Newton, to the same tolerance."""
     from masonry_dem.solvers.incremental import StaticSolver
 
-    newton = StaticSolver(_panel())._equilibrate(0.0, radius=None, damped=True)
+    newton = StaticSolver(_panel()).equilibrate(0.0, radius=None, damped=True)
     solver = StaticSolver(_panel(), StaticSettings(robust_iterations=2000))
-    robust = solver._robust(0.0)
+    robust = solver.robust(0.0)
     assert newton.ok and robust.ok, robust.reason
     scale = np.abs(newton.q).max()
     assert np.abs(robust.q - newton.q).max() <= 1e-4 * scale

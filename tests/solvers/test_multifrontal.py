@@ -53,16 +53,16 @@ def test_a_tangent_of_a_validation_wall_solves_as_superlu_does():
 
     case = build_case("S15")
     solver = StaticSolver(case.model, case.settings)
-    out = solver._equilibrate(0.0, radius=solver.limit, damped=True)
-    solver._accept(out, 0, 0.0)
-    out = solver._equilibrate(0.1)  # past the first yielding of S15's joints
+    out = solver.equilibrate(0.0, radius=solver.limit, damped=True)
+    solver.accept(out, 0, 0.0)
+    out = solver.equilibrate(0.1)  # past the first yielding of S15's joints
     assert out.ok and np.any(out.response.state > 0)
-    solver._factor(out.response)  # the first factorization fixes the ordering
+    solver.problem.factor(out.response)  # the first factorization fixes the ordering
     T = solver.law.tangent(out.response, solver.settings.residual_stiffness)
-    K = solver._tangents.matrix(T)
+    K = solver.problem._tangents.matrix(T)
     assert abs(K - K.T).max() > 1e-6 * abs(K).max()  # unsymmetric, as intended
     b = np.random.default_rng(0).uniform(-1.0, 1.0, K.shape[0])
-    x = solver._fronts.factorize(K).solve(b)
+    x = solver.problem._fronts.factorize(K).solve(b)
     reference = splu(K, permc_spec="NATURAL", diag_pivot_thresh=0.0).solve(b)
     np.testing.assert_allclose(x, reference, rtol=1e-8, atol=1e-12 * np.abs(reference).max())
     assert np.linalg.norm(K @ x - b) <= 1e-10 * np.linalg.norm(b)
@@ -132,17 +132,17 @@ def test_a_wall_splits_into_halves_of_equal_work_and_gives_the_same_bits_on_one_
 
     case = build_case("S12")
     solver = StaticSolver(case.model, case.settings)
-    out = solver._equilibrate(0.0, radius=solver.limit, damped=True)
-    solver._factor(out.response)  # the first factorization fixes the ordering
-    half_a, half_b, top = check_split(solver._fronts)
+    out = solver.equilibrate(0.0, radius=solver.limit, damped=True)
+    solver.problem.factor(out.response)  # the first factorization fixes the ordering
+    half_a, half_b, top = check_split(solver.problem._fronts)
     assert min(half_a, half_b) >= 0.8 * max(half_a, half_b)
     assert top <= 0.5 * (half_a + half_b + top)  # so that two threads gain at least 1.33x
-    K = solver._tangents.matrix(solver.law.tangent(out.response, 1e-9))
-    two = solver._fronts.factorize(K).factors
+    K = solver.problem._tangents.matrix(solver.law.tangent(out.response, 1e-9))
+    two = solver.problem._fronts.factorize(K).factors
     threads = numba.get_num_threads()
     numba.set_num_threads(1)
     try:
-        one = solver._fronts.factorize(K).factors
+        one = solver.problem._fronts.factorize(K).factors
     finally:
         numba.set_num_threads(threads)
     assert np.array_equal(one, two)

@@ -23,6 +23,7 @@ from masonry_dem.model import InterfaceMaterial, Model, SelfWeight, Support, Wei
 from masonry_dem.results import History
 from masonry_dem.solvers.dynamic_relaxation import DRSettings, DynamicRelaxation
 from masonry_dem.solvers.incremental import StaticSettings, StaticSolver
+from masonry_dem.solvers.static.outcome import StopReason
 
 A, B, S = 0.2, 0.3, 0.1
 DR_FAST = DRSettings(bracket_tolerance=0.01)
@@ -84,17 +85,21 @@ def test_load_control_past_the_limit_point(block):
     for hist in (hs, hd):
         assert hist.status == "collapse"
         assert hist.collapse_multiplier == pytest.approx(S / A, rel=0.01)
-        assert hist.collapse_multiplier <= S / A * (1 + 1e-9)  # a converged state, not beyond
+        # a converged state, not beyond (to the residual tolerance, 1e-8 of the load)
+        assert hist.collapse_multiplier <= S / A * (1 + 1e-8)
 
 
 def test_unrefined_bracket_says_so(block):
-    """Without refinement a first step beyond collapse stops the run at [0, 3]: the status is
-    a collapse bracket, and the reason says it is not a refined collapse load."""
+    """Without refinement a first step beyond collapse stops the run at [0, 3]. That is no
+    collapse: the state it stops in is the dead load's, with its whole elastic stiffness
+    along the load (also across the bracket's tolerance), so the run ends failed (no
+    lambda), and the reason says the bracket was not refined and why it is no collapse."""
     hist = StaticSolver(block, StaticSettings(initial_step=3.0, max_step=3.0, refine=False)).run()
     assert_clean(hist)
-    assert hist.status == "collapse"
-    assert hist.collapse_bracket == (0.0, pytest.approx(3.0))
-    assert "refine=False" in hist.reason
+    assert hist.status == "failed"
+    assert hist.stop == StopReason.LOAD_BRACKET
+    assert hist.certificate is not None and not hist.certificate.mode_found
+    assert "refine=False" in hist.reason and "not a certified collapse" in hist.reason
 
 
 def test_bracket_refined_when_work_control_finds_nothing_higher(block, monkeypatch):
@@ -103,11 +108,14 @@ def test_bracket_refined_when_work_control_finds_nothing_higher(block, monkeypat
     from the state it was handed (the block still tilts over at s/a, bracket <= 0.5 %)."""
     calls = []
 
-    def nothing_higher(self, hist, record, first_failure):
-        calls.append(hist.steps[-1].load_factor)
-        return "forced"
+    from masonry_dem.solvers.static import paths
+    from masonry_dem.solvers.static.outcome import StopReason
 
-    monkeypatch.setattr(StaticSolver, "_work_control", nothing_higher)
+    def nothing_higher(solver, hist, record, first_failure):
+        calls.append(hist.steps[-1].load_factor)
+        return "forced", StopReason.PATH_STUCK
+
+    monkeypatch.setattr(paths, "work_control", nothing_higher)
     hist = StaticSolver(block, StaticSettings(initial_step=0.1)).run()
     assert_clean(hist)
     assert len(calls) == 1 and calls[0] < S / A  # handed over once, below the collapse
@@ -124,20 +132,22 @@ def test_a_controlled_step_that_converges_slowly_is_not_a_stall(monkeypatch):
     exact tangent finds, not be stopped as a stall because its residual is above the
     start's (the error that made 20 work steps of a Table 3 wall fail at 8 iterations with
     every residual falling)."""
-    from masonry_dem.solvers import incremental
+    from masonry_dem.solvers.static import paths, problem
 
     wall = on_base(builders.running_bond_wall(3, 3, A, B, S, 20e3), left=["u1", "u2", "u3"])
     solver = StaticSolver(wall)
-    dead = solver._equilibrate(0.0, radius=solver.limit, damped=True)
+    dead = solver.equilibrate(0.0, radius=solver.limit, damped=True)
     assert dead.ok
-    solver.q = dead.q
-    c = solver.F_live / np.linalg.norm(solver.F_live)
+    solver.restore(dead.q)
+    F_live = solver.problem.F_live
+    c = F_live / np.linalg.norm(F_live)
     dw = 1e-6  # elastic
-    control = (c, float(c @ dead.q[solver.asm.free_index]) + dw, dw)
-    exact = solver._equilibrate(0.0, control=control, radius=solver._control_radius(c, dw))
+    control = (c, float(c @ dead.q[solver.problem.free]) + dw, dw)
+    radius = paths.control_radius(solver, c, dw)
+    exact = solver.equilibrate(0.0, control=control, radius=radius)
     assert exact.ok and exact.iterations <= 3
 
-    entries = incremental._TangentAssembler.data
+    entries = problem.TangentAssembler.data
 
     def too_stiff(self, T):
         data = entries(self, T).copy()
@@ -145,10 +155,10 @@ def test_a_controlled_step_that_converges_slowly_is_not_a_stall(monkeypatch):
         data[self.indices == column] *= 1.05  # the diagonal is stored
         return data
 
-    monkeypatch.setattr(incremental._TangentAssembler, "data", too_stiff)
-    slow = solver._equilibrate(0.0, control=control, radius=solver._control_radius(c, dw))
+    monkeypatch.setattr(problem.TangentAssembler, "data", too_stiff)
+    slow = solver.equilibrate(0.0, control=control, radius=radius)
     assert slow.ok, slow.reason
-    assert slow.iterations > incremental._STALL_WINDOW  # linear, as intended
+    assert slow.iterations > solver.settings.stall_window  # linear, as intended
     # both within the residual tolerance (1e-8 of the dead load, about 1e-8 load scales)
     assert slow.load_factor == pytest.approx(exact.load_factor, abs=1e-7)
     assert exact.load_factor > 1e-5
@@ -160,7 +170,7 @@ def test_dead_load_settles_by_relaxation_where_newton_stalls(block, monkeypatch)
     still tilts over at s/a); the reason of a run that fails both names both."""
     from dataclasses import replace as _replace
 
-    newton = StaticSolver._equilibrate
+    newton = StaticSolver.equilibrate
 
     def stalls_under_dead_load(self, load_factor, dead_factor=1.0, **kw):
         out = newton(self, load_factor, dead_factor, **kw)
@@ -168,7 +178,7 @@ def test_dead_load_settles_by_relaxation_where_newton_stalls(block, monkeypatch)
             return _replace(out, ok=False, reason="no equilibrium found: forced stall")
         return out
 
-    monkeypatch.setattr(StaticSolver, "_equilibrate", stalls_under_dead_load)
+    monkeypatch.setattr(StaticSolver, "equilibrate", stalls_under_dead_load)
     hist = StaticSolver(block).run()
     assert_clean(hist)
     assert hist.status == "collapse"

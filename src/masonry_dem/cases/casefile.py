@@ -41,6 +41,8 @@ else:  # pragma: no cover
     import tomli as tomllib
 
 DEFAULT_CASE = "default_wall.toml"
+ANALYSIS_METHODS = ("pushover", "limit")
+LIMIT_OPTIONS = ("associative", "grid", "backend")
 
 _BUILDERS = {
     "running_bond_wall": builders.running_bond_wall,
@@ -61,6 +63,10 @@ class Case:
     control: DisplacementControl | None
     monitor: tuple[int, str] | None
     source: str
+    #: ``[analysis] method``: "pushover" (default) or "limit" (limit analysis); the options of
+    #: the limit analysis (``associative``, ``grid``, ``backend``) in ``limit_options``
+    method: str = "pushover"
+    limit_options: dict[str, Any] | None = None
 
 
 def _unknown(section: str, given: dict, allowed: set[str]) -> None:
@@ -195,6 +201,14 @@ def case_from_dict(data: dict, source: str = "<dict>") -> Case:
     analysis = dict(data.get("analysis", {}))
     control_spec = analysis.pop("control", None)
     monitor_spec = analysis.pop("monitor", None)
+    method = analysis.pop("method", "pushover")
+    if method not in ANALYSIS_METHODS:
+        raise ValueError(
+            f"case file [analysis] method must be one of {ANALYSIS_METHODS}, got {method!r}"
+        )
+    limit_options = {k: analysis.pop(k) for k in LIMIT_OPTIONS if k in analysis}
+    if limit_options and method != "limit":
+        raise ValueError(f'case file [analysis] {", ".join(limit_options)} need method = "limit"')
     with _at(source, "[analysis]"):
         settings = StaticSettings(**analysis)
     with _at(source, "[supports]"):  # what Model.build refuses is a mechanism or a support
@@ -211,7 +225,7 @@ def case_from_dict(data: dict, source: str = "<dict>") -> Case:
         with _at(source, "[analysis].monitor.block"):
             model.dof_index(monitor_spec["block"], monitor_spec["dof"])
         monitor = (int(monitor_spec["block"]), str(monitor_spec["dof"]))
-    return Case(model, settings, control, monitor, source)
+    return Case(model, settings, control, monitor, source, method, limit_options)
 
 
 @contextmanager

@@ -388,6 +388,11 @@ MONITOR = _table("Monitor", {"block": _number("block"), "dof": _choice(DOF_NAMES
 ANALYSIS_EXTRA: dict[str, tuple[Any, Any]] = {
     "control": (dict | None, None),
     "monitor": (dict | None, None),
+    # limit analysis instead of a pushover (``masonry-dem limit``): the method and its options
+    "method": (_choice(("pushover", "limit")), "pushover"),
+    "associative": (bool | None, None),
+    "grid": (int | None, None),
+    "backend": (_choice(("highs", "clarabel")) | None, None),
 }
 
 

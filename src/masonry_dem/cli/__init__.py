@@ -17,7 +17,7 @@ import logging
 import sys
 import traceback
 
-COMMANDS = ("run", "validate", "interface", "render", "paraview_state", "study")
+COMMANDS = ("run", "validate", "interface", "render", "paraview_state", "study", "limit")
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -34,6 +34,20 @@ def add_parser(subparsers) -> None:
     p.set_defaults(func=run_command)
 
 
+def limit_analysis_bound(model) -> dict:
+    """The associative limit-analysis multiplier of the model, an upper bound of the
+    pushover's (``limit_analysis_bound``: None unless the LA finds a collapse), and its
+    status and time."""
+    from masonry_dem.solvers.limit_analysis import limit_analysis
+
+    la = limit_analysis(model)
+    return {
+        "limit_analysis_bound": la.load_factor if la.status == "collapse" else None,
+        "limit_analysis_status": la.status,
+        "limit_analysis_seconds": round(la.seconds, 4),
+    }
+
+
 def run_command(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
@@ -45,6 +59,13 @@ def run_command(args: argparse.Namespace) -> int:
 
     case = load_case(args.case)
     out = Path(args.out)
+    if case.method == "limit":  # [analysis] method = "limit"
+        from masonry_dem.cli.limit import run_limit
+
+        summary = run_limit(case, out, dict(case.limit_options or {}), not args.no_render)
+        print(json.dumps({k: summary[k] for k in ("status", "lambda", "method", "bound")}))
+        print(f"{summary['status']}: {summary['reason']}")
+        return 0 if summary["status"] == "collapse" else 1
     t0 = time.perf_counter()
     # claims the folder: refused if it holds another run (without --overwrite) or is in use
     writer = ResultsWriter(
@@ -59,7 +80,9 @@ def run_command(args: argparse.Namespace) -> int:
             bar.update(1)
             check_stop()  # Ctrl-C or SIGTERM: stop here, between steps, all of them written
 
-        solver = StaticSolver(case.model, case.settings)
+        # the associative bound first: the certificate of a collapse checks lambda against it
+        bound = limit_analysis_bound(case.model)
+        solver = StaticSolver(case.model, case.settings, bound=bound["limit_analysis_bound"])
         # the steps handed to the writer reach the disk; an exception (Ctrl-C, SIGTERM, a
         # full disk) leaves the folder marked interrupted or failed with every step written
         with writer, bar, stop_on_signals():
@@ -70,6 +93,7 @@ def run_command(args: argparse.Namespace) -> int:
                 release=False,
                 case=case.source,
                 wall_seconds=round(time.perf_counter() - t0, 4),
+                **bound,
             )
         if not args.no_render:
             summary = _render(out, summary, writer, MECHANISM_FILES[0])

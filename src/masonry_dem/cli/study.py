@@ -220,9 +220,8 @@ def polish(model, static_settings, hist) -> tuple[bool, str]:
     for st in upto:
         if st.flags is not None:
             cracked |= (np.asarray(st.flags) & DETACHED_FLAG) > 0
-    solver.cracked = cracked
-    solver.q = np.asarray(upto[-1].q, dtype=float).reshape(-1).copy()
-    out = solver._equilibrate(lam, start=solver.q)
+    solver.restore(upto[-1].q, cracked)
+    out = solver.equilibrate(lam, start=solver.q)
     if out.ok:
         return True, f"Newton polish converged in {out.iterations} iterations"
     return False, f"Newton polish failed: {out.reason}"

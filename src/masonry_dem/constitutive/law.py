@@ -194,6 +194,11 @@ class InterfaceLaw:
             return r.utilisation
         return self._check(r.trial, r.tensile_force).utilisation
 
+    def admissibility(self, r: LawResponse) -> np.ndarray:
+        """(m,) demand/capacity of the corrected actions of ``r`` (at most 1 where they lie
+        in the strength domain, up to the round-off of the return)."""
+        return self._check(np.ascontiguousarray(r.actions), r.tensile_force).utilisation
+
     def tangent(self, r: LawResponse, floor: float = 1e-9, method: str = "analytic") -> np.ndarray:
         """(m, 6, 6) consistent tangent d(actions)/d(relative displacements) at ``r``.
 

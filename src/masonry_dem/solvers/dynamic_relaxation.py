@@ -79,10 +79,11 @@ import numpy as np
 from scipy import sparse
 
 from masonry_dem._threads import kernel_threads_for
-from masonry_dem.assembly.stiffness import Assembly
-from masonry_dem.constitutive.law import InterfaceLaw, LawResponse
+from masonry_dem.constitutive.law import LawResponse
 from masonry_dem.model import Model
 from masonry_dem.results import History, StepResult
+from masonry_dem.solvers.static.outcome import Status
+from masonry_dem.solvers.static.problem import DiscreteProblem
 
 log = logging.getLogger(__name__)
 
@@ -227,26 +228,20 @@ class DynamicRelaxation:
     def __init__(self, model: Model, settings: DRSettings | None = None) -> None:
         self.model = model
         self.settings = s = settings or DRSettings()
-        self.asm = Assembly.of(model)
-        # memory is passed only when asked, so the call works with laws that predate it
-        extra = {} if s.memory == "none" else {"memory": s.memory}
-        self.law = InterfaceLaw.of(model, self.asm.kbar, s.tension, **extra)
-        free = self.asm.free_index
-        self.Hf = self.asm.H_free.tocsr()
-        self.F_dead = model.dead.reshape(-1)[free]
-        self.F_live = model.live.reshape(-1)[free]
-        dead_norm = float(np.linalg.norm(self.F_dead))
-        live_norm = float(np.linalg.norm(self.F_live))
-        self.load_scale = dead_norm / live_norm if live_norm > 0 and dead_norm > 0 else 1.0
-        self.limit = (
-            s.displacement_limit
-            if s.displacement_limit is not None
-            else 0.5 * model.smallest_moving_size
+        # the discrete problem of the static solver: the same loads, law, residual norm
+        # (moments as forces at the median block size) and displacement limit
+        self.problem = DiscreteProblem(
+            model, tension=s.tension, memory=s.memory, displacement_limit=s.displacement_limit
         )
-        self._translation = (free % 6) < 3
-        # residual norm: moments as forces at the median block size (as the static solver)
-        length = float(np.median(model.blocks.sizes))
-        self._weight = np.where(self._translation, 1.0, 1.0 / length)
+        self.asm = self.problem.asm
+        self.law = self.problem.law
+        self.Hf = self.asm.H_free.tocsr()
+        self.F_dead = self.problem.F_dead
+        self.F_live = self.problem.F_live
+        self.load_scale = self.problem.load_scale
+        self.limit = self.problem.limit
+        self._translation = self.problem.translation
+        self._weight = self.problem.weight
         self.m = model.interfaces.count
         self.K_elastic = self.asm.stiffness().tocsr()
         self.mass = self._masses()
@@ -627,13 +622,13 @@ class DynamicRelaxation:
         self._record(hist, dead.x, 0.0, dead.response, dead.cycles, monitor_dof, callback)
         if not np.any(self.F_live):
             return self._finish(
-                hist, "completed", "no live load: the dead-load state is the answer", t0
+                hist, Status.COMPLETED, "no live load: the dead-load state is the answer", t0
             )
         if s.loading == "ramp":
             state = self._ramp(hist, state, monitor_dof, callback)
-            if hist.status in ("failed", "completed"):
+            if hist.status in (Status.FAILED, Status.COMPLETED):
                 return self._finish(hist, hist.status, hist.reason, t0)
-            if hist.status == "collapse" and not s.refine:
+            if hist.status is Status.COLLAPSE and not s.refine:
                 return self._finish(hist, hist.status, hist.reason, t0)
         self._load_control(hist, state, monitor_dof, callback)
         return self._finish(hist, hist.status, hist.reason, t0)
@@ -659,7 +654,7 @@ class DynamicRelaxation:
         top = s.max_load_factor if math.isfinite(s.max_load_factor) else 1e6 * self.load_scale
         out = self._relax_with_cuts(state, top, hist, ramp_to=top, on_checkpoint=checkpoint)
         if out.kind in _FATAL:
-            hist.status, hist.reason = "failed", out.reason
+            hist.status, hist.reason = Status.FAILED, out.reason
             return state
         if out.ok:
             plastic, cracked = self._plastic_of(out, state)
@@ -678,7 +673,7 @@ class DynamicRelaxation:
             cand, _ = candidates[mid]
             probe = self._relax_with_cuts(cand, cand.load_factor, hist)
             if probe.kind in _FATAL:
-                hist.status, hist.reason = "failed", probe.reason
+                hist.status, hist.reason = Status.FAILED, probe.reason
                 return state
             if probe.ok:
                 lo = mid
@@ -696,10 +691,13 @@ class DynamicRelaxation:
                 hist, probe.x, cand.load_factor, probe.response, probe.cycles, monitor_dof, callback
             )
         if out.ok and lo == len(candidates) - 1:
-            hist.status, hist.reason = "completed", f"reached max_load_factor {out.load_factor:.6g}"
+            hist.status, hist.reason = (
+                Status.COMPLETED,
+                f"reached max_load_factor {out.load_factor:.6g}",
+            )
             return state
         hist.collapse_bracket = (state.load_factor, lam_fail)
-        hist.status = "collapse"
+        hist.status = Status.COLLAPSE
         hist.reason = (
             f"ramp: no equilibrium beyond lambda={state.load_factor:.6g} "
             f"(first failure at {lam_fail:.6g}: {out.reason or 'a passed state did not settle'})"
@@ -730,7 +728,7 @@ class DynamicRelaxation:
             target = min(lam + dlam, s.max_load_factor)
             out = self._relax_with_cuts(state, target, hist)
             if out.kind in _FATAL:
-                hist.status, hist.reason = "failed", out.reason
+                hist.status, hist.reason = Status.FAILED, out.reason
                 hist.collapse_bracket = None
                 return
             if out.ok:
@@ -739,7 +737,10 @@ class DynamicRelaxation:
                 self._record(hist, out.x, target, out.response, out.cycles, monitor_dof, callback)
                 lam = target
                 if lam >= s.max_load_factor:
-                    hist.status, hist.reason = "completed", f"reached max_load_factor {lam:.6g}"
+                    hist.status, hist.reason = (
+                        Status.COMPLETED,
+                        f"reached max_load_factor {lam:.6g}",
+                    )
                     return
                 if math.isfinite(lam_fail):
                     dlam = (lam_fail - lam) / 2
@@ -754,28 +755,28 @@ class DynamicRelaxation:
                 dlam = (lam_fail - lam) / 2
         else:
             hist.status, hist.reason = (
-                "failed",
+                Status.FAILED,
                 f"max_steps={s.max_steps} reached at lambda={lam:.6g}",
             )
             return
         if not math.isfinite(lam_fail):
-            hist.status, hist.reason = "failed", "no load step failed and none converged"
+            hist.status, hist.reason = Status.FAILED, "no load step failed and none converged"
             return
         hist.collapse_bracket = (lam, lam_fail)
-        hist.status = "collapse"
+        hist.status = Status.COLLAPSE
         hist.reason = f"no equilibrium beyond lambda={lam:.6g} (first failure at {lam_fail:.6g}: {last_reason})"
 
     def _fail_empty(self, hist: History, zero: _State, reason: str, t0: float, callback) -> History:
         resp = self.law.respond(np.zeros((self.m, 6)), zero.plastic, zero.cracked)
         self._record(hist, zero.x, 0.0, resp, 0, None, callback)
-        return self._finish(hist, "failed", reason, t0)
+        return self._finish(hist, Status.FAILED, reason, t0)
 
     def _global_dof(self, block: int, dof: str) -> int:
         return self.model.dof_index(block, dof)
 
-    def _finish(self, hist: History, status: str, reason: str, t0: float) -> History:
+    def _finish(self, hist: History, status: Status, reason: str, t0: float) -> History:
         hist.status, hist.reason = status, reason
-        if status != "collapse":
+        if status is not Status.COLLAPSE:
             hist.collapse_bracket = None
         hist.seconds = time.perf_counter() - t0
         hist.iterations = self.stats.time_steps

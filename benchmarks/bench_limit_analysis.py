@@ -1,0 +1,144 @@
+"""Limit analysis: the grid study, the validation cases beside the pushover, a size ladder.
+
+    python benchmarks/bench_limit_analysis.py --grid-study      # default grid of the frozen
+                                                               # capacities (cT within 1 %)
+    python benchmarks/bench_limit_analysis.py --cases [NAMES]   # 18 cases: LA (assoc., HiGHS
+                                                               # and Clarabel), non-assoc., pushover
+    python benchmarks/bench_limit_analysis.py --ladder 100 1000 10000   # blocks: LA vs pushover
+
+Times are wall-clock seconds of one run on this machine; compare the ratios printed in one
+run, not figures from different runs.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import time
+
+import numpy as np
+
+from masonry_dem.constitutive import torsion_constant
+from masonry_dem.solvers.limit_analysis import limit_analysis, torsion_quadrature
+
+ASPECTS = (1.0, 1.5, 2.0, 3.0, 4.0)
+
+
+def grid_study(max_n: int = 12) -> int:
+    """Error of the uniform-pressure torsion of the n x n Lobatto grid against cT, and the
+    smallest even n within 1 % on every aspect (odd n put a point on the cusp of |y|)."""
+    print(f"{'n':>3s} " + " ".join(f"{f'{a:g}:1':>8s}" for a in ASPECTS))
+    chosen = None
+    for n in range(2, max_n + 1):
+        errs = [
+            torsion_quadrature(0.2 * a, 0.2, n) / float(torsion_constant(0.2 * a, 0.2)) - 1
+            for a in ASPECTS
+        ]
+        print(f"{n:3d} " + " ".join(f"{100 * e:+7.2f}%" for e in errs))
+        if chosen is None and n % 2 == 0 and max(abs(e) for e in errs) <= 0.01:
+            chosen = n
+    print(f"smallest even n within 1 % of cT on aspects {ASPECTS}: {chosen}")
+    return chosen or -1
+
+
+def _timed(fn, *args, **kwargs):
+    t0 = time.perf_counter()
+    out = fn(*args, **kwargs)
+    return out, time.perf_counter() - t0
+
+
+def _fmt(x: float | None) -> str:
+    return "-" if x is None or not math.isfinite(x) else f"{x:.4f}"
+
+
+def cases(names: list[str]) -> None:
+    from masonry_dem.cases.paper import build_case, case_names
+    from masonry_dem.cli.study import warm_up
+    from masonry_dem.solvers.incremental import pushover
+
+    warm_up()
+    names = names or case_names()
+    print(
+        f"{'case':6s} {'LA assoc':>9s} {'s':>6s} {'LA cone':>9s} {'s':>6s} {'non-a Cl':>9s} "
+        f"{'s':>6s} {'it':>3s} {'pushover':>9s} {'s':>6s} {'status':>9s} {'paper LA':>8s}"
+    )
+    for name in names:
+        case = build_case(name)
+        model = case.model
+        assoc, t_a = _timed(limit_analysis, model)
+        cone, t_c = _timed(limit_analysis, model, backend="clarabel")
+        nonassoc, t_n = _timed(limit_analysis, model, associative=False, backend="clarabel")
+        hist, t_p = _timed(pushover, model, case.settings, monitor=case.monitor)
+        lam_p = hist.collapse_multiplier if hist.status == "collapse" else hist.final_load_factor
+        la_ref = case.extra.get("lambda_limit_analysis")
+
+        def show(r) -> str:
+            return _fmt(r.load_factor) if r.status == "collapse" else r.status[:9]
+
+        print(
+            f"{name:6s} {show(assoc):>9s} {t_a:6.2f} {show(cone):>9s} {t_c:6.2f} "
+            f"{show(nonassoc):>9s} {t_n:6.2f} {nonassoc.iterations:3d} {_fmt(lam_p):>9s} "
+            f"{t_p:6.2f} {hist.status:>9s} {_fmt(la_ref):>8s}",
+            flush=True,
+        )
+        for r in (assoc, cone, nonassoc):
+            if r.status != "collapse":
+                print(f"       {r.method} {r.backend}: {r.reason}")
+
+
+def ladder(sizes: list[int], pushover_up_to: int) -> None:
+    """Square-ish running-bond walls on a base tilted in plane (mu 0.6): LA against pushover."""
+    from masonry_dem.cli.study import warm_up
+    from masonry_dem.geometry.builders import add_base, running_bond_wall
+    from masonry_dem.model import InterfaceMaterial, Model, SelfWeight, Support, WeightProportional
+    from masonry_dem.solvers.incremental import pushover
+
+    warm_up()
+    print(
+        f"{'blocks':>7s} {'interf':>7s} {'LA HiGHS':>9s} {'s':>7s} {'LA Clar.':>9s} {'s':>7s} "
+        f"{'pushover':>9s} {'s':>7s} {'push/LA':>8s}"
+    )
+    for target in sizes:
+        side = max(2, round(math.sqrt(target / 1.0)))
+        wall = running_bond_wall(side, side, a=0.2, b=0.4, s=0.2, unit_weight=2000 * 9.81)
+        blocks, base = add_base(wall)
+        model = Model.build(
+            blocks,
+            InterfaceMaterial(kn=1e9, kt=4e8, friction=0.6),
+            [Support([base])],
+            [SelfWeight(), WeightProportional((1.0, 0.0, 0.0))],
+        )
+        r_h, t_h = _timed(limit_analysis, model)
+        r_c, t_c = _timed(limit_analysis, model, backend="clarabel")
+        lam_p, t_p = None, float("nan")
+        if model.blocks.count <= pushover_up_to:
+            h, t_p = _timed(pushover, model)
+            lam_p = h.collapse_multiplier
+        print(
+            f"{model.blocks.count:7d} {model.interfaces.count:7d} {_fmt(r_h.load_factor):>9s} "
+            f"{t_h:7.2f} {_fmt(r_c.load_factor):>9s} {t_c:7.2f} {_fmt(lam_p):>9s} {t_p:7.2f} "
+            f"{t_p / min(t_h, t_c):8.2f}",
+            flush=True,
+        )
+
+
+def main(argv: list[str] | None = None) -> None:
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
+    p.add_argument("--grid-study", action="store_true")
+    p.add_argument("--cases", nargs="*", default=None, metavar="NAME")
+    p.add_argument("--ladder", nargs="*", type=int, default=None, metavar="BLOCKS")
+    p.add_argument("--pushover-up-to", type=int, default=2000, help="largest ladder pushover")
+    args = p.parse_args(argv)
+    if args.grid_study:
+        grid_study()
+    if args.cases is not None:
+        cases(args.cases)
+    if args.ladder is not None:
+        ladder(args.ladder or [100, 1000, 10000], args.pushover_up_to)
+    if not (args.grid_study or args.cases is not None or args.ladder is not None):
+        p.print_help()
+
+
+if __name__ == "__main__":
+    np.set_printoptions(precision=4)
+    main()

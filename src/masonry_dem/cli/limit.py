@@ -1,0 +1,79 @@
+"""``masonry-dem limit [CASE] [--associative | --non-associative] [--grid N] [--out DIR]``:
+the collapse multiplier and mechanism of a case by limit analysis (one convex solve)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import time
+from pathlib import Path
+
+log = logging.getLogger(__name__)
+
+
+def add_parser(subparsers) -> None:
+    p = subparsers.add_parser(
+        "limit",
+        help="limit analysis of a case file: collapse multiplier, mechanism VTU/PNG, summary.json",
+        description=(
+            "Rigid-block limit analysis of a case file (default: the bundled wall). The "
+            "associative multiplier is an upper bound of the pushover's; the non-associative "
+            "one (zero dilatancy) an estimate of it."
+        ),
+    )
+    p.add_argument("case", nargs="?", help="TOML case file (see README, 'Case files')")
+    kind = p.add_mutually_exclusive_group()
+    kind.add_argument(
+        "--associative", dest="associative", action="store_true", default=None, help="(default)"
+    )
+    kind.add_argument("--non-associative", dest="associative", action="store_false")
+    p.add_argument("--grid", type=int, default=None, help="contact points per interface side")
+    p.add_argument("--backend", choices=("highs", "clarabel"), default=None)
+    p.add_argument("--out", default="results/limit", help="results folder (default: %(default)s)")
+    p.add_argument("--no-render", action="store_true", help="skip the PNG of the mechanism")
+    p.set_defaults(func=limit_command)
+
+
+def run_limit(case, out: Path, options: dict, render: bool = True) -> dict:
+    """Run the limit analysis of a loaded case into ``out``; returns the summary."""
+    from masonry_dem.export.limit_results import write_limit_results
+    from masonry_dem.solvers.limit_analysis import limit_analysis
+
+    t0 = time.perf_counter()
+    result = limit_analysis(case.model, **options)
+    summary = write_limit_results(
+        out, case.model, result, case=case.source, wall_seconds=round(time.perf_counter() - t0, 4)
+    )
+    if render and result.status == "collapse":
+        try:
+            from masonry_dem.export.render import render_mechanism
+        except ImportError as exc:  # rendering is optional for the analysis itself
+            log.warning("no PNG: the render module is unavailable (%s)", exc)
+        else:
+            summary["mechanism_png"] = render_mechanism(out).name
+            (out / "summary.json").write_text(json.dumps(summary, indent=2))
+    return summary
+
+
+def limit_command(args: argparse.Namespace) -> int:
+    from masonry_dem.cases.casefile import load_case
+
+    case = load_case(args.case)
+    options = dict(case.limit_options or {})
+    if args.associative is not None:
+        options["associative"] = args.associative
+    if args.grid is not None:
+        options["grid"] = args.grid
+    if args.backend is not None:
+        options["backend"] = args.backend
+    out = Path(args.out)
+    summary = run_limit(case, out, options, render=not args.no_render)
+    print(
+        json.dumps(
+            {k: summary[k] for k in ("status", "lambda", "method", "bound", "seconds", "blocks")}
+        )
+    )
+    print(f"{summary['status']}: {summary['reason']}")
+    print(f"results in {out}/ (summary.json, mechanism_blocks.vtu, mechanism_interfaces.vtu)")
+    return 0 if summary["status"] == "collapse" else 1

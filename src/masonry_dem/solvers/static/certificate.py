@@ -1,0 +1,398 @@
+"""The certificate of a collapse: what makes a stop of the static path a collapse.
+
+A path follower stops for many reasons (a flat curve, a displacement limit, no equilibrium
+for any step); only some of them are a collapse. :func:`certify` checks three conditions on
+the state where the path stopped, each independently of how the path got there:
+
+(a) **equilibrium** - the state is a converged equilibrium of the discrete problem at its
+    lambda (the residual re-evaluated to the static tolerance) and statically admissible
+    (every interface action inside its strength domain, to ``admissible_tolerance``);
+(b) **a collapse mode** - either the tangent of that state is singular along the motion
+    the live load drives, v = K_t^-1 F_L, to a stated tolerance: the Rayleigh quotient of
+    the tangent along v in the metric of the tangent K_0 of the dead-load state (the wall
+    as it stands before the live load), rho = v.K_t v / v.K_0 v = F_L.v / v.K_0 v, is at
+    most ``mode_stiffness`` (rho is 1 at the dead-load state, between 0 and 1 as joints
+    open and slide, 0 along a mechanism, negative where the tangent softens along the load
+    past a limit point; it is the smallest generalised eigenvalue of (K_t, K_0) when the
+    load drives that mode, as inverse iteration from F_L finds it). K_0 and not the
+    bonded elastic stiffness: a dry wall's head joints carry nothing under its weight, and
+    against a bonded wall its own elastic state measured 0.03 in plane. Or the pushover
+    curve is flat
+    or falling past its peak over at least ``mode_displacement`` x the work-conjugate
+    displacement at the peak. Where the law has a kink (a joint that starts to slide, rock
+    or lift: elastic up to its strength, then nothing along that motion) the singularity
+    lies just past the last converged state, so the tangent is also taken at the linear
+    extension of the state, q + (lambda_end - lambda) K_t^-1 F_L, across the bracket's
+    tolerance, lambda_end = lambda x (1 + ``bracket_tolerance``). Either way the live
+    load does positive work along the mode (F_L.v > 0). A path stopped by the displacement
+    limit (where equilibria were still being found) must have stopped rising: rho at most
+    ``flat_slope``, as work control measures a flat curve. The current stiffness parameter
+    of Bergan, S = (d lambda / d w along the
+    tangent) / (elastic d lambda / d w of the path), is reported beside it;
+(c) **the bound** - lambda does not exceed the associative limit-analysis multiplier of the
+    same model (Radenkovic: an upper bound of the non-associative one), within
+    ``bound_tolerance``. The bound is injected (a number or a function of the model); with
+    none, the field says ``"not checked"``, never a pass.
+
+A multiplier the residual cannot tell from zero load (at most ZERO_LOAD x ``tolerance`` load
+scales) needs more for (b): a mechanism of the dead-load state itself (its tangent, or the
+tangent at its extension to the smallest resolvable lambda, singular along the load to
+ZERO_MODE x the tangent's floor against the bonded elastic stiffness), which dynamic
+relaxation confirms by finding no rest at that lambda (a contact may close after a small
+motion: an in-plane held wall whose tangent is singular there carries 0.08 by DR).
+
+A stop that fails (a) or (b), or exceeds the bound, is reported ``failed`` with the reason
+and every step kept.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import asdict, dataclass, field
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from masonry_dem.constitutive.law import DETACHED_FLAG
+
+if TYPE_CHECKING:
+    from masonry_dem.model import Model
+    from masonry_dem.results import History
+    from masonry_dem.solvers.static.problem import DiscreteProblem
+    from masonry_dem.solvers.static.settings import StaticSettings
+
+#: an upper bound of the collapse multiplier: a number, or a function of the model
+Bound = float | Callable[["Model"], "float | None"] | None
+
+NOT_CHECKED = "not checked"
+#: a multiplier at most ZERO_LOAD x tolerance (in load scales) cannot be told from zero load
+#: by the residual; a collapse there needs a mechanism of the dead-load state itself: its
+#: tangent singular along the load to ZERO_MODE x the tangent's floor (residual_stiffness)
+ZERO_LOAD = 100.0
+ZERO_MODE = 1e3
+
+
+@dataclass
+class Certificate:
+    """Whether a stop of the path is a collapse, and the evidence. ``holds`` is the
+    conjunction of ``equilibrium``, ``admissible``, ``mode_found`` and (when a bound was
+    given) ``within_bound``."""
+
+    holds: bool
+    load_factor: float  # the certified multiplier (the peak of the path)
+    state_load_factor: float  # lambda of the state checked (the last converged one)
+    step: int  # the index in History.steps of the state checked (the last)
+    # (a)
+    residual: float
+    tolerance: float
+    equilibrium: bool
+    utilisation: float  # largest demand/capacity of the actions of the state
+    admissible: bool
+    # (b)
+    # "singular tangent" (at the state), "singular tangent at the end of the bracket",
+    # "flat curve", or "none"
+    mode: str
+    mode_rayleigh: float  # rho = v.K_t v / v.K_0 v along v = K_t^-1 F_L
+    mode_stiffness: float  # the tolerance applied (flat_slope after a displacement limit)
+    stiffness_parameter: float  # Bergan's S along the load (reported, not a condition)
+    curve_displacement: float  # w past the peak / w at the peak
+    mode_displacement: float
+    live_work: float  # F_L . mode (mode scaled to a largest translation of 1 m)
+    mode_found: bool
+    near_zero: bool  # lambda <= ZERO_LOAD x tolerance load scales: the stricter check applied
+    zero_load_check: str  # dynamic relaxation at the resolvable lambda: "no rest", ...
+    # (c)
+    bound: float | None
+    bound_status: str  # "within", "exceeded", or "not checked"
+    within_bound: bool | None
+    reason: str
+    mode_vector: np.ndarray | None = field(default=None, repr=False)
+
+    def as_dict(self) -> dict:
+        """JSON-ready fields (no arrays)."""
+        out = asdict(self)
+        out.pop("mode_vector")
+        for key, value in out.items():
+            if isinstance(value, float) and not math.isfinite(value):
+                out[key] = None if math.isnan(value) else str(value)
+        return out
+
+
+def _bound_value(bound: Bound, model: Model) -> float | None:
+    if bound is None:
+        return None
+    value = bound(model) if callable(bound) else bound
+    return None if value is None or not math.isfinite(float(value)) else float(value)
+
+
+def certify(
+    problem: DiscreteProblem,
+    hist: History,
+    settings: StaticSettings,
+    bound: Bound = None,
+    rests_at: Callable[[float], bool] | None = None,
+) -> Certificate:
+    """Check the stop of ``hist`` at its last recorded state (see the module). Only the
+    model's discrete problem and the History are used: the law state of the last step (the
+    joints cracked before it, the plastic part of the step before it) is rebuilt from the
+    steps, so the check does not rest on how the path got there. ``rests_at(lambda)``: does
+    an independent method (dynamic relaxation) find rest at that lambda from the last state;
+    asked only of a multiplier the residual cannot tell from zero load."""
+    s = settings
+    free = problem.free
+    law = problem.law
+    last = len(hist.steps) - 1
+    state = hist.steps[last]
+    lam_state = float(state.load_factor)
+    peak = hist.collapse_multiplier
+    lam = float(peak if peak is not None else hist.load_factors.max())
+    q = state.q.reshape(-1)
+    plastic, cracked = law_state_before(problem, hist, last)
+    # (a) the residual re-evaluated at the state, with the law state it was found with
+    _, rnorm, response = problem.residual(q, lam_state, plastic, cracked)
+    equilibrium = bool(rnorm <= s.tolerance)
+    util = float(np.max(law.admissibility(response), initial=0.0))
+    admissible = bool(util <= 1.0 + s.admissible_tolerance)
+    # (b1) the tangent of the state along the load
+    F = problem.F_live
+    live_norm = float(np.linalg.norm(F))
+    v = problem.factor(response).solve(F)
+    compliance = float(F @ v)
+    c = F / live_norm if live_norm > 0 else F
+    q0 = hist.steps[0].q.reshape(-1)[free]
+    path_w = np.array([float(c @ (st.q.reshape(-1)[free] - q0)) for st in hist.steps])
+    path_lam = hist.load_factors
+    elastic_slope = _elastic_slope(problem, path_w, path_lam)
+    if compliance != 0.0 and math.isfinite(compliance) and elastic_slope > 0:
+        stiffness = live_norm / compliance / elastic_slope
+    else:
+        stiffness = math.inf
+    T0 = _dead_load_tangent(problem, hist, s)
+    rho = _rayleigh(problem, v, compliance, T0)
+    # a path stopped by the displacement limit still found equilibria: its curve must have
+    # stopped rising there, as work control measures flatness (flat_slope); a path that
+    # found none beyond its state needs only a near-singular tangent (mode_stiffness)
+    from masonry_dem.solvers.static.outcome import StopReason
+
+    tolerance = (
+        min(s.flat_slope, s.mode_stiffness)
+        if hist.stop is StopReason.DISPLACEMENT_LIMIT
+        else s.mode_stiffness
+    )
+    singular = bool(compliance != 0 and rho <= tolerance)
+    where = "singular tangent"
+    if not singular and np.all(np.isfinite(v)):
+        # a kink of the law (a joint that starts to slide, rock or lift) puts the
+        # singularity just past the last converged state: the tangent at the linear
+        # extension of the state across the collapse bracket's tolerance
+        # (only that far: an unrefined bracket proves nothing about the state)
+        probe_lam = lam_state * (1.0 + s.bracket_tolerance)
+        probe = q.copy()
+        probe[free] += (probe_lam - lam_state) * v
+        _, _, beyond = problem.residual(probe, probe_lam, plastic, cracked)
+        v_beyond = problem.factor(beyond).solve(F)
+        compliance_beyond = float(F @ v_beyond)
+        rho_beyond = _rayleigh(problem, v_beyond, compliance_beyond, T0)
+        if compliance_beyond != 0 and rho_beyond <= tolerance:
+            singular, where = True, "singular tangent at the end of the bracket"
+            v, compliance, rho = v_beyond, compliance_beyond, rho_beyond
+    # (b2) the curve past its peak, up to the state checked
+    at_peak = int(np.argmax(path_lam))
+    w_peak = path_w[at_peak]
+    w_last = path_w[last]
+    past = (w_last - w_peak) / w_peak if w_peak > 0 else 0.0
+    flat = bool(last > at_peak and past >= s.mode_displacement)
+    # the mode and the work of the live load along it
+    mode_vector: np.ndarray | None = None
+    live_work = 0.0
+    mode = "none"
+    if singular and np.all(np.isfinite(v)):
+        x = v if compliance > 0 else -v  # oriented so that the live load does work
+        size = float(np.abs(x[problem.translation]).max(initial=0.0))
+        if size > 0:
+            x = x / size
+            live_work = float(F @ x)
+            mode, mode_vector = where, x
+    if mode == "none" and flat:
+        dq = (q - hist.steps[at_peak].q.reshape(-1))[free]
+        size = float(np.abs(dq[problem.translation]).max(initial=0.0))
+        if size > 0:
+            live_work = float(F @ dq) / size
+            mode, mode_vector = "flat curve", dq / size
+    mode_found = bool(mode != "none" and live_work > 0)
+    # a multiplier the residual cannot tell from zero load: the states found there are
+    # equilibria only to the tolerance, so the mode must be one of the dead-load state
+    # itself, singular to the floor of the tangent against the bonded elastic stiffness
+    near_zero = bool(lam <= ZERO_LOAD * s.tolerance * problem.load_scale)
+    zero_rho = math.nan
+    zero_check = NOT_CHECKED
+    lam_end = ZERO_LOAD * s.tolerance * problem.load_scale
+    if near_zero:
+        zero_rho, zero_mode = _dead_load_mode(problem, hist, s)
+        singular_at_zero = zero_rho <= ZERO_MODE * s.residual_stiffness
+        # a contact may close after a small motion: the mechanism must also run away
+        # where an independent method looks for rest (no rest at the resolvable lambda)
+        zero_check = (
+            NOT_CHECKED
+            if rests_at is None or not singular_at_zero
+            else ("rest found" if rests_at(lam_end) else "no rest")
+        )
+        if singular_at_zero and zero_check == "no rest" and zero_mode is not None:
+            mode, mode_vector = "mechanism of the dead-load state", zero_mode
+            live_work = float(F @ zero_mode)
+            mode_found = live_work > 0
+        else:
+            mode_found, mode, mode_vector, live_work = False, "none", None, 0.0
+    # (c) the bound
+    value = _bound_value(bound, problem.model)
+    if value is None:
+        bound_status, within = NOT_CHECKED, None
+    else:
+        within = bool(lam <= value * (1.0 + s.bound_tolerance) + 1e-12 * abs(value))
+        bound_status = "within" if within else "exceeded"
+    holds = equilibrium and admissible and mode_found and within is not False
+    why = []
+    if not equilibrium:
+        why.append(f"the last state is not an equilibrium (residual {rnorm:.2e} > {s.tolerance:g})")
+    if not admissible:
+        why.append(f"the last state is not admissible (utilisation {util:.6g})")
+    if not mode_found and near_zero:
+        why.append(
+            f"lambda {lam:.3g} is below what the residual tolerance resolves "
+            f"({ZERO_LOAD:g} x {s.tolerance:g} load scales) and the dead-load state shows no "
+            f"mechanism along the load (its tangent keeps {zero_rho:.3g} of the bonded "
+            f"elastic stiffness, limit {ZERO_MODE:g} x the floor {s.residual_stiffness:g}; "
+            f"dynamic relaxation at lambda {lam_end:.3g}: {zero_check})"
+        )
+    elif not mode_found:
+        why.append(
+            f"no collapse mode: the tangent keeps {rho:.3g} of the elastic stiffness along "
+            f"the motion the load drives (> {tolerance:g}) and the curve goes "
+            f"{past:.3g} of its peak displacement past the peak (< {s.mode_displacement:g})"
+        )
+    if within is False:
+        why.append(f"lambda {lam:.6g} exceeds the limit-analysis bound {value:.6g}")
+    reason = (
+        f"certified: {mode} (rho {rho:.2e}, live-load work {live_work:.3g} per m), "
+        f"bound {bound_status}"
+        if holds
+        else "; ".join(why)
+    )
+    return Certificate(
+        holds=bool(holds),
+        load_factor=lam,
+        state_load_factor=lam_state,
+        step=int(last),
+        residual=float(rnorm),
+        tolerance=s.tolerance,
+        equilibrium=equilibrium,
+        utilisation=util,
+        admissible=admissible,
+        mode=mode,
+        mode_rayleigh=float(rho),
+        mode_stiffness=tolerance,
+        stiffness_parameter=float(stiffness),
+        curve_displacement=float(past),
+        mode_displacement=s.mode_displacement,
+        live_work=float(live_work),
+        mode_found=mode_found,
+        near_zero=near_zero,
+        zero_load_check=zero_check,
+        bound=value,
+        bound_status=bound_status,
+        within_bound=within,
+        reason=reason,
+        mode_vector=None if mode_vector is None else _full(problem, mode_vector),
+    )
+
+
+def _full(problem: DiscreteProblem, x: np.ndarray) -> np.ndarray:
+    q = np.zeros(problem.model.n_dofs)
+    q[problem.free] = x
+    return q.reshape(-1, 6)
+
+
+def law_state_before(problem: DiscreteProblem, hist: History, index: int):
+    """(plastic part, cracked joints) that step ``index`` of the path was found with: the
+    joints detached at the steps before it (brittle tension), the plastic part stored at
+    the step before it (memory of slip)."""
+    law = problem.law
+    m = problem.model.interfaces.count
+    cracked = np.zeros(m, dtype=bool)
+    if law.tension == "brittle" and index > 0:
+        flags = np.array([st.flags for st in hist.steps[:index]])
+        cracked = np.any((flags & DETACHED_FLAG) > 0, axis=0)
+    plastic = np.zeros((m, 6))
+    if index > 0:
+        before = hist.steps[index - 1]
+        relative = problem.asm.relative_displacements(before.q.reshape(-1))
+        plastic = law.plastic_part(relative, before.actions)
+    return plastic, cracked
+
+
+def _dead_load_tangent(
+    problem: DiscreteProblem, hist: History, settings: StaticSettings
+) -> np.ndarray:
+    """(m, 6, 6) tangents of the joints at the dead-load state (the first step)."""
+    m = problem.model.interfaces.count
+    first = hist.steps[0].q.reshape(-1)
+    _, _, response = problem.residual(first, 0.0, np.zeros((m, 6)), np.zeros(m, dtype=bool))
+    return problem.law.tangent(response, settings.residual_stiffness, settings.tangent)
+
+
+def _dead_load_mode(
+    problem: DiscreteProblem, hist: History, settings: StaticSettings
+) -> tuple[float, np.ndarray | None]:
+    """The smaller rho of the dead-load state's tangent along K_0^-1 F_L, and of the tangent
+    at that state's linear extension to the smallest resolvable multiplier (ZERO_LOAD x
+    tolerance load scales: a joint with no strength along the load, e.g. no friction, is
+    elastic at zero demand and yields just past it), against the bonded elastic stiffness
+    (every joint at kbar); with that mode (free DOFs), scaled to a largest translation of 1
+    and oriented so that the live load does work on it."""
+    m = problem.model.interfaces.count
+    none = (np.zeros((m, 6)), np.zeros(m, dtype=bool))
+    first = hist.steps[0].q.reshape(-1)
+    F = problem.F_live
+    _, _, response = problem.residual(first, 0.0, *none)
+    best: tuple[float, np.ndarray | None] = (math.inf, None)
+    v0 = None
+    for _ in range(2):
+        v = problem.factor(response).solve(F)
+        compliance = float(F @ v)
+        if not (np.all(np.isfinite(v)) and math.isfinite(compliance)) or compliance == 0:
+            break
+        relative = problem.asm.relative_displacements(_full(problem, v).reshape(-1))
+        energy = float(np.sum(problem.law.kbar * relative**2))
+        x = v if compliance > 0 else -v
+        size = float(np.abs(x[problem.translation]).max(initial=0.0))
+        if energy > 0 and size > 0 and compliance / energy < best[0]:
+            best = (compliance / energy, x / size)
+        if v0 is not None:
+            break
+        v0 = v
+        lam_end = ZERO_LOAD * settings.tolerance * problem.load_scale
+        probe = first.copy()
+        probe[problem.free] += lam_end * v0
+        _, _, response = problem.residual(probe, lam_end, *none)
+    return best
+
+
+def _rayleigh(problem: DiscreteProblem, v: np.ndarray, compliance: float, T0: np.ndarray) -> float:
+    """F_L.v / v.K_0 v (K_0 = H^T T0 H, the tangent of the dead-load state)."""
+    if not (np.all(np.isfinite(v)) and math.isfinite(compliance)):
+        return math.inf
+    relative = problem.asm.relative_displacements(_full(problem, v).reshape(-1))
+    energy = float(np.einsum("mi,mij,mj->", relative, T0, relative))
+    return compliance / energy if energy > 0 else math.inf
+
+
+def _elastic_slope(problem: DiscreteProblem, path_w: np.ndarray, path_lam: np.ndarray) -> float:
+    """d lambda / d w of the first live-load step (elastic for a wall that stands), else of
+    the bonded assembly."""
+    if path_w.size > 1 and path_w[1] - path_w[0] > 0:
+        return float((path_lam[1] - path_lam[0]) / (path_w[1] - path_w[0]))
+    F = problem.F_live
+    live_norm = float(np.linalg.norm(F))
+    compliance = float(F @ problem.elastic_factor().solve(F))
+    return live_norm / compliance if compliance > 0 else 0.0

@@ -1,0 +1,485 @@
+"""Path followers of the static solver, sharing one corrector (:mod:`.corrector`) and one
+step rule (:class:`StepController`):
+
+* :func:`load_control` - lambda raised step by step; at its first failure it hands over
+  to work control, or refines the bracket [last converged, first failed];
+* :func:`work_control` - the work-conjugate displacement w = c.q of the live load
+  prescribed (c = F_L / |F_L|, lambda free), past limit points and plastic plateaus, with
+  a pseudo-transient step where the path folds at a kink of the law;
+* :func:`displacement_control` - one DOF driven to a target, lambda free.
+
+Each sets the provisional ``hist.status``, ``hist.stop`` (a :class:`StopReason`) and
+``hist.reason``; the solver then certifies a collapse before it reports one.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from masonry_dem.results import History
+from masonry_dem.solvers.static.certificate import ZERO_LOAD
+from masonry_dem.solvers.static.outcome import Outcome, Status, StopReason
+from masonry_dem.solvers.static.settings import DisplacementControl
+
+if TYPE_CHECKING:
+    from masonry_dem.solvers.static.solver import StaticSolver
+
+log = logging.getLogger(__name__)
+
+Record = Callable[[Outcome], None]
+
+
+@dataclass
+class StepController:
+    """The step length of a path follower: ``growth`` times longer after an easy step (at
+    most ``easy_iterations`` corrector iterations; None: after every converged step), at most
+    ``cap``; halved after a failure, counting the halvings in a row (``cuts``)."""
+
+    size: float
+    growth: float
+    cap: float = math.inf
+    easy_iterations: int | None = None
+    cuts: int = 0
+
+    def grow(self, iterations: int) -> None:
+        if self.easy_iterations is None or iterations <= self.easy_iterations:
+            self.size = min(self.size * self.growth, self.cap)
+
+    def cut(self) -> None:
+        self.size /= 2
+        self.cuts += 1
+
+
+def load_control(solver: StaticSolver, hist: History, record: Record) -> None:
+    s = solver.settings
+    lam = 0.0
+    dlam = s.initial_step * solver.problem.load_scale
+    max_dlam = s.max_step * solver.problem.load_scale
+    lam_fail = math.inf
+    failed_step = dlam
+    last_reason = ""
+    verified = False  # the first failure was re-tried from the end of the bracket
+    hand_over = True  # work control takes over at the first failure (continuation="work")
+    work_reason: tuple[str, StopReason] | None = None
+    for _ in range(s.max_steps):
+        target = min(lam + dlam, s.max_load_factor)
+        out = solver.equilibrate(target)
+        robust_ok = False
+        if not out.ok and s.rescue_time_steps > 0 and not out.past_limit:
+            rescued = solver.dynamic_rescue(target, lam)
+            if rescued is not None:
+                out, robust_ok = rescued, True
+        # the robust re-try: when asked for, or as the last resort of a bracket refined down
+        # to what the residual cannot tell from zero load (where Newton stalls from the
+        # dead-load state: in-plane walls held on one edge)
+        near_zero = target <= ZERO_LOAD * s.tolerance * solver.problem.load_scale
+        budget = s.robust_iterations or (s.zero_load_robust_iterations if near_zero else 0)
+        if not out.ok and budget > 0 and not out.past_limit:
+            second = solver.robust(target, budget=budget)
+            log.debug(
+                "Newton failed at lambda=%.6g (%s); robust: %s",
+                target,
+                out.reason,
+                "ok" if second.ok else second.reason,
+            )
+            if second.ok:
+                out, robust_ok = second, True
+            else:
+                out = replace(out, reason=f"{out.reason}; {second.reason}")
+        if out.ok:
+            record(out)
+            lam = target
+            if lam >= s.max_load_factor:
+                hist.end(
+                    Status.COMPLETED,
+                    StopReason.MAX_LOAD_FACTOR,
+                    f"reached max_load_factor {lam:.6g}",
+                )
+                return
+            if lam >= lam_fail:  # the earlier failure came from a long step only
+                log.debug("lambda=%.6g passed after an earlier failure", lam)
+                lam_fail, verified = math.inf, False
+                # the bracket's halvings came from a long step only: resume with half
+                # the step that failed instead of creeping on at the bracket width
+                dlam = max(dlam, min(failed_step / 2, max_dlam))
+            if math.isfinite(lam_fail):
+                dlam = (lam_fail - lam) / 2
+            elif out.iterations <= s.easy_iterations or robust_ok:
+                # the robust strategy copes with long steps: grow them after it too
+                dlam = min(dlam * s.growth, max_dlam)
+        else:
+            last_reason = out.reason
+            log.debug("step to lambda=%.6g failed: %s", target, out.reason)
+            if target < lam_fail:
+                if not math.isfinite(lam_fail):  # the step that opened this bracket
+                    failed_step = target - lam
+                lam_fail, verified = target, False
+            elif target == lam_fail:
+                verified = True
+            if not s.refine:
+                break
+            if hand_over and s.continuation == "work" and _hands_over(hist):
+                # work control follows the curve from here past any limit point, so
+                # refining this bracket would only cost failing steps; if it finds
+                # nothing higher, the bracket is refined after all (below)
+                hand_over = False
+                kept = solver.snapshot()
+                hist.collapse_bracket = (lam, lam_fail)
+                work_reason = work_control(solver, hist, record, first_failure=out.reason)
+                if work_reason is None:
+                    return
+                log.debug(
+                    "work control found nothing above lambda=%.6g (%s): refining "
+                    "the load-control bracket",
+                    lam,
+                    work_reason[0],
+                )
+                solver.resume(kept)
+                hist.collapse_bracket = None
+            dlam = (lam_fail - lam) / 2
+        if math.isfinite(lam_fail) and lam_fail - lam <= s.bracket_tolerance * max(
+            abs(lam), 1e-12 * solver.problem.load_scale
+        ):
+            if verified:
+                break
+            dlam = lam_fail - lam  # re-try the first failure from the bracket's end
+    else:
+        hist.end(
+            Status.FAILED,
+            StopReason.MAX_STEPS,
+            f"max_steps={s.max_steps} reached at lambda={lam:.6g}",
+        )
+        return
+    hist.collapse_bracket = (lam, lam_fail)
+    hist.end(
+        Status.COLLAPSE,
+        StopReason.LOAD_BRACKET,
+        f"no equilibrium beyond lambda={lam:.6g} (first failure at {lam_fail:.6g}: {last_reason})",
+    )
+    if not s.refine:  # a long step may fail where a shorter one would not
+        hist.reason += "; refine=False: the failed step was not cut, so this is an upper "
+        hist.reason += "bracket of the first failure only, not a refined collapse load"
+    if hand_over and s.continuation == "work" and _hands_over(hist):
+        work_reason = work_control(solver, hist, record, first_failure=last_reason)
+    if work_reason is not None:
+        hist.reason += f"; work control found no higher equilibrium ({work_reason[0]})"
+
+
+def _hands_over(hist: History) -> bool:
+    """Work control takes over at the first failure of load control once the path has two
+    live-load steps (the first is its elastic scale). An earlier failure is halved first:
+    there it is far more often a step too long than a limit (S11 and S34 fail their very
+    first live-load step and pass it on the retry; handing over there moved S11, S12 and S34
+    by 0.004-0.05 % at 1.5-2.2x the iterations, docs/solvers.md). A wall whose very first
+    step finds its limit (a block that slides or lifts at once) ends in the refined
+    bracket, which the certificate checks across its tolerance."""
+    return len(hist.steps) > 2
+
+
+def control_radius(solver: StaticSolver, c: np.ndarray, dw: float) -> float:
+    """Trust radius for a controlled step: room for the requested increment."""
+    return max(
+        4.0 * solver._last_increment,
+        1e-4 * solver.limit,
+        4.0 * abs(dw) / max(float(np.abs(c).max()), 1e-300),
+    )
+
+
+def work_control(
+    solver: StaticSolver, hist: History, record: Record, first_failure: str
+) -> tuple[str, StopReason] | None:
+    """Continue past the first failure of load control with lambda free and the
+    work-conjugate displacement w = c . q (c = F_L / |F_L|) prescribed, from the last
+    converged state. Returns None when the run is decided (a peak above the last
+    load-control state, or ``max_steps`` / ``max_load_factor``), else why nothing
+    higher was found and the stop it met (load control then refines its bracket).
+
+    Load control fails where the pushover curve turns flat (a plastic plateau or a
+    limit point); under work control the same equilibria are found with bounded
+    increments. The curve is followed until one of: lambda at w has risen less than
+    ``bracket_tolerance`` x lambda since w / 2 (w measured from the dead-load state);
+    three steps in a row gain less than ``flat_slope`` of the elastic d(lambda) / d(w) (a
+    formed mechanism, or creeping steps when Newton stalls at a kink); the step has been
+    halved ``max_cuts`` times or below what the control tolerance can resolve, and a
+    pseudo-transient step to lambda x (1 + transient_rise) finds no rest either
+    (one is tried as soon as the step has been halved ``transient_after`` times in a
+    row: a fold of the path, which no shorter step passes); the displacements pass the
+    limit. The collapse multiplier is the highest lambda on the
+    path."""
+    s = solver.settings
+    free = solver.problem.asm.free_index
+    c = solver.problem.F_live / float(np.linalg.norm(solver.problem.F_live))
+    q0 = hist.steps[0].q.reshape(-1)[free]
+    path_w = [float(c @ (st.q.reshape(-1)[free] - q0)) for st in hist.steps]
+    path_lam = [float(st.load_factor) for st in hist.steps]
+    w = path_w[-1]
+    if len(path_w) > 1:
+        # the first live-load step is elastic for walls that stand: its secant is the scale
+        elastic_slope = (path_lam[1] - path_lam[0]) / max(path_w[1] - path_w[0], 1e-300)
+        first = w - path_w[-2]
+        first_w = path_w[1] - path_w[0]
+    else:
+        # the very first live-load step failed (a block that slides or lifts at once): the
+        # scale is the tangent of the dead-load state, the first step half the failed one
+        elastic_slope = _tangent_slope(solver)
+        failed = hist.collapse_bracket[1] - path_lam[-1] if hist.collapse_bracket else 0.0
+        first = 0.5 * failed / elastic_slope if elastic_slope > 0 else 0.0
+        first_w = first
+    step = StepController(
+        max(first, 1e-3 * abs(w), 1e-12 * solver.limit),
+        s.growth,
+        easy_iterations=s.easy_iterations,
+    )
+    lam = path_lam[-1]
+    first_lambda = hist.collapse_bracket[1] if hist.collapse_bracket else lam
+    peak = max(path_lam)
+    flat_steps = 0
+    first_dw = step.size
+    transient_from = -1  # the step from which the last pseudo-transient step started
+    transient_failed = False
+    reason = ""
+    stop = StopReason.NONE
+    checked_from = -1  # the step from which the last dynamic-relaxation check started
+    last_fold: float | None = None  # lambda where the last failed search stopped
+    fold_failed = False  # a pseudo-transient step past a fold found no rest
+
+    def transient(why: str, above: float | None = None) -> bool:
+        """A pseudo-transient step to a lambda a little higher (and past ``above``),
+        once from each state."""
+        nonlocal transient_from
+        transient_from = len(hist.steps)
+        target = lam + s.transient_rise * abs(lam)
+        if above is not None:  # just past a fold known to within s.fold_match
+            target = max(target, above + s.fold_match * abs(above))
+        moved = solver.pseudo_transient(target)
+        log.debug(
+            "work control stuck at lambda=%.6g (%s); pseudo-transient step to %.6g: %s",
+            lam,
+            why,
+            target,
+            f"ok in {moved.iterations}" if moved.ok else moved.reason,
+        )
+        if moved.ok:
+            accept_moved(moved)
+        return moved.ok
+
+    def accept_moved(moved: Outcome) -> None:
+        """Go on from a state found at a higher lambda (not by a work step)."""
+        nonlocal lam, w, peak, flat_steps
+        record(moved)
+        lam = float(moved.load_factor)
+        w = float(c @ (moved.q[free] - q0))
+        path_w.append(w)
+        path_lam.append(lam)
+        peak = max(peak, lam)
+        step.size, step.cuts, flat_steps = max(step.size, first_dw * s.resume_step), 0, 0
+
+    while len(hist.steps) < s.max_steps:
+        goal = w + step.size
+        out = solver.equilibrate(
+            lam,
+            control=(c, goal + float(c @ q0), step.size),
+            radius=control_radius(solver, c, step.size),
+        )
+        if not out.ok and not out.past_limit:
+            # on a plateau the search may meet equilibria short of the goal (lambda is
+            # free, so any converged state on the way is a point of the curve)
+            reached = float(c @ (out.q[free] - q0))
+            _, rnorm, response = solver.residual(out.q, out.load_factor)
+            if rnorm <= s.tolerance and reached > w + 0.1 * step.size:
+                out = replace(out, ok=True, response=response)
+                goal = reached
+        if not out.ok:
+            log.debug("work step to w=%.6g failed: %s", goal, out.reason)
+            if out.past_limit and step.cuts >= s.limit_cuts:
+                reason = f"a mechanism at lambda={peak:.6g}: {out.reason}"
+                stop = StopReason.DISPLACEMENT_LIMIT
+                break
+            step.cut()
+            # a step below this cannot be told from no step (the control tolerance)
+            tiny = 1e-4 * max(abs(w), first_w, 1e-8 * solver.limit)
+            stuck = step.cuts > s.max_cuts or step.size < tiny
+            # the search stops where the one before it stopped: a fold of the path that
+            # halved steps only close in on (each half converges, the next full step
+            # fails there again), so the pseudo-transient step goes past it at once
+            fold = float(out.load_factor)
+            refold = (
+                last_fold is not None
+                and abs(fold - last_fold) <= s.fold_match * abs(lam)
+                and not fold_failed
+            )
+            last_fold = fold
+            if (
+                (stuck or refold or (step.cuts == s.transient_after and not transient_failed))
+                and s.transient_steps > 0
+                and transient_from != len(hist.steps)
+            ):
+                # Newton stops at a fold of the path
+                if transient(out.reason, above=fold if refold else None):
+                    continue
+                if refold:
+                    fold_failed = True
+                else:
+                    transient_failed = True
+            if stuck and s.stop_check_time_steps > 0 and checked_from != len(hist.steps):
+                # neither Newton nor the pseudo-transient step passes: before calling
+                # this a collapse, let dynamic relaxation look for rest a little higher
+                checked_from = len(hist.steps)
+                target = lam + s.transient_rise * abs(lam)
+                rescued = solver.dynamic_rescue(target, lam, s.stop_check_time_steps)
+                log.debug(
+                    "work control stuck at lambda=%.6g; dynamic relaxation to %.6g: %s",
+                    lam,
+                    target,
+                    "ok" if rescued else "no rest",
+                )
+                if rescued is not None:
+                    accept_moved(rescued)
+                    transient_failed = False
+                    continue
+            if stuck:
+                reason = f"no equilibrium beyond lambda={lam:.6g} under work control ({out.reason})"
+                stop = StopReason.PATH_STUCK
+                break
+            continue
+        record(out)
+        w, lam = goal, float(out.load_factor)
+        path_w.append(w)
+        path_lam.append(lam)
+        peak = max(peak, lam)
+        if lam >= s.max_load_factor:
+            hist.end(
+                Status.COMPLETED, StopReason.MAX_LOAD_FACTOR, f"reached max_load_factor {lam:.6g}"
+            )
+            return None
+        total = float(
+            np.abs(out.q - hist.steps[0].q.reshape(-1))[free][solver.problem.translation].max()
+        )
+        if total > solver.limit:
+            reason = (
+                f"a mechanism: displacements {total:.3g} m exceed the limit "
+                f"{solver.limit:.3g} m at lambda={lam:.6g}"
+            )
+            stop = StopReason.DISPLACEMENT_LIMIT
+            break
+        half = float(np.interp(w / 2, path_w, path_lam))
+        if w > 0 and lam - half <= s.bracket_tolerance * abs(peak) and lam < peak + 1e-12:
+            reason = (
+                f"the pushover curve is flat: lambda rose {lam - half:.3g} while the "
+                f"work-conjugate displacement doubled to {w:.3g} m (peak {peak:.6g})"
+            )
+            stop = StopReason.CURVE_FLAT
+            break
+        # a formed mechanism: the last steps gained (almost) nothing for their
+        # displacement, compared with the elastic stiffness of the live load
+        slope = (path_lam[-1] - path_lam[-2]) / max(path_w[-1] - path_w[-2], 1e-300)
+        flat_steps = flat_steps + 1 if slope < s.flat_slope * elastic_slope else 0
+        if flat_steps >= 3:
+            tiny = path_w[-1] - path_w[-4] < 1e-3 * w
+            reason = (
+                f"no equilibrium beyond lambda={peak:.6g}: work control creeps "
+                f"(w {path_w[-4]:.6g} -> {w:.6g} m in 3 steps)"
+                if tiny
+                else f"a mechanism: lambda gains {slope / elastic_slope:.1e} of the "
+                f"elastic stiffness per unit displacement over 3 steps (peak {peak:.6g})"
+            )
+            stop = StopReason.CREEPING if tiny else StopReason.STIFFNESS_LOST
+            break
+        if step.cuts == 0:
+            step.grow(out.iterations)
+        step.cuts = 0
+    else:
+        hist.end(
+            Status.FAILED,
+            StopReason.MAX_STEPS,
+            f"max_steps={s.max_steps} reached at lambda={lam:.6g}",
+        )
+        return None
+    assert hist.collapse_bracket is not None  # set by the caller
+    if peak <= hist.collapse_bracket[0]:
+        return reason, stop
+    hist.collapse_bracket = (peak, peak)
+    hist.end(
+        Status.COLLAPSE,
+        stop,
+        f"{reason}; load control first failed at {first_lambda:.6g} ({first_failure})",
+    )
+    return None
+
+
+def _tangent_slope(solver: StaticSolver) -> float:
+    """d lambda / d w along the tangent of the last converged state: |F_L| / F_L.K_t^-1 F_L."""
+    F = solver.problem.F_live
+    _, _, response = solver.residual(solver.q, solver.load_factor)
+    compliance = float(F @ solver.problem.factor(response).solve(F))
+    return float(np.linalg.norm(F)) / compliance if compliance > 0 else 0.0
+
+
+def displacement_control(
+    solver: StaticSolver, hist: History, record: Record, control: DisplacementControl, dof: int
+) -> None:
+    s = solver.settings
+    position = np.flatnonzero(solver.problem.asm.free_index == dof)
+    if position.size == 0:
+        raise ValueError(f"control dof {control.dof} of block {control.block} is fixed")
+    k = int(position[0])
+    if control.steps < 1:
+        raise ValueError(f"control steps must be at least 1, got {control.steps!r}")
+    unit = np.zeros(solver.problem.asm.n_free)
+    unit[k] = 1.0
+    du_nominal = control.target / control.steps
+    direction = float(np.sign(du_nominal))
+    step = StepController(abs(du_nominal), s.growth, cap=abs(du_nominal))
+    lam = 0.0
+    u = float(solver.q[dof])
+
+    def reached() -> bool:
+        return abs(u - control.target) <= 1e-12 * abs(control.target)
+
+    while not reached() and len(hist.steps) < s.max_steps:
+        goal = u + step.size * direction
+        if (goal - control.target) * np.sign(du_nominal) > 0:
+            goal = control.target
+        out = solver.equilibrate(
+            lam,
+            control=(unit, goal, abs(goal - u)),
+            radius=control_radius(solver, unit, goal - u),
+        )
+        if out.ok:
+            record(out)
+            lam, u = out.load_factor, goal
+            step.grow(out.iterations)
+            step.cuts = 0
+        else:
+            step.cut()
+            if step.cuts > s.max_control_cuts:
+                hist.end(
+                    Status.FAILED,
+                    StopReason.CONTROL_STUCK,
+                    f"displacement control stuck at {u:.4g}: {out.reason}",
+                )
+                break
+    else:
+        # the loop ends on its condition: the target reached, or the step budget spent
+        if reached():
+            hist.end(
+                Status.COMPLETED,
+                StopReason.CONTROL_REACHED,
+                f"control displacement reached {u:.6g}",
+            )
+        else:
+            hist.end(
+                Status.FAILED,
+                StopReason.CONTROL_BUDGET,
+                f"max_steps={s.max_steps} spent at {u:.6g} of the target "
+                f"{control.target:.6g} ({u / control.target:.1%})",
+            )
+    lams = hist.load_factors
+    peak = int(np.argmax(lams))
+    hist.collapse_bracket = (float(lams[peak]), float(lams[peak]))

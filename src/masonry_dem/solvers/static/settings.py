@@ -1,0 +1,257 @@
+"""Settings of the static solver: every number that steers it, with why it has its value
+(the measurements behind each are in docs/solvers.md, "Settings and their evidence")."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, fields
+
+from masonry_dem.constitutive.law import MEMORY, TANGENT_METHODS, TENSION
+
+CONTINUATION = ("work", "bracket")
+
+
+@dataclass(frozen=True)
+class StaticSettings:
+    """Knobs of the static solver. Step sizes are in units of the load scale |F_D| / |F_L|
+    (1 for a tilt table, where the live load is the weight turned horizontal).
+
+    Path and steps
+    --------------
+    initial_step, max_step, growth: lambda increments in units of the load scale
+        |F_D| / |F_L| (1 when both loads are weights; the weight per unit of a pressure),
+        grown by ``growth`` after easy steps. ``max_step`` 1.0: a pressure wall collapses at
+        7-26 load scales and took 60-140 steps at the former cap of 0.2.
+    easy_iterations: a step that converges in at most this many Newton iterations is easy:
+        the next one is ``growth`` times longer (Newton converges quadratically: a handful of
+        iterations means the step was well inside the convergence basin).
+    bracket_tolerance: collapse bracket width, relative to lambda.
+    refine: halve a failed load step (False: stop at the first failure, an upper bracket only).
+    max_steps: converged steps of a run (all path followers together).
+    max_load_factor: the run ends ``completed`` when lambda reaches it.
+    continuation: what follows the first failure of load control. ``"work"`` (default): the
+        work-conjugate displacement of the live load prescribed, lambda free, which passes
+        limit points and plastic plateaus, until the pushover curve is flat; ``"bracket"``:
+        refine the load-control bracket and stop there.
+
+    One equilibrium (the corrector)
+    -------------------------------
+    tolerance: force residual |R| / |F_D + lambda F_L| (moments measured as forces at the
+        median block size) below which a state is in equilibrium.
+    control_tolerance: a controlled displacement is reached when within this fraction of the
+        step asked for (relative to the step, so stiff joints are followed as closely as soft).
+    max_iterations: Newton iterations per attempt.
+    displacement_limit: largest translation [m] (from the last converged state, or from the
+        dead-load state along a path) still in the small-displacement range (None: half the
+        smallest dimension of the blocks that can move). Under the dead load the elastic
+        displacement of the bonded assembly is added to it: elastic shortening is no mechanism.
+    limit_elastic_multiple: along the path the limit is at least this multiple of the
+        largest displacement under the dead load. The model is geometrically linear, so at a
+        given load every displacement scales with 1 / kn: a limit in metres alone stopped a
+        3 x 5 panel with joints 100x softer at 0.298 before its peak 0.3187 (elastic
+        displacements 0.043 m). The validation walls' limits are 142-5106 times their
+        dead-load displacement, so 100 changes none of them.
+    residual_stiffness: fraction of the elastic stiffness kept on the diagonal of the tangent.
+    tangent: ``"analytic"`` (closed-form derivative of the return) or ``"difference"``.
+    tension, memory: interface law options (see :mod:`masonry_dem.constitutive.law`).
+    stall_window, stall_decrease: a Newton search that has not lowered its merit by
+        ``stall_decrease`` in ``stall_window`` iterations (with no cut of the trust radius)
+        is stalled: no equilibrium near the last converged state.
+    max_floor: largest tangent floor (fraction of the elastic stiffness) of the
+        Levenberg-Marquardt fallback used under the dead load.
+    chord_ratio: a factorized tangent is reused while each full step divides the residual
+        by at least 1 / ``chord_ratio`` (modified Newton: a solve instead of a factorization).
+    creep: a step shorter than this fraction of the Newton correction, with no joint changing
+        state, leaves the tangent as it was (its factorization is kept).
+    search_cuts: a search gives up after this many cuts (by 8) of its trust radius.
+
+    Work control
+    ------------
+    max_cuts: work control gives up after this many halvings of its step in a row.
+    limit_cuts: a work step whose iterations pass the displacement limit is a mechanism only
+        when it does so again after this many halvings in a row (a long first step may run
+        off along a mode the load does not drive yet).
+    flat_slope: a step whose d(lambda)/dw is below this fraction of the elastic one gains
+        nothing; three in a row end the path (a formed mechanism).
+    resume_step: after a pseudo-transient (or dynamic-relaxation) step past a fold, work
+        control goes on with this fraction of its first step (or the present one if longer).
+    fold_match: two failed work steps whose searches stop at lambdas this close (relative)
+        stop at one fold.
+
+    Pseudo-transient step (where Newton stops at a fold of the path)
+    ----------------------------------------------------------------
+    transient_steps: budget of pseudo time steps; 0 disables it.
+    transient_after: tried once work control has halved its step this many times in a row.
+    transient_rise: it relaxes to lambda x (1 + transient_rise): far enough to leave the
+        fold, near enough not to jump past the peak.
+    transient_start, transient_shrink, transient_window: first pseudo time step 1 /
+        ``transient_start`` (the tangent's floor, in units of the elastic stiffness), divided
+        by ``transient_shrink`` beyond the residual ratio after a step that lowers the
+        residual; it gives up when the residual has not halved in ``transient_window`` steps.
+
+    Other strategies (off by default, or checks)
+    --------------------------------------------
+    robust_iterations: budget of initial-stiffness iterations with Anderson acceleration
+        that re-try a failed load step; 0 disables it.
+    anderson, divergence_window: the robust iterations mix the last ``anderson``
+        corrections and stop when the residual has not fallen x10 in ``divergence_window``
+        iterations with corrections that do not shrink.
+    zero_load_robust_iterations: the robust re-try's budget where load control has halved
+        its step down to what the residual cannot tell from zero load (100 x ``tolerance``
+        load scales) and ``robust_iterations`` is 0: Newton stalls from the dead-load state
+        of in-plane walls held on one edge (a held 9 x 3 wall: 1e-8 -> 0.93).
+    rescue_time_steps: budget of a dynamic relaxation of a failed load step; 0 disables it.
+    stop_check_time_steps: budget of the dynamic relaxation that checks a stop of work
+        control (to lambda x (1 + transient_rise)) before the path is given up; 0 disables it.
+    max_control_cuts: displacement control gives up after this many halvings in a row.
+
+    Certificate of a collapse (see :mod:`masonry_dem.solvers.static.certificate`)
+    ----------------------------------------------------------------------------
+    certify: check a collapse before reporting it (False: the stop of the path is reported
+        as a collapse, unchecked, as before the certificate existed).
+    admissible_tolerance: the last state's actions may exceed the strength domain by this
+        fraction of the capacity (round-off of the return).
+    mode_stiffness: the tangent of the last state is singular along the live load's mode
+        when its current stiffness parameter (Bergan) F_L.K_el^-1 F_L / F_L.K_t^-1 F_L is
+        at most this.
+    mode_displacement: the pushover curve is flat or falling over a stated displacement
+        when the work-conjugate displacement past the peak is at least this fraction of
+        the displacement at the peak (both from the dead-load state).
+    bound_tolerance: lambda may exceed the associative limit-analysis bound (when one is
+        given) by this fraction (the bound's own discretisation and solver tolerance).
+    """
+
+    initial_step: float = 0.02
+    max_step: float = 1.0
+    growth: float = 1.5
+    easy_iterations: int = 6
+    bracket_tolerance: float = 0.005
+    refine: bool = True
+    max_steps: int = 1000
+    max_load_factor: float = math.inf
+    continuation: str = "work"
+    tolerance: float = 1e-8
+    control_tolerance: float = 1e-6
+    max_iterations: int = 40
+    displacement_limit: float | None = None
+    limit_elastic_multiple: float = 100.0
+    residual_stiffness: float = 1e-9
+    tangent: str = "analytic"
+    tension: str = "brittle"
+    memory: str = "none"
+    stall_window: int = 8
+    stall_decrease: float = 0.5
+    max_floor: float = 1e-3
+    chord_ratio: float = 0.25
+    creep: float = 1e-3
+    search_cuts: int = 7
+    max_cuts: int = 10
+    limit_cuts: int = 2
+    flat_slope: float = 1e-3
+    resume_step: float = 0.5
+    fold_match: float = 1e-3
+    transient_steps: int = 100
+    transient_after: int = 2
+    transient_rise: float = 0.005
+    transient_start: float = 1e-3
+    transient_shrink: float = 0.25
+    transient_window: int = 30
+    robust_iterations: int = 0
+    zero_load_robust_iterations: int = 2000
+    anderson: int = 5
+    divergence_window: int = 30
+    rescue_time_steps: int = 0
+    stop_check_time_steps: int = 4000
+    max_control_cuts: int = 12
+    certify: bool = True
+    admissible_tolerance: float = 1e-6
+    mode_stiffness: float = 0.05
+    mode_displacement: float = 0.5
+    bound_tolerance: float = 0.01
+
+    def __post_init__(self) -> None:
+        positive = (
+            "initial_step",
+            "max_step",
+            "bracket_tolerance",
+            "tolerance",
+            "control_tolerance",
+            "residual_stiffness",
+            "max_floor",
+            "chord_ratio",
+            "transient_rise",
+            "transient_start",
+            "transient_shrink",
+            "resume_step",
+            "stall_decrease",
+            "limit_elastic_multiple",
+            "admissible_tolerance",
+            "mode_stiffness",
+            "mode_displacement",
+            "bound_tolerance",
+        )
+        for name in positive:
+            value = getattr(self, name)
+            if not (
+                isinstance(value, (int, float))
+                and not isinstance(value, bool)
+                and math.isfinite(value)
+                and value > 0
+            ):
+                raise ValueError(f"{name} must be a positive number, got {value!r}")
+        counts = {
+            "max_iterations": 1,
+            "max_steps": 1,
+            "easy_iterations": 0,
+            "stall_window": 1,
+            "search_cuts": 1,
+            "max_cuts": 0,
+            "limit_cuts": 0,
+            "transient_steps": 0,
+            "transient_after": 0,
+            "transient_window": 1,
+            "robust_iterations": 0,
+            "zero_load_robust_iterations": 0,
+            "anderson": 1,
+            "divergence_window": 1,
+            "rescue_time_steps": 0,
+            "stop_check_time_steps": 0,
+            "max_control_cuts": 0,
+        }
+        for name, least in counts.items():
+            value = getattr(self, name)
+            if not isinstance(value, int) or isinstance(value, bool) or value < least:
+                raise ValueError(f"{name} must be an integer >= {least}, got {value!r}")
+        if not (isinstance(self.growth, (int, float)) and self.growth >= 1):
+            raise ValueError(f"growth must be >= 1, got {self.growth!r}")
+        for name in ("creep", "flat_slope", "fold_match"):
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float)) and math.isfinite(value)):
+                raise ValueError(f"{name} must be a finite number, got {value!r}")
+        if self.displacement_limit is not None and not self.displacement_limit > 0:
+            raise ValueError(
+                f"displacement_limit must be positive or None, got {self.displacement_limit!r}"
+            )
+        if self.tension not in TENSION:
+            raise ValueError(f"tension must be one of {TENSION}, got {self.tension!r}")
+        if self.memory not in MEMORY:
+            raise ValueError(f"memory must be one of {MEMORY}, got {self.memory!r}")
+        if self.tangent not in TANGENT_METHODS:
+            raise ValueError(f"tangent must be one of {TANGENT_METHODS}, got {self.tangent!r}")
+        if self.continuation not in CONTINUATION:
+            raise ValueError(
+                f"continuation must be one of {CONTINUATION}, got {self.continuation!r}"
+            )
+
+
+SETTING_NAMES = tuple(f.name for f in fields(StaticSettings))
+
+
+@dataclass(frozen=True)
+class DisplacementControl:
+    """Drive DOF ``dof`` (name, e.g. ``u3``) of ``block`` to ``target`` in ``steps`` steps."""
+
+    block: int
+    dof: str
+    target: float
+    steps: int = 50

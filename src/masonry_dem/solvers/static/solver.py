@@ -1,0 +1,253 @@
+"""The static solver (Section 2.3 of the paper): the dead load, then the live load raised
+by a path follower (:mod:`.paths`), each equilibrium found by the corrector
+(:mod:`.corrector`) on the discrete problem (:mod:`.problem`), and a stop of the path
+reported as a collapse only with a certificate (:mod:`.certificate`).
+
+Loads are F = F_D + lambda F_L. The collapse multiplier is the peak of the pushover curve
+that the path followers trace (docs/solvers.md).
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from collections.abc import Callable
+from contextlib import nullcontext
+from dataclasses import replace
+
+import numpy as np
+
+from masonry_dem._threads import kernel_threads_for
+from masonry_dem.model import Model
+from masonry_dem.results import History, StepResult
+from masonry_dem.solvers.static import paths
+from masonry_dem.solvers.static.certificate import Bound, certify
+from masonry_dem.solvers.static.corrector import Corrector
+from masonry_dem.solvers.static.outcome import Outcome, Status, StopReason
+from masonry_dem.solvers.static.settings import DisplacementControl, StaticSettings
+
+log = logging.getLogger(__name__)
+
+
+class StaticSolver(Corrector):
+    """Incremental-iterative solver for one model (keeps the assembly and the state).
+
+    ``bound``: an upper bound of the collapse multiplier (the associative limit-analysis
+    multiplier of the model, a number or a function of the model) that a certified collapse
+    may not exceed; None: the certificate says the bound was not checked.
+    """
+
+    def __init__(
+        self, model: Model, settings: StaticSettings | None = None, bound: Bound = None
+    ) -> None:
+        super().__init__(model, settings)
+        self.bound = bound
+        self.load_factor = 0.0  # lambda of the last converged state
+        # the law state (plastic part, cracked joints) the last converged state was found with
+        self.search_state = (self.plastic.copy(), self.cracked.copy())
+
+    # ------------------------------------------------------------------ states of the path
+    def accept(self, out: Outcome, step: int, control_value: float) -> StepResult:
+        """Make a converged search the last converged state, as a StepResult."""
+        rel = self.problem.asm.relative_displacements(out.q)
+        resp = out.response
+        self.search_state = (self.plastic, self.cracked)
+        self.plastic = self.law.plastic_part(rel, resp.actions)
+        self.cracked = self.law.cracked_after(self.cracked, resp)
+        self.q = out.q
+        self.load_factor = float(out.load_factor)
+        return StepResult(
+            step=step,
+            load_factor=float(out.load_factor),
+            q=out.q.reshape(-1, 6).copy(),
+            actions=resp.actions.copy(),
+            state=resp.state.astype(np.int32),
+            utilisation=np.minimum(self.law.utilisation(resp), 1.0),
+            flags=resp.flags.astype(np.int32),
+            control_displacement=float(control_value),
+            iterations=out.iterations,
+        )
+
+    def snapshot(self) -> tuple:
+        """The last converged state, to go back to (:meth:`resume`)."""
+        return (
+            self.q.copy(),
+            self.plastic.copy(),
+            self.cracked.copy(),
+            self._last_increment,
+            self.load_factor,
+            self.search_state,
+        )
+
+    def resume(self, kept: tuple) -> None:
+        (
+            self.q,
+            self.plastic,
+            self.cracked,
+            self._last_increment,
+            self.load_factor,
+            self.search_state,
+        ) = kept
+
+    def _control_value(self, q: np.ndarray, control_dof: int | None) -> float:
+        if control_dof is None:
+            return float(np.abs(q.reshape(-1, 6)[:, :3]).max(initial=0.0))
+        return float(q[control_dof])
+
+    # ------------------------------------------------------------------ analyses
+    def run(
+        self,
+        control: DisplacementControl | None = None,
+        callback: Callable[[StepResult], None] | None = None,
+        monitor: tuple[int, str] | None = None,
+    ) -> History:
+        """Dead load, then lambda raised (load control) or a DOF driven (displacement control).
+
+        ``monitor`` = (block, dof name) picks the displacement stored on the pushover curve
+        (default: the largest block translation).
+        """
+        with kernel_threads_for(self.model.interfaces.count):
+            return self._run(control, callback, monitor)
+
+    def _run(
+        self,
+        control: DisplacementControl | None,
+        callback: Callable[[StepResult], None] | None,
+        monitor: tuple[int, str] | None,
+    ) -> History:
+        t0 = time.perf_counter()
+        hist = History()
+        monitor_dof = None
+        if monitor is not None:
+            monitor_dof = self.model.dof_index(*monitor)
+        if control is not None:
+            monitor_dof = self.model.dof_index(control.block, control.dof)
+
+        def record(out: Outcome) -> None:
+            sr = self.accept(out, len(hist.steps), self._control_value(out.q, monitor_dof))
+            hist.steps.append(sr)
+            if callback is not None:
+                callback(sr)
+
+        dead = self._dead_load()
+        if not dead.ok:
+            reason = f"no equilibrium under the dead load: {dead.reason}"
+            zero = self.residual(np.zeros_like(self.q), 0.0, 0.0)[2]
+            record(Outcome(True, np.zeros_like(self.q), 0.0, zero, dead.iterations))
+            hist.end(Status.FAILED, StopReason.DEAD_LOAD, reason)
+            return self._finish(hist, t0)
+        record(dead)
+        if not np.any(self.problem.F_live):
+            hist.end(
+                Status.COMPLETED,
+                StopReason.NO_LIVE_LOAD,
+                "no live load: the dead-load state is the answer",
+            )
+            return self._finish(hist, t0)
+        if control is None:
+            paths.load_control(self, hist, record)
+        else:
+            assert monitor_dof is not None  # the control DOF, set above
+            paths.displacement_control(self, hist, record, control, monitor_dof)
+        return self._finish(hist, t0)
+
+    def _dead_load(self) -> Outcome:
+        """The equilibrium under the dead load (the specimens stood: the damped fallback
+        may be used). Elastic displacement is no mechanism: where the search passes the
+        displacement limit, the limit is widened by the displacement of the bonded assembly
+        under the dead load and the search repeated (a tall column shortens by more than
+        half a block under its own weight)."""
+        dead = self.equilibrate(0.0, 1.0, radius=self.limit, damped=True)
+        if dead.past_limit:
+            elastic = self.problem.elastic_displacement(self.problem.F_dead)
+            if np.isfinite(elastic) and elastic > 0:
+                self._limit_allowance = elastic
+                log.debug("dead load: the limit widened by the elastic %.3g m", elastic)
+                dead = self.equilibrate(0.0, 1.0, radius=self.limit, damped=True)
+        if not dead.ok and self.settings.transient_steps > 0 and not dead.past_limit:
+            # where the damped Newton search stalls (a wall with openings, blocks settling
+            # on their neighbours), an overdamped relaxation may still come to rest: from
+            # where Newton stopped (often a few pseudo time steps away), else from the start
+            settled = None
+            if np.all(np.isfinite(dead.q)):
+                settled = self.pseudo_transient(0.0, start=dead.q)
+            if settled is None or not settled.ok:
+                settled = self.pseudo_transient(0.0)
+            log.debug(
+                "dead load: Newton %s; pseudo-transient: %s",
+                dead.reason,
+                "ok" if settled.ok else settled.reason,
+            )
+            dead = (
+                settled
+                if settled.ok
+                else replace(dead, reason=f"{dead.reason}; pseudo-transient: {settled.reason}")
+            )
+        self._limit_allowance = 0.0  # from here displacements are measured from this state
+        if dead.ok:
+            # the model is geometrically linear: at a given load every displacement scales
+            # with 1 / kn, so a mechanism is told from a soft wall only against the wall's
+            # own elastic scale, the displacement under its weight
+            idx = self.problem.moving_translations
+            elastic = float(np.abs(dead.q[idx]).max(initial=0.0))
+            self._elastic_limit = self.settings.limit_elastic_multiple * elastic
+        return dead
+
+    def _rests_at(self, lam: float) -> bool:
+        """Does dynamic relaxation from the last converged state come to rest at ``lam``
+        (within ``stop_check_time_steps``, at least 4000 time steps)?"""
+        budget = max(self.settings.stop_check_time_steps, 4000)
+        out = self.dynamic_rescue(lam, self.load_factor, budget, polish=False)
+        return bool(out is not None and out.ok)
+
+    def _finish(self, hist: History, t0: float) -> History:
+        if hist.status is Status.COLLAPSE and self.settings.certify:
+            cert = certify(self.problem, hist, self.settings, self.bound, self._rests_at)
+            hist.certificate = cert
+            if not cert.holds:
+                hist.status = Status.FAILED
+                hist.collapse_bracket = None  # a failed run has no collapse multiplier
+                hist.reason = f"{hist.reason}; not a certified collapse: {cert.reason}"
+                log.warning(
+                    "%s: the stop is not a certified collapse: %s", self.model.name, cert.reason
+                )
+        hist.seconds = time.perf_counter() - t0
+        hist.iterations = self.iterations
+        hist.factorizations = self.factorizations
+        log.info(
+            "%s: %s after %d steps (%s)", self.model.name, hist.status, len(hist.steps), hist.reason
+        )
+        return hist
+
+
+def pushover(
+    model: Model,
+    settings: StaticSettings | None = None,
+    control: DisplacementControl | None = None,
+    out=None,
+    monitor: tuple[int, str] | None = None,
+    write_every: int = 1,
+    callback: Callable[[StepResult], None] | None = None,
+    bound: Bound = None,
+) -> History:
+    """Run the static incremental analysis; with ``out`` write VTU/PVD, pushover.csv and
+    summary.json to that folder as the steps converge. ``callback(step)`` is called after
+    each converged step (e.g. a progress bar); ``bound`` see :class:`StaticSolver`."""
+    writer = None
+    if out is not None:
+        from masonry_dem.export.writer import ResultsWriter
+
+        writer = ResultsWriter(out, model, every=write_every, background=True)
+
+    def on_step(step: StepResult) -> None:
+        if writer is not None:
+            writer(step)
+        if callback is not None:
+            callback(step)
+
+    solver = StaticSolver(model, settings, bound=bound)
+    with writer or nullcontext():  # the steps handed to the writer reach the disk
+        history = solver.run(control=control, callback=on_step, monitor=monitor)
+    if writer is not None:
+        writer.finish(history)
+    return history

@@ -1,0 +1,72 @@
+"""The ``limit`` command, ``[analysis] method = "limit"`` and the bound in every pushover
+summary."""
+
+from __future__ import annotations
+
+import json
+
+import meshio
+import numpy as np
+import pytest
+from test_run import SINGLE_BLOCK, _write_case
+
+from masonry_dem.cases.casefile import case_from_dict
+from masonry_dem.cli import main
+
+
+def test_limit_command_writes_summary_and_mechanism(tmp_path):
+    """A block 0.4 high, 0.2 thick (mu 0.7) tilts over at s/a = 0.5; the summary has the
+    keys of a pushover's plus method and bound; the mechanism VTU turns the block."""
+    case = _write_case(tmp_path, SINGLE_BLOCK)
+    out = tmp_path / "la"
+    assert main(["limit", str(case), "--out", str(out), "--no-render"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    pushover_keys = {"status", "reason", "steps", "lambda", "lambda_bracket", "iterations"}
+    pushover_keys |= {"factorizations", "seconds", "blocks", "interfaces", "name", "case"}
+    assert pushover_keys <= set(summary)
+    assert summary["method"] == "associative" and summary["bound"] == "upper"
+    assert summary["lambda"] == pytest.approx(0.5, rel=1e-6)
+    mesh = meshio.read(out / "mechanism_blocks.vtu")
+    assert np.abs(mesh.point_data["displacement"]).max() > 0
+    assert (out / "mechanism_interfaces.vtu").is_file()
+    out2 = tmp_path / "la2"
+    assert (
+        main(
+            [
+                "limit",
+                str(case),
+                "--non-associative",
+                "--grid",
+                "4",
+                "--out",
+                str(out2),
+                "--no-render",
+            ]
+        )
+        == 0
+    )
+    summary2 = json.loads((out2 / "summary.json").read_text())
+    assert summary2["method"] == "non-associative" and summary2["bound"] == "estimate"
+    assert summary2["lambda"] == pytest.approx(0.5, rel=1e-6)
+
+
+def test_case_file_method_limit_and_the_pushover_bound(tmp_path):
+    """``[analysis] method = "limit"`` makes ``run`` a limit analysis; a pushover's summary
+    carries the associative multiplier as ``limit_analysis_bound``, never below its lambda."""
+    data = dict(SINGLE_BLOCK, analysis={"method": "limit", "backend": "clarabel"})
+    case = _write_case(tmp_path, data)
+    assert case_from_dict(data).method == "limit"
+    out = tmp_path / "run_la"
+    assert main(["run", str(case), "--out", str(out), "--no-render", "--quiet"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["analysis"] == "limit" and summary["limit_analysis"]["backend"] == "clarabel"
+    push = tmp_path / "push"
+    case2 = _write_case(tmp_path, SINGLE_BLOCK)
+    assert main(["run", str(case2), "--out", str(push), "--no-render", "--quiet"]) == 0
+    summary = json.loads((push / "summary.json").read_text())
+    assert summary["limit_analysis_bound"] == pytest.approx(0.5, rel=1e-6)
+    assert summary["limit_analysis_bound"] >= summary["lambda"] * (1 - 1e-6)
+    with pytest.raises(ValueError, match="method"):
+        case_from_dict(dict(SINGLE_BLOCK, analysis={"method": "magic"}))
+    with pytest.raises(ValueError, match="grid"):
+        case_from_dict(dict(SINGLE_BLOCK, analysis={"grid": 4}))

@@ -1,0 +1,104 @@
+"""Helpers of the certificate tests: generated tilted walls, and :func:`recheck`, which
+re-checks a certified collapse without the solver's code paths."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy import sparse
+
+from masonry_dem.assembly.stiffness import Assembly
+from masonry_dem.constitutive.law import DETACHED_FLAG, InterfaceLaw
+from masonry_dem.geometry.builders import add_base, running_bond_wall
+from masonry_dem.geometry.selectors import column
+from masonry_dem.model import InterfaceMaterial, Model, SelfWeight, Support, WeightProportional
+from masonry_dem.results import History
+from masonry_dem.solvers.incremental import StaticSettings
+
+DRY = InterfaceMaterial(kn=1e9, kt=0.4e9, friction=0.7)
+
+
+def tilted_wall(
+    blocks_along: int,
+    courses: int,
+    material: InterfaceMaterial = DRY,
+    direction=(0.0, 0.0, 1.0),
+    held: bool = True,
+) -> Model:
+    wall = running_bond_wall(blocks_along, courses, 0.081, 0.21, 0.07, 20e3)
+    blocks, base = add_base(wall)
+    supports = [Support([base])]
+    if held:
+        supports.append(Support(column(wall, "left"), ["u1", "u3"]))
+    return Model.build(
+        blocks,
+        material,
+        supports=supports,
+        loads=[SelfWeight(), WeightProportional(direction)],
+    )
+
+
+def recheck(model: Model, hist: History, settings: StaticSettings) -> None:
+    """Re-check a certified collapse without the solver's code paths: (a) a fresh law and
+    assembly give a residual within the tolerance at the state the certificate names, its
+    actions inside the strength domain; (b) a dense solve of the tangent assembled here
+    gives rho = F_L.v / v.K_0 v <= mode_stiffness (K_0: the dead-load state's tangent) (or the curve past its peak is as long
+    as stated), with positive work of the live load along the mode; (c) lambda is the
+    peak of the recorded curve."""
+    cert = hist.certificate
+    assert hist.status == "collapse" and cert is not None and cert.holds
+    assert 0 <= cert.step < len(hist.steps)
+    state = hist.steps[cert.step]
+    asm = Assembly.of(model)
+    law = InterfaceLaw.of(model, asm.kbar, settings.tension, settings.memory)
+    free = asm.free_index
+    # the law state the step was found with: the joints cracked before it
+    cracked = np.zeros(model.interfaces.count, dtype=bool)
+    for st in hist.steps[: cert.step]:
+        cracked |= (np.asarray(st.flags) & DETACHED_FLAG) > 0
+    q = state.q.reshape(-1)
+    response = law.respond(asm.relative_displacements(q), np.zeros_like(asm.kbar), cracked)
+    F = model.dead.reshape(-1)[free] + state.load_factor * model.live.reshape(-1)[free]
+    internal = asm.H_free.T @ response.actions.reshape(-1)
+    size = float(np.median(model.blocks.sizes))
+    weight = np.where(free % 6 < 3, 1.0, 1.0 / size)
+    residual = np.linalg.norm(weight * (F - internal)) / np.linalg.norm(weight * F)
+    assert residual <= settings.tolerance
+    assert law.admissibility(response).max() <= 1.0 + settings.admissible_tolerance
+    # (b)
+    F_live = model.live.reshape(-1)[free]
+
+    def dense(response):
+        T = law.tangent(response, settings.residual_stiffness)
+        return (asm.H_free.T @ sparse.block_diag(list(T)) @ asm.H_free).toarray()
+
+    # the metric: the tangent of the dead-load state
+    first = hist.steps[0].q.reshape(-1)
+    K0 = dense(
+        law.respond(asm.relative_displacements(first), np.zeros_like(asm.kbar), cracked & False)
+    )
+
+    def along_load(response):
+        """v = K_t^-1 F_L by a dense solve, and rho = F_L.v / v.K_0 v."""
+        v = np.linalg.solve(dense(response), F_live)
+        return v, float(F_live @ v) / float(v @ K0 @ v)
+
+    if cert.mode.startswith("singular tangent"):
+        v, rho = along_load(response)
+        if cert.mode.endswith("at the end of the bracket"):  # past a kink of the law
+            lam_end = state.load_factor * (1 + settings.bracket_tolerance)
+            probe = q.copy()
+            probe[free] += (lam_end - state.load_factor) * v
+            beyond = law.respond(
+                asm.relative_displacements(probe), np.zeros_like(asm.kbar), cracked
+            )
+            v, rho = along_load(beyond)
+        assert rho <= settings.mode_stiffness
+        assert rho == pytest.approx(cert.mode_rayleigh, rel=1e-3, abs=1e-12)
+    else:
+        assert cert.mode == "flat curve"
+        assert cert.curve_displacement >= settings.mode_displacement
+    mode = cert.mode_vector.reshape(-1)[free]
+    assert float(F_live @ mode) > 0  # the live load does work along the mode
+    # (c) the multiplier is the highest lambda of the curve
+    assert hist.collapse_multiplier == pytest.approx(hist.load_factors.max(), rel=1e-12)

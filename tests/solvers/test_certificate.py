@@ -1,0 +1,256 @@
+"""A collapse is a certified result, and the solver never calls its own failure a collapse.
+
+Proves: every reported collapse carries a certificate whose three conditions a test
+re-checks on its own (the residual of the state re-evaluated by a fresh discrete problem,
+the tangent's Rayleigh quotient along K_t^-1 F_L from a dense solve, the live load's work);
+a stop the certificate refuses ends ``failed`` with every step kept; the outcome is typed
+(Status, StopReason) and written to summary.json. And the defects of issue 18, each failing
+on 7022155: the displacement-control budget reported as "completed", elastic shortening of a
+tall column taken for a mechanism, a displacement limit taken for a collapse, and absurd
+friction or stiffness giving a "collapse" at lambda ~ 1e-8.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from certificate_checks import recheck, tilted_wall
+
+from masonry_dem.geometry.builders import (
+    add_base,
+    single_block,
+    stack_bond_column,
+)
+from masonry_dem.model import InterfaceMaterial, Model, SelfWeight, Support, WeightProportional
+from masonry_dem.solvers.incremental import (
+    DisplacementControl,
+    StaticSettings,
+    Status,
+    StopReason,
+    pushover,
+)
+
+
+# ------------------------------------------------------------------ certified collapses
+def test_a_tilting_block_collapse_is_certified_at_s_over_a():
+    """A block on a base tilts at s/a; the certificate holds and re-checks: the tangent of
+    its last state has almost nothing left along the rotation the load drives."""
+    a, s = 0.2, 0.1
+    blocks, base = add_base(single_block(a, 0.25, s, 20e3))
+    model = Model.build(
+        blocks,
+        InterfaceMaterial(kn=2.4e9, kt=1e9, friction=0.7),
+        supports=[Support([base])],
+        loads=[SelfWeight(), WeightProportional((0.0, 0.0, 1.0))],
+    )
+    settings = StaticSettings()
+    hist = pushover(model, settings)
+    assert hist.collapse_multiplier == pytest.approx(s / a, rel=0.005)
+    recheck(model, hist, settings)
+    assert hist.certificate.bound_status == "not checked"  # no bound given: never a pass
+    assert hist.certificate.within_bound is None
+
+
+def test_panel_collapse_is_certified_and_written_to_the_summary(tmp_path):
+    model = tilted_wall(3, 5)
+    settings = StaticSettings()
+    hist = pushover(model, settings, out=tmp_path)
+    recheck(model, hist, settings)
+    assert isinstance(hist.status, Status) and isinstance(hist.stop, StopReason)
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert summary["status"] == "collapse"
+    assert summary["stop"] == str(hist.stop)
+    cert = summary["certificate"]
+    assert cert["holds"] and cert["mode"] in ("singular tangent", "flat curve")
+    assert cert["bound_status"] == "not checked"
+    assert cert["live_work"] > 0 and cert["step"] == hist.certificate.step
+
+
+def test_a_bound_below_lambda_refuses_the_collapse():
+    """Condition (c): a collapse multiplier above the (injected) associative bound is no
+    certified collapse: the run ends failed and says which bound it exceeds."""
+    model = tilted_wall(3, 5)
+    found = pushover(model)
+    lam = found.collapse_multiplier
+    above = pushover(model, bound=1.5 * lam)
+    assert above.status == "collapse" and above.certificate.bound_status == "within"
+    below = pushover(model, bound=lambda m: 0.5 * lam)
+    assert below.status == "failed" and below.certificate.bound_status == "exceeded"
+    assert "limit-analysis bound" in below.reason
+    assert len(below.steps) == len(found.steps)  # every step kept
+
+
+# ------------------------------------------------------------------ the defects of issue 18
+def test_displacement_control_that_spends_its_budget_fails():
+    """On 7022155 the ``while ... else`` reported "completed, control displacement reached"
+    when max_steps ran out at 15 % of the target."""
+    model = tilted_wall(3, 5)
+    top = int(np.argmax(model.blocks.centres[:, 1] * 100 + model.blocks.centres[:, 0]))
+    target = 0.02
+    hist = pushover(
+        model, StaticSettings(max_steps=10), control=DisplacementControl(top, "u3", target, 50)
+    )
+    assert hist.status == "failed"
+    assert hist.stop is StopReason.CONTROL_BUDGET
+    reached = hist.last.q[top, 2]
+    assert reached < 0.5 * target and f"{reached:.6g}" in hist.reason
+    # with the budget it needs, the same control reaches its target
+    done = pushover(model, control=DisplacementControl(top, "u3", 2e-3, 10))
+    assert done.status == "completed" and done.stop is StopReason.CONTROL_REACHED
+    assert done.last.q[top, 2] == pytest.approx(2e-3, rel=1e-9)
+
+
+def test_elastic_shortening_of_a_tall_column_is_no_mechanism():
+    """A stack of 200 blocks 0.1 m high, 0.05 m square (20 m) shortens elastically under its
+    weight by w / (kn A) x n (n + 1) / 2 = 0.0402 m (the joint under course i carries the
+    n - i + 1 blocks above it), more than the displacement limit (half the smallest block
+    size, 0.025 m). On 7022155 the dead load failed as "a mechanism"."""
+    n, a, b = 200, 0.1, 0.05
+    blocks, base = add_base(stack_bond_column(n, a, b, b, 20e3))
+    kn = 1e9
+    model = Model.build(
+        blocks,
+        InterfaceMaterial(kn=kn, kt=0.4e9, friction=0.7),
+        supports=[Support([base])],
+        loads=[SelfWeight()],
+    )
+    hist = pushover(model)
+    assert hist.status == "completed", hist.reason
+    weight = 20e3 * a * b * b
+    expected = weight / (kn * b * b) * n * (n + 1) / 2
+    assert expected > 0.025
+    assert -hist.last.q[:, 1].min() == pytest.approx(expected, rel=1e-6)
+
+
+def test_a_displacement_limit_alone_is_not_a_collapse():
+    """A limit the elastic wall passes long before anything yields (1e-5 m) stops the path;
+    the state there keeps its elastic stiffness, so the run ends failed, never collapse
+    (on 7022155: collapse, "a mechanism: displacements exceed the limit")."""
+    model = tilted_wall(3, 5)
+    # (the limit is also at least 100x the dead-load displacement unless told otherwise)
+    hist = pushover(model, StaticSettings(displacement_limit=1e-5, limit_elastic_multiple=0.1))
+    assert hist.status == "failed"
+    assert hist.collapse_multiplier is None
+    assert hist.certificate is not None and not hist.certificate.mode_found
+    assert hist.certificate.mode_rayleigh > StaticSettings().mode_stiffness
+    assert len(hist.steps) >= 2  # every step it converged is kept
+
+
+@pytest.mark.parametrize(
+    "material",
+    [
+        InterfaceMaterial(kn=1e9, kt=0.4e9, friction=1e10),
+        InterfaceMaterial(kn=1e9, kt=0.4e9, friction=10.0),
+    ],
+    ids=["friction 1e10", "friction 10"],
+)
+def test_high_friction_never_collapses_near_zero(material):
+    """With friction that cannot slide, the held 3 x 5 panel still rocks: a certified
+    collapse well above zero, or failed; on 7022155 friction 1e10 gave "collapse" at
+    lambda = 1.6e-8. The rocking panel with friction 0.7 bounds it from below (more friction
+    can only hold more)."""
+    model = tilted_wall(3, 5, material)
+    hist = pushover(model)
+    reference = pushover(tilted_wall(3, 5)).collapse_multiplier
+    if hist.status == "collapse":
+        assert hist.collapse_multiplier >= 0.99 * reference
+        recheck(model, hist, StaticSettings())
+    else:
+        assert hist.status == "failed"
+
+
+def test_certify_false_reports_the_stop_unchecked():
+    """``certify=False`` keeps the stop of the path as the answer (no certificate)."""
+    model = tilted_wall(3, 5)
+    unchecked = StaticSettings(displacement_limit=1e-5, limit_elastic_multiple=0.1, certify=False)
+    hist = pushover(model, unchecked)
+    assert hist.status == "collapse" and hist.certificate is None
+
+
+def test_settings_name_the_bad_field():
+    for field, value in [("mode_stiffness", 0.0), ("search_cuts", 0), ("bound_tolerance", -1)]:
+        with pytest.raises(ValueError, match=field):
+            replace(StaticSettings(), **{field: value})
+
+
+def test_an_in_plane_wall_never_collapses_at_the_residual_tolerance():
+    """A held 9 x 3 wall tilted in its plane, friction 29, kn 1.1e8 (found by the property
+    sweep): Newton stalls from the dead-load state for every lambda above 1e-8, and on
+    7022155 that was a collapse at lambda 1.04e-8. Its tangent there is singular along the
+    load, but a contact closes after a small motion: dynamic relaxation finds rest above it.
+    Without the robust re-try the run ends failed there and says why; with it (default,
+    where the bracket reaches what the residual cannot tell from zero load) the path leaves
+    the dead-load state and goes on to 0.93, where it stops with no mechanism: failed."""
+    model = tilted_wall(9, 3, InterfaceMaterial(kn=1.1e8, kt=0.44e8, friction=29.0), (1, 0, 0))
+    stalled = pushover(model, StaticSettings(zero_load_robust_iterations=0))
+    assert stalled.status == "failed"
+    cert = stalled.certificate
+    assert cert.near_zero and cert.zero_load_check == "rest found" and not cert.mode_found
+    assert "below what the residual tolerance resolves" in stalled.reason
+    hist = pushover(model)
+    assert hist.final_load_factor > 0.5
+    assert hist.status == "failed" and not hist.certificate.near_zero
+
+
+def test_a_frictionless_block_collapses_at_zero_load_certified():
+    """No friction: the block slides under any lateral load. The multiplier (<= 1e-8) is
+    below what the residual resolves, so the certificate asks for a mechanism of the
+    dead-load state that dynamic relaxation confirms by finding no rest: it does."""
+    blocks, base = add_base(single_block(0.2, 0.3, 0.3, 20e3))
+    model = Model.build(
+        blocks,
+        InterfaceMaterial(kn=1e9, kt=0.4e9, friction=0.0),
+        supports=[Support([base])],
+        loads=[SelfWeight(), WeightProportional((1.0, 0.0, 0.0))],
+    )
+    hist = pushover(model)
+    assert hist.status == "collapse", hist.reason
+    assert hist.collapse_multiplier <= 1e-8
+    cert = hist.certificate
+    assert cert.near_zero and cert.zero_load_check == "no rest"
+    assert cert.mode == "mechanism of the dead-load state" and cert.live_work > 0
+
+
+def test_load_and_displacement_control_reach_the_same_peak():
+    """The held 3 x 5 panel: the top right block's u3 driven to 3x its displacement at the
+    load-controlled collapse reaches the same peak within 1 % (0.3191 against 0.3187)."""
+    from masonry_dem.solvers.static.branches import compare_controls
+
+    model = tilted_wall(3, 5)
+    top = int(np.argmax(model.blocks.centres[:, 1] * 100 + model.blocks.centres[:, 0]))
+    result = compare_controls(
+        model, DisplacementControl(top, "u3", 0.0057, 60), StaticSettings(max_steps=400)
+    )
+    assert result.same_peak and result.verdict == "same peak", result.reason
+    assert result.displacement_peak == pytest.approx(result.load_peak, rel=0.01)
+
+
+def test_a_displacement_control_stopped_short_says_so():
+    """Driven to a fifth of the displacement at collapse, the path ends on a rising curve:
+    the comparison says it stopped before the peak, not that it took another branch."""
+    from masonry_dem.solvers.static.branches import compare_controls
+
+    model = tilted_wall(3, 5)
+    top = int(np.argmax(model.blocks.centres[:, 1] * 100 + model.blocks.centres[:, 0]))
+    result = compare_controls(model, DisplacementControl(top, "u3", 0.0004, 10))
+    assert not result.same_peak
+    assert result.verdict == "displacement control stopped before the peak", result.reason
+    assert result.displacement_peak < result.load_peak
+
+
+def test_a_limit_stop_on_a_soft_rising_curve_is_not_a_collapse():
+    """A held 10 x 15 panel (friction 11.3) with kn 1.5e9: the displacement limit stops its
+    path at 0.214 where the tangent keeps 2 % of its dead-load stiffness along the load and
+    the curve still rises (the same panel with kn 1.5e11, whose displacements are 100x
+    smaller, goes on to 0.256). Equilibria were still being found, so the stop needs a flat
+    curve (rho <= flat_slope): failed, not a collapse 16 % low."""
+    material = InterfaceMaterial(kn=1.5e9, kt=0.6e9, friction=11.3)
+    hist = pushover(tilted_wall(10, 15, material))
+    assert hist.stop is StopReason.DISPLACEMENT_LIMIT
+    assert hist.status == "failed"
+    cert = hist.certificate
+    assert StaticSettings().flat_slope < cert.mode_rayleigh <= StaticSettings().mode_stiffness
+    assert cert.mode_stiffness == StaticSettings().flat_slope  # the tolerance applied

@@ -1,0 +1,192 @@
+"""Limit analysis against closed forms: each expected value is derived in its test."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from masonry_dem.constitutive import torsion_constant
+from masonry_dem.geometry.blocks import Blocks
+from masonry_dem.geometry.builders import add_base, running_bond_wall, single_block
+from masonry_dem.model import InterfaceMaterial, Model, SelfWeight, Support, WeightProportional
+from masonry_dem.solvers.limit_analysis import (
+    NON_ASSOCIATIVE_GRID,
+    LimitAnalysisResult,
+    limit_analysis,
+    torsion_quadrature,
+)
+
+GAMMA = 2.0e4
+BACKENDS = [dict(backend="highs"), dict(backend="clarabel")]
+
+
+def _on_base(blocks: Blocks, mu: float, direction=(0.0, 0.0, 1.0), ft: float = 0.0) -> Model:
+    blocks, base = add_base(blocks)
+    return Model.build(
+        blocks,
+        InterfaceMaterial(kn=1e9, kt=1e9, friction=mu, tensile_strength=ft),
+        [Support([base])],
+        [SelfWeight(), WeightProportional(direction)],
+    )
+
+
+def _lam(r: LimitAnalysisResult) -> float:
+    assert r.status == "collapse", r.reason
+    return r.load_factor
+
+
+@pytest.mark.parametrize("kw", BACKENDS + [dict(associative=False)])
+def test_single_block_tilts_at_s_over_a(kw):
+    """A block a high and s thick on a rigid base, tilted out of plane: it turns about its
+    front edge when lambda W (a/2) = W (s/2), lambda = s/a = 0.25 (friction 0.6 > s/a). The
+    mechanism turns about that edge: u2 / u3 = (s/2) / (a/2) at the centre."""
+    a, b, s = 0.4, 0.3, 0.1
+    r = limit_analysis(_on_base(single_block(a, b, s, GAMMA), 0.6), **kw)
+    assert _lam(r) == pytest.approx(s / a, rel=1e-6)
+    v = r.block_velocities[0]
+    assert v[2] == pytest.approx(1.0)
+    assert v[1] == pytest.approx(s / a, rel=1e-5)  # the centre rises as it turns
+    assert v[3] == pytest.approx(1.0 / (a / 2), rel=1e-5)  # w1 = u3 / (a/2)
+    assert r.method == ("associative" if kw.get("associative", True) else "non-associative")
+
+
+@pytest.mark.parametrize("kw", BACKENDS)
+def test_single_block_slides_at_mu(kw):
+    """With mu = 0.2 < s/a = 0.25 the block slides when lambda W = mu W. Associative sliding
+    dilates (u2 = mu u3); without dilatancy it slides flat (u2 = 0)."""
+    model = _on_base(single_block(0.4, 0.3, 0.1, GAMMA), 0.2)
+    assoc = limit_analysis(model, **kw)
+    assert _lam(assoc) == pytest.approx(0.2, rel=1e-6)
+    assert assoc.block_velocities[0, 1] == pytest.approx(0.2, rel=1e-5)
+    flat = limit_analysis(model, associative=False, **kw)
+    assert _lam(flat) == pytest.approx(0.2, rel=1e-6)
+    assert abs(flat.block_velocities[0, 1]) < 1e-6
+    assert flat.bound == "estimate" and assoc.bound == "upper"
+
+
+@pytest.mark.parametrize("kw", BACKENDS)
+def test_two_block_stack_overturns_at_s_over_height(kw):
+    """Two blocks of heights a1, a2 (same b, s) stacked on a base, tilted out of plane. The
+    whole stack turns about the base edge when lambda sum(W_i h_i) = sum(W_i) s / 2 with W_i
+    proportional to a_i and h_1 = a1/2, h_2 = a1 + a2/2: lambda = s (a1 + a2) /
+    (a1^2 + 2 a1 a2 + a2^2) = s / (a1 + a2). The top block alone would need s / a2; sliding
+    needs mu = 0.8. So lambda = s / H = 0.1 / 0.5 = 0.2."""
+    a1, a2, b, s = 0.3, 0.2, 0.3, 0.1
+    blocks = Blocks.from_boxes(
+        np.array([[0, 0, 0], [0, a1, 0]], float), np.array([[b, a1, s], [b, a1 + a2, s]]), GAMMA
+    )
+    r = limit_analysis(_on_base(blocks, 0.8), **kw)
+    assert _lam(r) == pytest.approx(s / (a1 + a2), rel=1e-6)
+    # one rigid rotation: both blocks turn by the same w1
+    assert r.block_velocities[0, 3] == pytest.approx(r.block_velocities[1, 3], rel=1e-4)
+
+
+def test_free_standing_running_bond_wall_overturns_at_t_over_h():
+    """A free-standing running-bond wall (4 blocks x 6 courses, a = 0.1, s = 0.12, mu 0.8)
+    tilted out of plane turns as one body about its base edge at lambda = (t/2) / (H/2) =
+    t/H = 0.12 / 0.6 = 0.2: any part above a bed joint at height h turns at t/(H - h) > t/H,
+    and the running bond locks the columns together (splitting one off needs friction on
+    the head and bed joints, which only adds strength)."""
+    wall = running_bond_wall(4, 6, a=0.1, b=0.25, s=0.12, unit_weight=GAMMA)
+    r = limit_analysis(_on_base(wall, 0.8))
+    assert _lam(r) == pytest.approx(0.12 / 0.6, rel=1e-6)
+    turning = r.block_velocities[:-1, 3]  # the base (last) stays
+    assert np.allclose(turning, turning[0], rtol=1e-4)  # one rigid rotation about e1
+
+
+def test_torsion_of_one_interface_is_mu_n_r():
+    """A block on a base under a dead compression N (its weight) and a live torque T about
+    the joint's normal. Rigid-plastic statics may put the compression anywhere on the joint:
+    at its four corners the friction forces mu N / 4 act at the half diagonal R, so
+    lambda T = mu N R, whatever the grid (module docstring). With the exact cone (Clarabel).
+    This is the 1.7-1.9 x cT of corner contacts; cT itself is the uniform-pressure value
+    (next test)."""
+    a, b, s, mu = 0.2, 0.4, 0.3, 0.5
+    model = _on_base(single_block(a, b, s, GAMMA), mu)
+    live = np.zeros_like(model.live)
+    live[0, 4] = 1.0  # a unit torque about e2, the bed joint's normal
+    model = replace(model, live=live)
+    N = float(model.blocks.weights[0])
+    R = 0.5 * np.hypot(b, s)
+    for grid in (2, 4):
+        r = limit_analysis(model, backend="clarabel", grid=grid)
+        assert _lam(r) == pytest.approx(mu * N * R, rel=1e-5)
+    ratio = R / float(torsion_constant(b, s))
+    assert 1.7 < ratio < 1.9
+
+
+@pytest.mark.parametrize("aspect", [1.0, 1.5, 2.0, 3.0, 4.0])
+def test_uniform_pressure_torsion_through_the_grid(aspect):
+    """The frozen capacities of the non-associative scheme are a uniform pressure on the
+    grid: at the default grid their torsion, the mean distance from the centre by Lobatto
+    quadrature, is within 1 % of the closed-form cT (Eq. 11) up to a 4:1 rectangle; the
+    corners alone (n = 2) give the half diagonal instead."""
+    l1, l2 = 0.2 * aspect, 0.2
+    ct = float(torsion_constant(l1, l2))
+    assert torsion_quadrature(l1, l2, NON_ASSOCIATIVE_GRID) == pytest.approx(ct, rel=0.01)
+    assert torsion_quadrature(l1, l2, 2) == pytest.approx(0.5 * np.hypot(l1, l2), rel=1e-12)
+
+
+def _peer_wall() -> Model:
+    """The peer wall of issue 18: 5 x 6 running bond of 0.4 x 0.2 x 0.2 m blocks (half
+    blocks at alternate ends), mu 0.6, 2000 kg/m3, rigid slab, lateral acceleration in
+    plane."""
+    wall = running_bond_wall(5, 6, a=0.2, b=0.4, s=0.2, unit_weight=2000 * 9.81)
+    return _on_base(wall, 0.6, direction=(1.0, 0.0, 0.0))
+
+
+def test_peer_wall_matches_the_associative_lp_and_is_grid_independent():
+    """Peers: an associative rigid-block LP gives 0.584 (issue 18). In plane every shear is
+    along the wall, where the pyramids and the cone agree, so all cones give it; the corners
+    (grid 2) and a 4 x 4 grid give the same multiplier (the module docstring's argument)."""
+    model = _peer_wall()
+    corners = _lam(limit_analysis(model))
+    assert corners == pytest.approx(0.584, rel=0.01)
+    assert _lam(limit_analysis(model, grid=4)) == pytest.approx(corners, rel=1e-6)
+    assert _lam(limit_analysis(model, cone="inscribed")) == pytest.approx(corners, rel=1e-6)
+    assert _lam(limit_analysis(model, backend="clarabel")) == pytest.approx(corners, rel=1e-5)
+
+
+def test_statuses_not_exceptions():
+    """No live load work: 'failed'; a live load the base carries whatever lambda (the
+    weight pressed down): 'no collapse'; a dead horizontal push beyond friction: 'failed'
+    with the dead load named."""
+    blocks = single_block(0.4, 0.3, 0.1, GAMMA)
+    down = _on_base(blocks, 0.6, direction=(0.0, -1.0, 0.0))
+    for kw in BACKENDS:
+        r = limit_analysis(down, **kw)
+        assert r.status == "no collapse", r.reason
+        assert np.isnan(r.load_factor)
+    model = _on_base(blocks, 0.6)
+    dead = model.dead.copy()
+    dead[0, 2] = 0.7 * model.blocks.weights[0]  # beyond mu W
+    pushed = replace(model, dead=dead)
+    for kw in BACKENDS:
+        r = limit_analysis(pushed, **kw)
+        assert r.status == "failed" and "dead load" in r.reason, r.reason
+    none = replace(model, live=np.zeros_like(model.live))
+    assert limit_analysis(none).status == "failed"
+
+
+def test_tensile_strength_adds_the_cohesive_capacity():
+    """A block on a base with tensile strength ft (cohesion mu ft) slides when lambda W =
+    mu (W + ft A), A = b s the joint's area (fsu = mu (ft - fn) of the DEM's law)."""
+    a, b, s, mu, ft = 0.1, 0.3, 0.3, 0.3, 2.0e3
+    model = _on_base(single_block(a, b, s, GAMMA), mu, ft=ft)
+    W = float(model.blocks.weights[0])
+    expected = mu * (W + ft * b * s) / W
+    # overturning with tension: the joint's moment (W + ft A) s / 2 > lambda W a / 2 here
+    assert expected < (W + ft * b * s) * s / (W * a)
+    assert _lam(limit_analysis(model)) == pytest.approx(expected, rel=1e-6)
+
+
+def test_bad_arguments_name_the_field():
+    model = _on_base(single_block(0.4, 0.3, 0.1, GAMMA), 0.6)
+    with pytest.raises(ValueError, match="grid"):
+        limit_analysis(model, grid=1)
+    with pytest.raises(ValueError, match="backend"):
+        limit_analysis(model, backend="gurobi")
+    with pytest.raises(ValueError, match="cone"):
+        limit_analysis(model, cone="round")
