@@ -57,6 +57,9 @@ class History:
     def end(self, status: Status, stop: StopReason, reason: str) -> None:
         """How the path ended (a collapse is still to be certified by the solver)."""
         self.status, self.stop, self.reason = Status(status), stop, reason
+        if self.status == Status.COMPLETED:
+            # the path went on past every bracket load control had set: no collapse
+            self.collapse_bracket = None
 
     @property
     def load_factors(self) -> np.ndarray:

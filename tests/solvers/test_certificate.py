@@ -19,6 +19,7 @@ import numpy as np
 import pytest
 from certificate_checks import recheck, tilted_wall
 
+import masonry_dem as md
 from masonry_dem.geometry.builders import (
     add_base,
     single_block,
@@ -254,3 +255,30 @@ def test_a_limit_stop_on_a_soft_rising_curve_is_not_a_collapse():
     cert = hist.certificate
     assert StaticSettings().flat_slope < cert.mode_rayleigh <= StaticSettings().mode_stiffness
     assert cert.mode_stiffness == StaticSettings().flat_slope  # the tolerance applied
+
+
+def test_work_control_stops_at_max_load_factor_and_a_completed_run_has_no_collapse():
+    """A block jammed between a fixed base and a fixed top plate (joints in 4 x 4 pieces,
+    friction 10) carries far more than its free-standing b/h = 0.5: the run must end
+    ``completed`` exactly at ``max_load_factor`` (work control leaves lambda free, so a step
+    may pass the cap and is found again at the cap), and a completed run reports no collapse
+    multiplier (on 7022155: lambda 1.82 > 1.5 and a collapse multiplier of 0.1625 left from
+    load control's first failure)."""
+    blocks = md.boxes(
+        [[0, -0.1, 0], [0, 0, 0], [0, 0.4, 0]],
+        [[0.2, 0, 0.2], [0.2, 0.4, 0.2], [0.2, 0.5, 0.2]],
+        20e3,
+    )
+    interfaces = md.subdivide_interfaces(md.detect_interfaces(blocks), 4, 4)
+    model = md.Model.build(
+        blocks,
+        md.InterfaceMaterial(kn=1e9, kt=0.4e9, friction=10.0),
+        [md.Support([0, 2])],
+        [md.SelfWeight(), md.WeightProportional((1, 0, 0), blocks=[1])],
+        interfaces=interfaces,
+    )
+    hist = md.pushover(model, settings=md.StaticSettings(max_load_factor=1.5))
+    assert hist.status == "completed"
+    assert hist.final_load_factor == pytest.approx(1.5, rel=1e-12)
+    assert hist.collapse_multiplier is None
+    assert hist.summary()["lambda_bracket"] is None

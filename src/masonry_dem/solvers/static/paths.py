@@ -348,6 +348,12 @@ def work_control(
                 stop = StopReason.PATH_STUCK
                 break
             continue
+        if float(out.load_factor) > s.max_load_factor:
+            # lambda is free under work control: the step passed the cap, so the last
+            # state is found again by load control at the cap itself
+            capped = solver.equilibrate(s.max_load_factor)
+            if capped.ok:
+                out = capped
         record(out)
         w, lam = goal, float(out.load_factor)
         path_w.append(w)
