@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from masonry_dem.geometry import builders
+from masonry_dem.geometry import builders, plans
 from masonry_dem.geometry import selectors as sel
 from masonry_dem.geometry.blocks import Blocks
 from masonry_dem.model import (
@@ -42,6 +42,10 @@ _BUILDERS = {
     "stack_bond_column": builders.stack_bond_column,
     "single_block": builders.single_block,
     "boxes": builders.boxes,
+    "l_wall": plans.l_wall,
+    "t_wall": plans.t_wall,
+    "u_wall": plans.u_wall,
+    "box_wall": plans.box_wall,
 }
 _GEOMETRY_EXTRA = {"builder", "base", "openings"}
 
@@ -99,8 +103,9 @@ def build_blocks(geometry: dict) -> tuple[Blocks, int | None, np.ndarray]:
 def select_blocks(
     blocks: Blocks, spec: str | list[int], wall: np.ndarray, base: int | None
 ) -> np.ndarray:
-    """Resolve a selector: ``base``, ``all``, ``column:left``, ``course:K``, ``edge:top``, or a
-    list of block indices."""
+    """Resolve a selector: ``base``, ``all``, ``column:left``, ``course:K``, ``edge:top``, a part
+    of walls that meet (``facade``, ``return:left``, ``corner:left``, ...), or a list of block
+    indices."""
     if isinstance(spec, list):
         idx = np.asarray(spec, dtype=np.int64)
         if idx.size == 0 or idx.min() < 0 or idx.max() >= blocks.count:
@@ -125,9 +130,11 @@ def select_blocks(
         return sel.course(blocks, k, among=wall)
     if kind == "edge":
         return sel.edge(blocks, arg, among=wall)
+    if spec in sel.PARTS:
+        return sel.part(blocks, str(spec), among=wall)
     raise ValueError(
-        f"select must be 'base', 'all', 'column:left|right', 'course:K', 'edge:NAME' or a list of "
-        f"block indices, got {spec!r}"
+        f"select must be 'base', 'all', 'column:left|right', 'course:K', 'edge:NAME', a part of "
+        f"walls that meet ({', '.join(sel.PARTS)}) or a list of block indices, got {spec!r}"
     )
 
 
