@@ -189,9 +189,9 @@ def case_from_dict(data: dict, source: str = "<dict>") -> Case:
         raise ValueError(f"case file [material]: {exc}") from exc
     supports = []
     for k, spec in enumerate(data.get("supports", [])):
-        _unknown(f"supports[{k}]", spec, {"select", "dofs"})
+        _unknown(f"supports[{k}]", spec, {"select", "dofs", "settles_with_wall"})
         idx = select_blocks(blocks, _require(f"supports[{k}]", spec, "select"), wall, base)
-        supports.append(Support(idx, spec.get("dofs", "all")))
+        supports.append(Support(idx, spec.get("dofs", "all"), spec.get("settles_with_wall", False)))
     loads = [
         _load(spec, blocks, wall, base, k)
         for k, spec in enumerate(data.get("loads", [{"type": "self_weight"}]))
