@@ -134,3 +134,17 @@ def test_case_file_takes_settles_with_wall():
     column = sel.column(model.blocks, "left", among=np.arange(model.blocks.count - 1))
     np.testing.assert_array_equal(model.fixed[column, 1], False)
     assert model.fixed[column][:, [0, 2, 3, 4, 5]].all()
+
+
+def test_table_2_columns_are_read_as_settling_with_the_wall():
+    """The paper's fixed columns of Table 2 ("translations and rotations") are read as held
+    columns that settle with the wall: the same fixed DOFs as
+    Support(column, "all", settles_with_wall=True); Table 1's keep u1, u3 (free to turn)."""
+    from masonry_dem.cases.paper import Assumptions, build_case
+
+    case = build_case("S13")
+    wall = case.model.blocks.subset(case.wall)
+    column = sel.column(wall, "left")
+    held = Support(column, "all", settles_with_wall=True).mask(case.model.blocks.count)
+    np.testing.assert_array_equal(case.model.fixed[column], held[column])
+    assert "u2" not in Assumptions().column_dofs_table1
