@@ -27,6 +27,7 @@ from masonry_dem.geometry.builders import (
     single_block,
     stack_bond_column,
 )
+from masonry_dem.geometry.plans import box_wall, l_wall, t_wall, u_wall
 from masonry_dem.model import (
     InterfaceMaterial,
     Model,
@@ -53,8 +54,10 @@ __all__ = [
     "Support",
     "WeightProportional",
     "add_base",
+    "box_wall",
     "boxes",
     "cut_openings",
+    "l_wall",
     "pushover",
     "running_bond_wall",
     "running_bond_wall_of_size",
@@ -62,4 +65,6 @@ __all__ = [
     "single_block",
     "solve_linear",
     "stack_bond_column",
+    "t_wall",
+    "u_wall",
 ]
