@@ -3,19 +3,23 @@
 Run:  python benchmarks/bench_walls_that_meet.py [--sizes S5 big] [--repeat 3]
 
 For each size it builds a U wall of Restrepo Velez's stones on a fixed base (``S5``: the
-8-block specimen with returns of 4 blocks, 326 blocks; ``big``: 20 blocks x 40 courses with
+8-block specimen with returns of 4 blocks, 326 blocks; ``big``: 14 blocks x 30 courses with
 returns of 6 blocks) and a flat running-bond wall with the nearest block count, held on both
 end columns as the paper holds its return walls (all DOFs but u2), both tilted out of plane.
 In one run, alternating U and flat ``--repeat`` times, best of each, it prints:
 
 - ``detect+assemble``: contact detection, ``Model.build`` and K on the free DOFs;
+- ``linear solve``: one elastic solve (assembly of K, sparse LU, back substitution), the
+  kernel of every Newton step, best of 5;
 - ``pushover``: the static solver to collapse, its Newton iterations and factorizations;
-- ``per iteration``: pushover seconds per Newton iteration, the cost of one step of the
-  solver on that wall, which does not depend on how long each path is;
+- ``per iteration``, ``per factorization``: pushover seconds per Newton iteration and per
+  factorization of the tangent, the cost of the solver's work on that wall whatever the
+  length of its path;
 
 and the ratio U / flat of each. The paths differ (a U wall's mechanism drags its returns; a
 flat wall with held columns cracks on its own), so the total time is printed for reference
-and the claim rests on the per-iteration and assembly ratios.
+and the claim rests on the assembly, linear-solve, per-iteration and per-factorization
+ratios.
 """
 
 from __future__ import annotations
@@ -32,10 +36,11 @@ from masonry_dem.geometry.interfaces import detect_interfaces
 from masonry_dem.geometry.plans import u_wall
 from masonry_dem.model import InterfaceMaterial, Model, SelfWeight, Support, WeightProportional
 from masonry_dem.solvers.incremental import pushover
+from masonry_dem.solvers.linear import solve_linear
 
 A, B, S, GAMMA = 0.02824, 0.07978, 0.03968, 26.8e3  # Restrepo Velez's stones
 DRY = InterfaceMaterial(kn=2.4e9, kt=1.0e9, friction=0.7)
-SIZES = {"S5": (8, 21, 4), "big": (20, 40, 6)}  # facade blocks, courses, return blocks
+SIZES = {"S5": (8, 21, 4), "big": (14, 30, 6)}  # facade blocks, courses, return blocks
 HELD = ["u1", "u3", "w1", "w2", "w3"]
 
 
@@ -62,6 +67,11 @@ def build(wall, held: bool) -> tuple[Model, float]:
 
 def measure(wall, held: bool) -> dict:
     model, assemble = build(wall, held)
+    linear = []
+    for _ in range(5):
+        t0 = time.perf_counter()
+        solve_linear(model, 0.0)
+        linear.append(time.perf_counter() - t0)
     t0 = time.perf_counter()
     h = pushover(model)
     seconds = time.perf_counter() - t0
@@ -69,10 +79,12 @@ def measure(wall, held: bool) -> dict:
         "blocks": wall.count,
         "interfaces": model.interfaces.count,
         "assemble": assemble,
+        "linear": min(linear),
         "pushover": seconds,
         "iterations": h.iterations,
         "factorizations": h.factorizations,
         "per_iteration": seconds / max(h.iterations, 1),
+        "per_factorization": seconds / max(h.factorizations, 1),
         "lambda": h.collapse_multiplier,
         "status": h.status,
     }
@@ -95,7 +107,7 @@ def main(argv=None) -> int:
         for kind, rs in runs.items():
             best[kind] = {
                 k: min(r[k] for r in rs)
-                if k in ("assemble", "pushover", "per_iteration")
+                if k in ("assemble", "linear", "pushover", "per_iteration", "per_factorization")
                 else rs[0][k]
                 for k in rs[0]
             }
@@ -108,16 +120,19 @@ def main(argv=None) -> int:
         for key, unit in (
             ("interfaces", ""),
             ("assemble", "s"),
+            ("linear", "ms"),
             ("pushover", "s"),
             ("iterations", ""),
             ("factorizations", ""),
             ("per_iteration", "ms"),
+            ("per_factorization", "ms"),
             ("lambda", ""),
         ):
             uu, ff = best["U"][key], best["flat"][key]
             scale = 1e3 if unit == "ms" else 1.0
             ratio = uu / ff if ff else float("nan")
-            name = "detect+assemble" if key == "assemble" else key.replace("_", " ")
+            names = {"assemble": "detect+assemble", "linear": "linear solve"}
+            name = names.get(key, key.replace("_", " "))
             print(
                 f"{name + (' [' + unit + ']' if unit else ''):16s} {uu * scale:12.4g} {ff * scale:12.4g} {ratio:9.2f}"
             )
