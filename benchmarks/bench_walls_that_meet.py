@@ -9,8 +9,9 @@ end columns as the paper holds its return walls (all DOFs but u2), both tilted o
 In one run, alternating U and flat ``--repeat`` times, best of each, it prints:
 
 - ``detect+assemble``: contact detection, ``Model.build`` and K on the free DOFs;
-- ``linear solve``: one elastic solve (assembly of K, sparse LU, back substitution), the
-  kernel of every Newton step, best of 5;
+- ``linear solve``: one elastic solve (``solve_linear``: assembly of K, SuperLU with its
+  default ordering, back substitution), best of 5, and ``LU fill``, the entries of its
+  factors;
 - ``pushover``: the static solver to collapse, its Newton iterations and factorizations;
 - ``per iteration``, ``per factorization``: pushover seconds per Newton iteration and per
   factorization of the tangent, the cost of the solver's work on that wall whatever the
@@ -28,6 +29,8 @@ import argparse
 import platform
 import sys
 import time
+
+from scipy.sparse.linalg import splu
 
 from masonry_dem.assembly.stiffness import Assembly
 from masonry_dem.geometry import selectors as sel
@@ -72,6 +75,7 @@ def measure(wall, held: bool) -> dict:
         t0 = time.perf_counter()
         solve_linear(model, 0.0)
         linear.append(time.perf_counter() - t0)
+    lu = splu(Assembly.of(model).stiffness().tocsc())
     t0 = time.perf_counter()
     h = pushover(model)
     seconds = time.perf_counter() - t0
@@ -80,6 +84,7 @@ def measure(wall, held: bool) -> dict:
         "interfaces": model.interfaces.count,
         "assemble": assemble,
         "linear": min(linear),
+        "fill": lu.L.nnz + lu.U.nnz,
         "pushover": seconds,
         "iterations": h.iterations,
         "factorizations": h.factorizations,
@@ -121,6 +126,7 @@ def main(argv=None) -> int:
             ("interfaces", ""),
             ("assemble", "s"),
             ("linear", "ms"),
+            ("fill", ""),
             ("pushover", "s"),
             ("iterations", ""),
             ("factorizations", ""),
@@ -131,7 +137,7 @@ def main(argv=None) -> int:
             uu, ff = best["U"][key], best["flat"][key]
             scale = 1e3 if unit == "ms" else 1.0
             ratio = uu / ff if ff else float("nan")
-            names = {"assemble": "detect+assemble", "linear": "linear solve"}
+            names = {"assemble": "detect+assemble", "linear": "linear solve", "fill": "LU fill"}
             name = names.get(key, key.replace("_", " "))
             print(
                 f"{name + (' [' + unit + ']' if unit else ''):16s} {uu * scale:12.4g} {ff * scale:12.4g} {ratio:9.2f}"
