@@ -11,7 +11,9 @@ In one run, alternating U and flat ``--repeat`` times, best of each, it prints:
 - ``detect+assemble``: contact detection, ``Model.build`` and K on the free DOFs;
 - ``linear solve``: one elastic solve (``solve_linear``: assembly of K, SuperLU with its
   default ordering, back substitution), best of 5, and ``LU fill``, the entries of its
-  factors;
+  factors; ``tangent LU``: one factorization of the static solver's tangent at the dead
+  load, as every Newton step after the first does it (the multifrontal LU with the
+  ordering the solver keeps), best of 5;
 - ``pushover``: the static solver to collapse, its Newton iterations and factorizations;
 - ``per iteration``, ``per factorization``: pushover seconds per Newton iteration and per
   factorization of the tangent, the cost of the solver's work on that wall whatever the
@@ -38,7 +40,7 @@ from masonry_dem.geometry.builders import add_base, running_bond_wall
 from masonry_dem.geometry.interfaces import detect_interfaces
 from masonry_dem.geometry.plans import u_wall
 from masonry_dem.model import InterfaceMaterial, Model, SelfWeight, Support, WeightProportional
-from masonry_dem.solvers.incremental import pushover
+from masonry_dem.solvers.incremental import StaticSolver, pushover
 from masonry_dem.solvers.linear import solve_linear
 
 A, B, S, GAMMA = 0.02824, 0.07978, 0.03968, 26.8e3  # Restrepo Velez's stones
@@ -76,6 +78,14 @@ def measure(wall, held: bool) -> dict:
         solve_linear(model, 0.0)
         linear.append(time.perf_counter() - t0)
     lu = splu(Assembly.of(model).stiffness().tocsc())
+    solver = StaticSolver(model)
+    response = solver._residual(solver.q, 0.0)[2]
+    solver._factor(response)  # the first factorization fixes the ordering and the fronts
+    tangent = []
+    for _ in range(5):
+        t0 = time.perf_counter()
+        solver._factor(response)
+        tangent.append(time.perf_counter() - t0)
     t0 = time.perf_counter()
     h = pushover(model)
     seconds = time.perf_counter() - t0
@@ -85,6 +95,7 @@ def measure(wall, held: bool) -> dict:
         "assemble": assemble,
         "linear": min(linear),
         "fill": lu.L.nnz + lu.U.nnz,
+        "tangent": min(tangent),
         "pushover": seconds,
         "iterations": h.iterations,
         "factorizations": h.factorizations,
@@ -112,7 +123,15 @@ def main(argv=None) -> int:
         for kind, rs in runs.items():
             best[kind] = {
                 k: min(r[k] for r in rs)
-                if k in ("assemble", "linear", "pushover", "per_iteration", "per_factorization")
+                if k
+                in (
+                    "assemble",
+                    "linear",
+                    "tangent",
+                    "pushover",
+                    "per_iteration",
+                    "per_factorization",
+                )
                 else rs[0][k]
                 for k in rs[0]
             }
@@ -127,6 +146,7 @@ def main(argv=None) -> int:
             ("assemble", "s"),
             ("linear", "ms"),
             ("fill", ""),
+            ("tangent", "ms"),
             ("pushover", "s"),
             ("iterations", ""),
             ("factorizations", ""),
@@ -137,7 +157,12 @@ def main(argv=None) -> int:
             uu, ff = best["U"][key], best["flat"][key]
             scale = 1e3 if unit == "ms" else 1.0
             ratio = uu / ff if ff else float("nan")
-            names = {"assemble": "detect+assemble", "linear": "linear solve", "fill": "LU fill"}
+            names = {
+                "assemble": "detect+assemble",
+                "linear": "linear solve",
+                "fill": "LU fill",
+                "tangent": "tangent LU",
+            }
             name = names.get(key, key.replace("_", " "))
             print(
                 f"{name + (' [' + unit + ']' if unit else ''):16s} {uu * scale:12.4g} {ff * scale:12.4g} {ratio:9.2f}"
