@@ -28,6 +28,7 @@ from masonry_dem.geometry.builders import (
     stack_bond_column,
 )
 from masonry_dem.geometry.interfaces import detect_interfaces, subdivide_interfaces
+from masonry_dem.geometry.plans import box_wall, l_wall, t_wall, u_wall
 from masonry_dem.model import (
     InterfaceMaterial,
     Model,
@@ -54,9 +55,11 @@ __all__ = [
     "Support",
     "WeightProportional",
     "add_base",
+    "box_wall",
     "boxes",
     "cut_openings",
     "detect_interfaces",
+    "l_wall",
     "pushover",
     "running_bond_wall",
     "running_bond_wall_of_size",
@@ -65,4 +68,6 @@ __all__ = [
     "solve_linear",
     "stack_bond_column",
     "subdivide_interfaces",
+    "t_wall",
+    "u_wall",
 ]

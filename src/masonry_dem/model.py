@@ -70,17 +70,49 @@ def dof_mask(dofs: str | Sequence[str]) -> np.ndarray:
 # --------------------------------------------------------------------------- supports
 @dataclass(frozen=True)
 class Support:
-    """Fix ``dofs`` of the given blocks (indices)."""
+    """Fix ``dofs`` of the given blocks (indices) at zero, from the first load on.
+
+    What a held column means (a return wall read as fixed DOFs of the end column):
+
+    * ``u1``, ``u3``: the column cannot move horizontally; it turns and moves vertically with
+      the wall (a frictionless guide that only stops it sideways);
+    * rotations ``w1``-``w3`` as well: the column cannot turn either (a return wall stiff in
+      its own plane and out of it);
+    * ``u2`` as well (``all``, ``translations``): the column cannot move vertically at all.
+      Under the dead load the rest of the wall settles on its elastic bed joints and the
+      column does not, so the wall hangs on the column through the friction of its head
+      joints (the column's fixed u2 carries part of the wall's weight) and those joints
+      start the live load already sheared. A real return wall settles as much as the
+      facade (every point of the plan carries the same height of masonry, so each course of
+      an L or U wall sinks by the same amount: ``tests/cases/test_walls_that_meet.py``), so
+      this reading stiffens the wall by an artefact of the model.
+
+    ``settles_with_wall``: the column follows the wall's vertical motion: u2 of the held
+    blocks stays free whatever ``dofs`` says (the other DOFs stay fixed). Under the dead load
+    the column then sinks with its course (no head-joint shear, no weight on the support);
+    under the live load it may also rise or sink with the wall, held only by the joints
+    around it. Model the return walls as blocks (:mod:`masonry_dem.geometry.plans`) to let
+    them resist uplift by their weight and interlock.
+    """
 
     blocks: ArrayLike
     dofs: str | Sequence[str] = "all"
+    settles_with_wall: bool = False
 
     def mask(self, n_blocks: int) -> np.ndarray:
         idx = block_indices("Support.blocks", self.blocks, n_blocks)
         if idx.size == 0:
             raise ValueError("Support.blocks: the selection is empty")
+        if not isinstance(self.settles_with_wall, (bool, np.bool_)):
+            raise ValueError(
+                f"Support.settles_with_wall must be true or false, got {self.settles_with_wall!r}"
+            )
+        dofs = dof_mask(self.dofs)
+        if self.settles_with_wall:
+            # the column follows the wall's vertical settlement: u2 is left free
+            dofs[DOF_NAMES.index("u2")] = False
         out = np.zeros((n_blocks, 6), dtype=bool)
-        out[np.ix_(idx, np.flatnonzero(dof_mask(self.dofs)))] = True
+        out[np.ix_(idx, np.flatnonzero(dofs))] = True
         return out
 
 

@@ -21,7 +21,7 @@ import numpy as np
 
 from masonry_dem._validation import plain
 from masonry_dem.cases.schema import CaseError, check_case, located
-from masonry_dem.geometry import builders
+from masonry_dem.geometry import builders, plans
 from masonry_dem.geometry import selectors as sel
 from masonry_dem.geometry.blocks import Blocks
 from masonry_dem.model import (
@@ -50,6 +50,10 @@ _BUILDERS = {
     "stack_bond_column": builders.stack_bond_column,
     "single_block": builders.single_block,
     "boxes": builders.boxes,
+    "l_wall": plans.l_wall,
+    "t_wall": plans.t_wall,
+    "u_wall": plans.u_wall,
+    "box_wall": plans.box_wall,
 }
 _GEOMETRY_EXTRA = {"builder", "base", "openings"}
 
@@ -111,8 +115,9 @@ def build_blocks(geometry: dict) -> tuple[Blocks, int | None, np.ndarray]:
 def select_blocks(
     blocks: Blocks, spec: str | list[int], wall: np.ndarray, base: int | None
 ) -> np.ndarray:
-    """Resolve a selector: ``base``, ``all``, ``column:left``, ``course:K``, ``edge:top``, or a
-    list of block indices."""
+    """Resolve a selector: ``base``, ``all``, ``column:left``, ``course:K``, ``edge:top``, a part
+    of walls that meet (``facade``, ``return:left``, ``corner:left``, ...), or a list of block
+    indices."""
     if isinstance(spec, list):
         idx = np.asarray(spec, dtype=np.int64)
         if idx.size == 0 or idx.min() < 0 or idx.max() >= blocks.count:
@@ -139,9 +144,11 @@ def select_blocks(
         return sel.course(blocks, k, among=wall)
     if kind == "edge":
         return sel.edge(blocks, arg, among=wall)
+    if spec in sel.PARTS:
+        return sel.part(blocks, str(spec), among=wall)
     raise ValueError(
-        f"select must be 'base', 'all', 'column:left|right', 'course:K', 'edge:NAME' or a list of "
-        f"block indices, got {plain(spec)}"
+        f"select must be 'base', 'all', 'column:left|right', 'course:K', 'edge:NAME', a part of "
+        f"walls that meet ({', '.join(sel.PARTS)}) or a list of block indices, got {plain(spec)}"
     )
 
 
@@ -193,7 +200,7 @@ def case_from_dict(data: dict, source: str = "<dict>") -> Case:
     for k, spec in enumerate(data.get("supports", [])):
         with _at(source, f"[supports][{k}].select"):
             idx = select_blocks(blocks, spec["select"], wall, base)
-        supports.append(Support(idx, spec.get("dofs", "all")))
+        supports.append(Support(idx, spec.get("dofs", "all"), spec.get("settles_with_wall", False)))
     loads = []
     for k, spec in enumerate(data.get("loads", [{"type": "self_weight"}])):
         with _at(source, f"[loads][{k}]"):

@@ -29,8 +29,10 @@ from masonry_dem.geometry.builders import (
     running_bond_wall,
     running_bond_wall_of_size,
 )
+from masonry_dem.geometry.plans import l_wall, u_wall
 from masonry_dem.model import (
     InterfaceMaterial,
+    Load,
     Model,
     PointLoad,
     Pressure,
@@ -56,6 +58,10 @@ def reference_data() -> dict[str, Any]:
 
 
 SIMPLE_SUPPORTS = ("strips", "dofs")
+RESTRAINTS = ("columns", "return-walls")
+# the specimens of Table 2 held by return walls alone (no openings): the only ones
+# ``restraint="return-walls"`` rebuilds as L (one edge) and U (both edges) walls
+RETURN_WALL_CASES = ("S11", "S12", "S13", "S15", "S6", "S1-S3", "S5")
 
 
 @dataclass(frozen=True)
@@ -100,6 +106,18 @@ class Assumptions:
     support_strip_width [m]: width of the support strips: 0.01, the joint thickness, for a
         line support at the edge (0.02: 2-3 +7 %; 0.04: +26 %).
     simple_support_dofs: the DOFs fixed by ``simple_support="dofs"``: u3 (rotations free).
+    restraint: how the return walls of Table 2 are read. ``"columns"`` (default, the
+        paper's): fixed DOFs of the end column(s), ``column_dofs_table2``. ``"return-walls"``:
+        the specimens of ``RETURN_WALL_CASES`` rebuilt as they were built, an L wall (one
+        edge) or a U wall (both edges) of :mod:`masonry_dem.geometry.plans`, the returns
+        interlocked with the facade course by course, standing on the base behind it and
+        tilted with it (docs/walls_that_meet.md).
+    return_blocks: length of those return walls in blocks, from the facade's outer face; not
+        in the stored literature. None (default): the fewest whole blocks at least half the
+        wall's height long (4 for Restrepo Velez's 21 courses: 0.32 m for 0.59 m): a rigid
+        return that long overturns in its own plane at lambda >= 0.5, above every lambda of
+        Table 2, so by statics alone it could carry the facade's mechanism. Lambda for 2, 4
+        and 6 blocks is reported side by side, not chosen against the tests.
     """
 
     dry_kn: float = 2.4e9
@@ -116,8 +134,15 @@ class Assumptions:
     simple_support_dofs: tuple[str, ...] = ("u3",)
     simple_support: str = "strips"
     support_strip_width: float = 0.01
+    restraint: str = "columns"
+    return_blocks: int | None = None
 
     def __post_init__(self) -> None:
+        if self.restraint not in RESTRAINTS:
+            raise ValueError(f"restraint must be one of {RESTRAINTS}, got {self.restraint!r}")
+        m = self.return_blocks
+        if m is not None and (isinstance(m, bool) or not isinstance(m, int) or m < 2):
+            raise ValueError(f"return_blocks must be a whole number >= 2 or None, got {m!r}")
         if self.simple_support not in SIMPLE_SUPPORTS:
             raise ValueError(
                 f"simple_support must be one of {SIMPLE_SUPPORTS}, got {self.simple_support!r}"
@@ -265,8 +290,66 @@ def _with_lintels(wall: Blocks, rects, course: float) -> Blocks:
     return Blocks.concatenate(wall.subset(np.flatnonzero(keep)), *lintels)
 
 
+def default_return_blocks(data: dict) -> int:
+    """The fewest whole blocks at least half the wall's height (see Assumptions)."""
+    height = data["courses"] * data["block_height_a"]
+    return int(np.ceil(height / (2 * data["block_width_b"]) - 1e-9))
+
+
+def _restrepo_velez_as_built(spec: dict, data: dict, a: Assumptions) -> PaperCase:
+    """The specimen with its return wall(s) as blocks: an L wall (return on the left, where
+    the paper fixes the column) or a U wall, on a fixed base, every block tilted."""
+    name = spec["name"]
+    m = default_return_blocks(data) if a.return_blocks is None else a.return_blocks
+    both = "both edges" in spec["setup"]
+    build = u_wall if both else l_wall
+    wall = build(
+        spec["blocks_along_length"],
+        data["courses"],
+        data["block_height_a"],
+        data["block_width_b"],
+        data["block_thickness_s"],
+        data["unit_weight"],
+        return_blocks=m,
+    )
+    blocks, base = add_base(wall)
+    widx = np.arange(wall.count)
+    facade = sel.part(wall, "facade")
+    loads: list[Load] = [SelfWeight(), WeightProportional((0.0, 0.0, 1.0))]
+    model = Model.build(blocks, _dry(data["friction"], a), [Support([base])], loads, name=name)
+    if both:
+        monitor = _top_centre(blocks, facade)
+    else:
+        corner = (wall.upper[facade, 0].max(), wall.upper[facade, 1].max())
+        monitor = _nearest(blocks, facade, corner)
+    return PaperCase(
+        name,
+        "2",
+        model,
+        spec["lambda_dem_paper"],
+        spec["lambda_test"],
+        "lambda",
+        (monitor, "u3"),
+        widx,
+        "vertical-axis" if both else "diagonal",
+        {
+            "lambda_test": spec["lambda_test"],
+            "restraint": "return-walls",
+            "return_blocks": m,
+            "facade": facade,
+        },
+    )
+
+
 def _restrepo_velez(spec: dict, data: dict, a: Assumptions) -> PaperCase:
     name = spec["name"]
+    if a.restraint == "return-walls":
+        if name not in RETURN_WALL_CASES:
+            raise ValueError(
+                f"restraint='return-walls' rebuilds {', '.join(RETURN_WALL_CASES)}; "
+                f"{name} ({spec['setup']}) has no such reading"
+            )
+        return _restrepo_velez_as_built(spec, data, a)
     n = spec["blocks_along_length"]
     ha, hb, hs = data["block_height_a"], data["block_width_b"], data["block_thickness_s"]
     wall = running_bond_wall(n, data["courses"], ha, hb, hs, data["unit_weight"])
@@ -315,6 +398,7 @@ def _restrepo_velez(spec: dict, data: dict, a: Assumptions) -> PaperCase:
         monitor = _nearest(blocks, widx, (wall.upper[:, 0].max(), wall.upper[:, 1].max()))
     model = Model.build(blocks, _dry(data["friction"], a), supports, loads, name=name)
     extra["lambda_test"] = spec["lambda_test"]
+    extra["restraint"] = "columns"
     return PaperCase(
         name,
         "2",
@@ -443,6 +527,11 @@ def build_case(name: str, assumptions: Assumptions | None = None, **changes) -> 
         raise ValueError(f"unknown case {name!r}; the cases are {', '.join(specs)}")
     a = replace(assumptions or Assumptions(), **changes)
     table, spec, data = specs[name]
+    if a.restraint != "columns" and table != "2":
+        raise ValueError(
+            f"restraint={a.restraint!r} rebuilds {', '.join(RETURN_WALL_CASES)}; "
+            f"{name} (Table {table}) has no such reading"
+        )
     builder = {"1": _orduna_lourenco, "2": _restrepo_velez, "3": _chee_liang}[table]
     return builder(spec, data, a)
 
@@ -452,10 +541,13 @@ def all_cases(assumptions: Assumptions | None = None) -> list[PaperCase]:
 
 
 __all__ = [
+    "RESTRAINTS",
+    "RETURN_WALL_CASES",
     "Assumptions",
     "PaperCase",
     "all_cases",
     "build_case",
     "case_names",
+    "default_return_blocks",
     "reference_data",
 ]

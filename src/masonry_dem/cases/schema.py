@@ -335,7 +335,12 @@ MATERIAL = _table(
     },
 )
 SUPPORT = _table(
-    "Support", {"select": _SELECT, "dofs": (Annotated[Any, AfterValidator(_dofs)], "all")}
+    "Support",
+    {
+        "select": _SELECT,
+        "dofs": (Annotated[Any, AfterValidator(_dofs)], "all"),
+        "settles_with_wall": (bool, False),
+    },
 )
 _LIVE = (bool, None)
 #: ``[[loads]]`` tables by ``type`` (the builders of the loads are in casefile)

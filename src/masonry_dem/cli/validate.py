@@ -40,7 +40,36 @@ def add_parser(subparsers) -> None:
         help="cases run side by side in this many processes (default: %(default)s; each "
         "case's own time is then measured under the load of the others)",
     )
+    p.add_argument(
+        "--restraint",
+        choices=("columns", "return-walls"),
+        default="columns",
+        help="how the return walls of Table 2 are read: fixed DOFs of the end columns (the "
+        "paper's, default) or walls of blocks, the specimens rebuilt as L and U walls "
+        "(S11, S12, S13, S15, S6, S1-S3, S5; docs/walls_that_meet.md)",
+    )
+    p.add_argument(
+        "--return-blocks",
+        type=_return_blocks,
+        nargs="+",
+        default=[None],
+        metavar="M",
+        help="with --restraint return-walls: the return walls' length in blocks, one run "
+        "per value (default: the fewest blocks at least half the wall's height, 4)",
+    )
     p.set_defaults(func=validate_command)
+
+
+def _return_blocks(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 2:
+        raise argparse.ArgumentTypeError(
+            f"--return-blocks must be a whole number >= 2, got {text!r}"
+        )
+    return value
 
 
 def _jobs(text: str) -> int:
@@ -53,15 +82,29 @@ def _jobs(text: str) -> int:
     return value
 
 
-def run_case(name: str, out: Path | None = None, render: bool = True) -> dict:
-    """Run one case; return its row (also used by the benchmark and the tests)."""
+def run_case(
+    name: str,
+    out: Path | None = None,
+    render: bool = True,
+    restraint: str = "columns",
+    return_blocks: int | None = None,
+) -> dict:
+    """Run one case; return its row (also used by the benchmark and the tests).
+    ``restraint="return-walls"``: the specimen with its return walls as blocks,
+    ``return_blocks`` long (None: the default of ``cases.paper.Assumptions``)."""
     import time
 
     from masonry_dem.cases.paper import build_case
     from masonry_dem.solvers.incremental import pushover
 
-    case = build_case(name)
-    folder = None if out is None else Path(out) / name
+    if restraint == "columns":
+        case = build_case(name)
+    else:
+        case = build_case(name, restraint=restraint, return_blocks=return_blocks)
+    label = name
+    if restraint != "columns":
+        label = f"{name}_return{case.extra['return_blocks']}"
+    folder = None if out is None else Path(out) / label
     t0 = time.perf_counter()
     hist = pushover(case.model, case.settings, out=folder, monitor=case.monitor)
     seconds = time.perf_counter() - t0
@@ -82,23 +125,29 @@ def run_case(name: str, out: Path | None = None, render: bool = True) -> dict:
         "status": hist.status,
         "reason": hist.reason,
         "mechanism": case.mechanism,
+        "restraint": restraint,
     }
+    if restraint != "columns":
+        row["return_blocks"] = case.extra["return_blocks"]
     row.update({k: v for k, v in case.extra.items() if k in ("lambda_limit_analysis",)})
     if folder is not None and render:
         row["png"] = _render(folder, _VIEWS[case.table])
     return row
 
 
-def run_cases(names, out: Path | None, render: bool, jobs: int = 1, done=None) -> list[dict]:
+def run_cases(
+    names, out: Path | None, render: bool, jobs: int = 1, done=None, **variant
+) -> list[dict]:
     """Run cases, side by side in ``jobs`` processes when more than one; the rows in the
-    order of ``names``; ``done(row)`` after each case.
+    order of ``names``; ``done(row)`` after each case; ``variant``: the restraint reading
+    (``restraint``, ``return_blocks`` of :func:`run_case`).
 
     Fresh (spawned) processes: a forked copy of a process that has started VTK or BLAS
     threads may hang."""
     if jobs <= 1 or len(names) <= 1:
         rows = []
         for name in names:
-            rows.append(run_case(name, out, render=render))
+            rows.append(run_case(name, out, render, **variant))
             if done is not None:
                 done(rows[-1])
         return rows
@@ -109,12 +158,17 @@ def run_cases(names, out: Path | None, render: bool, jobs: int = 1, done=None) -
 
     # the largest models first (the time of a case grows with its joints), so that no
     # worker is left with a long case while the others wait
-    largest_first = sorted(names, key=lambda name: -build_case(name).model.interfaces.count)
+    restraint = variant.get("restraint", "columns")
+    largest_first = sorted(
+        names, key=lambda name: -build_case(name, restraint=restraint).model.interfaces.count
+    )
     context = multiprocessing.get_context("spawn")
     with ProcessPoolExecutor(
         max_workers=min(jobs, len(names)), mp_context=context, initializer=one_kernel_thread
     ) as pool:
-        futures = {pool.submit(run_case, name, out, render): name for name in largest_first}
+        futures = {
+            pool.submit(run_case, name, out, render, **variant): name for name in largest_first
+        }
         by_name = {}
         for future in as_completed(futures):
             by_name[futures[future]] = future.result()
@@ -162,6 +216,12 @@ def _pct(value: float | None) -> str:
     return "-" if value is None else f"{100 * value:+6.1f}%"
 
 
+def _label(row: dict) -> str:
+    """The case, and the return walls' length in blocks of the return-wall reading."""
+    m = row.get("return_blocks")
+    return row["case"] if m is None else f"{row['case']}/r{m}"
+
+
 def format_table(rows: list[dict]) -> str:
     head = (
         f"{'case':7s} {'table':5s} {'ours':>9s} {'paper':>9s} {'ref':>9s} "
@@ -170,41 +230,66 @@ def format_table(rows: list[dict]) -> str:
     lines = [head, "-" * len(head)]
     for r in rows:
         lines.append(
-            f"{r['case']:7s} {r['table']:5s} {_fmt(r['ours'], r['unit'])} "
+            f"{_label(r):7s} {r['table']:5s} {_fmt(r['ours'], r['unit'])} "
             f"{_fmt(r['paper_dem'], r['unit'])} {_fmt(r['reference'], r['unit'])} "
             f"{_pct(r['error_vs_reference']):>8s} {_pct(r['error_vs_paper']):>8s} "
             f"{r['steps']:5d} {r['seconds']:6.2f}  {r['status']}"
         )
-    for table in ("1", "2", "3"):
-        errs = [abs(r["error_vs_reference"]) for r in rows if r["table"] == table and r["ours"]]
-        n_all = sum(r["table"] == table for r in rows)
-        if errs:
-            lines.append(
-                f"Table {table}: mean |error| vs reference {100 * sum(errs) / len(errs):.1f}% "
-                f"over {len(errs)} of {n_all} cases"
-            )
+    readings = sorted(
+        {(r.get("restraint", "columns"), r.get("return_blocks")) for r in rows}, key=str
+    )
+    for restraint, m in readings:
+        same = [
+            r
+            for r in rows
+            if (r.get("restraint", "columns"), r.get("return_blocks")) == (restraint, m)
+        ]
+        what = "" if restraint == "columns" else f", return walls of {m} blocks"
+        for table in ("1", "2", "3"):
+            errs = [abs(r["error_vs_reference"]) for r in same if r["table"] == table and r["ours"]]
+            n_all = sum(r["table"] == table for r in same)
+            if errs:
+                lines.append(
+                    f"Table {table}{what}: mean |error| vs reference "
+                    f"{100 * sum(errs) / len(errs):.1f}% over {len(errs)} of {n_all} cases"
+                )
     return "\n".join(lines)
 
 
 def validate_command(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
-    from masonry_dem.cases.paper import case_names
+    from masonry_dem.cases.paper import RETURN_WALL_CASES, case_names
 
-    names = [args.case] if args.case else case_names()
-    if args.case and args.case not in case_names():
-        raise ValueError(f"unknown case {args.case!r}; the cases are {', '.join(case_names())}")
+    every = case_names() if args.restraint == "columns" else list(RETURN_WALL_CASES)
+    names = [args.case] if args.case else every
+    if args.case and args.case not in every:
+        raise ValueError(
+            f"unknown case {args.case!r} for --restraint {args.restraint}; "
+            f"the cases are {', '.join(every)}"
+        )
+    lengths = args.return_blocks if args.restraint == "return-walls" else [None]
     out = Path(args.out)
-    with tqdm(total=len(names), unit="case", disable=args.quiet or args.json) as bar:
+    rows = []
+    with tqdm(total=len(names) * len(lengths), unit="case", disable=args.quiet or args.json) as bar:
 
         def done(row: dict) -> None:
             bar.set_description(row["case"])
             bar.update()
 
-        rows = run_cases(names, out, not args.no_render, args.jobs, done)
+        for m in lengths:
+            variant = {"restraint": args.restraint, "return_blocks": m}
+            rows += run_cases(names, out, not args.no_render, args.jobs, done, **variant)
     if args.json:
         print(json.dumps(rows, indent=1))
     else:
         print(format_table(rows))
-        print(f"results in {out}/<case>/")
+        print(
+            f"results in {out}/<case>/"
+            + (
+                ""
+                if args.restraint == "columns"
+                else " (<case>_return<M>/ for the return-wall reading)"
+            )
+        )
     return 0 if all(r["status"] == "collapse" for r in rows) else 1

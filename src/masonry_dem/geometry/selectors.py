@@ -117,3 +117,99 @@ def where(
             f"{name} must return a boolean mask of shape ({blocks.count},), got {mask.shape}"
         )
     return _checked(name, mask, None)
+
+
+# --------------------------------------------------------------------------- walls that meet
+WALL_PARTS = ("facade", "back", "return:left", "return:right", "cross")
+CORNER_PARTS = (
+    "corner:left",
+    "corner:right",
+    "corner:back-left",
+    "corner:back-right",
+    "corner:cross",
+)
+PARTS = WALL_PARTS + CORNER_PARTS
+
+
+def _plan(blocks: Blocks, pool: np.ndarray):
+    """Plan bands of an assembly of walls that meet (see :mod:`masonry_dem.geometry.plans`):
+    the wall thickness t (the median of each block's smaller plan size) and the outer plan
+    extent of ``pool``."""
+    plan = blocks.sizes[pool][:, [0, 2]]
+    t = float(np.median(plan.min(axis=1)))
+    lo = blocks.lower[pool].min(axis=0)
+    hi = blocks.upper[pool].max(axis=0)
+    return t, lo, hi
+
+
+def _within(blocks: Blocks, axis: int, lo: float, hi: float, tol: float) -> np.ndarray:
+    return (blocks.lower[:, axis] >= lo - tol) & (blocks.upper[:, axis] <= hi + tol)
+
+
+def _wall_labels(blocks: Blocks, pool: np.ndarray) -> tuple[np.ndarray, float, np.ndarray]:
+    """Label every block of ``pool`` with its wall (index into WALL_PARTS, -1 outside pool).
+
+    A block belongs to the facade if its plan lies in the front band (z within t of the
+    largest z); else to a return wall if it lies in the left or right band and a wall runs
+    along that band (some block in it is longer along e3 than t); else to the back wall (the
+    back band, with a block in it longer along e1 than t); else to the cross wall. A block
+    that fills a corner square exactly lies in two bands and goes to the first of them."""
+    t, lo, hi = _plan(blocks, pool)
+    tol = 1e-6 * t
+    front = _within(blocks, 2, hi[2] - t, hi[2], tol)
+    left = _within(blocks, 0, lo[0], lo[0] + t, tol)
+    right = _within(blocks, 0, hi[0] - t, hi[0], tol)
+    back = _within(blocks, 2, lo[2], lo[2] + t, tol)
+    along_z = blocks.sizes[:, 2] > t + tol
+    along_x = blocks.sizes[:, 0] > t + tol
+    label = np.full(blocks.count, 4)
+    label[back & np.any(back & along_x & pool)] = 1
+    label[right & np.any(right & along_z & pool)] = 3
+    label[left & np.any(left & along_z & pool)] = 2
+    label[front] = 0
+    label[~pool] = -1
+    return label, t, np.stack([lo, hi])
+
+
+def part(blocks: Blocks, name: str, among: np.ndarray | None = None) -> np.ndarray:
+    """Blocks of one part of walls that meet (L, T, U plans, boxes of
+    :mod:`masonry_dem.geometry.plans`), found from the plan alone.
+
+    Walls: ``facade`` (the front wall, largest e3), ``back`` (the back wall of a box),
+    ``return:left``, ``return:right`` (the walls along e3 at the smallest and largest e1; the
+    side walls of a box), ``cross`` (the cross wall of a T). Corners: ``corner:left``,
+    ``corner:right`` (front corners), ``corner:back-left``, ``corner:back-right``, and
+    ``corner:cross`` (the junction of a T): the blocks of either wall that overlap the corner
+    square, course by course the one that runs through and the one that butts against it.
+    ``among`` restricts the search (e.g. the wall without its base slab)."""
+    if name not in PARTS:
+        raise ValueError(f"part must be one of {PARTS}, got {name!r}")
+    mask = _as_mask(blocks, among)
+    pool = np.ones(blocks.count, bool) if mask is None else mask
+    if not np.any(pool):
+        raise ValueError(f"selector part={name!r} matches no block: `among` selects none")
+    label, t, (lo, hi) = _wall_labels(blocks, pool)
+    if name in WALL_PARTS:
+        return _checked(f"part={name!r}", label == WALL_PARTS.index(name), mask)
+    tol = 1e-6 * t
+    if name == "corner:cross":
+        cross = label == WALL_PARTS.index("cross")
+        if not cross.any():
+            raise ValueError("selector part='corner:cross' matches no block: no cross wall")
+        x0, x1 = blocks.lower[cross, 0].min(), blocks.upper[cross, 0].max()
+        z0, z1 = hi[2] - t, hi[2]
+    else:
+        side = name.rpartition("-")[2].removeprefix("corner:")
+        x0, x1 = (lo[0], lo[0] + t) if side == "left" else (hi[0] - t, hi[0])
+        z0, z1 = (lo[2], lo[2] + t) if "back" in name else (hi[2] - t, hi[2])
+    overlaps = (
+        (blocks.upper[:, 0] > x0 + tol)
+        & (blocks.lower[:, 0] < x1 - tol)
+        & (blocks.upper[:, 2] > z0 + tol)
+        & (blocks.lower[:, 2] < z1 - tol)
+    )
+    walls = np.unique(label[overlaps & pool])
+    if walls.size < 2:
+        # a free end of a wall, or the outer corner of a flat wall: no two walls meet there
+        raise ValueError(f"selector part={name!r} matches no block: no two walls meet there")
+    return _checked(f"part={name!r}", overlaps & pool, mask)

@@ -1,0 +1,288 @@
+"""Walls that meet: L, T and U plans and a closed four-wall box, in running bond, with the
+courses interlocked at every corner (alternate courses run through).
+
+Plan axes: e1 along the facade, e3 across it (the facade's outer face is z = s, the others
+stand behind it, towards -e3, so a live load towards +e3 pulls the facade away from them, as
+on a tilt table that overturns the facade), e2 up. The facade is the wall of
+:func:`~masonry_dem.geometry.builders.running_bond_wall`: ``blocks_along_length`` x b long
+outside to outside, x in [0, n b], z in [0, s]. A return wall of ``return_blocks`` = m is m b
+long, measured from the facade's outer face (z from s down to s - m b).
+
+Every straight wall is a *run* of blocks along its axis, described by its distance d from the
+outer corner where it starts. Course by course a run covers [d0, d1] and is cut at the bond
+points d = (j + phase / 2) b: phase 0 puts whole blocks from the corner, phase 1 shifts the
+head joints half a block (running bond). At a corner one wall runs through the corner square
+(d0 = 0 there) and the other butts against it (d0 = s); the next course swaps them, which is
+the interlock. A piece shorter than 0.3 block is not cut: it stays with its neighbour
+(a bricklayer lays a closer, not a sliver): pieces are between 0.3 b and 1.3 b long. Bricks
+with b = 2 s give whole blocks at a corner; at a T junction of such bricks the quarter-block
+pieces beside the cross wall are taken into their neighbours (a threshold of b / 4 would
+leave that to round-off).
+
+Which walls run through: L, U and T walls run the facade through their corners in the even
+courses (0, 2, ...) and the returns (or the cross wall) in the odd ones, so the U is mirror
+symmetric about x = n b / 2. The box runs each wall through the corner where it starts (walking
+round the plan anticlockwise seen from above: front, right, back, left) in the even courses
+and through the corner where it ends in the odd ones; with as many blocks along the depth as
+along the length it is then symmetric under a quarter turn about its vertical axis.
+
+The parts are found back by :func:`masonry_dem.geometry.selectors.part` (``facade``,
+``return:left``, ``return:right``, ``back``, ``cross``, ``corner:left``, ...).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from masonry_dem._validation import as_finite_array, positive_scalar
+from masonry_dem.geometry.blocks import Blocks
+
+SHORTEST_PIECE = 0.3  # in block lengths: a shorter piece stays with its neighbour
+
+CORNERS = ("left", "right")
+
+
+def _count(name: str, value) -> int:
+    if isinstance(value, bool) or int(value) != value or int(value) < 1:
+        raise ValueError(f"{name} must be a positive integer, got {value!r}")
+    return int(value)
+
+
+@dataclass(frozen=True)
+class _Run:
+    """One straight wall. ``axis`` 0 (along e1) or 2 (along e3); d = 0 at ``origin`` on that
+    axis, growing towards ``sense`` x e[axis]; ``band``: the wall's thickness interval on
+    the other horizontal axis; ``even``, ``odd``: (d0, d1, phase) of the even and odd courses."""
+
+    axis: int
+    origin: float
+    sense: int
+    band: tuple[float, float]
+    even: tuple[float, float, int]
+    odd: tuple[float, float, int]
+
+
+def _pieces(d0: float, d1: float, phase: int, pitch: float) -> np.ndarray:
+    """Cut points of one course of a run, [d0, ..., d1]: the bond points strictly inside,
+    at least ``SHORTEST_PIECE`` blocks from either end."""
+    shortest = SHORTEST_PIECE * pitch
+    j = np.arange(np.floor(d0 / pitch) - 1, np.ceil(d1 / pitch) + 2)
+    cuts = (j + 0.5 * phase) * pitch
+    cuts = cuts[(cuts >= d0 + shortest) & (cuts <= d1 - shortest)]
+    return np.concatenate([[d0], cuts, [d1]])
+
+
+def _run_boxes(run: _Run, courses: int, pitch: float, course_pitch: float):
+    """Lower and upper corners of every block of a run, all courses (course-major)."""
+    k = np.arange(courses)
+    lowers, uppers = [], []
+    for parity, (d0, d1, phase) in enumerate((run.even, run.odd)):
+        ks = k[k % 2 == parity]
+        if ks.size == 0 or d1 - d0 <= 0:
+            continue
+        cut = _pieces(d0, d1, phase, pitch)
+        a_lo, a_hi = cut[:-1], cut[1:]
+        p = a_lo.size
+        # positions along the axis, whichever way d runs
+        x_lo = run.origin + run.sense * np.where(run.sense > 0, a_lo, a_hi)
+        x_hi = run.origin + run.sense * np.where(run.sense > 0, a_hi, a_lo)
+        lo = np.zeros((ks.size, p, 3))
+        hi = np.zeros((ks.size, p, 3))
+        other = 2 - run.axis
+        lo[:, :, run.axis], hi[:, :, run.axis] = x_lo, x_hi
+        lo[:, :, other], hi[:, :, other] = run.band
+        lo[:, :, 1] = (ks * course_pitch)[:, None]
+        hi[:, :, 1] = ((ks + 1) * course_pitch)[:, None]
+        lowers.append(lo.reshape(-1, 3))
+        uppers.append(hi.reshape(-1, 3))
+    return lowers, uppers
+
+
+def _assemble(runs: list[_Run], courses: int, pitch: float, course_pitch: float, gamma: float):
+    lowers, uppers = [], []
+    for run in runs:
+        lo, hi = _run_boxes(run, courses, pitch, course_pitch)
+        lowers += lo
+        uppers += hi
+    lo, hi = np.vstack(lowers), np.vstack(uppers)
+    order = np.lexsort((lo[:, 2], lo[:, 0], lo[:, 1]))  # course by course, then along e1
+    return Blocks.from_boxes(lo[order], hi[order], gamma)
+
+
+def _common(blocks_along_length, courses, a, b, s, unit_weight, joint):
+    n = _count("blocks_along_length", blocks_along_length)
+    nc = _count("courses", courses)
+    a, b, s = (positive_scalar(k, v) for k, v in (("a", a), ("b", b), ("s", s)))
+    e = positive_scalar("joint", joint, strict=False)
+    gamma = positive_scalar("unit_weight", unit_weight, strict=False)
+    pitch = b + e
+    if n * pitch <= 2 * s + 2 * SHORTEST_PIECE * pitch:
+        # the corners' squares would meet: no facade between them
+        raise ValueError(
+            f"blocks_along_length = {n} gives a facade {n * pitch:g} m long, too short for "
+            f"two corners of thickness s = {s:g} m: it needs more than "
+            f"{2 * s + 2 * SHORTEST_PIECE * pitch:g} m"
+        )
+    return n, nc, a + e, pitch, s, gamma
+
+
+def _returns(m: int, pitch: float, s: float, band: tuple[float, float]) -> _Run:
+    """A return (or cross) wall of m blocks behind the facade: through the corner in the odd
+    courses, butting against the facade's back face in the even ones."""
+    depth = m * pitch
+    if depth <= s + SHORTEST_PIECE * pitch:
+        raise ValueError(
+            f"return_blocks = {m} gives a return wall {depth:g} m long, no longer than the "
+            f"facade is thick (s = {s:g} m): it must reach behind the facade"
+        )
+    return _Run(2, s, -1, band, (s, depth, 1), (0.0, depth, 0))
+
+
+def _facade_openings(blocks: Blocks, openings, s: float) -> Blocks:
+    """Remove the facade blocks (z within [0, s]) whose centre lies inside an opening
+    (x_min, y_min, x_max, y_max); the walls behind the facade are left whole."""
+    if openings is None or len(openings) == 0:
+        return blocks
+    c = blocks.centres
+    facade = blocks.lower[:, 2] >= -1e-9 * s
+    keep = np.ones(blocks.count, dtype=bool)
+    for k, rect in enumerate(openings):
+        x0, y0, x1, y1 = as_finite_array(f"facade_openings[{k}]", rect, (4,))
+        if x1 <= x0 or y1 <= y0:
+            raise ValueError(
+                f"facade_openings[{k}] must have x_max > x_min and y_max > y_min, got {rect!r}"
+            )
+        inside = facade & (c[:, 0] > x0) & (c[:, 0] < x1) & (c[:, 1] > y0) & (c[:, 1] < y1)
+        if not inside.any():
+            raise ValueError(f"facade_openings[{k}] = {list(rect)} removes no block")
+        keep &= ~inside
+    return blocks.subset(np.flatnonzero(keep))
+
+
+def l_wall(
+    blocks_along_length: int,
+    courses: int,
+    a: float,
+    b: float,
+    s: float,
+    unit_weight: float,
+    return_blocks: int = 4,
+    corner: str = "left",
+    joint: float = 0.0,
+    facade_openings=None,
+) -> Blocks:
+    """A facade with one return wall at its ``corner`` (``left``: x = 0, or ``right``),
+    interlocked there; the other end of the facade is straight, as in a running-bond wall.
+    ``facade_openings``: (x_min, y_min, x_max, y_max) rectangles cut out of the facade."""
+    n, nc, cp, p, s, gamma = _common(blocks_along_length, courses, a, b, s, unit_weight, joint)
+    m = _count("return_blocks", return_blocks)
+    if corner not in CORNERS:
+        raise ValueError(f"corner must be one of {CORNERS}, got {corner!r}")
+    length = n * p
+    facade = _Run(0, 0.0, 1, (0.0, s), (0.0, length, 0), (s, length, 1))
+    ret = _returns(m, p, s, (0.0, s))
+    blocks = _assemble([facade, ret], nc, p, cp, gamma)
+    if corner == "right":  # the mirror image about the facade's middle
+        lo, hi = blocks.lower.copy(), blocks.upper.copy()
+        lo[:, 0], hi[:, 0] = length - blocks.upper[:, 0], length - blocks.lower[:, 0]
+        order = np.lexsort((lo[:, 2], lo[:, 0], lo[:, 1]))
+        blocks = Blocks.from_boxes(lo[order], hi[order], gamma)
+    return _facade_openings(blocks, facade_openings, s)
+
+
+def u_wall(
+    blocks_along_length: int,
+    courses: int,
+    a: float,
+    b: float,
+    s: float,
+    unit_weight: float,
+    return_blocks: int = 4,
+    joint: float = 0.0,
+    facade_openings=None,
+) -> Blocks:
+    """A facade between two return walls of ``return_blocks`` blocks, interlocked at both
+    corners (mirror symmetric about x = n b / 2)."""
+    n, nc, cp, p, s, gamma = _common(blocks_along_length, courses, a, b, s, unit_weight, joint)
+    m = _count("return_blocks", return_blocks)
+    length = n * p
+    facade = _Run(0, 0.0, 1, (0.0, s), (0.0, length, 0), (s, length - s, 1))
+    left = _returns(m, p, s, (0.0, s))
+    right = _returns(m, p, s, (length - s, length))
+    blocks = _assemble([facade, left, right], nc, p, cp, gamma)
+    return _facade_openings(blocks, facade_openings, s)
+
+
+def t_wall(
+    blocks_along_length: int,
+    courses: int,
+    a: float,
+    b: float,
+    s: float,
+    unit_weight: float,
+    return_blocks: int = 4,
+    cross_at: float | None = None,
+    joint: float = 0.0,
+    facade_openings=None,
+) -> Blocks:
+    """A facade with a cross wall of ``return_blocks`` blocks behind it, centred at
+    x = ``cross_at`` (default: the facade's middle); the cross wall runs through the facade in
+    the odd courses (its end block shows in the outer face) and butts against the facade's
+    back in the even ones. Both ends of the facade are straight."""
+    n, nc, cp, p, s, gamma = _common(blocks_along_length, courses, a, b, s, unit_weight, joint)
+    m = _count("return_blocks", return_blocks)
+    length = n * p
+    xc = length / 2 if cross_at is None else positive_scalar("cross_at", cross_at)
+    x0, x1 = xc - s / 2, xc + s / 2
+    shortest = SHORTEST_PIECE * p
+    if x0 < shortest or x1 > length - shortest:
+        raise ValueError(
+            f"cross_at = {xc:g} puts the cross wall within 0.3 block of the facade's "
+            f"ends; allowed range [{s / 2 + shortest:g}, {length - s / 2 - shortest:g}] m"
+        )
+    facade = _Run(0, 0.0, 1, (0.0, s), (0.0, length, 0), (0.0, x0, 1))
+    facade_right = _Run(0, 0.0, 1, (0.0, s), (0.0, 0.0, 0), (x1, length, 1))
+    cross = _returns(m, p, s, (x0, x1))
+    blocks = _assemble([facade, facade_right, cross], nc, p, cp, gamma)
+    return _facade_openings(blocks, facade_openings, s)
+
+
+def box_wall(
+    blocks_along_length: int,
+    courses: int,
+    a: float,
+    b: float,
+    s: float,
+    unit_weight: float,
+    blocks_along_depth: int | None = None,
+    joint: float = 0.0,
+    facade_openings=None,
+) -> Blocks:
+    """A closed box of four walls, n b by m b outside (``blocks_along_depth`` = m, default
+    n), the front wall (the facade) at z in [0, s], the back wall at z in [s - m b, 2 s - m b].
+    Each wall runs through the corner where it starts (anticlockwise from above) in the even
+    courses and through the one where it ends in the odd courses: a square box (m = n) is
+    the same seen from each side."""
+    n, nc, cp, p, s, gamma = _common(blocks_along_length, courses, a, b, s, unit_weight, joint)
+    m = n if blocks_along_depth is None else _count("blocks_along_depth", blocks_along_depth)
+    if m * p <= 2 * s + 2 * SHORTEST_PIECE * p:
+        raise ValueError(f"blocks_along_depth = {m} leaves no side wall between the corners")
+    lx, lz = n * p, m * p
+    back = s - lz  # z of the back wall's outer face
+
+    def run(axis, origin, sense, band, length):
+        return _Run(axis, origin, sense, band, (0.0, length - s, 0), (s, length, 1))
+
+    runs = [
+        run(0, 0.0, 1, (0.0, s), lx),  # front, from the front-left corner
+        run(2, s, -1, (lx - s, lx), lz),  # right, from the front-right corner
+        run(0, lx, -1, (back, back + s), lx),  # back, from the back-right corner
+        run(2, back, 1, (0.0, s), lz),  # left, from the back-left corner
+    ]
+    blocks = _assemble(runs, nc, p, cp, gamma)
+    return _facade_openings(blocks, facade_openings, s)
+
+
+__all__ = ["box_wall", "l_wall", "t_wall", "u_wall"]
