@@ -51,7 +51,7 @@ def _fmt(x: float | None) -> str:
     return "-" if x is None or not math.isfinite(x) else f"{x:.4f}"
 
 
-def cases(names: list[str]) -> None:
+def cases(names: list[str], nonassoc_grid: int | None = None) -> None:
     from masonry_dem.cases.paper import build_case, case_names
     from masonry_dem.cli.study import warm_up
     from masonry_dem.solvers.incremental import pushover
@@ -67,7 +67,9 @@ def cases(names: list[str]) -> None:
         model = case.model
         assoc, t_a = _timed(limit_analysis, model)
         cone, t_c = _timed(limit_analysis, model, backend="clarabel")
-        nonassoc, t_n = _timed(limit_analysis, model, associative=False, backend="clarabel")
+        nonassoc, t_n = _timed(
+            limit_analysis, model, associative=False, backend="clarabel", grid=nonassoc_grid
+        )
         hist, t_p = _timed(pushover, model, case.settings, monitor=case.monitor)
         lam_p = hist.collapse_multiplier if hist.status == "collapse" else hist.final_load_factor
         la_ref = case.extra.get("lambda_limit_analysis")
@@ -127,12 +129,15 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument("--grid-study", action="store_true")
     p.add_argument("--cases", nargs="*", default=None, metavar="NAME")
     p.add_argument("--ladder", nargs="*", type=int, default=None, metavar="BLOCKS")
+    p.add_argument(
+        "--nonassoc-grid", type=int, default=None, help="grid of the non-associative runs"
+    )
     p.add_argument("--pushover-up-to", type=int, default=2000, help="largest ladder pushover")
     args = p.parse_args(argv)
     if args.grid_study:
         grid_study()
     if args.cases is not None:
-        cases(args.cases)
+        cases(args.cases, args.nonassoc_grid)
     if args.ladder is not None:
         ladder(args.ladder or [100, 1000, 10000], args.pushover_up_to)
     if not (args.grid_study or args.cases is not None or args.ladder is not None):
