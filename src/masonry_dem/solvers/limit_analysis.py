@@ -84,7 +84,8 @@ NON_ASSOCIATIVE_GRID = 8
 class LimitAnalysisResult:
     """Outcome of :func:`limit_analysis`.
 
-    status: "collapse", "no collapse" (no mechanism is possible: the LP is unbounded) or
+    status: "collapse", "no collapse" (no mechanism is possible: the LP is unbounded, or
+        lambda reaches ``LAMBDA_CAP`` x max(1, |dead| / |live|)) or
         "failed" (``reason`` says why, with the solver's own status).
     load_factor: the collapse multiplier (nan unless "collapse").
     block_velocities: (n, 6) the collapse mechanism (zeros unless "collapse"), scaled so
@@ -291,6 +292,16 @@ class _Solution:
     detail: str = ""
 
 
+#: lambda is capped at this multiple of max(1, |dead| / |live|): reaching the cap is "no
+#: collapse" (no mechanism below it)
+LAMBDA_CAP = 1.0e4
+
+
+def _lambda_cap(live: np.ndarray, rhs: np.ndarray) -> float:
+    ratio = float(np.linalg.norm(rhs)) / max(float(np.linalg.norm(live)), 1e-300)
+    return LAMBDA_CAP * max(1.0, ratio)
+
+
 def _solve_highs(
     E: sparse.csc_matrix,
     live: np.ndarray,
@@ -322,7 +333,8 @@ def _solve_highs(
         return _Solution(
             "error", detail=f"HiGHS: {words.get(res.status, res.status)}: {res.message}"
         )
-    bounds[k] = (0.0, None)
+    cap = _lambda_cap(live, rhs)
+    bounds[k] = (0.0, cap)
     c[k] = -1.0
     res = linprog(c, A_ub, b_ub, A, rhs, bounds=bounds, method="highs-ipm")
     if res.status == 3:
@@ -332,6 +344,8 @@ def _solve_highs(
             "error", detail=f"HiGHS: {words.get(res.status, res.status)}: {res.message}"
         )
     x = np.asarray(res.x)
+    if x[k] >= cap * (1 - 1e-3):
+        return _Solution("unbounded", detail=f"HiGHS: lambda reached its cap {cap:.3g}")
     return _Solution(
         "optimal", float(x[k]), x[:k], np.asarray(res.eqlin.marginals), "HiGHS: optimal"
     )
@@ -389,10 +403,16 @@ def _solve_clarabel(
         rows.append(G)
         b.append(bb)
         cones += [clarabel.SecondOrderConeT(3)] * n_points
+    cap = _lambda_cap(live, rhs)
     if fix_lambda:  # lambda = 0: is there an equilibrium under the dead load alone?
         rows.insert(1, sparse.csc_matrix(([1.0], ([0], [k])), shape=(1, nvar)))
         b.insert(1, np.zeros(1))
         cones[0] = clarabel.ZeroConeT(n_eq + 1)
+    else:  # lambda <= cap: a bounded problem (interior point methods detect unboundedness
+        # poorly: Clarabel stopped with NumericalError on S6, HiGHS took 130 s)
+        rows.append(sparse.csc_matrix(([1.0], ([0], [k])), shape=(1, nvar)))
+        b.append(np.array([cap]))
+        cones.append(clarabel.NonnegativeConeT(1))
     A = sparse.vstack(rows, format="csc")
     A.sort_indices()
     q = np.zeros(nvar)
@@ -410,6 +430,8 @@ def _solve_clarabel(
     if word not in ("Solved", "AlmostSolved"):
         return _Solution("error", detail=f"Clarabel: {word}")
     x = np.asarray(sol.x)
+    if not fix_lambda and x[k] >= cap * (1 - 1e-3):
+        return _Solution("unbounded", detail=f"Clarabel: lambda reached its cap {cap:.3g}")
     z = np.asarray(sol.z)[:n_eq]
     return _Solution("optimal", float(x[k]), x[:k], -z, f"Clarabel: {word}")
 
