@@ -32,7 +32,7 @@ def limit_analysis_bound(model) -> dict:
     """The associative limit-analysis multiplier of the model, an upper bound of the
     pushover's (``limit_analysis_bound``: None unless the LA finds a collapse), and its
     status and time. With the exact cone (Clarabel): the tightest bound, and on the
-    validation walls 5-25 times faster than the LP (docs/limit_analysis.md)."""
+    validation walls 7-77 times faster than the LP (docs/limit_analysis.md)."""
     from masonry_dem.solvers.limit_analysis import limit_analysis
 
     la = limit_analysis(model, backend="clarabel")
