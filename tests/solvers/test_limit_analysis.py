@@ -270,3 +270,20 @@ def test_dem_strength_domain_and_the_limit_analysis_domain(l1, l2):
     assert _carried_by_corners((edge * [1, 1, 1, 1, 1, 0.09 * l1 * mu / m3])[None], l1, l2, mu)[0]
     corner = np.array([[0.0, mu, -1.0, -l2 / 2, -l1 / 2, 0.0]]) * 0.999
     assert not _carried_by_corners(corner, l1, l2, mu)[0]
+
+
+def test_mechanism_violation_checks_the_kinematics():
+    """The returned mechanism of a tilting block is admissible (the corners on the pivot
+    edge stay, the others lift); a block sinking into its base, or sliding flat (no
+    dilatancy), is not: its corners close by the whole velocity, or slide by mu of it."""
+    from masonry_dem.solvers.limit_analysis import mechanism_violation
+
+    model = _on_base(single_block(0.4, 0.3, 0.1, GAMMA), 0.6)
+    r = limit_analysis(model, backend="clarabel")
+    assert mechanism_violation(model, r.block_velocities, None) < 1e-6
+    sink = np.zeros((2, 6))
+    sink[0, 1] = -1.0
+    assert mechanism_violation(model, sink, None) == pytest.approx(1.0)
+    slide = np.zeros((2, 6))
+    slide[0, 2] = 1.0
+    assert mechanism_violation(model, slide, None) == pytest.approx(0.6)
