@@ -51,7 +51,7 @@ def _fmt(x: float | None) -> str:
     return "-" if x is None or not math.isfinite(x) else f"{x:.4f}"
 
 
-def cases(names: list[str]) -> None:
+def cases(names: list[str], nonassoc_grid: int | None = None) -> None:
     from masonry_dem.cases.paper import build_case, case_names
     from masonry_dem.cli.study import warm_up
     from masonry_dem.solvers.incremental import pushover
@@ -67,7 +67,9 @@ def cases(names: list[str]) -> None:
         model = case.model
         assoc, t_a = _timed(limit_analysis, model)
         cone, t_c = _timed(limit_analysis, model, backend="clarabel")
-        nonassoc, t_n = _timed(limit_analysis, model, associative=False, backend="clarabel")
+        nonassoc, t_n = _timed(
+            limit_analysis, model, associative=False, backend="clarabel", grid=nonassoc_grid
+        )
         hist, t_p = _timed(pushover, model, case.settings, monitor=case.monitor)
         lam_p = hist.collapse_multiplier if hist.status == "collapse" else hist.final_load_factor
         la_ref = case.extra.get("lambda_limit_analysis")
@@ -86,7 +88,7 @@ def cases(names: list[str]) -> None:
                 print(f"       {r.method} {r.backend}: {r.reason}")
 
 
-def ladder(sizes: list[int], pushover_up_to: int) -> None:
+def ladder(sizes: list[int], pushover_up_to: int, highs: bool = True) -> None:
     """Square-ish running-bond walls on a base tilted in plane (mu 0.6): LA against pushover."""
     from masonry_dem.cli.study import warm_up
     from masonry_dem.geometry.builders import add_base, running_bond_wall
@@ -108,16 +110,17 @@ def ladder(sizes: list[int], pushover_up_to: int) -> None:
             [Support([base])],
             [SelfWeight(), WeightProportional((1.0, 0.0, 0.0))],
         )
-        r_h, t_h = _timed(limit_analysis, model)
+        r_h, t_h = _timed(limit_analysis, model) if highs else (None, float("nan"))
         r_c, t_c = _timed(limit_analysis, model, backend="clarabel")
         lam_p, t_p = None, float("nan")
         if model.blocks.count <= pushover_up_to:
             h, t_p = _timed(pushover, model)
             lam_p = h.collapse_multiplier
         print(
-            f"{model.blocks.count:7d} {model.interfaces.count:7d} {_fmt(r_h.load_factor):>9s} "
+            f"{model.blocks.count:7d} {model.interfaces.count:7d} "
+            f"{_fmt(r_h.load_factor if r_h else None):>9s} "
             f"{t_h:7.2f} {_fmt(r_c.load_factor):>9s} {t_c:7.2f} {_fmt(lam_p):>9s} {t_p:7.2f} "
-            f"{t_p / min(t_h, t_c):8.2f}",
+            f"{t_p / np.nanmin([t_h, t_c]):8.2f}",
             flush=True,
         )
 
@@ -127,14 +130,18 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument("--grid-study", action="store_true")
     p.add_argument("--cases", nargs="*", default=None, metavar="NAME")
     p.add_argument("--ladder", nargs="*", type=int, default=None, metavar="BLOCKS")
+    p.add_argument(
+        "--nonassoc-grid", type=int, default=None, help="grid of the non-associative runs"
+    )
+    p.add_argument("--no-highs", action="store_true", help="ladder: Clarabel only")
     p.add_argument("--pushover-up-to", type=int, default=2000, help="largest ladder pushover")
     args = p.parse_args(argv)
     if args.grid_study:
         grid_study()
     if args.cases is not None:
-        cases(args.cases)
+        cases(args.cases, args.nonassoc_grid)
     if args.ladder is not None:
-        ladder(args.ladder or [100, 1000, 10000], args.pushover_up_to)
+        ladder(args.ladder or [100, 1000, 10000], args.pushover_up_to, not args.no_highs)
     if not (args.grid_study or args.cases is not None or args.ladder is not None):
         p.print_help()
 

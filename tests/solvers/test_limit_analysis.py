@@ -190,3 +190,100 @@ def test_bad_arguments_name_the_field():
         limit_analysis(model, backend="gurobi")
     with pytest.raises(ValueError, match="cone"):
         limit_analysis(model, cone="round")
+
+
+def _carried_by_corners(actions: np.ndarray, l1: float, l2: float, mu: float) -> list[bool]:
+    """Whether each row of actions is carried by point forces at the four corners of an
+    l1 x l2 joint within the exact cone (no tension): a feasibility SOCP per row."""
+    import clarabel
+    from scipy import sparse
+
+    from masonry_dem.solvers.limit_analysis import _resultant_columns, grid_points
+
+    y, _ = grid_points(np.array([l1]), np.array([l2]), 2)
+    eye = np.array([[0.0, 0.0, -1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+    R = _resultant_columns(np.repeat(y[0], 3, axis=0), np.tile(eye, (4, 1)), np.zeros(12, int), 1)
+    p = np.arange(4)
+    idx = np.concatenate([3 * p, 3 * p + 1, 3 * p + 2])
+    vals = np.concatenate([np.full(4, -mu), -np.ones(8)])
+    A = sparse.vstack([R, sparse.csc_matrix((vals, (idx, idx)), shape=(12, 12))], format="csc")
+    settings = clarabel.DefaultSettings()
+    settings.verbose = False
+    cones = [clarabel.ZeroConeT(6)] + [clarabel.SecondOrderConeT(3)] * 4
+    out = []
+    for a in actions:
+        b = np.concatenate([a, np.zeros(12)])
+        solver = clarabel.DefaultSolver(
+            sparse.csc_matrix((12, 12)), np.zeros(12), A, b, cones, settings
+        )
+        out.append(str(solver.solve().status) in ("Solved", "AlmostSolved"))
+    return out
+
+
+def _dem_boundary(l1: float, l2: float, alpha: float, centred: bool, mu: float = 0.6):
+    """Random trial actions projected onto the DEM's closed-form domain (check_strength),
+    scaled by 0.999, with the torsion read about the centre of the compression
+    y_c = (m2, -m1) / (ft - fn) turned into the torsion about the interface centre
+    (m3 + y_c x f): the DEM centres its reduced rectangle there."""
+    from masonry_dem.constitutive import check_strength
+
+    rng = np.random.default_rng(7)
+    trial = rng.normal(size=(120, 6)) * np.array([1.0, 1.0, 0.3, 0.1, 0.1, 0.1])
+    trial[:, 2] = -np.abs(trial[:, 2]) - 0.05
+    if centred:
+        trial[:, 3:5] = 0.0
+    dem = check_strength(trial, l1, l2, mu, 0.0, alpha).projected * 0.999
+    cap = -dem[:, 2]
+    y1c, y2c = dem[:, 4] / cap, -dem[:, 3] / cap
+    dem[:, 5] += y1c * dem[:, 1] - y2c * dem[:, 0]
+    return dem
+
+
+@pytest.mark.parametrize("l1, l2", [(0.2, 0.2), (0.4, 0.1)])
+def test_dem_strength_domain_and_the_limit_analysis_domain(l1, l2):
+    """Radenkovic's theorem needs the DEM's domain inside the LA's (four corners, exact
+    cone, no tension).
+
+    * Joints compressed about their centre (m1 = m2 = 0): inside, for alpha 1 and 1.5.
+    * Eccentric compression, alpha = 1 (the linear shear-torsion interaction): inside.
+    * Eccentric compression, alpha = 1.5 (the package's default, Eq. A5): not always. A
+      joint rocking about y1 (compression on the edge y2 = l2/2, of length l1) with a shear
+      0.8 mu N across that edge: the DEM admits (1 - 0.8^2)^(1/1.5) cT(l1, 0) mu N = 0.506
+      (l1/4) mu N of torsion, a rigid-plastic edge at most (l1/2)(0.5 - 0.3) mu N = 0.1 l1
+      mu N (end forces 0.5 and 0.3 mu N with N/2 at each end), the uniform pressure of
+      the DEM's own reading 0.09 l1 mu N. So the DEM's domain is larger than the LA's for
+      joints rocking on an edge while they shear and twist, and the associative multiplier
+      is no theorem-backed bound where such joints govern (docs/limit_analysis.md).
+    * Read about the interface centre instead of the compression's (m3 unshifted), the
+      DEM would also admit full shear at a corner with no torsion, which no rigid-plastic
+      joint carries."""
+    mu = 0.6
+    for alpha in (1.0, 1.5):
+        assert all(_carried_by_corners(_dem_boundary(l1, l2, alpha, True), l1, l2, mu))
+    assert all(_carried_by_corners(_dem_boundary(l1, l2, 1.0, False), l1, l2, mu))
+    assert not all(_carried_by_corners(_dem_boundary(l1, l2, 1.5, False), l1, l2, mu))
+    # the edge counterexample: N = 1, m1 at its limit, shear 0.8 mu across the edge
+    m3 = (1 - 0.8**2) ** (1 / 1.5) * (l1 / 4) * mu
+    edge = np.array([0.0, 0.8 * mu, -1.0, -l2 / 2, 0.0, 0.999 * m3]) * 0.999
+    edge[5] += 0.0 * edge[1] - (l2 / 2) * edge[0]  # y_c = (0, l2/2); f1 = 0: no shift
+    assert not _carried_by_corners(edge[None], l1, l2, mu)[0]
+    assert _carried_by_corners((edge * [1, 1, 1, 1, 1, 0.09 * l1 * mu / m3])[None], l1, l2, mu)[0]
+    corner = np.array([[0.0, mu, -1.0, -l2 / 2, -l1 / 2, 0.0]]) * 0.999
+    assert not _carried_by_corners(corner, l1, l2, mu)[0]
+
+
+def test_mechanism_violation_checks_the_kinematics():
+    """The returned mechanism of a tilting block is admissible (the corners on the pivot
+    edge stay, the others lift); a block sinking into its base, or sliding flat (no
+    dilatancy), is not: its corners close by the whole velocity, or slide by mu of it."""
+    from masonry_dem.solvers.limit_analysis import mechanism_violation
+
+    model = _on_base(single_block(0.4, 0.3, 0.1, GAMMA), 0.6)
+    r = limit_analysis(model, backend="clarabel")
+    assert mechanism_violation(model, r.block_velocities, None) < 1e-6
+    sink = np.zeros((2, 6))
+    sink[0, 1] = -1.0
+    assert mechanism_violation(model, sink, None) == pytest.approx(1.0)
+    slide = np.zeros((2, 6))
+    slide[0, 2] = 1.0
+    assert mechanism_violation(model, slide, None) == pytest.approx(0.6)
