@@ -12,6 +12,7 @@ own weight stops with status "failed", a reason that says so, and the step it wr
 from __future__ import annotations
 
 import json
+import math
 from dataclasses import replace
 
 import numpy as np
@@ -282,3 +283,12 @@ def test_free_standing_wall_tilts_at_s_over_h_with_slip_memory():
 def test_stop_check_time_steps_must_not_be_negative():
     with pytest.raises(ValueError, match="stop_check_time_steps"):
         StaticSettings(stop_check_time_steps=-1)
+
+
+@pytest.mark.parametrize("value", [-1.0, 0.0, float("nan"), True])
+def test_settings_refuse_a_max_load_factor_that_is_not_positive(value):
+    """max_load_factor = -1 once ended a pushover 'collapse' at lambda 0 (7022155); the
+    Python API now refuses it with the field's name, as the case-file schema does."""
+    with pytest.raises(ValueError, match="max_load_factor must be a number > 0"):
+        StaticSettings(max_load_factor=value)
+    assert StaticSettings(max_load_factor=math.inf).max_load_factor == math.inf

@@ -228,6 +228,14 @@ class StaticSettings:
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and math.isfinite(value)):
                 raise ValueError(f"{name} must be a finite number, got {value!r}")
+        if not (
+            isinstance(self.max_load_factor, (int, float))
+            and not isinstance(self.max_load_factor, bool)
+            and self.max_load_factor > 0  # NaN fails this too; +inf (no cap) passes
+        ):
+            raise ValueError(
+                f"max_load_factor must be a number > 0 (inf: no cap), got {self.max_load_factor!r}"
+            )
         if self.displacement_limit is not None and not self.displacement_limit > 0:
             raise ValueError(
                 f"displacement_limit must be positive or None, got {self.displacement_limit!r}"
