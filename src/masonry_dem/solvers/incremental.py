@@ -57,7 +57,7 @@ from masonry_dem.constitutive.law import (
 )
 from masonry_dem.model import Model
 from masonry_dem.results import History, StepResult
-from masonry_dem.solvers.multifrontal import Symbolic, ZeroPivot
+from masonry_dem.solvers.factorization import Factorizer, SingularMatrix, analyse
 
 if TYPE_CHECKING:
     from masonry_dem.solvers.dynamic_relaxation import DynamicRelaxation
@@ -352,12 +352,9 @@ class _TangentAssembler:
             data = self.data(T)
         return sparse.csc_matrix((data, self.indices, self.indptr), shape=(self.n, self.n))
 
-    def symbolic(self) -> Symbolic:
-        """The fronts of the multifrontal factorization of :meth:`matrix`."""
-        ones = np.ones(self.indices.size)
-        return Symbolic(
-            sparse.csc_matrix((ones, self.indices, self.indptr), shape=(self.n, self.n))
-        )
+    def symbolic(self) -> Factorizer:
+        """A factorizer of :meth:`matrix`'s pattern (the backend: factorization.choose)."""
+        return analyse(self.indptr, self.indices, self.n)
 
     def factorized(self, lu) -> _Factorized:
         """A factorization of :meth:`matrix` that solves in the DOF numbering."""
@@ -415,7 +412,7 @@ class StaticSolver:
         self._last_increment = 0.0
         self._elastic_lu: _Factorized | None = None
         self._dr: DynamicRelaxation | None = None
-        self._fronts: Symbolic | None = None  # once the ordering is known
+        self._fronts: Factorizer | None = None  # the tangent's pattern analysed
 
     # ------------------------------------------------------------------ one equilibrium
     def _increment(self, q: np.ndarray) -> float:
@@ -434,51 +431,23 @@ class StaticSolver:
 
     def _factor(self, response: LawResponse, floor: float | None = None) -> _Factorized:
         """LU of the tangent. The tangent is structurally symmetric with a regular diagonal
-        (the residual stiffness), so SuperLU's symmetric mode (minimum degree on A^T + A,
-        diagonal pivots) fills in less and runs about twice as fast as COLAMD; COLAMD with
-        partial pivoting is the fallback. ``relax=1`` (no relaxed supernodes) halves the time
-        of these small block-sparse matrices again (S11, 1467 DOFs: 18 -> 9 ms). The pattern
-        never changes, so the minimum-degree ordering of the first factorization is kept:
-        later tangents are assembled in that order and factorized as they are (another
-        13 % of each factorization), by the multifrontal LU of
-        :mod:`masonry_dem.solvers.multifrontal` (the same diagonal pivots, its fronts worked
-        out once: 1.4-2.4x faster than SuperLU on the validation walls); SuperLU takes over
-        where a pivot is zero."""
+        (the residual stiffness); its pattern never changes, so it is analysed once
+        (:func:`masonry_dem.solvers.factorization.analyse`: the ordering and symbolic
+        factorization of the backend chosen for its size) and each tangent's entries go
+        straight to a numeric factorization."""
         if floor is None:
             floor = self.settings.residual_stiffness
         T = self.law.tangent(response, floor, self.settings.tangent)
         data = self._tangents.data(T)
         self.factorizations += 1
-        ordered = self._tangents.order is not None
-        if self._fronts is not None:  # the entries go straight to the fronts (same pattern)
-            try:
-                return self._tangents.factorized(self._fronts.factorize_entries(data))
-            except ZeroPivot:  # SuperLU pivots where the diagonal is zero
-                pass
-        K = self._tangents.matrix(T, data)
+        if self._fronts is None:
+            self._fronts = self._tangents.symbolic()
         try:
-            lu = splu(
-                K,
-                permc_spec="NATURAL" if ordered else "MMD_AT_PLUS_A",
-                diag_pivot_thresh=0.0,
-                relax=1,
-                options={"SymmetricMode": True},
-            )
-        except RuntimeError:
-            pass
-        else:
-            factors = self._tangents.factorized(lu)
-            if not ordered:
-                self._tangents = _TangentAssembler(self.asm, self.model, order=lu.perm_c)
-                self._fronts = self._tangents.symbolic()
-            return factors
-        try:
-            return self._tangents.factorized(splu(K, permc_spec="COLAMD"))
-        except RuntimeError:  # exactly singular: stiffen the floor
+            return self._tangents.factorized(self._fronts.factor(data))
+        except SingularMatrix:  # exactly singular: stiffen the floor
             idx = np.arange(6)
             T[:, idx, idx] += 1e-6 * self.law.kbar
-            K = self._tangents.matrix(T)
-            return self._tangents.factorized(splu(K, permc_spec="COLAMD"))
+            return self._tangents.factorized(self._fronts.factor(self._tangents.data(T)))
 
     def _equilibrate(
         self,
