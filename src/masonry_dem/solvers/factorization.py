@@ -29,10 +29,12 @@ the wrong matrix.
 from __future__ import annotations
 
 import ctypes
+import glob
 import importlib
 import importlib.util
 import logging
 import os
+import sys
 from collections.abc import Callable
 from typing import Any, Protocol
 
@@ -47,11 +49,13 @@ BACKENDS = ("superlu", "pardiso", "umfpack", "mumps")
 #: the module that must be importable for each backend
 _MODULES = {"superlu": "scipy", "pardiso": "pypardiso", "umfpack": "kvxopt", "mumps": "mumps"}
 ENVIRONMENT = "MASONRY_DEM_FACTORIZER"
-#: ``"auto"``: below this many unknowns SuperLU (one call into scipy, no library to wake and
-#: no threads to start) factorizes as fast as the others, above it a library with a
-#: nested-dissection ordering and dense kernels wins; see :func:`choose`
-SMALL = 2_000
-#: the order of preference above ``SMALL`` unknowns, fastest first (bench_scale.py)
+#: ``"auto"``: below this many unknowns SuperLU (one call into scipy, no library to load)
+#: factorizes as fast as the others (100 DOFs: 0.1 ms each, 1 and 2 threads); from 610 DOFs
+#: PARDISO is the fastest (0.7 ms against SuperLU's 1.5-2.4 ms), at 6 000 and 60 000 DOFs too
+#: (``python benchmarks/bench_scale.py --sizes 4 10 20 30 100``, docs/solvers.md "Scale")
+SMALL = 300
+#: the order of preference from ``SMALL`` unknowns, fastest first (bench_scale.py: MUMPS
+#: before UMFPACK at 6 000 and 60 000 DOFs)
 _PREFERENCE = ("pardiso", "mumps", "umfpack", "superlu")
 
 
@@ -228,6 +232,19 @@ def _transpose_gather(
     return ids.indptr, ids.indices, ids.data.astype(np.int64) - 1
 
 
+def _point_pypardiso_at_mkl() -> None:
+    """Name MKL's runtime library for pypardiso (``PYPARDISO_MKL_RT``) when it sits where the
+    ``mkl`` wheel puts it: pypardiso otherwise searches every folder of the environment for it,
+    on import and again for each solver (1-3 s)."""
+    if "PYPARDISO_MKL_RT" in os.environ:
+        return
+    for folder in ("lib", "Library/bin"):
+        found = sorted(glob.glob(os.path.join(sys.prefix, folder, "*mkl_rt*")))
+        if found:
+            os.environ["PYPARDISO_MKL_RT"] = found[0]
+            return
+
+
 class _PardisoFactors:
     def __init__(self, owner: _Pardiso, generation: int) -> None:
         self.owner = owner
@@ -246,13 +263,11 @@ class _Pardiso:
     name = "pardiso"
 
     def __init__(self, indptr: np.ndarray, indices: np.ndarray, n: int) -> None:
+        _point_pypardiso_at_mkl()
         from pypardiso import PyPardisoSolver
 
         self.n = n
         self.solver = PyPardisoSolver(mtype=11)
-        # pypardiso finds MKL by a search of the environment's folders (0.3-0.5 s); later
-        # solvers of this process load the library it found
-        os.environ.setdefault("PYPARDISO_MKL_RT", self.solver.libmkl._name)
         self.solver.set_iparm(1, 1)  # iparm given (not the defaults)
         for i, value in {2: 2, 8: 0, 10: 13, 11: 1, 13: 1, 35: 0}.items():
             # METIS, refinement only after a perturbed pivot, perturbation 1e-13, scaling,
