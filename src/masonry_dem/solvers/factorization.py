@@ -274,34 +274,63 @@ class _Pardiso:
             # matching
             self.solver.set_iparm(i, value)
         ia, ja, self.gather = _transpose_gather(indptr, indices, n)
-        self.csr = sparse.csr_matrix((np.ones(indices.size), ja, ia), shape=(n, n))
+        # PARDISO's 1-based CSR, made once (pypardiso's own call converts it at each call)
+        self.ia = (ia + 1).astype(np.int32)
+        self.ja = (ja + 1).astype(np.int32)
+        self.values = np.ones(indices.size)
         self.generations = _Generation()
         self.analysed = False
 
-    def _threads(self) -> None:
-        mkl = self.solver.libmkl
+    def _call(self, phase: int, b: np.ndarray) -> np.ndarray:
+        """One call of MKL's pardiso on this handle (phase 12, 22, 33 or -1) on numba's
+        thread count; x for b."""
+        s = self.solver
         # the C entry point (the lower-case name is the Fortran one, which takes a pointer)
-        mkl.MKL_Set_Num_Threads_Local(ctypes.c_int(numba.get_num_threads()))
+        s.libmkl.MKL_Set_Num_Threads_Local(ctypes.c_int(numba.get_num_threads()))
+        b = np.asfortranarray(b, dtype=float)
+        x = np.zeros_like(b)
+        error = ctypes.c_int32(0)
+        int_p = ctypes.POINTER(ctypes.c_int32)
+        double_p = ctypes.POINTER(ctypes.c_double)
+        s._mkl_pardiso(
+            s.pt.ctypes.data_as(ctypes.POINTER(s._pt_type[0])),
+            ctypes.byref(ctypes.c_int32(1)),  # maxfct
+            ctypes.byref(ctypes.c_int32(1)),  # mnum
+            ctypes.byref(ctypes.c_int32(s.mtype)),
+            ctypes.byref(ctypes.c_int32(phase)),
+            ctypes.byref(ctypes.c_int32(self.n)),
+            self.values.ctypes.data_as(double_p),
+            self.ia.ctypes.data_as(int_p),
+            self.ja.ctypes.data_as(int_p),
+            s.perm.ctypes.data_as(int_p),
+            ctypes.byref(ctypes.c_int32(1 if b.ndim == 1 else b.shape[1])),  # right-hand sides
+            s.iparm.ctypes.data_as(int_p),
+            ctypes.byref(ctypes.c_int32(0)),  # no messages
+            b.ctypes.data_as(double_p),
+            x.ctypes.data_as(double_p),
+            ctypes.byref(error),
+        )
+        if error.value != 0:
+            raise SingularMatrix(f"pardiso: error {error.value} in phase {phase}")
+        return x
 
     def factor(self, data: np.ndarray) -> Factors:
-        from pypardiso.pardiso_wrapper import PyPardisoError
-
-        self.csr.data = np.ascontiguousarray(data[self.gather])
-        self._threads()
+        self.values = np.ascontiguousarray(data[self.gather], dtype=float)
         # the first matrix is analysed with its values (the matching and scaling use them)
-        self.solver.set_phase(22 if self.analysed else 12)
+        self._call(22 if self.analysed else 12, np.zeros(self.n))
         self.analysed = True
-        try:
-            self.solver._call_pardiso(self.csr, np.zeros((self.n, 1)))
-        except PyPardisoError as exc:
-            raise SingularMatrix(f"pardiso: {exc}") from exc
         return _PardisoFactors(self, self.generations.next())
 
     def solve(self, b: np.ndarray) -> np.ndarray:
-        self._threads()
-        self.solver.set_phase(33)
-        x = self.solver._call_pardiso(self.csr, np.asfortranarray(b, dtype=float))
-        return np.asarray(x).reshape(b.shape)
+        return self._call(33, b).reshape(b.shape)
+
+    def __del__(self) -> None:
+        """PARDISO's memory is the library's: released with the handle (phase -1)."""
+        if getattr(self, "analysed", False):
+            try:
+                self._call(-1, np.zeros(self.n))
+            except Exception:  # noqa: BLE001 (at interpreter exit the library may be gone)
+                pass
 
 
 # --------------------------------------------------------------------------- UMFPACK
