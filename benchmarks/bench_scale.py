@@ -2,7 +2,8 @@
 
 Run:  python benchmarks/bench_scale.py [--sizes 10 30 100 316] [--pushover-up-to 10000]
                                        [--threads 1 2] [--backends ...] [--repeat 5]
-                                       [--multifrontal-from REF] [--no-pushover] [--json FILE]
+                                       [--pushover-budget S] [--multifrontal-from REF]
+                                       [--no-pushover] [--json FILE]
 
 The walls are the bundled default case (dry running-bond panel on a base slab, its left
 column held by a return wall, tilted out of plane) with N blocks per course and N courses
@@ -20,7 +21,8 @@ courses, the 1 007-block wall of issue 23). For each wall it prints:
 * for walls of at most ``--pushover-up-to`` blocks, the default pushover (backend chosen by
   ``factorization.choose``, or ``MASONRY_DEM_FACTORIZER``), each in a fresh process: status,
   lambda, seconds, steps, Newton iterations, factorizations, seconds per iteration and peak
-  resident memory (ru_maxrss);
+  resident memory (ru_maxrss); a run still going after ``--pushover-budget`` seconds stops
+  after its step and reports what it reached (status ``stopped@...``);
 
 and the log-log slope of each quantity against blocks (least squares over the walls measured,
 and from about 10^3 blocks up). Timings are wall clock on a shared machine: compare ratios
@@ -174,26 +176,41 @@ def factor_child(n: int, backends: list[str], repeat: int, multifrontal: str | N
     return out
 
 
-def pushover_child(n: int) -> dict:
+class _OverBudget(Exception):
+    pass
+
+
+def pushover_child(n: int, budget: float) -> dict:
     import resource
 
     from masonry_dem.solvers import factorization as fz
-    from masonry_dem.solvers.incremental import pushover
+    from masonry_dem.solvers.incremental import StaticSolver
 
     model = default_wall(n)
     t0 = time.perf_counter()
-    h = pushover(model)
+    solver = StaticSolver(model)
+    steps: list = []
+
+    def on_step(step) -> None:
+        steps.append(step.load_factor)
+        if time.perf_counter() - t0 > budget:
+            raise _OverBudget
+
+    try:
+        h = solver.run(callback=on_step)
+        status = h.status
+        lam = h.collapse_multiplier if h.collapse_multiplier is not None else h.final_load_factor
+    except _OverBudget:  # stopped by --pushover-budget: what it reached
+        status, lam = f"stopped@{budget:.0f}s", max(steps)
     seconds = time.perf_counter() - t0
     return {
-        "status": h.status,
-        "lambda": h.collapse_multiplier
-        if h.collapse_multiplier is not None
-        else h.final_load_factor,
+        "status": status,
+        "lambda": lam,
         "seconds": seconds,
-        "steps": len(h.steps),
-        "iterations": h.iterations,
-        "factorizations": h.factorizations,
-        "s_per_iteration": seconds / max(h.iterations, 1),
+        "steps": len(steps),
+        "iterations": solver.iterations,
+        "factorizations": solver.factorizations,
+        "s_per_iteration": seconds / max(solver.iterations, 1),
         "peak_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
         "backend": fz.choose(6 * model.blocks.count),
     }
@@ -244,6 +261,9 @@ def main() -> int:
     p.add_argument("--pushover-up-to", type=int, default=11_000,
                    help="run the pushover on walls of at most this many blocks (default: %(default)s)")  # fmt: skip
     p.add_argument("--no-pushover", action="store_true", help="sizes and factorizations only")
+    p.add_argument("--pushover-budget", type=float, default=3600.0,
+                   help="stop a pushover after the step that passes this many seconds and "
+                   "report what it reached (default: %(default)s)")  # fmt: skip
     p.add_argument("--threads", type=int, nargs="+", default=[1, 2])
     p.add_argument("--backends", nargs="+", default=None, help="default: every installed one")
     p.add_argument("--repeat", type=int, default=5, help="factorizations timed per backend")
@@ -283,7 +303,9 @@ def main() -> int:
                         print(f"  {t} thread(s): {res}", flush=True)
                         break
         if not args.no_pushover and row.get("blocks", 0) <= args.pushover_up_to:
-            row["pushover"] = _child("pushover", {"n": n}, timeout=args.timeout)
+            row["pushover"] = _child(
+                "pushover", {"n": n, "budget": args.pushover_budget}, timeout=args.timeout
+            )
             print(f"  pushover {row['pushover']}", flush=True)
         rows.append(row)
     tmp.cleanup()
