@@ -316,6 +316,8 @@ def main() -> int:
 
 
 def _report(rows: list[dict], backends: list[str], threads: list[int]) -> None:
+    from masonry_dem.solvers import resources
+
     print()
     head = f"{'blocks':>7} {'DOFs':>7} {'build s':>8} {'asm s':>7}"
     series: dict[str, list[float]] = {"build": [], "assembly": []}
@@ -347,9 +349,11 @@ def _report(rows: list[dict], backends: list[str], threads: list[int]) -> None:
                 series[f"{b}/{t}"].append(v)
                 line += f" {v:>11.4f}"
         po = r.get("pushover", {})
+        est = resources.estimate(r["blocks"], r["interfaces"], r["dofs"])
         if "status" in po:
             line += (f"  {po['status']:>16} {po['lambda']:>11.5g} {po['seconds']:>8.2f} {po['iterations']:>4} "
-                     f"{po['factorizations']:>5} {po['s_per_iteration']:.3f} {po['peak_mb']:>4.0f} ({po['backend']})")  # fmt: skip
+                     f"{po['factorizations']:>5} {po['s_per_iteration']:.3f} {po['peak_mb']:>4.0f} ({po['backend']})"
+                     f" estimated {est.memory / 1e6:.0f} MB, {est.seconds:.0f} s")  # fmt: skip
         elif po:
             line += f"  pushover: {po}"
         for k in push:
