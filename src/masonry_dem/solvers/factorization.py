@@ -10,11 +10,13 @@ Backends (``BACKENDS``), each an ordinary library:
 * ``"superlu"`` (scipy, always present): the minimum-degree ordering of A^T + A worked out
   once, later matrices permuted by one gather of their entries and factorized with diagonal
   pivots (SuperLU's symmetric mode); partial pivoting (COLAMD) where a diagonal pivot is zero.
-* ``"pardiso"`` (Intel MKL PARDISO through ``pypardiso``; x86-64): phase 11 once (METIS
-  ordering, symbolic factorization), phase 22 for each matrix, on ``numba.get_num_threads()``
-  MKL threads (so one knob, ``NUMBA_NUM_THREADS``, sets the threads of every kernel).
-* ``"umfpack"`` (SuiteSparse UMFPACK through ``kvxopt``): symbolic once, numeric per matrix.
-* ``"mumps"`` (MUMPS through ``python-mumps``): analysis once, factorization per matrix.
+* ``"pardiso"`` (Intel MKL PARDISO through ``pypardiso``; x86-64): the analysis (METIS
+  ordering, matching and scaling, symbolic factorization) with the first matrix, then a
+  numeric factorization per matrix, on ``numba.get_num_threads()`` MKL threads (so one knob,
+  ``NUMBA_NUM_THREADS``, sets the threads of every kernel).
+* ``"umfpack"`` (SuiteSparse UMFPACK through ``kvxopt``) and ``"mumps"`` (MUMPS through
+  ``python-mumps``): the symbolic analysis with the first matrix, a numeric factorization per
+  matrix.
 
 :func:`choose` picks the backend for a size from those installed, by the rule measured with
 ``python benchmarks/bench_scale.py`` (see ``docs/solvers.md``, "Scale"). The environment
