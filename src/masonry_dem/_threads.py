@@ -1,12 +1,12 @@
 """How many threads the compiled kernels use for one analysis.
 
-The kernels (interface law, tangent assembly, multifrontal LU) share their loops among the
-cores. On a small wall a parallel loop does too little to pay for waking the threads (they
-wait passively, see ``masonry_dem/__init__.py``): one thread is faster below about 300
-interfaces (measured on 2 cores, session 9: a dynamic-relaxation time step of OL1, 107
-interfaces, 85 -> 48 us, of S15, 237 interfaces, 103 -> 78 us; the static OL1 0.17 -> 0.12 s;
-with 466 interfaces two threads win: 205 -> 169 us). The answers are the same bits on any
-number of threads.
+The kernels (interface law, tangent assembly) share their loops among the cores, and so does
+PARDISO (solvers/factorization.py gives MKL numba's thread count). On a small wall a parallel
+loop does too little to pay for waking the threads (they wait passively, see
+``masonry_dem/__init__.py``): one thread is faster below about 300 interfaces (measured on 2
+cores, session 9: a dynamic-relaxation time step of OL1, 107 interfaces, 85 -> 48 us, of S15,
+237 interfaces, 103 -> 78 us; the static OL1 0.17 -> 0.12 s; with 466 interfaces two threads
+win: 205 -> 169 us). The answers are the same bits on any number of threads.
 """
 
 from __future__ import annotations

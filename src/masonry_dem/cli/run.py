@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import logging
+import threading
 import time
 from pathlib import Path
 
@@ -31,6 +32,12 @@ def add_parser(subparsers) -> None:
         help="replace the run already in --out (removes the package's own files there, and "
         "only those); without it such a folder is refused",
     )
+    p.add_argument(
+        "--max-memory",
+        default=None,
+        help="refuse a run whose estimated memory is above this (e.g. 16G, 500M; default: "
+        "the machine's available memory)",
+    )
     p.set_defaults(func=run_command)
 
 
@@ -49,7 +56,53 @@ def limit_analysis_bound(model) -> dict:
     }
 
 
+def _refuse_if_too_large(args: argparse.Namespace, model=None) -> int | None:
+    """Exit code 2 with the estimate when the run would not fit (before the model is built
+    when the case's geometry can be counted, else after); None when it fits."""
+    import sys
+
+    from masonry_dem.solvers import resources
+
+    if model is None:
+        geometry = _geometry_of(args.case)
+        blocks = None if geometry is None else resources.blocks_of_geometry(geometry)
+        if blocks is None:
+            return None
+        est = resources.estimate(blocks)
+    else:
+        est = resources.estimate(model.blocks.count, model.interfaces.count, model.n_dofs)
+    limit = None if args.max_memory is None else resources.parse_memory(args.max_memory)
+    try:
+        resources.check_fits(est, limit)
+    except resources.TooLarge as exc:
+        print(f"masonry-dem run: refused: {exc}", file=sys.stderr)
+        return 2
+    if model is not None and not args.quiet:
+        print(f"estimate: {est.describe()}", file=sys.stderr)
+    return None
+
+
+def _geometry_of(case: str | None) -> dict | None:
+    """The ``[geometry]`` table of a case file, read without building anything (None for the
+    bundled wall or a file that does not parse: load_case then reports it)."""
+    try:
+        import tomllib
+    except ModuleNotFoundError:  # Python < 3.11
+        import tomli as tomllib  # type: ignore[no-redef,import-not-found]
+
+    if case is None:
+        return None
+    try:
+        geometry = tomllib.loads(Path(case).read_text()).get("geometry")
+    except (OSError, tomllib.TOMLDecodeError, UnicodeDecodeError):
+        return None
+    return geometry if isinstance(geometry, dict) else None
+
+
 def run_command(args: argparse.Namespace) -> int:
+    refused = _refuse_if_too_large(args)  # before anything is built
+    if refused is not None:
+        return refused
     from tqdm import tqdm
 
     from masonry_dem._signals import check_stop, deferred_signals, stop_on_signals
@@ -59,6 +112,9 @@ def run_command(args: argparse.Namespace) -> int:
     from masonry_dem.solvers.incremental import StaticSolver
 
     case = load_case(args.case)
+    refused = _refuse_if_too_large(args, case.model)
+    if refused is not None:
+        return refused
     out = Path(args.out)
     if case.method == "limit":  # [analysis] method = "limit"
         from masonry_dem.cli.limit import run_limit
@@ -86,8 +142,20 @@ def run_command(args: argparse.Namespace) -> int:
         solver = StaticSolver(case.model, case.settings, bound=bound["limit_analysis_bound"])
         # the steps handed to the writer reach the disk; an exception (Ctrl-C, SIGTERM, a
         # full disk) leaves the folder marked interrupted or failed with every step written
+        done = threading.Event()
+
+        def tick() -> None:  # progress within long steps: Newton iterations, factorizations
+            while not done.wait(2.0):
+                bar.set_postfix(its=solver.iterations, fac=solver.factorizations, refresh=True)
+
+        ticker = threading.Thread(target=tick, daemon=True)
         with writer, bar, stop_on_signals():
-            history = solver.run(control=case.control, callback=on_step, monitor=case.monitor)
+            ticker.start()
+            try:
+                history = solver.run(control=case.control, callback=on_step, monitor=case.monitor)
+            finally:
+                done.set()
+                ticker.join()
         with deferred_signals():  # pushover.csv, the mechanism and summary.json agree
             summary = writer.finish(
                 history,

@@ -15,12 +15,11 @@ import math
 import numba
 import numpy as np
 from scipy import sparse
-from scipy.sparse.linalg import splu
 
 from masonry_dem.assembly.stiffness import Assembly
 from masonry_dem.constitutive.law import InterfaceLaw, LawResponse
 from masonry_dem.model import Model
-from masonry_dem.solvers.multifrontal import Symbolic, ZeroPivot
+from masonry_dem.solvers.factorization import Factorizer, SingularMatrix, analyse
 
 
 @numba.njit(cache=True, parallel=True, fastmath={"contract"})
@@ -106,12 +105,9 @@ class TangentAssembler:
             data = self.data(T)
         return sparse.csc_matrix((data, self.indices, self.indptr), shape=(self.n, self.n))
 
-    def symbolic(self) -> Symbolic:
-        """The fronts of the multifrontal factorization of :meth:`matrix`."""
-        ones = np.ones(self.indices.size)
-        return Symbolic(
-            sparse.csc_matrix((ones, self.indices, self.indptr), shape=(self.n, self.n))
-        )
+    def symbolic(self) -> Factorizer:
+        """A factorizer of :meth:`matrix`'s pattern (the backend: factorization.choose)."""
+        return analyse(self.indptr, self.indices, self.n)
 
     def factorized(self, lu) -> Factorized:
         """A factorization of :meth:`matrix` that solves in the DOF numbering."""
@@ -173,7 +169,7 @@ class DiscreteProblem:
         self.translation = (free % 6) < 3  # among the free DOFs
         self.moving_translations = free[self.translation]  # DOF numbers
         self.factorizations = 0
-        self._fronts: Symbolic | None = None  # once the ordering is known
+        self._fronts: Factorizer | None = None  # the tangent's pattern, analysed once
         self._elastic: Factorized | None = None
 
     # ------------------------------------------------------------------ residual
@@ -203,62 +199,39 @@ class DiscreteProblem:
     def factor(self, response: LawResponse, floor: float | None = None) -> Factorized:
         """LU of the consistent tangent at ``response`` (with ``floor`` x the elastic
         stiffness kept on the diagonal of every joint). The tangent is structurally symmetric
-        with a regular diagonal (the residual stiffness), so SuperLU's symmetric mode
-        (minimum degree on A^T + A, diagonal pivots) fills in less and runs about twice as
-        fast as COLAMD; COLAMD with partial pivoting is the fallback. ``relax=1`` (no relaxed
-        supernodes) halves the time of these small block-sparse matrices again (S11, 1467
-        DOFs: 18 -> 9 ms). The pattern never changes, so the minimum-degree ordering of the
-        first factorization is kept: later tangents are assembled in that order and
-        factorized as they are (another 13 % of each factorization), by the multifrontal LU
-        of :mod:`masonry_dem.solvers.multifrontal` (the same diagonal pivots, its fronts
-        worked out once: 1.4-2.4x faster than SuperLU on the validation walls); SuperLU takes
-        over where a pivot is zero."""
+        with a regular diagonal (the residual stiffness); its pattern never changes, so it is
+        analysed once (:func:`masonry_dem.solvers.factorization.analyse`: the ordering and
+        symbolic factorization of the backend chosen for its size) and each tangent's
+        entries go straight to a numeric factorization."""
         if floor is None:
             floor = self.residual_stiffness
         T = self.law.tangent(response, floor, self.tangent_method)
         data = self._tangents.data(T)
         self.factorizations += 1
-        ordered = self._tangents.order is not None
-        if self._fronts is not None:  # the entries go straight to the fronts (same pattern)
-            try:
-                return self._tangents.factorized(self._fronts.factorize_entries(data))
-            except ZeroPivot:  # SuperLU pivots where the diagonal is zero
-                pass
-        K = self._tangents.matrix(T, data)
+        fronts = self._factorizer()
         try:
-            lu = splu(
-                K,
-                permc_spec="NATURAL" if ordered else "MMD_AT_PLUS_A",
-                diag_pivot_thresh=0.0,
-                relax=1,
-                options={"SymmetricMode": True},
-            )
-        except RuntimeError:
-            pass
-        else:
-            factors = self._tangents.factorized(lu)
-            if not ordered:
-                self._assembler = TangentAssembler(self.asm, self.model, order=lu.perm_c)
-                self._fronts = self._tangents.symbolic()
-            return factors
-        try:
-            return self._tangents.factorized(splu(K, permc_spec="COLAMD"))
-        except RuntimeError:  # exactly singular: stiffen the floor
+            return self._tangents.factorized(fronts.factor(data))
+        except SingularMatrix:  # exactly singular: stiffen the floor
             idx = np.arange(6)
             T[:, idx, idx] += 1e-6 * self.law.kbar
-            K = self._tangents.matrix(T)
-            return self._tangents.factorized(splu(K, permc_spec="COLAMD"))
+            return self._tangents.factorized(fronts.factor(self._tangents.data(T)))
+
+    def _factorizer(self) -> Factorizer:
+        if self._fronts is None:
+            self._fronts = self._tangents.symbolic()
+        return self._fronts
 
     def elastic_factor(self) -> Factorized:
         """LU of the elastic stiffness of the bonded assembly (every joint at its elastic
-        stiffness, in tension too), factorized once per problem."""
+        stiffness, in tension too), factorized once per problem (same pattern as the
+        tangent, so by the same factorizer)."""
         if self._elastic is None:
             idx = np.arange(6)
             T = np.zeros((self.model.interfaces.count, 6, 6))
             T[:, idx, idx] = self.law.kbar
             self.factorizations += 1
             self._elastic = self._tangents.factorized(
-                splu(self._tangents.matrix(T), permc_spec="COLAMD")
+                self._factorizer().factor(self._tangents.data(T))
             )
         return self._elastic
 

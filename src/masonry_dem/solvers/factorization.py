@@ -1,0 +1,430 @@
+"""Sparse LU of matrices of one fixed pattern, from well-kept libraries.
+
+The static solver factorizes hundreds of tangents of one sparsity pattern per analysis. A
+:class:`Factorizer` works the pattern out once (:func:`analyse`: the fill-reducing ordering,
+the symbolic factorization) and then factorizes new values of it many times
+(:meth:`Factorizer.factor`), each :class:`Factors` solving A x = b.
+
+Backends (``BACKENDS``), each an ordinary library:
+
+* ``"superlu"`` (scipy, always present): the minimum-degree ordering of A^T + A worked out
+  once, later matrices permuted by one gather of their entries and factorized with diagonal
+  pivots (SuperLU's symmetric mode); partial pivoting (COLAMD) where a diagonal pivot is zero.
+* ``"pardiso"`` (Intel MKL PARDISO through ``pypardiso``; x86-64): the analysis (METIS
+  ordering, matching and scaling, symbolic factorization) with the first matrix, then a
+  numeric factorization per matrix, on ``numba.get_num_threads()`` MKL threads (so one knob,
+  ``NUMBA_NUM_THREADS``, sets the threads of every kernel).
+* ``"umfpack"`` (SuiteSparse UMFPACK through ``kvxopt``) and ``"mumps"`` (MUMPS through
+  ``python-mumps``): the symbolic analysis with the first matrix, a numeric factorization per
+  matrix.
+
+:func:`choose` picks the backend for a size from those installed, by the rule measured with
+``python benchmarks/bench_scale.py`` (see ``docs/solvers.md``, "Scale"). The environment
+variable ``MASONRY_DEM_FACTORIZER`` (one of ``BACKENDS``) overrides the choice, so that a whole
+analysis or benchmark can be run with one backend.
+
+Only the newest :class:`Factors` of a :class:`Factorizer` solves (PARDISO and MUMPS keep one
+factorization per handle); an older one raises :class:`StaleFactors` rather than solving with
+the wrong matrix.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import glob
+import importlib
+import importlib.util
+import logging
+import os
+import sys
+from collections.abc import Callable
+from typing import Any, Protocol
+
+import numba
+import numpy as np
+from scipy import sparse
+from scipy.sparse.linalg import splu
+
+log = logging.getLogger(__name__)
+
+BACKENDS = ("superlu", "pardiso", "umfpack", "mumps")
+#: the module that must be importable for each backend
+_MODULES = {"superlu": "scipy", "pardiso": "pypardiso", "umfpack": "kvxopt", "mumps": "mumps"}
+ENVIRONMENT = "MASONRY_DEM_FACTORIZER"
+#: ``"auto"``: below this many unknowns SuperLU (one call into scipy, no library to load)
+#: factorizes as fast as the others (100 DOFs: 0.1 ms each, 1 and 2 threads); from 610 DOFs
+#: PARDISO is the fastest (0.7 ms against SuperLU's 1.5-2.4 ms), at 6 000 and 60 000 DOFs too
+#: (``python benchmarks/bench_scale.py --sizes 4 10 20 30 100``, docs/solvers.md "Scale")
+SMALL = 300
+#: the order of preference from ``SMALL`` unknowns, fastest first (bench_scale.py: MUMPS
+#: before UMFPACK at 6 000 and 60 000 DOFs)
+_PREFERENCE = ("pardiso", "mumps", "umfpack", "superlu")
+
+
+class SingularMatrix(RuntimeError):
+    """The matrix is singular to working precision (no backend pivot found)."""
+
+
+class StaleFactors(RuntimeError):
+    """The factors were replaced by a later factorization of the same factorizer."""
+
+
+class Factors(Protocol):
+    """The factors of one matrix."""
+
+    def solve(self, b: np.ndarray) -> np.ndarray:
+        """x with A x = b (b of shape (n,))."""
+        ...
+
+
+class Factorizer(Protocol):
+    """A sparsity pattern analysed once; :meth:`factor` factorizes new values of it."""
+
+    name: str
+    n: int
+
+    def factor(self, data: np.ndarray) -> Factors:
+        """LU factors of the matrix whose stored entries (CSC order of the pattern) are
+        ``data``; raises :class:`SingularMatrix` when it is singular."""
+        ...
+
+
+def installed() -> list[str]:
+    """The backends whose library can be imported here (SuperLU always)."""
+    return [b for b in BACKENDS if importlib.util.find_spec(_MODULES[b]) is not None]
+
+
+def choose(n: int, backend: str = "auto") -> str:
+    """The backend for a matrix of ``n`` unknowns: ``backend`` if named (it must be installed),
+    else ``MASONRY_DEM_FACTORIZER`` if set, else SuperLU below ``SMALL`` unknowns and the
+    fastest installed library above (``_PREFERENCE``)."""
+    if backend == "auto":
+        backend = os.environ.get(ENVIRONMENT, "auto") or "auto"
+        source = f"the environment variable {ENVIRONMENT}"
+    else:
+        source = "backend"
+    if backend != "auto":
+        if backend not in BACKENDS:
+            raise ValueError(f"{source} must be 'auto' or one of {list(BACKENDS)}, got {backend!r}")
+        if backend not in installed():
+            raise ValueError(
+                f"{source} = {backend!r}: its library ({_MODULES[backend]}) is not installed; "
+                f"installed: {installed()} (pip install 'masonry_dem[{backend}]')"
+            )
+        return backend
+    if n < SMALL:
+        return "superlu"
+    have = installed()
+    return next(b for b in _PREFERENCE if b in have)
+
+
+def analyse(indptr: np.ndarray, indices: np.ndarray, n: int, backend: str = "auto") -> Factorizer:
+    """A factorizer of the n x n pattern (CSC ``indptr``, ``indices``, sorted within each
+    column, every diagonal entry stored) by ``backend`` (``"auto"``: :func:`choose`)."""
+    indptr = np.asarray(indptr)
+    indices = np.asarray(indices)
+    if indptr.shape != (n + 1,) or indptr[-1] != indices.size:
+        raise ValueError(
+            f"the pattern must have n + 1 = {n + 1} column pointers ending at its "
+            f"{indices.size} entries, got {indptr.shape[0]} ending at {indptr[-1]}"
+        )
+    name = choose(n, backend)
+    cls: dict[str, Callable[[np.ndarray, np.ndarray, int], Factorizer]] = {
+        "superlu": _SuperLU,
+        "pardiso": _Pardiso,
+        "umfpack": _Umfpack,
+        "mumps": _Mumps,
+    }
+    return cls[name](indptr, indices, n)
+
+
+class _Generation:
+    """Counts the factorizations of a handle that holds one at a time."""
+
+    def __init__(self) -> None:
+        self.current = 0
+
+    def next(self) -> int:
+        self.current += 1
+        return self.current
+
+    def check(self, generation: int, name: str) -> None:
+        if generation != self.current:
+            raise StaleFactors(f"{name}: these factors were replaced by a later factorization")
+
+
+# --------------------------------------------------------------------------- SuperLU
+class _SuperLUFactors:
+    def __init__(self, lu, numbering: np.ndarray | None) -> None:
+        self.lu = lu
+        self.numbering = numbering  # numbering[k]: the unknown in row k of the permuted matrix
+
+    def solve(self, b: np.ndarray) -> np.ndarray:
+        if self.numbering is None:
+            return self.lu.solve(b)
+        x = np.empty_like(b)
+        x[self.numbering] = self.lu.solve(b[self.numbering])
+        return x
+
+
+class _SuperLU:
+    """SuperLU with the ordering worked out once: the minimum degree of A^T + A (SuperLU's
+    symmetric mode) on the pattern; each matrix is permuted symmetrically by a gather of its
+    entries and factorized in that order with diagonal pivots (``relax=1``: no relaxed
+    supernodes, about twice as fast on these small block-sparse matrices)."""
+
+    name = "superlu"
+
+    def __init__(self, indptr: np.ndarray, indices: np.ndarray, n: int) -> None:
+        self.n = n
+        self.pattern = (indptr, indices)
+        # the ordering depends on the pattern only: take it from a diagonally dominant matrix
+        # of the pattern (one factorization, once)
+        counts = np.diff(indptr)
+        cols = np.repeat(np.arange(n), counts)
+        probe = np.where(indices == cols, float(counts.max(initial=1) + 1), 1.0)
+        lu = splu(
+            sparse.csc_matrix((probe, indices, indptr), shape=(n, n)),
+            permc_spec="MMD_AT_PLUS_A",
+            diag_pivot_thresh=0.0,
+            relax=1,
+            options={"SymmetricMode": True},
+        )
+        self.numbering = np.argsort(lu.perm_c)
+        # where each entry of the permuted matrix comes from
+        ids = sparse.csc_matrix(
+            (np.arange(1, indices.size + 1, dtype=float), indices, indptr), shape=(n, n)
+        )
+        permuted = sparse.csc_matrix(ids[self.numbering][:, self.numbering])
+        permuted.sort_indices()
+        self.gather = permuted.data.astype(np.int64) - 1
+        self.permuted = (permuted.indptr, permuted.indices)
+
+    def factor(self, data: np.ndarray) -> Factors:
+        indptr, indices = self.permuted
+        A = sparse.csc_matrix((data[self.gather], indices, indptr), shape=(self.n,) * 2)
+        try:
+            lu = splu(
+                A,
+                permc_spec="NATURAL",
+                diag_pivot_thresh=0.0,
+                relax=1,
+                options={"SymmetricMode": True},
+            )
+            return _SuperLUFactors(lu, self.numbering)
+        except RuntimeError:  # a zero diagonal pivot: partial pivoting
+            pass
+        K = sparse.csc_matrix((data, self.pattern[1], self.pattern[0]), shape=(self.n,) * 2)
+        try:
+            return _SuperLUFactors(splu(K, permc_spec="COLAMD"), None)
+        except RuntimeError as exc:
+            raise SingularMatrix(f"superlu: {exc}") from exc
+
+
+# --------------------------------------------------------------------------- PARDISO
+def _transpose_gather(
+    indptr: np.ndarray, indices: np.ndarray, n: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """CSR of the matrix of CSC pattern (indptr, indices): its row pointers, column indices
+    and where each of its entries sits in the CSC entries."""
+    ids = sparse.csc_matrix(
+        (np.arange(1, indices.size + 1, dtype=float), indices, indptr), shape=(n, n)
+    ).tocsr()
+    ids.sort_indices()
+    return ids.indptr, ids.indices, ids.data.astype(np.int64) - 1
+
+
+def _point_pypardiso_at_mkl() -> None:
+    """Name MKL's runtime library for pypardiso (``PYPARDISO_MKL_RT``) when it sits where the
+    ``mkl`` wheel puts it: pypardiso otherwise searches every folder of the environment for it,
+    on import and again for each solver (1-3 s)."""
+    if "PYPARDISO_MKL_RT" in os.environ:
+        return
+    for folder in ("lib", "Library/bin"):
+        found = sorted(glob.glob(os.path.join(sys.prefix, folder, "*mkl_rt*")))
+        if found:
+            os.environ["PYPARDISO_MKL_RT"] = found[0]
+            return
+
+
+class _PardisoFactors:
+    def __init__(self, owner: _Pardiso, generation: int) -> None:
+        self.owner = owner
+        self.generation = generation
+
+    def solve(self, b: np.ndarray) -> np.ndarray:
+        self.owner.generations.check(self.generation, "pardiso")
+        return self.owner.solve(b)
+
+
+class _Pardiso:
+    """MKL PARDISO, real unsymmetric (mtype 11: METIS ordering, weighted matching and
+    scaling, pivots perturbed rather than refused, iterative refinement). The analysis
+    (phase 11) runs with the first matrix, whose values the matching and scaling use."""
+
+    name = "pardiso"
+
+    def __init__(self, indptr: np.ndarray, indices: np.ndarray, n: int) -> None:
+        _point_pypardiso_at_mkl()
+        from pypardiso import PyPardisoSolver
+
+        self.n = n
+        self.solver = PyPardisoSolver(mtype=11)
+        self.solver.set_iparm(1, 1)  # iparm given (not the defaults)
+        for i, value in {2: 2, 8: 0, 10: 13, 11: 1, 13: 1, 35: 0}.items():
+            # METIS, refinement only after a perturbed pivot, perturbation 1e-13, scaling,
+            # matching
+            self.solver.set_iparm(i, value)
+        ia, ja, self.gather = _transpose_gather(indptr, indices, n)
+        # PARDISO's 1-based CSR, made once (pypardiso's own call converts it at each call)
+        self.ia = (ia + 1).astype(np.int32)
+        self.ja = (ja + 1).astype(np.int32)
+        self.values = np.ones(indices.size)
+        self.generations = _Generation()
+        self.analysed = False
+
+    def _call(self, phase: int, b: np.ndarray) -> np.ndarray:
+        """One call of MKL's pardiso on this handle (phase 12, 22, 33 or -1) on numba's
+        thread count; x for b."""
+        s = self.solver
+        # the C entry point (the lower-case name is the Fortran one, which takes a pointer)
+        s.libmkl.MKL_Set_Num_Threads_Local(ctypes.c_int(numba.get_num_threads()))
+        b = np.asfortranarray(b, dtype=float)
+        x = np.zeros_like(b)
+        error = ctypes.c_int32(0)
+        int_p = ctypes.POINTER(ctypes.c_int32)
+        double_p = ctypes.POINTER(ctypes.c_double)
+        s._mkl_pardiso(
+            s.pt.ctypes.data_as(ctypes.POINTER(s._pt_type[0])),
+            ctypes.byref(ctypes.c_int32(1)),  # maxfct
+            ctypes.byref(ctypes.c_int32(1)),  # mnum
+            ctypes.byref(ctypes.c_int32(s.mtype)),
+            ctypes.byref(ctypes.c_int32(phase)),
+            ctypes.byref(ctypes.c_int32(self.n)),
+            self.values.ctypes.data_as(double_p),
+            self.ia.ctypes.data_as(int_p),
+            self.ja.ctypes.data_as(int_p),
+            s.perm.ctypes.data_as(int_p),
+            ctypes.byref(ctypes.c_int32(1 if b.ndim == 1 else b.shape[1])),  # right-hand sides
+            s.iparm.ctypes.data_as(int_p),
+            ctypes.byref(ctypes.c_int32(0)),  # no messages
+            b.ctypes.data_as(double_p),
+            x.ctypes.data_as(double_p),
+            ctypes.byref(error),
+        )
+        if error.value != 0:
+            raise SingularMatrix(f"pardiso: error {error.value} in phase {phase}")
+        return x
+
+    def factor(self, data: np.ndarray) -> Factors:
+        self.values = np.ascontiguousarray(data[self.gather], dtype=float)
+        # the first matrix is analysed with its values (the matching and scaling use them)
+        self._call(22 if self.analysed else 12, np.zeros(self.n))
+        self.analysed = True
+        return _PardisoFactors(self, self.generations.next())
+
+    def solve(self, b: np.ndarray) -> np.ndarray:
+        return self._call(33, b).reshape(b.shape)
+
+    def __del__(self) -> None:
+        """PARDISO's memory is the library's: released with the handle (phase -1)."""
+        if getattr(self, "analysed", False):
+            try:
+                self._call(-1, np.zeros(self.n))
+            except Exception:  # noqa: BLE001 (at interpreter exit the library may be gone)
+                pass
+
+
+# --------------------------------------------------------------------------- UMFPACK
+def _kvxopt() -> tuple[Any, Any]:
+    """kvxopt and its UMFPACK module (untyped: kvxopt's partial stubs do not cover the
+    buffer-protocol constructors used here)."""
+    return importlib.import_module("kvxopt"), importlib.import_module("kvxopt.umfpack")
+
+
+class _UmfpackFactors:
+    def __init__(self, owner: _Umfpack, numeric) -> None:
+        self.owner = owner
+        self.numeric = numeric
+
+    def solve(self, b: np.ndarray) -> np.ndarray:
+        kvxopt, umfpack = _kvxopt()
+        x = kvxopt.matrix(np.array(b, dtype=float))
+        umfpack.solve(self.owner.matrix, self.numeric, x)
+        return np.array(x).reshape(b.shape)
+
+
+class _Umfpack:
+    """SuiteSparse UMFPACK (kvxopt): the symbolic analysis (its ordering and strategy) of
+    the first matrix, a numeric factorization per matrix."""
+
+    name = "umfpack"
+
+    def __init__(self, indptr: np.ndarray, indices: np.ndarray, n: int) -> None:
+        kvxopt, _ = _kvxopt()
+        self.n = n
+        cols = np.repeat(np.arange(n, dtype=np.int64), np.diff(indptr))
+        # built from triplets in CSC order, so its values are ours in the same order
+        self.matrix = kvxopt.spmatrix(
+            kvxopt.matrix(np.ones(indices.size)),
+            kvxopt.matrix(np.asarray(indices, dtype=np.int64)),
+            kvxopt.matrix(cols),
+            (n, n),
+        )
+        if len(self.matrix.V) != indices.size:
+            raise ValueError("the pattern holds repeated entries")
+        self.symbolic = None  # of the first matrix (its values choose UMFPACK's strategy)
+
+    def factor(self, data: np.ndarray) -> Factors:
+        kvxopt, umfpack = _kvxopt()
+        self.matrix.V = kvxopt.matrix(np.ascontiguousarray(data, dtype=float))
+        try:
+            if self.symbolic is None:
+                self.symbolic = umfpack.symbolic(self.matrix)
+            numeric = umfpack.numeric(self.matrix, self.symbolic)
+        except ArithmeticError as exc:  # kvxopt: "singular matrix"
+            raise SingularMatrix(f"umfpack: {exc}") from exc
+        return _UmfpackFactors(self, numeric)
+
+
+# --------------------------------------------------------------------------- MUMPS
+class _MumpsFactors:
+    def __init__(self, owner: _Mumps, generation: int) -> None:
+        self.owner = owner
+        self.generation = generation
+
+    def solve(self, b: np.ndarray) -> np.ndarray:
+        self.owner.generations.check(self.generation, "mumps")
+        return np.asarray(self.owner.context.solve(np.array(b, dtype=float))).reshape(b.shape)
+
+
+class _Mumps:
+    """MUMPS (sequential, python-mumps): the analysis (its automatic ordering) with the
+    first matrix, a factorization per matrix."""
+
+    name = "mumps"
+
+    def __init__(self, indptr: np.ndarray, indices: np.ndarray, n: int) -> None:
+        import mumps
+
+        self.n = n
+        self.rows = np.asarray(indices, dtype=np.int64)
+        self.cols = np.repeat(np.arange(n, dtype=np.int64), np.diff(indptr))
+        self.context = mumps.Context()
+        self.analysed = False  # with the first matrix (its matching and scaling use values)
+        self.generations = _Generation()
+
+    def _coo(self, data: np.ndarray) -> sparse.coo_array:
+        return sparse.coo_array((data, (self.rows, self.cols)), shape=(self.n, self.n))
+
+    def factor(self, data: np.ndarray) -> Factors:
+        import mumps
+
+        try:
+            self.context.factor(
+                self._coo(np.asarray(data, dtype=float)), reuse_analysis=self.analysed
+            )
+            self.analysed = True
+        except mumps.MUMPSError as exc:
+            raise SingularMatrix(f"mumps: {exc}") from exc
+        return _MumpsFactors(self, self.generations.next())

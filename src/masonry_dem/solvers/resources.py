@@ -1,0 +1,192 @@
+"""What a static pushover will need, known before it starts: memory and time from the size of
+the wall alone, and the check that refuses a run the machine cannot hold.
+
+The estimate is a sum of parts, each proportional to what it stores, with constants measured
+by ``python benchmarks/bench_scale.py`` (walls of 10^2 to 10^5 blocks; docs/solvers.md,
+"Scale"):
+
+* ``runtime``: the interpreter with numpy, scipy, numba and the compiled kernels;
+* ``model``: blocks, interfaces, the compatibility matrix H and the interface law's arrays;
+* ``assembly``: the fixed-pattern tangent assembler (for each interface 144 terms: where
+  they go, one (12 x 12) block of the tangent) and the tangent's entries;
+* ``factors``: the sparse LU of the tangent. A running-bond wall is a planar graph of blocks,
+  so with a nested-dissection ordering the factors of its n DOFs hold about
+  ``FILL_PER_DOF x n x log2(n / 6)`` entries (George's bound: O(n log n) for planar graphs);
+* ``history``: every converged step kept in memory (q, actions, states, utilisation, flags).
+
+Time: ``factorizations x`` (seconds per factorization, growing like n^FACTOR_EXPONENT)
+``+ iterations x`` (seconds per Newton iteration without the factorization, linear in the
+interfaces), with the iterations and factorizations of the default pushover of the measured
+walls, growing like blocks^GROWTH. It is an order of magnitude on an idle machine, for a
+message; memory is the figure that refuses a run.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass, field
+
+#: bytes of the interpreter, numpy, scipy, numba and the compiled kernels (peak RSS of the
+#: 10^2-block pushover)
+RUNTIME_BYTES = 250e6
+#: bytes per block and per interface of the model and the solver's set-up (H, the law's
+#: arrays, the tangent assembler's 144 terms per interface and its construction's sort)
+MODEL_BYTES_PER_BLOCK = 2_000.0
+MODEL_BYTES_PER_INTERFACE = 12_000.0
+#: entries of the LU factors per DOF per log2(n / 6) (PARDISO, METIS ordering); 16 bytes
+#: per entry with its index and the library's work space
+FILL_PER_DOF = 22.0
+BYTES_PER_FACTOR_ENTRY = 16.0
+#: bytes per block and per interface of one converged step kept in the History
+STEP_BYTES_PER_BLOCK = 48.0
+STEP_BYTES_PER_INTERFACE = 66.0
+#: converged steps of the default pushover (the 10^3-block default wall: 66 steps)
+STEPS = 70
+#: Newton iterations and factorizations of the default pushover at 10^3 blocks, and how they
+#: grow with the blocks (bench_scale.py, default wall: 163 / 99 at 106 blocks, 475 / 270 at
+#: 1 007, more than 639 / 488 at 10 051: slope about 0.4)
+ITERATIONS = 475
+FACTORIZATIONS = 270
+GROWTH = 0.4
+#: seconds per factorization of n DOFs: FACTOR_SECONDS x (n / 6e4)^FACTOR_EXPONENT
+#: (PARDISO, 2 threads: 0.03 s at 6e3 DOFs, 0.5 s at 6e4)
+FACTOR_SECONDS = 0.5
+FACTOR_EXPONENT = 1.25
+#: seconds per Newton iteration and interface without the factorization (law, residual,
+#: tangent assembly, line search: about 10 ms an iteration at 2 923 interfaces, profiled)
+ITERATION_SECONDS_PER_INTERFACE = 3e-6
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """Memory [bytes] and time [s] a pushover is expected to need, with the parts."""
+
+    blocks: int
+    interfaces: int
+    dofs: int
+    memory: float
+    seconds: float
+    parts: dict[str, float] = field(default_factory=dict)
+
+    def describe(self) -> str:
+        parts = ", ".join(f"{k} {_gb(v)}" for k, v in self.parts.items())
+        return (
+            f"{self.blocks} blocks, {self.interfaces} interfaces, {self.dofs} DOFs: about "
+            f"{_gb(self.memory)} of memory ({parts}) and {_duration(self.seconds)}"
+        )
+
+
+def _gb(b: float) -> str:
+    return f"{b / 1e9:.1f} GB" if b >= 1e8 else f"{b / 1e6:.0f} MB"
+
+
+def _duration(s: float) -> str:
+    if s < 120:
+        return f"{s:.0f} s"
+    if s < 7200:
+        return f"{s / 60:.0f} min"
+    return f"{s / 3600:.1f} h"
+
+
+def estimate(blocks: int, interfaces: int | None = None, dofs: int | None = None) -> Estimate:
+    """The estimate for a wall of ``blocks`` blocks (``interfaces``: default 3 per block, a
+    running bond; ``dofs``: default 6 per block)."""
+    if blocks < 0:
+        raise ValueError(f"blocks must be >= 0, got {blocks}")
+    m = 3 * blocks if interfaces is None else int(interfaces)
+    n = 6 * blocks if dofs is None else int(dofs)
+    fill = FILL_PER_DOF * n * max(math.log2(max(n, 6) / 6.0), 1.0)
+    parts = {
+        "runtime": RUNTIME_BYTES,
+        "model": MODEL_BYTES_PER_BLOCK * blocks + MODEL_BYTES_PER_INTERFACE * m,
+        "factors": BYTES_PER_FACTOR_ENTRY * fill,
+        "history": STEPS * (STEP_BYTES_PER_BLOCK * blocks + STEP_BYTES_PER_INTERFACE * m),
+    }
+    more = (max(blocks, 1) / 1e3) ** GROWTH
+    seconds = more * (
+        FACTORIZATIONS * FACTOR_SECONDS * (n / 6e4) ** FACTOR_EXPONENT
+        + ITERATIONS * ITERATION_SECONDS_PER_INTERFACE * m
+    )
+    return Estimate(blocks, m, n, float(sum(parts.values())), float(seconds), parts)
+
+
+def machine_memory() -> float | None:
+    """Bytes of memory available to a new process (MemAvailable of /proc/meminfo, else the
+    physical memory); None where neither can be read."""
+    try:
+        with open("/proc/meminfo") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    return float(line.split()[1]) * 1024.0
+    except OSError:
+        pass
+    try:
+        return float(os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES"))
+    except (ValueError, OSError, AttributeError):
+        return None
+
+
+class TooLarge(RuntimeError):
+    """The estimated memory of a run is above what it may use."""
+
+
+def check_fits(est: Estimate, max_memory: float | None = None) -> None:
+    """Raise :class:`TooLarge` when ``est.memory`` is above ``max_memory`` bytes (None: the
+    machine's available memory)."""
+    limit = machine_memory() if max_memory is None else max_memory
+    if limit is None:
+        return
+    if est.memory > limit:
+        source = "--max-memory" if max_memory is not None else "the machine's available memory"
+        raise TooLarge(
+            f"the run would need {est.describe()}; that is over {_gb(limit)} "
+            f"({source}). Use a smaller wall, or raise --max-memory if the estimate is wrong."
+        )
+
+
+def parse_memory(text: str) -> float:
+    """Bytes of a size such as ``16G``, ``500M``, ``2.5GB`` or ``1e9``."""
+    units = {"": 1.0, "K": 1e3, "M": 1e6, "G": 1e9, "T": 1e12}
+    t = str(text).strip().upper().removesuffix("B").removesuffix("I")
+    unit = t[-1:] if t[-1:] in units and t[-1:] != "" and not t[-1:].isdigit() else ""
+    number = t[: len(t) - len(unit)] if unit else t
+    try:
+        value = float(number) * units[unit]
+    except ValueError:
+        raise ValueError(
+            f"--max-memory must be a size such as 16G, 500M or 2.5e9 (bytes), got {text!r}"
+        ) from None
+    if not math.isfinite(value) or value <= 0:
+        raise ValueError(f"--max-memory must be positive, got {text!r}")
+    return value
+
+
+def blocks_of_geometry(geometry: dict) -> int | None:
+    """Blocks of a case file's ``[geometry]`` counted from the builder's parameters without
+    building them (a wall of 10^6 blocks takes seconds to build), openings not subtracted;
+    None for a builder or parameters it does not know (the caller then builds the model and
+    estimates from it)."""
+    builder = geometry.get("builder")
+    base = 1 if geometry.get("base", False) else 0
+    try:
+        if builder == "running_bond_wall":
+            n, courses = int(geometry["blocks_along_length"]), int(geometry["courses"])
+            halves = (
+                courses // 2 if not geometry.get("start_with_half", False) else -(-courses // 2)
+            )
+            return n * courses + halves + base
+        if builder == "running_bond_wall_of_size":
+            e = float(geometry.get("joint", 0.0))
+            n = max(1, round(float(geometry["length"]) / (float(geometry["b"]) + e)))
+            courses = max(1, round(float(geometry["height"]) / (float(geometry["a"]) + e)))
+            return n * courses + courses // 2 + base
+        if builder == "stack_bond_column":
+            return int(geometry["courses"]) + base
+        if builder == "single_block":
+            return 1 + base
+        if builder == "boxes":
+            return len(geometry["lower"]) + base
+    except (KeyError, TypeError, ValueError):
+        return None
+    return None

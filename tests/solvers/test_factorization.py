@@ -1,0 +1,151 @@
+"""The sparse LU backends of the static solver (solvers/factorization.py): every installed
+backend against a dense solve, on random structurally symmetric (numerically unsymmetric)
+patterns and on assembly tangents of a wall with random per-interface tangents; the same
+collapse multiplier of a block on its base (s / a) through the solver with each; a stale
+factorization and a singular matrix refused with clear errors; the choice of backend.
+
+Backends whose library is not installed are skipped (they are optional extras)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy import sparse
+from test_stability import A, B, S, on_base
+
+from masonry_dem.geometry import builders
+from masonry_dem.solvers import factorization as fz
+from masonry_dem.solvers.incremental import StaticSolver
+
+INSTALLED = fz.installed()
+EVERY = [
+    pytest.param(
+        name,
+        marks=pytest.mark.skipif(name not in INSTALLED, reason=f"{name} is not installed"),
+    )
+    for name in fz.BACKENDS
+]
+
+
+def random_matrix(n: int, density: float, seed: int) -> sparse.csc_matrix:
+    """Structurally symmetric, numerically unsymmetric, diagonally dominant, every diagonal
+    entry stored, indices sorted (the form of the solver's tangents)."""
+    rng = np.random.default_rng(seed)
+    mask = sparse.random(n, n, density=density, rng=rng, format="csc")
+    pattern = (mask + mask.T + sparse.identity(n)).tocoo()
+    values = rng.uniform(-1.0, 1.0, pattern.nnz)  # a different value on each side
+    M = sparse.csc_matrix((values, (pattern.row, pattern.col)), shape=(n, n))
+    M = sparse.csc_matrix(M + sparse.diags(np.abs(M).sum(axis=1).A1 + 1.0))
+    M.sort_indices()
+    return M
+
+
+def assert_solves(factorizer, M: sparse.csc_matrix, seed: int) -> None:
+    b = np.random.default_rng(seed).uniform(-1.0, 1.0, M.shape[0])
+    x = factorizer.factor(M.data).solve(b)
+    reference = np.linalg.solve(M.toarray(), b)
+    assert x.shape == b.shape
+    np.testing.assert_allclose(x, reference, rtol=1e-9, atol=1e-11 * np.abs(reference).max())
+
+
+@pytest.mark.parametrize("backend", EVERY)
+@settings(max_examples=15, deadline=None)
+@given(n=st.integers(1, 60), density=st.floats(0.0, 0.3), seed=st.integers(0, 2**31 - 1))
+def test_random_patterns_solve_as_a_dense_solve(backend, n, density, seed):
+    M = random_matrix(n, density, seed)
+    factorizer = fz.analyse(M.indptr, M.indices, n, backend)
+    assert factorizer.name == backend
+    assert_solves(factorizer, M, seed)
+    # new values of the same pattern: the analysis is reused
+    M2 = M.copy()
+    M2.data = M.data * np.random.default_rng(seed + 1).uniform(0.5, 2.0, M.nnz)
+    M2 = sparse.csc_matrix(M2 + sparse.diags(np.abs(M2).sum(axis=1).A1))
+    M2.sort_indices()
+    assert np.array_equal(M2.indices, M.indices)
+    assert_solves(factorizer, M2, seed + 2)
+
+
+def wall_tangents(seed: int):
+    """The free-DOF tangent assembler of a 4 x 5 running-bond wall on a base (held on its
+    left column) and entries for random per-interface 6x6 tangents: a symmetric positive
+    part (the elastic stiffness of each joint) plus an unsymmetric coupling (a yielded
+    joint's)."""
+    wall = builders.running_bond_wall(4, 5, A, B, S, 20e3)
+    model = on_base(wall, left=["u1", "u3"])
+    solver = StaticSolver(model)
+    rng = np.random.default_rng(seed)
+    m = model.interfaces.count
+    G = rng.normal(size=(m, 6, 6))
+    T = np.einsum("mij,mkj->mik", G, G) + 6.0 * np.eye(6)
+    T += 0.5 * rng.normal(size=(m, 6, 6))  # unsymmetric
+    T *= 1e9
+    return solver._tangents, T
+
+
+@pytest.mark.parametrize("backend", EVERY)
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_assembly_tangents_solve_as_a_dense_solve(backend, seed):
+    tangents, T = wall_tangents(seed)
+    factorizer = fz.analyse(tangents.indptr, tangents.indices, tangents.n, backend)
+    for k in range(2):  # two tangents of the one pattern
+        K = tangents.matrix(T * (1.0 + k))
+        assert abs(K - K.T).max() > 1e-3 * abs(K).max()  # unsymmetric, as intended
+        b = np.random.default_rng(seed + k).uniform(-1.0, 1.0, K.shape[0])
+        x = factorizer.factor(K.data).solve(b)
+        reference = np.linalg.solve(K.toarray(), b)
+        np.testing.assert_allclose(x, reference, rtol=1e-8, atol=1e-10 * np.abs(reference).max())
+
+
+@pytest.mark.parametrize("backend", EVERY)
+def test_a_block_on_its_base_tilts_at_s_over_a_with_every_backend(backend, monkeypatch):
+    """The rigid block of width s and height a on a fixed base, tilted: it overturns at
+    lambda = s / a (moment balance about the toe) whichever library factorizes."""
+    monkeypatch.setenv(fz.ENVIRONMENT, backend)
+    hist = StaticSolver(on_base(builders.single_block(A, B, S, 20e3))).run()
+    assert hist.status == "collapse"
+    assert hist.collapse_multiplier == pytest.approx(S / A, rel=0.005)
+
+
+@pytest.mark.parametrize("backend", [b for b in ("pardiso", "mumps") if b in INSTALLED])
+def test_factors_replaced_by_a_later_factorization_refuse_to_solve(backend):
+    M = random_matrix(20, 0.2, 3)
+    factorizer = fz.analyse(M.indptr, M.indices, 20, backend)
+    first = factorizer.factor(M.data)
+    factorizer.factor(2.0 * M.data)
+    with pytest.raises(fz.StaleFactors, match="replaced by a later factorization"):
+        first.solve(np.ones(20))
+
+
+@pytest.mark.parametrize("backend", [b for b in ("superlu", "umfpack") if b in INSTALLED])
+def test_a_singular_matrix_raises_singular_matrix(backend):
+    """A zero column: no pivot exists (SuperLU, UMFPACK report it; PARDISO and MUMPS perturb
+    tiny pivots instead, so the Newton step that follows is judged by its residual)."""
+    M = sparse.csc_matrix(np.array([[1.0, 1.0], [1.0, 1.0]]))
+    M.sort_indices()
+    with pytest.raises(fz.SingularMatrix, match=backend):
+        fz.analyse(M.indptr, M.indices, 2, backend).factor(M.data)
+
+
+def test_the_choice_follows_the_size_and_what_is_installed(monkeypatch):
+    monkeypatch.delenv(fz.ENVIRONMENT, raising=False)
+    assert fz.choose(10) == "superlu"
+    large = fz.choose(10 * fz.SMALL)
+    assert large in INSTALLED
+    assert large == next(b for b in fz._PREFERENCE if b in INSTALLED)
+    monkeypatch.setattr(fz, "installed", lambda: ["superlu"])
+    assert fz.choose(10 * fz.SMALL) == "superlu"  # the always-present default
+    with pytest.raises(ValueError, match="pardiso.*not installed"):
+        fz.choose(10, "pardiso")
+    with pytest.raises(ValueError, match=r"one of \['superlu'"):
+        fz.choose(10, "lapack")
+    monkeypatch.setenv(fz.ENVIRONMENT, "bogus")
+    with pytest.raises(ValueError, match=f"{fz.ENVIRONMENT}.*got 'bogus'"):
+        fz.choose(10)
+
+
+def test_a_pattern_of_the_wrong_size_is_refused():
+    M = random_matrix(5, 0.3, 0)
+    with pytest.raises(ValueError, match="n \\+ 1 = 7 column pointers"):
+        fz.analyse(M.indptr, M.indices, 6, "superlu")
