@@ -67,7 +67,7 @@ def test_the_model_part_of_the_estimate_is_what_the_model_and_the_solver_allocat
         [md.SelfWeight(), md.WeightProportional((0.0, 0.0, 1.0))],
     )
     solver = StaticSolver(model)
-    solver._tangents.data(np.tile(np.eye(6), (model.interfaces.count, 1, 1)))
+    solver.problem.tangent_assembler.data(np.tile(np.eye(6), (model.interfaces.count, 1, 1)))
     peak = tracemalloc.get_traced_memory()[1]
     tracemalloc.stop()
     est = resources.estimate(model.blocks.count, model.interfaces.count, model.n_dofs)

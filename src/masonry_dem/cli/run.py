@@ -65,7 +65,10 @@ def _refuse_if_too_large(args: argparse.Namespace, model=None) -> int | None:
 
     if model is None:
         geometry = _geometry_of(args.case)
-        blocks = None if geometry is None else resources.blocks_of_geometry(geometry)
+        try:
+            blocks = None if geometry is None else resources.blocks_of_geometry(geometry)
+        except (TypeError, ValueError, OverflowError):
+            blocks = None  # not a geometry the schema accepts: load_case names the fault
         if blocks is None:
             return None
         est = resources.estimate(blocks)

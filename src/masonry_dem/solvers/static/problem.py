@@ -196,6 +196,11 @@ class DiscreteProblem:
             self._assembler = TangentAssembler(self.asm, self.model)
         return self._assembler
 
+    @property
+    def tangent_assembler(self) -> TangentAssembler:
+        """The fixed-pattern assembler of the tangent (its pattern: ``indptr``, ``indices``)."""
+        return self._tangents
+
     def factor(self, response: LawResponse, floor: float | None = None) -> Factorized:
         """LU of the consistent tangent at ``response`` (with ``floor`` x the elastic
         stiffness kept on the diagonal of every joint). The tangent is structurally symmetric
