@@ -70,3 +70,17 @@ def test_case_file_method_limit_and_the_pushover_bound(tmp_path):
         case_from_dict(dict(SINGLE_BLOCK, analysis={"method": "magic"}))
     with pytest.raises(ValueError, match="grid"):
         case_from_dict(dict(SINGLE_BLOCK, analysis={"grid": 4}))
+
+
+def test_limit_command_claims_its_folder_as_run_does(tmp_path, capsys):
+    """A results folder belongs to one run: a second limit analysis into the same --out is
+    refused (exit 2, naming the folder) unless --overwrite, which replaces it."""
+    case = _write_case(tmp_path, SINGLE_BLOCK)
+    out = tmp_path / "la"
+    assert main(["limit", str(case), "--out", str(out), "--no-render"]) == 0
+    capsys.readouterr()
+    assert main(["limit", str(case), "--out", str(out), "--no-render"]) == 2
+    assert str(out) in capsys.readouterr().err
+    assert main(["limit", str(case), "--out", str(out), "--no-render", "--overwrite"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "collapse" and summary["analysis"] == "limit"

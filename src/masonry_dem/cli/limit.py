@@ -32,27 +32,43 @@ def add_parser(subparsers) -> None:
     p.add_argument("--backend", choices=("highs", "clarabel"), default=None)
     p.add_argument("--out", default="results/limit", help="results folder (default: %(default)s)")
     p.add_argument("--no-render", action="store_true", help="skip the PNG of the mechanism")
+    p.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="replace the run already in --out (removes the package's own files there, and "
+        "only those); without it such a folder is refused",
+    )
     p.set_defaults(func=limit_command)
 
 
-def run_limit(case, out: Path, options: dict, render: bool = True) -> dict:
-    """Run the limit analysis of a loaded case into ``out``; returns the summary."""
+def run_limit(case, out: Path, options: dict, render: bool = True, overwrite: bool = False) -> dict:
+    """Run the limit analysis of a loaded case into ``out``, a folder this run claims as
+    ``run`` does (refused if it holds another run, unless ``overwrite``); returns the
+    summary."""
     from masonry_dem.export.limit_results import write_limit_results
+    from masonry_dem.export.results_folder import claim, write_summary
     from masonry_dem.solvers.limit_analysis import limit_analysis
 
-    t0 = time.perf_counter()
-    result = limit_analysis(case.model, **options)
-    summary = write_limit_results(
-        out, case.model, result, case=case.source, wall_seconds=round(time.perf_counter() - t0, 4)
-    )
-    if render and result.status == "collapse":
-        try:
-            from masonry_dem.export.render import render_mechanism
-        except ImportError as exc:  # rendering is optional for the analysis itself
-            log.warning("no PNG: the render module is unavailable (%s)", exc)
-        else:
-            summary["mechanism_png"] = render_mechanism(out).name
-            (out / "summary.json").write_text(json.dumps(summary, indent=2))
+    folder = claim(out, overwrite, {"case": case.source, "analysis": "limit"})
+    try:
+        t0 = time.perf_counter()
+        result = limit_analysis(case.model, **options)
+        summary = write_limit_results(
+            out,
+            case.model,
+            result,
+            case=case.source,
+            wall_seconds=round(time.perf_counter() - t0, 4),
+        )
+        if render and result.status == "collapse":
+            try:
+                from masonry_dem.export.render import render_mechanism
+            except ImportError as exc:  # rendering is optional for the analysis itself
+                log.warning("no PNG: the render module is unavailable (%s)", exc)
+            else:
+                summary = write_summary(out, summary, {"mechanism_png": render_mechanism(out).name})
+    finally:
+        folder.release()
     return summary
 
 
@@ -68,7 +84,7 @@ def limit_command(args: argparse.Namespace) -> int:
     if args.backend is not None:
         options["backend"] = args.backend
     out = Path(args.out)
-    summary = run_limit(case, out, options, render=not args.no_render)
+    summary = run_limit(case, out, options, render=not args.no_render, overwrite=args.overwrite)
     print(
         json.dumps(
             {k: summary[k] for k in ("status", "lambda", "method", "bound", "seconds", "blocks")}

@@ -4,7 +4,6 @@ plus ``method`` and ``bound``) and, at collapse, the mechanism as ``mechanism_bl
 
 from __future__ import annotations
 
-import json
 import logging
 from pathlib import Path
 from typing import Any
@@ -40,6 +39,7 @@ def write_limit_results(
     folder: Path | str, model: Model, result: LimitAnalysisResult, **summary_extra: Any
 ) -> dict[str, Any]:
     """Write ``summary.json`` and, at collapse, the mechanism VTUs; returns the summary."""
+    from masonry_dem.export.results_folder import write_summary
     from masonry_dem.export.vtu import write_mechanism_vtu
 
     folder = Path(folder)
@@ -67,6 +67,6 @@ def write_limit_results(
     if result.status == "collapse":
         step = collapse_step(model, result)
         write_mechanism_vtu(folder, model, step, result.block_velocities, None)
-    (folder / "summary.json").write_text(json.dumps(summary, indent=2))
+    summary = write_summary(folder, summary)
     log.info("limit analysis written to %s", folder)
     return summary
