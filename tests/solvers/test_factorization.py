@@ -149,3 +149,28 @@ def test_a_pattern_of_the_wrong_size_is_refused():
     M = random_matrix(5, 0.3, 0)
     with pytest.raises(ValueError, match="n \\+ 1 = 7 column pointers"):
         fz.analyse(M.indptr, M.indices, 6, "superlu")
+
+
+@pytest.mark.parametrize("backend", EVERY)
+def test_elastic_factors_stay_valid_after_tangent_factorizations(backend, monkeypatch):
+    """The bonded assembly's elastic factors are kept for the whole run (the robust re-try,
+    the certificate's elastic slope) while tangents are factorized in between: they must
+    still solve K_el x = b exactly (a backend with one factorization per handle would
+    otherwise hand back stale factors)."""
+    monkeypatch.setenv(fz.ENVIRONMENT, backend)
+    wall = builders.running_bond_wall(4, 5, A, B, S, 20e3)
+    solver = StaticSolver(on_base(wall, left=["u1", "u3"]))
+    problem = solver.problem
+    elastic = problem.elastic_factor()
+    _, _, response = solver.residual(solver.q, 0.0)
+    problem.factor(response)
+    problem.factor(response)
+    idx = np.arange(6)
+    T = np.zeros((solver.model.interfaces.count, 6, 6))
+    T[:, idx, idx] = problem.law.kbar
+    K = problem.tangent_assembler.matrix(T)
+    b = np.random.default_rng(3).uniform(-1.0, 1.0, K.shape[0])
+    reference = np.linalg.solve(K.toarray(), b)
+    np.testing.assert_allclose(
+        elastic.solve(b), reference, rtol=1e-8, atol=1e-10 * np.abs(reference).max()
+    )

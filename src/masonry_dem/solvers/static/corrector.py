@@ -26,7 +26,8 @@ import numpy as np
 
 from masonry_dem.model import Model
 from masonry_dem.solvers.static.outcome import Failure, Outcome
-from masonry_dem.solvers.static.problem import DiscreteProblem, Factorized
+from masonry_dem.solvers.factorization import Factors
+from masonry_dem.solvers.static.problem import DiscreteProblem
 from masonry_dem.solvers.static.settings import StaticSettings
 
 if TYPE_CHECKING:
@@ -154,7 +155,7 @@ class Corrector:
         cuts = 0  # cuts of the trust radius in this search
         cut = False  # the last iteration cut the radius
         direction = (np.zeros(0), 0.0)  # (dq, dlam) of the search that was cut
-        live_solved: tuple[Factorized | None, np.ndarray] = (None, np.zeros(0))  # K^-1 F_live
+        live_solved: tuple[Factors | None, np.ndarray] = (None, np.zeros(0))  # K^-1 F_live
         cerr = constraint_error(q)  # of the present iterate q, kept with it
         while it < budget:
             it += 1

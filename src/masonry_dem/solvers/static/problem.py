@@ -19,7 +19,7 @@ from scipy import sparse
 from masonry_dem.assembly.stiffness import Assembly
 from masonry_dem.constitutive.law import InterfaceLaw, LawResponse
 from masonry_dem.model import Model
-from masonry_dem.solvers.factorization import Factorizer, SingularMatrix, analyse
+from masonry_dem.solvers.factorization import Factorizer, Factors, SingularMatrix, analyse
 
 
 @numba.njit(cache=True, parallel=True, fastmath={"contract"})
@@ -60,8 +60,7 @@ class TangentAssembler:
     once: each interface adds B = H_loc^T T H_loc (12 x 12, the DOFs of its two blocks) and
     the blocks are summed into a fixed CSC structure with one bincount."""
 
-    def __init__(self, asm: Assembly, model: Model, order: np.ndarray | None = None) -> None:
-        """``order[d]``: the row and column of free DOF d in the matrix (None: as numbered)."""
+    def __init__(self, asm: Assembly, model: Model) -> None:
         its = model.interfaces
         m = its.count
         H = asm.H.tocoo()
@@ -75,9 +74,7 @@ class TangentAssembler:
             axis=1,
         )  # (m, 12)
         position = np.full(model.n_dofs, -1, dtype=np.int64)
-        position[asm.free_index] = np.arange(asm.n_free) if order is None else order
-        self.order = order
-        self._numbering = None if order is None else np.argsort(order)
+        position[asm.free_index] = np.arange(asm.n_free)
         pos = position[dofs]
         rows = np.broadcast_to(pos[:, :, None], (m, 12, 12)).ravel()
         cols = np.broadcast_to(pos[:, None, :], (m, 12, 12)).ravel()
@@ -108,25 +105,6 @@ class TangentAssembler:
     def symbolic(self) -> Factorizer:
         """A factorizer of :meth:`matrix`'s pattern (the backend: factorization.choose)."""
         return analyse(self.indptr, self.indices, self.n)
-
-    def factorized(self, lu) -> Factorized:
-        """A factorization of :meth:`matrix` that solves in the DOF numbering."""
-        return Factorized(lu, self._numbering)
-
-
-class Factorized:
-    """LU factors of a symmetrically permuted matrix, solving in the original numbering."""
-
-    def __init__(self, lu, numbering: np.ndarray | None) -> None:
-        self.lu = lu
-        self.numbering = numbering  # numbering[i]: the DOF in row i of the factorized matrix
-
-    def solve(self, b: np.ndarray) -> np.ndarray:
-        if self.numbering is None:
-            return self.lu.solve(b)
-        x = np.empty_like(b)
-        x[self.numbering] = self.lu.solve(b[self.numbering])
-        return x
 
 
 class DiscreteProblem:
@@ -170,7 +148,7 @@ class DiscreteProblem:
         self.moving_translations = free[self.translation]  # DOF numbers
         self.factorizations = 0
         self._fronts: Factorizer | None = None  # the tangent's pattern, analysed once
-        self._elastic: Factorized | None = None
+        self._elastic: Factors | None = None
 
     # ------------------------------------------------------------------ residual
     def residual(
@@ -201,7 +179,7 @@ class DiscreteProblem:
         """The fixed-pattern assembler of the tangent (its pattern: ``indptr``, ``indices``)."""
         return self._tangents
 
-    def factor(self, response: LawResponse, floor: float | None = None) -> Factorized:
+    def factor(self, response: LawResponse, floor: float | None = None) -> Factors:
         """LU of the consistent tangent at ``response`` (with ``floor`` x the elastic
         stiffness kept on the diagonal of every joint). The tangent is structurally symmetric
         with a regular diagonal (the residual stiffness); its pattern never changes, so it is
@@ -215,29 +193,28 @@ class DiscreteProblem:
         self.factorizations += 1
         fronts = self._factorizer()
         try:
-            return self._tangents.factorized(fronts.factor(data))
+            return fronts.factor(data)
         except SingularMatrix:  # exactly singular: stiffen the floor
             idx = np.arange(6)
             T[:, idx, idx] += 1e-6 * self.law.kbar
-            return self._tangents.factorized(fronts.factor(self._tangents.data(T)))
+            return fronts.factor(self._tangents.data(T))
 
     def _factorizer(self) -> Factorizer:
         if self._fronts is None:
             self._fronts = self._tangents.symbolic()
         return self._fronts
 
-    def elastic_factor(self) -> Factorized:
+    def elastic_factor(self) -> Factors:
         """LU of the elastic stiffness of the bonded assembly (every joint at its elastic
-        stiffness, in tension too), factorized once per problem (same pattern as the
-        tangent, so by the same factorizer)."""
+        stiffness, in tension too), factorized once per problem. It has a factorizer of its
+        own: a backend keeps one numeric factorization per handle (PARDISO, MUMPS), so
+        factors shared with the tangent's handle would go stale at the next tangent."""
         if self._elastic is None:
             idx = np.arange(6)
             T = np.zeros((self.model.interfaces.count, 6, 6))
             T[:, idx, idx] = self.law.kbar
             self.factorizations += 1
-            self._elastic = self._tangents.factorized(
-                self._factorizer().factor(self._tangents.data(T))
-            )
+            self._elastic = self._tangents.symbolic().factor(self._tangents.data(T))
         return self._elastic
 
     def elastic_displacement(self, load: np.ndarray) -> float:
