@@ -25,8 +25,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from masonry_dem.model import Model
-from masonry_dem.solvers.static.outcome import Failure, Outcome
 from masonry_dem.solvers.factorization import Factors
+from masonry_dem.solvers.static.outcome import Failure, Outcome
 from masonry_dem.solvers.static.problem import DiscreteProblem
 from masonry_dem.solvers.static.settings import StaticSettings
 
