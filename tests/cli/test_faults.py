@@ -20,6 +20,7 @@ from pathlib import Path
 import meshio
 import numpy as np
 import pytest
+from test_run import SINGLE_BLOCK, _write_case
 
 from masonry_dem.cli import main
 from masonry_dem.export import results_folder as rf
@@ -137,33 +138,8 @@ def test_sigkill_leaves_a_folder_the_next_commands_name_unfinished(tmp_path, cap
     assert not list((out / "steps").glob(".*.tmp"))  # the killed run's temporaries too
 
 
-SMALL = """\
-name = "block"
-[geometry]
-builder = "single_block"
-a = 0.4
-b = 0.3
-s = 0.2
-unit_weight = 20e3
-base = true
-[material]
-kn = 2.4e9
-kt = 1e9
-friction = 0.7
-[[supports]]
-select = "base"
-[[loads]]
-type = "self_weight"
-[[loads]]
-type = "weight_proportional"
-direction = [0, 0, 1]
-"""
-
-
 def _small(tmp_path: Path) -> Path:
-    case = tmp_path / "block.toml"
-    case.write_text(SMALL)
-    return case
+    return _write_case(tmp_path, SINGLE_BLOCK)
 
 
 def test_second_run_into_a_folder_is_refused(tmp_path, capsys):
