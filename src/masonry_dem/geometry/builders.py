@@ -101,23 +101,28 @@ def boxes(lower, upper, unit_weight) -> Blocks:
     return Blocks.from_boxes(lower, upper, unit_weight)
 
 
-def cut_openings(blocks: Blocks, openings) -> Blocks:
+def cut_openings(
+    blocks: Blocks, openings, among: np.ndarray | None = None, field: str = "openings"
+) -> Blocks:
     """Remove every block whose centre lies inside one of the rectangular openings.
 
     ``openings`` is a list of (x_min, y_min, x_max, y_max) in the wall plane (e1, e2). Openings
     are cut in whole blocks: choose their edges on block boundaries for clean jambs.
+    ``among``: a mask of the blocks an opening may remove (None: every block), e.g. the facade
+    of walls that meet; ``field`` names the argument in errors.
     """
+    c = blocks.centres
+    eligible = np.ones(blocks.count, dtype=bool) if among is None else among
     keep = np.ones(blocks.count, dtype=bool)
     for k, rect in enumerate(openings):
-        x0, y0, x1, y1 = as_finite_array(f"openings[{k}]", rect, (4,))
+        x0, y0, x1, y1 = as_finite_array(f"{field}[{k}]", rect, (4,))
         if x1 <= x0 or y1 <= y0:
             raise ValueError(
-                f"openings[{k}] must have x_max > x_min and y_max > y_min, got {plain(rect)}"
+                f"{field}[{k}] must have x_max > x_min and y_max > y_min, got {plain(rect)}"
             )
-        c = blocks.centres
-        inside = (c[:, 0] > x0) & (c[:, 0] < x1) & (c[:, 1] > y0) & (c[:, 1] < y1)
+        inside = eligible & (c[:, 0] > x0) & (c[:, 0] < x1) & (c[:, 1] > y0) & (c[:, 1] < y1)
         if not inside.any():
-            raise ValueError(f"openings[{k}] = {list(rect)} removes no block")
+            raise ValueError(f"{field}[{k}] = {plain(rect)} removes no block")
         keep &= ~inside
     return blocks.subset(np.flatnonzero(keep))
 

@@ -36,8 +36,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from masonry_dem._validation import as_finite_array, positive_scalar
+from masonry_dem._validation import positive_scalar
 from masonry_dem.geometry.blocks import Blocks
+from masonry_dem.geometry.builders import cut_openings
 
 SHORTEST_PIECE = 0.3  # in block lengths: a shorter piece stays with its neighbour
 
@@ -145,20 +146,8 @@ def _facade_openings(blocks: Blocks, openings, s: float) -> Blocks:
     (x_min, y_min, x_max, y_max); the walls behind the facade are left whole."""
     if openings is None or len(openings) == 0:
         return blocks
-    c = blocks.centres
     facade = blocks.lower[:, 2] >= -1e-9 * s
-    keep = np.ones(blocks.count, dtype=bool)
-    for k, rect in enumerate(openings):
-        x0, y0, x1, y1 = as_finite_array(f"facade_openings[{k}]", rect, (4,))
-        if x1 <= x0 or y1 <= y0:
-            raise ValueError(
-                f"facade_openings[{k}] must have x_max > x_min and y_max > y_min, got {rect!r}"
-            )
-        inside = facade & (c[:, 0] > x0) & (c[:, 0] < x1) & (c[:, 1] > y0) & (c[:, 1] < y1)
-        if not inside.any():
-            raise ValueError(f"facade_openings[{k}] = {list(rect)} removes no block")
-        keep &= ~inside
-    return blocks.subset(np.flatnonzero(keep))
+    return cut_openings(blocks, openings, among=facade, field="facade_openings")
 
 
 def l_wall(
