@@ -162,68 +162,14 @@ def print_validation_in_pieces() -> None:
 
 
 def associative_lp(model) -> float:
-    """Largest lambda of a statically admissible state of rigid blocks with forces at the four
-    corners of every interface: n >= 0, |t1|, |t2| <= mu n (exact in the plane of the wall,
-    where one tangent works), H^T B x + F_D + lambda F_L = 0 on the free DOFs."""
-    from scipy import sparse
-    from scipy.optimize import linprog
+    """The associative rigid-block multiplier of the same model, by the package's limit
+    analysis (the LP of ``masonry_dem.solvers.limit_analysis``, HiGHS)."""
+    from masonry_dem.solvers.limit_analysis import limit_analysis
 
-    from masonry_dem.assembly.compatibility import compatibility_matrix
-
-    its = model.interfaces
-    m = its.count
-    sign = np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]], dtype=float)
-    r1 = 0.5 * sign[None, :, 0] * its.l1[:, None]
-    r2 = 0.5 * sign[None, :, 1] * its.l2[:, None]
-    ones = np.ones(m)
-    rows, cols, vals = [], [], []
-    # corner k's force on block j, local (t1, t2, n) -> actions [f1, f2, fn, m1, m2, m3]
-    for k in range(4):
-        var = 12 * np.arange(m) + 3 * k
-        for action, dv, value in (
-            (0, 1, ones),
-            (1, 2, ones),
-            (2, 0, ones),
-            (3, 0, r2[:, k]),
-            (4, 0, -r1[:, k]),
-            (5, 2, r1[:, k]),
-            (5, 1, -r2[:, k]),
-        ):
-            rows.append(6 * np.arange(m) + action)
-            cols.append(var + dv)
-            vals.append(value)
-    to_actions = sparse.csr_matrix(
-        (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(6 * m, 12 * m)
-    )
-    free = model.free
-    equilibrium = (compatibility_matrix(model.blocks, its).T @ to_actions).tocsr()[free]
-    a_eq = sparse.hstack([equilibrium, sparse.csr_matrix(model.live.reshape(-1)[free][:, None])])
-    nc = 4 * m
-    c = np.arange(nc)
-    mu = np.repeat(model.friction, 4)
-    rows, cols, vals = [], [], []
-    for row_block, (tv, s) in enumerate(((1, 1.0), (1, -1.0), (2, 1.0), (2, -1.0))):
-        rows += [row_block * nc + c] * 2
-        cols += [3 * c + tv, 3 * c]
-        vals += [np.full(nc, s), -mu]
-    a_ub = sparse.csr_matrix(
-        (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
-        shape=(4 * nc, 12 * m + 1),
-    )
-    cost = np.zeros(12 * m + 1)
-    cost[-1] = -1.0
-    res = linprog(
-        cost,
-        A_ub=a_ub,
-        b_ub=np.zeros(4 * nc),
-        A_eq=a_eq,
-        b_eq=-model.dead.reshape(-1)[free],
-        bounds=[(0, None), (None, None), (None, None)] * nc + [(None, None)],
-        method="highs",
-    )
-    if res.status != 0:
-        raise RuntimeError(f"the LP did not solve: {res.message}")
-    return float(-res.fun)
+    result = limit_analysis(model, associative=True)
+    if result.status != "collapse":
+        raise RuntimeError(f"the limit analysis did not find a collapse: {result.reason}")
+    return result.load_factor
 
 
 def package_rows(with_dr: bool) -> list[tuple[str, str, float, str]]:

@@ -21,13 +21,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from scipy import sparse
-from scipy.optimize import linprog
 
 import masonry_dem as md
-from masonry_dem.assembly.compatibility import compatibility_matrix
 from masonry_dem.assembly.stiffness import Assembly
 from masonry_dem.geometry.interfaces import detect_interfaces, subdivide_interfaces
+from masonry_dem.solvers.limit_analysis import limit_analysis
 
 MATERIAL = md.InterfaceMaterial(kn=1e9, kt=0.4e9, friction=0.6)
 
@@ -150,66 +148,12 @@ def peer_wall(pieces=(1, 1)) -> md.Model:
 
 
 def associative_bound(model: md.Model) -> float:
-    """Largest lambda of a statically admissible state of rigid blocks: forces at the four
-    corners of every interface, compression n >= 0, |t1|, |t2| <= mu n (exact in the plane,
-    where only one tangent works), equilibrium H^T B x + F_D + lambda F_L = 0 on the free
-    DOFs. By the lower-bound theorem it is the associative collapse multiplier, and (after
-    Radenkovic) an upper bound of the non-associative one."""
-    its = model.interfaces
-    m = its.count
-    sign = np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]], dtype=float)
-    r1 = 0.5 * sign[None, :, 0] * its.l1[:, None]  # (m, 4) corner arms, local
-    r2 = 0.5 * sign[None, :, 1] * its.l2[:, None]
-    # corner force on block j, local (t1, t2, n): actions [t1, t2, n, r2 n, -r1 n, r1 t2 - r2 t1]
-    rows, cols, vals = [], [], []
-    ones = np.ones(m)
-    for k in range(4):
-        var = 12 * np.arange(m) + 3 * k  # n, t1, t2 of corner k
-        for action, dv, value in (
-            (0, 1, ones),
-            (1, 2, ones),
-            (2, 0, ones),
-            (3, 0, r2[:, k]),
-            (4, 0, -r1[:, k]),
-            (5, 2, r1[:, k]),
-            (5, 1, -r2[:, k]),
-        ):
-            rows.append(6 * np.arange(m) + action)
-            cols.append(var + dv)
-            vals.append(value)
-    corner_to_actions = sparse.csr_matrix(
-        (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(6 * m, 12 * m)
-    )
-    free = model.free
-    equilibrium = (compatibility_matrix(model.blocks, its).T @ corner_to_actions).tocsr()[free]
-    live = model.live.reshape(-1)[free]
-    a_eq = sparse.hstack([equilibrium, sparse.csr_matrix(live[:, None])])
-    nc = 4 * m
-    c = np.arange(nc)
-    mu = np.repeat(model.friction, 4)
-    rows, cols, vals = [], [], []
-    for block, (tv, s) in enumerate(((1, 1.0), (1, -1.0), (2, 1.0), (2, -1.0))):
-        rows += [block * nc + c] * 2
-        cols += [3 * c + tv, 3 * c]
-        vals += [np.full(nc, s), -mu]
-    a_ub = sparse.csr_matrix(
-        (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
-        shape=(4 * nc, 12 * m + 1),
-    )
-    cost = np.zeros(12 * m + 1)
-    cost[-1] = -1.0
-    bounds = [(0, None), (None, None), (None, None)] * nc + [(None, None)]
-    res = linprog(
-        cost,
-        A_ub=a_ub,
-        b_ub=np.zeros(4 * nc),
-        A_eq=a_eq,
-        b_eq=-model.dead.reshape(-1)[free],
-        bounds=bounds,
-        method="highs",
-    )
-    assert res.status == 0, res.message
-    return float(-res.fun)
+    """The associative rigid-block multiplier (limit analysis: by the lower-bound theorem the
+    largest lambda of a statically admissible state, after Radenkovic an upper bound of the
+    non-associative one)."""
+    result = limit_analysis(model, associative=True)
+    assert result.status == "collapse", result.reason
+    return result.load_factor
 
 
 def wedge_overturning() -> float:
