@@ -409,7 +409,7 @@ def _solve_clarabel(
         b.insert(1, np.zeros(1))
         cones[0] = clarabel.ZeroConeT(n_eq + 1)
     else:  # lambda <= cap: a bounded problem (interior point methods detect unboundedness
-        # poorly: Clarabel stopped with NumericalError on S6, HiGHS took 130 s)
+        # poorly; docs/limit_analysis.md)
         rows.append(sparse.csc_matrix(([1.0], ([0], [k])), shape=(1, nvar)))
         b.append(np.array([cap]))
         cones.append(clarabel.NonnegativeConeT(1))

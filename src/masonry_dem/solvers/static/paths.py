@@ -174,9 +174,8 @@ def load_control(solver: StaticSolver, hist: History, record: Record) -> None:
 def _hands_over(hist: History) -> bool:
     """Work control takes over at the first failure of load control once the path has two
     live-load steps (the first is its elastic scale). An earlier failure is halved first:
-    there it is far more often a step too long than a limit (S11 and S34 fail their very
-    first live-load step and pass it on the retry; handing over there moved S11, S12 and S34
-    by 0.004-0.05 % at 1.5-2.2x the iterations, docs/solvers.md). A wall whose very first
+    there it is far more often a step too long than a limit (the measurements are in
+    docs/solvers.md, "Settings and their evidence"). A wall whose very first
     step finds its limit (a block that slides or lifts at once) ends in the refined
     bracket, which the certificate checks across its tolerance."""
     return len(hist.steps) > 2
