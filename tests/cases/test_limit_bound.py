@@ -8,8 +8,8 @@ accepts and docs/limit_analysis.md lists."""
 from __future__ import annotations
 
 import pytest
-from paper_runs import run_case
 
+from helpers.paper_runs import run_case
 from masonry_dem.cases.paper import case_names
 from masonry_dem.solvers.limit_analysis import limit_analysis
 

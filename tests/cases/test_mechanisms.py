@@ -24,11 +24,11 @@ to fail, so the checks can fail.
 
 from __future__ import annotations
 
-import mechanism_checks as chk
 import numpy as np
 import pytest
-from paper_runs import run_case
 
+from helpers import mechanism_checks as chk
+from helpers.paper_runs import run_case
 from masonry_dem import mechanism as mech
 from masonry_dem.cases.paper import build_case
 

@@ -13,8 +13,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from paper_runs import run_case
 
+from helpers.paper_runs import run_case
 from masonry_dem.cases.paper import Assumptions, build_case, case_names, reference_data
 from masonry_dem.mechanism import last_increment, out_of_plane
 

@@ -15,11 +15,11 @@ test_mechanisms.py:
 
 from __future__ import annotations
 
-import mechanism_checks as chk
 import numpy as np
 import pytest
-from paper_runs import run_case
 
+from helpers import mechanism_checks as chk
+from helpers.paper_runs import run_case
 from masonry_dem import mechanism as mech
 from masonry_dem.geometry import selectors as sel
 

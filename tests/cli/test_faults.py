@@ -20,8 +20,9 @@ from pathlib import Path
 import meshio
 import numpy as np
 import pytest
-from test_run import SINGLE_BLOCK, _write_case
 
+from helpers.case_files import SINGLE_BLOCK
+from helpers.case_files import write_case as _write_case
 from masonry_dem.cli import main
 from masonry_dem.export import results_folder as rf
 

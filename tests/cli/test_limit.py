@@ -8,8 +8,9 @@ import json
 import meshio
 import numpy as np
 import pytest
-from test_run import SINGLE_BLOCK, _write_case
 
+from helpers.case_files import SINGLE_BLOCK
+from helpers.case_files import write_case as _write_case
 from masonry_dem.cases.casefile import case_from_dict
 from masonry_dem.cli import main
 

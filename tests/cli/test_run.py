@@ -13,52 +13,12 @@ import meshio
 import numpy as np
 import pytest
 
+from helpers.case_files import SINGLE_BLOCK
+from helpers.case_files import write_case as _write_case
 from masonry_dem.cases.casefile import case_from_dict, load_case
 from masonry_dem.cli import main
 
 ROOT = Path(__file__).resolve().parents[2]
-
-SINGLE_BLOCK = {
-    "name": "block",
-    "geometry": {
-        "builder": "single_block",
-        "a": 0.4,
-        "b": 0.3,
-        "s": 0.2,
-        "unit_weight": 20e3,
-        "base": True,
-    },
-    "material": {"kn": 2.4e9, "kt": 1e9, "friction": 0.7},
-    "supports": [{"select": "base"}],
-    "loads": [{"type": "self_weight"}, {"type": "weight_proportional", "direction": [0, 0, 1]}],
-}
-
-
-def _write_case(tmp_path: Path, data: dict) -> Path:
-    lines = []
-
-    def emit(table: dict) -> None:
-        simple = {
-            k: v
-            for k, v in table.items()
-            if not isinstance(v, (dict, list))
-            or (isinstance(v, list) and not (v and isinstance(v[0], dict)))
-        }
-        for k, v in simple.items():
-            lines.append(f"{k} = {json.dumps(v)}")
-
-    emit(data)
-    for key in ("geometry", "material", "analysis"):
-        if key in data:
-            lines.append(f"[{key}]")
-            emit(data[key])
-    for key in ("supports", "loads"):
-        for item in data.get(key, []):
-            lines.append(f"[[{key}]]")
-            emit(item)
-    path = tmp_path / "case.toml"
-    path.write_text("\n".join(lines))
-    return path
 
 
 def test_run_single_block_case_writes_every_output(tmp_path):

@@ -380,7 +380,7 @@ def test_energy_projection_converges_at_both_ends_of_the_curve(alpha, caplog):
     """Trials near pure torsion (where sqrt(1 - t^alpha) is singular in the shear-end
     parameter) and near pure shear (alpha = 1 has a vertex there) converge, every row, to the
     closest boundary point; no row is left to the radial fallback."""
-    from numpy_reference import _energy_closest_point
+    from helpers.numpy_reference import _energy_closest_point
 
     ang = np.concatenate([np.geomspace(1e-9, 1e-2, 40), np.pi / 2 - np.geomspace(1e-9, 1e-2, 40)])
     ang = np.concatenate([ang, np.linspace(0.01, np.pi / 2 - 0.01, 40)])

@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from numpy_reference import _evaluate_numpy, fd_tangent_numpy, law_tangent_numpy
 
+from helpers.numpy_reference import _evaluate_numpy, fd_tangent_numpy, law_tangent_numpy
 from masonry_dem.constitutive import law as law_module
 from masonry_dem.constitutive.law import InterfaceLaw
 from masonry_dem.constitutive.strength import (

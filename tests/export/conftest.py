@@ -6,8 +6,8 @@ import shutil
 from pathlib import Path
 
 import pytest
-from damage_pattern import build_model, write_results
 
+from helpers.damage_pattern import build_model, write_results
 from masonry_dem.model import Model
 
 

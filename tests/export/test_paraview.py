@@ -20,8 +20,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from damage_pattern import build_model, states_at, write_results
 
+from helpers.damage_pattern import build_model, states_at, write_results
 from masonry_dem.export import paraview_state
 from masonry_dem.export.pvd import read_pvd
 from masonry_dem.export.render import (

@@ -119,7 +119,7 @@ def test_pushover_plot_matches_reference(results, tmp_path):
 
 # --------------------------------------------------------------------------- content
 def test_front_view_damage_colours_in_proportion(results, model, tmp_path):
-    from damage_pattern import states_at
+    from helpers.damage_pattern import states_at
 
     img = iio.imread(render.render_step(results, view="front", out=tmp_path / "f.png"))
     got = fractions(classify(img))
@@ -142,7 +142,7 @@ def test_damage_colours_where_interfaces_failed(results, tmp_path):
 
 
 def test_earlier_step_shows_its_own_states(results, model, tmp_path):
-    from damage_pattern import states_at
+    from helpers.damage_pattern import states_at
 
     img = iio.imread(render.render_step(results, step=1, view="front", out=tmp_path / "s1.png"))
     got = fractions(classify(img))

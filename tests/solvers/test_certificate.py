@@ -17,9 +17,9 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from certificate_checks import recheck, tilted_wall
 
 import masonry_dem as md
+from helpers.certificate_checks import recheck, tilted_wall
 from masonry_dem.geometry.builders import (
     add_base,
     single_block,

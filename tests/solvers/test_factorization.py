@@ -13,8 +13,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy import sparse
-from test_stability import A, B, S, on_base
 
+from helpers.walls import A, B, S, on_base
 from masonry_dem.geometry import builders
 from masonry_dem.solvers import factorization as fz
 from masonry_dem.solvers.incremental import StaticSolver

@@ -15,10 +15,10 @@ more than 1 % when kn and kt are scaled together by 1e-2..1e3, nor with the step
 from __future__ import annotations
 
 import pytest
-from certificate_checks import recheck, tilted_wall
 from hypothesis import HealthCheck, given, seed, settings
 from hypothesis import strategies as st
 
+from helpers.certificate_checks import recheck, tilted_wall
 from masonry_dem.model import InterfaceMaterial
 from masonry_dem.solvers.incremental import StaticSettings, pushover
 from masonry_dem.solvers.limit_analysis import limit_analysis

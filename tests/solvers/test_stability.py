@@ -15,32 +15,17 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from helpers.walls import A, B, S, on_base
 from masonry_dem.assembly.stiffness import Assembly
 from masonry_dem.constitutive.law import InterfaceLaw
 from masonry_dem.geometry import builders
-from masonry_dem.geometry import selectors as sel
-from masonry_dem.model import InterfaceMaterial, Model, SelfWeight, Support, WeightProportional
+from masonry_dem.model import Model
 from masonry_dem.results import History
 from masonry_dem.solvers.dynamic_relaxation import DRSettings, DynamicRelaxation
 from masonry_dem.solvers.incremental import StaticSettings, StaticSolver
 from masonry_dem.solvers.static.outcome import StopReason
 
-A, B, S = 0.2, 0.3, 0.1
 DR_FAST = DRSettings(bracket_tolerance=0.01)
-
-
-def on_base(blocks, friction=0.7, direction=(0.0, 0.0, 1.0), kn=1e9, left=None) -> Model:
-    wall = np.arange(blocks.count)
-    blocks, base = builders.add_base(blocks)
-    supports = [Support(np.array([base]))]
-    if left is not None:
-        supports.append(Support(sel.column(blocks, "left", among=wall), left))
-    return Model.build(
-        blocks,
-        InterfaceMaterial(kn, 0.4 * kn, friction),
-        supports,
-        [SelfWeight(), WeightProportional(direction)],
-    )
 
 
 def assert_clean(hist: History) -> None:
