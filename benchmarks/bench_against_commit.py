@@ -28,7 +28,10 @@ ROOT = Path(__file__).resolve().parents[1]
 _CHILD = """
 import json, sys, time
 from masonry_dem.cases.paper import build_case
-from masonry_dem.cli.study import warm_up
+try:
+    from masonry_dem.studies.runs import warm_up
+except ImportError:  # a tree from before the studies left the command line
+    from masonry_dem.cli.study import warm_up
 from masonry_dem.solvers.incremental import pushover
 warm_up()
 case = build_case(sys.argv[1])

@@ -53,8 +53,8 @@ def _fmt(x: float | None) -> str:
 
 def cases(names: list[str], nonassoc_grid: int | None = None) -> None:
     from masonry_dem.cases.paper import build_case, case_names
-    from masonry_dem.cli.study import warm_up
     from masonry_dem.solvers.incremental import pushover
+    from masonry_dem.studies.runs import warm_up
 
     warm_up()
     names = names or case_names()
@@ -90,10 +90,10 @@ def cases(names: list[str], nonassoc_grid: int | None = None) -> None:
 
 def ladder(sizes: list[int], pushover_up_to: int, highs: bool = True) -> None:
     """Square-ish running-bond walls on a base tilted in plane (mu 0.6): LA against pushover."""
-    from masonry_dem.cli.study import warm_up
     from masonry_dem.geometry.builders import add_base, running_bond_wall
     from masonry_dem.model import InterfaceMaterial, Model, SelfWeight, Support, WeightProportional
     from masonry_dem.solvers.incremental import pushover
+    from masonry_dem.studies.runs import warm_up
 
     warm_up()
     print(

@@ -173,9 +173,9 @@ def associative_lp(model) -> float:
 
 
 def package_rows(with_dr: bool) -> list[tuple[str, str, float, str]]:
-    from masonry_dem.cli.study import warm_up
     from masonry_dem.solvers.dynamic_relaxation import relax
     from masonry_dem.solvers.incremental import pushover
+    from masonry_dem.studies.runs import warm_up
 
     warm_up()
     rows = []

@@ -259,7 +259,7 @@ def main() -> int:
     if len(sys.argv) > 1 and sys.argv[1] == "--child":
         kind, payload = sys.argv[2], json.loads(sys.argv[3])
         func = {"sizes": sizes_child, "factor": factor_child, "pushover": pushover_child}[kind]
-        from masonry_dem.cli.study import warm_up
+        from masonry_dem.studies.runs import warm_up
 
         warm_up()
         print(json.dumps(func(**payload)))

@@ -1,13 +1,15 @@
-"""Benchmark: speed against accuracy of the static solver and dynamic relaxation (issue 6).
+"""Benchmark: speed against accuracy of the static solver, dynamic relaxation and limit
+analysis (issues 6 and 19).
 
 Run:  python benchmarks/bench_speed_accuracy.py [--cases S15 OL1 14-15] [--quick]
                                                 [--out results/study] [--skip-sweeps]
 
 One command for every figure of docs/solvers.md:
 
-1. the speed-accuracy study (``masonry-dem study speed-accuracy``): every setting of both
-   solvers on each case, the table, ``speed_accuracy.json`` and the chart with the Pareto
-   front, and the time ratio DR / static at equal (1 %) accuracy, measured in this run;
+1. the speed-accuracy study (``masonry-dem study speed-accuracy``): every setting of each
+   method (``--methods``) on each case, the table, ``speed_accuracy.json`` and the chart with
+   the Pareto front, the time ratio DR / static at equal (1 %) accuracy and the limit
+   analysis against the static answer, measured in this run;
 2. the in-plane reduction (``masonry-dem study reduction``): lambda and time of the 3-DOF
    model against the 6-DOF model, and what the never-assembled fixed DOFs and the closed-form
    interface domain save;
@@ -30,16 +32,16 @@ import time
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
-from masonry_dem.cli import study
-from masonry_dem.cli.validate import one_kernel_thread
+from masonry_dem.studies import speed_accuracy as study
+from masonry_dem.studies.chart import chart
+from masonry_dem.studies.kn_sweep import kn_sweep
+from masonry_dem.studies.reduction import reduction_study, reduction_text
+from masonry_dem.studies.runs import Method
+from masonry_dem.studies.validation import one_kernel_thread
 
 
 def _progress(r: dict) -> None:
-    print(
-        f"  {r['case']} {r['method']} [{r['label']}]: {r['status']} "
-        f"lambda={study._fmt(r['lambda'], '.5g')} in {r['seconds']:.2f} s",
-        flush=True,
-    )
+    print(study.progress_line(r), flush=True)
 
 
 def _one_case(case: str, options: dict) -> dict:
@@ -49,6 +51,9 @@ def _one_case(case: str, options: dict) -> dict:
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
     p.add_argument("--cases", nargs="+", default=list(study.DEFAULT_CASES))
+    p.add_argument(
+        "--methods", nargs="+", choices=[m.value for m in Method], default=[m.value for m in Method]
+    )
     p.add_argument("--quick", action="store_true", help="a few settings per method")
     p.add_argument("--full", action="store_true", help="also the DR settings that only cost time")
     p.add_argument(
@@ -73,7 +78,12 @@ def main(argv: list[str] | None = None) -> int:
     failures: list[str] = []
 
     t0 = time.perf_counter()
-    options = {"quick": args.quick, "full": args.full, "budget": args.budget}
+    options = {
+        "quick": args.quick,
+        "full": args.full,
+        "budget": args.budget,
+        "methods": args.methods,
+    }
     if args.jobs > 1 and len(args.cases) > 1:
         with ProcessPoolExecutor(
             max_workers=args.jobs,
@@ -89,7 +99,7 @@ def main(argv: list[str] | None = None) -> int:
     (out / "speed_accuracy.json").write_text(json.dumps(res, indent=2))
     text = study.table(res["rows"]) + "\n\n" + study.summary_lines(res["summary"], res["accuracy"])
     (out / "speed_accuracy.txt").write_text(text + "\n")
-    png = study.chart(res["rows"], out / "speed_accuracy.png")
+    png = chart(res["rows"], out / "speed_accuracy.png")
     print(text)
     print(f"chart: {png} ({time.perf_counter() - t0:.0f} s)")
     for name, s in res["summary"].items():
@@ -99,10 +109,10 @@ def main(argv: list[str] | None = None) -> int:
                 failures.append(f"{name}: DR / static at 1 % of the {what} = {ratio}")
 
     if not args.skip_sweeps:
-        red = study.reduction_study(repeats=3)
+        red = reduction_study(repeats=3)
         (out / "reduction.json").write_text(json.dumps(red, indent=2))
         print()
-        print(study.reduction_text(red))
+        print(reduction_text(red))
         for r in red["in_plane"]:
             d = r["lambda_relative_difference"]
             if d is None or d > 1e-3:
@@ -113,18 +123,18 @@ def main(argv: list[str] | None = None) -> int:
         for method in methods:
             for scale_kt in (True, False):
                 key = f"{method}, {'kn and kt' if scale_kt else 'kn alone'}"
-                sweep = study.kn_sweep(args.kn_case, factors, method, args.budget, scale_kt)
+                sweep = kn_sweep(args.kn_case, factors, method, args.budget, scale_kt)
                 sweeps[key] = sweep
                 print()
                 print(f"{args.kn_case}: lambda as the dry-joint stiffness grows ({key})")
                 for r in sweep["rows"]:
                     print(
                         f"  kn = {r['kn']:9.3g}  kt = {r['kt']:9.3g}  "
-                        f"lambda = {study._fmt(r['lambda'], '.5g'):>9}  "
-                        f"drift {study._fmt(r['drift'], '.2%'):>7}  {r['seconds']:6.2f} s  "
+                        f"lambda = {study.fmt(r['lambda'], '.5g'):>9}  "
+                        f"drift {study.fmt(r['drift'], '.2%'):>7}  {r['seconds']:6.2f} s  "
                         f"{r['status']}"
                     )
-                print(f"  spread: {study._fmt(sweep['spread'], '.2%')}")
+                print(f"  spread: {study.fmt(sweep['spread'], '.2%')}")
                 if scale_kt and (sweep["spread"] is None or sweep["spread"] > 0.01):
                     failures.append(f"kn sweep ({key}) spread {sweep['spread']}")
         (out / "kn_sweep.json").write_text(json.dumps(sweeps, indent=2))

@@ -18,8 +18,14 @@ import argparse
 import platform
 import time
 
-from masonry_dem.cli.study import _dr_base, _run, _settings, load_study_case, warm_up
-from masonry_dem.solvers.dynamic_relaxation import DRSettings
+from masonry_dem.studies.runs import (
+    Method,
+    load_study_case,
+    run_method,
+    settings_for,
+    warm_up,
+    with_changes,
+)
 
 DR_RUNS = (
     ("DR tolerance 1e-3", {"tolerance": 1e-3, "bracket_tolerance": 0.01}),
@@ -39,15 +45,16 @@ def main() -> int:
     print(f"{'case':6} {'run':18} {'lambda':>10} {'seconds':>8} {'work':>8} {'vs static':>9}")
     for name in args.cases:
         case = load_study_case(name)
-        drs = [_settings(DRSettings, _dr_base(case.static), c) for _, c in DR_RUNS]
+        dr = settings_for(Method.DYNAMIC_RELAXATION, case.static)
+        drs = [with_changes(dr, c) for _, c in DR_RUNS]
         best: dict[int, tuple] = {}  # run index (0: static) -> fastest (history, s, cost)
         for _ in range(args.repeat):
             for i, (method, settings) in enumerate(
-                [("static", case.static)] + [("dynamic_relaxation", d) for d in drs]
+                [(Method.STATIC, case.static)] + [(Method.DYNAMIC_RELAXATION, d) for d in drs]
             ):
-                run = _run(method, case.model, settings)
-                if i not in best or run[1] < best[i][1]:
-                    best[i] = run
+                run = run_method(method, case.model, settings)
+                if i not in best or run.seconds < best[i][1]:
+                    best[i] = (run.history, run.seconds, run.cost)
         h, t_static, cost = best[0]
         lam = h.collapse_multiplier
         print(f"{name:6} {'static default':18} {lam:10.5g} {t_static:8.2f} {cost['iterations']:8d}")

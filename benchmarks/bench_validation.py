@@ -14,8 +14,8 @@ import time
 from dataclasses import fields, replace
 
 from masonry_dem.cases.paper import build_case, case_names
-from masonry_dem.cli.study import warm_up
 from masonry_dem.solvers.incremental import StaticSettings, pushover
+from masonry_dem.studies.runs import warm_up
 
 # (case, assumption changes): a sensible move of each value the paper does not give
 SENSITIVITY = [

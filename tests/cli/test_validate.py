@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from masonry_dem.cli import main
-from masonry_dem.cli.validate import run_case, run_cases
+from masonry_dem.studies.validation import run_case, run_cases
 
 
 def test_cases_run_side_by_side_give_the_rows_of_one_process():

@@ -10,30 +10,17 @@ import numpy as np
 import pytest
 import scipy.linalg as sla
 
+from helpers.walls import A, B, S, on_base
 from masonry_dem.geometry import builders
 from masonry_dem.model import (
     InterfaceMaterial,
     Model,
-    SelfWeight,
     Support,
-    WeightProportional,
 )
 from masonry_dem.solvers.dynamic_relaxation import DRSettings, DynamicRelaxation, relax
 from masonry_dem.solvers.incremental import StaticSolver
 
-A, B, S = 0.2, 0.3, 0.1  # block height, width, thickness [m]
 FAST = {"bracket_tolerance": 0.01}
-
-
-def on_base(blocks, friction=0.7, direction=(0.0, 0.0, 1.0), kn=1e9, name="model") -> Model:
-    blocks, base = builders.add_base(blocks)
-    return Model.build(
-        blocks,
-        InterfaceMaterial(kn, 0.4 * kn, friction),
-        [Support(np.array([base]))],
-        [SelfWeight(), WeightProportional(direction)],
-        name=name,
-    )
 
 
 @pytest.fixture(scope="module")
@@ -187,69 +174,3 @@ def test_time_step_budget_fails_without_lambda(small_wall):
     assert hist.status == "failed"
     assert "budget" in hist.reason
     assert hist.collapse_multiplier is None
-
-
-# ---------------------------------------------------------------------------- the study
-def test_pareto_front_and_equal_accuracy():
-    from masonry_dem.cli import study
-
-    rows = [
-        {"method": "static", "label": "a", "seconds": 1.0, "error_vs_converged": 0.05},
-        {"method": "static", "label": "b", "seconds": 2.0, "error_vs_converged": 0.001},
-        {"method": "static", "label": "c", "seconds": 3.0, "error_vs_converged": 0.002},
-        {"method": "dynamic_relaxation", "label": "d", "seconds": 40.0, "error_vs_converged": 0.0},
-        {"method": "dynamic_relaxation", "label": "e", "seconds": 5.0, "error_vs_converged": None},
-    ]
-    study.mark_pareto(rows)
-    assert [r["pareto"] for r in rows] == [True, True, False, True, False]
-    eq = study.equal_accuracy(rows, 0.01)
-    assert eq["static_label"] == "b" and eq["dynamic_relaxation_label"] == "d"
-    assert eq["time_ratio_dr_over_static"] == pytest.approx(20.0)
-
-
-def test_study_command_json_table_and_chart(tmp_path, monkeypatch, capsys, tilting_block):
-    """``masonry-dem study speed-accuracy --json`` on a one-block case (grids cut short)."""
-    from masonry_dem.cli import main, study
-    from masonry_dem.solvers.incremental import StaticSettings
-
-    case = study.StudyCase("block", tilting_block, S / A, StaticSettings())
-    monkeypatch.setattr(study, "load_study_case", lambda name: case)
-    monkeypatch.setattr(study, "STATIC_GRID", study.STATIC_GRID[:2])
-    monkeypatch.setattr(study, "DR_GRID", (("bracket 2%", {"bracket_tolerance": 0.02}),))
-    monkeypatch.setattr(study, "FULL_ONLY", {"static": (), "dynamic_relaxation": ()})
-    code = main(["study", "speed-accuracy", "--cases", "block", "--json", "--out", str(tmp_path)])
-    assert code == 0
-    runs = json.loads(capsys.readouterr().out)
-    assert {r["method"] for r in runs} == {"static", "dynamic_relaxation"}
-    for r in runs:
-        for key in (
-            "case",
-            "method",
-            "settings",
-            "seconds",
-            "lambda",
-            "error_vs_converged",
-            "error_vs_test",
-        ):
-            assert key in r
-        assert r["lambda"] == pytest.approx(S / A, rel=0.02)
-        assert r["error_vs_test"] <= 0.02
-    assert (tmp_path / "speed_accuracy.png").stat().st_size > 10_000
-    saved = json.loads((tmp_path / "speed_accuracy.json").read_text())
-    assert saved["summary"]["block"]["lambda_converged"] == pytest.approx(S / A, rel=1e-3)
-    assert "Pareto" in (tmp_path / "speed_accuracy.txt").read_text()
-    # the chart and table are regenerated from the saved runs without running anything
-    (tmp_path / "speed_accuracy.png").unlink()
-    again = tmp_path / "again"
-    code = main(
-        [
-            "study",
-            "speed-accuracy",
-            "--from-json",
-            str(tmp_path / "speed_accuracy.json"),
-            "--out",
-            str(again),
-        ]
-    )
-    assert code == 0 and (again / "speed_accuracy.png").is_file()
-    assert "DR / static" in capsys.readouterr().out
