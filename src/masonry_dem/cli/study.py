@@ -20,6 +20,7 @@ from typing import Any
 from masonry_dem.studies.runs import Method
 
 METHODS = [m.value for m in Method]
+HELP = f"{', '.join(METHODS)} (default: %(default)s)"
 
 
 def add_parser(subparsers: Any) -> None:
@@ -34,8 +35,12 @@ def add_parser(subparsers: Any) -> None:
     )
     sub = p.add_subparsers(dest="study", metavar="STUDY")
     sa = sub.add_parser("speed-accuracy", help="every setting of each method; time vs error")
-    sa.add_argument("--cases", nargs="+", default=list(DEFAULT_CASES), help="%(default)s")
-    sa.add_argument("--methods", nargs="+", choices=METHODS, default=METHODS)
+    sa.add_argument(
+        "--cases", nargs="+", default=list(DEFAULT_CASES), help="validation cases or 'default'"
+    )
+    sa.add_argument(
+        "--methods", nargs="+", choices=METHODS, default=METHODS, metavar="METHOD", help=HELP
+    )
     sa.add_argument("--quick", action="store_true", help="a few settings per method only")
     sa.add_argument("--full", action="store_true", help="also the DR settings that cost time")
     sa.add_argument("--budget", type=int, help="time-step budget of each DR run")
@@ -44,8 +49,10 @@ def add_parser(subparsers: Any) -> None:
     sa.add_argument("--out", default="results/study", help="PNG, JSON, table (%(default)s)")
     sa.set_defaults(func=speed_accuracy_command)
     la = sub.add_parser("ladder", help="the methods on walls of 10^2 to 10^4 blocks")
-    la.add_argument("--sizes", type=int, nargs="+", default=list(DEFAULT_SIZES))
-    la.add_argument("--methods", nargs="+", choices=METHODS, default=["static", "limit_analysis"])
+    la.add_argument("--sizes", type=int, nargs="+", default=list(DEFAULT_SIZES), help="blocks")
+    la.add_argument(
+        "--methods", nargs="+", choices=METHODS, default=METHODS[::2], metavar="METHOD", help=HELP
+    )
     for method, blocks in DEFAULT_UP_TO.items():
         la.add_argument(
             f"--{method.value.replace('_', '-')}-up-to",
