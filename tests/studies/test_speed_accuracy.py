@@ -115,3 +115,11 @@ def test_the_methods_of_a_study_are_chosen(tmp_path, monkeypatch, capsys, tiltin
     res = sa.speed_accuracy(["block"], quick=True, methods=["static", "limit_analysis"])
     assert {r["method"] for r in res["rows"]} == {"static", "limit_analysis"}
     assert len([r for r in res["rows"] if r["method"] == "limit_analysis"]) == 1
+
+
+def test_rows_saved_by_an_older_version_are_refused_with_the_file(tmp_path):
+    saved = tmp_path / "speed_accuracy.json"
+    row = {"case": "S15", "method": "static", "label": "default", "lambda": 0.27}
+    saved.write_text(json.dumps({"rows": [row], "summary": {}}))
+    with pytest.raises(ValueError, match="speed_accuracy.json: 1 rows .* older version"):
+        sa.from_saved(saved)

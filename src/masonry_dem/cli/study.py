@@ -94,8 +94,7 @@ def speed_accuracy_command(args: argparse.Namespace) -> int:
             print(sa.progress_line(row), flush=True)
 
     if args.from_json:
-        saved = json.loads(Path(args.from_json).read_text())
-        res = sa.summarise(saved["rows"], saved["summary"])
+        res = sa.from_saved(Path(args.from_json))
     else:
         res = sa.speed_accuracy(
             args.cases,

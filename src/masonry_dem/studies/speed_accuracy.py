@@ -13,9 +13,11 @@ costs and how far its multiplier lies from the pushover's (``ratio_to_static``).
 
 from __future__ import annotations
 
+import json
 import logging
 import math
 from collections.abc import Callable, Iterable, Sequence
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -299,6 +301,21 @@ def summarise(rows: list[dict[str, Any]], refs: dict[str, dict[str, Any]]) -> di
             "limit_analysis": limit_analysis_summary(case_rows),
         }
     return {"rows": rows, "summary": summary, "accuracy": ACCURACY}
+
+
+def from_saved(path: Path) -> dict[str, Any]:
+    """The study of a saved ``speed_accuracy.json`` summarised again (no runs). Rows saved by
+    a version before the runs were verified (no ``verified``) are refused, naming the file."""
+    saved = json.loads(Path(path).read_text())
+    if not isinstance(saved, dict) or not {"rows", "summary"} <= set(saved):
+        raise ValueError(f"{path}: not a speed_accuracy.json (no 'rows' and 'summary')")
+    old = [r.get("label", "?") for r in saved["rows"] if "verified" not in r]
+    if old:
+        raise ValueError(
+            f"{path}: {len(old)} rows (e.g. {old[0]!r}) were saved by an older version, "
+            "without 'verified'; run the study again"
+        )
+    return summarise(saved["rows"], saved["summary"])
 
 
 def limit_analysis_summary(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
