@@ -20,7 +20,7 @@ from masonry_dem.constitutive import REFERENCE_INTERFACE
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     ref = REFERENCE_INTERFACE
-    p = subparsers.add_parser(
+    p: argparse.ArgumentParser = subparsers.add_parser(
         "interface",
         help="interface strength: closed form vs spring model, Table A1",
         description=__doc__,

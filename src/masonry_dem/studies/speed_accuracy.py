@@ -27,6 +27,7 @@ from masonry_dem.results import History
 from masonry_dem.studies.runs import (
     Method,
     StudyCase,
+    collapse_lambda,
     load_study_case,
     relative_error,
     run_method,
@@ -111,7 +112,6 @@ def polish(model: Model, static_settings: Any, hist: History) -> tuple[bool, str
     lambda is an equilibrium of the same model, whatever method found it."""
     from masonry_dem.constitutive.law import DETACHED_FLAG
     from masonry_dem.solvers.incremental import StaticSolver
-    from masonry_dem.studies.runs import collapse_lambda
 
     lam = collapse_lambda(hist)
     if lam is None or not hist.steps:
