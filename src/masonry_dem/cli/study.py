@@ -118,10 +118,11 @@ def speed_accuracy_command(args: argparse.Namespace) -> int:
 
 
 def ladder_command(args: argparse.Namespace) -> int:
-    from masonry_dem.studies.size_ladder import ladder_text, size_ladder
+    from masonry_dem.studies.size_ladder import ladder_text, progress_line, size_ladder
 
     up_to = {m: getattr(args, f"{m.value}_up_to") for m in Method}
-    rows = size_ladder(args.sizes, [Method(m) for m in args.methods], up_to)
+    shown = None if args.json else (lambda row: print(progress_line(row), flush=True))
+    rows = size_ladder(args.sizes, [Method(m) for m in args.methods], up_to, progress=shown)
     print(json.dumps(rows, indent=1) if args.json else ladder_text(rows))
     return 0 if rows else 1
 

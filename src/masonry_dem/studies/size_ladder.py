@@ -109,6 +109,13 @@ def size_ladder(
     return rows
 
 
+def progress_line(row: dict[str, Any]) -> str:
+    return (
+        f"  {row['blocks']} blocks, {row['method']}: {row['status']} "
+        f"lambda={fmt(row['lambda'], '.5g')} in {row['seconds']:.2f} s"
+    )
+
+
 def ladder_text(rows: list[dict[str, Any]]) -> str:
     head = (
         f"{'blocks':>7} {'interf':>7} {'method':<7} {'status':<11} {'lambda':>10} "
