@@ -58,7 +58,7 @@ def size_ladder(
 ) -> list[dict[str, Any]]:
     """One row per wall and method: lambda, status, seconds; ``ratio_to_static`` and
     ``time_ratio_to_static`` against the static run of the same wall (None without one).
-    ``up_to``: the largest wall of each method (defaults: ``DEFAULT_UP_TO``)."""
+    ``up_to``: the largest size (blocks asked for) each method runs on (``DEFAULT_UP_TO``)."""
     from masonry_dem.solvers.dynamic_relaxation import DRSettings
     from masonry_dem.solvers.incremental import StaticSettings
 
@@ -76,7 +76,7 @@ def size_ladder(
         static: dict[str, Any] | None = None
         wall_rows = []
         for method in chosen:
-            if n > limits[method]:
+            if size > limits[method]:  # the size asked for: a wall of 1 000 has 1 041 blocks
                 continue
             run = run_method(method, model, base[method])
             row = {
@@ -125,11 +125,14 @@ def ladder_text(rows: list[dict[str, Any]]) -> str:
     for r in rows:
         lines.append(
             f"{r['blocks']:7d} {r['interfaces']:7d} {Method(r['method']).short:<7} "
-            f"{r['status']:<11} {fmt(r['lambda'], '10.5g')} {r['seconds']:8.2f} "
-            f"{fmt(r['ratio_to_static'], '15.3f')} {fmt(r['time_ratio_to_static'], '13.3f')}"
+            f"{r['status']:<11} {fmt(r['lambda'], '.5g'):>10} {r['seconds']:8.2f} "
+            f"{fmt(r['ratio_to_static'], '.3f'):>15} {fmt(r['time_ratio_to_static'], '.3f'):>13}"
         )
     lines.append(
         "x static: over the static pushover of the same wall (- where the wall is above the "
         "static solver's size limit)"
     )
+    for r in rows:
+        if r["status"] != "collapse":
+            lines.append(f"{r['blocks']} blocks, {r['method']}: {r['reason']}")
     return "\n".join(lines)
