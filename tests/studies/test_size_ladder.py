@@ -33,3 +33,13 @@ def test_a_method_skips_walls_above_its_limit():
 def test_bad_size_names_the_field(blocks):
     with pytest.raises(ValueError, match="blocks must be a whole number >= 4"):
         ladder_wall(blocks)
+
+
+def test_ladder_command_prints_each_run_then_the_table(capsys):
+    from masonry_dem.cli import main
+
+    code = main(["study", "ladder", "--sizes", "9", "--methods", "limit_analysis"])
+    assert code == 0
+    out = capsys.readouterr().out
+    assert "blocks, limit_analysis: collapse" in out  # the progress line
+    assert "x static lambda" in out and " LA " in out
