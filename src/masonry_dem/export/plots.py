@@ -43,9 +43,10 @@ def _block_motion(path: Path) -> np.ndarray | None:
 
 
 def control_dof(folder: Path | str) -> tuple[int, str] | str | None:
-    """Which displacement ``pushover.csv`` records: ``(block, dof name)``,
-    :data:`LARGEST_TRANSLATION` (followed by the block and DOF where it is largest at the
-    largest step), or None when the steps written do not tell (no motion yet,
+    """Which displacement ``pushover.csv`` records: ``(block, dof name)`` when one block DOF
+    equals it at every step checked (a displacement control, a monitor, or the largest
+    translation staying on one DOF), else :data:`LARGEST_TRANSLATION` (followed by the block
+    and DOF where it is largest at the largest step) when it is that, else None when the steps written do not tell (no motion yet,
     or files of another layout)."""
     table = read_pushover(folder)
     try:
@@ -65,14 +66,14 @@ def control_dof(folder: Path | str) -> tuple[int, str] | str | None:
         return None
     scale = max(abs(v) for v, _ in motions)
     tol = _MATCH * scale
-    if all(abs(np.abs(q[:, :3]).max() - v) <= tol for v, q in motions):
-        block, dof = divmod(int(np.argmax(np.abs(motions[0][1][:, :3]))), 3)
-        return f"{LARGEST_TRANSLATION}; at its largest block {block} {DOF_NAMES[dof]}"
     hit = np.ones(motions[0][1].shape, dtype=bool)
     for v, q in motions:
         hit &= np.abs(q - v) <= tol
     found = np.argwhere(hit)
-    if not found.size:
+    if not found.size:  # no one DOF: the largest translation, wherever it is
+        if all(abs(np.abs(q[:, :3]).max() - v) <= tol for v, q in motions):
+            block, dof = divmod(int(np.argmax(np.abs(motions[0][1][:, :3]))), 3)
+            return f"{LARGEST_TRANSLATION}; at its largest block {block} {DOF_NAMES[dof]}"
         return None
     block, dof = (int(x) for x in found[0])
     return block, DOF_NAMES[dof]
