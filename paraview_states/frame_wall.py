@@ -1,9 +1,11 @@
 """Frame a masonry_dem ParaView state to the wall it shows: every Warp By Vector scaled from the
 data, every render view's camera reset to the data.
 
-The shipped states (``*.pvsm``) keep the camera and the warp scale of the sample wall they were
-made from; loaded against another results folder (``LoadState(..., data_directory=...)`` or
-the GUI's *Search files under specified directory*), run this once:
+The shipped states (``*.pvsm``) were made from a sample wall. Each holds this file's
+:func:`frame` in a Python animation cue: the first time the animation moves
+(*Last Frame* in the GUI, ``GetAnimationScene().GoToLast()`` in a script, or *Play*) it frames
+the state to the wall loaded. To frame at any other moment, or a state without the cue, run
+this file:
 
 * GUI: *Macros > Import new macro...*, choose this file (once); after *File > Load State*, click
   ``frame_wall`` in the Macros toolbar;
@@ -43,11 +45,13 @@ def _warp_filters():
     return [src for src in pvs.GetSources().values() if src.GetXMLName() == "WarpVector"]
 
 
-def frame(time=None):
+def frame(time=None, set_time=True):
     """Set every Warp By Vector's scale from the data at ``time`` (default: the last time
-    step), then reset every render view's camera to what it shows. One scale for the whole
-    state, from the largest displacement and the largest dimension of all the warped inputs
-    (the blocks), so blocks and joints move together. Returns the scales set."""
+    step), then reset every render view's camera to what it shows (at that time when
+    ``set_time``, else at the view's own time: the animation cue, which must not move the
+    time). One scale for the whole state, from the largest displacement and the largest
+    dimension of all the warped inputs (the blocks), so blocks and joints move together.
+    Returns the scales set."""
     t = _last_time() if time is None else time
     warps = _warp_filters()
     size = dmax = 0.0
@@ -65,7 +69,8 @@ def frame(time=None):
     for view in pvs.GetViews():
         if view.GetXMLName() != "RenderView":
             continue
-        view.ViewTime = t
+        if set_time:
+            view.ViewTime = t
         view.ResetCamera(False)
         pvs.Render(view)
     return [scale] * len(warps)
@@ -79,6 +84,20 @@ def load(state, results_folder):
     scene.UpdateAnimationUsingDataTimeSteps()
     scene.GoToLast()
     return frame()
+
+
+#: the animation cue's callbacks (make_states.py embeds this file, up to the main block, in
+#: every state): frame once when the animation starts, keeping the time it is at
+def start_cue(self):
+    frame(set_time=False)
+
+
+def tick(self):
+    pass
+
+
+def end_cue(self):
+    pass
 
 
 if __name__ == "__main__":

@@ -8,8 +8,9 @@ pvbatch pvbatch_check.py states JOBS.json
     the same for a list of jobs [[state, data_dir, out, reset], ...] in one ParaView
     session (reset between jobs); prints a JSON list.
 pvbatch pvbatch_check.py frame FRAME_WALL.py JOBS.json
-    for each job [state, data_dir, out_prefix]: load the state by the README's recipe and
-    frame it with paraview_states/frame_wall.py, hide the 2D overlays (titles, time, scalar
+    for each job [state, data_dir, out_prefix, how]: load the state by the README's recipe
+    (LoadState with data_directory, then the last time step: the state's own cue frames it;
+    how = "recipe") or by paraview_states/frame_wall.py (how = "macro"), hide the 2D overlays (titles, time, scalar
     bars, orientation axes: they do not move with the camera), save one screenshot per
     render view (out_prefix_<k>.png); prints a JSON list of {scales, images}.
 pvbatch pvbatch_check.py pvd FILE.pvd [FILE.pvd ...]
@@ -77,9 +78,18 @@ def frame(frame_wall_py, jobs_file):
     with open(jobs_file) as fh:
         jobs = json.load(fh)
     results = []
-    for path, data_dir, prefix in jobs:
+    for path, data_dir, prefix, how in jobs:
         pvs.ResetSession()
-        scales = frame_wall.load(path, data_dir)
+        if how == "macro":
+            scales = frame_wall.load(path, data_dir)
+        else:  # the README's recipe alone: the state's own cue frames it
+            pvs.LoadState(path, data_directory=data_dir, restrict_to_data_directory=True)
+            pvs.GetAnimationScene().GoToLast()
+            scales = [
+                float(s.ScaleFactor)
+                for s in pvs.GetSources().values()
+                if s.GetXMLName() == "WarpVector"
+            ]
         images = []
         views = [v for v in pvs.GetViews() if v.GetXMLName() == "RenderView"]
         for k, view in enumerate(views):

@@ -561,7 +561,7 @@ def write_with_mechanism(folder: Path, model) -> None:
 
 
 def test_frame_wall_script_is_shipped_identically():
-    shipped = paraview_state.state_path("damage_map").with_name("frame_wall.py")
+    shipped = paraview_state.frame_script_path()
     assert filecmp.cmp(shipped, FRAME_WALL, shallow=False)
     text = FRAME_WALL.read_text()
     # the same amplification rule as the package's pictures
@@ -572,8 +572,8 @@ def test_frame_wall_script_is_shipped_identically():
 
 @pytest.fixture(scope="module")
 def framed(pvbatch, tmp_path_factory):
-    """Every state loaded by the README's recipe against the default wall and against the
-    same wall 4x larger, then framed by frame_wall.py; screenshots without the 2D overlays."""
+    """Every state loaded against the default wall and against the same wall 4x larger, by
+    the README's recipe alone and by frame_wall.py; screenshots without the 2D overlays."""
     import imageio.v3 as iio
 
     root = tmp_path_factory.mktemp("frame")
@@ -582,30 +582,32 @@ def framed(pvbatch, tmp_path_factory):
         folder = root / f"wall_x{factor:g}"
         write_with_mechanism(folder, default_wall_model(factor))
         for name in paraview_state.STATES:
-            jobs.append(
-                [
-                    str(paraview_state.state_path(name)),
-                    str(folder),
-                    str(root / f"{name}_{factor:g}"),
-                ]
-            )
-            keys.append((name, factor, folder))
+            for how in ("recipe", "macro"):
+                prefix = str(root / f"{name}_{factor:g}_{how}")
+                jobs.append([str(paraview_state.state_path(name)), str(folder), prefix, how])
+                keys.append((name, factor, how, folder))
     (root / "jobs.json").write_text(json.dumps(jobs))
     infos = run_pvbatch(pvbatch, "frame", FRAME_WALL, root / "jobs.json")
     return {
-        (name, factor): (folder, info["scales"], [iio.imread(f)[..., :3] for f in info["images"]])
-        for (name, factor, folder), info in zip(keys, infos, strict=True)
+        (name, factor, how): (
+            folder,
+            info["scales"],
+            [iio.imread(f)[..., :3] for f in info["images"]],
+        )
+        for (name, factor, how, folder), info in zip(keys, infos, strict=True)
     }
 
 
 @pytest.mark.paraview
+@pytest.mark.parametrize("how", ["recipe", "macro"])
 @pytest.mark.parametrize("factor", [1.0, 4.0])
 @pytest.mark.parametrize("name", paraview_state.STATES)
-def test_state_frames_any_wall(framed, name, factor):
-    """The wall fills most of every view and no part touches the frame's edge; the warp
-    scale is the package's automatic one for this folder (a wall 4x larger with the same
-    displacements gets a scale 4x larger)."""
-    folder, scales, images = framed[name, factor]
+def test_state_frames_any_wall(framed, name, factor, how):
+    """Loaded by the README's recipe (LoadState with data_directory, then the last time
+    step: the state's cue frames it) or framed by frame_wall.py: the wall fills most of
+    every view and no part touches the frame's edge; the warp scale is the package's
+    automatic one for this folder."""
+    folder, scales, images = framed[name, factor, how]
     for img in images:
         wall = np.any(img < 245, axis=-1)  # anything drawn on the white background
         rows, cols = np.nonzero(wall)
@@ -618,3 +620,19 @@ def test_state_frames_any_wall(framed, name, factor):
     if name in ("deformed_shape", "mechanism"):
         want = paraview_state.warp_scale(folder, mechanism=name == "mechanism")
         assert scales == pytest.approx([want, want])
+
+
+@pytest.mark.parametrize("name", paraview_state.STATES)
+def test_every_state_frames_itself_with_frame_wall(name):
+    """Each shipped state holds frame_wall.py (up to its main block) as a Python animation
+    cue: the code the framing test runs in ParaView is the code in the file."""
+    root = ET.parse(paraview_state.state_path(name)).getroot()
+    scripts = [
+        p.find("Element").get("value")
+        for proxy in root.iter("Proxy")
+        if proxy.get("type") == "PythonAnimationCue"
+        for p in proxy.findall("Property")
+        if p.get("name") == "Script"
+    ]
+    head = FRAME_WALL.read_text().split('\nif __name__ == "__main__":')[0] + "\n"
+    assert scripts == [head]
