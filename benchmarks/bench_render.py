@@ -94,7 +94,11 @@ def main() -> None:
         rows.append((f"PNG 1200x900, {nb} blocks, cold library call", time.perf_counter() - t))
         t = time.perf_counter()
         subprocess.run(
-            [sys.executable, "-c", "import masonry_dem.export.render as r; r._pyvista().Plotter"],
+            [
+                sys.executable,
+                "-c",
+                "import masonry_dem.export.scene as s; s.pyvista_offscreen().Plotter",
+            ],
             check=True,
             capture_output=True,
         )

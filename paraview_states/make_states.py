@@ -25,6 +25,10 @@ States (all time-aware: the PVD readers give ParaView every step, the animation 
   plain, interface lines coloured by ``joint_motion`` through a 4-colour step lookup table equal
   to the pyvista mechanism picture's bins and colours (``MECHANISM_BINS``/``MECHANISM_COLOURS``).
 
+Every state also holds ``frame_wall.py`` (up to its main block) as a Python animation cue, so
+that it frames the wall it is loaded against (warp scale from the data, cameras reset) when the
+animation first moves; the package copy of ``frame_wall.py`` is refreshed too.
+
 Under pvbatch (internal use): ``pvbatch make_states.py --build DATA OUTDIR COLOURS_JSON``.
 """
 
@@ -179,6 +183,18 @@ def _build(data: str, outdir: str, colours_json: str) -> None:  # pragma: no cov
     def reset():
         pvs.ResetSession()
 
+    def framing_cue():
+        """A Python animation cue running frame_wall.py's frame() when the animation starts:
+        the state frames whatever wall it is loaded against (warp scale, cameras)."""
+        cue = pvs.PythonAnimationCue()
+        cue.Script = spec["frame_script"]
+        pvs.GetAnimationScene().Cues.append(cue)
+        return cue
+
+    def save(name):
+        framing_cue()
+        pvs.SaveState(os.path.join(outdir, name))
+
     # ------------------------------------------------------------------ damage map
     reset()
     blocks, interfaces = readers()
@@ -193,7 +209,7 @@ def _build(data: str, outdir: str, colours_json: str) -> None:  # pragma: no cov
     annotate(view, "", time=True)
     front(view)
     time_aware()
-    pvs.SaveState(os.path.join(outdir, "damage_map.pvsm"))
+    save("damage_map.pvsm")
 
     # ------------------------------------------------------------------ deformed shape
     reset()
@@ -210,7 +226,7 @@ def _build(data: str, outdir: str, colours_json: str) -> None:  # pragma: no cov
     annotate(view, "", time=True)
     oblique(view)
     time_aware()
-    pvs.SaveState(os.path.join(outdir, "deformed_shape.pvsm"))
+    save("deformed_shape.pvsm")
 
     # ------------------------------------------------------------------ forces
     reset()
@@ -243,7 +259,7 @@ def _build(data: str, outdir: str, colours_json: str) -> None:  # pragma: no cov
         front(view)
     pvs.AddCameraLink(left, right, "forces camera")
     time_aware()
-    pvs.SaveState(os.path.join(outdir, "force_view.pvsm"))
+    save("force_view.pvsm")
     pvs.RemoveCameraLink("forces camera")  # links outlive ResetSession: keep it out of the next
 
     # ------------------------------------------------------------------ mechanism
@@ -284,7 +300,7 @@ def _build(data: str, outdir: str, colours_json: str) -> None:  # pragma: no cov
     bar.AddRangeLabels = 1
     annotate(view, "masonry_dem collapse mechanism: joints by relative motion in the mode")
     oblique(view)
-    pvs.SaveState(os.path.join(outdir, "mechanism.pvsm"))
+    save("mechanism.pvsm")
 
 
 # =========================================================================== driver side
@@ -355,6 +371,12 @@ def _sample_results(folder: Path) -> tuple[float, float]:
     return scale, auto_scale(float(np.linalg.norm(mdisp, axis=2).max()), size)
 
 
+def frame_script() -> str:
+    """frame_wall.py up to its main block: frame() and the cue's callbacks."""
+    text = (HERE / "frame_wall.py").read_text()
+    return text.split('\nif __name__ == "__main__":')[0] + "\n"
+
+
 def main() -> int:
     from masonry_dem.export.render import (
         BLOCK_COLOUR,
@@ -384,6 +406,7 @@ def main() -> int:
                 "mechanism_bins": list(MECHANISM_BINS),
                 "mechanism_colours": [list(c) for c in MECHANISM_COLOURS],
                 "mechanism_scale": mechanism_scale,
+                "frame_script": frame_script(),
             }
         )
         proc = subprocess.run(
@@ -404,6 +427,7 @@ def main() -> int:
             print(proc.stdout, proc.stderr, sep="\n", file=sys.stderr)
             return proc.returncode
         PACKAGE_COPY.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(HERE / "frame_wall.py", PACKAGE_COPY / "frame_wall.py")
         for name in STATES:
             text = (out / f"{name}.pvsm").read_text()
             text = text.replace(str(data), PLACEHOLDER)

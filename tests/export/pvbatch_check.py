@@ -7,6 +7,12 @@ pvbatch pvbatch_check.py state STATE.pvsm DATA_DIR|- OUT.png [reset]
 pvbatch pvbatch_check.py states JOBS.json
     the same for a list of jobs [[state, data_dir, out, reset], ...] in one ParaView
     session (reset between jobs); prints a JSON list.
+pvbatch pvbatch_check.py frame FRAME_WALL.py JOBS.json
+    for each job [state, data_dir, out_prefix, how]: load the state by the README's recipe
+    (LoadState with data_directory, then the last time step: the state's own cue frames it;
+    how = "recipe") or by paraview_states/frame_wall.py (how = "macro"), hide the 2D overlays (titles, time, scalar
+    bars, orientation axes: they do not move with the camera), save one screenshot per
+    render view (out_prefix_<k>.png); prints a JSON list of {scales, images}.
 pvbatch pvbatch_check.py pvd FILE.pvd [FILE.pvd ...]
     open each PVD and print a JSON line {file: {timesteps, cells, arrays}}.
 """
@@ -63,6 +69,41 @@ def _state(path, data_dir, out, reset):
     }
 
 
+def frame(frame_wall_py, jobs_file):
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("frame_wall", frame_wall_py)
+    frame_wall = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(frame_wall)
+    with open(jobs_file) as fh:
+        jobs = json.load(fh)
+    results = []
+    for path, data_dir, prefix, how in jobs:
+        pvs.ResetSession()
+        if how == "macro":
+            scales = frame_wall.load(path, data_dir)
+        else:  # the README's recipe alone: the state's own cue frames it
+            pvs.LoadState(path, data_directory=data_dir, restrict_to_data_directory=True)
+            pvs.GetAnimationScene().GoToLast()
+            scales = [
+                float(s.ScaleFactor)
+                for s in pvs.GetSources().values()
+                if s.GetXMLName() == "WarpVector"
+            ]
+        images = []
+        views = [v for v in pvs.GetViews() if v.GetXMLName() == "RenderView"]
+        for k, view in enumerate(views):
+            view.OrientationAxesVisibility = 0
+            for rep in view.Representations:
+                if "WindowLocation" in rep.ListProperties():  # text and scalar bars
+                    rep.Visibility = 0
+            out = f"{prefix}_{k}.png"
+            pvs.SaveScreenshot(out, view)
+            images.append(out)
+        results.append({"scales": scales, "images": images})
+    print("RESULT " + json.dumps(results))
+
+
 def pvd(paths):
     out = {}
     for path in paths:
@@ -84,6 +125,8 @@ if __name__ == "__main__":
         state(sys.argv[2], sys.argv[3], sys.argv[4], len(sys.argv) > 5 and sys.argv[5] == "reset")
     elif sys.argv[1] == "states":
         states(sys.argv[2])
+    elif sys.argv[1] == "frame":
+        frame(sys.argv[2], sys.argv[3])
     elif sys.argv[1] == "pvd":
         pvd(sys.argv[2:])
     else:

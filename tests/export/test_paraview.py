@@ -508,3 +508,131 @@ def test_mechanism_crack_colour_along_the_base_only(screenshots, how):
     span = np.ptp(shut_cols)
     assert np.ptp(cols) > 0.7 * span
     assert np.median(rows) > np.percentile(shut_rows, 90)
+
+
+# --------------------------------------------------------------------------- framing any wall
+FRAME_WALL = REPO / "paraview_states" / "frame_wall.py"
+#: the wall's share of the frame (along its longer side on screen) that "fills most of it"
+FILL_SHARE = 0.6
+#: pixels at the image's edge that must stay background (nothing cut off)
+EDGE = 2
+
+
+def default_wall_model(factor: float):
+    """The bundled default wall (default_wall.toml: 3 x 13 running bond, a = 0.081, b = 0.21,
+    s = 0.07 m, base slab, left column held in u1 and u3) with every length times
+    ``factor``."""
+    from masonry_dem.geometry import selectors
+    from masonry_dem.geometry.builders import add_base, running_bond_wall
+    from masonry_dem.model import (
+        InterfaceMaterial,
+        Model,
+        SelfWeight,
+        Support,
+        WeightProportional,
+    )
+
+    wall = running_bond_wall(3, 13, 0.081 * factor, 0.21 * factor, 0.07 * factor, 20e3)
+    blocks, base = add_base(wall)
+    return Model.build(
+        blocks,
+        InterfaceMaterial(kn=1e9, kt=0.4e9, friction=0.7),
+        supports=[Support([base]), Support(selectors.column(wall, "left"), ["u1", "u3"])],
+        loads=[SelfWeight(), WeightProportional((0.0, 0.0, 1.0))],
+        name=f"default wall x{factor:g}",
+    )
+
+
+def write_with_mechanism(folder: Path, model) -> None:
+    """Steps with known damage (damage_pattern) and a collapse mode: the wall turning out of
+    plane about its base's front edge (largest translation 1)."""
+    from masonry_dem.export.vtu import write_mechanism_vtu
+
+    hist = write_results(folder, model)
+    centres, upper = model.blocks.centres, model.blocks.upper
+    moving = ~model.fixed.all(axis=1)
+    pivot = np.array([0.0, float(upper[~moving, 1].max()), float(upper[:, 2].max())])
+    w = np.array([-1.0, 0.0, 0.0])
+    mode = np.zeros((model.blocks.count, 6))
+    mode[moving, :3] = np.cross(w, centres[moving] - pivot)
+    mode[moving, 3:] = w
+    mode /= np.linalg.norm(mode[:, :3], axis=1).max()
+    write_mechanism_vtu(folder, model, hist.last, mode, None)
+
+
+def test_frame_wall_script_is_shipped_identically():
+    shipped = paraview_state.frame_script_path()
+    assert filecmp.cmp(shipped, FRAME_WALL, shallow=False)
+    text = FRAME_WALL.read_text()
+    # the same amplification rule as the package's pictures
+    from masonry_dem.export.scene import AUTO_SCALE_TARGET
+
+    assert f"AUTO_SCALE_TARGET = {AUTO_SCALE_TARGET}" in text
+
+
+@pytest.fixture(scope="module")
+def framed(pvbatch, tmp_path_factory):
+    """Every state loaded against the default wall and against the same wall 4x larger, by
+    the README's recipe alone and by frame_wall.py; screenshots without the 2D overlays."""
+    import imageio.v3 as iio
+
+    root = tmp_path_factory.mktemp("frame")
+    jobs, keys = [], []
+    for factor in (1.0, 4.0):
+        folder = root / f"wall_x{factor:g}"
+        write_with_mechanism(folder, default_wall_model(factor))
+        for name in paraview_state.STATES:
+            for how in ("recipe", "macro"):
+                prefix = str(root / f"{name}_{factor:g}_{how}")
+                jobs.append([str(paraview_state.state_path(name)), str(folder), prefix, how])
+                keys.append((name, factor, how, folder))
+    (root / "jobs.json").write_text(json.dumps(jobs))
+    infos = run_pvbatch(pvbatch, "frame", FRAME_WALL, root / "jobs.json")
+    return {
+        (name, factor, how): (
+            folder,
+            info["scales"],
+            [iio.imread(f)[..., :3] for f in info["images"]],
+        )
+        for (name, factor, how, folder), info in zip(keys, infos, strict=True)
+    }
+
+
+@pytest.mark.paraview
+@pytest.mark.parametrize("how", ["recipe", "macro"])
+@pytest.mark.parametrize("factor", [1.0, 4.0])
+@pytest.mark.parametrize("name", paraview_state.STATES)
+def test_state_frames_any_wall(framed, name, factor, how):
+    """Loaded by the README's recipe (LoadState with data_directory, then the last time
+    step: the state's cue frames it) or framed by frame_wall.py: the wall fills most of
+    every view and no part touches the frame's edge; the warp scale is the package's
+    automatic one for this folder."""
+    folder, scales, images = framed[name, factor, how]
+    for img in images:
+        wall = np.any(img < 245, axis=-1)  # anything drawn on the white background
+        rows, cols = np.nonzero(wall)
+        assert rows.size, f"{name}: nothing drawn"
+        h, w = wall.shape
+        assert not wall[:EDGE].any() and not wall[-EDGE:].any(), f"{name} x{factor}: cut off"
+        assert not wall[:, :EDGE].any() and not wall[:, -EDGE:].any(), f"{name} x{factor}: cut off"
+        fill = max(np.ptp(rows) / h, np.ptp(cols) / w)
+        assert fill >= FILL_SHARE, f"{name} x{factor}: the wall fills {fill:.0%} of the frame"
+    if name in ("deformed_shape", "mechanism"):
+        want = paraview_state.warp_scale(folder, mechanism=name == "mechanism")
+        assert scales == pytest.approx([want, want])
+
+
+@pytest.mark.parametrize("name", paraview_state.STATES)
+def test_every_state_frames_itself_with_frame_wall(name):
+    """Each shipped state holds frame_wall.py (up to its main block) as a Python animation
+    cue: the code the framing test runs in ParaView is the code in the file."""
+    root = ET.parse(paraview_state.state_path(name)).getroot()
+    scripts = [
+        p.find("Element").get("value")
+        for proxy in root.iter("Proxy")
+        if proxy.get("type") == "PythonAnimationCue"
+        for p in proxy.findall("Property")
+        if p.get("name") == "Script"
+    ]
+    head = FRAME_WALL.read_text().split('\nif __name__ == "__main__":')[0] + "\n"
+    assert scripts == [head]

@@ -14,6 +14,10 @@ ends in collapse) of a placeholder folder, so they load against any results fold
 or, after :func:`copy_state`, by opening the copy written into the results folder, whose file
 names, camera and warp scale are already filled in (double-click / ``paraview --state=...``).
 
+Each state holds ``paraview_states/frame_wall.py`` as a Python animation cue: when the animation
+first moves (*Last Frame*, ``GoToLast()``) it sets the warp scale from the data and resets the
+cameras, so a state loaded by search frames any wall; :func:`frame_script_path` is that file.
+
 No ParaView (and no pyvista) is needed here: the state is XML, edited with ElementTree.
 """
 
@@ -66,6 +70,12 @@ def state_path(name: str) -> Path:
             f"ParaView state {key}.pvsm is missing from the installation ({path})"
         )
     return path
+
+
+def frame_script_path() -> Path:
+    """Path of the shipped ``frame_wall.py`` (a ParaView macro or pvbatch script that frames
+    a loaded state to its wall)."""
+    return state_path("damage_map").with_name("frame_wall.py")
 
 
 def _read_points(path: Path, name: str = "displacement") -> tuple[np.ndarray, np.ndarray]:

@@ -2,8 +2,9 @@
 
 blocks: one hexahedron per block at its undeformed position (8 own points per block so each
 block's rigid motion is exact), point data ``displacement``; cell data ``block_id``,
-``translation``, ``rotation``, ``fixed``. Warp By Vector on ``displacement`` shows the motion
-at any scale.
+``translation``, ``rotation``, ``fixed`` (every DOF held), ``restrained`` (which DOFs a support
+holds, u1 u2 u3 w1 w2 w3), ``live_load`` (the live force on the block at lambda = 1, N).
+Warp By Vector on ``displacement`` shows the motion at any scale.
 
 interfaces: one quad per interface at its mid-plane; point data ``displacement`` (mean of the
 two blocks' motion there); cell data ``interface_id``, ``block_i``, ``block_j``,
@@ -52,6 +53,10 @@ def blocks_mesh(model: Model, step: StepResult) -> meshio.Mesh:
             "translation": [np.ascontiguousarray(step.q[:, :3])],
             "rotation": [np.ascontiguousarray(step.q[:, 3:])],
             "fixed": [model.fixed.all(axis=1).astype(np.int32)],
+            # which of u1 u2 u3 w1 w2 w3 a support holds (1), and the live load at
+            # lambda = 1 (force at the centre, N): the pictures' support marks and load arrow
+            "restrained": [model.fixed.astype(np.int32)],
+            "live_load": [np.ascontiguousarray(model.live[:, :3])],
         },
     )
 

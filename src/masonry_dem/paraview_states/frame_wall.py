@@ -1,0 +1,109 @@
+"""Frame a masonry_dem ParaView state to the wall it shows: every Warp By Vector scaled from the
+data, every render view's camera reset to the data.
+
+The shipped states (``*.pvsm``) were made from a sample wall. Each holds this file's
+:func:`frame` in a Python animation cue: the first time the animation moves
+(*Last Frame* in the GUI, ``GetAnimationScene().GoToLast()`` in a script, or *Play*) it frames
+the state to the wall loaded. To frame at any other moment, or a state without the cue, run
+this file:
+
+* GUI: *Macros > Import new macro...*, choose this file (once); after *File > Load State*, click
+  ``frame_wall`` in the Macros toolbar;
+* pvpython / pvbatch: ``pvbatch frame_wall.py STATE.pvsm RESULTS_FOLDER [OUT.png]`` loads the
+  state against the folder, frames it and optionally saves a screenshot; or, in a script after
+  ``LoadState``: ``exec(open("paraview_states/frame_wall.py").read())``.
+
+The warp scale is the one of the package's own pictures (``masonry_dem.export.scene
+.auto_scale``): a round number (two significant figures, rounded down) making the largest
+displacement of the last time step about 6.5 % of the wall's largest dimension.
+"""
+
+import math
+import sys
+
+import paraview.simple as pvs
+
+#: largest displacement / largest wall dimension (masonry_dem.export.scene.AUTO_SCALE_TARGET)
+AUTO_SCALE_TARGET = 0.065
+
+
+def auto_scale(max_displacement, wall_size):
+    """The package's automatic amplification; 1 when nothing moves."""
+    if not (max_displacement > 0 and math.isfinite(max_displacement)) or wall_size <= 0:
+        return 1.0
+    raw = AUTO_SCALE_TARGET * wall_size / max_displacement
+    mag = 10.0 ** (math.floor(math.log10(raw)) - 1)
+    return float(math.floor(raw / mag) * mag)
+
+
+def _last_time():
+    times = list(pvs.GetTimeKeeper().TimestepValues)
+    return max(times) if times else 0.0
+
+
+def _warp_filters():
+    return [src for src in pvs.GetSources().values() if src.GetXMLName() == "WarpVector"]
+
+
+def frame(time=None, set_time=True):
+    """Set every Warp By Vector's scale from the data at ``time`` (default: the last time
+    step), then reset every render view's camera to what it shows (at that time when
+    ``set_time``, else at the view's own time: the animation cue, which must not move the
+    time). One scale for the whole state, from the largest displacement and the largest
+    dimension of all the warped inputs (the blocks), so blocks and joints move together.
+    Returns the scales set."""
+    t = _last_time() if time is None else time
+    warps = _warp_filters()
+    size = dmax = 0.0
+    for warp in warps:
+        source = warp.Input
+        source.UpdatePipeline(t)
+        b = source.GetDataInformation().GetBounds()
+        size = max(size, b[1] - b[0], b[3] - b[2], b[5] - b[4])
+        array = source.PointData.GetArray("displacement")
+        if array is not None:
+            dmax = max(dmax, array.GetRange(-1)[1])
+    scale = auto_scale(dmax, size)
+    for warp in warps:
+        warp.ScaleFactor = scale
+    for view in pvs.GetViews():
+        if view.GetXMLName() != "RenderView":
+            continue
+        if set_time:
+            view.ViewTime = t
+        view.ResetCamera(False)
+        pvs.Render(view)
+    return [scale] * len(warps)
+
+
+def load(state, results_folder):
+    """LoadState against ``results_folder`` (the README's recipe), go to the last time step,
+    frame."""
+    pvs.LoadState(state, data_directory=results_folder, restrict_to_data_directory=True)
+    scene = pvs.GetAnimationScene()
+    scene.UpdateAnimationUsingDataTimeSteps()
+    scene.GoToLast()
+    return frame()
+
+
+#: the animation cue's callbacks (make_states.py embeds this file, up to the main block, in
+#: every state): frame once when the animation starts, keeping the time it is at
+def start_cue(self):
+    frame(set_time=False)
+
+
+def tick(self):
+    pass
+
+
+def end_cue(self):
+    pass
+
+
+if __name__ == "__main__":
+    if len(sys.argv) >= 3:  # pvbatch frame_wall.py STATE RESULTS [OUT.png]
+        load(sys.argv[1], sys.argv[2])
+        if len(sys.argv) >= 4:
+            pvs.SaveScreenshot(sys.argv[3], pvs.GetLayout(), ImageResolution=[1200, 900])
+    else:  # a GUI macro, or exec() after LoadState
+        frame()
