@@ -75,9 +75,9 @@ def _dead_load_tangent(model):
     from masonry_dem.solvers.incremental import StaticSolver
 
     solver = StaticSolver(model)
-    out = solver._equilibrate(0.0, radius=solver.limit, damped=True)
+    out = solver.equilibrate(0.0, radius=solver.limit, damped=True)
     T = solver.law.tangent(out.response, solver.settings.residual_stiffness)
-    return solver, solver._tangents.data(T)
+    return solver, solver.problem.tangent_assembler.data(T)
 
 
 def sizes_child(n: int) -> dict:
@@ -87,13 +87,14 @@ def sizes_child(n: int) -> dict:
     from masonry_dem.solvers.incremental import StaticSolver
 
     solver = StaticSolver(model)
-    solver._tangents.data(np.tile(np.eye(6), (model.interfaces.count, 1, 1)))
+    tangents = solver.problem.tangent_assembler
+    tangents.data(np.tile(np.eye(6), (model.interfaces.count, 1, 1)))
     t2 = time.perf_counter()
     return {
         "blocks": model.blocks.count,
         "interfaces": model.interfaces.count,
-        "dofs": solver._tangents.n,
-        "nnz": int(solver._tangents.nnz),
+        "dofs": tangents.n,
+        "nnz": int(tangents.nnz),
         "build_s": t1 - t0,
         "assembly_s": t2 - t1,
     }
@@ -119,7 +120,7 @@ def factor_child(n: int, backends: list[str], repeat: int, multifrontal: str | N
 
     model = default_wall(n)
     solver, data = _dead_load_tangent(model)
-    tangents = solver._tangents
+    tangents = solver.problem.tangent_assembler
     b = np.random.default_rng(0).normal(size=tangents.n)
     out = {}
     makers = {
