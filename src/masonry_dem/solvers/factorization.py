@@ -52,10 +52,12 @@ BACKENDS = ("superlu", "pardiso", "umfpack", "mumps")
 _MODULES = {"superlu": "scipy", "pardiso": "pypardiso", "umfpack": "kvxopt", "mumps": "mumps"}
 ENVIRONMENT = "MASONRY_DEM_FACTORIZER"
 #: ``"auto"``: below this many unknowns SuperLU (one call into scipy, no library to load)
-#: factorizes as fast as the others (100 DOFs: 0.1 ms each, 1 and 2 threads); from 610 DOFs
-#: PARDISO is the fastest (0.7 ms against SuperLU's 1.5-2.4 ms), at 6 000 and 60 000 DOFs too
-#: (``python benchmarks/bench_scale.py --sizes 4 10 20 30 100``, docs/solvers.md "Scale")
-SMALL = 300
+#: factorizes as fast as the others or faster (6-60 DOFs: PARDISO 1.0-1.3x SuperLU's time);
+#: from about 100 DOFs PARDISO is the fastest: 0.92x at 102 DOFs, 0.65-0.70x at 216, 0.53-0.72x
+#: at 2 460, on 1 and 2 threads (factorization and solve, medians of 100 in one process:
+#: ``python benchmarks/bench_scale.py --small``), and at 6 000 and 60 000 DOFs
+#: (docs/solvers.md "Scale"). The validation walls (244-6 000 DOFs) all take PARDISO.
+SMALL = 100
 #: the order of preference from ``SMALL`` unknowns, fastest first (bench_scale.py: MUMPS
 #: before UMFPACK at 6 000 and 60 000 DOFs)
 _PREFERENCE = ("pardiso", "mumps", "umfpack", "superlu")
