@@ -4,6 +4,7 @@ Run:  python benchmarks/bench_scale.py [--sizes 10 30 100 316] [--pushover-up-to
                                        [--threads 1 2] [--backends ...] [--repeat 5]
                                        [--pushover-budget S] [--multifrontal-from REF]
                                        [--no-pushover] [--json FILE]
+       python benchmarks/bench_scale.py --small [--repeat 200]   # the backends, 6-2 400 DOFs
 
 The walls are the bundled default case (dry running-bond panel on a base slab, its left
 column held by a return wall, tilted out of plane) of about N^2 blocks (``--sizes``: N; 10,
@@ -75,9 +76,9 @@ def _dead_load_tangent(model):
     from masonry_dem.solvers.incremental import StaticSolver
 
     solver = StaticSolver(model)
-    out = solver._equilibrate(0.0, radius=solver.limit, damped=True)
+    out = solver.equilibrate(0.0, radius=solver.limit, damped=True)
     T = solver.law.tangent(out.response, solver.settings.residual_stiffness)
-    return solver, solver._tangents.data(T)
+    return solver, solver.problem.tangent_assembler.data(T)
 
 
 def sizes_child(n: int) -> dict:
@@ -87,13 +88,14 @@ def sizes_child(n: int) -> dict:
     from masonry_dem.solvers.incremental import StaticSolver
 
     solver = StaticSolver(model)
-    solver._tangents.data(np.tile(np.eye(6), (model.interfaces.count, 1, 1)))
+    tangents = solver.problem.tangent_assembler
+    tangents.data(np.tile(np.eye(6), (model.interfaces.count, 1, 1)))
     t2 = time.perf_counter()
     return {
         "blocks": model.blocks.count,
         "interfaces": model.interfaces.count,
-        "dofs": solver._tangents.n,
-        "nnz": int(solver._tangents.nnz),
+        "dofs": tangents.n,
+        "nnz": int(tangents.nnz),
         "build_s": t1 - t0,
         "assembly_s": t2 - t1,
     }
@@ -119,7 +121,7 @@ def factor_child(n: int, backends: list[str], repeat: int, multifrontal: str | N
 
     model = default_wall(n)
     solver, data = _dead_load_tangent(model)
-    tangents = solver._tangents
+    tangents = solver.problem.tangent_assembler
     b = np.random.default_rng(0).normal(size=tangents.n)
     out = {}
     makers = {
@@ -185,6 +187,57 @@ def factor_child(n: int, backends: list[str], repeat: int, multifrontal: str | N
     return out
 
 
+def small_walls(repeat: int) -> None:
+    """The backends on the tangents of small walls (6 to 2 400 DOFs, the validation set's
+    range), in one process on the threads set, each factorization followed by a solve,
+    the backends in turn ``repeat`` times: medians in ms and the ratio to SuperLU. The
+    rule ``factorization.SMALL`` comes from this table."""
+    import masonry_dem as md
+    from masonry_dem.solvers import factorization as fz
+
+    def wall(n: int, courses: int):
+        w = md.running_bond_wall(n, courses, A, B, S, GAMMA)
+        blocks, base = md.add_base(w)
+        return md.Model.build(
+            blocks,
+            md.InterfaceMaterial(kn=KN, kt=KT, friction=MU),
+            [md.Support([base])],
+            [md.SelfWeight(), md.WeightProportional((0.0, 0.0, 1.0))],
+        )
+
+    names = fz.installed()
+    print(
+        f"{'blocks':>6} {'DOFs':>5} " + " ".join(f"{b + ' ms':>11} {'/superlu':>8}" for b in names)
+    )
+    for n, courses in (
+        (1, 1),
+        (1, 3),
+        (2, 4),
+        (3, 5),
+        (4, 8),
+        (6, 8),
+        (10, 10),
+        (14, 14),
+        (20, 20),
+    ):
+        solver, data = _dead_load_tangent(wall(n, courses))
+        t = solver.problem.tangent_assembler
+        made = {b: fz.analyse(t.indptr, t.indices, t.n, b) for b in names}
+        for f in made.values():
+            f.factor(data)
+        times: dict[str, list[float]] = {b: [] for b in names}
+        for _ in range(repeat):
+            for b, f in made.items():
+                t0 = time.perf_counter()
+                f.factor(data).solve(data[: t.n])
+                times[b].append(time.perf_counter() - t0)
+        ref = float(np.median(times["superlu"]))
+        cells = " ".join(
+            f"{np.median(v) * 1e3:>11.3f} {np.median(v) / ref:>8.2f}" for v in times.values()
+        )
+        print(f"{solver.model.blocks.count:>6} {t.n:>5} {cells}", flush=True)
+
+
 class _OverBudget(Exception):
     pass
 
@@ -193,6 +246,7 @@ def pushover_child(n: int, budget: float) -> dict:
     import resource
 
     from masonry_dem.solvers import factorization as fz
+    from masonry_dem.solvers import resources
     from masonry_dem.solvers.incremental import StaticSolver
 
     model = default_wall(n)
@@ -205,15 +259,18 @@ def pushover_child(n: int, budget: float) -> dict:
         if time.perf_counter() - t0 > budget:
             raise _OverBudget
 
+    stop, reason = "budget", ""
     try:
         h = solver.run(callback=on_step)
-        status = h.status
+        status, stop, reason = str(h.status), str(h.stop), h.reason
         lam = h.collapse_multiplier if h.collapse_multiplier is not None else h.final_load_factor
     except _OverBudget:  # stopped by --pushover-budget: what it reached
         status, lam = f"stopped@{budget:.0f}s", max(steps)
     seconds = time.perf_counter() - t0
     return {
         "status": status,
+        "stop": stop,
+        "reason": reason[:300],
         "lambda": lam,
         "seconds": seconds,
         "steps": len(steps),
@@ -221,6 +278,10 @@ def pushover_child(n: int, budget: float) -> dict:
         "factorizations": solver.factorizations,
         "s_per_iteration": seconds / max(solver.iterations, 1),
         "peak_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+        "estimated_mb": resources.estimate(
+            model.blocks.count, model.interfaces.count, model.n_dofs
+        ).memory
+        / 1e6,
         "backend": fz.choose(6 * model.blocks.count),
     }
 
@@ -282,7 +343,15 @@ def main() -> int:
                    help="also time the multifrontal LU of commit REF (e.g. 7022155)")  # fmt: skip
     p.add_argument("--timeout", type=float, default=3600.0, help="seconds per child process")
     p.add_argument("--json", default=None, help="also write the results to this file")
+    p.add_argument("--small", action="store_true",
+                   help="only the backends on small walls (6-2 400 DOFs), in this process")  # fmt: skip
     args = p.parse_args()
+    if args.small:
+        from masonry_dem.cli.study import warm_up
+
+        warm_up()
+        small_walls(max(args.repeat, 50))
+        return 0
     from masonry_dem.solvers import factorization as fz
 
     backends = args.backends or fz.installed()

@@ -3,9 +3,10 @@
 from __future__ import annotations
 
 import json
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Protocol, overload
 
 import numpy as np
 
@@ -38,13 +39,30 @@ class StepResult:
     iterations: int = 0
 
 
+class Steps(Protocol):
+    """The steps of a History: a list, or :class:`masonry_dem.streamed_history.StreamedSteps`
+    (on disk)."""
+
+    def append(self, step: StepResult, /) -> None: ...
+
+    def __len__(self) -> int: ...
+
+    @overload
+    def __getitem__(self, index: int, /) -> StepResult: ...
+
+    @overload
+    def __getitem__(self, index: slice, /) -> list[StepResult]: ...
+
+    def __iter__(self) -> Iterator[StepResult]: ...
+
+
 @dataclass
 class History:
     """All steps of a run, and how it ended: ``status`` (collapse only when certified),
     ``stop`` (why the path stopped), ``reason`` (the same for people) and, for a stop the
     solver took for a collapse, the ``certificate`` that confirmed or refused it."""
 
-    steps: list[StepResult] = field(default_factory=list)
+    steps: Steps = field(default_factory=lambda: list[StepResult]())
     status: Status = Status.RUNNING
     reason: str = ""
     stop: StopReason = StopReason.NONE
@@ -63,10 +81,16 @@ class History:
 
     @property
     def load_factors(self) -> np.ndarray:
+        kept = getattr(self.steps, "load_factors", None)  # streamed steps keep their scalars
+        if kept is not None:
+            return np.array(kept, dtype=float)
         return np.array([s.load_factor for s in self.steps])
 
     @property
     def control_displacements(self) -> np.ndarray:
+        kept = getattr(self.steps, "control_displacements", None)
+        if kept is not None:
+            return np.array(kept, dtype=float)
         return np.array([s.control_displacement for s in self.steps])
 
     @property

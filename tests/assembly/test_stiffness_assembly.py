@@ -138,12 +138,24 @@ def test_material_override_changes_the_base_joints_only():
     np.testing.assert_allclose(kbar[~on_base, 0], KT * its.area[~on_base], rtol=1e-15)
 
 
-def test_the_solver_assembles_per_interface_tangents_as_the_sparse_product(model):
+def _held_model():
+    """A base and a left column held in u1 and u3 only: blocks with some DOFs fixed."""
+    wall = running_bond_wall(5, 4, A, B, S, GAMMA)
+    blocks, ib = add_base(wall)
+    return Model.build(blocks, MAT, [Support([ib]), Support(column(wall, "left"), ["u1", "u3"])])
+
+
+@pytest.mark.parametrize("which", ["base", "held column"])
+def test_the_solver_assembles_per_interface_tangents_as_the_sparse_product(model, which):
     """The static solver's compiled assembly of H_f^T T H_f (T: one unsymmetric 6 x 6 block per
-    interface, its entries summed in a pattern built once) against the sparse product, in
-    the numbering of the free DOFs (the sparse LU backends order the matrix themselves)."""
+    interface, its entries summed in a pattern built once, worked out on block pairs) against
+    the sparse product, in the numbering of the free DOFs (the sparse LU backends order the
+    matrix themselves), also where blocks have only some DOFs fixed; the pattern is a
+    canonical CSC (sorted rows, no duplicates, every diagonal entry stored)."""
     from masonry_dem.solvers.static.problem import TangentAssembler
 
+    if which == "held column":
+        model = _held_model()
     asm = Assembly.of(model)
     rng = np.random.default_rng(4)
     T = rng.normal(size=(model.interfaces.count, 6, 6)) * KN
@@ -153,3 +165,9 @@ def test_the_solver_assembles_per_interface_tangents_as_the_sparse_product(model
     scale = np.abs(reference).max()
     assert np.abs(K.toarray() - reference).max() <= 1e-12 * scale
     assert np.abs(K.toarray() - K.toarray().T).max() > 1e-3 * scale  # unsymmetric, as T
+    pattern = TangentAssembler(asm, model)
+    assert pattern.nnz == np.count_nonzero(np.abs(reference) > 0)
+    csc = pattern.matrix(T)
+    assert csc.has_canonical_format
+    assert np.all(np.diff(pattern.indptr) > 0)
+    assert np.all(np.abs(csc.diagonal()) > 0)

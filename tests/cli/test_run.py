@@ -98,3 +98,40 @@ def test_run_renders_the_last_step_and_the_collapse_mechanism(tmp_path):
     assert (out / summary["png"]).is_file()
     assert summary["mechanism_png"] == "mechanism_oblique.png"
     assert (out / summary["mechanism_png"]).is_file()
+
+
+def test_the_limit_analysis_bound_is_computed_only_to_certify_a_collapse(tmp_path, monkeypatch):
+    """``run`` computes the associative bound when a collapse is to be certified, and only
+    then: a run that ends ``completed`` (max_load_factor 0.2, below the block's s/a = 0.5)
+    does no limit analysis; a collapse carries the bound (0.5, the block's s/a) checked
+    within it; ``--no-bound`` leaves the certificate's bound unchecked."""
+    import masonry_dem.cli.run as run_module
+
+    calls: list[int] = []
+    original = run_module.limit_analysis_bound
+
+    def counting(model):
+        calls.append(model.blocks.count)
+        return original(model)
+
+    monkeypatch.setattr(run_module, "limit_analysis_bound", counting)
+    capped = _write_case(tmp_path, dict(SINGLE_BLOCK, analysis={"max_load_factor": 0.2}))
+    out = tmp_path / "capped"
+    assert main(["run", str(capped), "--out", str(out), "--no-render", "--quiet"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "completed" and calls == []
+    assert summary["limit_analysis_bound"] is None
+    assert summary["limit_analysis_status"] == "not computed (no collapse to certify)"
+    case = _write_case(tmp_path, SINGLE_BLOCK)
+    out = tmp_path / "collapse"
+    assert main(["run", str(case), "--out", str(out), "--no-render", "--quiet"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "collapse" and len(calls) == 1
+    assert summary["limit_analysis_bound"] == pytest.approx(0.5, rel=1e-6)
+    assert summary["certificate"]["bound_status"] == "within"
+    out = tmp_path / "no_bound"
+    assert main(["run", str(case), "--out", str(out), "--no-render", "--quiet", "--no-bound"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "collapse" and len(calls) == 1
+    assert summary["certificate"]["bound_status"] == "not checked"
+    assert summary["limit_analysis_status"] == "not computed (--no-bound)"

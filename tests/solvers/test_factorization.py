@@ -174,3 +174,22 @@ def test_elastic_factors_stay_valid_after_tangent_factorizations(backend, monkey
     np.testing.assert_allclose(
         elastic.solve(b), reference, rtol=1e-8, atol=1e-10 * np.abs(reference).max()
     )
+
+
+@pytest.mark.parametrize("backend", EVERY)
+def test_solutions_are_the_callers_and_many_right_hand_sides_solve_column_by_column(backend):
+    """A solution is not overwritten by a later solve (PARDISO solves into a buffer of its
+    handle), and (n, k) right-hand sides give the k solutions of their columns."""
+    M = random_matrix(40, 0.1, 7)
+    factors = fz.analyse(M.indptr, M.indices, 40, backend).factor(M.data)
+    rng = np.random.default_rng(8)
+    b1, b2 = rng.uniform(-1, 1, 40), rng.uniform(-1, 1, 40)
+    x1 = factors.solve(b1)
+    kept = x1.copy()
+    factors.solve(b2)
+    assert np.array_equal(x1, kept)
+    B = rng.uniform(-1, 1, (40, 3))
+    X = factors.solve(B)
+    assert X.shape == (40, 3)
+    reference = np.linalg.solve(M.toarray(), B)
+    np.testing.assert_allclose(X, reference, rtol=1e-9, atol=1e-11 * np.abs(reference).max())

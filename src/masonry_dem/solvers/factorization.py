@@ -52,10 +52,12 @@ BACKENDS = ("superlu", "pardiso", "umfpack", "mumps")
 _MODULES = {"superlu": "scipy", "pardiso": "pypardiso", "umfpack": "kvxopt", "mumps": "mumps"}
 ENVIRONMENT = "MASONRY_DEM_FACTORIZER"
 #: ``"auto"``: below this many unknowns SuperLU (one call into scipy, no library to load)
-#: factorizes as fast as the others (100 DOFs: 0.1 ms each, 1 and 2 threads); from 610 DOFs
-#: PARDISO is the fastest (0.7 ms against SuperLU's 1.5-2.4 ms), at 6 000 and 60 000 DOFs too
-#: (``python benchmarks/bench_scale.py --sizes 4 10 20 30 100``, docs/solvers.md "Scale")
-SMALL = 300
+#: factorizes as fast as the others or faster (6-60 DOFs: PARDISO 1.0-1.3x SuperLU's time);
+#: from about 100 DOFs PARDISO is the fastest: 0.92x at 102 DOFs, 0.65-0.70x at 216, 0.53-0.72x
+#: at 2 460, on 1 and 2 threads (factorization and solve, medians of 100 in one process:
+#: ``python benchmarks/bench_scale.py --small``), and at 6 000 and 60 000 DOFs
+#: (docs/solvers.md "Scale"). The validation walls (244-6 000 DOFs) all take PARDISO.
+SMALL = 100
 #: the order of preference from ``SMALL`` unknowns, fastest first (bench_scale.py: MUMPS
 #: before UMFPACK at 6 000 and 60 000 DOFs)
 _PREFERENCE = ("pardiso", "mumps", "umfpack", "superlu")
@@ -282,44 +284,68 @@ class _Pardiso:
         self.values = np.ones(indices.size)
         self.generations = _Generation()
         self.analysed = False
-
-    def _call(self, phase: int, b: np.ndarray) -> np.ndarray:
-        """One call of MKL's pardiso on this handle (phase 12, 22, 33 or -1) on numba's
-        thread count; x for b."""
-        s = self.solver
-        # the C entry point (the lower-case name is the Fortran one, which takes a pointer)
-        s.libmkl.MKL_Set_Num_Threads_Local(ctypes.c_int(numba.get_num_threads()))
-        b = np.asfortranarray(b, dtype=float)
-        x = np.zeros_like(b)
-        error = ctypes.c_int32(0)
+        # the arguments of every call but the phase and the right-hand sides, made once: on
+        # the validation walls (250-6 000 DOFs) building the 16 ctypes arguments at each
+        # call cost about as much as PARDISO's own factorization
         int_p = ctypes.POINTER(ctypes.c_int32)
         double_p = ctypes.POINTER(ctypes.c_double)
-        s._mkl_pardiso(
+        s = self.solver
+        self._phase = ctypes.c_int32(0)
+        self._nrhs = ctypes.c_int32(1)
+        self._error = ctypes.c_int32(0)
+        self._b = np.zeros(n)  # one right-hand side and its solution, in place
+        self._x = np.zeros(n)
+        self._head = (
             s.pt.ctypes.data_as(ctypes.POINTER(s._pt_type[0])),
             ctypes.byref(ctypes.c_int32(1)),  # maxfct
             ctypes.byref(ctypes.c_int32(1)),  # mnum
             ctypes.byref(ctypes.c_int32(s.mtype)),
-            ctypes.byref(ctypes.c_int32(phase)),
-            ctypes.byref(ctypes.c_int32(self.n)),
+            ctypes.byref(self._phase),
+            ctypes.byref(ctypes.c_int32(n)),
             self.values.ctypes.data_as(double_p),
             self.ia.ctypes.data_as(int_p),
             self.ja.ctypes.data_as(int_p),
             s.perm.ctypes.data_as(int_p),
-            ctypes.byref(ctypes.c_int32(1 if b.ndim == 1 else b.shape[1])),  # right-hand sides
+            ctypes.byref(self._nrhs),
             s.iparm.ctypes.data_as(int_p),
             ctypes.byref(ctypes.c_int32(0)),  # no messages
-            b.ctypes.data_as(double_p),
-            x.ctypes.data_as(double_p),
-            ctypes.byref(error),
         )
-        if error.value != 0:
-            raise SingularMatrix(f"pardiso: error {error.value} in phase {phase}")
+        self._one = (self._b.ctypes.data_as(double_p), self._x.ctypes.data_as(double_p))
+
+    def _call(self, phase: int, b: np.ndarray | None = None) -> np.ndarray:
+        """One call of MKL's pardiso on this handle (phase 12, 22, 33 or -1) on numba's
+        thread count; x for b (None: no right-hand side)."""
+        s = self.solver
+        # the C entry point (the lower-case name is the Fortran one, which takes a pointer)
+        s.libmkl.MKL_Set_Num_Threads_Local(ctypes.c_int(numba.get_num_threads()))
+        self._phase.value = phase
+        self._error.value = 0
+        if b is None or b.ndim == 1:
+            if b is not None:
+                self._b[:] = b
+            self._nrhs.value = 1
+            s._mkl_pardiso(*self._head, *self._one, ctypes.byref(self._error))
+            x = self._x.copy()
+        else:
+            double_p = ctypes.POINTER(ctypes.c_double)
+            b = np.asfortranarray(b, dtype=float)
+            x = np.zeros_like(b)
+            self._nrhs.value = b.shape[1]
+            s._mkl_pardiso(
+                *self._head,
+                b.ctypes.data_as(double_p),
+                x.ctypes.data_as(double_p),
+                ctypes.byref(self._error),
+            )
+        if self._error.value != 0:
+            raise SingularMatrix(f"pardiso: error {self._error.value} in phase {phase}")
         return x
 
     def factor(self, data: np.ndarray) -> Factors:
-        self.values = np.ascontiguousarray(data[self.gather], dtype=float)
+        # in place: the pointer handed to PARDISO stays valid
+        np.take(data, self.gather, out=self.values)
         # the first matrix is analysed with its values (the matching and scaling use them)
-        self._call(22 if self.analysed else 12, np.zeros(self.n))
+        self._call(22 if self.analysed else 12)
         self.analysed = True
         return _PardisoFactors(self, self.generations.next())
 
@@ -330,7 +356,7 @@ class _Pardiso:
         """PARDISO's memory is the library's: released with the handle (phase -1)."""
         if getattr(self, "analysed", False):
             try:
-                self._call(-1, np.zeros(self.n))
+                self._call(-1)
             except Exception:  # noqa: BLE001 (at interpreter exit the library may be gone)
                 pass
 

@@ -12,7 +12,8 @@ by ``python benchmarks/bench_scale.py`` (walls of 10^2 to 10^5 blocks; docs/solv
 * ``factors``: the sparse LU of the tangent. A running-bond wall is a planar graph of blocks,
   so with a nested-dissection ordering the factors of its n DOFs hold about
   ``FILL_PER_DOF x n x log2(n / 6)`` entries (George's bound: O(n log n) for planar graphs);
-* ``history``: every converged step kept in memory (q, actions, states, utilisation, flags).
+* ``history``: every converged step kept in memory (q, actions, states, utilisation, flags),
+  or three of them where the run streams its steps to disk (``streamed_history``).
 
 Time: ``factorizations x`` (seconds per factorization, growing like n^FACTOR_EXPONENT)
 ``+ iterations x`` (seconds per Newton iteration without the factorization, linear in the
@@ -103,6 +104,10 @@ def estimate(blocks: int, interfaces: int | None = None, dofs: int | None = None
         "factors": BYTES_PER_FACTOR_ENTRY * fill,
         "history": STEPS * (STEP_BYTES_PER_BLOCK * blocks + STEP_BYTES_PER_INTERFACE * m),
     }
+    from masonry_dem.streamed_history import should_stream
+
+    if should_stream(blocks, m):  # the run keeps its steps on disk: 3 in memory
+        parts["history"] *= 3 / STEPS
     more = (max(blocks, 1) / 1e3) ** GROWTH
     seconds = more * (
         FACTORIZATIONS * FACTOR_SECONDS * (n / 6e4) ** FACTOR_EXPONENT

@@ -55,10 +55,34 @@ def _assemble_tangent(H_loc: np.ndarray, T: np.ndarray, terms: np.ndarray, ptr: 
     return out
 
 
+@numba.njit(cache=True)
+def _entry_terms(pair, r, c, ptr, pair_start, record_order):
+    """The terms of each stored entry (pair, r, c): the B.flat index 144 i + 12 (6 side(I) +
+    r) + 6 side(J) + c of each interface i of its block pair, in the order of the
+    interfaces. The records 4 i + 2 side(I) + side(J) are sorted stably by pair
+    (``record_order``), those of a pair from ``pair_start[pair]`` on."""
+    terms = np.empty(ptr[-1], dtype=np.int64)
+    for e in range(pair.size):
+        start = ptr[e]
+        for t in range(ptr[e + 1] - start):
+            record = record_order[pair_start[pair[e]] + t]
+            i, sides = divmod(record, 4)
+            side_i, side_j = divmod(sides, 2)
+            terms[start + t] = 144 * i + 12 * (6 * side_i + r[e]) + 6 * side_j + c[e]
+    return terms
+
+
 class TangentAssembler:
     """K_ff = H_f^T T H_f for per-interface 6x6 tangents T, with the sparsity pattern built
     once: each interface adds B = H_loc^T T H_loc (12 x 12, the DOFs of its two blocks) and
-    the blocks are summed into a fixed CSC structure with one bincount."""
+    the blocks are summed into a fixed CSC structure (compiled kernel, :meth:`data`).
+
+    The pattern is worked out on the blocks, not on the 144 entries of each interface: one
+    stable sort of the 4 block pairs of each interface (its two blocks, either way round)
+    gives each block column's neighbour blocks in order; the 36 entries of a block pair then
+    sit at known offsets of their columns, and the terms of an entry are the interfaces of
+    its pair, in the order of the interfaces (the order a sum over the interfaces adds
+    them). Fixed DOFs are dropped from the full pattern by a mask."""
 
     def __init__(self, asm: Assembly, model: Model) -> None:
         its = model.interfaces
@@ -69,27 +93,49 @@ class TangentAssembler:
         side = (blk == its.block_j[k]).astype(np.int64)
         self.H_loc = np.zeros((m, 6, 12))
         self.H_loc[k, H.row % 6, 6 * side + H.col % 6] = H.data
-        dofs = np.concatenate(
-            [6 * its.block_i[:, None] + np.arange(6), 6 * its.block_j[:, None] + np.arange(6)],
-            axis=1,
-        )  # (m, 12)
+        nb = model.blocks.count
         position = np.full(model.n_dofs, -1, dtype=np.int64)
-        position[asm.free_index] = np.arange(asm.n_free)
-        pos = position[dofs]
-        rows = np.broadcast_to(pos[:, :, None], (m, 12, 12)).ravel()
-        cols = np.broadcast_to(pos[:, None, :], (m, 12, 12)).ravel()
-        self.keep = np.flatnonzero((rows >= 0) & (cols >= 0))
+        position[asm.free_index] = np.arange(asm.n_free)  # increasing: CSC order kept
+        # the 4 block pairs (row block I, column block J) of each interface, record
+        # 4 i + 2 side(I) + side(J)
+        ends = np.stack([its.block_i, its.block_j], axis=1).astype(np.int64)  # (m, 2)
+        row_block = np.repeat(ends, 2, axis=1).ravel()  # I: i, i, j, j
+        col_block = np.tile(ends, (1, 2)).ravel()  # J: i, j, i, j
+        record_order = np.argsort(col_block * nb + row_block, kind="stable")
+        sorted_key = (col_block * nb + row_block)[record_order]
+        first = np.flatnonzero(np.r_[True, sorted_key[1:] != sorted_key[:-1]])
+        n_terms = np.diff(np.r_[first, sorted_key.size])  # interfaces of each block pair
+        pair_I = row_block[record_order[first]]
+        pair_J = col_block[record_order[first]]
+        pairs = first.size
+        per_column = np.bincount(pair_J, minlength=nb)  # neighbour blocks of each block
+        column_start = np.r_[0, np.cumsum(per_column)[:-1]]  # first pair of each column
+        rank = np.arange(pairs) - column_start[pair_J]
+        # the full (all DOFs) CSC position of entry (pair, r, c): its column 6 J + c holds
+        # the 6 rows of each neighbour block of J in turn
+        r = np.arange(6)[None, :, None]
+        c = np.arange(6)[None, None, :]
+        full = (
+            36 * column_start[pair_J][:, None, None]
+            + c * 6 * per_column[pair_J][:, None, None]
+            + 6 * rank[:, None, None]
+            + r
+        )  # (pairs, 6, 6)
+        entry = np.empty(36 * pairs, dtype=np.int64)  # the flat (pair, r, c) at each position
+        entry[full.ravel()] = np.arange(36 * pairs)
+        e_pair, e_rc = np.divmod(entry, 36)
+        e_r, e_c = np.divmod(e_rc, 6)
+        row = position[6 * pair_I[e_pair] + e_r]
+        col = position[6 * pair_J[e_pair] + e_c]
+        kept = np.flatnonzero((row >= 0) & (col >= 0))
         nf = asm.n_free
-        key = cols[self.keep] * nf + rows[self.keep]  # column-major
-        unique, inverse = np.unique(key, return_inverse=True)
-        # the terms of each stored entry, in the order np.bincount would add them
-        by_entry = np.argsort(inverse, kind="stable")
-        self.terms = self.keep[by_entry]
-        self.term_ptr = np.concatenate([[0], np.cumsum(np.bincount(inverse))]).astype(np.int64)
-        self.indices = (unique % nf).astype(np.int32)
-        counts = np.bincount(unique // nf, minlength=nf)
+        self.indices = row[kept].astype(np.int32)
+        counts = np.bincount(col[kept], minlength=nf)
         self.indptr = np.concatenate([[0], np.cumsum(counts)]).astype(np.int32)
-        self.nnz = unique.size
+        k_pair = e_pair[kept]
+        self.term_ptr = np.concatenate([[0], np.cumsum(n_terms[k_pair])]).astype(np.int64)
+        self.terms = _entry_terms(k_pair, e_r[kept], e_c[kept], self.term_ptr, first, record_order)
+        self.nnz = kept.size
         self.n = nf
 
     def data(self, T: np.ndarray) -> np.ndarray:

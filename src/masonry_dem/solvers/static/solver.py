@@ -14,6 +14,7 @@ import time
 from collections.abc import Callable
 from contextlib import nullcontext
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 
@@ -25,6 +26,7 @@ from masonry_dem.solvers.static.certificate import Bound, certify
 from masonry_dem.solvers.static.corrector import Corrector
 from masonry_dem.solvers.static.outcome import Outcome, Status, StopReason
 from masonry_dem.solvers.static.settings import DisplacementControl, StaticSettings
+from masonry_dem.streamed_history import StreamedSteps, should_stream
 
 log = logging.getLogger(__name__)
 
@@ -100,23 +102,34 @@ class StaticSolver(Corrector):
         control: DisplacementControl | None = None,
         callback: Callable[[StepResult], None] | None = None,
         monitor: tuple[int, str] | None = None,
+        stream: bool | str | Path | None = None,
     ) -> History:
         """Dead load, then lambda raised (load control) or a DOF driven (displacement control).
 
         ``monitor`` = (block, dof name) picks the displacement stored on the pushover curve
-        (default: the largest block translation).
+        (default: the largest block translation). ``stream``: keep the History's steps on
+        disk (:mod:`masonry_dem.streamed_history`): a folder, True (a temporary folder),
+        False (in memory), None (on disk when the History would not fit in a quarter of
+        the available memory).
         """
+        if stream is None:
+            stream = should_stream(self.model.blocks.count, self.model.interfaces.count)
+        hist = History()
+        if stream is not False:
+            steps = StreamedSteps(None if stream is True else Path(stream))
+            hist = History(steps=steps)
+            log.info("%s: the History's steps go to %s", self.model.name, steps.folder)
         with kernel_threads_for(self.model.interfaces.count):
-            return self._run(control, callback, monitor)
+            return self._run(hist, control, callback, monitor)
 
     def _run(
         self,
+        hist: History,
         control: DisplacementControl | None,
         callback: Callable[[StepResult], None] | None,
         monitor: tuple[int, str] | None,
     ) -> History:
         t0 = time.perf_counter()
-        hist = History()
         monitor_dof = None
         if monitor is not None:
             monitor_dof = self.model.dof_index(*monitor)
@@ -229,10 +242,12 @@ def pushover(
     write_every: int = 1,
     callback: Callable[[StepResult], None] | None = None,
     bound: Bound = None,
+    stream: bool | str | Path | None = None,
 ) -> History:
     """Run the static incremental analysis; with ``out`` write VTU/PVD, pushover.csv and
     summary.json to that folder as the steps converge. ``callback(step)`` is called after
-    each converged step (e.g. a progress bar); ``bound`` see :class:`StaticSolver`."""
+    each converged step (e.g. a progress bar); ``bound`` see :class:`StaticSolver`;
+    ``stream`` (the History's steps on disk) see :meth:`StaticSolver.run`."""
     writer = None
     if out is not None:
         from masonry_dem.export.writer import ResultsWriter
@@ -247,7 +262,7 @@ def pushover(
 
     solver = StaticSolver(model, settings, bound=bound)
     with writer or nullcontext():  # the steps handed to the writer reach the disk
-        history = solver.run(control=control, callback=on_step, monitor=monitor)
+        history = solver.run(control=control, callback=on_step, monitor=monitor, stream=stream)
     if writer is not None:
         writer.finish(history)
     return history
