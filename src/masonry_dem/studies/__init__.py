@@ -1,0 +1,1 @@
+"""Studies: many analyses of one scene (parameter sweeps, speed against accuracy, ...)."""
