@@ -15,8 +15,6 @@ from __future__ import annotations
 
 import csv
 import json
-import subprocess
-import sys
 from importlib.metadata import version
 from pathlib import Path
 
@@ -155,16 +153,21 @@ def test_samples_give_the_histogram_and_cdf_and_command_line_runs_on_a_scheduler
     case.write_text(tomli_w.dumps(SLIDING_WALL))
     out = tmp_path / "out"
     args = ["sweep", str(case), "--sample", "material.friction=uniform(0.5,0.9)"]
-    args += ["--samples", "4", "--seed", "1", "--scheduler", client.scheduler.address]
-    assert main([*args, "--out", str(out), "--quiet"]) == 0
+    args += ["--samples", "4", "--scheduler", client.scheduler.address, "--out", str(out)]
+    assert main([*args, "--quiet"]) == 0
     summary = json.loads(capsys.readouterr().out.splitlines()[0])
     assert summary["runs"] == 4 and summary["status"] == {"collapse": 4}
     rows = pq.read_table(out / "sweep.parquet").to_pylist()
-    mu = np.random.default_rng(1).uniform(0.5, 0.9, 4)  # the draws of the seed
+    seed = json.loads((out / "sweep.json").read_text())["seed"]  # drawn and recorded
+    mu = np.random.default_rng(seed).uniform(0.5, 0.9, 4)
     assert [r["material.friction"] for r in rows] == list(mu)
     np.testing.assert_allclose([r["lambda"] for r in rows], mu, rtol=TOL)
     for png in ("lambda_histogram.png", "lambda_cdf.png", "lambda_vs_material.friction.png"):
         assert (out / png).stat().st_size > 10_000
+    # resumed without --seed: the recorded one, so every row is found done
+    assert main([*args, "--quiet", "--resume"]) == 0
+    summary = json.loads(capsys.readouterr().out.splitlines()[0])
+    assert (summary["ran"], summary["resumed"]) == (0, 4)
 
 
 # --------------------------------------------------------------------- plans and errors
@@ -223,11 +226,8 @@ def test_command_line_refuses_a_value_out_of_range_with_exit_2(tmp_path, capsys)
     assert not (tmp_path / "s").exists()  # refused before anything ran
 
 
-def test_version_is_the_installed_one():
-    out = subprocess.run(
-        [sys.executable, "-m", "masonry_dem.cli", "--version"],
-        capture_output=True,
-        text=True,
-        check=True,
-    ).stdout
-    assert out.strip() == f"masonry-dem {version('masonry_dem')}"
+def test_version_is_the_installed_one(capsys):
+    with pytest.raises(SystemExit) as done:
+        main(["--version"])
+    assert done.value.code == 0
+    assert capsys.readouterr().out.strip() == f"masonry-dem {version('masonry_dem')}"

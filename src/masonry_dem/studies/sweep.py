@@ -82,7 +82,9 @@ RESULT_COLUMNS: dict[str, type] = {
     "mechanism_blocks": int,  # blocks moving >= 5 % of the largest translation of the mode
     "mechanism_cracks": int,  # joints moving >= 50 % of the largest: the cracks
     "mechanism_sliding_share": float,  # sliding / (sliding + opening) over the cracks
-    "seconds": float,
+    "seconds": float,  # wall-clock time of the run on its worker
+    "cpu_seconds": float,  # CPU time of the worker process meanwhile: seconds / cpu_seconds
+    # above 1 is time spent waiting for a core (a loaded machine), not computing
     "worker": str,
     "folder": str,
 }
@@ -380,7 +382,7 @@ def run_point(data: dict, source: str, keep: str = "none", folder: str | None = 
     limit-analysis bound, then the pushover (or the limit analysis alone for ``[analysis]
     method = "limit"``). Returns the result columns of its row (:data:`RESULT_COLUMNS`);
     anything the run raises is the row's status ``error`` with the reason, never raised."""
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     row: dict[str, Any] = dict.fromkeys(RESULT_COLUMNS)
     row["worker"] = f"{socket.gethostname()}:{os.getpid()}"
     try:
@@ -390,6 +392,7 @@ def run_point(data: dict, source: str, keep: str = "none", folder: str | None = 
         row.update(status="error", reason=f"{type(exc).__name__}: {text}")
         log.info("run of %s raised %s", source, row["reason"])
     row["seconds"] = time.perf_counter() - t0
+    row["cpu_seconds"] = time.process_time() - c0
     return row
 
 
@@ -620,7 +623,6 @@ class SweepResult:
     plots: list[Path]
     ran: int
     resumed: int
-    interrupted: bool = False
 
     @property
     def lambdas(self) -> np.ndarray:
@@ -670,8 +672,10 @@ def sweep(
         raise ValueError(f"keep = {plain(keep)}: must be one of {', '.join(KEEP)}")
     if workers is not None and (isinstance(workers, bool) or not 1 <= int(workers) <= 4096):
         raise ValueError(f"workers = {plain(workers)}: must be a whole number from 1 to 4096")
-    plan = make_plan(case, vary, sample, samples, seed)
     folder = Path(out)
+    if resume and sample and seed is None:  # the seed the sweep drew and recorded
+        seed = _recorded(folder).get("seed")
+    plan = make_plan(case, vary, sample, samples, seed)
     done = _prepare(folder, plan, resume, overwrite)
     points = plan.points()
     columns = columns_of(plan)
@@ -801,11 +805,11 @@ def _prepare(folder: Path, plan: Plan, resume: bool, overwrite: bool) -> dict[in
     plan_file = folder / PLAN
     if plan_file.is_file() or (folder / TABLE_CSV).is_file():
         if resume:
-            try:
-                before = json.loads(plan_file.read_text())
-            except (OSError, ValueError):
-                before = None
-            if before != json.loads(json.dumps(manifest)):
+            same = json.loads(json.dumps(manifest))
+            before = _recorded(folder)
+            if {k: before.get(k) for k in same if k != "source"} != {
+                k: v for k, v in same.items() if k != "source"
+            }:
                 raise ValueError(
                     f"{folder} holds a sweep of another plan (case, values, distributions or "
                     "seed differ): resume needs the same; use another folder or overwrite"
@@ -821,6 +825,15 @@ def _prepare(folder: Path, plan: Plan, resume: bool, overwrite: bool) -> dict[in
     tmp.write_text(json.dumps(manifest, indent=2))
     os.replace(tmp, plan_file)
     return {}
+
+
+def _recorded(folder: Path) -> dict[str, Any]:
+    """The plan a sweep in ``folder`` recorded ({} when there is none)."""
+    try:
+        data = json.loads((folder / PLAN).read_text())
+    except (OSError, ValueError):
+        return {}
+    return data if isinstance(data, dict) else {}
 
 
 def remove_own_files(folder: Path) -> None:
