@@ -76,11 +76,13 @@ def _pairs(items: list[str], option: str) -> dict[str, str]:
 
 def sweep_command(args: argparse.Namespace) -> int:
     try:
+        import distributed  # noqa: F401
+
         from masonry_dem.studies.sweep import sweep
     except ImportError as exc:  # pragma: no cover - the optional extra is missing
-        print(f"masonry-dem sweep: {exc}", file=sys.stderr)
+        print(f'masonry-dem sweep: error: {exc}; pip install "masonry_dem[sweep]"', file=sys.stderr)
         return 2
-    if not args.verbose:  # Dask's workers and scheduler log their life at INFO
+    if not args.verbose:  # Dask logs its cluster's life at INFO (set on its import, above)
         logging.getLogger("distributed").setLevel(logging.WARNING)
     logging.getLogger("masonry_dem.studies.sweep").setLevel(logging.INFO)  # the dashboard
     try:
