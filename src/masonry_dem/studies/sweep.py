@@ -51,7 +51,6 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from masonry_dem._validation import plain
-from masonry_dem.cases.schema import RANGES, CaseError
 
 if TYPE_CHECKING:
     from masonry_dem.model import Model
@@ -251,6 +250,8 @@ def get_path(data: dict, path: str) -> Any:
 def _typed(path: str, value: Any, current: Any) -> Any:
     """A plain Python value; a whole float where the case wants a whole number (a grid of
     courses) becomes an int, since the schema takes no 3.0 for 3."""
+    from masonry_dem.cases.schema import RANGES
+
     if isinstance(value, np.generic):
         value = value.item()
     key = path_keys(path)[-1]
@@ -327,7 +328,7 @@ def make_plan(
     """The plan of a sweep, every value checked by the case schema (CaseError, a ValueError,
     naming the path, the value and the allowed range)."""
     from masonry_dem.cases.casefile import _BUILDERS, read_case_data
-    from masonry_dem.cases.schema import check_case
+    from masonry_dem.cases.schema import CaseError, check_case
     from masonry_dem.solvers.incremental import StaticSettings
 
     if isinstance(case, Mapping):
@@ -866,6 +867,8 @@ LAMBDA_LABEL = "collapse multiplier $\\lambda$ [-] (live load / its nominal valu
 
 def axis_label(path: str) -> str:
     """``material.kn`` -> ``material.kn [N/m^3]``: the unit from the case schema."""
+    from masonry_dem.cases.schema import RANGES
+
     key = path_keys(path)[-1]
     rng = RANGES.get(key) if isinstance(key, str) else None
     return f"{path} [{rng.unit if rng is not None and rng.unit else '-'}]"
