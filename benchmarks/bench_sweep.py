@@ -102,6 +102,10 @@ def main() -> int:
         f"CPU seconds of the runs:     {cpu_serial:8.2f} s serial, {cpu_cluster:.2f} s on the "
         "workers (wall / CPU above 1: waiting for a core)"
     )
+    print(
+        f"CPU share:                   {cpu_serial / t_serial:8.2f} cores serial, "
+        f"{cpu_cluster / t_sweep:.2f} for the workers together"
+    )
     print(f"overhead per run:            {1e3 * overhead:8.1f} ms  (workers x sweep - runs' own)")
     print(f"no-op task round trip:       {1e3 * t_noop:8.2f} ms  (1000 tasks)")
     print(f"lambda of every run equal serial and cluster: {same}")

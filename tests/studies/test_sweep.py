@@ -196,6 +196,8 @@ def test_grids_lists_and_distributions_parse_as_written():
     points = plan.points()  # the grid crossed with the same three draws
     assert len(points) == 6
     assert [p["material.kn"] for p in points[:3]] == [p["material.kn"] for p in points[3:]]
+    with pytest.raises(ValueError, match="no sampled parameter"):
+        make_plan(SLIDING_WALL, vary={"material.friction": [0.5]}, samples=3)
 
 
 @pytest.mark.parametrize(
@@ -211,7 +213,7 @@ def test_grids_lists_and_distributions_parse_as_written():
 )
 def test_a_bad_path_or_value_is_one_line_naming_it(vary, sample, words, tmp_path):
     with pytest.raises(ValueError) as err:
-        make_plan(SLIDING_WALL, vary=vary, sample=sample, samples=50, seed=1)
+        make_plan(SLIDING_WALL, vary=vary, sample=sample, samples=50 if sample else 0, seed=1)
     text = str(err.value)
     assert "\n" not in text and all(w in text for w in words), text
     if sample == {} and "grid" not in words[0]:

@@ -139,6 +139,11 @@ class Distribution:
     def text(self) -> str:
         return f"{self.kind}({plain(self.a)},{plain(self.b)})"
 
+    def label(self) -> str:
+        """For people: ``lognormal(median 1e+09, sigma_log 0.3)``."""
+        a, b = DISTRIBUTIONS[self.kind]
+        return f"{self.kind}({a} {self.a:.6g}, {b} {self.b:.6g})"
+
 
 def parse_values(text: str, path: str = "") -> list[Any]:
     """The values of a grid ``lo:hi:n`` (n evenly spaced, both ends included) or of a list
@@ -353,6 +358,8 @@ def make_plan(
             raise ValueError(f"{path} is both varied and sampled; give it once")
     if isinstance(samples, bool) or not isinstance(samples, int) or samples < 0:
         raise ValueError(f"samples = {plain(samples)}: must be a whole number >= 0")
+    if samples and not dists:
+        raise ValueError(f"samples = {samples} but no sampled parameter: give --sample PATH=DIST")
     if dists and samples < 1:
         raise ValueError("sample given but samples = 0: give the number of samples (--samples N)")
     if not grid and not dists:
@@ -948,7 +955,7 @@ def write_plots(folder: Path, rows: list[dict], plan: Plan) -> list[Path]:
             if len(rows) > lam.size
             else ""
         )
-        what = ", ".join(f"{p} ~ {d.text()}" for p, d in plan.sample.items())
+        what = ", ".join(f"{p} ~ {d.label()}" for p, d in plan.sample.items())
         fig, ax = plt.subplots(figsize=(6.4, 4.4), layout="constrained")
         ax.hist(lam, bins="auto", color="C0", edgecolor="white")
         ax.set_xlabel(LAMBDA_LABEL)
