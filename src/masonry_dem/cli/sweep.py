@@ -33,7 +33,7 @@ def add_parser(subparsers) -> None:
         default=[],
         metavar="PATH=DIST",
         help="lognormal(median,sigma_log), normal(mean,sd) or uniform(lo,hi); e.g. "
-        "material.kn=lognormal(1e9,0.3); repeat for several",
+        '"material.kn=lognormal(1e9,0.3)" (quoted: a shell reads the brackets); repeat for several',
     )
     p.add_argument("--samples", type=int, default=0, help="number of random samples")
     p.add_argument("--seed", type=int, default=None, help="seed of the samples (default: drawn)")
