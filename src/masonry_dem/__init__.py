@@ -40,6 +40,7 @@ from masonry_dem.model import (
 )
 from masonry_dem.solvers.incremental import DisplacementControl, StaticSettings, pushover
 from masonry_dem.solvers.linear import solve_linear
+from masonry_dem.studies.sweep import sweep  # dask is imported only when a sweep runs
 
 __version__ = "0.1.0"
 
@@ -68,6 +69,7 @@ __all__ = [
     "solve_linear",
     "stack_bond_column",
     "subdivide_interfaces",
+    "sweep",
     "t_wall",
     "u_wall",
 ]

@@ -250,9 +250,16 @@ def load_case(path: str | Path | None = None) -> Case:
     """Read a case file; with no path, the bundled default wall. Raises FileNotFoundError
     (no such file) or CaseError naming the file (a folder, unreadable, not UTF-8, not TOML,
     or refused by the schema)."""
+    data, source = read_case_data(path)
+    return case_from_dict(data, source=source)
+
+
+def read_case_data(path: str | Path | None = None) -> tuple[dict[str, Any], str]:
+    """The parsed TOML of a case file (no path: the bundled default wall) and its source
+    name, not yet checked by the schema; errors as :func:`load_case`."""
     if path is None:
         text = resources.files("masonry_dem.cases").joinpath("data", DEFAULT_CASE).read_text()
-        return case_from_dict(tomllib.loads(text), source=f"bundled:{DEFAULT_CASE}")
+        return tomllib.loads(text), f"bundled:{DEFAULT_CASE}"
     p = Path(path)
     if p.is_dir():
         raise CaseError(f"case file {p} is a folder; give the TOML file in it")
@@ -273,4 +280,4 @@ def load_case(path: str | Path | None = None) -> Case:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise CaseError(f"case file {p} is not valid TOML: {exc}") from exc
-    return case_from_dict(data, source=str(p))
+    return data, str(p)

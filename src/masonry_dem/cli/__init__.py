@@ -17,7 +17,7 @@ import logging
 import sys
 import traceback
 
-COMMANDS = ("run", "validate", "interface", "render", "paraview_state", "study", "limit")
+COMMANDS = ("run", "validate", "interface", "render", "paraview_state", "study", "limit", "sweep")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -29,6 +29,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument(
         "--debug", action="store_true", help="show the traceback of an error, not one line"
     )
+    parser.add_argument("--version", action="version", version=f"%(prog)s {version()}")
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name in COMMANDS:
         try:
@@ -39,6 +40,19 @@ def build_parser() -> argparse.ArgumentParser:
             continue
         module.add_parser(subparsers)
     return parser
+
+
+def version() -> str:
+    """The installed package's version (its metadata: what pip installed)."""
+    from importlib.metadata import PackageNotFoundError
+    from importlib.metadata import version as installed
+
+    try:
+        return installed("masonry_dem")
+    except PackageNotFoundError:  # run from a source tree that was never installed
+        from masonry_dem import __version__
+
+        return f"{__version__} (not installed)"
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -9,7 +9,8 @@ JSON-ready rows (the command line only parses arguments and prints them).
 * :mod:`.reduction` - the 3-DOF in-plane model against the 6-DOF model;
 * :mod:`.kn_sweep` - lambda as the dry-joint stiffness grows;
 * :mod:`.validation` - the paper's validation cases (Tables 1-3) against the paper and the tests;
-* :mod:`.interface` - the closed-form interface strength against the spring model (Table A1).
+* :mod:`.interface` - the closed-form interface strength against the spring model (Table A1);
+* :mod:`.sweep` - one case over grids, lists and seeded samples of its case-file values, on Dask.
 
 Submodules are imported on use, not here, so that ``import masonry_dem.studies`` is cheap.
 """
