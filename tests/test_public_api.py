@@ -1,0 +1,69 @@
+"""The public namespace: every exported name exists, heavy names load on first use, and
+importing the package changes no environment variable (the entry points set the thread wait
+policy)."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+import masonry_dem as md
+
+SRC = Path(md.__file__).resolve().parents[1]
+
+
+def _python(code: str, **env: str) -> str:
+    base = {k: v for k, v in os.environ.items() if k != "OMP_WAIT_POLICY"}
+    base.update(env, PYTHONPATH=str(SRC))
+    out = subprocess.run(
+        [sys.executable, "-c", code], env=base, capture_output=True, text=True, check=True
+    )
+    return out.stdout.strip()
+
+
+def test_every_exported_name_resolves_and_no_internal_leaks():
+    for name in md.__all__:
+        assert getattr(md, name) is not None, name
+    assert not {"replace", "os", "import_module"} & set(md.__all__)
+    # the names the README and docs use
+    for name in ("History", "relax", "load_case", "collapse_mode", "limit_analysis", "Status"):
+        assert name in md.__all__
+    from masonry_dem.solvers.limit_analysis import limit_analysis
+
+    assert md.limit_analysis is limit_analysis
+
+
+def test_the_package_ships_its_type_information():
+    assert (Path(md.__file__).parent / "py.typed").is_file()
+
+
+def test_importing_the_package_sets_no_thread_policy_and_the_cli_does():
+    assert _python("import os, masonry_dem; print(os.environ.get('OMP_WAIT_POLICY'))") == "None"
+    code = (
+        "import os, contextlib, io\n"
+        "from masonry_dem.cli import main\n"
+        "with contextlib.redirect_stdout(io.StringIO()): main([])\n"
+        "print(os.environ.get('OMP_WAIT_POLICY'))"
+    )
+    assert _python(code) == "PASSIVE"
+    # a value the user set is kept
+    assert _python(code, OMP_WAIT_POLICY="ACTIVE") == "ACTIVE"
+
+
+def test_the_thread_policy_helper_refuses_an_unknown_policy_by_name():
+    with pytest.raises(ValueError, match="policy must be 'PASSIVE' or 'ACTIVE', got 'SPIN'"):
+        md.set_thread_wait_policy("SPIN")  # type: ignore[arg-type]
+
+
+def test_status_is_an_enum_that_compares_and_serialises_as_its_text():
+    history = md.History()
+    assert history.status is md.Status.RUNNING
+    history.end(md.Status.COMPLETED, md.StopReason.MAX_STEPS, "done")
+    assert history.status == "completed" and isinstance(history.status, md.Status)
+    summary = json.loads(json.dumps(history.summary()))
+    assert summary["status"] == "completed" and summary["stop"] == "max_steps reached"
