@@ -10,6 +10,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import masonry_dem as md
@@ -67,3 +68,25 @@ def test_status_is_an_enum_that_compares_and_serialises_as_its_text():
     assert history.status == "completed" and isinstance(history.status, md.Status)
     summary = json.loads(json.dumps(history.summary()))
     assert summary["status"] == "completed" and summary["stop"] == "max_steps reached"
+
+
+@pytest.mark.parametrize(
+    "build",
+    [
+        lambda **k: md.running_bond_wall(3, 4, unit_weight=20e3, **k),
+        lambda **k: md.running_bond_wall_of_size(0.9, 0.4, unit_weight=20e3, **k),
+        lambda **k: md.stack_bond_column(3, unit_weight=20e3, **k),
+        lambda **k: md.single_block(unit_weight=20e3, **k),
+        lambda **k: md.l_wall(4, 3, unit_weight=20e3, **k),
+        lambda **k: md.box_wall(4, 3, unit_weight=20e3, **k),
+    ],
+)
+def test_builders_take_descriptive_names_or_the_papers_letters(build):
+    named = build(block_height=0.081, block_length=0.21, thickness=0.07)
+    letters = build(a=0.081, b=0.21, s=0.07)
+    assert np.array_equal(named.centres, letters.centres)
+    assert np.array_equal(named.sizes, letters.sizes)
+    with pytest.raises(ValueError, match="give block_height or a .*not both"):
+        build(block_height=0.081, a=0.081, block_length=0.21, thickness=0.07)
+    with pytest.raises(ValueError, match="thickness is required"):
+        build(block_height=0.081, block_length=0.21)
