@@ -5,9 +5,10 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from masonry_dem.solvers.static.outcome import Status, StopReason
 
@@ -29,11 +30,11 @@ class StepResult:
 
     step: int
     load_factor: float
-    q: np.ndarray
-    actions: np.ndarray
-    state: np.ndarray
-    utilisation: np.ndarray
-    flags: np.ndarray | None = None
+    q: NDArray[np.float64]
+    actions: NDArray[np.float64]
+    state: NDArray[np.int32]
+    utilisation: NDArray[np.float64]
+    flags: NDArray[np.int32] | None = None
     control_displacement: float = 0.0
     iterations: int = 0
 
@@ -62,11 +63,13 @@ class History:
             self.collapse_bracket = None
 
     @property
-    def load_factors(self) -> np.ndarray:
+    def load_factors(self) -> NDArray[np.float64]:
+        """(steps,) lambda of every converged step."""
         return np.array([s.load_factor for s in self.steps])
 
     @property
-    def control_displacements(self) -> np.ndarray:
+    def control_displacements(self) -> NDArray[np.float64]:
+        """(steps,) the monitored (or largest) displacement of every step [m]."""
         return np.array([s.control_displacement for s in self.steps])
 
     @property
@@ -82,7 +85,8 @@ class History:
     def final_load_factor(self) -> float:
         return float(self.steps[-1].load_factor) if self.steps else 0.0
 
-    def summary(self, **extra) -> dict:
+    def summary(self, **extra: Any) -> dict[str, Any]:
+        """What summary.json holds of the run (``extra``: more fields, e.g. the method)."""
         out = {
             "status": str(self.status),
             "reason": self.reason,
@@ -102,6 +106,7 @@ class History:
 
 
 def write_pushover_csv(path: Path, history: History) -> None:
+    """pushover.csv: step, lambda and the control displacement of every step."""
     rows = np.column_stack(
         [np.arange(len(history.steps)), history.load_factors, history.control_displacements]
     )
@@ -115,5 +120,7 @@ def write_pushover_csv(path: Path, history: History) -> None:
     )
 
 
-def read_summary(folder: Path) -> dict:
-    return json.loads((Path(folder) / "summary.json").read_text())
+def read_summary(folder: Path) -> dict[str, Any]:
+    """The summary.json of a results folder."""
+    summary: dict[str, Any] = json.loads((Path(folder) / "summary.json").read_text())
+    return summary

@@ -11,7 +11,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 
 from masonry_dem._validation import as_finite_array, plain, positive_scalar
 from masonry_dem.geometry.blocks import Blocks
@@ -173,7 +173,10 @@ def boxes(lower: ArrayLike, upper: ArrayLike, unit_weight: ArrayLike) -> Blocks:
 
 
 def cut_openings(
-    blocks: Blocks, openings, among: np.ndarray | None = None, field: str = "openings"
+    blocks: Blocks,
+    openings: Sequence[Sequence[float]],
+    among: NDArray[np.bool_] | None = None,
+    field: str = "openings",
 ) -> Blocks:
     """Remove every block whose centre lies inside one of the rectangular openings.
 
@@ -207,8 +210,8 @@ def add_base(
     and its top face touches the lowest blocks, so real interfaces join it to the wall.
     """
     lo, hi = blocks.lower.min(axis=0), blocks.upper.max(axis=0)
-    # validated here so a NaN or negative overhang is reported by name (it surfaced as a
-    # non-finite "lower" corner, or silently shrank the base)
+    # checked by name: a NaN overhang would surface as a non-finite corner, a negative one
+    # would shrink the base silently
     overhang = positive_scalar("overhang", overhang, strict=False)
     depth = (
         float(np.median(blocks.sizes[:, 1])) if depth is None else positive_scalar("depth", depth)

@@ -36,6 +36,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import NDArray
 
 from masonry_dem._validation import positive_scalar
 from masonry_dem.geometry.blocks import Blocks
@@ -60,7 +61,7 @@ class _Run:
     odd: tuple[float, float, int]
 
 
-def _pieces(d0: float, d1: float, phase: int, pitch: float) -> np.ndarray:
+def _pieces(d0: float, d1: float, phase: int, pitch: float) -> NDArray[np.float64]:
     """Cut points of one course of a run, [d0, ..., d1]: the bond points strictly inside,
     at least ``SHORTEST_PIECE`` blocks from either end."""
     shortest = SHORTEST_PIECE * pitch
@@ -70,10 +71,13 @@ def _pieces(d0: float, d1: float, phase: int, pitch: float) -> np.ndarray:
     return np.concatenate([[d0], cuts, [d1]])
 
 
-def _run_boxes(run: _Run, courses: int, pitch: float, course_pitch: float):
+def _run_boxes(
+    run: _Run, courses: int, pitch: float, course_pitch: float
+) -> tuple[list[NDArray[np.float64]], list[NDArray[np.float64]]]:
     """Lower and upper corners of every block of a run, all courses (course-major)."""
     k = np.arange(courses)
-    lowers, uppers = [], []
+    lowers: list[NDArray[np.float64]] = []
+    uppers: list[NDArray[np.float64]] = []
     for parity, (d0, d1, phase) in enumerate((run.even, run.odd)):
         ks = k[k % 2 == parity]
         if ks.size == 0 or d1 - d0 <= 0:
@@ -96,12 +100,15 @@ def _run_boxes(run: _Run, courses: int, pitch: float, course_pitch: float):
     return lowers, uppers
 
 
-def _assemble(runs: list[_Run], courses: int, pitch: float, course_pitch: float, gamma: float):
-    lowers, uppers = [], []
+def _assemble(
+    runs: list[_Run], courses: int, pitch: float, course_pitch: float, gamma: float
+) -> Blocks:
+    lowers: list[NDArray[np.float64]] = []
+    uppers: list[NDArray[np.float64]] = []
     for run in runs:
-        lo, hi = _run_boxes(run, courses, pitch, course_pitch)
-        lowers += lo
-        uppers += hi
+        run_lo, run_hi = _run_boxes(run, courses, pitch, course_pitch)
+        lowers += run_lo
+        uppers += run_hi
     lo, hi = np.vstack(lowers), np.vstack(uppers)
     order = np.lexsort((lo[:, 2], lo[:, 0], lo[:, 1]))  # course by course, then along e1
     return Blocks.from_boxes(lo[order], hi[order], gamma)
@@ -143,7 +150,9 @@ def _returns(m: int, pitch: float, s: float, band: tuple[float, float]) -> _Run:
     return _Run(2, s, -1, band, (s, depth, 1), (0.0, depth, 0))
 
 
-def _facade_openings(blocks: Blocks, openings, s: float) -> Blocks:
+def _facade_openings(
+    blocks: Blocks, openings: Sequence[Sequence[float]] | None, s: float
+) -> Blocks:
     """Remove the facade blocks (z within [0, s]) whose centre lies inside an opening
     (x_min, y_min, x_max, y_max); the walls behind the facade are left whole."""
     if openings is None or len(openings) == 0:
@@ -303,7 +312,7 @@ def box_wall(
     lx, lz = n * p, m * p
     back = s - lz  # z of the back wall's outer face
 
-    def run(axis, origin, sense, band, length):
+    def run(axis: int, origin: float, sense: int, band: tuple[float, float], length: float) -> _Run:
         return _Run(axis, origin, sense, band, (0.0, length - s, 0), (s, length, 1))
 
     runs = [

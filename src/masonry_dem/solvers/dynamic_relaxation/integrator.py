@@ -146,14 +146,14 @@ class Relaxation:
         self._ramp_fail = math.inf  # first failure met by a ramp (refined in steps after it)
 
     # ------------------------------------------------------------------ masses and time step
-    def _masses(self) -> np.ndarray:
+    def _masses(self) -> NDArray[np.float64]:
         """(nf,) diagonal fictitious masses of the free DOFs."""
         K = self.K_elastic
         diag = K.diagonal()
         if self.settings.mass == "stiffness":
             d = np.sqrt(np.maximum(diag, 1e-300))
             absK = abs(K)
-            return d * (absK @ (1.0 / d))
+            return np.asarray(d * (absK @ (1.0 / d)), dtype=np.float64)
         blocks = self.model.blocks
         mass = blocks.weights / 9.81
         mass = np.where(mass > 0, mass, max(float(mass.max(initial=0.0)), 1.0) * 1e-3)
@@ -193,12 +193,14 @@ class Relaxation:
         lam = max(lam, 1e-300)
         return 2.0 / math.sqrt(lam), lam
 
-    def _rng_vector(self, n: int) -> np.ndarray:
+    def _rng_vector(self, n: int) -> NDArray[np.float64]:
         x = np.random.default_rng(1).standard_normal(n)
         return x / max(float(np.linalg.norm(x)), 1e-300)
 
     # ------------------------------------------------------------------ forces
-    def _forces(self, x: np.ndarray, plastic: np.ndarray, cracked: np.ndarray):
+    def _forces(
+        self, x: NDArray[np.float64], plastic: NDArray[np.float64], cracked: NDArray[np.bool_]
+    ) -> tuple[NDArray[np.float64], LawResponse, NDArray[np.float64]]:
         rel, resp, internal = self.law.forces(self.Hf, x, plastic, cracked, self.asm.H_free_T)
         self.stats.law_evaluations += 1
         return rel, resp, internal
@@ -210,8 +212,7 @@ class Relaxation:
         target: float,
         dt: float,
         ramp_to: float | None = None,
-        on_checkpoint: Callable[[np.ndarray, float, LawResponse, np.ndarray, np.ndarray], None]
-        | None = None,
+        on_checkpoint: Checkpoint | None = None,
     ) -> _Relaxed:
         """Integrate from ``start`` at rest until equilibrium under lambda = ``target``.
 

@@ -51,9 +51,8 @@ class DRSettings:
     ramp_tolerance: float = 1e-2
     tolerance: float = 1e-4
     energy_tolerance: float = 1e-6
-    # a relaxation that keeps halving its residual may run this long: near the peak of a
-    # cracked mortar wall (Chee Liang 14-15) one load step needs 1e5 time steps, and 2e4 ended
-    # the path 6 % low; relaxations that stop converging end earlier, by the stall test
+    # a relaxation that keeps halving its residual may run this long (near a peak one load
+    # step can need 1e5 time steps); one that stops converging ends earlier, by the stall test
     max_cycles: int = 400_000
     stall_factor: float = 5.0
     min_stall_window: int = 200

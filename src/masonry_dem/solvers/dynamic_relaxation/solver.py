@@ -28,12 +28,14 @@ import math
 import time
 from collections.abc import Callable
 from contextlib import nullcontext
+from pathlib import Path
 
 import numpy as np
+from numpy.typing import NDArray
 
 from masonry_dem._threads import kernel_threads_for
 from masonry_dem.constitutive.law import LawResponse
-from masonry_dem.model import Model
+from masonry_dem.model import DofName, Model, Monitor
 from masonry_dem.results import History, StepResult
 from masonry_dem.solvers.dynamic_relaxation.integrator import FATAL, Relaxation, _Relaxed, _State
 from masonry_dem.solvers.dynamic_relaxation.settings import DRSettings
@@ -51,12 +53,12 @@ class DynamicRelaxation(Relaxation):
     def _record(
         self,
         hist: History,
-        x: np.ndarray,
+        x: NDArray[np.float64],
         lam: float,
         resp: LawResponse,
         cycles: int,
         monitor_dof: int | None,
-        callback,
+        callback: StepCallback | None,
     ) -> None:
         q = np.zeros(self.model.n_dofs)
         q[self.asm.free_index] = x
@@ -81,7 +83,7 @@ class DynamicRelaxation(Relaxation):
             callback(sr)
 
     def _converged_state(
-        self, x: np.ndarray, lam: float, start: _State, resp: LawResponse, ramp: bool
+        self, x: NDArray[np.float64], lam: float, start: _State, resp: LawResponse, ramp: bool
     ) -> _State:
         rel = (self.Hf @ x).reshape(-1, 6)
         plastic = self.law.plastic_part(rel, resp.actions)
@@ -91,8 +93,8 @@ class DynamicRelaxation(Relaxation):
     # ------------------------------------------------------------------ analyses
     def run(
         self,
-        callback: Callable[[StepResult], None] | None = None,
-        monitor: tuple[int, str] | None = None,
+        callback: StepCallback | None = None,
+        monitor: Monitor | None = None,
     ) -> History:
         """Dead load, then lambda raised in steps or ramped until a mechanism forms."""
         with kernel_threads_for(self.m):
@@ -100,8 +102,8 @@ class DynamicRelaxation(Relaxation):
 
     def _run(
         self,
-        callback: Callable[[StepResult], None] | None,
-        monitor: tuple[int, str] | None,
+        callback: StepCallback | None,
+        monitor: Monitor | None,
     ) -> History:
         t0 = time.perf_counter()
         s = self.settings
@@ -140,7 +142,13 @@ class DynamicRelaxation(Relaxation):
         self._load_control(hist, state, monitor_dof, callback)
         return self._finish(hist, hist.status, hist.reason, t0)
 
-    def _ramp(self, hist: History, state: _State, monitor_dof, callback) -> _State:
+    def _ramp(
+        self,
+        hist: History,
+        state: _State,
+        monitor_dof: int | None,
+        callback: StepCallback | None,
+    ) -> _State:
         """Raise lambda continuously, then verify the quasi-static states passed on the way.
 
         A state passed during the ramp has a residual below ``ramp_tolerance`` only: it is a
@@ -152,7 +160,13 @@ class DynamicRelaxation(Relaxation):
         s = self.settings
         candidates: list[tuple[_State, LawResponse]] = []
 
-        def checkpoint(x, lam, resp, plastic, cracked):
+        def checkpoint(
+            x: NDArray[np.float64],
+            lam: float,
+            resp: LawResponse,
+            plastic: NDArray[np.float64],
+            cracked: NDArray[np.bool_],
+        ) -> None:
             if candidates and lam <= candidates[-1][0].load_factor * (1 + s.bracket_tolerance):
                 return
             st = _State(x.copy(), plastic.copy(), cracked.copy(), lam, resp.tangent.copy())
@@ -212,13 +226,21 @@ class DynamicRelaxation(Relaxation):
         self._ramp_fail = lam_fail
         return state
 
-    def _plastic_of(self, out: _Relaxed, state: _State):
+    def _plastic_of(
+        self, out: _Relaxed, state: _State
+    ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
         rel = (self.Hf @ out.x).reshape(-1, 6)
         return self.law.plastic_part(rel, out.response.actions), self.law.cracked_after(
             state.cracked, out.response
         )
 
-    def _load_control(self, hist: History, state: _State, monitor_dof, callback) -> None:
+    def _load_control(
+        self,
+        hist: History,
+        state: _State,
+        monitor_dof: int | None,
+        callback: StepCallback | None,
+    ) -> None:
         s = self.settings
         lam = state.load_factor
         dlam = s.initial_step * self.load_scale
@@ -273,12 +295,14 @@ class DynamicRelaxation(Relaxation):
         hist.status = Status.COLLAPSE
         hist.reason = f"no equilibrium beyond lambda={lam:.6g} (first failure at {lam_fail:.6g}: {last_reason})"
 
-    def _fail_empty(self, hist: History, zero: _State, reason: str, t0: float, callback) -> History:
+    def _fail_empty(
+        self, hist: History, zero: _State, reason: str, t0: float, callback: StepCallback | None
+    ) -> History:
         resp = self.law.respond(np.zeros((self.m, 6)), zero.plastic, zero.cracked)
         self._record(hist, zero.x, 0.0, resp, 0, None, callback)
         return self._finish(hist, Status.FAILED, reason, t0)
 
-    def _global_dof(self, block: int, dof: str) -> int:
+    def _global_dof(self, block: int, dof: DofName) -> int:
         return self.model.dof_index(block, dof)
 
     def _finish(self, hist: History, status: Status, reason: str, t0: float) -> History:
@@ -302,8 +326,8 @@ class DynamicRelaxation(Relaxation):
 def relax(
     model: Model,
     settings: DRSettings | None = None,
-    out=None,
-    monitor: tuple[int, str] | None = None,
+    out: str | Path | None = None,
+    monitor: Monitor | None = None,
     write_every: int = 1,
 ) -> History:
     """Run dynamic relaxation; with ``out`` write VTU/PVD, pushover.csv and summary.json."""

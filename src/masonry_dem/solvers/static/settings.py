@@ -15,6 +15,7 @@ from masonry_dem.constitutive.law import (
     TangentMethod,
     Tension,
 )
+from masonry_dem.model import DofName
 
 #: what follows the first failure of load control (see ``StaticSettings.continuation``)
 Continuation = Literal["work", "bracket"]
@@ -270,6 +271,6 @@ class DisplacementControl:
     """Drive DOF ``dof`` (name, e.g. ``u3``) of ``block`` to ``target`` in ``steps`` steps."""
 
     block: int
-    dof: str
+    dof: DofName
     target: float
     steps: int = 50
