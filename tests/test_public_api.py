@@ -90,3 +90,15 @@ def test_builders_take_descriptive_names_or_the_papers_letters(build):
         build(block_height=0.081, a=0.081, block_length=0.21, thickness=0.07)
     with pytest.raises(ValueError, match="thickness is required"):
         build(block_height=0.081, block_length=0.21)
+
+
+def test_the_thread_policy_set_after_the_threads_started_says_it_comes_too_late(
+    monkeypatch, caplog
+):
+    import numba
+
+    numba.get_num_threads()  # starts the threading layer, as a first analysis does
+    monkeypatch.delenv("OMP_WAIT_POLICY", raising=False)
+    with caplog.at_level("WARNING", logger="masonry_dem._threads"):
+        assert md.set_thread_wait_policy() == "PASSIVE"
+    assert "after the kernels' threads started" in caplog.text

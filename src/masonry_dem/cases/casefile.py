@@ -15,7 +15,7 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
-from typing import Any, Literal, cast
+from typing import Any, Literal, cast, get_args
 
 import numpy as np
 from numpy.typing import NDArray
@@ -45,7 +45,8 @@ else:  # pragma: no cover
     import tomli as tomllib
 
 DEFAULT_CASE = "default_wall.toml"
-ANALYSIS_METHODS = ("pushover", "limit")
+AnalysisMethod = Literal["pushover", "limit"]
+ANALYSIS_METHODS: tuple[str, ...] = get_args(AnalysisMethod)
 LIMIT_OPTIONS = ("associative", "grid", "backend")
 
 _BUILDERS = {
@@ -73,7 +74,7 @@ class Case:
     source: str
     #: ``[analysis] method``: "pushover" (default) or "limit" (limit analysis); the options of
     #: the limit analysis (``associative``, ``grid``, ``backend``) in ``limit_options``
-    method: str = "pushover"
+    method: AnalysisMethod = "pushover"
     limit_options: dict[str, Any] | None = None
 
 
@@ -241,7 +242,9 @@ def case_from_dict(data: dict[str, Any], source: str = "<dict>") -> Case:
         with _at(source, "[analysis].monitor.block"):
             model.dof_index(monitor_spec["block"], monitor_spec["dof"])
         monitor = (int(monitor_spec["block"]), cast(DofName, monitor_spec["dof"]))  # checked above
-    return Case(model, settings, control, monitor, source, method, limit_options)
+    return Case(
+        model, settings, control, monitor, source, cast(AnalysisMethod, method), limit_options
+    )
 
 
 @contextmanager
