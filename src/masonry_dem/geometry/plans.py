@@ -180,13 +180,8 @@ def l_wall(
     """A facade with one return wall at its ``corner`` (``left``: x = 0, or ``right``),
     interlocked there; the other end of the facade is straight, as in a running-bond wall.
     ``facade_openings``: (x_min, y_min, x_max, y_max) rectangles cut out of the facade."""
-    n, nc, cp, p, s, gamma = _common(
-        blocks_along_length,
-        courses,
-        block_size(block_height, block_length, thickness, a, b, s),
-        unit_weight,
-        joint,
-    )
+    size = block_size(block_height, block_length, thickness, a, b, s)
+    n, nc, cp, p, s, gamma = _common(blocks_along_length, courses, size, unit_weight, joint)
     m = _count("return_blocks", return_blocks)
     if corner not in CORNERS:
         raise ValueError(f"corner must be one of {CORNERS}, got {corner!r}")
@@ -219,13 +214,8 @@ def u_wall(
 ) -> Blocks:
     """A facade between two return walls of ``return_blocks`` blocks, interlocked at both
     corners (mirror symmetric about x = n b / 2)."""
-    n, nc, cp, p, s, gamma = _common(
-        blocks_along_length,
-        courses,
-        block_size(block_height, block_length, thickness, a, b, s),
-        unit_weight,
-        joint,
-    )
+    size = block_size(block_height, block_length, thickness, a, b, s)
+    n, nc, cp, p, s, gamma = _common(blocks_along_length, courses, size, unit_weight, joint)
     m = _count("return_blocks", return_blocks)
     length = n * p
     facade = _Run(0, 0.0, 1, (0.0, s), (0.0, length, 0), (s, length - s, 1))
@@ -255,13 +245,8 @@ def t_wall(
     x = ``cross_at`` (default: the facade's middle); the cross wall runs through the facade in
     the odd courses (its end block shows in the outer face) and butts against the facade's
     back in the even ones. Both ends of the facade are straight."""
-    n, nc, cp, p, s, gamma = _common(
-        blocks_along_length,
-        courses,
-        block_size(block_height, block_length, thickness, a, b, s),
-        unit_weight,
-        joint,
-    )
+    size = block_size(block_height, block_length, thickness, a, b, s)
+    n, nc, cp, p, s, gamma = _common(blocks_along_length, courses, size, unit_weight, joint)
     m = _count("return_blocks", return_blocks)
     length = n * p
     xc = length / 2 if cross_at is None else positive_scalar("cross_at", cross_at)
@@ -299,13 +284,8 @@ def box_wall(
     Each wall runs through the corner where it starts (anticlockwise from above) in the even
     courses and through the one where it ends in the odd courses: a square box (m = n) is
     the same seen from each side."""
-    n, nc, cp, p, s, gamma = _common(
-        blocks_along_length,
-        courses,
-        block_size(block_height, block_length, thickness, a, b, s),
-        unit_weight,
-        joint,
-    )
+    size = block_size(block_height, block_length, thickness, a, b, s)
+    n, nc, cp, p, s, gamma = _common(blocks_along_length, courses, size, unit_weight, joint)
     m = n if blocks_along_depth is None else _count("blocks_along_depth", blocks_along_depth)
     if m * p <= 2 * s + 2 * SHORTEST_PIECE * p:
         raise ValueError(f"blocks_along_depth = {m} leaves no side wall between the corners")
