@@ -34,6 +34,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Literal, get_args
 
 import numpy as np
 from numpy.typing import NDArray
@@ -44,7 +45,8 @@ from masonry_dem.geometry.builders import _count, _weight, block_size, cut_openi
 
 SHORTEST_PIECE = 0.3  # in block lengths: a shorter piece stays with its neighbour
 
-CORNERS = ("left", "right")
+Corner = Literal["left", "right"]
+CORNERS: tuple[str, ...] = get_args(Corner)
 
 
 @dataclass(frozen=True)
@@ -169,7 +171,7 @@ def l_wall(
     thickness: float | None = None,
     unit_weight: float | None = None,
     return_blocks: int = 4,
-    corner: str = "left",
+    corner: Corner = "left",
     joint: float = 0.0,
     facade_openings: Sequence[Sequence[float]] | None = None,
     *,
