@@ -106,10 +106,10 @@ class Assumptions:
         contacts (the mortar's kn, kt and friction, no tension): the support acts at the
         wall's edge, and the edge turns about it and may lift off, as on a line support.
         ``"dofs"``: fix ``simple_support_dofs`` of the edge blocks at their centres (the
-        bottom course also u1, u2); this holds the wall half a block inside its edges and
-        makes every wall 10-60 % stronger (docs/validation.md).
+        bottom course also u1, u2); this holds the wall half a block inside its edges, which
+        makes it stronger (the sensitivity table of docs/validation.md).
     support_strip_width [m]: width of the support strips: 0.01, the joint thickness, for a
-        line support at the edge (0.02: 2-3 +7 %; 0.04: +26 %).
+        line support at the edge (wider strips hold the edge inside the wall).
     simple_support_dofs: the DOFs fixed by ``simple_support="dofs"``: u3 (rotations free).
     restraint: how the return walls of Table 2 are read. ``"columns"`` (default, the
         paper's): fixed DOFs of the end column(s), ``column_dofs_table2``. ``"return-walls"``:
