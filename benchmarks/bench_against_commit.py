@@ -47,6 +47,9 @@ print(json.dumps(dict(lam=h.collapse_multiplier, fac=h.factorizations, its=h.ite
 
 def _run(src: Path, case: str, repeat: int) -> dict:
     env = dict(os.environ, PYTHONPATH=str(src))
+    # the same thread wait policy for both trees (older ones set it on import, newer ones at
+    # their entry points: masonry_dem.set_thread_wait_policy)
+    env.setdefault("OMP_WAIT_POLICY", "PASSIVE")
     out = subprocess.run(
         [sys.executable, "-c", _CHILD, case, str(repeat)],
         env=env,

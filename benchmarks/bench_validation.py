@@ -13,6 +13,7 @@ import argparse
 import time
 from dataclasses import fields, replace
 
+from masonry_dem import set_thread_wait_policy
 from masonry_dem.cases.paper import build_case, case_names
 from masonry_dem.solvers.incremental import StaticSettings, pushover
 from masonry_dem.studies.runs import warm_up
@@ -94,6 +95,7 @@ def _parse_settings(items: list[str]) -> dict:
 
 
 def main(argv: list[str] | None = None) -> None:
+    set_thread_wait_policy()  # as the command line does, before any kernel runs
     p = argparse.ArgumentParser(description=__doc__)
     p.add_argument("cases", nargs="*")
     p.add_argument("--sensitivity", action="store_true")

@@ -18,7 +18,9 @@ def main(argv: list[str] | None = None) -> dict:
     parser.add_argument("--courses", type=int, default=13)
     args = parser.parse_args(argv)
 
-    wall = md.running_bond_wall(3, args.courses, a=0.081, b=0.210, s=0.070, unit_weight=20e3)
+    wall = md.running_bond_wall(
+        3, args.courses, block_height=0.081, block_length=0.210, thickness=0.070, unit_weight=20e3
+    )
     blocks, base = md.add_base(wall)
     model = md.Model.build(
         blocks,

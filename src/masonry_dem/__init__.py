@@ -1,22 +1,23 @@
 """masonry_dem: nonlinear 3D discrete element analysis of masonry walls (Baraldi & Cecchi).
 
-The data flow is the folder layout: ``geometry`` (blocks, builders, contacts) -> ``model``
-(materials, supports, loads) -> ``assembly`` (H, Kbar, K) -> ``solvers`` (linear, static
-incremental) with the interface law of ``constitutive`` -> ``results`` -> ``export`` (VTU/PVD,
-renders, ParaView states).
+The data flow is the folder layout (docs/architecture.md): ``geometry`` (blocks, builders,
+contacts) -> ``model`` (materials, supports, loads) -> ``assembly`` (H, Kbar, K) ->
+``solvers`` (linear, static incremental, dynamic relaxation, limit analysis) with the
+interface law of ``constitutive`` -> ``results`` -> ``export`` (VTU/PVD, renders, ParaView
+states). This namespace is the public API; the names that pull in heavy dependencies (case
+files, dynamic relaxation, limit analysis, the collapse mode) are imported on first use.
+
+Importing the package changes no environment variable: a script that runs long analyses
+calls :func:`set_thread_wait_policy` first (the command line does).
 """
 
-import os
+from __future__ import annotations
 
-# The compiled kernels share their loops among the cores with OpenMP (numba). Threads that
-# spin while they wait (OpenMP's default) took a core from the serial parts between the
-# parallel loops: the 20 x 40 mortar wall ran 35 s against 19 s waiting passively (and 20 s
-# before the kernels were parallel), and a background results writer or a second process
-# slowed a run 3-4x. Waiting passively costs about a tenth on the small validation walls.
-# Set before the first parallel loop starts OpenMP; a value set by the user is kept.
-os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
+from importlib import import_module
+from typing import TYPE_CHECKING, Any
 
-from masonry_dem.geometry import selectors as select  # noqa: E402
+from masonry_dem._threads import set_thread_wait_policy
+from masonry_dem.geometry import selectors as select
 from masonry_dem.geometry.blocks import Blocks
 from masonry_dem.geometry.builders import (
     add_base,
@@ -38,33 +39,74 @@ from masonry_dem.model import (
     Support,
     WeightProportional,
 )
+from masonry_dem.results import History, StepResult
 from masonry_dem.solvers.incremental import DisplacementControl, StaticSettings, pushover
 from masonry_dem.solvers.linear import solve_linear
-from masonry_dem.studies.sweep import sweep  # dask is imported only when a sweep runs
+from masonry_dem.solvers.static.outcome import Status, StopReason
+
+if TYPE_CHECKING:
+    from masonry_dem.cases.casefile import Case, load_case
+    from masonry_dem.mechanism import collapse_mode
+    from masonry_dem.solvers.dynamic_relaxation import DRSettings, relax
+    from masonry_dem.solvers.limit_analysis import LimitAnalysisResult, limit_analysis
+    from masonry_dem.studies.sweep import sweep
 
 __version__ = "0.1.0"
 
+#: public names imported on first use: name -> module
+_LAZY = {
+    "Case": "masonry_dem.cases.casefile",
+    "load_case": "masonry_dem.cases.casefile",
+    "collapse_mode": "masonry_dem.mechanism",
+    "DRSettings": "masonry_dem.solvers.dynamic_relaxation",
+    "relax": "masonry_dem.solvers.dynamic_relaxation",
+    "LimitAnalysisResult": "masonry_dem.solvers.limit_analysis",
+    "limit_analysis": "masonry_dem.solvers.limit_analysis",
+    "sweep": "masonry_dem.studies.sweep",
+}
+
+
+def __getattr__(name: str) -> Any:
+    if name in _LAZY:
+        value = getattr(import_module(_LAZY[name]), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
 __all__ = [
     "Blocks",
+    "Case",
+    "DRSettings",
     "DisplacementControl",
+    "History",
     "InterfaceMaterial",
+    "LimitAnalysisResult",
     "Model",
     "PointLoad",
     "Pressure",
     "SelfWeight",
     "StaticSettings",
+    "Status",
+    "StepResult",
+    "StopReason",
     "Support",
     "WeightProportional",
     "add_base",
     "box_wall",
     "boxes",
+    "collapse_mode",
     "cut_openings",
     "detect_interfaces",
     "l_wall",
+    "limit_analysis",
+    "load_case",
     "pushover",
+    "relax",
     "running_bond_wall",
     "running_bond_wall_of_size",
     "select",
+    "set_thread_wait_policy",
     "single_block",
     "solve_linear",
     "stack_bond_column",

@@ -2,10 +2,15 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
+from numpy.typing import NDArray
 
 
-def as_finite_array(name: str, value, shape: tuple[int | None, ...] | None = None) -> np.ndarray:
+def as_finite_array(
+    name: str, value: Any, shape: tuple[int | None, ...] | None = None
+) -> NDArray[np.float64]:
     """Return ``value`` as a float array, rejecting NaN/inf and wrong shapes by name."""
     try:
         arr = np.asarray(value, dtype=float)
@@ -24,7 +29,7 @@ def as_finite_array(name: str, value, shape: tuple[int | None, ...] | None = Non
     return arr
 
 
-def require_positive(name: str, arr: np.ndarray, strict: bool = True) -> None:
+def require_positive(name: str, arr: NDArray[np.float64], strict: bool = True) -> None:
     bad = arr <= 0 if strict else arr < 0
     if np.any(bad):
         first = tuple(int(i) for i in np.argwhere(np.atleast_1d(bad))[0])
@@ -34,7 +39,7 @@ def require_positive(name: str, arr: np.ndarray, strict: bool = True) -> None:
         raise ValueError(f"{name} must be {sign}, got {plain(value)}{where}")
 
 
-def positive_scalar(name: str, value, strict: bool = True) -> float:
+def positive_scalar(name: str, value: Any, strict: bool = True) -> float:
     if isinstance(value, (bool, np.bool_)):  # True would be read as 1.0
         raise ValueError(f"{name} must be a number, got the boolean {plain(value)}")
     arr = as_finite_array(name, value)
@@ -44,7 +49,7 @@ def positive_scalar(name: str, value, strict: bool = True) -> float:
     return float(arr)
 
 
-def plain(value) -> str:
+def plain(value: Any) -> str:
     """``value`` as a user wrote it: plain numbers (no numpy reprs), TOML's true/false."""
     if isinstance(value, (bool, np.bool_)):
         return "true" if value else "false"
@@ -71,7 +76,7 @@ def plain(value) -> str:
     return repr(value)
 
 
-def block_indices(name: str, value, count: int | None = None) -> np.ndarray:
+def block_indices(name: str, value: Any, count: int | None = None) -> NDArray[np.int64]:
     """``value`` as an array of block indices, refusing what cannot be read plainly as one:
     a boolean mask (``np.asarray(mask, int64)`` would select blocks 0 and 1), fractional or
     non-finite numbers, text; with ``count``, indices outside 0..count-1 too."""

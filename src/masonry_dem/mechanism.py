@@ -24,6 +24,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from masonry_dem.assembly.compatibility import compatibility_matrix
 from masonry_dem.model import Model
@@ -32,14 +33,14 @@ from masonry_dem.results import History, StepResult
 HEAD, BED = 0, 1  # normal axis of the head (vertical) and bed (horizontal) joints
 
 
-def last_increment(history: History) -> np.ndarray:
+def last_increment(history: History) -> NDArray[np.float64]:
     """(n, 6) displacement increment of the last converged step: the collapse mechanism."""
     if len(history.steps) < 2:
         raise ValueError("the mechanism needs two converged steps; the run has fewer")
     return history.steps[-1].q - history.steps[-2].q
 
 
-def collapse_mode(model: Model, step: StepResult, floor: float = 1e-9) -> np.ndarray:
+def collapse_mode(model: Model, step: StepResult, floor: float = 1e-9) -> NDArray[np.float64]:
     """(n, 6) collapse mechanism at a converged step: the displacement field that the live
     load drives through the damaged stiffness of the assembly (Eqs. 13-14 of the paper).
 
@@ -62,7 +63,7 @@ def collapse_mode(model: Model, step: StepResult, floor: float = 1e-9) -> np.nda
     factors = np.maximum(stiffness_factors_of_flags(step.flags), floor)
     K = asm.stiffness(factors).tocsc()
     x = spsolve(K, model.live.reshape(-1)[asm.free_index])
-    q: np.ndarray = np.zeros(model.n_dofs)
+    q: NDArray[np.float64] = np.zeros(model.n_dofs)
     q[asm.free_index] = x
     q = q.reshape(-1, 6)
     scale = float(np.abs(q[:, :3]).max(initial=0.0))
@@ -71,10 +72,10 @@ def collapse_mode(model: Model, step: StepResult, floor: float = 1e-9) -> np.nda
     return q / scale
 
 
-def out_of_plane(dq: np.ndarray, blocks: np.ndarray | None = None) -> np.ndarray:
+def out_of_plane(dq: NDArray[np.float64], blocks: ArrayLike | None = None) -> NDArray[np.float64]:
     """u3 of the increment on ``blocks`` (default: all), divided by its largest magnitude."""
     du = dq[:, 2] if blocks is None else dq[np.asarray(blocks), 2]
-    peak = np.abs(du).max()
+    peak = float(np.abs(du).max())
     if peak == 0.0:
         raise ValueError("the increment has no out-of-plane motion")
     return du / peak
@@ -86,12 +87,12 @@ class JointMotion:
     interface rectangle (negative: the joint closes everywhere), ``sliding`` the tangential
     relative translation at its centre, ``rotation`` the norm of the relative rotation."""
 
-    opening: np.ndarray
-    sliding: np.ndarray
-    rotation: np.ndarray
+    opening: NDArray[np.float64]
+    sliding: NDArray[np.float64]
+    rotation: NDArray[np.float64]
 
 
-def joint_motion(model: Model, dq: np.ndarray) -> JointMotion:
+def joint_motion(model: Model, dq: NDArray[np.float64]) -> JointMotion:
     """Opening, sliding and relative rotation of every interface for the increment ``dq``."""
     itf = model.interfaces
     d = (compatibility_matrix(model.blocks, itf) @ np.asarray(dq).ravel()).reshape(-1, 6)
@@ -104,14 +105,14 @@ def joint_motion(model: Model, dq: np.ndarray) -> JointMotion:
     )
 
 
-def between(model: Model, blocks: np.ndarray) -> np.ndarray:
+def between(model: Model, blocks: ArrayLike) -> NDArray[np.bool_]:
     """(m,) mask of the interfaces joining two of ``blocks`` (e.g. the wall, not the base)."""
     inside = np.zeros(model.blocks.count, dtype=bool)
     inside[np.asarray(blocks)] = True
     return inside[model.interfaces.block_i] & inside[model.interfaces.block_j]
 
 
-def _rows(model: Model, mask: np.ndarray) -> list[np.ndarray]:
+def _rows(model: Model, mask: NDArray[np.bool_]) -> list[NDArray[np.intp]]:
     idx = np.flatnonzero(mask)
     y = np.round(model.interfaces.centre[idx, 1], 9)
     return [idx[y == h] for h in np.unique(y)]
@@ -119,11 +120,11 @@ def _rows(model: Model, mask: np.ndarray) -> list[np.ndarray]:
 
 def row_peaks(
     model: Model,
-    value: np.ndarray,
-    mask: np.ndarray,
+    value: NDArray[np.float64],
+    mask: NDArray[np.bool_],
     axis: int = BED,
     threshold: float = 0.2,
-) -> tuple[np.ndarray, np.ndarray]:
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """The crack path through one family of joints.
 
     Among the interfaces in ``mask`` with normal ``axis`` (``BED``: horizontal joints,
@@ -148,7 +149,9 @@ def row_peaks(
     return np.reshape(pts, (-1, 2)), np.asarray(w)
 
 
-def opening_by_row(model: Model, value: np.ndarray, mask: np.ndarray, axis: int = BED):
+def opening_by_row(
+    model: Model, value: NDArray[np.float64], mask: NDArray[np.bool_], axis: int = BED
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Heights of the rows of joints (normal ``axis``) in ``mask`` and the largest ``value``
     in each: a horizontal hinge is the row whose every joint opens, far above the others."""
     rows = _rows(model, mask & (model.interfaces.axis == axis))
@@ -163,8 +166,8 @@ class CrackLine:
     rising to the right, above 90 falling to the right), ``rms`` distance of the points from
     the line, and the ``y_range`` (lowest, highest) of the points."""
 
-    centre: np.ndarray
-    direction: np.ndarray
+    centre: NDArray[np.float64]
+    direction: NDArray[np.float64]
     angle: float
     rms: float
     y_range: tuple[float, float]
@@ -176,13 +179,13 @@ class CrackLine:
             raise ValueError("a horizontal crack line has no single x at a height")
         return float(self.centre[0] + (y - self.centre[1]) * self.direction[0] / self.direction[1])
 
-    def distance(self, point) -> float:
+    def distance(self, point: ArrayLike) -> float:
         """Distance of an in-plane point (x, y) from the line."""
         r = np.asarray(point, dtype=float) - self.centre
         return float(abs(r[0] * self.direction[1] - r[1] * self.direction[0]))
 
 
-def fit_crack(points: np.ndarray, weights: np.ndarray | None = None) -> CrackLine:
+def fit_crack(points: ArrayLike, weights: ArrayLike | None = None) -> CrackLine:
     """Weighted total-least-squares line through in-plane points (vertical lines allowed)."""
     pts = np.asarray(points, dtype=float).reshape(-1, 2)
     if pts.shape[0] < 2:
@@ -204,7 +207,9 @@ def fit_crack(points: np.ndarray, weights: np.ndarray | None = None) -> CrackLin
     )
 
 
-def mirror_mismatch(centres: np.ndarray, field: np.ndarray, axis_x: float) -> float:
+def mirror_mismatch(
+    centres: NDArray[np.float64], field: NDArray[np.float64], axis_x: float
+) -> float:
     """Largest |field(block) - field(mirror block)| about the vertical line x = axis_x, the
     mirror block being the one nearest to the reflected centre (inf if none lies within a
     millimetre: the layout itself is not symmetric)."""

@@ -9,9 +9,10 @@ from __future__ import annotations
 import logging
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import Any, Literal, get_args
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 
 from masonry_dem._validation import as_finite_array, block_indices, plain, positive_scalar
 from masonry_dem.geometry.blocks import Blocks
@@ -19,8 +20,14 @@ from masonry_dem.geometry.interfaces import Interfaces, detect_interfaces
 
 log = logging.getLogger(__name__)
 
-DOF_NAMES = ("u1", "u2", "u3", "w1", "w2", "w3")
-_DOF_GROUPS = {
+#: a block DOF: translations u1-u3 and rotations w1-w3 along / about e1, e2, e3
+DofName = Literal["u1", "u2", "u3", "w1", "w2", "w3"]
+#: a named group of DOFs (``in_plane``: u1, u2, w3; ``out_of_plane``: u3, w1, w2)
+DofGroup = Literal["all", "translations", "rotations", "in_plane", "out_of_plane"]
+DOF_NAMES: tuple[str, ...] = get_args(DofName)
+#: (block, DOF): the displacement a run puts on its pushover curve
+Monitor = tuple[int, DofName]
+_DOF_GROUPS: dict[str, tuple[int, ...]] = {
     "all": (0, 1, 2, 3, 4, 5),
     "translations": (0, 1, 2),
     "rotations": (3, 4, 5),
@@ -50,7 +57,7 @@ class InterfaceMaterial:
             positive_scalar("alpha", self.alpha)
 
 
-def dof_mask(dofs: str | Sequence[str]) -> np.ndarray:
+def dof_mask(dofs: DofGroup | DofName | Sequence[DofGroup | DofName]) -> NDArray[np.bool_]:
     """Boolean (6,) mask from a group name (``all``, ``translations``, ``rotations``,
     ``in_plane``, ``out_of_plane``) or a list of DOF names (``u1`` ... ``w3``)."""
     mask = np.zeros(6, dtype=bool)
@@ -96,10 +103,11 @@ class Support:
     """
 
     blocks: ArrayLike
-    dofs: str | Sequence[str] = "all"
+    dofs: DofGroup | DofName | Sequence[DofGroup | DofName] = "all"
     settles_with_wall: bool = False
 
-    def mask(self, n_blocks: int) -> np.ndarray:
+    def mask(self, n_blocks: int) -> NDArray[np.bool_]:
+        """(n_blocks, 6) fixed DOFs."""
         idx = block_indices("Support.blocks", self.blocks, n_blocks)
         if idx.size == 0:
             raise ValueError("Support.blocks: the selection is empty")
@@ -123,7 +131,8 @@ class SelfWeight:
 
     live: bool = False
 
-    def vector(self, blocks: Blocks) -> np.ndarray:
+    def vector(self, blocks: Blocks) -> NDArray[np.float64]:
+        """(n, 6) generalised forces at the block centres."""
         out = np.zeros((blocks.count, 6))
         out[:, 1] = -blocks.weights
         return out
@@ -138,7 +147,8 @@ class WeightProportional:
     live: bool = True
     blocks: ArrayLike | None = None
 
-    def vector(self, blocks: Blocks) -> np.ndarray:
+    def vector(self, blocks: Blocks) -> NDArray[np.float64]:
+        """(n, 6) generalised forces at the block centres."""
         d = as_finite_array("direction", self.direction, (3,))
         norm = np.linalg.norm(d)
         if norm == 0:
@@ -164,7 +174,8 @@ class Pressure:
     live: bool = True
     blocks: ArrayLike | None = None
 
-    def vector(self, blocks: Blocks) -> np.ndarray:
+    def vector(self, blocks: Blocks) -> NDArray[np.float64]:
+        """(n, 6) generalised forces at the block centres."""
         p = float(as_finite_array("pressure", self.value))
         if self.axis not in (0, 1, 2):
             raise ValueError(f"pressure axis must be 0, 1 or 2, got {plain(self.axis)}")
@@ -192,7 +203,8 @@ class PointLoad:
     offset: Sequence[float] = (0.0, 0.0, 0.0)
     live: bool = False
 
-    def vector(self, blocks: Blocks) -> np.ndarray:
+    def vector(self, blocks: Blocks) -> NDArray[np.float64]:
+        """(n, 6) generalised forces at the block centres."""
         idx = block_indices("PointLoad.blocks", self.blocks, blocks.count)
         f = as_finite_array("force", self.force, (3,))
         r = as_finite_array("offset", self.offset, (3,))
@@ -217,16 +229,16 @@ class Model:
 
     blocks: Blocks
     interfaces: Interfaces
-    kn: np.ndarray
-    kt: np.ndarray
-    friction: np.ndarray
-    tensile_strength: np.ndarray
-    alpha: np.ndarray
-    fixed: np.ndarray
-    dead: np.ndarray
-    live: np.ndarray
+    kn: NDArray[np.float64]
+    kt: NDArray[np.float64]
+    friction: NDArray[np.float64]
+    tensile_strength: NDArray[np.float64]
+    alpha: NDArray[np.float64]
+    fixed: NDArray[np.bool_]
+    dead: NDArray[np.float64]
+    live: NDArray[np.float64]
     name: str = "model"
-    meta: dict = field(default_factory=dict)
+    meta: dict[str, Any] = field(default_factory=dict)
 
     @classmethod
     def build(
@@ -237,8 +249,8 @@ class Model:
         loads: Sequence[Load] = (SelfWeight(),),
         name: str = "model",
         interfaces: Interfaces | None = None,
-        material_overrides: Sequence[tuple[np.ndarray, InterfaceMaterial]] = (),
-        meta: dict | None = None,
+        material_overrides: Sequence[tuple[ArrayLike, InterfaceMaterial]] = (),
+        meta: dict[str, Any] | None = None,
     ) -> Model:
         """Detect contacts, apply supports and loads.
 
@@ -256,7 +268,7 @@ class Model:
         its = its.subset(np.flatnonzero(keep))
         m = its.count
 
-        def per_interface(mat: InterfaceMaterial) -> np.ndarray:
+        def per_interface(mat: InterfaceMaterial) -> NDArray[np.float64]:
             alpha = np.nan if mat.alpha is None else mat.alpha
             return np.array([mat.kn, mat.kt, mat.friction, mat.tensile_strength, alpha])
 
@@ -302,11 +314,11 @@ class Model:
         return float(sizes.min())
 
     @property
-    def free(self) -> np.ndarray:
+    def free(self) -> NDArray[np.bool_]:
         """(6n,) bool mask of free DOFs (block-major)."""
         return ~self.fixed.reshape(-1)
 
-    def dof_index(self, block: int, dof: str) -> int:
+    def dof_index(self, block: int, dof: DofName) -> int:
         """Global DOF number of ``dof`` (``u1`` ... ``w3``) of ``block``."""
         if dof not in DOF_NAMES:
             raise ValueError(f"dof must be one of {DOF_NAMES}, got {dof!r}")
@@ -342,11 +354,11 @@ class Model:
             )
         self._check_rigid_modes_restrained(label, ncomp)
 
-    def _check_rigid_modes_restrained(self, label: np.ndarray, ncomp: int) -> None:
+    def _check_rigid_modes_restrained(self, label: NDArray[np.int32], ncomp: int) -> None:
         """Each connected group must have its six rigid-body motions stopped by its fixed DOFs.
 
-        Added with the kernel tests: anchoring a group by *some* fixed DOF is not enough (e.g.
-        only the translations of one base block, or no DOF along e3 anywhere). Such K_ff is
+        Anchoring a group by *some* fixed DOF is not enough (e.g. only the translations of
+        one base block, or no DOF along e3 anywhere). Such K_ff is
         singular in exact arithmetic, but splu usually factors it anyway in floating point
         and returns a meaningless displacement instead of an error. Elastic interfaces of
         positive area make each connected group rigid under zero energy, so K_ff is regular

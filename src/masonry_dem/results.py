@@ -6,9 +6,10 @@ import json
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Protocol, overload
+from typing import TYPE_CHECKING, Any, Protocol, overload
 
 import numpy as np
+from numpy.typing import NDArray
 
 from masonry_dem.solvers.static.outcome import Status, StopReason
 
@@ -30,11 +31,11 @@ class StepResult:
 
     step: int
     load_factor: float
-    q: np.ndarray
-    actions: np.ndarray
-    state: np.ndarray
-    utilisation: np.ndarray
-    flags: np.ndarray | None = None
+    q: NDArray[np.float64]
+    actions: NDArray[np.float64]
+    state: NDArray[np.int32]
+    utilisation: NDArray[np.float64]
+    flags: NDArray[np.int32] | None = None
     control_displacement: float = 0.0
     iterations: int = 0
 
@@ -80,14 +81,16 @@ class History:
             self.collapse_bracket = None
 
     @property
-    def load_factors(self) -> np.ndarray:
+    def load_factors(self) -> NDArray[np.float64]:
+        """(steps,) lambda of every converged step."""
         kept = getattr(self.steps, "load_factors", None)  # streamed steps keep their scalars
         if kept is not None:
             return np.array(kept, dtype=float)
         return np.array([s.load_factor for s in self.steps])
 
     @property
-    def control_displacements(self) -> np.ndarray:
+    def control_displacements(self) -> NDArray[np.float64]:
+        """(steps,) the monitored (or largest) displacement of every step [m]."""
         kept = getattr(self.steps, "control_displacements", None)
         if kept is not None:
             return np.array(kept, dtype=float)
@@ -106,7 +109,8 @@ class History:
     def final_load_factor(self) -> float:
         return float(self.steps[-1].load_factor) if self.steps else 0.0
 
-    def summary(self, **extra) -> dict:
+    def summary(self, **extra: Any) -> dict[str, Any]:
+        """What summary.json holds of the run (``extra``: more fields, e.g. the method)."""
         out = {
             "status": str(self.status),
             "reason": self.reason,
@@ -126,6 +130,7 @@ class History:
 
 
 def write_pushover_csv(path: Path, history: History) -> None:
+    """pushover.csv: step, lambda and the control displacement of every step."""
     rows = np.column_stack(
         [np.arange(len(history.steps)), history.load_factors, history.control_displacements]
     )
@@ -139,5 +144,7 @@ def write_pushover_csv(path: Path, history: History) -> None:
     )
 
 
-def read_summary(folder: Path) -> dict:
-    return json.loads((Path(folder) / "summary.json").read_text())
+def read_summary(folder: Path) -> dict[str, Any]:
+    """The summary.json of a results folder."""
+    summary: dict[str, Any] = json.loads((Path(folder) / "summary.json").read_text())
+    return summary

@@ -15,9 +15,10 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal, cast, get_args
 
 import numpy as np
+from numpy.typing import NDArray
 
 from masonry_dem._validation import plain
 from masonry_dem.cases.schema import CaseError, check_case, located
@@ -25,8 +26,11 @@ from masonry_dem.geometry import builders, plans
 from masonry_dem.geometry import selectors as sel
 from masonry_dem.geometry.blocks import Blocks
 from masonry_dem.model import (
+    DofName,
     InterfaceMaterial,
+    Load,
     Model,
+    Monitor,
     PointLoad,
     Pressure,
     SelfWeight,
@@ -36,12 +40,13 @@ from masonry_dem.model import (
 from masonry_dem.solvers.incremental import DisplacementControl, StaticSettings
 
 if sys.version_info >= (3, 11):
-    import tomllib
+    import tomllib as tomllib  # re-exported: the sweep parses values with it
 else:  # pragma: no cover
     import tomli as tomllib
 
 DEFAULT_CASE = "default_wall.toml"
-ANALYSIS_METHODS = ("pushover", "limit")
+AnalysisMethod = Literal["pushover", "limit"]
+ANALYSIS_METHODS: tuple[str, ...] = get_args(AnalysisMethod)
 LIMIT_OPTIONS = ("associative", "grid", "backend")
 
 _BUILDERS = {
@@ -65,15 +70,15 @@ class Case:
     model: Model
     settings: StaticSettings
     control: DisplacementControl | None
-    monitor: tuple[int, str] | None
+    monitor: Monitor | None
     source: str
     #: ``[analysis] method``: "pushover" (default) or "limit" (limit analysis); the options of
     #: the limit analysis (``associative``, ``grid``, ``backend``) in ``limit_options``
-    method: str = "pushover"
+    method: AnalysisMethod = "pushover"
     limit_options: dict[str, Any] | None = None
 
 
-def _unknown(section: str, given: dict, allowed: set[str]) -> None:
+def _unknown(section: str, given: dict[str, Any], allowed: set[str]) -> None:
     extra = sorted(set(given) - allowed)
     if extra:
         raise ValueError(
@@ -81,13 +86,15 @@ def _unknown(section: str, given: dict, allowed: set[str]) -> None:
         )
 
 
-def _require(section: str, data: dict, key: str) -> Any:
+def _require(section: str, data: dict[str, Any], key: str) -> Any:
     if key not in data:
         raise ValueError(f"case file [{section}]: missing key {key!r}")
     return data[key]
 
 
-def build_blocks(geometry: dict) -> tuple[Blocks, int | None, np.ndarray]:
+def build_blocks(
+    geometry: dict[str, Any],
+) -> tuple[Blocks, int | None, NDArray[np.bool_]]:
     """Blocks of the scene, the index of the base slab (or None) and the wall-block mask."""
     builder = _require("geometry", geometry, "builder")
     if builder not in _BUILDERS:
@@ -135,7 +142,8 @@ def select_blocks(
         return np.flatnonzero(wall)
     kind, _, arg = str(spec).partition(":")
     if kind == "column":
-        return sel.column(blocks, arg or "left", among=wall)
+        # the selectors check the words of a case file
+        return sel.column(blocks, cast("Literal['left', 'right']", arg or "left"), among=wall)
     if kind == "course":
         try:
             k = int(arg)
@@ -143,7 +151,7 @@ def select_blocks(
             raise ValueError(f"select: course needs an integer, got {plain(spec)}") from None
         return sel.course(blocks, k, among=wall)
     if kind == "edge":
-        return sel.edge(blocks, arg, among=wall)
+        return sel.edge(blocks, cast("sel.Edge", arg), among=wall)
     if spec in sel.PARTS:
         return sel.part(blocks, str(spec), among=wall)
     raise ValueError(
@@ -152,7 +160,9 @@ def select_blocks(
     )
 
 
-def _load(spec: dict, blocks: Blocks, wall: np.ndarray, base: int | None, k: int):
+def _load(
+    spec: dict[str, Any], blocks: Blocks, wall: NDArray[np.bool_], base: int | None, k: int
+) -> Load:
     kind = _require(f"loads[{k}]", spec, "type")
     section = f"loads[{k}]"
     if kind == "self_weight":
@@ -188,7 +198,7 @@ def _load(spec: dict, blocks: Blocks, wall: np.ndarray, base: int | None, k: int
     )
 
 
-def case_from_dict(data: dict, source: str = "<dict>") -> Case:
+def case_from_dict(data: dict[str, Any], source: str = "<dict>") -> Case:
     """The scene of a parsed case file; raises CaseError (a ValueError) naming ``source``, the
     table path and the value for anything the schema or the builders refuse."""
     check_case(data, source, _BUILDERS, StaticSettings)
@@ -231,8 +241,10 @@ def case_from_dict(data: dict, source: str = "<dict>") -> Case:
     if monitor_spec is not None:
         with _at(source, "[analysis].monitor.block"):
             model.dof_index(monitor_spec["block"], monitor_spec["dof"])
-        monitor = (int(monitor_spec["block"]), str(monitor_spec["dof"]))
-    return Case(model, settings, control, monitor, source, method, limit_options)
+        monitor = (int(monitor_spec["block"]), cast(DofName, monitor_spec["dof"]))  # checked above
+    return Case(
+        model, settings, control, monitor, source, cast(AnalysisMethod, method), limit_options
+    )
 
 
 @contextmanager

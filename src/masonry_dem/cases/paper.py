@@ -14,10 +14,11 @@ lambda is the uniform pressure in Pa.
 from __future__ import annotations
 
 import sys
+from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from functools import lru_cache
 from importlib import resources
-from typing import Any
+from typing import Any, Literal, get_args
 
 import numpy as np
 
@@ -31,9 +32,11 @@ from masonry_dem.geometry.builders import (
 )
 from masonry_dem.geometry.plans import l_wall, u_wall
 from masonry_dem.model import (
+    DofName,
     InterfaceMaterial,
     Load,
     Model,
+    Monitor,
     PointLoad,
     Pressure,
     SelfWeight,
@@ -57,8 +60,10 @@ def reference_data() -> dict[str, Any]:
     return tomllib.loads(text)
 
 
-SIMPLE_SUPPORTS = ("strips", "dofs")
-RESTRAINTS = ("columns", "return-walls")
+SimpleSupport = Literal["strips", "dofs"]
+Restraint = Literal["columns", "return-walls"]
+SIMPLE_SUPPORTS: tuple[str, ...] = get_args(SimpleSupport)
+RESTRAINTS: tuple[str, ...] = get_args(Restraint)
 # the specimens of Table 2 held by return walls alone (no openings): the only ones
 # ``restraint="return-walls"`` rebuilds as L (one edge) and U (both edges) walls
 RETURN_WALL_CASES = ("S11", "S12", "S13", "S15", "S6", "S1-S3", "S5")
@@ -101,10 +106,10 @@ class Assumptions:
         contacts (the mortar's kn, kt and friction, no tension): the support acts at the
         wall's edge, and the edge turns about it and may lift off, as on a line support.
         ``"dofs"``: fix ``simple_support_dofs`` of the edge blocks at their centres (the
-        bottom course also u1, u2); this holds the wall half a block inside its edges and
-        makes every wall 10-60 % stronger (docs/validation.md).
+        bottom course also u1, u2); this holds the wall half a block inside its edges, which
+        makes it stronger (the sensitivity table of docs/validation.md).
     support_strip_width [m]: width of the support strips: 0.01, the joint thickness, for a
-        line support at the edge (0.02: 2-3 +7 %; 0.04: +26 %).
+        line support at the edge (wider strips hold the edge inside the wall).
     simple_support_dofs: the DOFs fixed by ``simple_support="dofs"``: u3 (rotations free).
     restraint: how the return walls of Table 2 are read. ``"columns"`` (default, the
         paper's): fixed DOFs of the end column(s), ``column_dofs_table2``. ``"return-walls"``:
@@ -122,8 +127,8 @@ class Assumptions:
 
     dry_kn: float = 2.4e9
     dry_kt: float = 1.0e9
-    column_dofs_table1: tuple[str, ...] = ("u1", "u3")
-    column_dofs_table2: tuple[str, ...] = ("u1", "u3", "w1", "w2", "w3")
+    column_dofs_table1: tuple[DofName, ...] = ("u1", "u3")
+    column_dofs_table2: tuple[DofName, ...] = ("u1", "u3", "w1", "w2", "w3")
     opening_width: int = 3
     opening_height: int = 9
     sill_courses: int = 6
@@ -131,10 +136,10 @@ class Assumptions:
     s32_top_restrained: bool = False
     s32_beams_hold: bool = True
     brick_unit_weight: float = 18.0e3
-    simple_support_dofs: tuple[str, ...] = ("u3",)
-    simple_support: str = "strips"
+    simple_support_dofs: tuple[DofName, ...] = ("u3",)
+    simple_support: SimpleSupport = "strips"
     support_strip_width: float = 0.01
-    restraint: str = "columns"
+    restraint: Restraint = "columns"
     return_blocks: int | None = None
 
     def __post_init__(self) -> None:
@@ -162,7 +167,7 @@ class PaperCase:
     paper_dem: float
     reference: float  # Table 1: FEM; Table 2: the test; Table 3: the mean of the two tests
     unit: str  # "lambda" or "Pa"
-    monitor: tuple[int, str]  # the block DOF on the pushover curve
+    monitor: Monitor  # the block DOF on the pushover curve
     wall: np.ndarray  # (n_wall,) indices of the wall blocks (not supports)
     mechanism: str  # "diagonal", "vertical-axis", "hinge", "four-sided", "three-sided"
     extra: dict = field(default_factory=dict)  # other published values (LA bound, tests)
@@ -207,7 +212,9 @@ def _orduna_lourenco(spec: dict, data: dict, a: Assumptions) -> PaperCase:
     )
     blocks, base = add_base(wall)
     widx = np.arange(wall.count)
-    sides = ["left"] if spec["blocks_along_length"] == 3 else ["left", "right"]
+    sides: list[Literal["left", "right"]] = (
+        ["left"] if spec["blocks_along_length"] == 3 else ["left", "right"]
+    )
     supports = [Support([base])] + [
         Support(sel.column(wall, side), list(a.column_dofs_table1)) for side in sides
     ]
@@ -414,7 +421,7 @@ def _restrepo_velez(spec: dict, data: dict, a: Assumptions) -> PaperCase:
 
 
 # --------------------------------------------------------------------------- Table 3
-def _support_strips(wall: Blocks, edges: list[str], width: float) -> tuple[Blocks, np.ndarray]:
+def _support_strips(wall: Blocks, edges: Sequence[str], width: float) -> tuple[Blocks, np.ndarray]:
     """Rigid strips ``width`` wide behind the leeward face (+z, where the pressure pushes the
     wall) along each supported edge, and a slab under the bottom course that carries the
     weight: the wall bears on them through dry contacts, free to turn about the support lines
@@ -452,7 +459,7 @@ def _chee_liang(spec: dict, data: dict, a: Assumptions) -> PaperCase:
     )
     widx = np.arange(wall.count)
     restraint = spec["supports"]
-    edges = ["bottom", "left", "right", "top"]
+    edges: list[sel.Edge] = ["bottom", "left", "right", "top"]
     if "top edge free" in restraint:
         edges.remove("top")
     elif "left edge free" in restraint:

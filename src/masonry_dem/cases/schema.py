@@ -108,7 +108,10 @@ RANGES: dict[str, Range] = {
     # geometry
     "blocks_along_length": _COUNT,
     "courses": _COUNT,
-    "a": _SIZE,
+    "block_height": _SIZE,
+    "block_length": _SIZE,
+    "thickness": _SIZE,
+    "a": _SIZE,  # the paper's letters for the three above
     "b": _SIZE,
     "s": _SIZE,
     "length": _SIZE,

@@ -56,6 +56,9 @@ def version() -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
+    from masonry_dem._threads import set_thread_wait_policy
+
+    set_thread_wait_policy()  # before any kernel starts OpenMP (it reads the policy once)
     parser = build_parser()
     args = parser.parse_args(argv)
     logging.basicConfig(

@@ -26,6 +26,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cached_property
+from typing import Literal, get_args
 
 import numpy as np
 from scipy import sparse
@@ -46,10 +47,13 @@ from masonry_dem.constitutive.strength import (
 from masonry_dem.model import Model
 
 DETACHED_FLAG = FLAG_DETACHED
-MEMORY = ("none", "slip")
-TENSION = ("brittle", "plastic")
+Memory = Literal["none", "slip"]
+Tension = Literal["brittle", "plastic"]
 #: how :meth:`InterfaceLaw.tangent` differentiates the projection of yielded joints
-TANGENT_METHODS = ("analytic", "difference")
+TangentMethod = Literal["analytic", "difference"]
+MEMORY: tuple[str, ...] = get_args(Memory)
+TENSION: tuple[str, ...] = get_args(Tension)
+TANGENT_METHODS: tuple[str, ...] = get_args(TangentMethod)
 #: components that keep plastic slip with ``memory="slip"``: f1, f2, m3
 SLIP_COMPONENTS = np.array([True, True, False, False, False, True])
 #: relative size of the finite-difference steps of the tangent
@@ -90,8 +94,8 @@ class InterfaceLaw:
     friction: np.ndarray
     tensile_force: np.ndarray  # (m,) ft = tensile strength x area
     alpha: np.ndarray
-    tension: str = "brittle"
-    memory: str = "none"
+    tension: Tension = "brittle"
+    memory: Memory = "none"
     projection: str = "energy"  # shear-torsion return (see check_strength)
 
     def __post_init__(self) -> None:
@@ -102,7 +106,11 @@ class InterfaceLaw:
 
     @classmethod
     def of(
-        cls, model: Model, kbar: np.ndarray, tension: str = "brittle", memory: str = "none"
+        cls,
+        model: Model,
+        kbar: np.ndarray,
+        tension: Tension = "brittle",
+        memory: Memory = "none",
     ) -> InterfaceLaw:
         its = model.interfaces
         return cls(

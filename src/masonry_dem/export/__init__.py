@@ -1,0 +1,1 @@
+"""Exports: the results folder, VTU/PVD, renders and ParaView states."""

@@ -1,0 +1,1 @@
+"""Geometry: box blocks, builders of walls and plans, selectors, contact detection."""

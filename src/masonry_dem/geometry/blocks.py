@@ -8,6 +8,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from masonry_dem._validation import as_finite_array, require_positive
 
@@ -20,9 +21,9 @@ class Blocks:
     unit_weight: (n,) weight per unit volume [N/m^3].
     """
 
-    centres: np.ndarray
-    sizes: np.ndarray
-    unit_weight: np.ndarray
+    centres: NDArray[np.float64]
+    sizes: NDArray[np.float64]
+    unit_weight: NDArray[np.float64]
 
     def __post_init__(self) -> None:
         centres = as_finite_array("centres", self.centres, (None, 3))
@@ -33,7 +34,7 @@ class Blocks:
         require_positive("sizes", sizes)
         gamma = as_finite_array("unit_weight", self.unit_weight)
         if gamma.ndim > 1 or gamma.size not in (1, n):
-            # np.broadcast_to raised numpy's "operands could not be broadcast" without the name
+            # checked here: np.broadcast_to's own error does not name the field
             raise ValueError(
                 f"unit_weight must be a scalar or have shape ({n},), got {gamma.shape}"
             )
@@ -46,11 +47,11 @@ class Blocks:
             arr.flags.writeable = False
 
     @classmethod
-    def from_boxes(cls, lower, upper, unit_weight) -> Blocks:
+    def from_boxes(cls, lower: ArrayLike, upper: ArrayLike, unit_weight: ArrayLike) -> Blocks:
         """Blocks from lower and upper corners, each (n, 3)."""
         lo = as_finite_array("lower", lower, (None, 3))
         hi = as_finite_array("upper", upper, (lo.shape[0], 3))
-        return cls((lo + hi) / 2, hi - lo, unit_weight)
+        return cls((lo + hi) / 2, hi - lo, as_finite_array("unit_weight", unit_weight))
 
     @property
     def count(self) -> int:
@@ -60,25 +61,27 @@ class Blocks:
         return self.count
 
     @property
-    def lower(self) -> np.ndarray:
+    def lower(self) -> NDArray[np.float64]:
         return self.centres - self.sizes / 2
 
     @property
-    def upper(self) -> np.ndarray:
+    def upper(self) -> NDArray[np.float64]:
         return self.centres + self.sizes / 2
 
     @property
-    def volumes(self) -> np.ndarray:
-        return np.prod(self.sizes, axis=1)
+    def volumes(self) -> NDArray[np.float64]:
+        return np.asarray(np.prod(self.sizes, axis=1), dtype=np.float64)
 
     @property
-    def weights(self) -> np.ndarray:
+    def weights(self) -> NDArray[np.float64]:
         return self.volumes * self.unit_weight
 
-    def subset(self, index) -> Blocks:
-        return Blocks(self.centres[index], self.sizes[index], self.unit_weight[index])
+    def subset(self, index: ArrayLike | slice) -> Blocks:
+        """The blocks at ``index`` (indices, a boolean mask or a slice)."""
+        idx = index if isinstance(index, slice) else np.asarray(index)
+        return Blocks(self.centres[idx], self.sizes[idx], self.unit_weight[idx])
 
-    def permuted(self, order) -> Blocks:
+    def permuted(self, order: ArrayLike) -> Blocks:
         """The same blocks in another order (for numbering-independence checks)."""
         return self.subset(np.asarray(order))
 
@@ -90,7 +93,7 @@ class Blocks:
             np.concatenate([p.unit_weight for p in parts]),
         )
 
-    def corner_points(self) -> np.ndarray:
+    def corner_points(self) -> NDArray[np.float64]:
         """(n, 8, 3) corners in VTK hexahedron order."""
         signs = np.array(
             [

@@ -1,30 +1,77 @@
 """Builders of block assemblies: running-bond walls, stack-bond columns, single blocks, openings,
-supports (rigid base, return walls), and user lists of boxes."""
+supports (rigid base, return walls), and user lists of boxes.
+
+A block measures ``block_height`` x ``block_length`` x ``thickness`` (the paper's a x b x s,
+along e2, e1, e3). Every builder also takes the paper's letters as keywords (``a=``, ``b=``,
+``s=``), as case files and older scripts write them; giving both names of one size is an error.
+"""
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from masonry_dem._validation import as_finite_array, plain, positive_scalar
 from masonry_dem.geometry.blocks import Blocks
 
 
-def _count(name: str, value) -> int:
-    if isinstance(value, bool) or int(value) != value or int(value) < 1:
+def _count(name: str, value: object) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise ValueError(f"{name} must be a positive integer, got {plain(value)}")
+    if int(value) != value or int(value) < 1:
         raise ValueError(f"{name} must be a positive integer, got {plain(value)}")
     return int(value)
+
+
+def _one_of(name: str, value: float | None, letter: str, by_letter: float | None) -> float:
+    """A size given by its name or by the paper's letter (not both), validated under the name
+    the caller used."""
+    if value is not None and by_letter is not None:
+        raise ValueError(f"give {name} or {letter} (the paper's letter for it), not both")
+    if value is None and by_letter is None:
+        raise ValueError(f"{name} is required (the paper's {letter})")
+    return positive_scalar(name, value) if value is not None else positive_scalar(letter, by_letter)
+
+
+def block_size(
+    block_height: float | None,
+    block_length: float | None,
+    thickness: float | None,
+    a: float | None = None,
+    b: float | None = None,
+    s: float | None = None,
+) -> tuple[float, float, float]:
+    """(a, b, s): the block's height, length and thickness [m], each given by its name or by
+    the paper's letter."""
+    return (
+        _one_of("block_height", block_height, "a", a),
+        _one_of("block_length", block_length, "b", b),
+        _one_of("thickness", thickness, "s", s),
+    )
+
+
+def _weight(unit_weight: float | None) -> float:
+    if unit_weight is None:
+        raise ValueError("unit_weight is required (weight per unit volume, N/m^3; 0: weightless)")
+    return positive_scalar("unit_weight", unit_weight, strict=False)
 
 
 def running_bond_wall(
     blocks_along_length: int,
     courses: int,
-    a: float,
-    b: float,
-    s: float,
-    unit_weight: float,
+    block_height: float | None = None,
+    block_length: float | None = None,
+    thickness: float | None = None,
+    unit_weight: float | None = None,
     joint: float = 0.0,
-    origin=(0.0, 0.0, 0.0),
+    origin: Sequence[float] = (0.0, 0.0, 0.0),
     start_with_half: bool = False,
+    *,
+    a: float | None = None,
+    b: float | None = None,
+    s: float | None = None,
 ) -> Blocks:
     """A single-leaf running-bond wall with straight ends.
 
@@ -33,12 +80,13 @@ def running_bond_wall(
     (``start_with_half`` swaps the two). Block pitch is (b + joint) along e1 and (a + joint)
     along e2: the mortar joint thickness ``joint`` is included in the blocks, so the wall
     measures n(b+e) x courses(a+e) x s. The wall's lower-left-back corner sits at ``origin``.
+    Block sizes a, b, s: ``block_height``, ``block_length``, ``thickness``.
     """
     n = _count("blocks_along_length", blocks_along_length)
     nc = _count("courses", courses)
-    a, b, s = (positive_scalar(k, v) for k, v in (("a", a), ("b", b), ("s", s)))
+    a, b, s = block_size(block_height, block_length, thickness, a, b, s)
     e = positive_scalar("joint", joint, strict=False)
-    gamma = positive_scalar("unit_weight", unit_weight, strict=False)
+    gamma = _weight(unit_weight)
     px, py = b + e, a + e
     half_course = (np.arange(nc) % 2 == 1) ^ bool(start_with_half)
     # Each course is cut at integer or half-integer pitches; describe blocks by their cut points.
@@ -59,18 +107,23 @@ def running_bond_wall(
 def running_bond_wall_of_size(
     length: float,
     height: float,
-    a: float,
-    b: float,
-    s: float,
-    unit_weight: float,
+    block_height: float | None = None,
+    block_length: float | None = None,
+    thickness: float | None = None,
+    unit_weight: float | None = None,
     joint: float = 0.0,
+    *,
+    a: float | None = None,
+    b: float | None = None,
+    s: float | None = None,
 ) -> Blocks:
-    """A running-bond wall of the given overall size: the nearest whole numbers of blocks and
-    courses, with the pitch stretched (by less than half a block) so the wall is exactly
-    ``length`` x ``height``."""
+    """A running-bond wall of the given overall size (``length`` x ``height`` [m]): the
+    nearest whole numbers of blocks of ``block_length`` (b) and courses of ``block_height``
+    (a), with the pitch stretched (by less than half a block) so the wall is exactly that
+    size; ``thickness`` (s)."""
     length = positive_scalar("length", length)
     height = positive_scalar("height", height)
-    a, b = positive_scalar("a", a), positive_scalar("b", b)
+    a, b, s = block_size(block_height, block_length, thickness, a, b, s)
     e = positive_scalar("joint", joint, strict=False)
     n = max(1, round(length / (b + e)))
     nc = max(1, round(height / (a + e)))
@@ -78,31 +131,52 @@ def running_bond_wall_of_size(
     return running_bond_wall(n, nc, pitch_y, pitch_x, s, unit_weight, joint=0.0)
 
 
-def stack_bond_column(courses: int, a: float, b: float, s: float, unit_weight: float) -> Blocks:
-    """Blocks stacked one on another (a column of ``courses`` blocks)."""
+def stack_bond_column(
+    courses: int,
+    block_height: float | None = None,
+    block_length: float | None = None,
+    thickness: float | None = None,
+    unit_weight: float | None = None,
+    *,
+    a: float | None = None,
+    b: float | None = None,
+    s: float | None = None,
+) -> Blocks:
+    """Blocks stacked one on another (a column of ``courses`` blocks of ``block_height`` (a)
+    x ``block_length`` (b) x ``thickness`` (s)), its base on y = 0."""
     nc = _count("courses", courses)
-    a, b, s = (positive_scalar(k, v) for k, v in (("a", a), ("b", b), ("s", s)))
+    a, b, s = block_size(block_height, block_length, thickness, a, b, s)
     k = np.arange(nc)
     centres = np.stack([np.full(nc, b / 2), (k + 0.5) * a, np.full(nc, s / 2)], axis=1)
-    return Blocks(
-        centres,
-        np.tile([b, a, s], (nc, 1)),
-        np.full(nc, positive_scalar("unit_weight", unit_weight, False)),
-    )
+    return Blocks(centres, np.tile([b, a, s], (nc, 1)), np.full(nc, _weight(unit_weight)))
 
 
-def single_block(a: float, b: float, s: float, unit_weight: float) -> Blocks:
-    """One block of height a, width b and thickness s with its base on y = 0."""
+def single_block(
+    block_height: float | None = None,
+    block_length: float | None = None,
+    thickness: float | None = None,
+    unit_weight: float | None = None,
+    *,
+    a: float | None = None,
+    b: float | None = None,
+    s: float | None = None,
+) -> Blocks:
+    """One block of ``block_height`` (a) x ``block_length`` (b) x ``thickness`` (s) with its
+    base on y = 0."""
+    a, b, s = block_size(block_height, block_length, thickness, a, b, s)
     return stack_bond_column(1, a, b, s, unit_weight)
 
 
-def boxes(lower, upper, unit_weight) -> Blocks:
+def boxes(lower: ArrayLike, upper: ArrayLike, unit_weight: ArrayLike) -> Blocks:
     """Any user list of boxes given by their lower and upper corners, each (n, 3)."""
     return Blocks.from_boxes(lower, upper, unit_weight)
 
 
 def cut_openings(
-    blocks: Blocks, openings, among: np.ndarray | None = None, field: str = "openings"
+    blocks: Blocks,
+    openings: Sequence[Sequence[float]],
+    among: NDArray[np.bool_] | None = None,
+    field: str = "openings",
 ) -> Blocks:
     """Remove every block whose centre lies inside one of the rectangular openings.
 
@@ -136,8 +210,8 @@ def add_base(
     and its top face touches the lowest blocks, so real interfaces join it to the wall.
     """
     lo, hi = blocks.lower.min(axis=0), blocks.upper.max(axis=0)
-    # validated here so a NaN or negative overhang is reported by name (it surfaced as a
-    # non-finite "lower" corner, or silently shrank the base)
+    # checked by name: a NaN overhang would surface as a non-finite corner, a negative one
+    # would shrink the base silently
     overhang = positive_scalar("overhang", overhang, strict=False)
     depth = (
         float(np.median(blocks.sizes[:, 1])) if depth is None else positive_scalar("depth", depth)

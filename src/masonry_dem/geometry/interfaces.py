@@ -10,6 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from masonry_dem.geometry.blocks import Blocks
 
@@ -22,12 +23,12 @@ class Interfaces:
     centre: (m, 3); l1, l2: (m,) sides along the local axes y1, y2.
     """
 
-    block_i: np.ndarray
-    block_j: np.ndarray
-    axis: np.ndarray
-    centre: np.ndarray
-    l1: np.ndarray
-    l2: np.ndarray
+    block_i: NDArray[np.intp]
+    block_j: NDArray[np.intp]
+    axis: NDArray[np.intp]
+    centre: NDArray[np.float64]
+    l1: NDArray[np.float64]
+    l2: NDArray[np.float64]
 
     @property
     def count(self) -> int:
@@ -37,49 +38,49 @@ class Interfaces:
         return self.count
 
     @property
-    def area(self) -> np.ndarray:
+    def area(self) -> NDArray[np.float64]:
         return self.l1 * self.l2
 
     @property
-    def inertia1(self) -> np.ndarray:
+    def inertia1(self) -> NDArray[np.float64]:
         """Second moment about y1 (bending m1; stresses vary along y2)."""
         return self.l1 * self.l2**3 / 12.0
 
     @property
-    def inertia2(self) -> np.ndarray:
+    def inertia2(self) -> NDArray[np.float64]:
         """Second moment about y2 (bending m2; stresses vary along y1)."""
         return self.l2 * self.l1**3 / 12.0
 
     @property
-    def polar(self) -> np.ndarray:
+    def polar(self) -> NDArray[np.float64]:
         return self.inertia1 + self.inertia2
 
     @property
-    def local_axes(self) -> np.ndarray:
+    def local_axes(self) -> NDArray[np.intp]:
         """(m, 3) global axis index of y1, y2, y3."""
         n = self.axis
         return np.stack([(n + 1) % 3, (n + 2) % 3, n], axis=1)
 
-    def subset(self, index) -> Interfaces:
+    def subset(self, index: ArrayLike | slice) -> Interfaces:
+        """The interfaces at ``index`` (indices, a boolean mask or a slice)."""
+        idx = index if isinstance(index, slice) else np.asarray(index)
         return Interfaces(
-            self.block_i[index],
-            self.block_j[index],
-            self.axis[index],
-            self.centre[index],
-            self.l1[index],
-            self.l2[index],
+            self.block_i[idx],
+            self.block_j[idx],
+            self.axis[idx],
+            self.centre[idx],
+            self.l1[idx],
+            self.l2[idx],
         )
 
-    def corner_points(self) -> np.ndarray:
+    def corner_points(self) -> NDArray[np.float64]:
         """(m, 4, 3) corners of each interface rectangle, counter-clockwise about y3."""
         axes = self.local_axes
         rows = np.arange(self.count)
         signs = np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]], dtype=float)
         pts = np.repeat(self.centre[:, None, :], 4, axis=1)
-        # Index all three axes with arrays, (m, 1) x (1, 4) x (m, 1) -> (m, 4). The former
-        # pts[rows[:, None], :, axes[:, 0:1]] put a slice between the advanced indices, so
-        # numpy moved the indexed shape to the front, (m, 1, 4), and the (m, 4) update failed
-        # to broadcast for every m > 1 (any VTU export of a real wall raised).
+        # all three axes indexed by arrays, (m, 1) x (1, 4) x (m, 1) -> (m, 4): a slice
+        # between advanced indices would move the indexed shape to the front
         corner = np.arange(4)[None, :]
         pts[rows[:, None], corner, axes[:, 0:1]] += 0.5 * signs[None, :, 0] * self.l1[:, None]
         pts[rows[:, None], corner, axes[:, 1:2]] += 0.5 * signs[None, :, 1] * self.l2[:, None]
@@ -134,7 +135,7 @@ def subdivide_interfaces(interfaces: Interfaces, n1: int, n2: int) -> Interfaces
     )
 
 
-def _pairs_sharing_keys(keys: np.ndarray, owners: np.ndarray) -> np.ndarray:
+def _pairs_sharing_keys(keys: NDArray[np.intp], owners: NDArray[np.intp]) -> NDArray[np.intp]:
     """All pairs (a, b), a < b, of owners that share a key; (k, 2), unique."""
     order = np.argsort(keys, kind="stable")
     keys, owners = keys[order], owners[order]
@@ -150,17 +151,17 @@ def _pairs_sharing_keys(keys: np.ndarray, owners: np.ndarray) -> np.ndarray:
     lo, hi = lo[keep], hi[keep]
     if lo.size == 0:
         return np.zeros((0, 2), dtype=np.int64)
-    # Deduplicate on one int64 code per pair, by sort + mask. np.unique(pairs, axis=0) sorts
-    # a structured view and took ~90% of contact detection (3.6 s of 4 s at 10^5 blocks);
-    # np.unique on the codes is no better on numpy >= 2.3 (its hash path is ~20x slower than
-    # a plain sort here). Same result: pairs sorted lexicographically by (a, b).
+    # deduplicated on one int64 code per pair by sort + mask, the cheapest way numpy offers
+    # (docs/history/measurements.md); pairs come out sorted lexicographically by (a, b)
     n = np.int64(hi.max()) + 1
     code = np.sort(lo.astype(np.int64) * n + hi)
     code = code[np.concatenate(([True], code[1:] != code[:-1]))]
     return np.stack([code // n, code % n], axis=1)
 
 
-def candidate_pairs(lower: np.ndarray, upper: np.ndarray, pad: float) -> np.ndarray:
+def candidate_pairs(
+    lower: NDArray[np.float64], upper: NDArray[np.float64], pad: float
+) -> NDArray[np.intp]:
     """Pairs of boxes whose padded bounding boxes may touch, by uniform grid hashing.
 
     Near-linear in the number of boxes for walls of similar blocks; a large box (a base slab)

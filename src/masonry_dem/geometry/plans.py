@@ -32,23 +32,21 @@ The parts are found back by :func:`masonry_dem.geometry.selectors.part` (``facad
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Literal, get_args
 
 import numpy as np
+from numpy.typing import NDArray
 
 from masonry_dem._validation import positive_scalar
 from masonry_dem.geometry.blocks import Blocks
-from masonry_dem.geometry.builders import cut_openings
+from masonry_dem.geometry.builders import _count, _weight, block_size, cut_openings
 
 SHORTEST_PIECE = 0.3  # in block lengths: a shorter piece stays with its neighbour
 
-CORNERS = ("left", "right")
-
-
-def _count(name: str, value) -> int:
-    if isinstance(value, bool) or int(value) != value or int(value) < 1:
-        raise ValueError(f"{name} must be a positive integer, got {value!r}")
-    return int(value)
+Corner = Literal["left", "right"]
+CORNERS: tuple[str, ...] = get_args(Corner)
 
 
 @dataclass(frozen=True)
@@ -65,7 +63,7 @@ class _Run:
     odd: tuple[float, float, int]
 
 
-def _pieces(d0: float, d1: float, phase: int, pitch: float) -> np.ndarray:
+def _pieces(d0: float, d1: float, phase: int, pitch: float) -> NDArray[np.float64]:
     """Cut points of one course of a run, [d0, ..., d1]: the bond points strictly inside,
     at least ``SHORTEST_PIECE`` blocks from either end."""
     shortest = SHORTEST_PIECE * pitch
@@ -75,10 +73,13 @@ def _pieces(d0: float, d1: float, phase: int, pitch: float) -> np.ndarray:
     return np.concatenate([[d0], cuts, [d1]])
 
 
-def _run_boxes(run: _Run, courses: int, pitch: float, course_pitch: float):
+def _run_boxes(
+    run: _Run, courses: int, pitch: float, course_pitch: float
+) -> tuple[list[NDArray[np.float64]], list[NDArray[np.float64]]]:
     """Lower and upper corners of every block of a run, all courses (course-major)."""
     k = np.arange(courses)
-    lowers, uppers = [], []
+    lowers: list[NDArray[np.float64]] = []
+    uppers: list[NDArray[np.float64]] = []
     for parity, (d0, d1, phase) in enumerate((run.even, run.odd)):
         ks = k[k % 2 == parity]
         if ks.size == 0 or d1 - d0 <= 0:
@@ -101,23 +102,33 @@ def _run_boxes(run: _Run, courses: int, pitch: float, course_pitch: float):
     return lowers, uppers
 
 
-def _assemble(runs: list[_Run], courses: int, pitch: float, course_pitch: float, gamma: float):
-    lowers, uppers = [], []
+def _assemble(
+    runs: list[_Run], courses: int, pitch: float, course_pitch: float, gamma: float
+) -> Blocks:
+    lowers: list[NDArray[np.float64]] = []
+    uppers: list[NDArray[np.float64]] = []
     for run in runs:
-        lo, hi = _run_boxes(run, courses, pitch, course_pitch)
-        lowers += lo
-        uppers += hi
+        run_lo, run_hi = _run_boxes(run, courses, pitch, course_pitch)
+        lowers += run_lo
+        uppers += run_hi
     lo, hi = np.vstack(lowers), np.vstack(uppers)
     order = np.lexsort((lo[:, 2], lo[:, 0], lo[:, 1]))  # course by course, then along e1
     return Blocks.from_boxes(lo[order], hi[order], gamma)
 
 
-def _common(blocks_along_length, courses, a, b, s, unit_weight, joint):
+def _common(
+    blocks_along_length: int,
+    courses: int,
+    size: tuple[float, float, float],
+    unit_weight: float | None,
+    joint: float,
+) -> tuple[int, int, float, float, float, float]:
+    """Counts, course pitch, block pitch, thickness and unit weight of a plan, validated."""
     n = _count("blocks_along_length", blocks_along_length)
     nc = _count("courses", courses)
-    a, b, s = (positive_scalar(k, v) for k, v in (("a", a), ("b", b), ("s", s)))
+    a, b, s = size
     e = positive_scalar("joint", joint, strict=False)
-    gamma = positive_scalar("unit_weight", unit_weight, strict=False)
+    gamma = _weight(unit_weight)
     pitch = b + e
     if n * pitch <= 2 * s + 2 * SHORTEST_PIECE * pitch:
         # the corners' squares would meet: no facade between them
@@ -141,7 +152,9 @@ def _returns(m: int, pitch: float, s: float, band: tuple[float, float]) -> _Run:
     return _Run(2, s, -1, band, (s, depth, 1), (0.0, depth, 0))
 
 
-def _facade_openings(blocks: Blocks, openings, s: float) -> Blocks:
+def _facade_openings(
+    blocks: Blocks, openings: Sequence[Sequence[float]] | None, s: float
+) -> Blocks:
     """Remove the facade blocks (z within [0, s]) whose centre lies inside an opening
     (x_min, y_min, x_max, y_max); the walls behind the facade are left whole."""
     if openings is None or len(openings) == 0:
@@ -153,19 +166,24 @@ def _facade_openings(blocks: Blocks, openings, s: float) -> Blocks:
 def l_wall(
     blocks_along_length: int,
     courses: int,
-    a: float,
-    b: float,
-    s: float,
-    unit_weight: float,
+    block_height: float | None = None,
+    block_length: float | None = None,
+    thickness: float | None = None,
+    unit_weight: float | None = None,
     return_blocks: int = 4,
-    corner: str = "left",
+    corner: Corner = "left",
     joint: float = 0.0,
-    facade_openings=None,
+    facade_openings: Sequence[Sequence[float]] | None = None,
+    *,
+    a: float | None = None,
+    b: float | None = None,
+    s: float | None = None,
 ) -> Blocks:
     """A facade with one return wall at its ``corner`` (``left``: x = 0, or ``right``),
     interlocked there; the other end of the facade is straight, as in a running-bond wall.
     ``facade_openings``: (x_min, y_min, x_max, y_max) rectangles cut out of the facade."""
-    n, nc, cp, p, s, gamma = _common(blocks_along_length, courses, a, b, s, unit_weight, joint)
+    size = block_size(block_height, block_length, thickness, a, b, s)
+    n, nc, cp, p, s, gamma = _common(blocks_along_length, courses, size, unit_weight, joint)
     m = _count("return_blocks", return_blocks)
     if corner not in CORNERS:
         raise ValueError(f"corner must be one of {CORNERS}, got {corner!r}")
@@ -184,17 +202,22 @@ def l_wall(
 def u_wall(
     blocks_along_length: int,
     courses: int,
-    a: float,
-    b: float,
-    s: float,
-    unit_weight: float,
+    block_height: float | None = None,
+    block_length: float | None = None,
+    thickness: float | None = None,
+    unit_weight: float | None = None,
     return_blocks: int = 4,
     joint: float = 0.0,
-    facade_openings=None,
+    facade_openings: Sequence[Sequence[float]] | None = None,
+    *,
+    a: float | None = None,
+    b: float | None = None,
+    s: float | None = None,
 ) -> Blocks:
     """A facade between two return walls of ``return_blocks`` blocks, interlocked at both
     corners (mirror symmetric about x = n b / 2)."""
-    n, nc, cp, p, s, gamma = _common(blocks_along_length, courses, a, b, s, unit_weight, joint)
+    size = block_size(block_height, block_length, thickness, a, b, s)
+    n, nc, cp, p, s, gamma = _common(blocks_along_length, courses, size, unit_weight, joint)
     m = _count("return_blocks", return_blocks)
     length = n * p
     facade = _Run(0, 0.0, 1, (0.0, s), (0.0, length, 0), (s, length - s, 1))
@@ -207,20 +230,25 @@ def u_wall(
 def t_wall(
     blocks_along_length: int,
     courses: int,
-    a: float,
-    b: float,
-    s: float,
-    unit_weight: float,
+    block_height: float | None = None,
+    block_length: float | None = None,
+    thickness: float | None = None,
+    unit_weight: float | None = None,
     return_blocks: int = 4,
     cross_at: float | None = None,
     joint: float = 0.0,
-    facade_openings=None,
+    facade_openings: Sequence[Sequence[float]] | None = None,
+    *,
+    a: float | None = None,
+    b: float | None = None,
+    s: float | None = None,
 ) -> Blocks:
     """A facade with a cross wall of ``return_blocks`` blocks behind it, centred at
     x = ``cross_at`` (default: the facade's middle); the cross wall runs through the facade in
     the odd courses (its end block shows in the outer face) and butts against the facade's
     back in the even ones. Both ends of the facade are straight."""
-    n, nc, cp, p, s, gamma = _common(blocks_along_length, courses, a, b, s, unit_weight, joint)
+    size = block_size(block_height, block_length, thickness, a, b, s)
+    n, nc, cp, p, s, gamma = _common(blocks_along_length, courses, size, unit_weight, joint)
     m = _count("return_blocks", return_blocks)
     length = n * p
     xc = length / 2 if cross_at is None else positive_scalar("cross_at", cross_at)
@@ -241,27 +269,32 @@ def t_wall(
 def box_wall(
     blocks_along_length: int,
     courses: int,
-    a: float,
-    b: float,
-    s: float,
-    unit_weight: float,
+    block_height: float | None = None,
+    block_length: float | None = None,
+    thickness: float | None = None,
+    unit_weight: float | None = None,
     blocks_along_depth: int | None = None,
     joint: float = 0.0,
-    facade_openings=None,
+    facade_openings: Sequence[Sequence[float]] | None = None,
+    *,
+    a: float | None = None,
+    b: float | None = None,
+    s: float | None = None,
 ) -> Blocks:
     """A closed box of four walls, n b by m b outside (``blocks_along_depth`` = m, default
     n), the front wall (the facade) at z in [0, s], the back wall at z in [s - m b, 2 s - m b].
     Each wall runs through the corner where it starts (anticlockwise from above) in the even
     courses and through the one where it ends in the odd courses: a square box (m = n) is
     the same seen from each side."""
-    n, nc, cp, p, s, gamma = _common(blocks_along_length, courses, a, b, s, unit_weight, joint)
+    size = block_size(block_height, block_length, thickness, a, b, s)
+    n, nc, cp, p, s, gamma = _common(blocks_along_length, courses, size, unit_weight, joint)
     m = n if blocks_along_depth is None else _count("blocks_along_depth", blocks_along_depth)
     if m * p <= 2 * s + 2 * SHORTEST_PIECE * p:
         raise ValueError(f"blocks_along_depth = {m} leaves no side wall between the corners")
     lx, lz = n * p, m * p
     back = s - lz  # z of the back wall's outer face
 
-    def run(axis, origin, sense, band, length):
+    def run(axis: int, origin: float, sense: int, band: tuple[float, float], length: float) -> _Run:
         return _Run(axis, origin, sense, band, (0.0, length - s, 0), (s, length, 1))
 
     runs = [

@@ -7,12 +7,15 @@ silently leave a wall unsupported.
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import Literal, get_args
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from masonry_dem.geometry.blocks import Blocks
 
-EDGES = ("left", "right", "bottom", "top", "back", "front")
+Edge = Literal["left", "right", "bottom", "top", "back", "front"]
+EDGES: tuple[str, ...] = get_args(Edge)
 _EDGE_AXIS = {
     "left": (0, -1),
     "right": (0, 1),
@@ -23,10 +26,9 @@ _EDGE_AXIS = {
 }
 
 
-def _as_mask(blocks: Blocks, among) -> np.ndarray | None:
-    """``among`` as an (n,) boolean mask. Block indices are accepted too: before, an index
-    array went through ``mask & among`` as a bitwise AND of bools and ints and silently
-    selected the wrong blocks."""
+def _as_mask(blocks: Blocks, among: ArrayLike | None) -> NDArray[np.bool_] | None:
+    """``among`` as an (n,) boolean mask, from a mask or from block indices (which must
+    become a mask: ``mask & indices`` would be a bitwise AND of bools and ints)."""
     if among is None:
         return None
     arr = np.asarray(among)
@@ -44,7 +46,9 @@ def _as_mask(blocks: Blocks, among) -> np.ndarray | None:
     return mask
 
 
-def _checked(name: str, mask: np.ndarray, among: np.ndarray | None) -> np.ndarray:
+def _checked(
+    name: str, mask: NDArray[np.bool_], among: NDArray[np.bool_] | None
+) -> NDArray[np.intp]:
     if among is not None:
         mask = mask & among
     idx = np.flatnonzero(mask)
@@ -57,18 +61,17 @@ def _tol(blocks: Blocks) -> float:
     return 1e-6 * float(np.median(blocks.sizes))
 
 
-def edge(blocks: Blocks, which: str, among: np.ndarray | None = None) -> np.ndarray:
+def edge(blocks: Blocks, which: Edge, among: ArrayLike | None = None) -> NDArray[np.intp]:
     """Blocks touching one edge of the assembly's bounding box (``left``, ``right``, ``bottom``,
     ``top``, ``back``, ``front``); ``among`` (boolean mask or block indices) restricts the
     search."""
     if which not in _EDGE_AXIS:
         raise ValueError(f"edge must be one of {EDGES}, got {which!r}")
     axis, side = _EDGE_AXIS[which]
-    among = _as_mask(blocks, among)
-    pool = np.ones(blocks.count, bool) if among is None else among
+    mask_among = _as_mask(blocks, among)
+    pool = np.ones(blocks.count, bool) if mask_among is None else mask_among
     if not np.any(pool):
-        # an empty ``among`` made min()/max() fail with numpy's "zero-size array" message;
-        # say which selector matched nothing instead
+        # an empty pool has no min()/max(): name the selector that matched nothing
         raise ValueError(f"selector edge={which!r} matches no block: `among` selects none")
     if side < 0:
         limit = blocks.lower[pool, axis].min()
@@ -76,40 +79,42 @@ def edge(blocks: Blocks, which: str, among: np.ndarray | None = None) -> np.ndar
     else:
         limit = blocks.upper[pool, axis].max()
         mask = blocks.upper[:, axis] >= limit - _tol(blocks)
-    return _checked(f"edge={which!r}", mask, among)
+    return _checked(f"edge={which!r}", mask, mask_among)
 
 
-def column(blocks: Blocks, which: str = "left", among: np.ndarray | None = None) -> np.ndarray:
+def column(
+    blocks: Blocks, which: Literal["left", "right"] = "left", among: ArrayLike | None = None
+) -> NDArray[np.intp]:
     """The end column of a wall: ``left`` or ``right`` (whole and half end blocks)."""
     if which not in ("left", "right"):
         raise ValueError(f"column must be 'left' or 'right', got {which!r}")
     return edge(blocks, which, among)
 
 
-def course_levels(blocks: Blocks, among: np.ndarray | None = None) -> np.ndarray:
-    """Sorted distinct centre heights (e2) of the blocks: one per course."""
-    among = _as_mask(blocks, among)
-    y = blocks.centres[among if among is not None else slice(None), 1]
+def course_levels(blocks: Blocks, among: ArrayLike | None = None) -> NDArray[np.float64]:
+    """(courses,) sorted distinct centre heights (e2) of the blocks: one per course."""
+    mask = _as_mask(blocks, among)
+    y = blocks.centres[mask if mask is not None else slice(None), 1]
     y = np.sort(y)
     if y.size == 0:
         return y
     gaps = np.diff(y) > _tol(blocks)
-    return y[np.concatenate([[True], gaps])]
+    return np.asarray(y[np.concatenate([[True], gaps])], dtype=np.float64)
 
 
-def course(blocks: Blocks, k: int, among: np.ndarray | None = None) -> np.ndarray:
+def course(blocks: Blocks, k: int, among: ArrayLike | None = None) -> NDArray[np.intp]:
     """Blocks of course ``k`` (0 = lowest; negative counts from the top)."""
-    among = _as_mask(blocks, among)
-    levels = course_levels(blocks, among)
+    mask_among = _as_mask(blocks, among)
+    levels = course_levels(blocks, mask_among)
     if not -levels.size <= k < levels.size:
         raise ValueError(f"course {k} does not exist: the assembly has {levels.size} courses")
     mask = np.abs(blocks.centres[:, 1] - levels[k]) <= _tol(blocks)
-    return _checked(f"course={k}", mask, among)
+    return _checked(f"course={k}", mask, mask_among)
 
 
 def where(
-    blocks: Blocks, predicate: Callable[[np.ndarray], np.ndarray], name: str = "predicate"
-) -> np.ndarray:
+    blocks: Blocks, predicate: Callable[[NDArray[np.float64]], ArrayLike], name: str = "predicate"
+) -> NDArray[np.intp]:
     """Blocks whose centres (n, 3) satisfy ``predicate(centres) -> bool mask``."""
     mask = np.asarray(predicate(blocks.centres), dtype=bool)
     if mask.shape != (blocks.count,):
@@ -131,7 +136,9 @@ CORNER_PARTS = (
 PARTS = WALL_PARTS + CORNER_PARTS
 
 
-def _plan(blocks: Blocks, pool: np.ndarray):
+def _plan(
+    blocks: Blocks, pool: NDArray[np.bool_]
+) -> tuple[float, NDArray[np.float64], NDArray[np.float64]]:
     """Plan bands of an assembly of walls that meet (see :mod:`masonry_dem.geometry.plans`):
     the wall thickness t (the median of each block's smaller plan size) and the outer plan
     extent of ``pool``."""
@@ -142,11 +149,13 @@ def _plan(blocks: Blocks, pool: np.ndarray):
     return t, lo, hi
 
 
-def _within(blocks: Blocks, axis: int, lo: float, hi: float, tol: float) -> np.ndarray:
+def _within(blocks: Blocks, axis: int, lo: float, hi: float, tol: float) -> NDArray[np.bool_]:
     return (blocks.lower[:, axis] >= lo - tol) & (blocks.upper[:, axis] <= hi + tol)
 
 
-def _wall_labels(blocks: Blocks, pool: np.ndarray) -> tuple[np.ndarray, float, np.ndarray]:
+def _wall_labels(
+    blocks: Blocks, pool: NDArray[np.bool_]
+) -> tuple[NDArray[np.int_], float, NDArray[np.float64]]:
     """Label every block of ``pool`` with its wall (index into WALL_PARTS, -1 outside pool).
 
     A block belongs to the facade if its plan lies in the front band (z within t of the
@@ -171,7 +180,7 @@ def _wall_labels(blocks: Blocks, pool: np.ndarray) -> tuple[np.ndarray, float, n
     return label, t, np.stack([lo, hi])
 
 
-def part(blocks: Blocks, name: str, among: np.ndarray | None = None) -> np.ndarray:
+def part(blocks: Blocks, name: str, among: ArrayLike | None = None) -> NDArray[np.intp]:
     """Blocks of one part of walls that meet (L, T, U plans, boxes of
     :mod:`masonry_dem.geometry.plans`), found from the plan alone.
 

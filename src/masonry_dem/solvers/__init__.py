@@ -1,0 +1,1 @@
+"""Solvers: linear, static incremental, dynamic relaxation, limit analysis, 3-DOF reduction."""

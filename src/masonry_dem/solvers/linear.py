@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import NDArray
 from scipy.sparse.linalg import splu
 
 from masonry_dem.assembly.stiffness import Assembly
@@ -13,10 +14,12 @@ from masonry_dem.model import Model
 
 @dataclass(frozen=True)
 class LinearSolution:
-    q: np.ndarray  # (n, 6) block displacements and rotations
-    actions: np.ndarray  # (m, 6) interface actions, local order [f1, f2, fn, m1, m2, m3]
-    reactions: np.ndarray  # (n, 6) support reactions (zero on free DOFs)
-    relative: np.ndarray  # (m, 6) relative displacements
+    """The displacements, actions and reactions of one linear elastic solve."""
+
+    q: NDArray[np.float64]  # (n, 6) block displacements and rotations
+    actions: NDArray[np.float64]  # (m, 6) interface actions, local order [f1, f2, fn, m1, m2, m3]
+    reactions: NDArray[np.float64]  # (n, 6) support reactions (zero on free DOFs)
+    relative: NDArray[np.float64]  # (m, 6) relative displacements
 
 
 def solve_linear(

@@ -98,7 +98,7 @@ def in_plane_model(model: Model) -> Model:
     if model.meta.get("reduction") == "in_plane":
         return model
     fixed = model.fixed | OUT_OF_PLANE_DOFS[None, :]
-    fully = fixed.all(axis=1)
+    fully = np.asarray(fixed.all(axis=1), dtype=bool)
     its = model.interfaces
     keep = np.flatnonzero(~(fully[its.block_i] & fully[its.block_j]))
     meta = dict(model.meta)

@@ -183,8 +183,11 @@ def blocks_of_geometry(geometry: dict) -> int | None:
             return n * courses + halves + base
         if builder == "running_bond_wall_of_size":
             e = float(geometry.get("joint", 0.0))
-            n = max(1, round(float(geometry["length"]) / (float(geometry["b"]) + e)))
-            courses = max(1, round(float(geometry["height"]) / (float(geometry["a"]) + e)))
+            # a block size by its name or by the paper's letter (KeyError: neither given)
+            b = float(geometry["block_length" if "block_length" in geometry else "b"])
+            a = float(geometry["block_height" if "block_height" in geometry else "a"])
+            n = max(1, round(float(geometry["length"]) / (b + e)))
+            courses = max(1, round(float(geometry["height"]) / (a + e)))
             return n * courses + courses // 2 + base
         if builder == "stack_bond_column":
             return int(geometry["courses"]) + base

@@ -17,7 +17,7 @@ import numpy as np
 from scipy import sparse
 
 from masonry_dem.assembly.stiffness import Assembly
-from masonry_dem.constitutive.law import InterfaceLaw, LawResponse
+from masonry_dem.constitutive.law import InterfaceLaw, LawResponse, Memory, Tension
 from masonry_dem.model import Model
 from masonry_dem.solvers.factorization import Factorizer, Factors, SingularMatrix, analyse
 
@@ -161,8 +161,8 @@ class DiscreteProblem:
         self,
         model: Model,
         *,
-        tension: str = "brittle",
-        memory: str = "none",
+        tension: Tension = "brittle",
+        memory: Memory = "none",
         tangent: str = "analytic",
         residual_stiffness: float = 1e-9,
         displacement_limit: float | None = None,

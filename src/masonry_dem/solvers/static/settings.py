@@ -5,10 +5,21 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, fields
+from typing import Literal, get_args
 
-from masonry_dem.constitutive.law import MEMORY, TANGENT_METHODS, TENSION
+from masonry_dem.constitutive.law import (
+    MEMORY,
+    TANGENT_METHODS,
+    TENSION,
+    Memory,
+    TangentMethod,
+    Tension,
+)
+from masonry_dem.model import DofName
 
-CONTINUATION = ("work", "bracket")
+#: what follows the first failure of load control (see ``StaticSettings.continuation``)
+Continuation = Literal["work", "bracket"]
+CONTINUATION: tuple[str, ...] = get_args(Continuation)
 
 
 @dataclass(frozen=True)
@@ -129,16 +140,16 @@ class StaticSettings:
     refine: bool = True
     max_steps: int = 1000
     max_load_factor: float = math.inf
-    continuation: str = "work"
+    continuation: Continuation = "work"
     tolerance: float = 1e-8
     control_tolerance: float = 1e-6
     max_iterations: int = 40
     displacement_limit: float | None = None
     limit_elastic_multiple: float = 100.0
     residual_stiffness: float = 1e-9
-    tangent: str = "analytic"
-    tension: str = "brittle"
-    memory: str = "none"
+    tangent: TangentMethod = "analytic"
+    tension: Tension = "brittle"
+    memory: Memory = "none"
     stall_window: int = 8
     stall_decrease: float = 0.5
     max_floor: float = 1e-3
@@ -260,6 +271,6 @@ class DisplacementControl:
     """Drive DOF ``dof`` (name, e.g. ``u3``) of ``block`` to ``target`` in ``steps`` steps."""
 
     block: int
-    dof: str
+    dof: DofName
     target: float
     steps: int = 50

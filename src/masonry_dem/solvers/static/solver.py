@@ -15,11 +15,12 @@ from collections.abc import Callable
 from contextlib import nullcontext
 from dataclasses import replace
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from masonry_dem._threads import kernel_threads_for
-from masonry_dem.model import Model
+from masonry_dem.model import Model, Monitor
 from masonry_dem.results import History, StepResult
 from masonry_dem.solvers.static import paths
 from masonry_dem.solvers.static.certificate import Bound, certify
@@ -70,7 +71,7 @@ class StaticSolver(Corrector):
             iterations=out.iterations,
         )
 
-    def snapshot(self) -> tuple:
+    def snapshot(self) -> tuple[Any, ...]:
         """The last converged state, to go back to (:meth:`resume`)."""
         return (
             self.q.copy(),
@@ -81,7 +82,7 @@ class StaticSolver(Corrector):
             self.search_state,
         )
 
-    def resume(self, kept: tuple) -> None:
+    def resume(self, kept: tuple[Any, ...]) -> None:
         (
             self.q,
             self.plastic,
@@ -101,7 +102,7 @@ class StaticSolver(Corrector):
         self,
         control: DisplacementControl | None = None,
         callback: Callable[[StepResult], None] | None = None,
-        monitor: tuple[int, str] | None = None,
+        monitor: Monitor | None = None,
         stream: bool | str | Path | None = None,
     ) -> History:
         """Dead load, then lambda raised (load control) or a DOF driven (displacement control).
@@ -127,7 +128,7 @@ class StaticSolver(Corrector):
         hist: History,
         control: DisplacementControl | None,
         callback: Callable[[StepResult], None] | None,
-        monitor: tuple[int, str] | None,
+        monitor: Monitor | None,
     ) -> History:
         t0 = time.perf_counter()
         monitor_dof = None
@@ -237,8 +238,8 @@ def pushover(
     model: Model,
     settings: StaticSettings | None = None,
     control: DisplacementControl | None = None,
-    out=None,
-    monitor: tuple[int, str] | None = None,
+    out: str | Path | None = None,
+    monitor: Monitor | None = None,
     write_every: int = 1,
     callback: Callable[[StepResult], None] | None = None,
     bound: Bound = None,

@@ -1,0 +1,22 @@
+"""Dynamic relaxation (DR): the explicit baseline the paper's static method is measured
+against, one role per module:
+
+* :mod:`.settings` - :class:`DRSettings` (every knob, the choices as ``Literal`` types) and
+  :class:`DRStats` (what a run cost);
+* :mod:`.integrator` - one relaxation: masses, stable time step, damped central differences
+  until the motion dies out, blow-up checks and cuts of the step;
+* :mod:`.solver` - the load path: dead load, load steps or a ramp, the collapse bracket,
+  :class:`DynamicRelaxation` and :func:`relax`.
+
+It answers the static solver's discrete problem (same law, loads, residual norm and
+displacement limit), so both must find the same collapse multiplier.
+"""
+
+from __future__ import annotations
+
+# _State: the start of one relaxation, for the static solver's dynamic rescue (corrector.py)
+from masonry_dem.solvers.dynamic_relaxation.integrator import _State as _State
+from masonry_dem.solvers.dynamic_relaxation.settings import DRSettings, DRStats
+from masonry_dem.solvers.dynamic_relaxation.solver import DynamicRelaxation, relax
+
+__all__ = ["DRSettings", "DRStats", "DynamicRelaxation", "relax"]
