@@ -74,6 +74,12 @@ class Corrector:
         """The displacement limit of the searches [m]."""
         return max(self.problem.limit, self._elastic_limit) + self._limit_allowance
 
+    @property
+    def search_seed(self) -> float:
+        """The trust radius of a search with no previous increment to go by [m]:
+        ``trust_seed`` elastic units of the wall (:attr:`DiscreteProblem.displacement_scale`)."""
+        return self.settings.trust_seed * self.problem.displacement_scale
+
     def restore(self, q: np.ndarray, cracked: np.ndarray | None = None) -> None:
         """Make (q, cracked) the last converged state (e.g. a state read from a History)."""
         self.q = np.asarray(q, dtype=float).reshape(-1).copy()
@@ -114,7 +120,7 @@ class Corrector:
         q = (self.q if start is None else start).copy()
         lam = load_factor
         if radius is None:
-            radius = max(4.0 * self._last_increment, 1e-4 * self.limit)
+            radius = max(4.0 * self._last_increment, self.search_seed)
         residual, rnorm, response = self.residual(q, lam, dead_factor)
         floor = s.residual_stiffness
         lu = None  # the factorized tangent, kept while it converges fast (chord steps)
@@ -231,9 +237,12 @@ class Corrector:
                     it += 1
                 radius = min(radius, shrink * size) / 8.0
                 cuts += 1
-                exhausted = radius < 1e-12 * self.limit or cuts >= s.search_cuts
+                exhausted = (
+                    radius < s.radius_floor * self.problem.displacement_scale
+                    or cuts >= s.search_cuts
+                )
                 if exhausted and regularise():
-                    radius = max(4.0 * self._last_increment, 1e-4 * self.limit)
+                    radius = max(4.0 * self._last_increment, self.search_seed)
                     continue
                 if exhausted:
                     return Outcome(
