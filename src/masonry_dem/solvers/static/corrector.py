@@ -57,7 +57,8 @@ class Corrector:
         self.plastic = np.zeros((m, 6))
         self.cracked = np.zeros(m, dtype=bool)
         self.q = np.zeros(model.n_dofs)
-        self.iterations = 0
+        self.iterations = 0  # Newton (and pseudo-transient, robust) iterations
+        self.time_steps = 0  # time steps of the dynamic relaxations the solver ran
         self._last_increment = 0.0
         #: extra room of the displacement limit (the elastic displacement under the dead load)
         self._limit_allowance = 0.0
@@ -528,7 +529,9 @@ class Corrector:
             np.ones((self.model.interfaces.count, 6)),
         )
         relaxed = self._dr._relax_with_cuts(start, target, None)
-        self.iterations += relaxed.cycles
+        # time steps of an explicit relaxation are no Newton iterations (each costs a
+        # residual, no factorization): counted apart, so that ``iterations`` compares paths
+        self.time_steps += relaxed.cycles
         if not polish:
             return Outcome(relaxed.ok, self.q, target, self.residual(self.q, target)[2], 0)
         if not relaxed.ok:

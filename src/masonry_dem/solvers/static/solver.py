@@ -220,7 +220,15 @@ class StaticSolver(Corrector):
         hist.iterations = self.iterations
         hist.factorizations = self.factorizations
         log.info(
-            "%s: %s after %d steps (%s)", self.model.name, hist.status, len(hist.steps), hist.reason
+            "%s: %s after %d steps, %d Newton iterations, %d factorizations, %d time steps of "
+            "dynamic relaxation (%s)",
+            self.model.name,
+            hist.status,
+            len(hist.steps),
+            self.iterations,
+            self.factorizations,
+            self.time_steps,
+            hist.reason,
         )
         return hist
 
