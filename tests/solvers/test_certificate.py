@@ -280,6 +280,24 @@ def test_displacement_control_passes_the_folds_of_its_path_to_the_load_controlle
     assert "pseudo-transient step(s) past folds" in result.displacement.reason
 
 
+def test_a_stop_at_a_singular_tangent_skips_the_dynamic_relaxation_check():
+    """S23 (two openings): work control stops where Newton finds no correction, at a state
+    whose tangent is singular along the load (rho 0.013 <= mode_stiffness): a limit point,
+    above which dynamic relaxation found no rest in its 2 000 time steps on 5133bd5. The
+    check is skipped there: the same certified lambda 0.084721, no time step of dynamic
+    relaxation."""
+    from masonry_dem.cases.paper import build_case
+    from masonry_dem.solvers.incremental import StaticSolver
+
+    case = build_case("S23")
+    solver = StaticSolver(case.model, case.settings)
+    hist = solver.run(monitor=case.monitor)
+    assert hist.status == "collapse" and hist.stop is StopReason.PATH_STUCK
+    assert hist.collapse_multiplier == pytest.approx(0.084721, rel=1e-4)
+    assert hist.certificate.mode_rayleigh <= StaticSettings().mode_stiffness
+    assert solver.time_steps == 0
+
+
 def test_a_limit_stop_on_a_soft_rising_curve_is_not_a_collapse():
     """A held 10 x 15 panel (friction 11.3) with kn 1.5e9: the displacement limit stops its
     path at 0.214 where the tangent keeps 2 % of its dead-load stiffness along the load and

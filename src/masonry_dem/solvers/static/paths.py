@@ -331,7 +331,12 @@ def work_control(
                     fold_failed = True
                 else:
                     transient_failed = True
-            if stuck and s.stop_check_time_steps > 0 and checked_from != len(hist.steps):
+            if (
+                stuck
+                and s.stop_check_time_steps > 0
+                and checked_from != len(hist.steps)
+                and not _singular_along_load(solver, hist)
+            ):
                 # neither Newton nor the pseudo-transient step passes: before calling
                 # this a collapse, let dynamic relaxation look for rest a little higher
                 checked_from = len(hist.steps)
@@ -421,6 +426,21 @@ def work_control(
         f"{reason}; load control first failed at {first_lambda:.6g} ({first_failure})",
     )
     return None
+
+
+def _singular_along_load(solver: StaticSolver, hist: History) -> bool:
+    """Is the tangent of the last converged state singular along the motion the live load
+    drives (the certificate's rho at most ``mode_stiffness``)? Then the path stopped at a
+    limit point, where dynamic relaxation finds no rest higher up: its check is skipped."""
+    from masonry_dem.solvers.static.certificate import _dead_load_tangent, _rayleigh
+
+    F = solver.problem.F_live
+    _, _, response = solver.residual(solver.q, solver.load_factor)
+    v = solver.problem.factor(response).solve(F)
+    rho = _rayleigh(
+        solver.problem, v, float(F @ v), _dead_load_tangent(solver.problem, hist, solver.settings)
+    )
+    return bool(rho <= solver.settings.mode_stiffness)
 
 
 def _tangent_slope(solver: StaticSolver) -> float:
