@@ -83,12 +83,12 @@ def measure(wall, held: bool) -> dict:
     seconds = time.perf_counter() - t0
     solver = StaticSolver(model)
     # at the dead-load state (at rest, unloaded dry joints have no tangent stiffness)
-    response = solver._residual(h.steps[0].q.reshape(-1), 0.0)[2]
-    solver._factor(response)  # the first factorization fixes the ordering and the fronts
+    response = solver.residual(h.steps[0].q.reshape(-1), 0.0)[2]
+    solver.problem.factor(response)  # the first factorization fixes the ordering and the fronts
     tangent = []
     for _ in range(5):
         t0 = time.perf_counter()
-        solver._factor(response)
+        solver.problem.factor(response)
         tangent.append(time.perf_counter() - t0)
     return {
         "blocks": wall.count,

@@ -72,16 +72,22 @@ def recheck(model: Model, hist: History, settings: StaticSettings) -> None:
         T = law.tangent(response, settings.residual_stiffness)
         return (asm.H_free.T @ sparse.block_diag(list(T)) @ asm.H_free).toarray()
 
-    # the metric: the tangent of the dead-load state
+    # the metric: the tangent of the dead-load state, joint by joint, each joint's energy
+    # counted where it is positive (a semi-norm even where a joint slides under the dead load)
     first = hist.steps[0].q.reshape(-1)
-    K0 = dense(
-        law.respond(asm.relative_displacements(first), np.zeros_like(asm.kbar), cracked & False)
+    T0 = law.tangent(
+        law.respond(asm.relative_displacements(first), np.zeros_like(asm.kbar), cracked & False),
+        settings.residual_stiffness,
     )
+
+    def metric(v):
+        relative = (asm.H_free @ v).reshape(-1, 6)
+        return float(np.maximum(np.einsum("mi,mij,mj->m", relative, T0, relative), 0).sum())
 
     def along_load(response):
         """v = K_t^-1 F_L by a dense solve, and rho = F_L.v / v.K_0 v."""
         v = np.linalg.solve(dense(response), F_live)
-        return v, float(F_live @ v) / float(v @ K0 @ v)
+        return v, float(F_live @ v) / metric(v)
 
     if cert.mode.startswith("singular tangent"):
         v, rho = along_load(response)

@@ -22,6 +22,7 @@ import masonry_dem as md
 from helpers.certificate_checks import recheck, tilted_wall
 from masonry_dem.geometry.builders import (
     add_base,
+    running_bond_wall,
     single_block,
     stack_bond_column,
 )
@@ -247,6 +248,56 @@ def test_a_displacement_control_stopped_short_says_so():
     assert result.displacement_peak < result.load_peak
 
 
+def test_displacement_control_passes_the_folds_of_its_path_to_the_load_controlled_peak():
+    """Issue 18: a dry running-bond wall on a fixed base tilted in its own plane (3 x 5
+    blocks of 0.4 x 0.2 x 0.2 m, friction 0.6, kn 1e9, kt 0.4e9) slides at lambda = mu =
+    0.6 under load control. Driving the top left block's u1 instead, the path folds where a
+    joint starts to slide: at lambda 0.5077 (u1 = 0.186 mm) no equilibrium with a larger u1
+    lies near the last state and halved steps only close in on it; on 5133bd5 the run
+    stopped there ("displacement control stuck"), 15.4 % below the load-controlled peak, and
+    the comparison called it a path "stopped before the peak" by its target or budget. A
+    pseudo-transient step to a lambda 0.5 % higher goes round each fold (the controlled
+    displacement turns back at some: the reason counts them) and the two controls reach the
+    same peak."""
+    from masonry_dem.solvers.static.branches import compare_controls
+
+    wall = running_bond_wall(3, 5, a=0.2, b=0.4, s=0.2, unit_weight=2000 * 9.81)
+    blocks, base = add_base(wall)
+    model = Model.build(
+        blocks,
+        InterfaceMaterial(kn=1e9, kt=0.4e9, friction=0.6),
+        [Support([base])],
+        [SelfWeight(), WeightProportional(direction=(1.0, 0.0, 0.0))],
+    )
+    c = wall.centres
+    top = np.flatnonzero(np.isclose(c[:, 1], c[:, 1].max()))
+    left = int(top[np.argmin(c[top, 0])])
+    result = compare_controls(model, DisplacementControl(left, "u1", 0.05, 50))
+    assert result.load_peak == pytest.approx(0.6, rel=1e-6)  # sliding at mu
+    assert result.verdict == "same peak", result.reason
+    assert result.displacement_peak == pytest.approx(0.6, rel=0.01)
+    assert result.displacement.status == "completed"
+    assert "pseudo-transient step(s) past folds" in result.displacement.reason
+
+
+def test_a_stop_at_a_singular_tangent_skips_the_dynamic_relaxation_check():
+    """S23 (two openings): work control stops where Newton finds no correction, at a state
+    whose tangent is singular along the load (rho 0.013 <= mode_stiffness): a limit point,
+    above which dynamic relaxation found no rest in its 2 000 time steps on 5133bd5. The
+    check is skipped there: the same certified lambda 0.084721, no time step of dynamic
+    relaxation."""
+    from masonry_dem.cases.paper import build_case
+    from masonry_dem.solvers.incremental import StaticSolver
+
+    case = build_case("S23")
+    solver = StaticSolver(case.model, case.settings)
+    hist = solver.run(monitor=case.monitor)
+    assert hist.status == "collapse" and hist.stop is StopReason.PATH_STUCK
+    assert hist.collapse_multiplier == pytest.approx(0.084721, rel=1e-4)
+    assert hist.certificate.mode_rayleigh <= StaticSettings().mode_stiffness
+    assert solver.time_steps == 0
+
+
 def test_a_limit_stop_on_a_soft_rising_curve_is_not_a_collapse():
     """A held 10 x 15 panel (friction 11.3) with kn 1.5e9: the displacement limit stops its
     path at 0.214 where the tangent keeps 2 % of its dead-load stiffness along the load and
@@ -260,6 +311,8 @@ def test_a_limit_stop_on_a_soft_rising_curve_is_not_a_collapse():
     cert = hist.certificate
     assert StaticSettings().flat_slope < cert.mode_rayleigh <= StaticSettings().mode_stiffness
     assert cert.mode_stiffness == StaticSettings().flat_slope  # the tolerance applied
+    # the reason is the physical one: half a block of motion before the curve stopped rising
+    assert "left the small-displacement range" in hist.reason
 
 
 def test_work_control_stops_at_max_load_factor_and_a_completed_run_has_no_collapse():

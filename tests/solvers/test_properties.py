@@ -70,15 +70,55 @@ def _lambda(model, **changes) -> float:
     return hist.collapse_multiplier
 
 
+def _same_or_too_soft(model, reference: float) -> None:
+    """lambda within 1 % of ``reference``, or the run failed for the one physical reason a
+    stiffness may change the answer of a geometrically linear model: the wall left the
+    small-displacement range (half a block from its dead-load state) while its curve still
+    rose, which the reason states with the numbers."""
+    hist = pushover(model, StaticSettings())
+    if hist.status == "collapse":
+        assert hist.collapse_multiplier == pytest.approx(reference, rel=0.01)
+        return
+    assert hist.status == "failed" and hist.stop == "displacement limit", hist.reason
+    assert "left the small-displacement range" in hist.reason
+    first, last = hist.steps[0].q[:, :3], hist.steps[-1].q[:, :3]
+    assert abs(last - first).max() >= 0.5 * model.smallest_moving_size
+
+
 @pytest.mark.parametrize("in_plane", [False, True], ids=["out of plane", "in plane"])
 @pytest.mark.parametrize("factor", [1e-2, 1e3])
 def test_lambda_does_not_move_with_joint_stiffness(in_plane, factor):
-    """kn and kt scaled together by 1e-2 and 1e3 (same ratio): lambda within 1 %."""
+    """kn and kt scaled together by 1e-2 and 1e3 (same ratio): lambda within 1 %, or (soft
+    joints only) failed because the wall leaves the small-displacement range before its
+    peak: the 3 x 5 panel out of plane with kn 1e7 moves 0.043 m (half a block: 0.035 m) by
+    lambda 0.298, below its peak 0.3187."""
     direction = (1.0, 0.0, 0.0) if in_plane else (0.0, 0.0, 1.0)
     base = InterfaceMaterial(kn=1e9, kt=0.4e9, friction=0.7)
     scaled = InterfaceMaterial(kn=1e9 * factor, kt=0.4e9 * factor, friction=0.7)
     reference = _lambda(tilted_wall(3, 5, base, direction))
-    assert _lambda(tilted_wall(3, 5, scaled, direction)) == pytest.approx(reference, rel=0.01)
+    if factor >= 1:  # stiffer joints: the same answer, no excuse
+        assert _lambda(tilted_wall(3, 5, scaled, direction)) == pytest.approx(reference, rel=0.01)
+    else:
+        _same_or_too_soft(tilted_wall(3, 5, scaled, direction), reference)
+
+
+@seed(21)
+@settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(walls, st.sampled_from([1e-2, 1e3]))
+def test_kn_invariance_on_generated_walls(w, factor):
+    """Generated walls of the issue's class (small end): a certified collapse keeps its
+    lambda within 1 % with kn and kt x 1e-2 or x 1e3; with stiffer joints exactly the same
+    path is taken (the searches are measured in the wall's elastic unit, not in metres), with
+    softer ones the run may instead fail because the wall leaves the small-displacement
+    range before its peak."""
+    hist = pushover(_model(w), StaticSettings())
+    if hist.status != "collapse":
+        return
+    scaled = dict(w, kn=w["kn"] * factor)
+    if factor >= 1:
+        assert _lambda(_model(scaled)) == pytest.approx(hist.collapse_multiplier, rel=0.01)
+    else:
+        _same_or_too_soft(_model(scaled), hist.collapse_multiplier)
 
 
 @pytest.mark.parametrize(

@@ -265,6 +265,20 @@ def certify(
             f"elastic stiffness, limit {ZERO_MODE:g} x the floor {s.residual_stiffness:g}; "
             f"dynamic relaxation at lambda {lam_end:.3g}: {zero_check})"
         )
+    elif not mode_found and hist.stop is StopReason.DISPLACEMENT_LIMIT:
+        # equilibria were still being found: the wall left the small-displacement range of
+        # the geometrically linear model before its curve stopped rising (joints so soft
+        # that the displacement at the peak would be a sizeable part of a block)
+        moved = float(np.abs((q - hist.steps[0].q.reshape(-1))[free][problem.translation]).max())
+        why.append(
+            f"the wall left the small-displacement range before its curve stopped rising: "
+            f"{moved:.3g} m from the dead-load state (limit {problem.limit:.3g} m, half the "
+            f"smallest moving block) at lambda {lam_state:.6g}, where the tangent still keeps "
+            f"{rho:.3g} of its stiffness along the load (> {tolerance:g}); its joints are too "
+            f"soft for a small-displacement analysis to reach the peak (the dead load alone "
+            f"moves it {problem.displacement_scale:.3g} m bonded): stiffer joints in the same "
+            f"kt/kn ratio give the multiplier"
+        )
     elif not mode_found:
         why.append(
             f"no collapse mode: the tangent keeps {rho:.3g} of the elastic stiffness along "
@@ -383,8 +397,20 @@ def _rayleigh(problem: DiscreteProblem, v: np.ndarray, compliance: float, T0: np
     if not (np.all(np.isfinite(v)) and math.isfinite(compliance)):
         return math.inf
     relative = problem.asm.relative_displacements(_full(problem, v).reshape(-1))
-    energy = float(np.einsum("mi,mij,mj->", relative, T0, relative))
-    return compliance / energy if energy > 0 else math.inf
+    metric = _metric(relative, T0)
+    return compliance / metric if math.isfinite(metric) else math.inf
+
+
+def _metric(relative: np.ndarray, T0: np.ndarray) -> float:
+    """v.K_0 v as a sum over the joints of their energy in the dead-load state's tangent,
+    each counted where it is positive (a joint that slides under the dead load has a
+    non-symmetric tangent whose energy may be negative along some motions; the metric must
+    not be: with joints at zero gap and zero force, which side of the contact round-off puts
+    them on changed its sign, and with it the certificate, between kn and 1000 kn); inf
+    when nothing is left."""
+    energy = np.einsum("mi,mij,mj->m", relative, T0, relative)
+    total = float(np.sum(np.maximum(energy, 0.0)))
+    return total if total > 0 else math.inf
 
 
 def _elastic_slope(problem: DiscreteProblem, path_w: np.ndarray, path_lam: np.ndarray) -> float:

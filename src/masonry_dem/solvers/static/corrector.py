@@ -57,7 +57,8 @@ class Corrector:
         self.plastic = np.zeros((m, 6))
         self.cracked = np.zeros(m, dtype=bool)
         self.q = np.zeros(model.n_dofs)
-        self.iterations = 0
+        self.iterations = 0  # Newton (and pseudo-transient, robust) iterations
+        self.time_steps = 0  # time steps of the dynamic relaxations the solver ran
         self._last_increment = 0.0
         #: extra room of the displacement limit (the elastic displacement under the dead load)
         self._limit_allowance = 0.0
@@ -73,6 +74,12 @@ class Corrector:
     def limit(self) -> float:
         """The displacement limit of the searches [m]."""
         return max(self.problem.limit, self._elastic_limit) + self._limit_allowance
+
+    @property
+    def search_seed(self) -> float:
+        """The trust radius of a search with no previous increment to go by [m]:
+        ``trust_seed`` elastic units of the wall (:attr:`DiscreteProblem.displacement_scale`)."""
+        return self.settings.trust_seed * self.problem.displacement_scale
 
     def restore(self, q: np.ndarray, cracked: np.ndarray | None = None) -> None:
         """Make (q, cracked) the last converged state (e.g. a state read from a History)."""
@@ -114,7 +121,7 @@ class Corrector:
         q = (self.q if start is None else start).copy()
         lam = load_factor
         if radius is None:
-            radius = max(4.0 * self._last_increment, 1e-4 * self.limit)
+            radius = max(4.0 * self._last_increment, self.search_seed)
         residual, rnorm, response = self.residual(q, lam, dead_factor)
         floor = s.residual_stiffness
         lu = None  # the factorized tangent, kept while it converges fast (chord steps)
@@ -231,9 +238,12 @@ class Corrector:
                     it += 1
                 radius = min(radius, shrink * size) / 8.0
                 cuts += 1
-                exhausted = radius < 1e-12 * self.limit or cuts >= s.search_cuts
+                exhausted = (
+                    radius < s.radius_floor * self.problem.displacement_scale
+                    or cuts >= s.search_cuts
+                )
                 if exhausted and regularise():
-                    radius = max(4.0 * self._last_increment, 1e-4 * self.limit)
+                    radius = max(4.0 * self._last_increment, self.search_seed)
                     continue
                 if exhausted:
                     return Outcome(
@@ -519,7 +529,9 @@ class Corrector:
             np.ones((self.model.interfaces.count, 6)),
         )
         relaxed = self._dr._relax_with_cuts(start, target, None)
-        self.iterations += relaxed.cycles
+        # time steps of an explicit relaxation are no Newton iterations (each costs a
+        # residual, no factorization): counted apart, so that ``iterations`` compares paths
+        self.time_steps += relaxed.cycles
         if not polish:
             return Outcome(relaxed.ok, self.q, target, self.residual(self.q, target)[2], 0)
         if not relaxed.ok:

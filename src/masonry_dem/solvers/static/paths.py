@@ -34,6 +34,11 @@ log = logging.getLogger(__name__)
 
 Record = Callable[[Outcome], None]
 
+#: d u / d lambda of a controlled DOF below this fraction of its rate on the first live-load
+#: step (or negative) at the state where displacement control is stuck: a limit point of the
+#: controlled DOF (docs/solvers.md, "Load against displacement control")
+TURN_RATE = 0.1
+
 
 @dataclass
 class StepController:
@@ -185,7 +190,7 @@ def control_radius(solver: StaticSolver, c: np.ndarray, dw: float) -> float:
     """Trust radius for a controlled step: room for the requested increment."""
     return max(
         4.0 * solver._last_increment,
-        1e-4 * solver.limit,
+        solver.search_seed,
         4.0 * abs(dw) / max(float(np.abs(c).max()), 1e-300),
     )
 
@@ -231,7 +236,7 @@ def work_control(
         first = 0.5 * failed / elastic_slope if elastic_slope > 0 else 0.0
         first_w = first
     step = StepController(
-        max(first, 1e-3 * abs(w), 1e-12 * solver.limit),
+        max(first, 1e-3 * abs(w), s.radius_floor * solver.problem.displacement_scale),
         s.growth,
         easy_iterations=s.easy_iterations,
     )
@@ -302,7 +307,7 @@ def work_control(
                 break
             step.cut()
             # a step below this cannot be told from no step (the control tolerance)
-            tiny = 1e-4 * max(abs(w), first_w, 1e-8 * solver.limit)
+            tiny = 1e-4 * max(abs(w), first_w, 1e-4 * solver.problem.displacement_scale)
             stuck = step.cuts > s.max_cuts or step.size < tiny
             # the search stops where the one before it stopped: a fold of the path that
             # halved steps only close in on (each half converges, the next full step
@@ -326,7 +331,12 @@ def work_control(
                     fold_failed = True
                 else:
                     transient_failed = True
-            if stuck and s.stop_check_time_steps > 0 and checked_from != len(hist.steps):
+            if (
+                stuck
+                and s.stop_check_time_steps > 0
+                and checked_from != len(hist.steps)
+                and not _singular_along_load(solver, hist)
+            ):
                 # neither Newton nor the pseudo-transient step passes: before calling
                 # this a collapse, let dynamic relaxation look for rest a little higher
                 checked_from = len(hist.steps)
@@ -418,12 +428,60 @@ def work_control(
     return None
 
 
+def _singular_along_load(solver: StaticSolver, hist: History) -> bool:
+    """Is the tangent of the last converged state singular along the motion the live load
+    drives (the certificate's rho at most ``mode_stiffness``)? Then the path stopped at a
+    limit point, where dynamic relaxation finds no rest higher up: its check is skipped."""
+    from masonry_dem.solvers.static.certificate import _dead_load_tangent, _rayleigh
+
+    F = solver.problem.F_live
+    _, _, response = solver.residual(solver.q, solver.load_factor)
+    v = solver.problem.factor(response).solve(F)
+    rho = _rayleigh(
+        solver.problem, v, float(F @ v), _dead_load_tangent(solver.problem, hist, solver.settings)
+    )
+    return bool(rho <= solver.settings.mode_stiffness)
+
+
 def _tangent_slope(solver: StaticSolver) -> float:
     """d lambda / d w along the tangent of the last converged state: |F_L| / F_L.K_t^-1 F_L."""
     F = solver.problem.F_live
     _, _, response = solver.residual(solver.q, solver.load_factor)
     compliance = float(F @ solver.problem.factor(response).solve(F))
     return float(np.linalg.norm(F)) / compliance if compliance > 0 else 0.0
+
+
+def control_rate(solver: StaticSolver, c: np.ndarray) -> float:
+    """d(c.q)/d lambda along the tangent of the last converged state: c.K_t^-1 F_L, how fast
+    the controlled displacement grows with the load there."""
+    _, _, response = solver.residual(solver.q, solver.load_factor)
+    return float(c @ solver.problem.factor(response).solve(solver.problem.F_live))
+
+
+def _control_turn(solver: StaticSolver, hist: History, c: np.ndarray) -> str:
+    """Why displacement control cannot go on: the controlled displacement's rate of growth
+    with the load at the last state, against the first live-load step's (a limit point of
+    the controlled DOF, where it stops growing or turns back while the load still rises,
+    cannot be passed by prescribing that DOF)."""
+    free = solver.problem.asm.free_index
+    rate = control_rate(solver, c)
+    first = 0.0
+    if len(hist.steps) > 1:
+        du = float(c @ (hist.steps[1].q.reshape(-1)[free] - hist.steps[0].q.reshape(-1)[free]))
+        dlam = float(hist.steps[1].load_factor - hist.steps[0].load_factor)
+        first = du / dlam if dlam != 0 else 0.0
+    relative = rate / first if first != 0 else math.nan
+    if math.isfinite(relative) and relative < TURN_RATE:
+        return (
+            f"the controlled displacement grows with the load at {relative:.2g} of its rate on "
+            f"the first step (d u / d lambda {rate:.3g}): a limit point of the controlled DOF "
+            f"(it stops growing or turns back while lambda can still rise), which prescribing "
+            f"that DOF cannot pass; load or work control follows the path on"
+        )
+    return (
+        f"the controlled displacement still grows with the load ({relative:.2g} of its rate on "
+        f"the first step): no equilibrium with a larger controlled displacement near this state"
+    )
 
 
 def displacement_control(
@@ -443,6 +501,8 @@ def displacement_control(
     step = StepController(abs(du_nominal), s.growth, cap=abs(du_nominal))
     lam = 0.0
     u = float(solver.q[dof])
+    transient_from = -1  # the step from which the last pseudo-transient step started
+    turned = []  # (lambda, u before, u after) of the pseudo-transient steps past folds
 
     def reached() -> bool:
         return abs(u - control.target) <= 1e-12 * abs(control.target)
@@ -463,11 +523,38 @@ def displacement_control(
             step.cuts = 0
         else:
             step.cut()
+            if (
+                step.cuts == s.transient_after
+                and s.transient_steps > 0
+                and transient_from != len(hist.steps)
+                and lam != 0.0
+            ):
+                # the controlled path folds at a kink of the law (a joint that starts to
+                # slide or rock): halved steps only close in on it, as under work control,
+                # so a pseudo-transient step to a slightly higher lambda goes round it, and
+                # displacement control goes on from the state it comes to rest in
+                transient_from = len(hist.steps)
+                moved = solver.pseudo_transient(lam + s.transient_rise * abs(lam))
+                log.debug(
+                    "displacement control stuck at u=%.6g, lambda=%.6g; pseudo-transient: %s",
+                    u,
+                    lam,
+                    f"ok in {moved.iterations}" if moved.ok else moved.reason,
+                )
+                if moved.ok:
+                    record(moved)
+                    before = u
+                    lam, u = float(moved.load_factor), float(moved.q[dof])
+                    turned.append((lam, before, u))
+                    step.size = max(step.size, abs(du_nominal) * s.resume_step)
+                    step.cuts = 0
+                    continue
             if step.cuts > s.max_control_cuts:
                 hist.end(
                     Status.FAILED,
                     StopReason.CONTROL_STUCK,
-                    f"displacement control stuck at {u:.4g}: {out.reason}",
+                    f"displacement control stuck at {u:.4g} (lambda {lam:.6g}): {out.reason}; "
+                    + _control_turn(solver, hist, unit),
                 )
                 break
     else:
@@ -484,6 +571,17 @@ def displacement_control(
                 StopReason.CONTROL_BUDGET,
                 f"max_steps={s.max_steps} spent at {u:.6g} of the target "
                 f"{control.target:.6g} ({u / control.target:.1%})",
+            )
+    if turned:
+        back = [t for t in turned if (t[2] - t[1]) * direction < 0]
+        hist.reason += (
+            f"; {len(turned)} pseudo-transient step(s) past folds of the controlled path "
+            f"(first at lambda {turned[0][0]:.6g})"
+        )
+        if back:
+            hist.reason += (
+                f", {len(back)} of them with the controlled displacement turning back "
+                f"(first at lambda {back[0][0]:.6g}: {back[0][1]:.4g} -> {back[0][2]:.4g})"
             )
     lams = hist.load_factors
     peak = int(np.argmax(lams))

@@ -195,6 +195,22 @@ class DiscreteProblem:
         self.factorizations = 0
         self._fronts: Factorizer | None = None  # the tangent's pattern, analysed once
         self._elastic: Factors | None = None
+        self._scale: float | None = None
+
+    @property
+    def displacement_scale(self) -> float:
+        """The wall's own elastic unit of displacement [m]: the largest translation of the
+        bonded assembly under the dead load (under the live load at the load scale when
+        there is no dead load). The model is geometrically linear, so with kn and kt scaled
+        together by f every displacement of the path scales by 1 / f, and so does this:
+        search lengths measured in it make the solver's iterates the same on both walls
+        (docs/solvers.md, "Invariance"). Falls back to 1e-3 x the displacement limit when
+        the bonded assembly is itself a mechanism."""
+        if self._scale is None:
+            load = self.F_dead if np.any(self.F_dead) else self.load_scale * self.F_live
+            size = self.elastic_displacement(load) if np.any(load) else 0.0
+            self._scale = size if math.isfinite(size) and size > 0 else 1e-3 * self.limit
+        return self._scale
 
     # ------------------------------------------------------------------ residual
     def residual(

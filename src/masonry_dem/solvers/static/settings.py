@@ -57,11 +57,11 @@ class StaticSettings:
         smallest dimension of the blocks that can move). Under the dead load the elastic
         displacement of the bonded assembly is added to it: elastic shortening is no mechanism.
     limit_elastic_multiple: along the path the limit is at least this multiple of the
-        largest displacement under the dead load. The model is geometrically linear, so at a
-        given load every displacement scales with 1 / kn: a limit in metres alone stopped a
-        3 x 5 panel with joints 100x softer at 0.298 before its peak 0.3187 (elastic
-        displacements 0.043 m). The validation walls' limits are 142-5106 times their
-        dead-load displacement, so 100 changes none of them.
+        largest displacement under the dead load (0: off, the default). At 100 (until
+        session 12) a soft wall went on past half a block, which is neither the model's
+        small-displacement range nor invariant with kn (a held 6 x 15 panel with kn 1.3e7
+        stopped at 100 elastic units, 1.25 % below its stiff twin). Off, a path that leaves
+        the small-displacement range on a rising curve fails with that physical reason.
     residual_stiffness: fraction of the elastic stiffness kept on the diagonal of the tangent.
     tangent: ``"analytic"`` (closed-form derivative of the return) or ``"difference"``.
     tension, memory: interface law options (see :mod:`masonry_dem.constitutive.law`).
@@ -75,6 +75,15 @@ class StaticSettings:
     creep: a step shorter than this fraction of the Newton correction, with no joint changing
         state, leaves the tangent as it was (its factorization is kept).
     search_cuts: a search gives up after this many cuts (by 8) of its trust radius.
+    trust_seed: the trust radius of a search with no previous increment to go by (the dead
+        load's first live step, a controlled step), in elastic units of the wall
+        (``DiscreteProblem.displacement_scale``: the bonded assembly's largest translation
+        under the dead load). In units of the wall, not metres, so that a wall with kn and kt
+        x f takes the same iterates scaled by 1 / f (a seed of 1e-4 x the displacement limit
+        in metres made a 13 x 19 panel with kn x 1e3 stop at 0.650 instead of 0.864).
+    radius_floor: a search also gives up when its trust radius falls below this many elastic
+        units (it was 1e-12 m x the limit in metres: reached after 5 cuts on stiff joints
+        and after 7 on soft ones).
 
     Work control
     ------------
@@ -145,7 +154,7 @@ class StaticSettings:
     control_tolerance: float = 1e-6
     max_iterations: int = 40
     displacement_limit: float | None = None
-    limit_elastic_multiple: float = 100.0
+    limit_elastic_multiple: float = 0.0
     residual_stiffness: float = 1e-9
     tangent: TangentMethod = "analytic"
     tension: Tension = "brittle"
@@ -156,6 +165,8 @@ class StaticSettings:
     chord_ratio: float = 0.25
     creep: float = 1e-3
     search_cuts: int = 7
+    trust_seed: float = 0.05
+    radius_floor: float = 1e-9
     max_cuts: int = 10
     limit_cuts: int = 2
     flat_slope: float = 1e-3
@@ -195,7 +206,8 @@ class StaticSettings:
             "transient_shrink",
             "resume_step",
             "stall_decrease",
-            "limit_elastic_multiple",
+            "trust_seed",
+            "radius_floor",
             "admissible_tolerance",
             "mode_stiffness",
             "mode_displacement",
@@ -246,6 +258,15 @@ class StaticSettings:
         ):
             raise ValueError(
                 f"max_load_factor must be a number > 0 (inf: no cap), got {self.max_load_factor!r}"
+            )
+        if not (
+            isinstance(self.limit_elastic_multiple, (int, float))
+            and math.isfinite(self.limit_elastic_multiple)
+            and self.limit_elastic_multiple >= 0
+        ):
+            raise ValueError(
+                "limit_elastic_multiple must be a number >= 0 (0: off), got "
+                f"{self.limit_elastic_multiple!r}"
             )
         if self.displacement_limit is not None and not self.displacement_limit > 0:
             raise ValueError(

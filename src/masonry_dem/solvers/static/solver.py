@@ -171,13 +171,13 @@ class StaticSolver(Corrector):
         displacement limit, the limit is widened by the displacement of the bonded assembly
         under the dead load and the search repeated (a tall column shortens by more than
         half a block under its own weight)."""
-        dead = self.equilibrate(0.0, 1.0, radius=self.limit, damped=True)
+        dead = self.equilibrate(0.0, 1.0, radius=self._dead_radius(), damped=True)
         if dead.past_limit:
             elastic = self.problem.elastic_displacement(self.problem.F_dead)
             if np.isfinite(elastic) and elastic > 0:
                 self._limit_allowance = elastic
                 log.debug("dead load: the limit widened by the elastic %.3g m", elastic)
-                dead = self.equilibrate(0.0, 1.0, radius=self.limit, damped=True)
+                dead = self.equilibrate(0.0, 1.0, radius=self._dead_radius(), damped=True)
         if not dead.ok and self.settings.transient_steps > 0 and not dead.past_limit:
             # where the damped Newton search stalls (a wall with openings, blocks settling
             # on their neighbours), an overdamped relaxation may still come to rest: from
@@ -207,6 +207,11 @@ class StaticSolver(Corrector):
             self._elastic_limit = self.settings.limit_elastic_multiple * elastic
         return dead
 
+    def _dead_radius(self) -> float:
+        """The trust radius of the dead-load search: 1000 elastic units of the wall (its
+        first Newton step is about one), within the small-displacement range."""
+        return min(self.limit, 1e3 * self.problem.displacement_scale)
+
     def _rests_at(self, lam: float) -> bool:
         """Does dynamic relaxation from the last converged state come to rest at ``lam``
         (within ``stop_check_time_steps``, at least 4000 time steps)?"""
@@ -229,7 +234,15 @@ class StaticSolver(Corrector):
         hist.iterations = self.iterations
         hist.factorizations = self.factorizations
         log.info(
-            "%s: %s after %d steps (%s)", self.model.name, hist.status, len(hist.steps), hist.reason
+            "%s: %s after %d steps, %d Newton iterations, %d factorizations, %d time steps of "
+            "dynamic relaxation (%s)",
+            self.model.name,
+            hist.status,
+            len(hist.steps),
+            self.iterations,
+            self.factorizations,
+            self.time_steps,
+            hist.reason,
         )
         return hist
 
