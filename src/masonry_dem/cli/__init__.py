@@ -17,7 +17,16 @@ import logging
 import sys
 import traceback
 
-COMMANDS = ("run", "validate", "interface", "render", "paraview_state", "study", "limit")
+COMMANDS = (
+    "run",
+    "validate",
+    "interface",
+    "render",
+    "paraview_state",
+    "study",
+    "limit",
+    "warmup",
+)
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -233,6 +233,9 @@ def pushover(
     """Run the static incremental analysis; with ``out`` write VTU/PVD, pushover.csv and
     summary.json to that folder as the steps converge. ``callback(step)`` is called after
     each converged step (e.g. a progress bar); ``bound`` see :class:`StaticSolver`."""
+    from masonry_dem.solvers.warmup import prepare
+
+    prepare(model.interfaces.count)  # announced compilation of the kernels, on a cold cache
     writer = None
     if out is not None:
         from masonry_dem.export.writer import ResultsWriter
