@@ -25,6 +25,9 @@ __all__ = ["compile_kernels", "prepare"]
 
 log = logging.getLogger(__name__)
 
+#: the variants (parallel or not) this process found compiled or cached: not checked again
+_READY: set[bool] = set()
+
 
 def _tiny_problem():  # -> DiscreteProblem
     """One block on a base: every kernel of an analysis, on arrays of the analysis' types."""
@@ -120,9 +123,12 @@ def prepare(interfaces: int, processes: int = 2) -> float:
     machine, about N s") and compile them (:func:`compile_kernels`). Returns the seconds spent
     compiling, 0 when every kernel is cached."""
     parallel = interfaces >= jit.parallel_from()
-    if not jit.compile_pending(parallel):
+    if parallel in _READY:
         return 0.0
-    jit.announce_compilation(interfaces, processes=processes)
-    seconds = compile_kernels(parallel, processes)
-    log.info("kernels compiled in %.1f s", seconds)
+    seconds = 0.0
+    if jit.compile_pending(parallel):
+        jit.announce_compilation(interfaces, processes=processes)
+        seconds = compile_kernels(parallel, processes)
+        log.info("kernels compiled in %.1f s", seconds)
+    _READY.add(parallel)
     return seconds
