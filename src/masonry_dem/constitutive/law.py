@@ -41,11 +41,11 @@ from masonry_dem.constitutive.strength import (
     projection_and_flags,
     writable_c,
 )
-from masonry_dem.model import Model
+from masonry_dem.model import LAW_OPTIONS, Model
 
 DETACHED_FLAG = FLAG_DETACHED
-MEMORY = ("none", "slip")
-TENSION = ("brittle", "plastic")
+MEMORY = LAW_OPTIONS["memory"]
+TENSION = LAW_OPTIONS["tension"]
 #: how :meth:`InterfaceLaw.tangent` differentiates the projection of yielded joints
 TANGENT_METHODS = ("analytic", "difference")
 #: components that keep plastic slip with ``memory="slip"``: f1, f2, m3
@@ -100,8 +100,15 @@ class InterfaceLaw:
 
     @classmethod
     def of(
-        cls, model: Model, kbar: np.ndarray, tension: str = "brittle", memory: str = "none"
+        cls,
+        model: Model,
+        kbar: np.ndarray,
+        tension: str | None = None,
+        memory: str | None = None,
     ) -> InterfaceLaw:
+        """The law of ``model``'s interfaces with stiffness ``kbar``; its options are the
+        model's material's (``tension`` or ``memory`` given here override them: the
+        deprecated settings fields of the solvers)."""
         its = model.interfaces
         return cls(
             kbar,
@@ -110,8 +117,9 @@ class InterfaceLaw:
             model.friction,
             model.tensile_strength * its.area,
             model.alpha,
-            tension,
-            memory,
+            model.tension if tension is None else tension,
+            model.memory if memory is None else memory,
+            model.projection,
         )
 
     @cached_property

@@ -80,7 +80,7 @@ from scipy import sparse
 
 from masonry_dem._threads import kernel_threads_for
 from masonry_dem.constitutive.law import LawResponse
-from masonry_dem.model import Model
+from masonry_dem.model import Model, deprecated_law_option
 from masonry_dem.results import History, StepResult
 from masonry_dem.solvers.static.outcome import Status
 from masonry_dem.solvers.static.problem import DiscreteProblem
@@ -94,8 +94,6 @@ _CHOICES = {
     "loading": ("steps", "ramp"),
     "on_blowup": ("cut", "refuse"),
     "stability": ("elastic", "current"),
-    "tension": ("brittle", "plastic"),
-    "memory": ("none", "slip"),
 }
 
 #: outcomes of a relaxation that end the whole run (no lambda is reported)
@@ -138,8 +136,8 @@ class DRSettings:
     max_steps: int = 1000
     max_load_factor: float = math.inf
     displacement_limit: float | None = None
-    tension: str = "brittle"
-    memory: str = "none"
+    tension: str | None = None  # deprecated: InterfaceMaterial(tension=...)
+    memory: str | None = None  # deprecated: InterfaceMaterial(memory=...)
     max_time_steps: int = 2_000_000
     on_blowup: str = "cut"
     max_cuts: int = 6
@@ -147,6 +145,8 @@ class DRSettings:
     power_iterations: int = 30
 
     def __post_init__(self) -> None:
+        deprecated_law_option("DRSettings", "tension", self.tension)
+        deprecated_law_option("DRSettings", "memory", self.memory)
         for name, allowed in _CHOICES.items():
             if getattr(self, name) not in allowed:
                 raise ValueError(f"{name} must be one of {allowed}, got {getattr(self, name)!r}")

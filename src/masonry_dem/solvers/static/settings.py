@@ -6,7 +6,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, fields
 
-from masonry_dem.constitutive.law import MEMORY, TANGENT_METHODS, TENSION
+from masonry_dem.constitutive.law import TANGENT_METHODS
+from masonry_dem.model import deprecated_law_option
 
 CONTINUATION = ("work", "bracket")
 
@@ -53,7 +54,8 @@ class StaticSettings:
         dead-load displacement, so 100 changes none of them.
     residual_stiffness: fraction of the elastic stiffness kept on the diagonal of the tangent.
     tangent: ``"analytic"`` (closed-form derivative of the return) or ``"difference"``.
-    tension, memory: interface law options (see :mod:`masonry_dem.constitutive.law`).
+    tension, memory: deprecated (None: the material's). They are the interface law's, set on
+        :class:`~masonry_dem.model.InterfaceMaterial`; given here they warn and override it.
     stall_window, stall_decrease: a Newton search that has not lowered its merit by
         ``stall_decrease`` in ``stall_window`` iterations (with no cut of the trust radius)
         is stalled: no equilibrium near the last converged state.
@@ -137,8 +139,8 @@ class StaticSettings:
     limit_elastic_multiple: float = 100.0
     residual_stiffness: float = 1e-9
     tangent: str = "analytic"
-    tension: str = "brittle"
-    memory: str = "none"
+    tension: str | None = None
+    memory: str | None = None
     stall_window: int = 8
     stall_decrease: float = 0.5
     max_floor: float = 1e-3
@@ -240,10 +242,8 @@ class StaticSettings:
             raise ValueError(
                 f"displacement_limit must be positive or None, got {self.displacement_limit!r}"
             )
-        if self.tension not in TENSION:
-            raise ValueError(f"tension must be one of {TENSION}, got {self.tension!r}")
-        if self.memory not in MEMORY:
-            raise ValueError(f"memory must be one of {MEMORY}, got {self.memory!r}")
+        deprecated_law_option("StaticSettings", "tension", self.tension)
+        deprecated_law_option("StaticSettings", "memory", self.memory)
         if self.tangent not in TANGENT_METHODS:
             raise ValueError(f"tangent must be one of {TANGENT_METHODS}, got {self.tangent!r}")
         if self.continuation not in CONTINUATION:
