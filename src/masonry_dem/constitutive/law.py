@@ -20,6 +20,10 @@ What the law remembers between converged steps (``memory``):
 
 Tensile strength (``tension``): ``"brittle"`` (a joint whose normal force exceeds ft loses
 its tensile strength for good, as a cracked mortar joint does) or ``"plastic"`` (it keeps ft).
+
+``tension``, ``memory`` and the shear-torsion ``projection`` are set on the model's
+:class:`~masonry_dem.model.InterfaceMaterial` (the solver settings' ``tension`` and ``memory``
+are deprecated). The compiled kernels are :mod:`~masonry_dem.constitutive.law_kernels`'.
 """
 
 from __future__ import annotations

@@ -24,11 +24,13 @@ Criteria, with ``ft`` the tensile force of the whole interface (tensile strength
 The torsion constant ``cT`` is the mean distance of the rectangle's points from its centre; the
 printed Eq. (11) is garbled and the correct form is used here (see ``DESIGN.md``).
 
-The batched check runs compiled (numba), one interface at a time, the rows shared among the
-threads (:mod:`~masonry_dem.constitutive.check_kernels`: each row is worked out alone, so the answer is the same bits on any
-number of threads); the numpy version of the same operations, batched with masks, is its
-reference in the tests (``tests/constitutive/numpy_reference.py``). The kernel is compiled on
-the first check and cached on disk (a few seconds, once per machine).
+This module is the numpy API of the domain (strengths, torsion constant, Table A1, the
+batched check and its validated per-interface constants, :class:`StrengthDomain`). The check
+itself runs compiled, one interface at a time (:mod:`~masonry_dem.constitutive.check_kernels`:
+each row is worked out alone, so the answer is the same bits on any number of threads); the
+numpy version of the same operations, batched with masks, is its reference in the tests
+(``tests/constitutive/numpy_reference.py``). The joint states and flags are
+:mod:`~masonry_dem.constitutive.states`'.
 """
 
 from __future__ import annotations
