@@ -12,10 +12,11 @@ longer group instead of the sum. The disk cache then serves every later process.
 from __future__ import annotations
 
 import logging
-import multiprocessing
 import os
+import subprocess
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -90,30 +91,43 @@ def _run_group(group: str, parallel: bool) -> None:
         jit.set_parallel_from(before)
 
 
-def _child(group: str, parallel: bool) -> None:  # pragma: no cover - runs in a child process
-    _run_group(group, parallel)
+def _start_child(group: str, parallel: bool) -> subprocess.Popen[bytes]:
+    """A second interpreter compiling ``group`` (a plain process, not a fork or a
+    multiprocessing spawn: no threads copied, no user ``__main__`` run again)."""
+    package_root = str(Path(__file__).resolve().parents[2])
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join(p for p in (package_root, env.get("PYTHONPATH")) if p)
+    code = (
+        "from masonry_dem.solvers.warmup import _run_group; "
+        f"_run_group({group!r}, {bool(parallel)!r})"
+    )
+    return subprocess.Popen(
+        [sys.executable, "-c", code], env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE
+    )
 
 
 def compile_kernels(parallel: bool = False, processes: int = 2) -> float:
     """Compile (or load from the disk cache) the kernels of an analysis: the serial variants,
     or the parallel ones with ``parallel``. With ``processes`` >= 2 and two cores the tangent's
-    kernels compile in a child process beside this one's (its result reaches this process
-    through the disk cache). Returns the seconds it took."""
+    kernels compile in a second process beside this one's (their code reaches this process
+    through the disk cache; if that process fails they compile here). Returns the seconds."""
     t0 = time.perf_counter()
     child = None
     if processes >= 2 and (os.cpu_count() or 1) >= 2:
-        # fork: the child has the modules already (no threads run yet before an analysis)
-        method = "fork" if sys.platform.startswith("linux") else "spawn"
-        child = multiprocessing.get_context(method).Process(  # type: ignore[attr-defined]
-            target=_child, args=("tangent", parallel), daemon=True
-        )
-        child.start()
+        try:
+            child = _start_child("tangent", parallel)
+        except OSError as exc:  # no second interpreter: everything here
+            log.debug("no second process to compile in: %s", exc)
     _run_group("forces", parallel)
     if child is not None:
-        child.join()
-        if child.exitcode != 0:  # it compiles here instead
-            log.warning("compiling in a second process failed (exit code %s)", child.exitcode)
-    _run_group("tangent", parallel)  # loads what the child compiled
+        _, err = child.communicate()
+        if child.returncode != 0:
+            log.warning(
+                "compiling in a second process failed (exit code %s): %s",
+                child.returncode,
+                err.decode(errors="replace").strip().splitlines()[-1:],
+            )
+    _run_group("tangent", parallel)  # loads what the second process compiled
     return time.perf_counter() - t0
 
 
