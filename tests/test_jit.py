@@ -81,3 +81,12 @@ def test_a_compilation_is_announced_before_it_happens(monkeypatch, caplog):
     assert "(parallel)" not in caplog.text  # a small wall compiles no parallel variant
     monkeypatch.setattr(jit, "_cached", lambda disp: True)
     assert jit.announce_compilation(10**6) == 0.0
+
+
+def test_warmup_command_leaves_nothing_to_compile(capsys):
+    """``masonry-dem warmup`` fills the cache: afterwards no serial kernel is pending."""
+    from masonry_dem.cli import main
+
+    assert main(["warmup", "--variant", "serial", "--processes", "1"]) == 0
+    assert "serial kernels:" in capsys.readouterr().out
+    assert jit.compile_pending(parallel=False) == []
