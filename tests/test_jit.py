@@ -89,4 +89,21 @@ def test_warmup_command_leaves_nothing_to_compile(capsys):
 
     assert main(["warmup", "--variant", "serial", "--processes", "1"]) == 0
     assert "serial kernels:" in capsys.readouterr().out
-    assert jit.compile_pending(parallel=False) == []
+    assert jit.compile_pending(parallel=False, lazy=True) == []
+
+
+def test_a_lazy_kernel_is_announced_on_its_first_call(monkeypatch, caplog):
+    """The forward difference, which most analyses never call, is compiled on its first call
+    (not before every analysis), and says so then, once per process and variant."""
+    from masonry_dem.constitutive.law_kernels import fd_tangent_rows
+
+    monkeypatch.setattr(jit, "_cached", lambda disp: False)
+    assert not any("fd_tangent_rows" in p for p in jit.compile_pending(parallel=True))
+    assert any("fd_tangent_rows" in p for p in jit.compile_pending(parallel=True, lazy=True))
+    announced = set(fd_tangent_rows._announced)
+    fd_tangent_rows._announced.clear()
+    with caplog.at_level(logging.WARNING, logger="masonry_dem.jit"):
+        assert fd_tangent_rows.for_rows(10) is fd_tangent_rows.serial
+        fd_tangent_rows.for_rows(10)
+    fd_tangent_rows._announced.update(announced)
+    assert caplog.text.count("compiling kernel fd_tangent_rows (serial), once per machine") == 1

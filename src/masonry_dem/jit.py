@@ -22,7 +22,7 @@ import hashlib
 import logging
 import types
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Final
 
@@ -103,17 +103,34 @@ def _dispatcher(py_func: Callable[..., Any], options: dict[str, Any]) -> Any:
 @dataclass(frozen=True)
 class Kernel:
     """A compiled kernel: its serial variant, and its parallel one when it has ``prange``
-    loops. Call :meth:`for_rows` with the number of rows (interfaces) to pick."""
+    loops. Call :meth:`for_rows` with the number of rows (interfaces) to pick. ``eager``
+    kernels are compiled before an analysis (:mod:`masonry_dem.solvers.warmup`); the others,
+    which most analyses never call, on their first call, announced then."""
 
     name: str
     serial: Any  # numba dispatcher
     parallel: Any | None
+    eager: bool = True
+    _announced: set[str] = field(default_factory=set, compare=False, repr=False)
 
     def for_rows(self, rows: int) -> Any:
         """The variant for a loop over ``rows`` rows: parallel from ``SERIAL_BELOW`` rows."""
+        variant = "serial"
+        disp = self.serial
         if self.parallel is not None and rows >= parallel_from():
-            return self.parallel
-        return self.serial
+            variant = "parallel"
+            disp = self.parallel
+        if variant not in self._announced:  # once per process and variant
+            self._announced.add(variant)
+            if not _cached(disp):
+                seconds = COMPILE_SECONDS[variant] / max(len(_KERNELS), 1)
+                logger.warning(
+                    "compiling kernel %s (%s), once per machine, about %.0f s",
+                    self.name,
+                    variant,
+                    max(seconds, 1.0),
+                )
+        return disp
 
     @property
     def variants(self) -> tuple[tuple[str, Any], ...]:
@@ -139,16 +156,19 @@ def set_parallel_from(rows: int) -> int:
     return before
 
 
-def kernel(*, parallel: bool = False, **options: Any) -> Callable[[Callable[..., Any]], Kernel]:
+def kernel(
+    *, parallel: bool = False, eager: bool = True, **options: Any
+) -> Callable[[Callable[..., Any]], Kernel]:
     """Decorator: a :class:`Kernel` of ``py_func`` compiled with ``numba.njit(**options)`` on
-    first use and cached on disk; ``parallel=True`` adds the parallel variant."""
+    first use and cached on disk; ``parallel=True`` adds the parallel variant; ``eager=False``
+    leaves it out of the compilation before an analysis."""
 
     def wrap(py_func: Callable[..., Any]) -> Kernel:
         serial = _dispatcher(py_func, options)
         par = None
         if parallel:
             par = _dispatcher(_twin(py_func, "_parallel"), {**options, "parallel": True})
-        k = Kernel(py_func.__name__, serial, par)
+        k = Kernel(py_func.__name__, serial, par, eager)
         _KERNELS.append(k)
         return k
 
@@ -175,31 +195,32 @@ def _cached(disp: Any) -> bool:
         return True
 
 
-def _pending(parallel: bool) -> dict[str, list[str]]:
-    """Kernel names an analysis would compile, by variant."""
+def _pending(parallel: bool, lazy: bool = False) -> dict[str, list[str]]:
+    """Names of the eager kernels (and the ``lazy`` ones) not in the cache, by variant."""
     out: dict[str, list[str]] = {"serial": [], "parallel": []}
     for k in kernels():
+        if not (k.eager or lazy):
+            continue
         for variant, disp in k.variants:
             if (parallel or variant == "serial") and not _cached(disp):
                 out[variant].append(k.name)
     return out
 
 
-def compile_pending(parallel: bool) -> list[str]:
-    """Names of the kernels an analysis would compile: serial variants, and the parallel ones
-    when ``parallel`` (a wall of ``SERIAL_BELOW`` interfaces or more)."""
-    return [
-        f"{name} ({variant})" for variant, names in _pending(parallel).items() for name in names
-    ]
+def compile_pending(parallel: bool, lazy: bool = False) -> list[str]:
+    """Names of the kernels an analysis would compile first: serial variants, and the
+    parallel ones when ``parallel`` (a wall of ``SERIAL_BELOW`` interfaces or more); with
+    ``lazy`` also those compiled on their first call."""
+    pending = _pending(parallel, lazy)
+    return [f"{name} ({variant})" for variant, names in pending.items() for name in names]
 
 
-def compile_estimate(parallel: bool) -> float:
-    """Seconds the pending kernels take to compile (:data:`COMPILE_SECONDS` pro rata)."""
-    pending = _pending(parallel)
-    total = {
-        "serial": len(kernels()),
-        "parallel": sum(k.parallel is not None for k in kernels()),
-    }
+def compile_estimate(parallel: bool, lazy: bool = False) -> float:
+    """Seconds the pending kernels take to compile: :data:`COMPILE_SECONDS` (the eager
+    kernels' all together) pro rata of the kernels pending."""
+    eager = [k for k in kernels() if k.eager]
+    total = {"serial": len(eager), "parallel": sum(k.parallel is not None for k in eager)}
+    pending = _pending(parallel, lazy)
     return sum(COMPILE_SECONDS[v] * len(names) / max(total[v], 1) for v, names in pending.items())
 
 

@@ -34,12 +34,13 @@ def run(args: argparse.Namespace) -> int:
     variants = ("serial", "parallel") if args.variant == "all" else (args.variant,)
     for variant in variants:
         parallel = variant == "parallel"
-        pending = jit.compile_pending(parallel)
+        pending = jit.compile_pending(parallel, lazy=True)
         if not pending:
             print(f"{variant} kernels: cached")
             continue
-        estimate = jit.compile_estimate(parallel) * (jit.SIDE_BY_SIDE if args.processes > 1 else 1)
+        estimate = jit.compile_estimate(parallel, lazy=True)
+        estimate *= jit.SIDE_BY_SIDE if args.processes > 1 else 1
         print(f"{variant} kernels: compiling {len(pending)}, about {estimate:.0f} s", flush=True)
-        seconds = compile_kernels(parallel, processes=args.processes)
+        seconds = compile_kernels(parallel, processes=args.processes, lazy=True)
         print(f"{variant} kernels: compiled in {seconds:.1f} s")
     return 0

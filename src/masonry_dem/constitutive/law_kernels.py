@@ -93,7 +93,7 @@ def _nb_fd_collect(proj, h, k, probe_row, out) -> None:
                     out[r, a, p] = d * k[r, p]
 
 
-@kernel(parallel=True, error_model="numpy")
+@kernel(parallel=True, eager=False, error_model="numpy")  # most analyses never call it
 def fd_tangent_rows(
     t, h, ft, rows, l1, l2, friction, alpha, snap1, snap2, energy, k, normal_only, out
 ):

@@ -46,8 +46,9 @@ def _tiny_problem():  # -> DiscreteProblem
     return DiscreteProblem(model)
 
 
-def _forces_group() -> None:
-    """The residual's kernels: the law's forces, the strength check, the forward difference."""
+def _forces_group(lazy: bool = False) -> None:
+    """The residual's kernels: the law's forces, the strength check, and with ``lazy`` the
+    forward difference (compiled on its first call otherwise: most analyses never call it)."""
     from masonry_dem.constitutive.law import fd_tangent
 
     problem = _tiny_problem()
@@ -56,6 +57,8 @@ def _forces_group() -> None:
         np.zeros(problem.model.n_dofs), 0.0, np.zeros((m, 6)), np.zeros(m, dtype=bool)
     )
     problem.law.utilisation(response)
+    if not lazy:
+        return
     law = problem.law
     fd_tangent(
         np.zeros((m, 6)),
@@ -83,10 +86,13 @@ def _tangent_group() -> None:
     problem.tangent_assembler.data(np.zeros((m, 6, 6)))
 
 
-def _run_group(group: str, parallel: bool) -> None:
+def _run_group(group: str, parallel: bool, lazy: bool = False) -> None:
     before = jit.set_parallel_from(0 if parallel else jit.parallel_from())
     try:
-        {"forces": _forces_group, "tangent": _tangent_group}[group]()
+        if group == "forces":
+            _forces_group(lazy)
+        else:
+            _tangent_group()
     finally:
         jit.set_parallel_from(before)
 
@@ -106,9 +112,9 @@ def _start_child(group: str, parallel: bool) -> subprocess.Popen[bytes]:
     )
 
 
-def compile_kernels(parallel: bool = False, processes: int = 2) -> float:
+def compile_kernels(parallel: bool = False, processes: int = 2, lazy: bool = False) -> float:
     """Compile (or load from the disk cache) the kernels of an analysis: the serial variants,
-    or the parallel ones with ``parallel``. With ``processes`` >= 2 and two cores the tangent's
+    or the parallel ones with ``parallel``; with ``lazy`` also those compiled on first call. With ``processes`` >= 2 and two cores the tangent's
     kernels compile in a second process beside this one's (their code reaches this process
     through the disk cache; if that process fails they compile here). Returns the seconds."""
     t0 = time.perf_counter()
@@ -118,7 +124,7 @@ def compile_kernels(parallel: bool = False, processes: int = 2) -> float:
             child = _start_child("tangent", parallel)
         except OSError as exc:  # no second interpreter: everything here
             log.debug("no second process to compile in: %s", exc)
-    _run_group("forces", parallel)
+    _run_group("forces", parallel, lazy)
     if child is not None:
         _, err = child.communicate()
         if child.returncode != 0:
