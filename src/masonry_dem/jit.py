@@ -40,6 +40,7 @@ __all__ = [
     "compile_pending",
     "kernel",
     "kernels",
+    "mark_announced",
 ]
 
 logger = logging.getLogger(__name__)
@@ -173,6 +174,13 @@ def kernel(
         return k
 
     return wrap
+
+
+def mark_announced(parallel: bool) -> None:
+    """The kernels' compilation is announced already (by the warm-up): their first calls
+    stay quiet (the serial variants, and the parallel ones with ``parallel``)."""
+    for k in kernels():
+        k._announced.add("parallel" if parallel else "serial")
 
 
 def kernels() -> tuple[Kernel, ...]:

@@ -15,17 +15,15 @@ from numpy_reference import _evaluate_numpy, fd_tangent_numpy, law_tangent_numpy
 
 from masonry_dem.constitutive import law as law_module
 from masonry_dem.constitutive.law import InterfaceLaw, fd_tangent
+from masonry_dem.constitutive.states import FLAG_DETACHED, FLAG_SHEAR_TORSION, STATE_ELASTIC
+from masonry_dem.constitutive.strength import StrengthDomain as _Domain
+from masonry_dem.constitutive.strength import evaluate as _evaluate
+from masonry_dem.constitutive.strength import projection_and_flags as _projection_and_flags
 from masonry_dem.constitutive.strength import (
-    FLAG_DETACHED,
-    FLAG_SHEAR_TORSION,
-    STATE_ELASTIC,
     shear_strength,
     torsion_constant,
     torsion_strength,
 )
-from masonry_dem.constitutive.strength import StrengthDomain as _Domain
-from masonry_dem.constitutive.strength import evaluate as _evaluate
-from masonry_dem.constitutive.strength import projection_and_flags as _projection_and_flags
 
 ALPHAS = (1.0, 1.43, 1.5, 2.0, 2.56)
 PROJECTIONS = ("energy", "radial")

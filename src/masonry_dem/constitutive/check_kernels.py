@@ -406,24 +406,13 @@ def nb_evaluate_row(
 
 @kernel(parallel=True, error_model="numpy")
 def evaluate_rows(
-    act,
-    ft,
-    l1,
-    l2,
-    friction,
-    alpha,
-    snap1,
-    snap2,
-    torsion_bending_interaction,
-    projection_only,
-    energy,
-    proj,
-    flags,
-    util,
-):
-    """The strength check (see :func:`check_strength`) row by row, into ``proj`` (m, 6), ``flags`` (m,) uint8 and
-    (unless ``projection_only``) ``util`` (m,). Returns the numbers of rows whose radial
-    factor and whose energy projection did not converge."""
+    act, ft, l1, l2, friction, alpha, snap1, snap2, torsion_bending_interaction,
+    projection_only, energy, proj, flags, util,
+):  # fmt: skip
+    """The strength check (see :func:`~masonry_dem.constitutive.strength.check_strength`) row
+    by row, into ``proj`` (m, 6), ``flags`` (m,) uint8 and (unless ``projection_only``)
+    ``util`` (m,). Returns the numbers of rows whose radial factor and whose energy
+    projection did not converge."""
     n_radial = 0
     n_energy = 0
     for i in numba.prange(act.shape[0]):

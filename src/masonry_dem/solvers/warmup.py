@@ -118,6 +118,7 @@ def compile_kernels(parallel: bool = False, processes: int = 2, lazy: bool = Fal
     kernels compile in a second process beside this one's (their code reaches this process
     through the disk cache; if that process fails they compile here). Returns the seconds."""
     t0 = time.perf_counter()
+    jit.mark_announced(parallel)  # said once for all by the caller
     child = None
     if processes >= 2 and (os.cpu_count() or 1) >= 2:
         try:
