@@ -192,12 +192,15 @@ def kernels() -> tuple[Kernel, ...]:
 
 
 def _cached(disp: Any) -> bool:
-    """Whether ``disp`` has compiled code in this process or a fresh index on disk (any
-    signature: a run uses one per kernel)."""
+    """Whether ``disp`` has compiled code in this process, or on disk an entry for this
+    machine (numba's target) and these kernel sources (any signature: a run uses one per
+    kernel)."""
     if disp.signatures:
         return True
     try:
-        return bool(disp._cache._cache_file._load_index())
+        index = disp._cache._cache_file._load_index()  # {} when stale
+        magic = disp.targetctx.codegen().magic_tuple()
+        return any(key[1] == magic and key[-1] == _SOURCES_HASH for key in index)
     except Exception:  # pragma: no cover - numba's cache layout changed: assume compiled
         logger.debug("cannot read the numba cache index of %s", disp, exc_info=True)
         return True
