@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import masonry_dem as md
-from masonry_dem import _threads
+from masonry_dem import _threads, jit
 
 
 def test_a_small_model_runs_its_kernels_on_one_thread_and_restores_the_setting():
@@ -43,6 +43,7 @@ def test_one_kernel_thread_gives_the_same_bits(monkeypatch):
     model = _wall()
     serial = md.pushover(model)
     monkeypatch.setattr(_threads, "SERIAL_BELOW", 0)  # every model on all threads
+    monkeypatch.setattr(jit, "_PARALLEL_FROM", [0])  # with the parallel variants
     parallel = md.pushover(model)
     assert serial.collapse_multiplier == parallel.collapse_multiplier
     assert np.array_equal(serial.steps[-1].q, parallel.steps[-1].q)

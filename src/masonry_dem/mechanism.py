@@ -55,7 +55,7 @@ def collapse_mode(model: Model, step: StepResult, floor: float = 1e-9) -> NDArra
     from scipy.sparse.linalg import spsolve
 
     from masonry_dem.assembly.stiffness import Assembly
-    from masonry_dem.constitutive.strength import stiffness_factors_of_flags
+    from masonry_dem.constitutive.states import stiffness_factors_of_flags
 
     if step.flags is None:
         raise ValueError("the step has no interface flags: there is no collapse mode")

@@ -7,6 +7,7 @@ block centres: ``dead`` (applied first, held constant) and ``live`` (scaled by l
 from __future__ import annotations
 
 import logging
+import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any, Literal, get_args
@@ -15,6 +16,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from masonry_dem._validation import as_finite_array, block_indices, plain, positive_scalar
+from masonry_dem.constitutive.strength import PROJECTIONS
 from masonry_dem.geometry.blocks import Blocks
 from masonry_dem.geometry.interfaces import Interfaces, detect_interfaces
 
@@ -36,17 +38,32 @@ _DOF_GROUPS: dict[str, tuple[int, ...]] = {
 }
 
 
+#: the interface law's options (one definition: the law, the settings and the schema use these)
+Tension = Literal["brittle", "plastic"]
+Memory = Literal["none", "slip"]
+
+
 @dataclass(frozen=True)
 class InterfaceMaterial:
     """Joint properties. kn, kt: stiffness per unit area [N/m^3]; friction: mu = tan(phi);
     tensile_strength [Pa] (also sets cohesion c = mu * ft); alpha: torsion-shear exponent of
-    Eq. (A5) (None: 1.5, the paper's value for running-bond masonry)."""
+    Eq. (A5) (None: 1.5, the paper's value for running-bond masonry).
+
+    The interface law's behaviour beyond the strength domain (one for the whole model: the
+    ``material`` of :meth:`Model.build`; see :mod:`masonry_dem.constitutive.law`):
+    tension: ``"brittle"`` (a joint that opens loses its tensile strength for good) or
+    ``"plastic"``; memory: ``"none"`` (holonomic) or ``"slip"`` (sliding keeps its plastic
+    slip); projection: the shear-torsion return, ``"energy"`` (closest point) or ``"radial"``.
+    """
 
     kn: float
     kt: float
     friction: float
     tensile_strength: float = 0.0
     alpha: float | None = None
+    tension: Tension = "brittle"
+    memory: Memory = "none"
+    projection: str = "energy"
 
     def __post_init__(self) -> None:
         positive_scalar("kn", self.kn)
@@ -55,6 +72,37 @@ class InterfaceMaterial:
         positive_scalar("tensile_strength", self.tensile_strength, strict=False)
         if self.alpha is not None:
             positive_scalar("alpha", self.alpha)
+        for name, allowed in LAW_OPTIONS.items():
+            check_choice(name, getattr(self, name), allowed)
+
+
+#: the interface law's options of :class:`InterfaceMaterial` and their allowed values
+LAW_OPTIONS: dict[str, tuple[str, ...]] = {
+    "tension": get_args(Tension),
+    "memory": get_args(Memory),
+    "projection": PROJECTIONS,
+}
+
+
+def check_choice(name: str, value: object, allowed: tuple[str, ...]) -> None:
+    """ValueError naming ``name``, ``value`` and the ``allowed`` values unless it is one."""
+    if value not in allowed:
+        raise ValueError(f"{name} must be one of {allowed}, got {value!r}")
+
+
+def deprecated_law_option(owner: str, name: str, value: str | None) -> None:
+    """A law option (``tension``, ``memory``) still given to solver settings ``owner``: checked,
+    with a DeprecationWarning (it belongs to the material; kept for one version)."""
+    if value is None:
+        return
+    check_choice(name, value, LAW_OPTIONS[name])
+    warnings.warn(
+        f"{owner}.{name} is deprecated: {name} is a property of the interface law, set "
+        f"InterfaceMaterial({name}={value!r}) (case files: [material] {name} = {value!r}); "
+        "the settings' value still overrides the material's in this version",
+        DeprecationWarning,
+        stacklevel=4,
+    )
 
 
 def dof_mask(dofs: DofGroup | DofName | Sequence[DofGroup | DofName]) -> NDArray[np.bool_]:
@@ -239,6 +287,10 @@ class Model:
     live: NDArray[np.float64]
     name: str = "model"
     meta: dict[str, Any] = field(default_factory=dict)
+    #: the interface law's options (of the ``material`` of :meth:`build`)
+    tension: Tension = "brittle"
+    memory: Memory = "none"
+    projection: str = "energy"
 
     @classmethod
     def build(
@@ -296,6 +348,9 @@ class Model:
             live,
             name=name,
             meta=dict(meta or {}),
+            tension=material.tension,
+            memory=material.memory,
+            projection=material.projection,
         )
         model.check_supported()
         return model

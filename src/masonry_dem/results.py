@@ -11,14 +11,19 @@ from typing import TYPE_CHECKING, Any, Protocol, overload
 import numpy as np
 from numpy.typing import NDArray
 
+# damage state codes of the interfaces (cell data "state" in the VTU files), re-exported
+from masonry_dem.constitutive.states import (  # noqa: F401
+    STATE_DETACHED,
+    STATE_ELASTIC,
+    STATE_NAMES,
+    STATE_ROCKING,
+    STATE_SLIDING,
+    STATE_SLIDING_ROCKING,
+)
 from masonry_dem.solvers.static.outcome import Status, StopReason
 
 if TYPE_CHECKING:
     from masonry_dem.solvers.static.certificate import Certificate
-
-# damage state codes of the interfaces (cell data "state" in the VTU files)
-STATE_NAMES = ("elastic", "sliding", "rocking", "sliding+rocking", "detached")
-STATE_ELASTIC, STATE_SLIDING, STATE_ROCKING, STATE_SLIDING_ROCKING, STATE_DETACHED = range(5)
 
 
 @dataclass(frozen=True)

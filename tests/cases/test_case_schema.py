@@ -223,3 +223,28 @@ def test_readme_case_file_passes_the_schema(tmp_path):
         import tomli as tomllib
     case = case_from_dict(tomllib.loads(block), "README")
     assert case.settings.bracket_tolerance == 0.005
+
+
+def test_law_options_belong_to_the_material(tmp_path, capsys):
+    """tension, memory and projection are [material] fields that reach the interface law;
+    the [analysis] fields of the same names still work for one version, with a
+    DeprecationWarning, and a bad value names the field and the allowed values."""
+    from masonry_dem.cases.casefile import load_case
+    from masonry_dem.solvers.static.problem import DiscreteProblem
+
+    path = tmp_path / "law.toml"
+    law_fields = 'tension = "plastic"\nmemory = "slip"\nprojection = "radial"\n'
+    path.write_text(_edit(GOOD, "friction = 0.7\n", "friction = 0.7\n" + law_fields))
+    law = DiscreteProblem(load_case(str(path)).model).law
+    assert (law.tension, law.memory, law.projection) == ("plastic", "slip", "radial")
+
+    path.write_text(GOOD + '[analysis]\nmemory = "slip"\n')
+    with pytest.warns(DeprecationWarning, match=r"\[material\] memory = 'slip'"):
+        case = load_case(str(path))
+    assert DiscreteProblem(case.model, memory=case.settings.memory).law.memory == "slip"
+    assert DiscreteProblem(case.model).law.memory == "none"  # the material's default
+
+    path.write_text(_edit(GOOD, "friction = 0.7\n", 'friction = 0.7\ntension = "elastic"\n'))
+    assert main(["run", str(path), "--out", str(tmp_path / "out"), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert '[material].tension = "elastic"' in err and "brittle" in err and "plastic" in err

@@ -2,7 +2,7 @@
 differentiates.
 
 ``InterfaceLaw.tangent(method="analytic")`` differentiates the energy return of the closed-form
-domain by the implicit function theorem (``strength._nb_row_tangent``). Here it is checked
+domain by the implicit function theorem (``law_kernels._nb_row_tangent``). Here it is checked
 against central differences of :func:`check_strength` itself, row by row, on joints in every
 state (sliding, rocking about either axis or both, sliding while rocking, pure shear), for
 several exponents alpha, away from the kinks of the domain (where no derivative exists and
@@ -16,12 +16,12 @@ import pytest
 
 from masonry_dem.constitutive import check_strength, torsion_constant, torsion_strength
 from masonry_dem.constitutive.law import InterfaceLaw
-from masonry_dem.constitutive.strength import (
+from masonry_dem.constitutive.law_kernels import _nb_torsion_constant_slope
+from masonry_dem.constitutive.states import (
     FLAG_DETACHED,
     FLAG_ROCKING_1,
     FLAG_ROCKING_2,
     FLAG_SHEAR_TORSION,
-    _nb_torsion_constant_slope,
 )
 from masonry_dem.solvers.incremental import StaticSettings
 

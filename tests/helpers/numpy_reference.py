@@ -1,5 +1,5 @@
 """The numpy version of the interface strength check, kept as the reference of the compiled
-one (``masonry_dem.constitutive.strength._evaluate``): the same floating-point operations,
+one (``masonry_dem.constitutive.strength.evaluate``): the same floating-point operations,
 batched over rows with masks instead of one row at a time. Used by the tests only."""
 
 from __future__ import annotations
@@ -9,19 +9,19 @@ import logging
 import numpy as np
 from numpy.typing import NDArray
 
+from masonry_dem.constitutive.check_kernels import PROJECTION_MAX_ITER as _PROJECTION_MAX_ITER
+from masonry_dem.constitutive.check_kernels import PROJECTION_TOL as _PROJECTION_TOL
+from masonry_dem.constitutive.check_kernels import TINY_CAPACITY as _TINY_CAPACITY
+from masonry_dem.constitutive.states import FACTORS_OF_FLAGS as _FACTORS_OF_FLAGS
+from masonry_dem.constitutive.states import SLIDE_COLUMNS as _SLIDE_COLUMNS
+from masonry_dem.constitutive.states import STATE_OF_FLAGS as _STATE_OF_FLAGS
 from masonry_dem.constitutive.strength import (
-    _FACTORS_OF_FLAGS,
-    _PROJECTION_MAX_ITER,
-    _PROJECTION_TOL,
-    _SLIDE_COLUMNS,
-    _STATE_OF_FLAGS,
-    _TINY_CAPACITY,
     SHEAR_TORSION_TOLERANCE,
     StrengthCheck,
-    _Domain,
-    _radial_factor,
     _safe_ratio,
 )
+from masonry_dem.constitutive.strength import StrengthDomain as _Domain
+from masonry_dem.constitutive.strength import radial_factor as _radial_factor
 
 logger = logging.getLogger(__name__)
 

@@ -276,8 +276,12 @@ def test_robust_iterations_must_not_be_negative():
 def test_free_standing_wall_tilts_at_s_over_h_with_slip_memory():
     a, s, courses = 0.081, 0.07, 9
     blocks, base = add_base(running_bond_wall(4, courses, a, 0.21, s, 20e3))
-    lam = _collapse(_tilt(blocks, base), memory="slip")
+    slip = InterfaceMaterial(DRY.kn, DRY.kt, DRY.friction, memory="slip")
+    lam = _collapse(_tilt(blocks, base, slip))
     assert lam == pytest.approx(s / (courses * a), rel=TOL)
+    # the deprecated settings field still works, warns, and gives the same bits
+    with pytest.warns(DeprecationWarning, match=r"InterfaceMaterial\(memory='slip'\)"):
+        assert _collapse(_tilt(blocks, base), memory="slip") == lam
 
 
 def test_stop_check_time_steps_must_not_be_negative():

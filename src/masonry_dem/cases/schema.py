@@ -27,6 +27,7 @@ from pydantic import AfterValidator, BaseModel, ConfigDict, ValidationError, cre
 from pydantic_core import PydanticCustomError
 
 from masonry_dem._validation import plain
+from masonry_dem.model import LAW_OPTIONS, InterfaceMaterial
 
 log = logging.getLogger(__name__)
 
@@ -327,6 +328,7 @@ TOP = _table(
         "analysis": (dict, None),
     },
 )
+_LAW = {name: (allowed, getattr(InterfaceMaterial, name)) for name, allowed in LAW_OPTIONS.items()}
 MATERIAL = _table(
     "Material",
     {
@@ -335,6 +337,8 @@ MATERIAL = _table(
         "friction": _number("friction"),
         "tensile_strength": (_number("tensile_strength"), 0.0),
         "alpha": (_number("alpha") | None, None),
+        # the interface law's options (the solver settings' tension and memory: deprecated)
+        **{name: (_choice(allowed), default) for name, (allowed, default) in _LAW.items()},
     },
 )
 SUPPORT = _table(
@@ -407,9 +411,9 @@ ANALYSIS_EXTRA: dict[str, tuple[Any, Any]] = {
 def _analysis_table(settings_type: type) -> type[BaseModel]:
     """The ``[analysis]`` table: every field of ``settings_type`` (StaticSettings), typed by
     :data:`RANGES` or its annotation, string options by the solver's own constants."""
-    from masonry_dem.constitutive.law import MEMORY, TANGENT_METHODS, TENSION
+    from masonry_dem.constitutive.law import TANGENT_METHODS
 
-    choices: dict[str, Any] = {"tension": TENSION, "memory": MEMORY, "tangent": TANGENT_METHODS}
+    choices: dict[str, Any] = {**LAW_OPTIONS, "tangent": TANGENT_METHODS}
     try:  # the solver's continuation options, wherever the solver package keeps them
         from masonry_dem.solvers import incremental
 

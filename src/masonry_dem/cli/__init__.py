@@ -17,7 +17,17 @@ import logging
 import sys
 import traceback
 
-COMMANDS = ("run", "validate", "interface", "render", "paraview_state", "study", "limit", "sweep")
+COMMANDS = (
+    "run",
+    "validate",
+    "interface",
+    "render",
+    "paraview_state",
+    "study",
+    "limit",
+    "sweep",
+    "warmup",
+)
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -167,6 +167,9 @@ def run_command(args: argparse.Namespace) -> int:
         print(json.dumps({k: summary[k] for k in ("status", "lambda", "method", "bound")}))
         print(f"{summary['status']}: {summary['reason']}")
         return 0 if summary["status"] == "collapse" else 1
+    from masonry_dem.solvers.warmup import prepare
+
+    prepare(case.model.interfaces.count)  # says "compiling kernels ..." first, if it must
     t0 = time.perf_counter()
     # claims the folder: refused if it holds another run (without --overwrite) or is in use
     writer = ResultsWriter(

@@ -20,6 +20,10 @@ What the law remembers between converged steps (``memory``):
 
 Tensile strength (``tension``): ``"brittle"`` (a joint whose normal force exceeds ft loses
 its tensile strength for good, as a cracked mortar joint does) or ``"plastic"`` (it keeps ft).
+
+``tension``, ``memory`` and the shear-torsion ``projection`` are set on the model's
+:class:`~masonry_dem.model.InterfaceMaterial` (the solver settings' ``tension`` and ``memory``
+are deprecated). The compiled kernels are :mod:`~masonry_dem.constitutive.law_kernels`'.
 """
 
 from __future__ import annotations
@@ -31,24 +35,20 @@ from typing import Literal, get_args
 import numpy as np
 from scipy import sparse
 
+from masonry_dem.constitutive.law_kernels import fd_tangent_rows, forces, law_tangent
+from masonry_dem.constitutive.states import FACTORS_OF_FLAGS, FLAG_DETACHED, STATE_OF_FLAGS
 from masonry_dem.constitutive.strength import (
-    _FACTORS_OF_FLAGS,
-    _STATE_OF_FLAGS,
-    FLAG_DETACHED,
     StrengthCheck,
-    _actions,
-    _Domain,
-    _evaluate,
-    _field,
-    _nb_forces,
-    _nb_law_tangent,
-    _projection_and_flags,
+    StrengthDomain,
+    checked_actions,
+    checked_field,
+    evaluate,
+    projection_and_flags,
+    writable_c,
 )
-from masonry_dem.model import Model
+from masonry_dem.model import Memory, Model, Tension
 
 DETACHED_FLAG = FLAG_DETACHED
-Memory = Literal["none", "slip"]
-Tension = Literal["brittle", "plastic"]
 #: how :meth:`InterfaceLaw.tangent` differentiates the projection of yielded joints
 TangentMethod = Literal["analytic", "difference"]
 MEMORY: tuple[str, ...] = get_args(Memory)
@@ -76,12 +76,12 @@ class LawResponse:
     @cached_property
     def tangent(self) -> np.ndarray:
         """(m, 6) stiffness factors of Eqs. (13)-(14), 0 or 1."""
-        return _FACTORS_OF_FLAGS[self.flags]
+        return FACTORS_OF_FLAGS[self.flags]
 
     @cached_property
     def state(self) -> np.ndarray:
         """(m,) damage code."""
-        return _STATE_OF_FLAGS[self.flags]
+        return STATE_OF_FLAGS[self.flags]
 
 
 @dataclass(frozen=True)
@@ -109,9 +109,12 @@ class InterfaceLaw:
         cls,
         model: Model,
         kbar: np.ndarray,
-        tension: Tension = "brittle",
-        memory: Memory = "none",
+        tension: Tension | None = None,
+        memory: Memory | None = None,
     ) -> InterfaceLaw:
+        """The law of ``model``'s interfaces with stiffness ``kbar``; its options are the
+        model's material's (``tension`` or ``memory`` given here override them: the
+        deprecated settings fields of the solvers)."""
         its = model.interfaces
         return cls(
             kbar,
@@ -120,22 +123,23 @@ class InterfaceLaw:
             model.friction,
             model.tensile_strength * its.area,
             model.alpha,
-            tension,
-            memory,
+            model.tension if tension is None else tension,
+            model.memory if memory is None else memory,
+            model.projection,
         )
 
     @cached_property
-    def _domain(self) -> _Domain:
+    def _domain(self) -> StrengthDomain:
         """Validated per-interface constants of the strength check, built on the first call
         (the arrays are not meant to change afterwards)."""
         m = self.kbar.shape[0]
-        _field("tensile_force", self.tensile_force, m, minimum=0.0, strict=False)
-        return _Domain.of(m, self.l1, self.l2, self.friction, self.alpha)
+        checked_field("tensile_force", self.tensile_force, m, minimum=0.0, strict=False)
+        return StrengthDomain.of(m, self.l1, self.l2, self.friction, self.alpha)
 
     def _check(self, trial: np.ndarray, ft: np.ndarray) -> StrengthCheck:
         if not np.isfinite(trial.sum()):  # one cheap test; _actions says what is wrong
-            trial = _actions(trial)
-        return _evaluate(trial, ft, self._domain, projection=self.projection)
+            trial = checked_actions(trial)
+        return evaluate(trial, ft, self._domain, projection=self.projection)
 
     def respond(
         self,
@@ -155,8 +159,8 @@ class InterfaceLaw:
             actions, flags, util = chk.projected, chk.flags, chk.utilisation  # fresh arrays
         else:
             if not np.isfinite(trial.sum()):  # one cheap test; _actions says what is wrong
-                trial = _actions(trial)
-            actions, flags = _projection_and_flags(trial, ft, self._domain, self.projection)
+                trial = checked_actions(trial)
+            actions, flags = projection_and_flags(trial, ft, self._domain, self.projection)
             util = None
         if self.tension == "brittle":
             actions[(flags & DETACHED_FLAG) > 0] = 0.0
@@ -175,7 +179,8 @@ class InterfaceLaw:
         compiled pass: a Newton residual or a time step without its intermediate arrays and
         calls."""
         dom = self._domain
-        rel, trial, ft, actions, flags, internal, finite = _nb_forces(
+        kernel = forces.for_rows(self.kbar.shape[0])
+        rel, trial, ft, actions, flags, internal, finite = kernel(
             np.ascontiguousarray(x, dtype=float),
             H.indptr,
             H.indices,
@@ -193,7 +198,7 @@ class InterfaceLaw:
             H_T.shape[0],
         )
         if not finite:
-            _actions(trial)  # says which action is not finite
+            checked_actions(trial)  # says which action is not finite
         return rel, LawResponse(trial, ft, actions, flags, None), internal
 
     def utilisation(self, r: LawResponse) -> np.ndarray:
@@ -227,7 +232,7 @@ class InterfaceLaw:
         """
         if method not in TANGENT_METHODS:
             raise ValueError(f"method must be one of {TANGENT_METHODS}, got {method!r}")
-        return _nb_law_tangent(
+        T, rows, t, h, ft, k, normal_only = law_tangent.serial(
             r.trial,
             r.tensile_force,
             r.flags,
@@ -240,6 +245,12 @@ class InterfaceLaw:
             self.projection == "energy",
             method == "analytic",
         )
+        if rows.size:  # the rows the analytic derivative does not cover
+            fd = fd_tangent(t, h, ft, rows, self._domain, k, self.projection, normal_only)
+            diagonal = np.arange(6)
+            fd[:, diagonal, diagonal] += float(floor) * k
+            T[rows] = fd
+        return T
 
     def plastic_part(self, relative: np.ndarray, actions: np.ndarray) -> np.ndarray:
         """Plastic relative displacements to store at a converged state (see ``memory``)."""
@@ -253,3 +264,33 @@ class InterfaceLaw:
         if self.tension != "brittle":
             return cracked
         return cracked | ((response.flags & DETACHED_FLAG) > 0)
+
+
+def fd_tangent(
+    trial: np.ndarray,
+    h: np.ndarray,
+    ft: np.ndarray,
+    rows: np.ndarray,
+    dom: StrengthDomain,
+    kbar: np.ndarray,
+    projection: str = "energy",
+    normal_only: np.ndarray | None = None,
+) -> np.ndarray:
+    """(n, 6, 6) forward-difference tangent of the projection at ``trial`` (n, 6), steps ``h``
+    (n, 6), for the rows ``rows`` of ``dom`` (``ft`` and ``kbar`` already taken at those rows);
+    ``normal_only`` (n,) marks rows at zero capacity, probed along fn alone; see
+    :data:`~masonry_dem.constitutive.law_kernels.fd_tangent_rows`."""
+    n = trial.shape[0]
+    out = np.empty((n, 6, 6))
+    fd_tangent_rows.for_rows(dom.l1.shape[0])(
+        writable_c(trial),
+        writable_c(h),
+        writable_c(ft),
+        np.ascontiguousarray(rows, dtype=np.int64),
+        *dom.kernel_arrays,
+        projection == "energy",
+        writable_c(kbar),
+        np.zeros(n, dtype=np.bool_) if normal_only is None else np.asarray(normal_only, bool),
+        out,
+    )
+    return out

@@ -30,7 +30,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import minimize_scalar
 
-from masonry_dem.constitutive.strength import DIRECTIONS, _radial_factor
+from masonry_dem.constitutive.strength import DIRECTIONS, radial_factor
 
 __all__ = [
     "REFERENCE_INTERFACE",
@@ -440,7 +440,7 @@ def fit_alpha(
     a, c = r * np.cos(phis), r * np.sin(phis)
 
     def objective(alpha: float) -> float:
-        s = _radial_factor(a, c, np.full_like(a, alpha))
+        s = radial_factor(a, c, np.full_like(a, alpha))
         return float(np.sum(np.log(s) ** 2))
 
     res = minimize_scalar(objective, bounds=(1.0, 4.0), method="bounded", options={"xatol": 1e-6})

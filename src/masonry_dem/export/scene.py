@@ -28,10 +28,10 @@ from typing import Any
 
 import numpy as np
 
+from masonry_dem.constitutive.states import STATE_NAMES
 from masonry_dem.export.results_series import ResultsSeries
-from masonry_dem.results import STATE_NAMES
 
-#: RGB colour (0-255) of each interface state code, index = code (see ``STATE_NAMES``).
+#: RGB colour (0-255) of each interface state, index = :class:`~masonry_dem.constitutive.states.JointState`.
 STATE_COLOURS: tuple[tuple[int, int, int], ...] = (
     (0, 170, 0),  # 0 elastic: green
     (220, 0, 0),  # 1 sliding (shear / torsion): red

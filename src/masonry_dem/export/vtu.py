@@ -9,7 +9,7 @@ Warp By Vector on ``displacement`` shows the motion at any scale.
 interfaces: one quad per interface at its mid-plane; point data ``displacement`` (mean of the
 two blocks' motion there); cell data ``interface_id``, ``block_i``, ``block_j``,
 ``normal_axis``, ``area``, ``actions`` (local [f1, f2, fn, m1, m2, m3]), ``normal_force``,
-``shear_force`` (|f1, f2|), ``bending_moment`` (|m1, m2|), ``torsion``, ``state`` (0 elastic,
+``shear_force`` (|f1, f2|), ``bending_moment`` (|m1, m2|), ``torsion``, ``state`` (:class:`~masonry_dem.constitutive.states.JointState`: 0 elastic,
 1 sliding, 2 rocking, 3 sliding and rocking, 4 detached), ``flags``, ``utilisation``.
 
 mechanism (``mechanism_blocks.vtu``, ``mechanism_interfaces.vtu``, once per run that ends in

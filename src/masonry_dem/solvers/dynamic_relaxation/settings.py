@@ -9,6 +9,7 @@ from dataclasses import dataclass, field
 from typing import Literal, get_args
 
 from masonry_dem.constitutive.law import Memory, Tension
+from masonry_dem.model import deprecated_law_option
 
 MassRule = Literal["stiffness", "density"]
 TimeStepRule = Literal["gershgorin", "power"]
@@ -24,8 +25,6 @@ _CHOICES: dict[str, tuple[str, ...]] = {
     "loading": get_args(Loading),
     "on_blowup": get_args(OnBlowup),
     "stability": get_args(Stability),
-    "tension": get_args(Tension),
-    "memory": get_args(Memory),
 }
 
 
@@ -64,8 +63,8 @@ class DRSettings:
     max_steps: int = 1000
     max_load_factor: float = math.inf
     displacement_limit: float | None = None
-    tension: Tension = "brittle"
-    memory: Memory = "none"
+    tension: Tension | None = None  # deprecated: InterfaceMaterial(tension=...)
+    memory: Memory | None = None  # deprecated: InterfaceMaterial(memory=...)
     max_time_steps: int = 2_000_000
     on_blowup: OnBlowup = "cut"
     max_cuts: int = 6
@@ -73,6 +72,8 @@ class DRSettings:
     power_iterations: int = 30
 
     def __post_init__(self) -> None:
+        deprecated_law_option("DRSettings", "tension", self.tension)
+        deprecated_law_option("DRSettings", "memory", self.memory)
         for name, allowed in _CHOICES.items():
             if getattr(self, name) not in allowed:
                 raise ValueError(f"{name} must be one of {allowed}, got {getattr(self, name)!r}")

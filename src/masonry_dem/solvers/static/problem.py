@@ -18,11 +18,12 @@ from scipy import sparse
 
 from masonry_dem.assembly.stiffness import Assembly
 from masonry_dem.constitutive.law import InterfaceLaw, LawResponse, Memory, Tension
+from masonry_dem.jit import kernel
 from masonry_dem.model import Model
 from masonry_dem.solvers.factorization import Factorizer, Factors, SingularMatrix, analyse
 
 
-@numba.njit(cache=True, parallel=True, fastmath={"contract"})
+@kernel(parallel=True, fastmath={"contract"})
 def _assemble_tangent(H_loc: np.ndarray, T: np.ndarray, terms: np.ndarray, ptr: np.ndarray):
     """The stored entries of K = sum over interfaces of H_loc^T T H_loc (12 x 12 each):
     ``out[j] = sum(B.flat[terms[ptr[j] : ptr[j + 1]]])``, added in that order from 0. The
@@ -140,7 +141,8 @@ class TangentAssembler:
 
     def data(self, T: np.ndarray) -> np.ndarray:
         """The stored entries of :meth:`matrix`, in its CSC order."""
-        return _assemble_tangent(self.H_loc, np.ascontiguousarray(T), self.terms, self.term_ptr)
+        assemble = _assemble_tangent.for_rows(self.H_loc.shape[0])
+        return assemble(self.H_loc, np.ascontiguousarray(T), self.terms, self.term_ptr)
 
     def matrix(self, T: np.ndarray, data: np.ndarray | None = None) -> sparse.csc_matrix:
         """K_ff for the tangents T (or for entries ``data`` assembled already)."""
@@ -161,8 +163,8 @@ class DiscreteProblem:
         self,
         model: Model,
         *,
-        tension: Tension = "brittle",
-        memory: Memory = "none",
+        tension: Tension | None = None,
+        memory: Memory | None = None,
         tangent: str = "analytic",
         residual_stiffness: float = 1e-9,
         displacement_limit: float | None = None,

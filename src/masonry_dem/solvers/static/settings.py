@@ -7,15 +7,8 @@ import math
 from dataclasses import dataclass, fields
 from typing import Literal, get_args
 
-from masonry_dem.constitutive.law import (
-    MEMORY,
-    TANGENT_METHODS,
-    TENSION,
-    Memory,
-    TangentMethod,
-    Tension,
-)
-from masonry_dem.model import DofName
+from masonry_dem.constitutive.law import TANGENT_METHODS, Memory, TangentMethod, Tension
+from masonry_dem.model import DofName, deprecated_law_option
 
 #: what follows the first failure of load control (see ``StaticSettings.continuation``)
 Continuation = Literal["work", "bracket"]
@@ -64,7 +57,8 @@ class StaticSettings:
         the small-displacement range on a rising curve fails with that physical reason.
     residual_stiffness: fraction of the elastic stiffness kept on the diagonal of the tangent.
     tangent: ``"analytic"`` (closed-form derivative of the return) or ``"difference"``.
-    tension, memory: interface law options (see :mod:`masonry_dem.constitutive.law`).
+    tension, memory: deprecated (None: the material's). They are the interface law's, set on
+        :class:`~masonry_dem.model.InterfaceMaterial`; given here they warn and override it.
     stall_window, stall_decrease: a Newton search that has not lowered its merit by
         ``stall_decrease`` in ``stall_window`` iterations (with no cut of the trust radius)
         is stalled: no equilibrium near the last converged state.
@@ -157,8 +151,8 @@ class StaticSettings:
     limit_elastic_multiple: float = 0.0
     residual_stiffness: float = 1e-9
     tangent: TangentMethod = "analytic"
-    tension: Tension = "brittle"
-    memory: Memory = "none"
+    tension: Tension | None = None
+    memory: Memory | None = None
     stall_window: int = 8
     stall_decrease: float = 0.5
     max_floor: float = 1e-3
@@ -272,10 +266,8 @@ class StaticSettings:
             raise ValueError(
                 f"displacement_limit must be positive or None, got {self.displacement_limit!r}"
             )
-        if self.tension not in TENSION:
-            raise ValueError(f"tension must be one of {TENSION}, got {self.tension!r}")
-        if self.memory not in MEMORY:
-            raise ValueError(f"memory must be one of {MEMORY}, got {self.memory!r}")
+        deprecated_law_option("StaticSettings", "tension", self.tension)
+        deprecated_law_option("StaticSettings", "memory", self.memory)
         if self.tangent not in TANGENT_METHODS:
             raise ValueError(f"tangent must be one of {TANGENT_METHODS}, got {self.tangent!r}")
         if self.continuation not in CONTINUATION:

@@ -1,0 +1,426 @@
+"""The strength check of Section 2.1 compiled (numba), one interface (row) at a time.
+
+Each ``_nb_`` function is the scalar transcription of the numpy function of the same name
+without the prefix (:mod:`masonry_dem.constitutive.strength`, or the reference of the tests in
+tests/constitutive/numpy_reference.py), operation for operation and in the same order (no
+fast-math, so no reassociation or fused multiply-adds), so that a row comes out as the numpy
+reference gives it up to the last bit of the libm functions. :data:`evaluate_rows` runs the
+row function over all rows; the kernels of the interface law
+(:mod:`~masonry_dem.constitutive.law_kernels`) call the row function in their own loops.
+Compiled on first use and cached on disk (see :mod:`masonry_dem.jit`); importing compiles nothing.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Final
+
+import numba
+import numpy as np
+
+from masonry_dem.constitutive.states import (
+    FLAG_DETACHED,
+    FLAG_ROCKING_1,
+    FLAG_ROCKING_2,
+    FLAG_SHEAR_TORSION,
+)
+from masonry_dem.jit import kernel
+
+__all__ = [
+    "NEWTON_MAX_ITER",
+    "NEWTON_RTOL",
+    "PROJECTION_MAX_ITER",
+    "PROJECTION_TOL",
+    "SHEAR_TORSION_TOLERANCE",
+    "SNAP",
+    "TINY_CAPACITY",
+    "evaluate_rows",
+    "nb_energy_radius",
+    "nb_evaluate_row",
+    "nb_radial_factor",
+    "nb_reduced_side",
+    "nb_torsion_constant",
+]
+
+#: safeguarded Newton of the energy projection: iteration cap, and the relative step below
+#: which the last step is taken and the row stops (Newton's quadratic convergence leaves an
+#: error of the order of its square, at round-off)
+PROJECTION_MAX_ITER: Final[int] = 100
+PROJECTION_TOL: Final[float] = 1e-9
+#: capacities near the subnormal range lose digits in the energy return: radial there
+TINY_CAPACITY: Final[float] = 1e-280
+#: A trial violates Eq. (A5) only if its radial demand/capacity ratio (see ``check_strength``)
+#: exceeds 1 by more than this. The radial projection lands on the boundary to ~1e-13, so
+#: re-checking projected actions reports them elastic (and returns them unchanged).
+SHEAR_TORSION_TOLERANCE: Final[float] = 1e-9
+#: Newton on the radial factor: iteration cap and relative step of convergence
+NEWTON_MAX_ITER: Final[int] = 60
+NEWTON_RTOL: Final[float] = 1e-13
+#: relative size below which a reduced side of the torsion rectangle is zero
+SNAP: Final[float] = 1e-12
+
+#: the row functions: compiled into the kernels that call them (x/0 = inf or nan, as numpy)
+_jit = numba.njit(error_model="numpy")
+
+
+@_jit
+def nb_torsion_constant(l1: float, l2: float) -> float:
+    """:func:`_torsion_constant` of one rectangle (sides >= 0; asinh(x)/x patched to its
+    limits where a side is below 1e-8 of the other)."""
+    x = l2 / l1
+    y = l1 / l2
+    r1 = math.asinh(x) / x
+    r2 = math.asinh(y) / y
+    odd = not (x >= 1e-8 and y >= 1e-8)  # a tiny or zero side, or both zero (NaN ratios)
+    if odd:
+        if x < 1e-8:
+            r1 = 1.0 - x * x / 6.0
+        if x == math.inf:
+            r1 = 0.0  # l1 = 0: its term vanishes
+        if y < 1e-8:
+            r2 = 1.0 - y * y / 6.0
+        if y == math.inf:
+            r2 = 0.0
+    c = math.hypot(l1, l2)
+    c *= 0.5
+    c += (0.25 * l1) * r1
+    c += (0.25 * l2) * r2
+    c /= 3.0
+    if odd and math.isnan(x):
+        c = 0.0  # both sides zero
+    return c
+
+
+@_jit
+def _nb_radial_t(big_a: float, big_c: float, alpha: float) -> tuple[float, bool]:
+    """:func:`_radial_t` and :func:`_radial_newton` of one row; False if Newton did not
+    converge."""
+    if alpha == 2.0:
+        return 1.0 / math.hypot(big_a, big_c), True
+    if alpha == 1.0:
+        return 2.0 / (big_a + math.sqrt(big_a * big_a + 4.0 * big_c * big_c)), True
+    ln_a = math.log(big_a)  # -inf where A underflowed to 0
+    ln_c = math.log(big_c)
+    tau = 0.0
+    for _ in range(NEWTON_MAX_ITER):
+        p = math.exp(alpha * (tau + ln_a))
+        q = math.exp(2.0 * (tau + ln_c))
+        total = p + q
+        step = math.log(total) * total / (alpha * p + 2.0 * q)
+        tau = tau - step
+        if not abs(step) > NEWTON_RTOL:
+            return math.exp(tau), True
+    return math.exp(tau), False
+
+
+@_jit
+def nb_radial_factor(a: float, c: float, alpha: float) -> tuple[float, bool]:
+    """:func:`_radial_factor` of one row."""
+    m = max(a, c)
+    s = 1.0 / m  # inf at a = c = 0, 0 at inf
+    ok = True
+    if min(a, c) > 0 and m < math.inf:
+        t, ok = _nb_radial_t(a / m, c / m, alpha)
+        s = t / m
+    return s, ok
+
+
+@_jit
+def _nb_safe_ratio(demand: float, capacity: float) -> float:
+    """:func:`_safe_ratio` of one row."""
+    if demand == 0:
+        return 0.0
+    if capacity > 0:
+        return demand / capacity
+    return math.inf
+
+
+@_jit
+def _nb_shear_half(tau, a, b, r0, z0, alpha, power) -> tuple[float, float]:
+    """g = d/dt of half the squared distance from (a sqrt(1 - t^alpha), b t) to (r0, z0) at
+    t = tau^power, and dg/dtau; smooth on t in [0, 2^(-1/alpha)]. One row."""
+    t = tau**power
+    ta = t**alpha
+    u = 1.0 - ta
+    su = math.sqrt(u)
+    du = -alpha * ta / t
+    d2u = du * (alpha - 1.0) / t
+    r = a * su
+    dr = 0.5 * a * du / su
+    d2r = a * (0.5 * d2u / su - 0.25 * du * du / (u * su))
+    g = (r - r0) * dr + (b * t - z0) * b
+    dg = (dr * dr + (r - r0) * d2r + b * b) * power * t / tau
+    return g, dg
+
+
+@_jit
+def _nb_torsion_half(x, a, b, r0, z0, alpha) -> tuple[float, float]:
+    """g = d/dx of half the squared distance from (a x, b (1 - x^2)^(1/alpha)) to (r0, z0),
+    and g'; smooth on x in [0, sqrt(1/2)]. One row."""
+    w = 1.0 - x * x
+    p = 1.0 / alpha
+    wp = w**p
+    z = b * wp
+    dz = -2.0 * p * b * x * wp / w
+    d2z = 2.0 * p * b * wp / w * (2.0 * (p - 1.0) * x * x / w - 1.0)
+    g = (a * x - r0) * a + (z - z0) * dz
+    dg = a * a + dz * dz + (z - z0) * d2z
+    return g, dg
+
+
+@_jit
+def _nb_bracketed_newton(torsion, a, b, r0, z0, alpha, power, hi, start) -> tuple[float, bool]:
+    """Root of g on [0, hi] (g(0) < 0 < g(hi), one sign change) for one row, g being
+    :func:`_nb_torsion_half` if ``torsion`` else :func:`_nb_shear_half`: Newton's method from
+    ``start`` (mid-bracket if outside it) kept inside the shrinking bracket (bisection where a
+    step would leave it); False if it did not converge."""
+    lo = 0.0
+    x = 0.5 * hi
+    if start > 0.0 and start < hi:
+        x = start
+    for _ in range(PROJECTION_MAX_ITER):
+        if torsion:
+            g, dg = _nb_torsion_half(x, a, b, r0, z0, alpha)
+        else:
+            g, dg = _nb_shear_half(x, a, b, r0, z0, alpha, power)
+        if g > 0:
+            hi = x
+        else:
+            lo = x
+        step = g / dg
+        newton = x - step
+        # a step below tolerance is taken even where it rounds onto the bracket's end
+        done = abs(step) <= PROJECTION_TOL * (x if x > 1e-300 else 1e-300)
+        inside = newton > lo and newton < hi and math.isfinite(newton)
+        x = newton if (inside or done) else 0.5 * (lo + hi)
+        if done or hi - lo <= 4.0 * np.spacing(hi):  # converged, or bracket at round-off
+            return x, True
+    return x, False
+
+
+@_jit
+def _nb_energy_closest_point(r0, z0, a, b, alpha, radial) -> tuple[float, float, bool]:
+    """Closest point (r, z) of the curve (z/b)^alpha + (r/a)^2 = 1 to (r0, z0) outside it.
+
+    r = |f| and z = |m3| / rho, with rho^2 = J / A: Euclidean distance in (r, z) is the
+    elastic energy of the correction (kt A for shear, kt J for torsion), so this is the
+    textbook return mapping. The squared distance is unimodal along the convex curve
+    (alpha >= 1). Each half of the curve gets the parameter in which it is smooth: near pure
+    shear z = b t, r = a sqrt(1 - t^alpha); near pure torsion (where sqrt(1 - t^alpha) is
+    singular) r = a x, z = b (1 - x^2)^(1/alpha). The sign of the distance's derivative at the
+    switch point x^2 = t^alpha = 1/2 says which half holds the minimum; there Newton's method
+    is kept inside the bracket (bisection where a step would leave it), a few steps each.
+    ``radial`` (the factor that takes the trial radially onto the curve), if given, starts
+    Newton at the radial point, usually a few steps from the answer.
+    Degenerate capacities: b = 0 (no torsion, e.g. a joint rocking on a corner) keeps
+    the shear up to a and drops the torsion; a = 0 drops both. One row; False if Newton did not converge."""
+    r = 0.0
+    z = 0.0
+    ok = True
+    if r0 > 0 and z0 > 0 and a > 0 and b > 0:
+        t_switch = 0.5 ** (1.0 / alpha)
+        x_switch = math.sqrt(0.5)
+        power = 2.0 if alpha < 2.0 else 1.0
+        near_shear = _nb_shear_half(t_switch, a, b, r0, z0, alpha, 1.0)[0] >= 0.0
+        # alpha = 1 has a vertex on the shear axis; points in its normal cone return to it
+        vertex = alpha == 1.0 and (r0 - a) * 0.5 * a >= z0 * b
+        if vertex:
+            r = a
+        if near_shear and not vertex:
+            p = power
+            start = (radial * z0 / b) ** (1 / p)
+            tau, ok = _nb_bracketed_newton(
+                False, a, b, r0, z0, alpha, p, t_switch ** (1 / p), start
+            )
+            t = tau**p
+            r = a * math.sqrt(max(1.0 - t**alpha, 0.0))
+            z = b * t
+        if not near_shear:  # (after the vertex, as the numpy version does)
+            start = radial * r0 / a
+            x, ok = _nb_bracketed_newton(True, a, b, r0, z0, alpha, 1.0, x_switch, start)
+            r = a * x
+            z = b * max(1.0 - x * x, 0.0) ** (1.0 / alpha)
+    # one of r0, z0 zero: the point is on an axis and so is its closest point
+    if r0 == 0 and b > 0:
+        z = b * min(1.0, _nb_safe_ratio(z0, b))
+    if z0 == 0:
+        r = min(r0, a)
+    if b == 0:
+        r = min(r0, a)
+        z = 0.0
+    return r, z, ok
+
+
+@_jit
+def nb_energy_radius(l1: float, l2: float) -> float:
+    """rho = sqrt(J / A) of an l1 x l2 rectangle: z = |m3| / rho puts torsion in the units of
+    shear so that distance in (|f|, z) is the elastic energy of a correction (kt A, kt J)."""
+    return math.sqrt((l1 * l1 + l2 * l2) / 12.0)
+
+
+@_jit
+def nb_reduced_side(side: float, abs_moment: float, cap: float, snap: float) -> float:
+    """Side of the rectangle of uniform compression ``cap`` carrying the bending moment
+    ``abs_moment`` about the other axis (:func:`_reduced_sides` of one row): zero at or
+    below ``snap`` (a moment clipped to its rocking limit leaves round-off)."""
+    reduced = side - 2.0 * abs_moment / cap
+    reduced = min(reduced, side)
+    if reduced <= snap:
+        reduced = 0.0
+    return reduced
+
+
+@_jit
+def nb_evaluate_row(
+    i,
+    act,
+    ft,
+    l1,
+    l2,
+    friction,
+    alpha,
+    snap1,
+    snap2,
+    torsion_bending_interaction,
+    projection_only,
+    energy,
+    proj,
+    flags,
+    util,
+):
+    """Row ``i`` of :func:`_nb_evaluate`; returns whether its radial factor and its energy
+    projection did not converge (0 or 1 each)."""
+    n_radial = 0
+    n_energy = 0
+    f1 = act[i, 0]
+    f2 = act[i, 1]
+    fn = act[i, 2]
+    m1 = act[i, 3]
+    m2 = act[i, 4]
+    m3 = act[i, 5]
+    fti = ft[i]
+    al = alpha[i]
+
+    # detachment
+    detached = fn > fti
+    live = not detached
+    cap = 0.0 if detached else fti - fn
+
+    # rocking: clip the bending moments to the eccentricity limits
+    half = 0.5 * cap
+    m1_lim = half * l2[i]
+    m2_lim = half * l1[i]
+    abs_m1 = abs(m1)
+    abs_m2 = abs(m2)
+    rock1 = abs_m1 > m1_lim and live
+    rock2 = abs_m2 > m2_lim and live
+    abs_m1c = min(abs_m1, m1_lim)
+    abs_m2c = min(abs_m2, m2_lim)
+
+    # shear and torsion: demand/capacity ratios a = |m3|/m3u, c = |f|/fsu
+    fsu = friction[i] * cap
+    abs_m3 = abs(m3)
+    m3u = 0.0
+    if abs_m3 > 0 and cap > 0:
+        if torsion_bending_interaction:
+            l1r = nb_reduced_side(l1[i], abs_m2c, cap, snap1[i])
+            l2r = nb_reduced_side(l2[i], abs_m1c, cap, snap2[i])
+            c_t = nb_torsion_constant(l1r, l2r)
+        else:
+            c_t = nb_torsion_constant(l1[i], l2[i])
+        m3u = c_t * fsu
+    shear = math.hypot(f1, f2)
+    a = abs_m3 / m3u if abs_m3 > 0 else 0.0  # 0/0 = 0, d/0 = inf (no capacity)
+    c = shear / fsu if shear > 0 else 0.0
+
+    u_st = 0.0
+    s = 1.0
+    sliding = False
+    if projection_only:
+        # a + c^2 >= a^alpha + c^2 for a, c <= 1 and alpha >= 1: below 1 no row slides
+        if live and not a + c * c < 0.999:
+            s, ok = nb_radial_factor(a, c, al)
+            n_radial += 0 if ok else 1
+            sliding = 1.0 / s > 1.0 + SHEAR_TORSION_TOLERANCE
+    else:
+        s, ok = nb_radial_factor(a, c, al)
+        n_radial += 0 if ok else 1
+        u_st = 1.0 / s  # radial demand/capacity ratio of Eq. (A5)
+        sliding = u_st > 1.0 + SHEAR_TORSION_TOLERANCE and live
+
+    # projection (untouched entries are kept bitwise)
+    for j in range(6):
+        proj[i, j] = act[i, j]
+    proj[i, 3] = math.copysign(abs_m1c, m1)
+    proj[i, 4] = math.copysign(abs_m2c, m2)
+    if sliding and not energy:
+        proj[i, 0] *= s
+        proj[i, 1] *= s
+        proj[i, 5] *= s
+    elif sliding:
+        rho = nb_energy_radius(l1[i], l2[i])
+        r, z, ok = _nb_energy_closest_point(shear, abs_m3 / rho, fsu, m3u / rho, al, s)
+        n_energy += 0 if ok else 1
+        shear_scale = _nb_safe_ratio(r, shear)
+        if not math.isfinite(shear_scale):
+            shear_scale = 0.0
+        m3_new = math.copysign(z * rho, m3)
+        # capacities at the edge of floating point (subnormal friction or sides): the
+        # radial return, which lands on the boundary by construction
+        phi = _nb_safe_ratio(z * rho, m3u) ** al + _nb_safe_ratio(r, fsu) ** 2
+        off = not abs(phi - 1.0) <= 1e-9 and m3u > 0 and fsu > 0
+        off = off or abs_m3 == 0  # pure shear: the same point, with the radial round-off
+        off = off or fsu < TINY_CAPACITY
+        if off:
+            shear_scale = s
+            m3_new = m3 * s
+        proj[i, 0] = f1 * shear_scale
+        proj[i, 1] = f2 * shear_scale
+        proj[i, 5] = m3_new
+    if detached:
+        for j in range(6):
+            proj[i, j] = 0.0
+        proj[i, 2] = fti
+
+    flags[i] = (
+        (FLAG_SHEAR_TORSION if sliding else 0)
+        | (FLAG_ROCKING_1 if rock1 else 0)
+        | (FLAG_ROCKING_2 if rock2 else 0)
+        | (FLAG_DETACHED if detached else 0)
+    )
+    if projection_only:
+        return n_radial, n_energy
+
+    # utilisation
+    u_tension = max(fn, 0.0) / fti  # ft = 0: inf in tension, NaN otherwise
+    if math.isnan(u_tension):  # ft = 0: 1 at fn = 0, 0 in compression
+        u_tension = 1.0 if fn >= 0 else 0.0
+    if detached:
+        util[i] = u_tension
+        return n_radial, n_energy
+    u_rock = abs_m1 / m1_lim if abs_m1 > 0 else 0.0
+    u_rock2 = abs_m2 / m2_lim if abs_m2 > 0 else 0.0
+    util[i] = max(max(max(u_rock, u_rock2), u_tension), u_st)
+    return n_radial, n_energy
+
+
+@kernel(parallel=True, error_model="numpy")
+def evaluate_rows(
+    act, ft, l1, l2, friction, alpha, snap1, snap2, torsion_bending_interaction,
+    projection_only, energy, proj, flags, util,
+):  # fmt: skip
+    """The strength check (see :func:`~masonry_dem.constitutive.strength.check_strength`) row
+    by row, into ``proj`` (m, 6), ``flags`` (m,) uint8 and (unless ``projection_only``)
+    ``util`` (m,). Returns the numbers of rows whose radial factor and whose energy
+    projection did not converge."""
+    n_radial = 0
+    n_energy = 0
+    for i in numba.prange(act.shape[0]):
+        # one compiled row function: the parallel loop stays small to compile
+        radial_failed, energy_failed = nb_evaluate_row(
+            i, act, ft, l1, l2, friction, alpha, snap1, snap2, torsion_bending_interaction,
+            projection_only, energy, proj, flags, util,
+        )  # fmt: skip
+        n_radial += radial_failed
+        n_energy += energy_failed
+    return n_radial, n_energy

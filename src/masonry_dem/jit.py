@@ -1,0 +1,252 @@
+"""How the package compiles its numba kernels: one decorator, its disk cache, and the first run.
+
+Every compiled kernel is built by :func:`kernel`. What it adds to ``numba.njit``:
+
+* **A serial and a parallel variant.** A kernel with ``numba.prange`` loops is compiled without
+  ``parallel`` for walls of fewer than :data:`masonry_dem._threads.SERIAL_BELOW` interfaces
+  (which run on one thread anyway) and with it for larger ones, each variant on its first use.
+  Numba's parallel pass doubles the compile time, so a small wall never pays for it. Each row
+  of a loop is worked out alone, so both variants give the same bits.
+* **A disk cache keyed on every kernel file.** Numba renews a function's cache when the
+  function's own file changes, not when a callee's file does; the kernels of the interface law
+  call the strength check's row functions in another file, so the key of every kernel here also
+  holds a hash of :data:`KERNEL_SOURCES`.
+* **Word before the wait.** :func:`compile_pending` says which kernels a run will compile (their
+  cache is empty or stale) and :func:`announce_compilation` logs "compiling kernels, once per
+  machine, about N s" before it happens; ``masonry-dem warmup`` compiles them ahead.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import logging
+import types
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Final
+
+import numba
+from numba.core.caching import FunctionCache
+
+from masonry_dem._threads import SERIAL_BELOW
+
+__all__ = [
+    "COMPILE_SECONDS",
+    "KERNEL_SOURCES",
+    "Kernel",
+    "announce_compilation",
+    "compile_estimate",
+    "compile_pending",
+    "kernel",
+    "kernels",
+    "mark_announced",
+]
+
+logger = logging.getLogger(__name__)
+
+_PACKAGE = Path(__file__).resolve().parent
+
+#: the files whose kernels call each other: a change in any renews the cache of all
+KERNEL_SOURCES: Final[tuple[Path, ...]] = (
+    _PACKAGE / "jit.py",
+    _PACKAGE / "constitutive" / "check_kernels.py",
+    _PACKAGE / "constitutive" / "law_kernels.py",
+)
+
+#: seconds to compile the kernels of one analysis on an idle core (2-core AMD EPYC, see
+#: docs/first_run.md): serial variants (every wall) and the parallel ones (walls of
+#: SERIAL_BELOW interfaces or more) on top
+COMPILE_SECONDS: Final[dict[str, float]] = {"serial": 11.0, "parallel": 12.0}
+
+
+#: wall time of the compilation on two cores side by side, as a share of one core's
+SIDE_BY_SIDE: Final[float] = 0.6
+
+
+def _sources_hash() -> str:
+    digest = hashlib.sha256()
+    for path in KERNEL_SOURCES:
+        digest.update(path.read_bytes())
+    return digest.hexdigest()
+
+
+_SOURCES_HASH: Final[str] = _sources_hash()
+
+
+class _KernelCache(FunctionCache):  # type: ignore[misc]
+    """numba's function cache with the hash of every kernel file in its key."""
+
+    def _index_key(self, sig: Any, codegen: Any) -> tuple[Any, ...]:
+        return (*super()._index_key(sig, codegen), _SOURCES_HASH)
+
+
+def _twin(py_func: Callable[..., Any], suffix: str) -> Callable[..., Any]:
+    """A copy of ``py_func`` under another qualified name: its own cache files on disk."""
+    twin = types.FunctionType(
+        py_func.__code__,
+        py_func.__globals__,
+        py_func.__name__,
+        py_func.__defaults__,
+        py_func.__closure__,
+    )
+    twin.__qualname__ = py_func.__qualname__ + suffix
+    twin.__doc__ = py_func.__doc__
+    return twin
+
+
+def _dispatcher(py_func: Callable[..., Any], options: dict[str, Any]) -> Any:
+    disp = numba.njit(**options)(py_func)
+    disp._cache = _KernelCache(py_func)  # numba's own enable_caching(), with our key
+    return disp
+
+
+@dataclass(frozen=True)
+class Kernel:
+    """A compiled kernel: its serial variant, and its parallel one when it has ``prange``
+    loops. Call :meth:`for_rows` with the number of rows (interfaces) to pick. ``eager``
+    kernels are compiled before an analysis (:mod:`masonry_dem.solvers.warmup`); the others,
+    which most analyses never call, on their first call, announced then."""
+
+    name: str
+    serial: Any  # numba dispatcher
+    parallel: Any | None
+    eager: bool = True
+    _announced: set[str] = field(default_factory=set, compare=False, repr=False)
+
+    def for_rows(self, rows: int) -> Any:
+        """The variant for a loop over ``rows`` rows: parallel from ``SERIAL_BELOW`` rows."""
+        variant = "serial"
+        disp = self.serial
+        if self.parallel is not None and rows >= parallel_from():
+            variant = "parallel"
+            disp = self.parallel
+        if variant not in self._announced:  # once per process and variant
+            self._announced.add(variant)
+            if not _cached(disp):
+                seconds = COMPILE_SECONDS[variant] / max(len(_KERNELS), 1)
+                logger.warning(
+                    "compiling kernel %s (%s), once per machine, about %.0f s",
+                    self.name,
+                    variant,
+                    max(seconds, 1.0),
+                )
+        return disp
+
+    @property
+    def variants(self) -> tuple[tuple[str, Any], ...]:
+        out: tuple[tuple[str, Any], ...] = (("serial", self.serial),)
+        if self.parallel is not None:
+            out += (("parallel", self.parallel),)
+        return out
+
+
+_KERNELS: list[Kernel] = []
+_PARALLEL_FROM: list[int] = [SERIAL_BELOW]
+
+
+def parallel_from() -> int:
+    """Rows from which the parallel variants run (``SERIAL_BELOW``; the warm-up lowers it)."""
+    return _PARALLEL_FROM[0]
+
+
+def set_parallel_from(rows: int) -> int:
+    """Set :func:`parallel_from`; returns the previous value (for the warm-up)."""
+    before = _PARALLEL_FROM[0]
+    _PARALLEL_FROM[0] = int(rows)
+    return before
+
+
+def kernel(
+    *, parallel: bool = False, eager: bool = True, **options: Any
+) -> Callable[[Callable[..., Any]], Kernel]:
+    """Decorator: a :class:`Kernel` of ``py_func`` compiled with ``numba.njit(**options)`` on
+    first use and cached on disk; ``parallel=True`` adds the parallel variant; ``eager=False``
+    leaves it out of the compilation before an analysis."""
+
+    def wrap(py_func: Callable[..., Any]) -> Kernel:
+        serial = _dispatcher(py_func, options)
+        par = None
+        if parallel:
+            par = _dispatcher(_twin(py_func, "_parallel"), {**options, "parallel": True})
+        k = Kernel(py_func.__name__, serial, par, eager)
+        _KERNELS.append(k)
+        return k
+
+    return wrap
+
+
+def mark_announced(parallel: bool) -> None:
+    """The kernels' compilation is announced already (by the warm-up): their first calls
+    stay quiet (the serial variants, and the parallel ones with ``parallel``)."""
+    for k in kernels():
+        k._announced.add("parallel" if parallel else "serial")
+
+
+def kernels() -> tuple[Kernel, ...]:
+    """Every kernel of the package (their modules imported)."""
+    import masonry_dem.constitutive.law_kernels  # noqa: F401
+    import masonry_dem.solvers.static.problem  # noqa: F401
+
+    return tuple(_KERNELS)
+
+
+def _cached(disp: Any) -> bool:
+    """Whether ``disp`` has compiled code in this process, or on disk an entry for this
+    machine (numba's target) and these kernel sources (any signature: a run uses one per
+    kernel)."""
+    if disp.signatures:
+        return True
+    try:
+        index = disp._cache._cache_file._load_index()  # {} when stale
+        magic = disp.targetctx.codegen().magic_tuple()
+        return any(key[1] == magic and key[-1] == _SOURCES_HASH for key in index)
+    except Exception:  # pragma: no cover - numba's cache layout changed: assume compiled
+        logger.debug("cannot read the numba cache index of %s", disp, exc_info=True)
+        return True
+
+
+def _pending(parallel: bool, lazy: bool = False) -> dict[str, list[str]]:
+    """Names of the eager kernels (and the ``lazy`` ones) not in the cache, by variant."""
+    out: dict[str, list[str]] = {"serial": [], "parallel": []}
+    for k in kernels():
+        if not (k.eager or lazy):
+            continue
+        for variant, disp in k.variants:
+            if (parallel or variant == "serial") and not _cached(disp):
+                out[variant].append(k.name)
+    return out
+
+
+def compile_pending(parallel: bool, lazy: bool = False) -> list[str]:
+    """Names of the kernels an analysis would compile first: serial variants, and the
+    parallel ones when ``parallel`` (a wall of ``SERIAL_BELOW`` interfaces or more); with
+    ``lazy`` also those compiled on their first call."""
+    pending = _pending(parallel, lazy)
+    return [f"{name} ({variant})" for variant, names in pending.items() for name in names]
+
+
+def compile_estimate(parallel: bool, lazy: bool = False) -> float:
+    """Seconds the pending kernels take to compile: :data:`COMPILE_SECONDS` (the eager
+    kernels' all together) pro rata of the kernels pending."""
+    eager = [k for k in kernels() if k.eager]
+    total = {"serial": len(eager), "parallel": sum(k.parallel is not None for k in eager)}
+    pending = _pending(parallel, lazy)
+    return sum(COMPILE_SECONDS[v] * len(names) / max(total[v], 1) for v, names in pending.items())
+
+
+def announce_compilation(interfaces: int, processes: int = 1) -> float:
+    """Log "compiling kernels, once per machine, about N s" if an analysis of a model with
+    ``interfaces`` interfaces will compile kernels (on ``processes`` cores: the two groups of
+    :mod:`masonry_dem.solvers.warmup` side by side); returns N (0 when all are cached)."""
+    parallel = interfaces >= parallel_from()
+    pending = compile_pending(parallel)
+    if not pending:
+        return 0.0
+    seconds = compile_estimate(parallel)
+    if processes >= 2:
+        seconds *= SIDE_BY_SIDE
+    logger.warning(
+        "compiling kernels, once per machine, about %.0f s (%s)", seconds, ", ".join(pending)
+    )
+    return seconds
