@@ -198,11 +198,11 @@ def _carried_by_corners(actions: np.ndarray, l1: float, l2: float, mu: float) ->
     import clarabel
     from scipy import sparse
 
-    from masonry_dem.solvers.limit_analysis import _resultant_columns, grid_points
+    from masonry_dem.solvers.limit_analysis.interface import grid_points, resultant_columns
 
     y, _ = grid_points(np.array([l1]), np.array([l2]), 2)
     eye = np.array([[0.0, 0.0, -1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
-    R = _resultant_columns(np.repeat(y[0], 3, axis=0), np.tile(eye, (4, 1)), np.zeros(12, int), 1)
+    R = resultant_columns(np.repeat(y[0], 3, axis=0), np.tile(eye, (4, 1)), np.zeros(12, int), 1)
     p = np.arange(4)
     idx = np.concatenate([3 * p, 3 * p + 1, 3 * p + 2])
     vals = np.concatenate([np.full(4, -mu), -np.ones(8)])
