@@ -52,7 +52,8 @@ degenerate LP vertices), the relaxation is halved, down to 1/64, a damping that 
 frozen actions settle; the iteration reports ``failed`` with the last lambdas when ``max_iterations`` pass without it.
 """
 
-from .analysis import BACKENDS, limit_analysis
+from .analysis import BACKENDS, dem_upper_bound, limit_analysis
+from .dem_domain import dem_friction_scale, model_friction_scale
 from .formulation import LAMBDA_CAP
 from .interface import (
     ASSOCIATIVE_GRID,
@@ -72,9 +73,12 @@ __all__ = [
     "PYRAMIDS",
     "STATUSES",
     "LimitAnalysisResult",
+    "dem_friction_scale",
+    "dem_upper_bound",
     "grid_points",
     "limit_analysis",
     "lobatto_rule",
     "mechanism_violation",
+    "model_friction_scale",
     "torsion_quadrature",
 ]

@@ -14,6 +14,7 @@ import numpy as np
 from masonry_dem.model import Model
 
 from .backends import solve_associative
+from .dem_domain import model_friction_scale
 from .formulation import Problem
 from .interface import ASSOCIATIVE_GRID, NON_ASSOCIATIVE_GRID, lobatto_rule, pyramid_edges
 from .non_associative import non_associative
@@ -36,6 +37,7 @@ def limit_analysis(
     tolerance: float = 1e-3,
     max_iterations: int = 50,
     relaxation: float = 0.5,
+    friction_scale: float = 1.0,
 ) -> LimitAnalysisResult:
     """The collapse multiplier of ``model``'s live load over its dead load, and the mechanism.
 
@@ -55,6 +57,10 @@ def limit_analysis(
         tolerance, max_iterations, relaxation: the non-associative iteration (the last
             three lambdas within ``tolerance``, relative; the starting under-relaxation of
             the frozen actions between solves, halved where lambda turns back).
+        friction_scale: a factor (>= 1) on every joint's friction. ``dem_friction_scale``
+            of the model's alpha makes the LA domain contain the DEM's, so the associative
+            multiplier is an upper bound of the pushover's by Radenkovic's theorem (the
+            result's ``bound`` is then "upper"; ``dem_upper_bound`` does this).
 
     Returns a :class:`LimitAnalysisResult`; solver trouble is a status, never an exception
     (bad arguments raise ValueError naming the argument).
@@ -84,6 +90,11 @@ def limit_analysis(
         raise ValueError(f"max_iterations must be an integer >= 1, got {max_iterations!r}")
     if not (isinstance(relaxation, (int, float)) and 0 < relaxation <= 1):
         raise ValueError(f"relaxation must be in (0, 1], got {relaxation!r}")
+    if not (isinstance(friction_scale, (int, float)) and 1 <= friction_scale < np.inf):
+        raise ValueError(f"friction_scale must be a number >= 1, got {friction_scale!r}")
+    covers = friction_scale >= model_friction_scale(model) * (1 - 1e-9)
+    if friction_scale != 1:
+        model = replace(model, friction=model.friction * float(friction_scale))
     method = "associative" if associative else "non-associative"
     n, m = model.blocks.count, model.interfaces.count
 
@@ -100,6 +111,8 @@ def limit_analysis(
             seconds=time.perf_counter() - t0,
             cone=str(cone),
             friction_sides=int(friction_sides) if backend == "highs" else 0,
+            friction_scale=float(friction_scale),
+            covers_dem=bool(covers),
             **kw,
         )
         log.info("%s limit analysis of %s: %s (%s)", method, model.name, status, reason)
@@ -129,3 +142,13 @@ def limit_analysis(
     return non_associative(
         problem, grid, dirs, tolerance, int(max_iterations), float(relaxation), result
     )
+
+
+def dem_upper_bound(model: Model, **options: Any) -> LimitAnalysisResult:
+    """The associative multiplier with the exact cone (Clarabel) and the friction enlarged by
+    ``dem_friction_scale`` of the model's alpha: its domain contains the DEM's, so the
+    multiplier is an upper bound of the pushover's by Radenkovic's theorem
+    (``dem_domain``). The bound of ``masonry-dem run``'s certificate."""
+    options.setdefault("backend", "clarabel")
+    options.setdefault("friction_scale", model_friction_scale(model))
+    return limit_analysis(model, associative=True, **options)

@@ -10,6 +10,7 @@ import numpy as np
 from scipy import sparse
 
 from .formulation import Problem, Solution, associative_columns, lambda_cap, objective_scale
+from .kinematic import solve_kinematic_clarabel
 
 
 def solve_highs(
@@ -149,43 +150,46 @@ def solve_clarabel(
     return Solution("optimal", float(x[k]), x[:k], -z, f"Clarabel: {word}")
 
 
-def dead_load_stands_clarabel(
-    problem: Problem, E: sparse.csc_matrix, solve_args: tuple, capacity: np.ndarray | None
-) -> Solution | None:
-    """None if the dead load alone (lambda = 0) is in equilibrium, else why not (Clarabel has
-    no warm start: a feasibility problem of its own)."""
-    n_points, mu, n_normal = solve_args
-    sol = solve_clarabel(
-        E, problem.live, problem.rhs, n_points, mu, capacity, n_normal, fix_lambda=True
-    )
-    if sol.status == "optimal":
-        return None
-    if sol.status == "infeasible":
-        return Solution("dead load", detail=f"{sol.detail} at lambda = 0")
-    return Solution("error", detail=f"{sol.detail} at lambda = 0")
-
-
 def solve_associative(
     problem: Problem, grid: int, dirs: np.ndarray | None
 ) -> tuple[Solution, tuple[int, int]]:
     """The associative problem on an n x n grid: HiGHS on the pyramid ``dirs``, or Clarabel on
-    the exact cone (``dirs`` None, after a feasibility solve at lambda = 0)."""
+    the exact cone (``dirs`` None) in its kinematic form (``kinematic``)."""
     model = problem.model
     R, K = associative_columns(model, grid, dirs)
-    E = (problem.H_T @ R).tocsc()
-    size = (E.shape[1] + 1, E.shape[0])
     if dirs is not None:
+        E = (problem.H_T @ R).tocsc()
+        size = (E.shape[1] + 1, E.shape[0])
         k = E.shape[1]
         sol = solve_highs(E, problem.live, problem.rhs, np.zeros(k), np.full(k, np.inf))
-    else:
-        n_points = model.interfaces.count * K
-        mu = np.repeat(model.friction, K)
-        dead = dead_load_stands_clarabel(problem, E, (n_points, mu, 0), None)
-        if dead is not None:
-            return dead, size
-        sol = solve_clarabel(E, problem.live, problem.rhs, n_points, mu, None)
-        if sol.status == "infeasible":  # stood at lambda = 0, so not expected
-            sol = Solution("error", detail=sol.detail)
+    else:  # velocities of the free DOFs; the live work row and 3 cone rows per point
+        size = (problem.H_T.shape[0], 1 + R.shape[1])
+        sol, _, _ = solve_kinematic_clarabel(problem, grid)
+        if sol.status == "error":
+            sol = _static_clarabel(problem, R, K, sol.detail)
     if sol.status == "optimal":
         sol.info_actions = (problem.a0 + R @ sol.x).reshape(-1, 6)  # type: ignore[attr-defined]
     return sol, size
+
+
+def _static_clarabel(problem: Problem, R, K: int, kinematic_detail: str) -> Solution:
+    """The static form, when the kinematic one stalls: on walls with no mechanism (an
+    infeasible kinematic problem) Clarabel sometimes stops with "InsufficientProgress"
+    instead of a certificate (S5, S6 of the validation set); the static form is bounded by
+    the lambda cap, which it reaches there ("no collapse"). A feasibility solve at
+    lambda = 0 first (Clarabel has no warm start)."""
+    E = (problem.H_T @ R).tocsc()
+    n_points = R.shape[1] // 3
+    mu = np.repeat(problem.model.friction, K)
+    args = (E, problem.live, problem.rhs, n_points, mu, None)
+    first = solve_clarabel(*args, fix_lambda=True)
+    note = f"{kinematic_detail}; static form: "
+    if first.status == "infeasible":
+        return Solution("dead load", detail=f"{note}{first.detail} at lambda = 0")
+    if first.status != "optimal":
+        return Solution("error", detail=f"{note}{first.detail} at lambda = 0")
+    sol = solve_clarabel(*args)
+    sol.detail = note + sol.detail
+    if sol.status == "infeasible":  # stood at lambda = 0, so not expected
+        sol.status = "error"
+    return sol

@@ -46,12 +46,20 @@ class LimitAnalysisResult:
     variables: int = 0
     constraints: int = 0
     info: dict[str, Any] = field(default_factory=dict)
+    friction_scale: float = 1.0
+    covers_dem: bool = False  # friction_scale >= kappa(alpha): the LA domain holds the DEM's
 
     @property
     def bound(self) -> str:
         """What the multiplier is to the DEM's: an "upper" bound (associative, with a cone
-        that contains the DEM's) or an "estimate" (non-associative, or an inscribed cone)."""
-        upper = self.method == "associative" and self.cone in ("circumscribed", "exact")
+        and a friction whose domain contains the DEM's: ``friction_scale`` >= kappa(alpha),
+        ``dem_domain``) or an "estimate" (non-associative, an inscribed cone, or a DEM
+        alpha the friction does not cover)."""
+        upper = (
+            self.method == "associative"
+            and self.cone in ("circumscribed", "exact")
+            and self.covers_dem
+        )
         return "upper" if upper else "estimate"
 
     def summary(self) -> dict[str, Any]:
@@ -66,6 +74,7 @@ class LimitAnalysisResult:
             "backend": self.backend,
             "cone": self.cone,
             "friction_sides": self.friction_sides,
+            "friction_scale": self.friction_scale,
             "iterations": self.iterations,
             "load_factors": [float(x) for x in self.load_factors],
             "variables": self.variables,
