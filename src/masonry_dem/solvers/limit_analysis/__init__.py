@@ -15,9 +15,18 @@ to the rows of the compatibility matrix H of Eqs. (A1)-(A3); equilibrium of the 
 Cones. ``backend="highs"``: a pyramid of ``friction_sides`` faces, in generator form (the
 compression is a non-negative combination of the pyramid's edges, ``(mu rho e_d, -1)``), so
 the LP has only equality rows and sign bounds; ``"circumscribed"`` (default) contains the
-circular cone of the DEM, so the DEM's strength domain lies inside the LA's and Radenkovic's
-theorem makes the associative multiplier an upper bound of the pushover's;
-``"inscribed"`` lies inside it. ``backend="clarabel"``: the exact circular cone (SOCP).
+circular cone of the DEM; ``"inscribed"`` lies inside it. ``backend="clarabel"``: the exact
+circular cone, an SOCP solved in its kinematic form (``kinematic``).
+
+The bound. The DEM's domain lies inside the LA's, and Radenkovic's theorem makes the
+associative multiplier an upper bound of the pushover's, once the friction is enlarged by
+kappa(alpha) (``dem_domain``: 1 for alpha = 1, 1.0655 for the default 1.5):
+:func:`dem_upper_bound`.
+
+The package, by role: ``interface`` (grid, pyramid, actions of point forces),
+``formulation`` (equilibrium rows, units, lambda cap), ``backends`` (HiGHS; static Clarabel),
+``kinematic`` (the kinematic SOCP), ``dem_domain`` (kappa), ``non_associative``,
+``result`` (the result and the mechanism check), ``analysis`` (the entry points).
 
 Why the associative answer needs only the corners. The kinematic (dual) problem asks, at
 each point y of the grid, ``v_n(y) >= mu max_d e_d . v_t(y)`` (or ``>= mu |v_t(y)|``), where
