@@ -36,7 +36,7 @@ holds at the four corners it holds on the whole rectangle. The tensile part ente
 objective only through the resultant ``ft``. Hence any grid that contains the corners (and
 the continuum interface itself) gives the same associative multiplier as the four corners:
 the default ``grid`` of the associative problem is 2, and a finer grid only costs time
-(``tests/solvers/test_limit_analysis.py`` checks 2 against 6). The same argument shows why
+(``tests/solvers/test_limit_analysis.py`` checks 2 against 4). The same argument shows why
 four corner contacts carry a torsion of ``mu N R`` (R the half diagonal), 1.7 to 1.9 times
 the ``cT mu N`` of uniform pressure: the rigid-plastic interface may put its compression in
 the corners.
