@@ -161,6 +161,15 @@ def test_peer_wall_matches_the_associative_lp_and_is_grid_independent():
         dict(backend="clarabel"),
     ):
         assert _lam(limit_analysis(model, **kw)) == pytest.approx(corners, rel=1e-6), kw
+    # the kinematic SOCP's forces (the cones' duals) are in equilibrium and press
+    from masonry_dem.assembly.compatibility import compatibility_matrix
+
+    cone = limit_analysis(model, backend="clarabel")
+    H = compatibility_matrix(model.blocks, model.interfaces)
+    external = model.dead.reshape(-1) + cone.load_factor * model.live.reshape(-1)
+    residual = (H.T @ cone.interface_actions.reshape(-1) - external)[model.free]
+    assert np.abs(residual).max() < 1e-6 * np.abs(model.dead).max()
+    assert cone.interface_actions[:, 2].max() < 1e-6 * np.abs(model.dead).max()
 
 
 def test_statuses_not_exceptions():
