@@ -5,6 +5,8 @@
     python benchmarks/bench_limit_analysis.py --cases [NAMES]   # 18 cases: LA (assoc., HiGHS
                                                                # and Clarabel), non-assoc., pushover
     python benchmarks/bench_limit_analysis.py --ladder 100 1000 10000   # blocks: LA vs pushover
+    python benchmarks/bench_limit_analysis.py --speed 100 1000 10000    # build vs solve, the
+                                                               # formulations and solvers
 
 Times are wall-clock seconds of one run on this machine; compare the ratios printed in one
 run, not figures from different runs.
@@ -125,6 +127,77 @@ def ladder(sizes: list[int], pushover_up_to: int, highs: bool = True) -> None:
         )
 
 
+def _ladder_model(target: int):
+    from masonry_dem.geometry.builders import add_base, running_bond_wall
+    from masonry_dem.model import InterfaceMaterial, Model, SelfWeight, Support, WeightProportional
+
+    side = max(2, round(math.sqrt(target)))
+    wall = running_bond_wall(side, side, a=0.2, b=0.4, s=0.2, unit_weight=2000 * 9.81)
+    blocks, base = add_base(wall)
+    return Model.build(
+        blocks,
+        InterfaceMaterial(kn=1e9, kt=4e8, friction=0.6),
+        [Support([base])],
+        [SelfWeight(), WeightProportional((1.0, 0.0, 0.0))],
+    )
+
+
+def _cpu(fn, *args, **kwargs):
+    """(result, process CPU seconds, wall seconds): on a shared machine the CPU time is the
+    figure that does not depend on the other jobs."""
+    c0, t0 = time.process_time(), time.perf_counter()
+    out = fn(*args, **kwargs)
+    return out, time.process_time() - c0, time.perf_counter() - t0
+
+
+def speed(sizes: list[int], static_up_to: int, highs_up_to: int) -> None:
+    """The ladder's walls: the time to build the problem (compatibility matrix and the cone
+    rows, vectorised) against the solve, for the kinematic SOCP (Clarabel, the default of
+    the exact cone), the static SOCP it replaced (Clarabel, objective in force units) and
+    the LP (HiGHS IPM, 4-face pyramid, exact in plane). CPU seconds of this process."""
+    from masonry_dem.solvers.limit_analysis import formulation, kinematic
+    from masonry_dem.solvers.limit_analysis.backends import solve_clarabel, solve_highs
+
+    print(
+        f"{'blocks':>7s} {'interf':>7s} {'build':>7s} {'kin.SOCP':>9s} {'cpu s':>7s} "
+        f"{'wall s':>7s} {'stat.SOCP':>9s} {'cpu s':>7s} {'LP HiGHS':>9s} {'cpu s':>7s}"
+    )
+    for target in sizes:
+        model = _ladder_model(target)
+
+        def build(model=model):
+            problem = formulation.Problem.of(model)
+            return problem, kinematic.corner_velocity_rows(problem, 2)
+
+        (problem, _), t_build, _ = _cpu(build)
+        (sol, _, _), t_kin, w_kin = _cpu(kinematic.solve_kinematic_clarabel, problem, 2)
+        lam_s, t_s = None, float("nan")
+        if model.blocks.count <= static_up_to:
+            R, K = formulation.associative_columns(model, 2, None)
+            E = (problem.H_T @ R).tocsc()
+            mu = np.repeat(model.friction, K)
+            st, t_s, _ = _cpu(
+                solve_clarabel, E, problem.live, problem.rhs, E.shape[1] // 3, mu, None
+            )
+            lam_s = st.lam
+        lam_h, t_h = None, float("nan")
+        if model.blocks.count <= highs_up_to:
+            dirs = np.array([[1.0, 1.0], [-1.0, 1.0], [-1.0, -1.0], [1.0, -1.0]])
+            R, _ = formulation.associative_columns(model, 2, dirs)
+            E = (problem.H_T @ R).tocsc()
+            k = E.shape[1]
+            lp, t_h, _ = _cpu(
+                solve_highs, E, problem.live, problem.rhs, np.zeros(k), np.full(k, np.inf)
+            )
+            lam_h = lp.lam
+        print(
+            f"{model.blocks.count:7d} {model.interfaces.count:7d} {t_build:7.2f} "
+            f"{_fmt(sol.lam):>9s} {t_kin:7.2f} {w_kin:7.2f} {_fmt(lam_s):>9s} {t_s:7.2f} "
+            f"{_fmt(lam_h):>9s} {t_h:7.2f}",
+            flush=True,
+        )
+
+
 def main(argv: list[str] | None = None) -> None:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
     p.add_argument("--grid-study", action="store_true")
@@ -134,6 +207,9 @@ def main(argv: list[str] | None = None) -> None:
         "--nonassoc-grid", type=int, default=None, help="grid of the non-associative runs"
     )
     p.add_argument("--no-highs", action="store_true", help="ladder: Clarabel only")
+    p.add_argument("--speed", nargs="*", type=int, default=None, metavar="BLOCKS")
+    p.add_argument("--static-up-to", type=int, default=1100, help="largest static SOCP (speed)")
+    p.add_argument("--highs-up-to", type=int, default=320, help="largest LP (speed)")
     p.add_argument("--pushover-up-to", type=int, default=2000, help="largest ladder pushover")
     args = p.parse_args(argv)
     if args.grid_study:
@@ -142,7 +218,14 @@ def main(argv: list[str] | None = None) -> None:
         cases(args.cases, args.nonassoc_grid)
     if args.ladder is not None:
         ladder(args.ladder or [100, 1000, 10000], args.pushover_up_to, not args.no_highs)
-    if not (args.grid_study or args.cases is not None or args.ladder is not None):
+    if args.speed is not None:
+        speed(args.speed or [100, 1000, 10000], args.static_up_to, args.highs_up_to)
+    if not (
+        args.grid_study
+        or args.cases is not None
+        or args.ladder is not None
+        or args.speed is not None
+    ):
         p.print_help()
 
 

@@ -25,8 +25,13 @@ def test_limit_command_writes_summary_and_mechanism(tmp_path):
     pushover_keys = {"status", "reason", "steps", "lambda", "lambda_bracket", "iterations"}
     pushover_keys |= {"factorizations", "seconds", "blocks", "interfaces", "name", "case"}
     assert pushover_keys <= set(summary)
-    assert summary["method"] == "associative" and summary["bound"] == "upper"
+    # the default alpha 1.5 is covered only with the friction enlarged by kappa (--dem-bound)
+    assert summary["method"] == "associative" and summary["bound"] == "estimate"
     assert summary["lambda"] == pytest.approx(0.5, rel=1e-6)
+    out_b = tmp_path / "la_bound"
+    assert main(["limit", str(case), "--out", str(out_b), "--no-render", "--dem-bound"]) == 0
+    bound = json.loads((out_b / "summary.json").read_text())
+    assert bound["bound"] == "upper" and bound["lambda"] == pytest.approx(0.5, rel=1e-6)
     mesh = meshio.read(out / "mechanism_blocks.vtu")
     assert np.abs(mesh.point_data["displacement"]).max() > 0
     assert (out / "mechanism_interfaces.vtu").is_file()

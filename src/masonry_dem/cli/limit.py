@@ -18,8 +18,10 @@ def add_parser(subparsers) -> None:
         help="limit analysis of a case file: collapse multiplier, mechanism VTU/PNG, summary.json",
         description=(
             "Rigid-block limit analysis of a case file (default: the bundled wall). The "
-            "associative multiplier is an upper bound of the pushover's; the non-associative "
-            "one (zero dilatancy) an estimate of it."
+            "associative multiplier with --dem-bound is an upper bound of the pushover's "
+            "(the friction enlarged by kappa(alpha) so that the DEM's joints fit); the "
+            "classical one is that bound for alpha = 1; the non-associative one (zero "
+            "dilatancy) an estimate."
         ),
     )
     p.add_argument("case", nargs="?", help="TOML case file (see README, 'Case files')")
@@ -30,6 +32,12 @@ def add_parser(subparsers) -> None:
     kind.add_argument("--non-associative", dest="associative", action="store_false")
     p.add_argument("--grid", type=int, default=None, help="contact points per interface side")
     p.add_argument("--backend", choices=("highs", "clarabel"), default=None)
+    p.add_argument(
+        "--dem-bound",
+        action="store_true",
+        help="enlarge the friction by kappa(alpha) (1.0655 for alpha 1.5): a theorem-backed "
+        "upper bound of the pushover's multiplier (docs/limit_analysis.md)",
+    )
     p.add_argument("--out", default="results/limit", help="results folder (default: %(default)s)")
     p.add_argument("--no-render", action="store_true", help="skip the PNG of the mechanism")
     p.add_argument(
@@ -83,6 +91,10 @@ def limit_command(args: argparse.Namespace) -> int:
         options["grid"] = args.grid
     if args.backend is not None:
         options["backend"] = args.backend
+    if args.dem_bound:
+        from masonry_dem.solvers.limit_analysis import model_friction_scale
+
+        options["friction_scale"] = model_friction_scale(case.model)
     out = Path(args.out)
     summary = run_limit(case, out, options, render=not args.no_render, overwrite=args.overwrite)
     print(

@@ -83,11 +83,11 @@ class LazyBound:
 def limit_analysis_bound(model) -> dict:
     """The associative limit-analysis multiplier of the model, an upper bound of the
     pushover's (``limit_analysis_bound``: None unless the LA finds a collapse), and its
-    status and time. With the exact cone (Clarabel): the tightest bound, and on the
-    validation walls 7-77 times faster than the LP (docs/limit_analysis.md)."""
-    from masonry_dem.solvers.limit_analysis import limit_analysis
+    status and time: the exact cone (Clarabel) with the friction enlarged by kappa(alpha),
+    whose domain contains the DEM's (``solvers.limit_analysis.dem_upper_bound``)."""
+    from masonry_dem.solvers.limit_analysis import dem_upper_bound
 
-    la = limit_analysis(model, backend="clarabel")
+    la = dem_upper_bound(model)
     return {
         "limit_analysis_bound": la.load_factor if la.status == "collapse" else None,
         "limit_analysis_status": la.status,

@@ -1,0 +1,93 @@
+"""Rigid-block limit analysis of a :class:`~masonry_dem.model.Model`: the collapse multiplier
+and mechanism in one convex solve (associative), or by a sequence of them (non-associative).
+
+Statics. Each interface carries point forces at a grid of ``n x n`` contact points (the
+Gauss-Lobatto points of the rectangle, corners included). Point k carries
+``(t1, t2, n) = (0, 0, ft_k) + compression`` where ``ft_k`` is its share of the interface's
+tensile force (tensile strength x area, Lobatto weights) and the compression lies in the
+friction cone ``|t| <= mu c``, ``n = ft_k - c``, ``c >= 0``: no tension beyond ``ft``, Coulomb
+friction with the cohesion ``mu ft`` of the DEM's law (``fsu = mu (ft - fn)``), and rocking and
+torsion that follow the interface's real area. The point forces reduce to the interface
+actions ``[f1, f2, fn, m1, m2, m3]`` about its centre (``m = y x p``), which are work-conjugate
+to the rows of the compatibility matrix H of Eqs. (A1)-(A3); equilibrium of the free DOFs is
+``H^T a = F_dead + lambda F_live``.
+
+Cones. ``backend="highs"``: a pyramid of ``friction_sides`` faces, in generator form (the
+compression is a non-negative combination of the pyramid's edges, ``(mu rho e_d, -1)``), so
+the LP has only equality rows and sign bounds; ``"circumscribed"`` (default) contains the
+circular cone of the DEM; ``"inscribed"`` lies inside it. ``backend="clarabel"``: the exact
+circular cone, an SOCP solved in its kinematic form (``kinematic``).
+
+The bound. The DEM's domain lies inside the LA's, and Radenkovic's theorem makes the
+associative multiplier an upper bound of the pushover's, once the friction is enlarged by
+kappa(alpha) (``dem_domain``: 1 for alpha = 1, 1.0655 for the default 1.5):
+:func:`dem_upper_bound`.
+
+The package, by role: ``interface`` (grid, pyramid, actions of point forces),
+``formulation`` (equilibrium rows, units, lambda cap), ``backends`` (HiGHS; static Clarabel),
+``kinematic`` (the kinematic SOCP), ``dem_domain`` (kappa), ``non_associative``,
+``result`` (the result and the mechanism check), ``analysis`` (the entry points).
+
+Why the associative answer needs only the corners. The kinematic (dual) problem asks, at
+each point y of the grid, ``v_n(y) >= mu max_d e_d . v_t(y)`` (or ``>= mu |v_t(y)|``), where
+the relative velocity v(y) is affine in y (a rigid relative motion). The right side is
+convex in y, the left side affine, so the set of points where it holds is convex: if it
+holds at the four corners it holds on the whole rectangle. The tensile part enters the
+objective only through the resultant ``ft``. Hence any grid that contains the corners (and
+the continuum interface itself) gives the same associative multiplier as the four corners:
+the default ``grid`` of the associative problem is 2, and a finer grid only costs time
+(``tests/solvers/test_limit_analysis.py`` checks 2 against 4). The same argument shows why
+four corner contacts carry a torsion of ``mu N R`` (R the half diagonal), 1.7 to 1.9 times
+the ``cT mu N`` of uniform pressure: the rigid-plastic interface may put its compression in
+the corners.
+
+Non-associative (zero dilatancy). The scheme of Gilbert, Casapulla & Ahmed (2006), "Limit
+analysis of masonry block structures with non-associative frictional joints using linear
+programming", Computers & Structures 84, 873-887: the friction capacity of each interface
+is frozen at the normal actions of the previous solve (a cohesive, Tresca-like capacity,
+which sliding does not dilate), the LP is solved again, and the capacities are updated
+(under-relaxed) until lambda and the normal actions settle. The frozen capacity is spread
+as the DEM spreads it (Figure 10): a uniform compression ``ft - fn`` on the reduced rectangle
+``l1 - 2|m2|/(ft - fn)`` x ``l2 - 2|m1|/(ft - fn)`` centred on the resultant, integrated at its
+``n x n`` Lobatto points, so the frozen torsion capacity is the DEM's ``cT mu (ft - fn)`` to
+within the quadrature error (the default n is the smallest even n for which it is within
+1 % of the closed form on rectangles up to 4:1, ``benchmarks/bench_limit_analysis.py
+--grid-study``). The normal forces stay at the four corners (no tension beyond ft, free
+rocking). Convergence: none is proved (the non-associative problem is not convex and its
+solution need not be unique, and its LPs are degenerate, so the actions may jump between
+equivalent vertices); the iteration stops when its last three lambdas lie within
+``tolerance`` (relative) of each other. Where lambda turns back (it oscillates between
+degenerate LP vertices), the relaxation is halved, down to 1/64, a damping that lets the
+frozen actions settle; the iteration reports ``failed`` with the last lambdas when ``max_iterations`` pass without it.
+"""
+
+from .analysis import BACKENDS, dem_upper_bound, limit_analysis
+from .dem_domain import dem_friction_scale, model_friction_scale
+from .formulation import LAMBDA_CAP
+from .interface import (
+    ASSOCIATIVE_GRID,
+    NON_ASSOCIATIVE_GRID,
+    PYRAMIDS,
+    grid_points,
+    lobatto_rule,
+    torsion_quadrature,
+)
+from .result import STATUSES, LimitAnalysisResult, mechanism_violation
+
+__all__ = [
+    "ASSOCIATIVE_GRID",
+    "BACKENDS",
+    "LAMBDA_CAP",
+    "NON_ASSOCIATIVE_GRID",
+    "PYRAMIDS",
+    "STATUSES",
+    "LimitAnalysisResult",
+    "dem_friction_scale",
+    "dem_upper_bound",
+    "grid_points",
+    "limit_analysis",
+    "lobatto_rule",
+    "mechanism_violation",
+    "model_friction_scale",
+    "torsion_quadrature",
+]

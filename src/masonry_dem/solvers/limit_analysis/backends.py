@@ -1,0 +1,195 @@
+"""The solvers of the convex problem: HiGHS (LP, friction pyramid, scipy's ``linprog``) and
+Clarabel (SOCP, exact cone). Each returns a :class:`~.formulation.Solution` whose status is a
+word, never an exception."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from scipy import sparse
+
+from .formulation import Problem, Solution, associative_columns, lambda_cap, objective_scale
+from .kinematic import solve_kinematic_clarabel
+
+
+def solve_highs(
+    E: sparse.csc_matrix,
+    live: np.ndarray,
+    rhs: np.ndarray,
+    lower: np.ndarray,
+    upper: np.ndarray,
+    ineq: tuple[sparse.csc_matrix, np.ndarray] | None = None,
+) -> Solution:
+    """max lambda s.t. E x - lambda live = rhs, [C x <= d], lower <= x <= upper, by HiGHS's
+    interior point method (scipy's ``linprog``; the simplex methods were 2-8 times slower on
+    these degenerate LPs, benchmarks/bench_limit_analysis.py). First with lambda = 0 (is
+    there an equilibrium under the dead load?), then free."""
+    from scipy.optimize import linprog
+
+    n_eq, k = E.shape
+    A = sparse.hstack([E, sparse.csc_matrix(-live.reshape(-1, 1))], format="csc")
+    A_ub = b_ub = None
+    if ineq is not None:
+        C, d = ineq
+        A_ub = sparse.hstack([C, sparse.csc_matrix((C.shape[0], 1))], format="csc")
+        b_ub = d
+    bounds = np.column_stack([np.concatenate([lower, [0.0]]), np.concatenate([upper, [0.0]])])
+    words = {2: "infeasible", 3: "unbounded", 1: "iteration limit", 4: "numerical difficulties"}
+    c = np.zeros(k + 1)
+    res = linprog(c, A_ub, b_ub, A, rhs, bounds=bounds, method="highs-ipm")
+    if res.status == 2:
+        return Solution("dead load", detail=f"HiGHS: {res.message} (at lambda = 0)")
+    if res.status != 0:
+        return Solution(
+            "error", detail=f"HiGHS: {words.get(res.status, res.status)}: {res.message}"
+        )
+    cap = lambda_cap(live, rhs)
+    bounds[k] = (0.0, cap)
+    c[k] = -objective_scale(live)
+    res = linprog(c, A_ub, b_ub, A, rhs, bounds=bounds, method="highs-ipm")
+    if res.status == 3:
+        return Solution("unbounded", detail=f"HiGHS: {res.message}")
+    if res.status != 0:
+        return Solution(
+            "error", detail=f"HiGHS: {words.get(res.status, res.status)}: {res.message}"
+        )
+    x = np.asarray(res.x)
+    if x[k] >= cap * (1 - 1e-3):
+        return Solution("unbounded", detail=f"HiGHS: lambda reached its cap {cap:.3g}")
+    return Solution(
+        "optimal", float(x[k]), x[:k], np.asarray(res.eqlin.marginals), "HiGHS: optimal"
+    )
+
+
+def solve_clarabel(
+    E: sparse.csc_matrix,
+    live: np.ndarray,
+    rhs: np.ndarray,
+    n_points: int,
+    mu: np.ndarray,
+    capacity: np.ndarray | None,
+    n_normal: int = 0,
+    fix_lambda: bool = False,
+) -> Solution:
+    """max lambda s.t. E x - lambda live = rhs with, per point, x = (c, t1, t2):
+    ``|t| <= mu c``, ``c >= 0`` (``capacity`` None), or ``|t| <= mu capacity`` and then
+    ``n_normal`` leading columns of compressions >= 0."""
+    try:
+        import clarabel
+    except ImportError as exc:  # pragma: no cover - declared dependency
+        return Solution("error", detail=f"clarabel is not installed ({exc})")
+    n_eq, k = E.shape
+    nvar = k + 1
+    A_eq = sparse.hstack([E, sparse.csc_matrix(-live.reshape(-1, 1))], format="csc")
+    rows = [A_eq]
+    b = [rhs]
+    cones: list[Any] = [clarabel.ZeroConeT(n_eq)]
+    if capacity is None:
+        # s = (mu c, t1, t2) in SOC(3): rows -mu e_c, -e_t1, -e_t2
+        p = np.arange(n_points)
+        r = np.concatenate([3 * p, 3 * p + 1, 3 * p + 2])
+        c = np.concatenate([3 * p, 3 * p + 1, 3 * p + 2])
+        v = np.concatenate([-mu, -np.ones(n_points), -np.ones(n_points)])
+        G = sparse.csc_matrix((v, (r, c)), shape=(3 * n_points, nvar))
+        rows.append(sparse.csc_matrix((-np.ones(n_points), (p, 3 * p)), shape=(n_points, nvar)))
+        b.append(np.zeros(n_points))
+        cones.append(clarabel.NonnegativeConeT(n_points))
+        rows.append(G)
+        b.append(np.zeros(3 * n_points))
+        cones += [clarabel.SecondOrderConeT(3)] * n_points
+    else:
+        # normal compressions >= 0; per shear point s = (mu cap, t1, t2) in SOC(3)
+        if n_normal:
+            j = np.arange(n_normal)
+            rows.append(sparse.csc_matrix((-np.ones(n_normal), (j, j)), shape=(n_normal, nvar)))
+            b.append(np.zeros(n_normal))
+            cones.append(clarabel.NonnegativeConeT(n_normal))
+        p = np.arange(n_points)
+        r = np.concatenate([3 * p + 1, 3 * p + 2])
+        c = n_normal + np.concatenate([2 * p, 2 * p + 1])
+        G = sparse.csc_matrix((-np.ones(2 * n_points), (r, c)), shape=(3 * n_points, nvar))
+        bb = np.zeros(3 * n_points)
+        bb[3 * p] = mu * capacity
+        rows.append(G)
+        b.append(bb)
+        cones += [clarabel.SecondOrderConeT(3)] * n_points
+    cap = lambda_cap(live, rhs)
+    if fix_lambda:  # lambda = 0: is there an equilibrium under the dead load alone?
+        rows.insert(1, sparse.csc_matrix(([1.0], ([0], [k])), shape=(1, nvar)))
+        b.insert(1, np.zeros(1))
+        cones[0] = clarabel.ZeroConeT(n_eq + 1)
+    else:  # lambda <= cap: a bounded problem (interior point methods detect unboundedness
+        # poorly; docs/limit_analysis.md)
+        rows.append(sparse.csc_matrix(([1.0], ([0], [k])), shape=(1, nvar)))
+        b.append(np.array([cap]))
+        cones.append(clarabel.NonnegativeConeT(1))
+    A = sparse.vstack(rows, format="csc")
+    A.sort_indices()
+    q = np.zeros(nvar)
+    q[k] = 0.0 if fix_lambda else -objective_scale(live)
+    P = sparse.csc_matrix((nvar, nvar))
+    settings = clarabel.DefaultSettings()
+    settings.verbose = False
+    # qdldl, not the default faer: 4 times less CPU on the ladder's 1 041-block wall, whose
+    # KKT systems are small and sparse (docs/limit_analysis.md)
+    settings.direct_solve_method = "qdldl"
+    solver = clarabel.DefaultSolver(P, q, A, np.concatenate(b), cones, settings)
+    sol = solver.solve()
+    word = str(sol.status)
+    if "DualInfeasible" in word:
+        return Solution("unbounded", detail=f"Clarabel: {word}")
+    if "PrimalInfeasible" in word:
+        return Solution("infeasible", detail=f"Clarabel: {word}")
+    if word not in ("Solved", "AlmostSolved"):
+        return Solution("error", detail=f"Clarabel: {word}")
+    x = np.asarray(sol.x)
+    if not fix_lambda and x[k] >= cap * (1 - 1e-3):
+        return Solution("unbounded", detail=f"Clarabel: lambda reached its cap {cap:.3g}")
+    z = np.asarray(sol.z)[:n_eq]
+    return Solution("optimal", float(x[k]), x[:k], -z, f"Clarabel: {word}")
+
+
+def solve_associative(
+    problem: Problem, grid: int, dirs: np.ndarray | None
+) -> tuple[Solution, tuple[int, int]]:
+    """The associative problem on an n x n grid: HiGHS on the pyramid ``dirs``, or Clarabel on
+    the exact cone (``dirs`` None) in its kinematic form (``kinematic``)."""
+    model = problem.model
+    R, K = associative_columns(model, grid, dirs)
+    if dirs is not None:
+        E = (problem.H_T @ R).tocsc()
+        size = (E.shape[1] + 1, E.shape[0])
+        k = E.shape[1]
+        sol = solve_highs(E, problem.live, problem.rhs, np.zeros(k), np.full(k, np.inf))
+    else:  # velocities of the free DOFs; the live work row and 3 cone rows per point
+        size = (problem.H_T.shape[0], 1 + R.shape[1])
+        sol, _, _ = solve_kinematic_clarabel(problem, grid)
+        if sol.status == "error":
+            sol = _static_clarabel(problem, R, K, sol.detail)
+    if sol.status == "optimal":
+        sol.info_actions = (problem.a0 + R @ sol.x).reshape(-1, 6)  # type: ignore[attr-defined]
+    return sol, size
+
+
+def _static_clarabel(problem: Problem, R, K: int, kinematic_detail: str) -> Solution:
+    """The static form, when the kinematic one stalls: on walls with no mechanism (an
+    infeasible kinematic problem) Clarabel sometimes stops with "InsufficientProgress"
+    instead of a certificate (S5, S6 of the validation set); the static form is bounded by
+    the lambda cap, which it reaches there ("no collapse"). A feasibility solve at
+    lambda = 0 first (Clarabel has no warm start)."""
+    E = (problem.H_T @ R).tocsc()
+    n_points = R.shape[1] // 3
+    mu = np.repeat(problem.model.friction, K)
+    args = (E, problem.live, problem.rhs, n_points, mu, None)
+    first = solve_clarabel(*args, fix_lambda=True)
+    note = f"{kinematic_detail}; static form: "
+    if first.status == "infeasible":
+        return Solution("dead load", detail=f"{note}{first.detail} at lambda = 0")
+    if first.status != "optimal":
+        return Solution("error", detail=f"{note}{first.detail} at lambda = 0")
+    sol = solve_clarabel(*args)
+    sol.detail = note + sol.detail
+    if sol.status == "infeasible":  # stood at lambda = 0, so not expected
+        sol.status = "error"
+    return sol

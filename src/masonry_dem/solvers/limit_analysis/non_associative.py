@@ -1,0 +1,136 @@
+"""Non-associative (zero dilatancy) limit analysis: the iteration of Gilbert, Casapulla & Ahmed
+(2006) on frozen friction capacities."""
+
+from __future__ import annotations
+
+import logging
+
+import numpy as np
+from scipy import sparse
+
+from masonry_dem.model import Model
+
+from .backends import solve_associative, solve_clarabel, solve_highs
+from .formulation import Problem, Solution
+from .interface import ASSOCIATIVE_GRID, grid_points, lobatto_rule, resultant_columns
+from .result import LimitAnalysisResult, finish
+
+log = logging.getLogger(__name__)
+
+#: the non-associative iteration halves its relaxation each time lambda turns back, down to
+_SMALLEST_RELAXATION = 1.0 / 64
+
+
+# --------------------------------------------------------------------------- non-associative
+def frozen_layout(model: Model, actions: np.ndarray, grid: int) -> tuple[np.ndarray, np.ndarray]:
+    """Points (m, K, 2) and frozen compressions (m, K) of the DEM's reading of the
+    actions: ``ft - fn`` spread uniformly over the reduced rectangle centred on the
+    resultant (Figure 10)."""
+    its = model.interfaces
+    ft = model.tensile_strength * its.area
+    cap = np.maximum(ft - actions[:, 2], 0.0)
+    safe = np.where(cap > 0, cap, 1.0)
+    # centre of the compression: m1 = -cap y2c, m2 = cap y1c
+    y1c = np.where(cap > 0, actions[:, 4] / safe, 0.0)
+    y2c = np.where(cap > 0, -actions[:, 3] / safe, 0.0)
+    y1c = np.clip(y1c, -its.l1 / 2, its.l1 / 2)
+    y2c = np.clip(y2c, -its.l2 / 2, its.l2 / 2)
+    l1r = np.maximum(its.l1 - 2 * np.abs(y1c), 0.0)
+    l2r = np.maximum(its.l2 - 2 * np.abs(y2c), 0.0)
+    pts, w = grid_points(l1r, l2r, grid, np.stack([y1c, y2c], axis=1))
+    area = l1r * l2r
+    # a degenerate rectangle (a line or a corner): the Lobatto weights of its sides
+    _, wl = lobatto_rule(grid)
+    wu = np.outer(wl, wl).ravel() / 4.0
+    share = np.where(area[:, None] > 0, w / np.where(area > 0, area, 1.0)[:, None], wu[None, :])
+    return pts, cap[:, None] * share
+
+
+def non_associative(
+    problem: Problem,
+    grid: int,
+    dirs: np.ndarray | None,
+    tolerance: float,
+    max_iterations: int,
+    relaxation: float,
+    result,
+) -> LimitAnalysisResult:
+    model = problem.model
+    m = model.interfaces.count
+    start, size = solve_associative(problem, ASSOCIATIVE_GRID, dirs)
+    if start.status != "optimal":
+        return finish(problem, start, size, result, iterations=1, load_factors=())
+    actions = start.info_actions  # type: ignore[attr-defined]
+    # the normal forces at the corners (rocking, tension) stay associative
+    corners, _ = grid_points(model.interfaces.l1, model.interfaces.l2, 2)
+    iface4 = np.repeat(np.arange(m), 4)
+    normal = np.zeros((4 * m, 3))
+    normal[:, 2] = -1.0
+    R_n = resultant_columns(corners.reshape(-1, 2), normal, iface4, m)
+    lams: list[float] = []
+    sol = start
+    for it in range(1, max_iterations + 1):
+        pts, cap = frozen_layout(model, actions, grid)
+        K = pts.shape[1]
+        iface = np.repeat(np.arange(m), K)
+        yk = pts.reshape(-1, 2)
+        mu = np.repeat(model.friction, K)
+        capk = cap.ravel()
+        if dirs is None:
+            shear = np.zeros((m * K, 2, 3))
+            shear[:, 0, 0] = 1.0
+            shear[:, 1, 1] = 1.0
+            R_s = resultant_columns(
+                np.repeat(yk, 2, axis=0), shear.reshape(-1, 3), np.repeat(iface, 2), m
+            )
+            R = sparse.hstack([R_n, R_s], format="csc")
+            E = (problem.H_T @ R).tocsc()
+            sol = solve_clarabel(E, problem.live, problem.rhs, m * K, mu, capk, 4 * m)
+            if sol.status == "infeasible":
+                sol = Solution("dead load", detail=f"{sol.detail} (frozen capacities)")
+        else:
+            D = dirs.shape[0]
+            force = np.zeros((m * K, D, 3))
+            force[:, :, :2] = mu[:, None, None] * dirs[None, :, :]
+            R_s = resultant_columns(
+                np.repeat(yk, D, axis=0), force.reshape(-1, 3), np.repeat(iface, D), m
+            )
+            R = sparse.hstack([R_n, R_s], format="csc")
+            E = (problem.H_T @ R).tocsc()
+            k = E.shape[1]
+            # per point, the edge multipliers share its frozen compression: sum_d g_d <= cap
+            npts = m * K
+            C = sparse.csc_matrix(
+                (np.ones(npts * D), (np.repeat(np.arange(npts), D), 4 * m + np.arange(npts * D))),
+                shape=(npts, k),
+            )
+            sol = solve_highs(
+                E, problem.live, problem.rhs, np.zeros(k), np.full(k, np.inf), (C, capk)
+            )
+        size = (E.shape[1] + 1, E.shape[0] + (m * K if dirs is not None else 0))
+        if sol.status != "optimal":
+            return finish(problem, sol, size, result, iterations=it, load_factors=tuple(lams))
+        new = (problem.a0 + R @ sol.x).reshape(-1, 6)
+        sol.info_actions = new  # type: ignore[attr-defined]
+        lams.append(sol.lam)
+        # the LPs are degenerate: the actions may jump between equivalent vertices while
+        # lambda settles, so the test is on lambda (its last three values)
+        last = lams[-3:]
+        settled = len(last) == 3 and max(last) - min(last) <= tolerance * max(abs(last[-1]), 1e-12)
+        log.debug("non-associative iteration %d: lambda = %.6g", it, sol.lam)
+        if settled:
+            return finish(problem, sol, size, result, iterations=it, load_factors=tuple(lams))
+        if len(lams) > 2 and (lams[-1] - lams[-2]) * (lams[-2] - lams[-3]) < 0:
+            relaxation = max(relaxation / 2, _SMALLEST_RELAXATION)  # it oscillates: damp it
+        actions = actions + relaxation * (new - actions)
+    tail = ", ".join(f"{x:.5g}" for x in lams[-4:])
+    return result(
+        "failed",
+        float("nan"),
+        f"the non-associative iteration did not settle in {max_iterations} solves "
+        f"(last lambdas {tail})",
+        iterations=max_iterations,
+        load_factors=tuple(lams),
+        variables=size[0],
+        constraints=size[1],
+    )
