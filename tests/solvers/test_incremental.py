@@ -148,15 +148,24 @@ def test_kept_factorization_while_creeping_changes_nothing(panel_lambda, monkeyp
     assert kept.factorizations < 0.5 * refactored.factorizations
 
 
-def test_a_search_that_keeps_cutting_gives_up_without_changing_the_answer(monkeypatch):
+@pytest.mark.parametrize(("backend", "rel"), [("superlu", 1e-9), ("auto", 1e-3)])
+def test_a_search_that_keeps_cutting_gives_up_without_changing_the_answer(
+    monkeypatch, backend, rel
+):
     """A Newton search gives up after ``search_cuts`` cuts of its trust radius instead of
     creeping on with steps of 1e-7..1e-13 of the correction until the radius is gone: the
-    searches that converge never needed more, so the peak is the same (to 1e-9: work
-    control reads the lambda where a failed search stops, which moves by the creep it no
-    longer takes) and the failing searches end sooner (fewer iterations in all)."""
+    searches that converge never needed more, so the peak is the same and the failing
+    searches end sooner (fewer iterations in all).
+
+    "The same": work control reads the lambda where a failed search stops, which moves by the
+    creep it no longer takes. With SuperLU's exact pivots that is below 1e-9. PARDISO (the
+    automatic choice from ``factorization.SMALL`` unknowns when installed) perturbs tiny
+    pivots of the near-singular tangent, so its failed searches stop elsewhere: measured
+    2.7e-4 on this panel, hence 1e-3, still 5x inside the bracket tolerance (0.005)."""
+    monkeypatch.setenv("MASONRY_DEM_FACTORIZER", backend)
     capped = pushover(_panel(), StaticSettings())
     uncapped = pushover(_panel(), StaticSettings(search_cuts=10**6))
-    assert capped.collapse_multiplier == pytest.approx(uncapped.collapse_multiplier, rel=1e-9)
+    assert capped.collapse_multiplier == pytest.approx(uncapped.collapse_multiplier, rel=rel)
     assert capped.iterations < 0.9 * uncapped.iterations
 
 
