@@ -9,6 +9,7 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from masonry_dem.cli.options import add_overwrite
 from masonry_dem.export.run_case import Progress, estimate_run, run_case
 
 if TYPE_CHECKING:
@@ -30,12 +31,7 @@ def add_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) 
         help="skip the PNGs of the last step and of the collapse mechanism",
     )
     p.add_argument("--quiet", action="store_true", help="no progress bar")
-    p.add_argument(
-        "--overwrite",
-        action="store_true",
-        help="replace the run already in --out (removes the package's own files there, and "
-        "only those); without it such a folder is refused",
-    )
+    add_overwrite(p)
     p.add_argument(
         "--max-memory",
         default=None,

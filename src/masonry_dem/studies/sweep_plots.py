@@ -57,27 +57,25 @@ def write_plots(folder: Path, rows: list[dict[str, Any]], plan: Plan) -> list[Pa
         ) -> list[Any]:
             return [r[path] if labels is None else labels.index(cell(r[path])) for r in rs]
 
-        if ok:
-            ax.plot(x(ok), [r["lambda"] for r in ok], "o", color="C0", label="collapse")
         bounds = [r for r in rows if r["limit_analysis_bound"] is not None]
-        if bounds:
-            ax.plot(
-                x(bounds),
-                [r["limit_analysis_bound"] for r in bounds],
+        series: tuple[tuple[list[dict[str, Any]], str, str, dict[str, Any]], ...] = (
+            (ok, "lambda", "o", {"color": "C0", "label": "collapse"}),
+            (
+                bounds,
+                "limit_analysis_bound",
                 "_",
-                color="C2",
-                ms=12,
-                label="limit-analysis bound",
-            )
-        if done:
-            ax.plot(
-                x(done),
-                [r["lambda"] for r in done],
+                {"color": "C2", "ms": 12, "label": "limit-analysis bound"},
+            ),
+            (
+                done,
+                "lambda",
                 "^",
-                mfc="none",
-                color="C1",
-                label="completed (no collapse up to)",
-            )
+                {"mfc": "none", "color": "C1", "label": "completed (no collapse up to)"},
+            ),
+        )
+        for drawn, column, marker, style in series:
+            if drawn:
+                ax.plot(x(drawn), [r[column] for r in drawn], marker, **style)
         if bad:
             for xv in x(bad):
                 ax.axvline(xv, color="C3", lw=0.8, ls=":")
@@ -105,14 +103,14 @@ def write_plots(folder: Path, rows: list[dict[str, Any]], plan: Plan) -> list[Pa
             if kind == "histogram":
                 ax.hist(lam, bins="auto", color="C0", edgecolor="white")
                 ax.set_ylabel("runs [-]")
-                drawn = f"{lam.size} collapses"
+                subject = f"{lam.size} collapses"
             else:
                 ax.step(lam, np.arange(1, lam.size + 1) / lam.size, where="post", color="C0")
                 ax.set_ylabel("P(collapse at or below $\\lambda$) [-]")
                 ax.set_ylim(0, 1.02)
                 ax.grid(alpha=0.3)
-                drawn = f"empirical CDF of {lam.size} collapses"
+                subject = f"empirical CDF of {lam.size} collapses"
             ax.set_xlabel(LAMBDA_LABEL)
-            ax.set_title(f"{name}: {drawn}{excluded}\n{what}", fontsize=9)
+            ax.set_title(f"{name}: {subject}{excluded}\n{what}", fontsize=9)
             save(fig, f"lambda_{kind}.png")
     return out
