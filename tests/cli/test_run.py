@@ -105,7 +105,7 @@ def test_the_limit_analysis_bound_is_computed_only_to_certify_a_collapse(tmp_pat
     then: a run that ends ``completed`` (max_load_factor 0.2, below the block's s/a = 0.5)
     does no limit analysis; a collapse carries the bound (0.5, the block's s/a) checked
     within it; ``--no-bound`` leaves the certificate's bound unchecked."""
-    import masonry_dem.cli.run as run_module
+    import masonry_dem.export.run_case as run_module
 
     calls: list[int] = []
     original = run_module.limit_analysis_bound

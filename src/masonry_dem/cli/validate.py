@@ -10,6 +10,8 @@ import json
 from pathlib import Path
 from typing import Any
 
+from masonry_dem.cli.options import whole_number
+
 
 def add_parser(subparsers: Any) -> None:
     p = subparsers.add_parser(
@@ -27,7 +29,7 @@ def add_parser(subparsers: Any) -> None:
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.add_argument(
         "--jobs",
-        type=_jobs,
+        type=whole_number("--jobs", 1),
         default=1,
         help="cases run side by side in this many processes (default: %(default)s; each "
         "case's own time is then measured under the load of the others)",
@@ -42,7 +44,7 @@ def add_parser(subparsers: Any) -> None:
     )
     p.add_argument(
         "--return-blocks",
-        type=_return_blocks,
+        type=whole_number("--return-blocks", 2),
         nargs="+",
         default=[None],
         metavar="M",
@@ -50,28 +52,6 @@ def add_parser(subparsers: Any) -> None:
         "per value (default: the fewest blocks at least half the wall's height, 4)",
     )
     p.set_defaults(func=validate_command)
-
-
-def _return_blocks(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        value = 0
-    if value < 2:
-        raise argparse.ArgumentTypeError(
-            f"--return-blocks must be a whole number >= 2, got {text!r}"
-        )
-    return value
-
-
-def _jobs(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        value = 0
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"--jobs must be a whole number >= 1, got {text!r}")
-    return value
 
 
 def validate_command(args: argparse.Namespace) -> int:

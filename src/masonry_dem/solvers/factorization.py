@@ -155,6 +155,23 @@ class _Generation:
             raise StaleFactors(f"{name}: these factors were replaced by a later factorization")
 
 
+class _HeldFactors:
+    """The factors of a handle that holds one factorization at a time (PARDISO, MUMPS): they
+    solve with it until the handle factorizes again, then refuse (:class:`StaleFactors`)."""
+
+    def __init__(
+        self, name: str, generations: _Generation, solve: Callable[[np.ndarray], np.ndarray]
+    ) -> None:
+        self.name = name
+        self.generations = generations
+        self.generation = generations.next()
+        self._solve = solve
+
+    def solve(self, b: np.ndarray) -> np.ndarray:
+        self.generations.check(self.generation, self.name)
+        return self._solve(b)
+
+
 # --------------------------------------------------------------------------- SuperLU
 class _SuperLUFactors:
     def __init__(self, lu, numbering: np.ndarray | None) -> None:
@@ -249,16 +266,6 @@ def _point_pypardiso_at_mkl() -> None:
             return
 
 
-class _PardisoFactors:
-    def __init__(self, owner: _Pardiso, generation: int) -> None:
-        self.owner = owner
-        self.generation = generation
-
-    def solve(self, b: np.ndarray) -> np.ndarray:
-        self.owner.generations.check(self.generation, "pardiso")
-        return self.owner.solve(b)
-
-
 class _Pardiso:
     """MKL PARDISO, real unsymmetric (mtype 11: METIS ordering, weighted matching and
     scaling, pivots perturbed rather than refused, iterative refinement). The analysis
@@ -347,7 +354,7 @@ class _Pardiso:
         # the first matrix is analysed with its values (the matching and scaling use them)
         self._call(22 if self.analysed else 12)
         self.analysed = True
-        return _PardisoFactors(self, self.generations.next())
+        return _HeldFactors("pardiso", self.generations, self.solve)
 
     def solve(self, b: np.ndarray) -> np.ndarray:
         return self._call(33, b).reshape(b.shape)
@@ -414,16 +421,6 @@ class _Umfpack:
 
 
 # --------------------------------------------------------------------------- MUMPS
-class _MumpsFactors:
-    def __init__(self, owner: _Mumps, generation: int) -> None:
-        self.owner = owner
-        self.generation = generation
-
-    def solve(self, b: np.ndarray) -> np.ndarray:
-        self.owner.generations.check(self.generation, "mumps")
-        return np.asarray(self.owner.context.solve(np.array(b, dtype=float))).reshape(b.shape)
-
-
 class _Mumps:
     """MUMPS (sequential, python-mumps): the analysis (its automatic ordering) with the
     first matrix, a factorization per matrix."""
@@ -453,4 +450,7 @@ class _Mumps:
             self.analysed = True
         except mumps.MUMPSError as exc:
             raise SingularMatrix(f"mumps: {exc}") from exc
-        return _MumpsFactors(self, self.generations.next())
+        return _HeldFactors("mumps", self.generations, self._solve)
+
+    def _solve(self, b: np.ndarray) -> np.ndarray:
+        return np.asarray(self.context.solve(np.array(b, dtype=float))).reshape(b.shape)

@@ -10,7 +10,9 @@ JSON-ready rows (the command line only parses arguments and prints them).
 * :mod:`.kn_sweep` - lambda as the dry-joint stiffness grows;
 * :mod:`.validation` - the paper's validation cases (Tables 1-3) against the paper and the tests;
 * :mod:`.interface` - the closed-form interface strength against the spring model (Table A1);
-* :mod:`.sweep` - one case over grids, lists and seeded samples of its case-file values, on Dask.
+* :mod:`.sweep` - one case over grids, lists and seeded samples of its case-file values, on Dask;
+  :mod:`.sweep_plan` reads the values, :mod:`.sweep_point` runs one, :mod:`.sweep_table` and
+  :mod:`.sweep_plots` write the rows and draw them.
 
 Submodules are imported on use, not here, so that ``import masonry_dem.studies`` is cheap.
 """

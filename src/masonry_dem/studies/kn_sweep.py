@@ -12,7 +12,7 @@ from masonry_dem.studies.runs import (
     settings_for,
     with_changes,
 )
-from masonry_dem.studies.speed_accuracy import fmt
+from masonry_dem.studies.text import fmt
 
 
 def kn_sweep(

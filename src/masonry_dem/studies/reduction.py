@@ -11,7 +11,7 @@ import numpy as np
 
 from masonry_dem.model import Model
 from masonry_dem.studies.runs import load_study_case
-from masonry_dem.studies.speed_accuracy import fmt
+from masonry_dem.studies.text import fmt
 
 log = logging.getLogger(__name__)
 

@@ -15,8 +15,8 @@ from collections.abc import Callable, Iterable, Mapping
 from typing import Any
 
 from masonry_dem.model import Model
+from masonry_dem.studies import text
 from masonry_dem.studies.runs import Method, run_method, with_changes
-from masonry_dem.studies.speed_accuracy import fmt
 
 DEFAULT_SIZES = (100, 1000, 10_000)
 #: the largest wall (blocks) each method runs on by default
@@ -110,24 +110,24 @@ def size_ladder(
 
 
 def progress_line(row: dict[str, Any]) -> str:
-    return (
-        f"  {row['blocks']} blocks, {row['method']}: {row['status']} "
-        f"lambda={fmt(row['lambda'], '.5g')} in {row['seconds']:.2f} s"
-    )
+    return text.progress_line(f"{row['blocks']} blocks, {row['method']}", row)
+
+
+#: the columns of :func:`ladder_text`
+LADDER_COLUMNS = (
+    text.Column("blocks", "7d", lambda r: r["blocks"]),
+    text.Column("interf", "7d", lambda r: r["interfaces"]),
+    text.Column("method", "<7", lambda r: Method(r["method"]).short),
+    text.Column("status", "<11", lambda r: r["status"]),
+    text.Column("lambda", ">10.5g", lambda r: r["lambda"]),
+    text.Column("seconds", "8.2f", lambda r: r["seconds"]),
+    text.Column("x static lambda", ">15.3f", lambda r: r["ratio_to_static"]),
+    text.Column("x static time", ">13.3f", lambda r: r["time_ratio_to_static"]),
+)
 
 
 def ladder_text(rows: list[dict[str, Any]]) -> str:
-    head = (
-        f"{'blocks':>7} {'interf':>7} {'method':<7} {'status':<11} {'lambda':>10} "
-        f"{'seconds':>8} {'x static lambda':>15} {'x static time':>13}"
-    )
-    lines = [head, "-" * len(head)]
-    for r in rows:
-        lines.append(
-            f"{r['blocks']:7d} {r['interfaces']:7d} {Method(r['method']).short:<7} "
-            f"{r['status']:<11} {fmt(r['lambda'], '.5g'):>10} {r['seconds']:8.2f} "
-            f"{fmt(r['ratio_to_static'], '.3f'):>15} {fmt(r['time_ratio_to_static'], '.3f'):>13}"
-        )
+    lines = text.text_table(LADDER_COLUMNS, rows)
     lines.append(
         "x static: over the static pushover of the same wall (- where the wall is above the "
         "static solver's size limit)"

@@ -24,6 +24,7 @@ import numpy as np
 
 from masonry_dem.model import Model
 from masonry_dem.results import History
+from masonry_dem.studies import text
 from masonry_dem.studies.runs import (
     Method,
     StudyCase,
@@ -35,6 +36,7 @@ from masonry_dem.studies.runs import (
     warm_up,
     with_changes,
 )
+from masonry_dem.studies.text import fmt
 
 log = logging.getLogger(__name__)
 
@@ -385,33 +387,28 @@ def equal_accuracy(
 
 
 # ---------------------------------------------------------------------------- text
-def fmt(value: Any, spec: str, missing: str = "-") -> str:
-    """``value`` formatted by ``spec``; ``missing`` for None."""
-    return missing if value is None else format(value, spec)
-
-
 def progress_line(row: dict[str, Any]) -> str:
-    return (
-        f"  {row['case']} {row['method']} [{row['label']}]: {row['status']} "
-        f"lambda={fmt(row['lambda'], '.5g')} in {row['seconds']:.2f} s"
-    )
+    return text.progress_line(f"{row['case']} {row['method']} [{row['label']}]", row)
+
+
+#: the columns of :func:`table`
+TABLE_COLUMNS = (
+    text.Column("case", "<8", lambda r: r["case"]),
+    text.Column("method", "<8", lambda r: Method(r["method"]).short),
+    text.Column("settings", "<20", lambda r: r["label"]),
+    text.Column("status", "<9", lambda r: r["status"]),
+    text.Column("lambda", "11.5g", lambda r: r["lambda"]),
+    text.Column("err conv", "9.2%", lambda r: r["error_vs_converged"]),
+    text.Column("err own", "8.2%", lambda r: r.get("error_vs_own")),
+    text.Column("err test", "9.2%", lambda r: r["error_vs_test"]),
+    text.Column("seconds", "8.2f", lambda r: r["seconds"]),
+    text.Column("work", "9d", lambda r: r.get("time_steps", r.get("iterations"))),
+    text.Column("pareto", ">6", lambda r: "*" if r.get("pareto") else ""),
+)
 
 
 def table(rows: list[dict[str, Any]]) -> str:
-    head = (
-        f"{'case':<8} {'method':<8} {'settings':<20} {'status':<9} {'lambda':>11} "
-        f"{'err conv':>9} {'err own':>8} {'err test':>9} {'seconds':>8} {'work':>9} {'pareto':>6}"
-    )
-    lines = [head, "-" * len(head)]
-    for r in rows:
-        work = r.get("time_steps", r.get("iterations"))
-        lines.append(
-            f"{r['case']:<8} {Method(r['method']).short:<8} "
-            f"{r['label']:<20} {r['status']:<9} {fmt(r['lambda'], '11.5g')} "
-            f"{fmt(r['error_vs_converged'], '9.2%')} {fmt(r.get('error_vs_own'), '8.2%')} "
-            f"{fmt(r['error_vs_test'], '9.2%')} "
-            f"{r['seconds']:8.2f} {fmt(work, '9d')} {'*' if r.get('pareto') else '':>6}"
-        )
+    lines = text.text_table(TABLE_COLUMNS, rows)
     lines.append(
         "err conv: against the converged lambda of the case; err own: against the method's own "
         "converged lambda; work: Newton iterations (static), time steps (DR) or convex solves "

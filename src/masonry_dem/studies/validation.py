@@ -17,6 +17,8 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
+from masonry_dem.studies import text
+
 log = logging.getLogger(__name__)
 
 #: the face each table's walls are seen from
@@ -157,36 +159,40 @@ def render_case(folder: Path, view: str) -> str | None:
     return str(png)
 
 
-def _fmt(value: float | None, unit: str) -> str:
+def _number(value: float | None, unit: str) -> str | None:
     if value is None or (isinstance(value, float) and not math.isfinite(value)):
-        return "-"
+        return None
     return f"{value:9.0f}" if unit == "Pa" else f"{value:9.4f}"
 
 
-def _pct(value: float | None) -> str:
-    return "-" if value is None else f"{100 * value:+6.1f}%"
+def _pct(value: float | None) -> str | None:
+    return None if value is None else f"{100 * value:+6.1f}%"
 
 
-def _label(row: Row) -> str:
+def _label(row: text.Row) -> str:
     """The case, and the return walls' length in blocks of the return-wall reading."""
     m = row.get("return_blocks")
     return str(row["case"]) if m is None else f"{row['case']}/r{m}"
 
 
+#: the columns of :func:`format_table`
+TABLE_COLUMNS = (
+    text.Column("case", "<7", _label),
+    text.Column("table", "<5", lambda r: r["table"]),
+    text.Column("ours", ">9", lambda r: _number(r["ours"], r["unit"])),
+    text.Column("paper", ">9", lambda r: _number(r["paper_dem"], r["unit"])),
+    text.Column("ref", ">9", lambda r: _number(r["reference"], r["unit"])),
+    text.Column("err ref", ">8", lambda r: _pct(r["error_vs_reference"])),
+    text.Column("err pap", ">8", lambda r: _pct(r["error_vs_paper"])),
+    text.Column("steps", "5d", lambda r: r["steps"]),
+    text.Column("s", "6.2f", lambda r: r["seconds"]),
+    text.Column("status", "", lambda r: r["status"], gap="  "),
+)
+
+
 def format_table(rows: list[Row]) -> str:
     """The rows against the paper and the reference, and the mean error of each table."""
-    head = (
-        f"{'case':7s} {'table':5s} {'ours':>9s} {'paper':>9s} {'ref':>9s} "
-        f"{'err ref':>8s} {'err pap':>8s} {'steps':>5s} {'s':>6s}  status"
-    )
-    lines = [head, "-" * len(head)]
-    for r in rows:
-        lines.append(
-            f"{_label(r):7s} {r['table']:5s} {_fmt(r['ours'], r['unit'])} "
-            f"{_fmt(r['paper_dem'], r['unit'])} {_fmt(r['reference'], r['unit'])} "
-            f"{_pct(r['error_vs_reference']):>8s} {_pct(r['error_vs_paper']):>8s} "
-            f"{r['steps']:5d} {r['seconds']:6.2f}  {r['status']}"
-        )
+    lines = text.text_table(TABLE_COLUMNS, rows)
     readings = sorted(
         {(r.get("restraint", "columns"), r.get("return_blocks")) for r in rows}, key=str
     )

@@ -1,0 +1,226 @@
+"""One case run into a results folder, as ``masonry-dem run`` runs it: the memory estimate
+checked before anything is built (:func:`estimate_run`), the pushover written step by step
+(:func:`run_case`: Ctrl-C or SIGTERM stop it between steps, every step written), the
+associative limit-analysis bound computed only when a collapse is to be certified
+(:class:`LazyBound`), the summary and the PNGs. The command line adds the progress bar
+(a :class:`Progress`) and prints.
+"""
+
+from __future__ import annotations
+
+import logging
+import sys
+import threading
+import time
+from pathlib import Path
+from types import TracebackType
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from masonry_dem.cases.casefile import Case
+    from masonry_dem.export.writer import ResultsWriter
+    from masonry_dem.model import Model
+    from masonry_dem.results import StepResult
+    from masonry_dem.solvers.resources import Estimate
+
+log = logging.getLogger(__name__)
+
+#: seconds between two progress ticks within a step (Newton iterations, factorizations)
+TICK_SECONDS = 2.0
+
+
+class LazyBound:
+    """The associative limit-analysis bound, computed the first time the certificate of a
+    collapse asks for it and never otherwise: a run that ends ``completed`` or ``failed``
+    before a collapse is checked costs no limit analysis (at 10^4 blocks it took longer
+    than the pushover). :meth:`summary` gives the ``limit_analysis_*`` fields."""
+
+    def __init__(self, enabled: bool = True) -> None:
+        self.enabled = enabled
+        self.result: dict[str, Any] | None = None
+
+    def __call__(self, model: Model) -> float | None:
+        if not self.enabled:
+            return None
+        if self.result is None:
+            self.result = limit_analysis_bound(model)
+        bound: float | None = self.result["limit_analysis_bound"]
+        return bound
+
+    def summary(self) -> dict[str, Any]:
+        if self.result is not None:
+            return self.result
+        why = (
+            "not computed (--no-bound)"
+            if not self.enabled
+            else "not computed (no collapse to certify)"
+        )
+        return {
+            "limit_analysis_bound": None,
+            "limit_analysis_status": why,
+            "limit_analysis_seconds": 0.0,
+        }
+
+
+def limit_analysis_bound(model: Model) -> dict[str, Any]:
+    """The associative limit-analysis multiplier of the model, an upper bound of the
+    pushover's (``limit_analysis_bound``: None unless the LA finds a collapse), and its
+    status and time: the exact cone (Clarabel) with the friction enlarged by kappa(alpha),
+    whose domain contains the DEM's (``solvers.limit_analysis.dem_upper_bound``)."""
+    from masonry_dem.solvers.limit_analysis import dem_upper_bound
+
+    la = dem_upper_bound(model)
+    return {
+        "limit_analysis_bound": la.load_factor if la.status == "collapse" else None,
+        "limit_analysis_status": la.status,
+        "limit_analysis_seconds": round(la.seconds, 4),
+    }
+
+
+def estimate_run(case: str | Path | Model | None, max_memory: str | None = None) -> Estimate | None:
+    """The memory and time a run needs: of a case file, counted from its ``[geometry]``
+    without building it (None for the bundled wall, a builder that cannot be counted, or a
+    file that does not parse: loading the case then names the fault), or of a built model.
+    Raises :class:`~masonry_dem.solvers.resources.TooLarge` when it is above ``max_memory``
+    (a size such as ``16G``; default: the machine's available memory)."""
+    from masonry_dem.solvers import resources
+
+    if case is None or isinstance(case, (str, Path)):
+        geometry = _geometry_of(case)
+        try:
+            blocks = None if geometry is None else resources.blocks_of_geometry(geometry)
+        except (TypeError, ValueError, OverflowError):
+            blocks = None  # not a geometry the schema accepts: load_case names the fault
+        if blocks is None:
+            return None
+        est = resources.estimate(blocks)
+    else:
+        est = resources.estimate(case.blocks.count, case.interfaces.count, case.n_dofs)
+    limit = None if max_memory is None else resources.parse_memory(max_memory)
+    resources.check_fits(est, limit)
+    return est
+
+
+def _geometry_of(case: str | Path | None) -> dict[str, Any] | None:
+    """The ``[geometry]`` table of a case file, read without building anything (None for the
+    bundled wall or a file that does not parse)."""
+    if sys.version_info >= (3, 11):
+        import tomllib
+    else:  # pragma: no cover
+        import tomli as tomllib
+
+    if case is None:
+        return None
+    try:
+        geometry = tomllib.loads(Path(case).read_text()).get("geometry")
+    except (OSError, tomllib.TOMLDecodeError, UnicodeDecodeError):
+        return None
+    return geometry if isinstance(geometry, dict) else None
+
+
+class Progress:
+    """What the caller of :func:`run_case` sees while it runs (the command line's progress
+    bar; this base shows nothing). Entered once the folder is claimed and left when the
+    pushover stops; :meth:`step` after each step handed to the writer, :meth:`tick` every
+    :data:`TICK_SECONDS` within long steps."""
+
+    def __enter__(self) -> Progress:
+        return self
+
+    def __exit__(
+        self,
+        kind: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        return None
+
+    def step(self, step: StepResult) -> None:
+        """A step is done and handed to the writer."""
+
+    def tick(self, iterations: int, factorizations: int) -> None:
+        """The solver's Newton iterations and factorizations so far."""
+
+
+def run_case(
+    case: Case,
+    out: str | Path,
+    overwrite: bool = False,
+    bound: bool = True,
+    render: bool = True,
+    progress: Progress | None = None,
+) -> dict[str, Any]:
+    """Run the pushover of a loaded case into the results folder ``out`` and return its
+    summary (what ``summary.json`` holds).
+
+    The folder is claimed first: refused if it holds another run (unless ``overwrite``,
+    which removes the package's own files there) or is in use. Ctrl-C or SIGTERM stop the
+    run between steps; an exception (a signal, a full disk) leaves the folder marked
+    interrupted or failed with every step written. ``bound``: the certificate of a collapse
+    checks lambda against the associative limit-analysis bound, computed then and only then
+    (:class:`LazyBound`). ``render``: PNGs of the last step and of the collapse mechanism,
+    named in the summary."""
+    from masonry_dem._signals import check_stop, deferred_signals, stop_on_signals
+    from masonry_dem.export.results_folder import MECHANISM_FILES
+    from masonry_dem.export.writer import ResultsWriter
+    from masonry_dem.solvers.incremental import StaticSolver
+    from masonry_dem.solvers.warmup import prepare
+
+    out = Path(out)
+    shown = progress or Progress()
+    prepare(case.model.interfaces.count)  # says "compiling kernels ..." first, if it must
+    t0 = time.perf_counter()
+    writer = ResultsWriter(
+        out, case.model, background=True, overwrite=overwrite, start={"case": case.source}
+    )
+    try:
+
+        def on_step(step: StepResult) -> None:
+            writer(step)
+            shown.step(step)
+            check_stop()  # Ctrl-C or SIGTERM: stop here, between steps, all of them written
+
+        lazy = LazyBound(enabled=bound)
+        solver = StaticSolver(case.model, case.settings, bound=lazy)
+        done = threading.Event()
+
+        def tick() -> None:
+            while not done.wait(TICK_SECONDS):
+                shown.tick(solver.iterations, solver.factorizations)
+
+        ticker = threading.Thread(target=tick, daemon=True)
+        with writer, shown, stop_on_signals():
+            ticker.start()
+            try:
+                history = solver.run(control=case.control, callback=on_step, monitor=case.monitor)
+            finally:
+                done.set()
+                ticker.join()
+        with deferred_signals():  # pushover.csv, the mechanism and summary.json agree
+            summary: dict[str, Any] = writer.finish(
+                history,
+                release=False,
+                case=case.source,
+                wall_seconds=round(time.perf_counter() - t0, 4),
+                **lazy.summary(),
+            )
+        if render:
+            summary = _render(out, summary, writer, MECHANISM_FILES[0])
+    finally:
+        writer.release()
+    return summary
+
+
+def _render(
+    out: Path, summary: dict[str, Any], writer: ResultsWriter, mechanism_file: str
+) -> dict[str, Any]:
+    """PNGs of the last step and, after a collapse, of the mechanism, named in summary.json."""
+    try:
+        from masonry_dem.export.render import render_mechanism, render_step
+    except ImportError as exc:  # rendering is optional for the analysis itself
+        log.warning("no PNG: the render module is unavailable (%s)", exc)
+        return summary
+    pngs = {"png": Path(render_step(out, step="last")).name}
+    if (out / mechanism_file).is_file():  # the run ended in collapse
+        pngs["mechanism_png"] = render_mechanism(out).name
+    return writer.write_summary(summary, pngs)

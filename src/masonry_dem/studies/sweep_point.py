@@ -1,0 +1,160 @@
+"""One run of a sweep: a parsed case file run as ``masonry-dem run`` runs it, reduced to the
+result columns of its row (:data:`RESULT_COLUMNS`) and, on demand, its files."""
+
+from __future__ import annotations
+
+import logging
+import os
+import socket
+import time
+from contextlib import nullcontext
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from masonry_dem.model import Model
+    from masonry_dem.results import History
+
+log = logging.getLogger(__name__)
+
+#: the result columns of a row (after ``run`` and the varied paths), with their type
+RESULT_COLUMNS: dict[str, type] = {
+    "status": str,  # collapse | completed | failed (the analysis) | error (an exception)
+    "reason": str,
+    "lambda": float,  # collapse multiplier, or the final lambda of a completed run
+    "lambda_upper": float,  # upper end of the collapse bracket
+    "limit_analysis_bound": float,
+    "limit_analysis_status": str,
+    "steps": int,
+    "mechanism_blocks": int,  # blocks moving >= 5 % of the largest translation of the mode
+    "mechanism_cracks": int,  # joints moving >= 50 % of the largest: the cracks
+    "mechanism_sliding_share": float,  # sliding / (sliding + opening) over the cracks
+    "seconds": float,  # wall-clock time of the run on its worker
+    "cpu_seconds": float,  # CPU time of the worker process meanwhile: seconds / cpu_seconds
+    # above 1 is time spent waiting for a core (a loaded machine), not computing
+    "worker": str,
+    "folder": str,
+}
+#: a block "moves" in the collapse mode above this share of the largest translation, the
+#: threshold below which the mechanism picture draws a joint as shut
+MOVING = 0.05
+
+
+def run_point(
+    data: dict[str, Any], source: str, keep: str = "none", folder: str | None = None
+) -> dict[str, Any]:
+    """Run one case (a parsed case file) as ``masonry-dem run`` does: the associative
+    limit-analysis bound, then the pushover (or the limit analysis alone for ``[analysis]
+    method = "limit"``). Returns the result columns of its row (:data:`RESULT_COLUMNS`);
+    anything the run raises is the row's status ``error`` with the reason, never raised."""
+    t0, c0 = time.perf_counter(), time.process_time()
+    row: dict[str, Any] = dict.fromkeys(RESULT_COLUMNS)
+    row["worker"] = f"{socket.gethostname()}:{os.getpid()}"
+    try:
+        row.update(_run(data, source, keep, None if keep == "none" else folder))
+    except Exception as exc:  # a failed run is a row: the sweep goes on
+        text = " ".join(str(exc).split()) or type(exc).__name__
+        row.update(status="error", reason=f"{type(exc).__name__}: {text}")
+        log.info("run of %s raised %s", source, row["reason"])
+    row["seconds"] = time.perf_counter() - t0
+    row["cpu_seconds"] = time.process_time() - c0
+    return row
+
+
+def _run(data: dict[str, Any], source: str, keep: str, folder: str | None) -> dict[str, Any]:
+    from masonry_dem.cases.casefile import case_from_dict
+    from masonry_dem.export.run_case import limit_analysis_bound
+    from masonry_dem.solvers.incremental import StaticSolver
+    from masonry_dem.solvers.limit_analysis import limit_analysis
+
+    case = case_from_dict(data, source)
+    if case.method == "limit":
+        la = limit_analysis(case.model, **(case.limit_options or {}))
+        lam = la.load_factor if la.status == "collapse" else None
+        if folder is not None:
+            from masonry_dem.export import results_folder as rf
+
+            Path(folder).mkdir(parents=True, exist_ok=True)
+            rf.write_summary(folder, {"case": source, **la.summary()})
+        return {
+            "status": la.status,
+            "reason": la.reason,
+            "lambda": lam,
+            "limit_analysis_bound": lam if la.bound == "upper" else None,
+            "limit_analysis_status": la.status,
+            "folder": folder,
+        }
+    # the row's bound column: the same certified bound a pushover's summary carries
+    extra: dict[str, Any] = limit_analysis_bound(case.model)
+    bound = extra["limit_analysis_bound"]
+    writer = None
+    if keep == "all" and folder is not None:
+        from masonry_dem.export.writer import ResultsWriter
+
+        writer = ResultsWriter(folder, case.model, overwrite=True, start={"case": source})
+    solver = StaticSolver(case.model, case.settings, bound=bound)
+    with writer or nullcontext():
+        history = solver.run(control=case.control, callback=writer, monitor=case.monitor)
+    if writer is not None:
+        writer.finish(history, case=source, **extra)
+    elif folder is not None:  # keep = "summary"
+        from masonry_dem.export import results_folder as rf
+
+        Path(folder).mkdir(parents=True, exist_ok=True)
+        rf.write_pushover(
+            folder,
+            np.arange(len(history.steps)),
+            history.load_factors,
+            history.control_displacements,
+        )
+        summary = history.summary(
+            blocks=case.model.blocks.count, interfaces=case.model.interfaces.count
+        )
+        rf.write_summary(folder, {"name": case.model.name, "case": source, **summary}, extra)
+    status = str(history.status)
+    ended = status in ("collapse", "completed")
+    bracket = history.collapse_bracket
+    row: dict[str, Any] = {
+        "status": status,
+        "reason": history.reason,
+        "lambda": history.summary()["lambda"] if ended else None,
+        "lambda_upper": bracket[1] if bracket else None,
+        "steps": len(history.steps),
+        "folder": folder,
+        **extra,
+    }
+    if status == "collapse":
+        row.update(mechanism_summary(case.model, history))
+    return row
+
+
+def mechanism_summary(model: Model, history: History) -> dict[str, Any]:
+    """The collapse mode in three numbers: the blocks that move (>= 5 % of the largest
+    translation), the cracks (joints whose relative motion is >= 50 % of the largest, the
+    red joints of the mechanism picture) and the share of sliding in the cracks' motion
+    (1: they slide, 0: they open and turn)."""
+    from masonry_dem.export.render import MECHANISM_BINS
+    from masonry_dem.export.vtu import joint_relative_motion
+    from masonry_dem.mechanism import collapse_mode, joint_motion
+
+    try:
+        mode = collapse_mode(model, history.last)
+    except (ValueError, RuntimeError, ArithmeticError) as exc:
+        log.info("%s: no collapse mode (%s)", model.name, exc)
+        return {}
+    moved = np.linalg.norm(mode[:, :3], axis=1)
+    motion = joint_relative_motion(model, mode)
+    peak = float(motion.max(initial=0.0))
+    cracks = motion >= MECHANISM_BINS[-1] * peak if peak > 0 else np.zeros(motion.size, bool)
+    jm = joint_motion(model, mode)
+    slide = float(jm.sliding[cracks].sum())
+    opening = float(np.maximum(jm.opening[cracks], 0.0).sum())
+    return {
+        "mechanism_blocks": int((moved >= MOVING * moved.max(initial=0.0)).sum())
+        if moved.max(initial=0.0) > 0
+        else 0,
+        "mechanism_cracks": int(cracks.sum()),
+        "mechanism_sliding_share": slide / (slide + opening) if slide + opening > 0 else None,
+    }
