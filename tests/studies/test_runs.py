@@ -27,7 +27,10 @@ def test_each_method_finds_the_tilting_load_of_one_block():
         assert run.status == "collapse", run.reason
         assert run.load_factor == pytest.approx(S / A, rel=rel)
         assert run.seconds > 0 and run.cost["iterations"] >= 1
-    assert run.history is None and run.bound == "upper"
+    # the plain associative multiplier: a certified upper bound of the DEM only where every
+    # joint has alpha = 1 (solvers.limit_analysis.dem_domain); this block's joint has the
+    # default alpha, so the study labels it an estimate
+    assert run.history is None and run.bound == "estimate"
 
 
 def test_the_kn_sweep_refuses_limit_analysis():

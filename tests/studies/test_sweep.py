@@ -27,6 +27,8 @@ tomli_w = pytest.importorskip("tomli_w")
 
 from masonry_dem.cases.schema import CaseError  # noqa: E402
 from masonry_dem.cli import main  # noqa: E402
+from masonry_dem.constitutive import DEFAULT_ALPHA  # noqa: E402
+from masonry_dem.solvers.limit_analysis import dem_friction_scale  # noqa: E402
 from masonry_dem.studies.sweep import (  # noqa: E402
     Distribution,
     make_plan,
@@ -80,6 +82,7 @@ def test_friction_grid_rises_with_mu_and_matches_single_runs(client, tmp_path):
         SLIDING_WALL, vary={"material.friction": "0.5:0.9:9"}, out=tmp_path, scheduler=client
     )
     rows = result.rows
+    kappa = dem_friction_scale(DEFAULT_ALPHA)
     mu = np.array([r["material.friction"] for r in rows])
     lam = result.lambdas
     assert [r["run"] for r in rows] == list(range(9))
@@ -89,7 +92,9 @@ def test_friction_grid_rises_with_mu_and_matches_single_runs(client, tmp_path):
     assert np.all(np.diff(lam) > 0.04)  # rises by about 0.05 a step
     for r in rows:  # the collapse mode slides: the cracks move along the joints
         assert r["mechanism_sliding_share"] > 0.99 and r["mechanism_cracks"] >= 1
-        assert r["limit_analysis_bound"] == pytest.approx(r["material.friction"], rel=1e-6)
+        # the certified bound of the summaries: the LA with friction x kappa(alpha), whose
+        # domain holds the DEM's (solvers.limit_analysis.dem_domain); sliding at kappa mu
+        assert r["limit_analysis_bound"] == pytest.approx(kappa * r["material.friction"], rel=1e-6)
     # exactly the single run of the same case, in this process
     for r in rows:
         single = run_point(set_path(SLIDING_WALL, "material.friction", r["material.friction"]), "x")

@@ -87,8 +87,11 @@ def _run(data: dict[str, Any], source: str, keep: str, folder: str | None) -> di
             "folder": folder,
         }
     # the row's bound column: the same certified bound a pushover's summary carries
-    extra: dict[str, Any] = limit_analysis_bound(case.model)
-    bound = extra["limit_analysis_bound"]
+    bound_fields = limit_analysis_bound(case.model)
+    bound = bound_fields["limit_analysis_bound"]
+    extra: dict[str, Any] = {
+        k: bound_fields[k] for k in ("limit_analysis_bound", "limit_analysis_status")
+    }
     writer = None
     if keep == "all" and folder is not None:
         from masonry_dem.export.writer import ResultsWriter
