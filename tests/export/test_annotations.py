@@ -100,8 +100,7 @@ def test_pushover_names_the_displacement_it_plots(results):
 def test_pushover_names_the_monitored_block_and_dof(tmp_path):
     """A run with a monitor on a mid-height block (never the largest translation) records
     that DOF: the axis names its block and DOF."""
-    from damage_pattern import build_model
-
+    from helpers.damage_pattern import build_model
     from masonry_dem.solvers.incremental import pushover
 
     model = build_model(3, 3)
