@@ -305,3 +305,34 @@ def test_settings_refuse_a_max_load_factor_that_is_not_positive(value):
     with pytest.raises(ValueError, match="max_load_factor must be a number > 0"):
         StaticSettings(max_load_factor=value)
     assert StaticSettings(max_load_factor=math.inf).max_load_factor == math.inf
+
+
+@pytest.mark.parametrize("lam", [1e-5, 1e-4])
+def test_an_elastic_step_of_a_dry_wall_takes_one_newton_iteration(lam):
+    """A dry running-bond wall (6 x 6, left column held in u1 and u3) tilted out of its
+    plane by lambda 1e-5 or 1e-4 from its dead-load state: no joint with a strength changes
+    state (the wall is elastic up to lambda ~ 1e-3 here), and the head joints, at zero
+    compression with no tensile strength, carry nothing whatever their round-off state.
+    The problem is linear along the step, so one Newton correction with the consistent
+    tangent lands on the equilibrium (residual 1e-8). With the head joints' round-off
+    states in the tangent (elastic shear, sliding or rocking; before the zero-capacity
+    tangent) it took two."""
+    from masonry_dem.solvers.incremental import StaticSolver
+
+    wall = running_bond_wall(6, 6, 0.081, 0.210, 0.070, 20e3)
+    blocks, base = add_base(wall)
+    model = Model.build(
+        blocks,
+        InterfaceMaterial(kn=1e9, kt=0.4e9, friction=0.7),
+        supports=[Support([base]), Support(column(wall, "left"), ["u1", "u3"])],
+        loads=[SelfWeight(), WeightProportional(direction=(0, 0, 1))],
+    )
+    solver = StaticSolver(model)
+    dead = solver._dead_load()
+    assert dead.ok
+    solver.accept(dead, 0, 0.0)
+    out = solver.equilibrate(lam)
+    assert out.ok
+    assert out.iterations == 1
+    _, rnorm, _ = solver.residual(out.q, lam)
+    assert rnorm <= solver.settings.tolerance

@@ -61,7 +61,7 @@ _FD_STEP = 1e-7
 #: trial normal forces within this fraction of the largest one count as "in contact" for the
 #: tangent: a joint with a zero gap and zero force must not flip between the tangents of a
 #: detached and of a closed joint on round-off (Newton's iterations would cycle)
-_CONTACT_BAND = 1e-8
+CONTACT_BAND = 1e-8
 
 
 @dataclass(frozen=True)
@@ -239,7 +239,7 @@ class InterfaceLaw:
             r.actions,
             self.kbar,
             float(floor),
-            _CONTACT_BAND,
+            CONTACT_BAND,
             _FD_STEP,
             *self._domain.kernel_arrays,
             self.projection == "energy",

@@ -17,7 +17,7 @@ import numpy as np
 from scipy import sparse
 
 from masonry_dem.assembly.stiffness import Assembly
-from masonry_dem.constitutive.law import InterfaceLaw, LawResponse, Memory, Tension
+from masonry_dem.constitutive.law import CONTACT_BAND, InterfaceLaw, LawResponse, Memory, Tension
 from masonry_dem.jit import kernel
 from masonry_dem.model import Model
 from masonry_dem.solvers.factorization import Factorizer, Factors, SingularMatrix, analyse
@@ -253,6 +253,7 @@ class DiscreteProblem:
         if floor is None:
             floor = self.residual_stiffness
         T = self.law.tangent(response, floor, self.tangent_method)
+        self._zero_capacity_tangent(T, response, floor)
         data = self._tangents.data(T)
         self.factorizations += 1
         fronts = self._factorizer()
@@ -262,6 +263,29 @@ class DiscreteProblem:
             idx = np.arange(6)
             T[:, idx, idx] += 1e-6 * self.law.kbar
             return fronts.factor(self._tangents.data(T))
+
+    def _zero_capacity_tangent(self, T: np.ndarray, response: LawResponse, floor: float) -> None:
+        """Joints of no strength at zero compression (no tensile strength, trial normal force
+        within the law's contact band of zero: the head joints of a dry wall under its own
+        weight) keep only their normal stiffness, with ``floor`` on the other diagonal
+        terms. Their trial actions are round-off, so the law's flags (elastic, sliding,
+        rocking or detached) are set by it, and an elastic shear or bending stiffness tells
+        Newton they carry what they cannot: along that direction hundreds of such joints
+        change state at any step length and the residual rises (docs/solvers.md, "Why
+        Newton stalls from the dead-load state"). The residual is unchanged, so a
+        converged state is still an exact equilibrium of the law."""
+        fn = response.trial[:, 2]
+        band = CONTACT_BAND * float(np.abs(fn).max(initial=0.0))
+        if band == 0.0:  # the undeformed start: every joint at zero, none decided by round-off
+            return
+        zero = np.flatnonzero((response.tensile_force <= 0.0) & (np.abs(fn) <= band))
+        if zero.size == 0:
+            return
+        normal = T[zero, 2, 2].copy()
+        T[zero] = 0.0
+        idx = np.arange(6)
+        T[zero[:, None], idx, idx] = floor * self.law.kbar[zero]
+        T[zero, 2, 2] = normal
 
     def _factorizer(self) -> Factorizer:
         if self._fronts is None:
