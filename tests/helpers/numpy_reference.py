@@ -378,7 +378,7 @@ def law_tangent_numpy(law, r, floor=1e-9, fd=None):
     compiled into one call): diag(kbar), zero for open joints, the forward difference ``fd``
     (default :func:`fd_tangent_numpy`; the compiled ``fd_tangent`` gives the library's bits)
     at yielded rows taken at the contact side, and floor x kbar."""
-    from masonry_dem.constitutive.law import _CONTACT_BAND, _FD_STEP, DETACHED_FLAG
+    from masonry_dem.constitutive.law import CONTACT_BAND, _FD_STEP, DETACHED_FLAG
 
     fd = fd or fd_tangent_numpy
     k = law.kbar
@@ -387,7 +387,7 @@ def law_tangent_numpy(law, r, floor=1e-9, fd=None):
     diagonal = T.reshape(m, 36)[:, ::7]  # a view on T[:, i, i]
     diagonal[...] = k
     trial, ft = r.trial, r.tensile_force
-    band = _CONTACT_BAND * float(np.abs(trial[:, 2]).max(initial=0.0))
+    band = CONTACT_BAND * float(np.abs(trial[:, 2]).max(initial=0.0))
     open_ = trial[:, 2] > ft + band
     diagonal[open_] = 0.0
     rows = np.flatnonzero((r.flags > 0) & ~open_)
