@@ -378,7 +378,7 @@ def law_tangent_numpy(law, r, floor=1e-9, fd=None):
     compiled into one call): diag(kbar), zero for open joints, the forward difference ``fd``
     (default :func:`fd_tangent_numpy`; the compiled ``fd_tangent`` gives the library's bits)
     at yielded rows taken at the contact side, and floor x kbar."""
-    from masonry_dem.constitutive.law import CONTACT_BAND, _FD_STEP, DETACHED_FLAG
+    from masonry_dem.constitutive.law import _FD_STEP, CONTACT_BAND, DETACHED_FLAG
 
     fd = fd or fd_tangent_numpy
     k = law.kbar
