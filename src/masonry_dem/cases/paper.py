@@ -329,23 +329,9 @@ def _restrepo_velez_as_built(spec: dict, data: dict, a: Assumptions) -> PaperCas
     else:
         corner = (wall.upper[facade, 0].max(), wall.upper[facade, 1].max())
         monitor = _nearest(blocks, facade, corner)
-    return PaperCase(
-        name,
-        "2",
-        model,
-        spec["lambda_dem_paper"],
-        spec["lambda_test"],
-        "lambda",
-        (monitor, "u3"),
-        widx,
-        "vertical-axis" if both else "diagonal",
-        {
-            "lambda_test": spec["lambda_test"],
-            "restraint": "return-walls",
-            "return_blocks": m,
-            "facade": facade,
-        },
-    )
+    mechanism = "vertical-axis" if both else "diagonal"
+    extra = {"restraint": "return-walls", "return_blocks": m, "facade": facade}
+    return _table2_case(spec, model, monitor, widx, mechanism, extra)
 
 
 def _restrepo_velez(spec: dict, data: dict, a: Assumptions) -> PaperCase:
@@ -404,17 +390,24 @@ def _restrepo_velez(spec: dict, data: dict, a: Assumptions) -> PaperCase:
         supports.append(Support(sel.column(wall, "left"), list(a.column_dofs_table2)))
         monitor = _nearest(blocks, widx, (wall.upper[:, 0].max(), wall.upper[:, 1].max()))
     model = Model.build(blocks, _dry(data["friction"], a), supports, loads, name=name)
-    extra["lambda_test"] = spec["lambda_test"]
     extra["restraint"] = "columns"
+    return _table2_case(spec, model, monitor, widx, mechanism, extra)
+
+
+def _table2_case(
+    spec: dict, model: Model, monitor: int, wall: np.ndarray, mechanism: str, extra: dict
+) -> PaperCase:
+    """A Table 2 case: lambda against the test, the out-of-plane u3 of ``monitor`` on the curve."""
+    extra = {"lambda_test": spec["lambda_test"], **extra}
     return PaperCase(
-        name,
+        spec["name"],
         "2",
         model,
         spec["lambda_dem_paper"],
         spec["lambda_test"],
         "lambda",
         (monitor, "u3"),
-        widx,
+        wall,
         mechanism,
         extra,
     )
