@@ -20,6 +20,7 @@ from masonry_dem.constitutive.states import (  # noqa: F401
     STATE_SLIDING,
     STATE_SLIDING_ROCKING,
 )
+from masonry_dem.export.results_folder import save_pushover_rows
 from masonry_dem.solvers.static.outcome import Status, StopReason
 
 if TYPE_CHECKING:
@@ -139,14 +140,7 @@ def write_pushover_csv(path: Path, history: History) -> None:
     rows = np.column_stack(
         [np.arange(len(history.steps)), history.load_factors, history.control_displacements]
     )
-    np.savetxt(
-        path,
-        rows,
-        delimiter=",",
-        header="step,lambda,control_displacement",
-        comments="",
-        fmt=["%d", "%.10g", "%.10g"],
-    )
+    save_pushover_rows(path, rows)
 
 
 def read_summary(folder: Path) -> dict[str, Any]:

@@ -200,14 +200,17 @@ def _nearest(blocks: Blocks, idx: np.ndarray, point) -> int:
     return int(idx[np.argmin(d)])
 
 
+def _block_size(data: dict) -> tuple[float, float, float]:
+    """The unit's (a, b, s) of a test series: height, length along the wall, thickness."""
+    return data["block_height_a"], data["block_width_b"], data["block_thickness_s"]
+
+
 # --------------------------------------------------------------------------- Table 1
 def _orduna_lourenco(spec: dict, data: dict, a: Assumptions) -> PaperCase:
     wall = running_bond_wall(
         spec["blocks_along_length"],
         spec["courses"],
-        data["block_height_a"],
-        data["block_width_b"],
-        data["block_thickness_s"],
+        *_block_size(data),
         data["unit_weight"],
     )
     blocks, base = add_base(wall)
@@ -313,9 +316,7 @@ def _restrepo_velez_as_built(spec: dict, data: dict, a: Assumptions) -> PaperCas
     wall = build(
         spec["blocks_along_length"],
         data["courses"],
-        data["block_height_a"],
-        data["block_width_b"],
-        data["block_thickness_s"],
+        *_block_size(data),
         data["unit_weight"],
         return_blocks=m,
     )
@@ -329,23 +330,9 @@ def _restrepo_velez_as_built(spec: dict, data: dict, a: Assumptions) -> PaperCas
     else:
         corner = (wall.upper[facade, 0].max(), wall.upper[facade, 1].max())
         monitor = _nearest(blocks, facade, corner)
-    return PaperCase(
-        name,
-        "2",
-        model,
-        spec["lambda_dem_paper"],
-        spec["lambda_test"],
-        "lambda",
-        (monitor, "u3"),
-        widx,
-        "vertical-axis" if both else "diagonal",
-        {
-            "lambda_test": spec["lambda_test"],
-            "restraint": "return-walls",
-            "return_blocks": m,
-            "facade": facade,
-        },
-    )
+    mechanism = "vertical-axis" if both else "diagonal"
+    extra = {"restraint": "return-walls", "return_blocks": m, "facade": facade}
+    return _table2_case(spec, model, monitor, widx, mechanism, extra)
 
 
 def _restrepo_velez(spec: dict, data: dict, a: Assumptions) -> PaperCase:
@@ -358,7 +345,7 @@ def _restrepo_velez(spec: dict, data: dict, a: Assumptions) -> PaperCase:
             )
         return _restrepo_velez_as_built(spec, data, a)
     n = spec["blocks_along_length"]
-    ha, hb, hs = data["block_height_a"], data["block_width_b"], data["block_thickness_s"]
+    ha, hb, hs = _block_size(data)
     wall = running_bond_wall(n, data["courses"], ha, hb, hs, data["unit_weight"])
     setup = spec["setup"]
     loads: list = [SelfWeight(), WeightProportional((0.0, 0.0, 1.0))]
@@ -404,17 +391,24 @@ def _restrepo_velez(spec: dict, data: dict, a: Assumptions) -> PaperCase:
         supports.append(Support(sel.column(wall, "left"), list(a.column_dofs_table2)))
         monitor = _nearest(blocks, widx, (wall.upper[:, 0].max(), wall.upper[:, 1].max()))
     model = Model.build(blocks, _dry(data["friction"], a), supports, loads, name=name)
-    extra["lambda_test"] = spec["lambda_test"]
     extra["restraint"] = "columns"
+    return _table2_case(spec, model, monitor, widx, mechanism, extra)
+
+
+def _table2_case(
+    spec: dict, model: Model, monitor: int, wall: np.ndarray, mechanism: str, extra: dict
+) -> PaperCase:
+    """A Table 2 case: lambda against the test, the out-of-plane u3 of ``monitor`` on the curve."""
+    extra = {"lambda_test": spec["lambda_test"], **extra}
     return PaperCase(
-        name,
+        spec["name"],
         "2",
         model,
         spec["lambda_dem_paper"],
         spec["lambda_test"],
         "lambda",
         (monitor, "u3"),
-        widx,
+        wall,
         mechanism,
         extra,
     )
@@ -451,9 +445,7 @@ def _chee_liang(spec: dict, data: dict, a: Assumptions) -> PaperCase:
     wall = running_bond_wall_of_size(
         spec["length"],
         spec["height"],
-        data["block_height_a"],
-        data["block_width_b"],
-        data["block_thickness_s"],
+        *_block_size(data),
         a.brick_unit_weight,
         joint=data["joint_thickness"],
     )

@@ -189,18 +189,19 @@ def write_pushover(folder: Path | str, steps, load_factors, control_displacement
     rows = np.column_stack(
         [np.asarray(steps, dtype=float), np.asarray(load_factors), control_displacements]
     ).reshape(-1, 3)
+    write_atomic(Path(folder) / PUSHOVER, lambda tmp: save_pushover_rows(tmp, rows))
 
-    def write(tmp: Path) -> None:
-        np.savetxt(
-            tmp,
-            rows,
-            delimiter=",",
-            header="step,lambda,control_displacement",
-            comments="",
-            fmt=["%d", "%.10g", "%.10g"],
-        )
 
-    write_atomic(Path(folder) / PUSHOVER, write)
+def save_pushover_rows(path: Path, rows: np.ndarray) -> None:
+    """The one layout of ``pushover.csv``: rows of (step, lambda, control_displacement)."""
+    np.savetxt(
+        path,
+        rows,
+        delimiter=",",
+        header="step,lambda,control_displacement",
+        comments="",
+        fmt=["%d", "%.10g", "%.10g"],
+    )
 
 
 # ------------------------------------------------------------------------------ reading
