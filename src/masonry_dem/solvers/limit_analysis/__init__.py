@@ -28,14 +28,9 @@ The package, by role: ``interface`` (grid, pyramid, actions of point forces),
 ``kinematic`` (the kinematic SOCP), ``dem_domain`` (kappa), ``non_associative``,
 ``result`` (the result and the mechanism check), ``analysis`` (the entry points).
 
-Why the associative answer needs only the corners. The kinematic (dual) problem asks, at
-each point y of the grid, ``v_n(y) >= mu max_d e_d . v_t(y)`` (or ``>= mu |v_t(y)|``), where
-the relative velocity v(y) is affine in y (a rigid relative motion). The right side is
-convex in y, the left side affine, so the set of points where it holds is convex: if it
-holds at the four corners it holds on the whole rectangle. The tensile part enters the
-objective only through the resultant ``ft``. Hence any grid that contains the corners (and
-the continuum interface itself) gives the same associative multiplier as the four corners:
-the default ``grid`` of the associative problem is 2, and a finer grid only costs time
+Why the associative answer needs only the corners is argued in ``interface``: any grid that
+holds the corners gives the same associative multiplier, so the default ``grid`` of the
+associative problem is 2, and a finer grid only costs time
 (``tests/solvers/test_limit_analysis.py`` checks 2 against 4). The same argument shows why
 four corner contacts carry a torsion of ``mu N R`` (R the half diagonal), 1.7 to 1.9 times
 the ``cT mu N`` of uniform pressure: the rigid-plastic interface may put its compression in

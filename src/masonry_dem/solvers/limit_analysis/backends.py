@@ -35,15 +35,12 @@ def solve_highs(
         A_ub = sparse.hstack([C, sparse.csc_matrix((C.shape[0], 1))], format="csc")
         b_ub = d
     bounds = np.column_stack([np.concatenate([lower, [0.0]]), np.concatenate([upper, [0.0]])])
-    words = {2: "infeasible", 3: "unbounded", 1: "iteration limit", 4: "numerical difficulties"}
     c = np.zeros(k + 1)
     res = linprog(c, A_ub, b_ub, A, rhs, bounds=bounds, method="highs-ipm")
     if res.status == 2:
         return Solution("dead load", detail=f"HiGHS: {res.message} (at lambda = 0)")
     if res.status != 0:
-        return Solution(
-            "error", detail=f"HiGHS: {words.get(res.status, res.status)}: {res.message}"
-        )
+        return _highs_error(res)
     cap = lambda_cap(live, rhs)
     bounds[k] = (0.0, cap)
     c[k] = -objective_scale(live)
@@ -51,15 +48,23 @@ def solve_highs(
     if res.status == 3:
         return Solution("unbounded", detail=f"HiGHS: {res.message}")
     if res.status != 0:
-        return Solution(
-            "error", detail=f"HiGHS: {words.get(res.status, res.status)}: {res.message}"
-        )
+        return _highs_error(res)
     x = np.asarray(res.x)
     if x[k] >= cap * (1 - 1e-3):
         return Solution("unbounded", detail=f"HiGHS: lambda reached its cap {cap:.3g}")
     return Solution(
         "optimal", float(x[k]), x[:k], np.asarray(res.eqlin.marginals), "HiGHS: optimal"
     )
+
+
+#: HiGHS's status codes as words, for the reasons of failed runs
+_HIGHS_WORDS = {1: "iteration limit", 2: "infeasible", 3: "unbounded", 4: "numerical difficulties"}
+
+
+def _highs_error(res: Any) -> Solution:
+    """The ``error`` solution of a HiGHS run that ended with status ``res.status``."""
+    word = _HIGHS_WORDS.get(res.status, res.status)
+    return Solution("error", detail=f"HiGHS: {word}: {res.message}")
 
 
 def solve_clarabel(

@@ -31,6 +31,7 @@ from masonry_dem.solvers.static.problem import DiscreteProblem
 from masonry_dem.solvers.static.settings import StaticSettings
 
 if TYPE_CHECKING:
+    from masonry_dem.constitutive.law import LawResponse
     from masonry_dem.solvers.dynamic_relaxation import DynamicRelaxation
 
 log = logging.getLogger(__name__)
@@ -88,6 +89,20 @@ class Corrector:
             self.cracked = np.asarray(cracked, dtype=bool).copy()
 
     # ------------------------------------------------------------------ one equilibrium
+    def _past_limit(
+        self, q: np.ndarray, lam: float, response: LawResponse, iterations: int
+    ) -> Outcome:
+        """The failed outcome of a state whose displacements passed :attr:`limit`."""
+        return Outcome(
+            False,
+            q,
+            lam,
+            response,
+            iterations,
+            f"displacements exceed the limit {self.limit:.3g} m (a mechanism)",
+            failure=Failure.DISPLACEMENT_LIMIT,
+        )
+
     def increment(self, q: np.ndarray) -> float:
         """Largest translation of ``q`` away from the last converged state."""
         idx = self.problem.moving_translations
@@ -274,15 +289,7 @@ class Corrector:
             here = here and crept
             umax = self.increment(q)
             if not math.isfinite(umax) or umax > self.limit:
-                return Outcome(
-                    False,
-                    q,
-                    lam,
-                    response,
-                    it,
-                    f"displacements exceed the limit {self.limit:.3g} m (a mechanism)",
-                    failure=Failure.DISPLACEMENT_LIMIT,
-                )
+                return self._past_limit(q, lam, response, it)
             history.append((rnorm + cerr, radius))
             if len(history) > s.stall_window:
                 window = history[-1 - s.stall_window :]
@@ -371,15 +378,7 @@ class Corrector:
                 self._last_increment = umax
                 return Outcome(True, q_now, load_factor, response, it)
             if not math.isfinite(umax) or umax > self.limit:
-                return Outcome(
-                    False,
-                    q_now,
-                    load_factor,
-                    response,
-                    it,
-                    f"displacements exceed the limit {self.limit:.3g} m (a mechanism)",
-                    failure=Failure.DISPLACEMENT_LIMIT,
-                )
+                return self._past_limit(q_now, load_factor, response, it)
             step = float(np.abs(f[self.problem.translation]).max(initial=0.0))
             hist.append((rnorm, step))
             if len(hist) > s.divergence_window:
@@ -458,15 +457,7 @@ class Corrector:
             floor = min(max(floor * ratio, s.residual_stiffness), 1.0)
             umax = self.increment(q)
             if umax > self.limit:
-                return Outcome(
-                    False,
-                    q,
-                    target,
-                    response,
-                    it,
-                    f"displacements exceed the limit {self.limit:.3g} m (a mechanism)",
-                    failure=Failure.DISPLACEMENT_LIMIT,
-                )
+                return self._past_limit(q, target, response, it)
             best.append(min(best[-1], rnorm))
             if len(best) > s.transient_window and best[-1] > 0.5 * best[-1 - s.transient_window]:
                 return Outcome(
