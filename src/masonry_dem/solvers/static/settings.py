@@ -50,11 +50,10 @@ class StaticSettings:
         smallest dimension of the blocks that can move). Under the dead load the elastic
         displacement of the bonded assembly is added to it: elastic shortening is no mechanism.
     limit_elastic_multiple: along the path the limit is at least this multiple of the
-        largest displacement under the dead load (0: off, the default). At 100 (until
-        session 12) a soft wall went on past half a block, which is neither the model's
-        small-displacement range nor invariant with kn (a held 6 x 15 panel with kn 1.3e7
-        stopped at 100 elastic units, 1.25 % below its stiff twin). Off, a path that leaves
-        the small-displacement range on a rising curve fails with that physical reason.
+        largest displacement under the dead load (0: off, the default). Off, because a limit
+        that grows with 1 / kn lets a soft wall go past half a block, which is neither the
+        model's small-displacement range nor invariant with kn (docs/solvers.md,
+        "Invariance"); a path that leaves that range on a rising curve fails with that reason.
     residual_stiffness: fraction of the elastic stiffness kept on the diagonal of the tangent.
     tangent: ``"analytic"`` (closed-form derivative of the return) or ``"difference"``.
     tension, memory: deprecated (None: the material's). They are the interface law's, set on
