@@ -22,6 +22,7 @@ import numpy as np
 
 from masonry_dem.constitutive import torsion_constant
 from masonry_dem.solvers.limit_analysis import limit_analysis, torsion_quadrature
+from masonry_dem.studies.size_ladder import ladder_wall
 
 ASPECTS = (1.0, 1.5, 2.0, 3.0, 4.0)
 
@@ -127,21 +128,6 @@ def ladder(sizes: list[int], pushover_up_to: int, highs: bool = True) -> None:
         )
 
 
-def _ladder_model(target: int):
-    from masonry_dem.geometry.builders import add_base, running_bond_wall
-    from masonry_dem.model import InterfaceMaterial, Model, SelfWeight, Support, WeightProportional
-
-    side = max(2, round(math.sqrt(target)))
-    wall = running_bond_wall(side, side, a=0.2, b=0.4, s=0.2, unit_weight=2000 * 9.81)
-    blocks, base = add_base(wall)
-    return Model.build(
-        blocks,
-        InterfaceMaterial(kn=1e9, kt=4e8, friction=0.6),
-        [Support([base])],
-        [SelfWeight(), WeightProportional((1.0, 0.0, 0.0))],
-    )
-
-
 def _cpu(fn, *args, **kwargs):
     """(result, process CPU seconds, wall seconds): on a shared machine the CPU time is the
     figure that does not depend on the other jobs."""
@@ -163,7 +149,7 @@ def speed(sizes: list[int], static_up_to: int, highs_up_to: int) -> None:
         f"{'wall s':>7s} {'stat.SOCP':>9s} {'cpu s':>7s} {'LP HiGHS':>9s} {'cpu s':>7s}"
     )
     for target in sizes:
-        model = _ladder_model(target)
+        model = ladder_wall(target)
 
         def build(model=model):
             problem = formulation.Problem.of(model)

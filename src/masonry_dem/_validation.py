@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+from collections.abc import Iterable, Mapping
 from typing import Any
 
 import numpy as np
@@ -47,6 +49,25 @@ def positive_scalar(name: str, value: Any, strict: bool = True) -> float:
         raise ValueError(f"{name} must be a scalar, got shape {arr.shape}")
     require_positive(name, arr, strict)
     return float(arr)
+
+
+def check_positive_fields(owner: Any, names: Iterable[str]) -> None:
+    """ValueError naming the first field of ``owner`` among ``names`` that is not a finite
+    number > 0 (a boolean is no number here)."""
+    for name in names:
+        value = getattr(owner, name)
+        number = isinstance(value, (int, float)) and not isinstance(value, bool)
+        if not (number and math.isfinite(value) and value > 0):
+            raise ValueError(f"{name} must be a positive number, got {value!r}")
+
+
+def check_count_fields(owner: Any, least: Mapping[str, int]) -> None:
+    """ValueError naming the first field of ``owner`` that is not an integer at least
+    ``least[name]``."""
+    for name, low in least.items():
+        value = getattr(owner, name)
+        if not isinstance(value, int) or isinstance(value, bool) or value < low:
+            raise ValueError(f"{name} must be an integer >= {low}, got {value!r}")
 
 
 def plain(value: Any) -> str:

@@ -236,8 +236,8 @@ def _nb_row_tangent(t, p, fti, l1, l2, mu, al, snap1, snap2, flag, k, fd_step, o
             out[a, q] = 0.0
         out[a, a] = 1.0
     # a moment at its rocking limit to round-off (a hinge pinned there by the mechanism)
-    # takes the elastic side, as a shear within SHEAR_TORSION_TOLERANCE of Eq. (A5) does: the
-    # rocking side's zero stiffness made S34 take 3.5x the iterations
+    # takes the elastic side, as a shear within SHEAR_TORSION_TOLERANCE of Eq. (A5) does: a
+    # zero stiffness chosen by round-off makes Newton cycle between the two sides
     lean = 1.0 + SHEAR_TORSION_TOLERANCE
     rock1 = (flag & FLAG_ROCKING_1) > 0 and abs(m1) > lean * (0.5 * cap * l2)
     rock2 = (flag & FLAG_ROCKING_2) > 0 and abs(m2) > lean * (0.5 * cap * l1)

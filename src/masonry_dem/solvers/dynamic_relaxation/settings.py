@@ -8,8 +8,9 @@ import math
 from dataclasses import dataclass, field
 from typing import Literal, get_args
 
+from masonry_dem._validation import check_count_fields, check_positive_fields
 from masonry_dem.constitutive.law import Memory, Tension
-from masonry_dem.model import deprecated_law_option
+from masonry_dem.model import check_choice, deprecated_law_option
 
 MassRule = Literal["stiffness", "density"]
 TimeStepRule = Literal["gershgorin", "power"]
@@ -75,38 +76,38 @@ class DRSettings:
         deprecated_law_option("DRSettings", "tension", self.tension)
         deprecated_law_option("DRSettings", "memory", self.memory)
         for name, allowed in _CHOICES.items():
-            if getattr(self, name) not in allowed:
-                raise ValueError(f"{name} must be one of {allowed}, got {getattr(self, name)!r}")
-        for name in (
-            "dt_fraction",
-            "viscous_ratio",
-            "ramp_rate",
-            "tolerance",
-            "energy_tolerance",
-            "ramp_tolerance",
-            "initial_step",
-            "max_step",
-            "bracket_tolerance",
-            "stall_factor",
-        ):
-            value = getattr(self, name)
-            if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
-                raise ValueError(f"{name} must be a positive number, got {value!r}")
-        if self.dt is not None and not (math.isfinite(self.dt) and self.dt > 0):
-            raise ValueError(f"dt must be a positive number or None, got {self.dt!r}")
+            check_choice(name, getattr(self, name), allowed)
+        check_positive_fields(
+            self,
+            (
+                "dt_fraction",
+                "viscous_ratio",
+                "ramp_rate",
+                "tolerance",
+                "energy_tolerance",
+                "ramp_tolerance",
+                "initial_step",
+                "max_step",
+                "bracket_tolerance",
+                "stall_factor",
+            ),
+        )
+        if self.dt is not None:
+            check_positive_fields(self, ("dt",))
         if self.growth < 1:
             raise ValueError(f"growth must be >= 1, got {self.growth!r}")
-        for name in (
-            "max_cycles",
-            "max_steps",
-            "check_every",
-            "blowup_patience",
-            "min_stall_window",
-        ):
-            if getattr(self, name) < 1:
-                raise ValueError(f"{name} must be at least 1, got {getattr(self, name)!r}")
-        if self.max_cuts < 0 or self.power_iterations < 1:
-            raise ValueError("max_cuts must be >= 0 and power_iterations >= 1")
+        check_count_fields(
+            self,
+            {
+                "max_cycles": 1,
+                "max_steps": 1,
+                "check_every": 1,
+                "blowup_patience": 1,
+                "min_stall_window": 1,
+                "max_cuts": 0,
+                "power_iterations": 1,
+            },
+        )
 
 
 @dataclass

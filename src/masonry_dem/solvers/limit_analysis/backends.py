@@ -180,7 +180,7 @@ def solve_associative(
 def _static_clarabel(problem: Problem, R, K: int, kinematic_detail: str) -> Solution:
     """The static form, when the kinematic one stalls: on walls with no mechanism (an
     infeasible kinematic problem) Clarabel sometimes stops with "InsufficientProgress"
-    instead of a certificate (S5, S6 of the validation set); the static form is bounded by
+    instead of an infeasibility certificate; the static form is bounded by
     the lambda cap, which it reaches there ("no collapse"). A feasibility solve at
     lambda = 0 first (Clarabel has no warm start)."""
     E = (problem.H_T @ R).tocsc()

@@ -7,8 +7,9 @@ import math
 from dataclasses import dataclass, fields
 from typing import Literal, get_args
 
+from masonry_dem._validation import check_count_fields, check_positive_fields
 from masonry_dem.constitutive.law import TANGENT_METHODS, Memory, TangentMethod, Tension
-from masonry_dem.model import DofName, deprecated_law_option
+from masonry_dem.model import DofName, check_choice, deprecated_law_option
 
 #: what follows the first failure of load control (see ``StaticSettings.continuation``)
 Continuation = Literal["work", "bracket"]
@@ -206,15 +207,7 @@ class StaticSettings:
             "mode_displacement",
             "bound_tolerance",
         )
-        for name in positive:
-            value = getattr(self, name)
-            if not (
-                isinstance(value, (int, float))
-                and not isinstance(value, bool)
-                and math.isfinite(value)
-                and value > 0
-            ):
-                raise ValueError(f"{name} must be a positive number, got {value!r}")
+        check_positive_fields(self, positive)
         counts = {
             "max_iterations": 1,
             "max_steps": 1,
@@ -234,10 +227,7 @@ class StaticSettings:
             "stop_check_time_steps": 0,
             "max_control_cuts": 0,
         }
-        for name, least in counts.items():
-            value = getattr(self, name)
-            if not isinstance(value, int) or isinstance(value, bool) or value < least:
-                raise ValueError(f"{name} must be an integer >= {least}, got {value!r}")
+        check_count_fields(self, counts)
         if not (isinstance(self.growth, (int, float)) and self.growth >= 1):
             raise ValueError(f"growth must be >= 1, got {self.growth!r}")
         for name in ("creep", "flat_slope", "fold_match"):
@@ -267,12 +257,8 @@ class StaticSettings:
             )
         deprecated_law_option("StaticSettings", "tension", self.tension)
         deprecated_law_option("StaticSettings", "memory", self.memory)
-        if self.tangent not in TANGENT_METHODS:
-            raise ValueError(f"tangent must be one of {TANGENT_METHODS}, got {self.tangent!r}")
-        if self.continuation not in CONTINUATION:
-            raise ValueError(
-                f"continuation must be one of {CONTINUATION}, got {self.continuation!r}"
-            )
+        check_choice("tangent", self.tangent, TANGENT_METHODS)
+        check_choice("continuation", self.continuation, CONTINUATION)
 
 
 SETTING_NAMES = tuple(f.name for f in fields(StaticSettings))
