@@ -102,3 +102,28 @@ def test_the_thread_policy_set_after_the_threads_started_says_it_comes_too_late(
     with caplog.at_level("WARNING", logger="masonry_dem._threads"):
         assert md.set_thread_wait_policy() == "PASSIVE"
     assert "after the kernels' threads started" in caplog.text
+
+
+def test_heavy_names_load_on_first_use_and_once():
+    """Importing the package leaves limit analysis, dynamic relaxation and the case files
+    unloaded; the first access imports the defining module and keeps the name."""
+    code = (
+        "import sys, masonry_dem as md\n"
+        "heavy = ('masonry_dem.solvers.limit_analysis', 'masonry_dem.solvers.dynamic_relaxation',"
+        " 'masonry_dem.cases.casefile')\n"
+        "print(any(m in sys.modules for m in heavy))\n"
+        "f = md.limit_analysis\n"
+        "print('masonry_dem.solvers.limit_analysis' in sys.modules, 'limit_analysis' in vars(md))"
+    )
+    assert _python(code).split("\n") == ["False", "True True"]
+
+
+def test_the_lazy_names_of_the_static_solver_package_are_its_modules_names():
+    import masonry_dem.solvers.static as static
+    from masonry_dem.solvers.static import certificate, settings, solver
+
+    assert static.pushover is solver.pushover and static.StaticSettings is settings.StaticSettings
+    assert static.certify is certificate.certify
+    for package in (md, static):
+        with pytest.raises(AttributeError, match=f"module '{package.__name__}' has no attribute"):
+            package.no_such_name  # noqa: B018

@@ -13,9 +13,9 @@ calls :func:`set_thread_wait_policy` first (the command line does).
 
 from __future__ import annotations
 
-from importlib import import_module
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
+from masonry_dem._lazy import lazy_names
 from masonry_dem._threads import set_thread_wait_policy
 from masonry_dem.geometry import selectors as select
 from masonry_dem.geometry.blocks import Blocks
@@ -64,15 +64,7 @@ _LAZY = {
     "limit_analysis": "masonry_dem.solvers.limit_analysis",
     "sweep": "masonry_dem.studies.sweep",
 }
-
-
-def __getattr__(name: str) -> Any:
-    if name in _LAZY:
-        value = getattr(import_module(_LAZY[name]), name)
-        globals()[name] = value
-        return value
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
+__getattr__ = lazy_names(__name__, _LAZY)
 
 __all__ = [
     "Blocks",

@@ -9,7 +9,6 @@ and the value. A new builder is one line in ``_BUILDERS``: the schema reads its 
 from __future__ import annotations
 
 import inspect
-import sys
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -20,6 +19,7 @@ from typing import Any, Literal, cast, get_args
 import numpy as np
 from numpy.typing import NDArray
 
+from masonry_dem._toml import tomllib
 from masonry_dem._validation import plain
 from masonry_dem.cases.schema import CaseError, check_case, located
 from masonry_dem.geometry import builders, plans
@@ -38,11 +38,6 @@ from masonry_dem.model import (
     WeightProportional,
 )
 from masonry_dem.solvers.incremental import DisplacementControl, StaticSettings
-
-if sys.version_info >= (3, 11):
-    import tomllib as tomllib  # re-exported: the sweep parses values with it
-else:  # pragma: no cover
-    import tomli as tomllib
 
 DEFAULT_CASE = "default_wall.toml"
 AnalysisMethod = Literal["pushover", "limit"]

@@ -13,7 +13,6 @@ lambda is the uniform pressure in Pa.
 
 from __future__ import annotations
 
-import sys
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from functools import lru_cache
@@ -22,6 +21,7 @@ from typing import Any, Literal, get_args
 
 import numpy as np
 
+from masonry_dem._toml import tomllib
 from masonry_dem.geometry import selectors as sel
 from masonry_dem.geometry.blocks import Blocks
 from masonry_dem.geometry.builders import (
@@ -44,11 +44,6 @@ from masonry_dem.model import (
     WeightProportional,
 )
 from masonry_dem.solvers.incremental import StaticSettings
-
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover
-    import tomli as tomllib
 
 DATA_FILE = "baraldi_cecchi_2016.toml"
 

@@ -9,7 +9,6 @@ associative limit-analysis bound computed only when a collapse is to be certifie
 from __future__ import annotations
 
 import logging
-import sys
 import threading
 import time
 from pathlib import Path
@@ -104,10 +103,7 @@ def estimate_run(case: str | Path | Model | None, max_memory: str | None = None)
 def _geometry_of(case: str | Path | None) -> dict[str, Any] | None:
     """The ``[geometry]`` table of a case file, read without building anything (None for the
     bundled wall or a file that does not parse)."""
-    if sys.version_info >= (3, 11):
-        import tomllib
-    else:  # pragma: no cover
-        import tomli as tomllib
+    from masonry_dem._toml import tomllib
 
     if case is None:
         return None

@@ -17,7 +17,6 @@ import itertools
 import json
 import math
 import re
-import sys
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -129,10 +128,7 @@ def _split_top(text: str) -> list[str]:
 
 
 def _toml_value(token: str) -> Any:
-    if sys.version_info >= (3, 11):
-        import tomllib
-    else:  # pragma: no cover
-        import tomli as tomllib
+    from masonry_dem._toml import tomllib
 
     try:
         return tomllib.loads(f"v = {token}")["v"]

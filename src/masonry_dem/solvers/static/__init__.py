@@ -15,26 +15,29 @@ Names are imported lazily, so that :mod:`masonry_dem.results` can use the outcom
 
 from __future__ import annotations
 
-from importlib import import_module
-from typing import Any
+from typing import TYPE_CHECKING
 
+from masonry_dem._lazy import lazy_names
 from masonry_dem.solvers.static.outcome import Failure, Outcome, Status, StopReason
 
+if TYPE_CHECKING:  # the names ``__getattr__`` imports, seen by type checkers as re-exports
+    from masonry_dem.solvers.static.certificate import Certificate as Certificate
+    from masonry_dem.solvers.static.certificate import certify as certify
+    from masonry_dem.solvers.static.problem import DiscreteProblem as DiscreteProblem
+    from masonry_dem.solvers.static.settings import DisplacementControl as DisplacementControl
+    from masonry_dem.solvers.static.settings import StaticSettings as StaticSettings
+    from masonry_dem.solvers.static.solver import StaticSolver as StaticSolver
+    from masonry_dem.solvers.static.solver import pushover as pushover
+
 _LAZY = {
-    "StaticSettings": "settings",
-    "DisplacementControl": "settings",
-    "StaticSolver": "solver",
-    "pushover": "solver",
-    "Certificate": "certificate",
-    "certify": "certificate",
-    "DiscreteProblem": "problem",
+    "StaticSettings": ".settings",
+    "DisplacementControl": ".settings",
+    "StaticSolver": ".solver",
+    "pushover": ".solver",
+    "Certificate": ".certificate",
+    "certify": ".certificate",
+    "DiscreteProblem": ".problem",
 }
-
-
-def __getattr__(name: str) -> Any:
-    if name in _LAZY:
-        return getattr(import_module(f"masonry_dem.solvers.static.{_LAZY[name]}"), name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
+__getattr__ = lazy_names(__name__, _LAZY)
 
 __all__ = ["Failure", "Outcome", "Status", "StopReason", *_LAZY]
