@@ -15,8 +15,10 @@ from masonry_dem.constitutive.states import (
     FLAG_DETACHED,
     FLAG_ROCKING_1,
     FLAG_SHEAR_TORSION,
+    STATE_DETACHED,
     STATE_NAMES,
     STATE_OF_FLAGS,
+    STATE_SLIDING_ROCKING,
     JointFlag,
     JointState,
 )
@@ -25,9 +27,10 @@ from masonry_dem.constitutive.states import (
 def test_one_definition_of_the_joint_states():
     """The law's flag table, the export's names and the renderer's colours agree."""
     from masonry_dem.export.render import STATE_COLOURS
-    from masonry_dem.results import STATE_DETACHED, STATE_SLIDING_ROCKING
+    from masonry_dem.results import STATE_NAMES as RESULT_STATE_NAMES
 
     assert [s.label for s in JointState] == list(STATE_NAMES) and len(STATE_COLOURS) == 5
+    assert RESULT_STATE_NAMES is STATE_NAMES
     assert STATE_OF_FLAGS[FLAG_SHEAR_TORSION | FLAG_ROCKING_1] == JointState.SLIDING_ROCKING
     assert STATE_SLIDING_ROCKING == JointState.SLIDING_ROCKING
     assert STATE_OF_FLAGS[JointFlag.DETACHED] == STATE_DETACHED

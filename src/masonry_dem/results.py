@@ -11,15 +11,8 @@ from typing import TYPE_CHECKING, Any, Protocol, overload
 import numpy as np
 from numpy.typing import NDArray
 
-# damage state codes of the interfaces (cell data "state" in the VTU files), re-exported
-from masonry_dem.constitutive.states import (  # noqa: F401
-    STATE_DETACHED,
-    STATE_ELASTIC,
-    STATE_NAMES,
-    STATE_ROCKING,
-    STATE_SLIDING,
-    STATE_SLIDING_ROCKING,
-)
+# re-exported: the names of the codes of StepResult.state (docs/rendering.md)
+from masonry_dem.constitutive.states import STATE_NAMES as STATE_NAMES
 from masonry_dem.export.results_folder import save_pushover_rows
 from masonry_dem.solvers.static.outcome import Status, StopReason
 
@@ -32,7 +25,8 @@ class StepResult:
     """One converged equilibrium state.
 
     q: (n, 6) block displacements/rotations; actions: (m, 6) local interface actions
-    [f1, f2, fn, m1, m2, m3]; state: (m,) damage code; utilisation: (m,) demand/capacity.
+    [f1, f2, fn, m1, m2, m3]; state: (m,) damage code (a
+    :class:`~masonry_dem.constitutive.states.JointState`, named by ``STATE_NAMES``); utilisation: (m,) demand/capacity.
     """
 
     step: int
