@@ -51,13 +51,17 @@ def positive_scalar(name: str, value: Any, strict: bool = True) -> float:
     return float(arr)
 
 
+def _number(value: Any) -> bool:
+    """An int or a float (a boolean is no number here)."""
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
 def check_positive_fields(owner: Any, names: Iterable[str]) -> None:
     """ValueError naming the first field of ``owner`` among ``names`` that is not a finite
-    number > 0 (a boolean is no number here)."""
+    number > 0."""
     for name in names:
         value = getattr(owner, name)
-        number = isinstance(value, (int, float)) and not isinstance(value, bool)
-        if not (number and math.isfinite(value) and value > 0):
+        if not (_number(value) and math.isfinite(value) and value > 0):
             raise ValueError(f"{name} must be a positive number, got {value!r}")
 
 
@@ -68,6 +72,25 @@ def check_count_fields(owner: Any, least: Mapping[str, int]) -> None:
         value = getattr(owner, name)
         if not isinstance(value, int) or isinstance(value, bool) or value < low:
             raise ValueError(f"{name} must be an integer >= {low}, got {value!r}")
+
+
+def check_load_path_fields(owner: Any) -> None:
+    """The fields of the load path that the static and the dynamic-relaxation settings share,
+    each refused by name: the step sizes and the bracket width (positive numbers),
+    ``max_steps`` (an integer >= 1), ``growth`` (a finite number >= 1), ``max_load_factor``
+    (a number > 0, inf: no cap) and ``displacement_limit`` (a number > 0, or None: the
+    solver's own)."""
+    check_positive_fields(owner, ("initial_step", "max_step", "bracket_tolerance"))
+    check_count_fields(owner, {"max_steps": 1})
+    growth = owner.growth
+    if not (_number(growth) and math.isfinite(growth) and growth >= 1):
+        raise ValueError(f"growth must be a number >= 1, got {growth!r}")
+    cap = owner.max_load_factor
+    if not (_number(cap) and cap > 0):  # NaN fails this too
+        raise ValueError(f"max_load_factor must be a number > 0 (inf: no cap), got {cap!r}")
+    limit = owner.displacement_limit
+    if limit is not None and not (_number(limit) and limit > 0):
+        raise ValueError(f"displacement_limit must be a number > 0 or None, got {limit!r}")
 
 
 def plain(value: Any) -> str:

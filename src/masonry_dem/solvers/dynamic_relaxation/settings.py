@@ -8,7 +8,11 @@ import math
 from dataclasses import dataclass, field
 from typing import Literal, get_args
 
-from masonry_dem._validation import check_count_fields, check_positive_fields
+from masonry_dem._validation import (
+    check_count_fields,
+    check_load_path_fields,
+    check_positive_fields,
+)
 from masonry_dem.constitutive.law import Memory, Tension
 from masonry_dem.model import check_choice, deprecated_law_option
 
@@ -77,6 +81,7 @@ class DRSettings:
         deprecated_law_option("DRSettings", "memory", self.memory)
         for name, allowed in _CHOICES.items():
             check_choice(name, getattr(self, name), allowed)
+        check_load_path_fields(self)
         check_positive_fields(
             self,
             (
@@ -86,21 +91,15 @@ class DRSettings:
                 "tolerance",
                 "energy_tolerance",
                 "ramp_tolerance",
-                "initial_step",
-                "max_step",
-                "bracket_tolerance",
                 "stall_factor",
             ),
         )
         if self.dt is not None:
             check_positive_fields(self, ("dt",))
-        if self.growth < 1:
-            raise ValueError(f"growth must be >= 1, got {self.growth!r}")
         check_count_fields(
             self,
             {
                 "max_cycles": 1,
-                "max_steps": 1,
                 "check_every": 1,
                 "blowup_patience": 1,
                 "min_stall_window": 1,

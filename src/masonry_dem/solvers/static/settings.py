@@ -7,7 +7,11 @@ import math
 from dataclasses import dataclass, fields
 from typing import Literal, get_args
 
-from masonry_dem._validation import check_count_fields, check_positive_fields
+from masonry_dem._validation import (
+    check_count_fields,
+    check_load_path_fields,
+    check_positive_fields,
+)
 from masonry_dem.constitutive.law import TANGENT_METHODS, Memory, TangentMethod, Tension
 from masonry_dem.model import DofName, check_choice, deprecated_law_option
 
@@ -186,10 +190,8 @@ class StaticSettings:
     bound_tolerance: float = 0.01
 
     def __post_init__(self) -> None:
+        check_load_path_fields(self)
         positive = (
-            "initial_step",
-            "max_step",
-            "bracket_tolerance",
             "tolerance",
             "control_tolerance",
             "residual_stiffness",
@@ -210,7 +212,6 @@ class StaticSettings:
         check_positive_fields(self, positive)
         counts = {
             "max_iterations": 1,
-            "max_steps": 1,
             "easy_iterations": 0,
             "stall_window": 1,
             "search_cuts": 1,
@@ -228,20 +229,10 @@ class StaticSettings:
             "max_control_cuts": 0,
         }
         check_count_fields(self, counts)
-        if not (isinstance(self.growth, (int, float)) and self.growth >= 1):
-            raise ValueError(f"growth must be >= 1, got {self.growth!r}")
         for name in ("creep", "flat_slope", "fold_match"):
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and math.isfinite(value)):
                 raise ValueError(f"{name} must be a finite number, got {value!r}")
-        if not (
-            isinstance(self.max_load_factor, (int, float))
-            and not isinstance(self.max_load_factor, bool)
-            and self.max_load_factor > 0  # NaN fails this too; +inf (no cap) passes
-        ):
-            raise ValueError(
-                f"max_load_factor must be a number > 0 (inf: no cap), got {self.max_load_factor!r}"
-            )
         if not (
             isinstance(self.limit_elastic_multiple, (int, float))
             and math.isfinite(self.limit_elastic_multiple)
@@ -250,10 +241,6 @@ class StaticSettings:
             raise ValueError(
                 "limit_elastic_multiple must be a number >= 0 (0: off), got "
                 f"{self.limit_elastic_multiple!r}"
-            )
-        if self.displacement_limit is not None and not self.displacement_limit > 0:
-            raise ValueError(
-                f"displacement_limit must be positive or None, got {self.displacement_limit!r}"
             )
         deprecated_law_option("StaticSettings", "tension", self.tension)
         deprecated_law_option("StaticSettings", "memory", self.memory)

@@ -1,0 +1,44 @@
+"""The load-path fields the static and the dynamic-relaxation settings share are refused by
+name in both, with the same message (one check, ``_validation.check_load_path_fields``)."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from masonry_dem.solvers.dynamic_relaxation import DRSettings
+from masonry_dem.solvers.incremental import StaticSettings
+
+BAD = [
+    ("initial_step", 0.0, "initial_step must be a positive number"),
+    ("max_step", math.inf, "max_step must be a positive number"),
+    ("bracket_tolerance", -0.01, "bracket_tolerance must be a positive number"),
+    ("max_steps", 0, "max_steps must be an integer >= 1"),
+    ("max_steps", 2.0, "max_steps must be an integer >= 1"),
+    ("growth", 0.5, "growth must be a number >= 1"),
+    ("growth", math.nan, "growth must be a number >= 1"),
+    ("growth", "fast", "growth must be a number >= 1"),
+    ("max_load_factor", -1.0, "max_load_factor must be a number > 0"),
+    ("max_load_factor", math.nan, "max_load_factor must be a number > 0"),
+    ("max_load_factor", True, "max_load_factor must be a number > 0"),
+    ("displacement_limit", -0.01, "displacement_limit must be a number > 0 or None"),
+    ("displacement_limit", math.nan, "displacement_limit must be a number > 0 or None"),
+    ("displacement_limit", "half a block", "displacement_limit must be a number > 0 or None"),
+]
+
+
+@pytest.mark.parametrize("settings", [StaticSettings, DRSettings])
+@pytest.mark.parametrize("field, value, message", BAD)
+def test_both_settings_refuse_a_bad_load_path_field_by_name(settings, field, value, message):
+    with pytest.raises(ValueError, match=message):
+        settings(**{field: value})
+
+
+@pytest.mark.parametrize("settings", [StaticSettings, DRSettings])
+def test_both_settings_take_the_load_path_fields_at_their_limits(settings):
+    """growth 1 keeps the step, an infinite max_load_factor is no cap, displacement_limit None
+    is the solver's own, and an infinite one no limit."""
+    s = settings(growth=1, max_load_factor=math.inf, displacement_limit=None, max_steps=1)
+    assert (s.growth, s.max_load_factor, s.displacement_limit) == (1, math.inf, None)
+    assert settings(displacement_limit=math.inf).displacement_limit == math.inf
