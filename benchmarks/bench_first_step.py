@@ -61,7 +61,7 @@ def main() -> None:
     for tensile in args.tensile:
         model = wall(args.size, tensile)
         solver = StaticSolver(model)
-        dead = solver._dead_load()
+        dead = solver.dead_load()
         solver.accept(dead, 0, 0.0)
         its = model.interfaces
         fn = dead.response.trial[:, 2]

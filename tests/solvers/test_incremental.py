@@ -328,7 +328,7 @@ def test_an_elastic_step_of_a_dry_wall_takes_one_newton_iteration(lam):
         loads=[SelfWeight(), WeightProportional(direction=(0, 0, 1))],
     )
     solver = StaticSolver(model)
-    dead = solver._dead_load()
+    dead = solver.dead_load()
     assert dead.ok
     solver.accept(dead, 0, 0.0)
     out = solver.equilibrate(lam)

@@ -9,6 +9,8 @@ import logging
 import time
 from pathlib import Path
 
+from masonry_dem.cli.options import add_overwrite
+
 log = logging.getLogger(__name__)
 
 
@@ -40,12 +42,7 @@ def add_parser(subparsers) -> None:
     )
     p.add_argument("--out", default="results/limit", help="results folder (default: %(default)s)")
     p.add_argument("--no-render", action="store_true", help="skip the PNG of the mechanism")
-    p.add_argument(
-        "--overwrite",
-        action="store_true",
-        help="replace the run already in --out (removes the package's own files there, and "
-        "only those); without it such a folder is refused",
-    )
+    add_overwrite(p)
     p.set_defaults(func=limit_command)
 
 

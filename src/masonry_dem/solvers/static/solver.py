@@ -143,7 +143,7 @@ class StaticSolver(Corrector):
             if callback is not None:
                 callback(sr)
 
-        dead = self._dead_load()
+        dead = self.dead_load()
         if not dead.ok:
             reason = f"no equilibrium under the dead load: {dead.reason}"
             zero = self.residual(np.zeros_like(self.q), 0.0, 0.0)[2]
@@ -165,7 +165,7 @@ class StaticSolver(Corrector):
             paths.displacement_control(self, hist, record, control, monitor_dof)
         return self._finish(hist, t0)
 
-    def _dead_load(self) -> Outcome:
+    def dead_load(self) -> Outcome:
         """The equilibrium under the dead load (the specimens stood: the damped fallback
         may be used). Elastic displacement is no mechanism: where the search passes the
         displacement limit, the limit is widened by the displacement of the bonded assembly
