@@ -81,7 +81,7 @@ GRIDS: dict[Method, Grid] = {
     ),
 }
 #: settings run only with ``full=True``, the ones that take minutes on the default cases: a DR
-#: time step costs ~5 ms since the energy-metric return of the law; the default study keeps
+#: time step costs ~5 ms on these walls (the law's energy-metric return); the default study keeps
 #: the defaults, the fastest DR setting at 1 % and the static knobs, and stays under an hour
 FULL_ONLY: dict[Method, tuple[str, ...]] = {
     Method.STATIC: ("bracket 0.1%", "fine steps", "tolerance 1e-5"),
