@@ -193,10 +193,16 @@ def _load(
     )
 
 
+def check_case_data(data: dict[str, Any], source: str = "<dict>") -> None:
+    """Check a parsed case file against the schema without building anything: CaseError (a
+    ValueError) naming ``source``, the table path and the value."""
+    check_case(data, source, _BUILDERS, StaticSettings)
+
+
 def case_from_dict(data: dict[str, Any], source: str = "<dict>") -> Case:
     """The scene of a parsed case file; raises CaseError (a ValueError) naming ``source``, the
     table path and the value for anything the schema or the builders refuse."""
-    check_case(data, source, _BUILDERS, StaticSettings)
+    check_case_data(data, source)
     with _at(source, "[geometry]"):
         blocks, base, wall = build_blocks(data["geometry"])
     with _at(source, "[material]"):

@@ -273,15 +273,14 @@ def make_plan(
 ) -> Plan:
     """The plan of a sweep, every value checked by the case schema (CaseError, a ValueError,
     naming the path, the value and the allowed range)."""
-    from masonry_dem.cases.casefile import _BUILDERS, read_case_data
-    from masonry_dem.cases.schema import CaseError, check_case
-    from masonry_dem.solvers.incremental import StaticSettings
+    from masonry_dem.cases.casefile import check_case_data, read_case_data
+    from masonry_dem.cases.schema import CaseError
 
     if isinstance(case, Mapping):
         data, source = copy.deepcopy(dict(case)), "<dict>"
     else:
         data, source = read_case_data(case)
-    check_case(data, source, _BUILDERS, StaticSettings)
+    check_case_data(data, source)
     grid: dict[str, list[Any]] = {}
     for path, spec in (vary or {}).items():
         path_keys(path)
@@ -312,7 +311,7 @@ def make_plan(
     for path, vals in every.items():
         for value in _distinct(vals):
             try:
-                check_case(set_path(data, path, value), source, _BUILDERS, StaticSettings)
+                check_case_data(set_path(data, path, value), source)
             except CaseError as exc:
                 raise CaseError(f"sweep parameter {path} = {plain(value)}: {exc}") from None
     return plan
