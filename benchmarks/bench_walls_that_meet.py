@@ -10,11 +10,18 @@ In one run, alternating U and flat ``--repeat`` times, best of each, it prints:
 
 - ``detect+assemble``: contact detection, ``Model.build`` and K on the free DOFs;
 - ``linear solve``: one elastic solve (``solve_linear``: assembly of K, SuperLU with its
-  default ordering, back substitution), best of 5, and ``LU fill``, the entries of its
-  factors; ``tangent LU``: one factorization of the static solver's tangent at the
-  dead-load state, as every Newton step after the first does it (the multifrontal LU with the
-  ordering the solver keeps), best of 5;
-- ``pushover``: the static solver to collapse, its Newton iterations and factorizations;
+  default ordering, back substitution), best of 5, and ``K fill``, the entries of its
+  factors; ``K parts``: the connected parts of K's graph of DOFs (a flat wall's elastic
+  stiffness falls apart into its in-plane and its out-of-plane DOFs, which no joint of
+  a plane wall couples; the corners of a U wall couple them, so its K is one part and
+  fills in about twice as much: a property of the plan, not of an ordering);
+- ``tangent fill``: the entries of SuperLU's factors (COLAMD) of the static solver's
+  tangent pattern, 6 x 6 per pair of blocks in contact whatever the plan: the fill every
+  factorization of the pushover pays; ``tangent LU``: one factorization of the static
+  solver's tangent at the dead-load state, as every Newton step after the first does it
+  (the multifrontal LU with the ordering the solver keeps), best of 5;
+- ``pushover``: the static solver to collapse, its recorded steps, Newton iterations,
+  factorizations and the time steps of its dynamic-relaxation checks;
 - ``per iteration``, ``per factorization``: pushover seconds per Newton iteration and per
   factorization of the tangent, the cost of the solver's work on that wall whatever the
   length of its path;
@@ -32,6 +39,9 @@ import platform
 import sys
 import time
 
+import numpy as np
+from scipy import sparse
+from scipy.sparse.csgraph import connected_components
 from scipy.sparse.linalg import splu
 
 from masonry_dem.assembly.stiffness import Assembly
@@ -40,7 +50,7 @@ from masonry_dem.geometry.builders import add_base, running_bond_wall
 from masonry_dem.geometry.interfaces import detect_interfaces
 from masonry_dem.geometry.plans import u_wall
 from masonry_dem.model import InterfaceMaterial, Model, SelfWeight, Support, WeightProportional
-from masonry_dem.solvers.incremental import StaticSolver, pushover
+from masonry_dem.solvers.incremental import StaticSolver
 from masonry_dem.solvers.linear import solve_linear
 
 A, B, S, GAMMA = 0.02824, 0.07978, 0.03968, 26.8e3  # Restrepo Velez's stones
@@ -77,11 +87,20 @@ def measure(wall, held: bool) -> dict:
         t0 = time.perf_counter()
         solve_linear(model, 0.0)
         linear.append(time.perf_counter() - t0)
-    lu = splu(Assembly.of(model).stiffness().tocsc())
+    K = Assembly.of(model).stiffness().tocsc()
+    lu = splu(K)
+    parts = connected_components(K, directed=False)[0]
     t0 = time.perf_counter()
-    h = pushover(model)
+    pushed = StaticSolver(model)
+    h = pushed.run()
     seconds = time.perf_counter() - t0
     solver = StaticSolver(model)
+    pattern = solver.problem.tangent_assembler
+    n = pattern.n
+    ones = np.ones(pattern.nnz)
+    T = sparse.csc_matrix((ones, pattern.indices, pattern.indptr), shape=(n, n))
+    T = T + sparse.identity(n, format="csc") * n  # the pattern, numerically regular
+    tangent_lu = splu(T.tocsc(), permc_spec="COLAMD")
     # at the dead-load state (at rest, unloaded dry joints have no tangent stiffness)
     response = solver.residual(h.steps[0].q.reshape(-1), 0.0)[2]
     solver.problem.factor(response)  # the first factorization fixes the ordering and the fronts
@@ -96,10 +115,14 @@ def measure(wall, held: bool) -> dict:
         "assemble": assemble,
         "linear": min(linear),
         "fill": lu.L.nnz + lu.U.nnz,
+        "parts": parts,
+        "tangent_fill": tangent_lu.L.nnz + tangent_lu.U.nnz,
         "tangent": min(tangent),
         "pushover": seconds,
+        "steps": len(h.steps),
         "iterations": h.iterations,
         "factorizations": h.factorizations,
+        "time_steps": pushed.time_steps,
         "per_iteration": seconds / max(h.iterations, 1),
         "per_factorization": seconds / max(h.factorizations, 1),
         "lambda": h.collapse_multiplier,
@@ -147,10 +170,14 @@ def main(argv=None) -> int:
             ("assemble", "s"),
             ("linear", "ms"),
             ("fill", ""),
+            ("parts", ""),
+            ("tangent_fill", ""),
             ("tangent", "ms"),
             ("pushover", "s"),
+            ("steps", ""),
             ("iterations", ""),
             ("factorizations", ""),
+            ("time_steps", ""),
             ("per_iteration", "ms"),
             ("per_factorization", "ms"),
             ("lambda", ""),
@@ -161,7 +188,8 @@ def main(argv=None) -> int:
             names = {
                 "assemble": "detect+assemble",
                 "linear": "linear solve",
-                "fill": "LU fill",
+                "fill": "K fill",
+                "parts": "K parts",
                 "tangent": "tangent LU",
             }
             name = names.get(key, key.replace("_", " "))

@@ -249,12 +249,15 @@ class DynamicRelaxation(Relaxation):
         if math.isfinite(lam_fail):
             dlam = (lam_fail - lam) / 2
         last_reason = hist.reason if math.isfinite(lam_fail) else ""
+        # the stall window the failure at lam_fail was judged with (inf: not by a stall)
+        fail_window = math.inf
         for _ in range(s.max_steps):
             if math.isfinite(lam_fail) and lam_fail - lam <= s.bracket_tolerance * max(
                 abs(lam), 1e-12 * self.load_scale
             ):
                 break
             target = min(lam + dlam, s.max_load_factor)
+            window = self._stall_window()
             out = self._relax_with_cuts(state, target)
             if out.kind in FATAL:
                 hist.status, hist.reason = Status.FAILED, out.reason
@@ -271,12 +274,28 @@ class DynamicRelaxation(Relaxation):
                         f"reached max_load_factor {lam:.6g}",
                     )
                     return
-                if math.isfinite(lam_fail):
+                if math.isfinite(lam_fail) and self._stall_window() > fail_window:
+                    # the failure was a stall judged against faster steps than this one (the
+                    # first live step against the dead load's settling, a different, stiffer
+                    # mode): it proves no mechanism, so the failed load is tried again
+                    log.debug(
+                        "DR: lambda=%.6g stalled over %d time steps, a converged step took %d: "
+                        "tried again",
+                        lam_fail,
+                        fail_window,
+                        out.cycles,
+                    )
+                    dlam = lam_fail - lam
+                    lam_fail, fail_window, last_reason = math.inf, math.inf, ""
+                elif math.isfinite(lam_fail):
                     dlam = (lam_fail - lam) / 2
                 else:
                     dlam = min(dlam * s.growth, max_dlam)
             else:
                 last_reason = out.reason
+                if target <= lam_fail:
+                    by_window = out.kind == "stalled" and out.cycles < s.max_cycles
+                    fail_window = window if by_window else math.inf
                 lam_fail = min(lam_fail, target)
                 log.debug("DR step to lambda=%.6g failed: %s", target, out.reason)
                 if not s.refine:
