@@ -20,6 +20,10 @@ block plus 4 per point)."""
 
 from __future__ import annotations
 
+import time
+from collections.abc import Mapping
+from typing import Any
+
 import numpy as np
 from scipy import sparse
 
@@ -51,10 +55,25 @@ def corner_velocity_rows(problem: Problem, grid: int) -> sparse.csc_matrix:
     return (C @ Hs).tocsc()
 
 
-def solve_kinematic_clarabel(problem: Problem, grid: int) -> tuple[Solution, np.ndarray, int]:
+#: Clarabel's settings for the kinematic SOCP, measured on the ladder walls by
+#: ``python benchmarks/bench_limit_analysis.py --profile`` (docs/limit_analysis.md, "Speed"):
+#: ``qdldl``, not the default ``faer``: as fast or faster at 1 041 and 3 053 blocks on one
+#: thread, and much slower on two (its threads compete with the other jobs); the iterative
+#: refinement off: 0.74x the CPU at 1 041 blocks and 0.84x at 3 053 for the same lambda to
+#: 1e-6 and an admissible mechanism (every answer is checked by ``mechanism_violation``).
+CLARABEL_OPTIONS: dict[str, Any] = {
+    "direct_solve_method": "qdldl",
+    "iterative_refinement_enable": False,
+}
+
+
+def solve_kinematic_clarabel(
+    problem: Problem, grid: int, options: Mapping[str, Any] | None = None
+) -> tuple[Solution, np.ndarray, int]:
     """min -(rhs/|live|) . u s.t. (live/|live|) . u = 1, corner rows in SOC(3). Returns the
     solution (``x``: per point (c, t1, t2), the layout of ``associative_columns``; ``duals``:
-    the mechanism u), and the points per interface."""
+    the mechanism u; ``iterations`` and ``setup_seconds``, Clarabel's), and the points per
+    interface. ``options`` override ``CLARABEL_OPTIONS`` (Clarabel's settings by name)."""
     import clarabel
 
     G = corner_velocity_rows(problem, grid)
@@ -69,10 +88,11 @@ def solve_kinematic_clarabel(problem: Problem, grid: int) -> tuple[Solution, np.
     cones = [clarabel.ZeroConeT(1)] + [clarabel.SecondOrderConeT(3)] * n_points
     settings = clarabel.DefaultSettings()
     settings.verbose = False
-    # qdldl, not the default faer: 4 times less CPU on the ladder's 1 041-block wall
-    # (docs/limit_analysis.md)
-    settings.direct_solve_method = "qdldl"
+    for name, value in {**CLARABEL_OPTIONS, **(options or {})}.items():
+        setattr(settings, name, value)
+    t0 = time.process_time()
     out = clarabel.DefaultSolver(sparse.csc_matrix((n_u, n_u)), -rhs, A, b, cones, settings)
+    setup = time.process_time() - t0
     sol = out.solve()
     word = str(sol.status)
     K = n_points // max(problem.model.interfaces.count, 1)
@@ -92,4 +112,6 @@ def solve_kinematic_clarabel(problem: Problem, grid: int) -> tuple[Solution, np.
     z = np.asarray(sol.z)[1:].reshape(-1, 3)
     mu = np.repeat(problem.model.friction, K)
     x = np.column_stack([norm * z[:, 0], -norm * mu * z[:, 1], -norm * mu * z[:, 2]]).ravel()
-    return Solution("optimal", lam, x, u, f"Clarabel: {word} (kinematic)"), u, K
+    detail = f"Clarabel: {word} (kinematic, {sol.iterations} iterations)"
+    answer = Solution("optimal", lam, x, u, detail, int(sol.iterations), setup)
+    return answer, u, K
