@@ -187,11 +187,12 @@ def speed(sizes: list[int], static_up_to: int, highs_up_to: int) -> None:
         )
 
 
-#: Clarabel's settings compared by ``--profile``: the package's (``CLARABEL_OPTIONS``), the
-#: iterative refinement back on (the previous default), and ``faer`` on one and two threads
+#: Clarabel's settings compared by ``--profile``: the package's (``clarabel_options``), the
+#: iterative refinement back on, and each factorization on one and two threads
 PROFILE_VARIANTS: dict[str, dict[str, object]] = {
     "package": {},
     "refine": {"iterative_refinement_enable": True},
+    "qdldl": {"direct_solve_method": "qdldl"},
     "faer 1": {"direct_solve_method": "faer", "max_threads": 1},
     "faer 2": {"direct_solve_method": "faer", "max_threads": 2},
 }

@@ -56,15 +56,23 @@ def corner_velocity_rows(problem: Problem, grid: int) -> sparse.csc_matrix:
 
 
 #: Clarabel's settings for the kinematic SOCP, measured on the ladder walls by
-#: ``python benchmarks/bench_limit_analysis.py --profile`` (docs/limit_analysis.md, "Speed"):
-#: ``qdldl``, not the default ``faer``: as fast or faster at 1 041 and 3 053 blocks on one
-#: thread, and much slower on two (its threads compete with the other jobs); the iterative
-#: refinement off: 0.74x the CPU at 1 041 blocks and 0.84x at 3 053 for the same lambda to
-#: 1e-6 and an admissible mechanism (every answer is checked by ``mechanism_violation``).
-CLARABEL_OPTIONS: dict[str, Any] = {
-    "direct_solve_method": "qdldl",
-    "iterative_refinement_enable": False,
-}
+#: ``python benchmarks/bench_limit_analysis.py --profile`` (docs/limit_analysis.md, "Where the
+#: time goes"): the iterative refinement off (0.79x the CPU at 1 041 blocks, 0.83x at 3 053,
+#: the same lambda to 1e-6; every mechanism is still checked by ``mechanism_violation``)
+CLARABEL_OPTIONS: dict[str, Any] = {"iterative_refinement_enable": False}
+#: from this many velocities (6 per free block) Clarabel factorizes its KKT system with
+#: ``faer`` (supernodal LDL^T) on one thread, below with ``qdldl``: faer took 1.23x qdldl's
+#: CPU at 1 041 blocks (6 240 velocities), 0.72x at 3 053 (18 312) and 0.32x at 10 051
+#: (60 300: 61 against 194 s); on two threads it took 2-2.7x the CPU of one on the shared
+#: machine
+SUPERNODAL_FROM = 10_000
+
+
+def clarabel_options(velocities: int) -> dict[str, Any]:
+    """Clarabel's settings for a kinematic SOCP of ``velocities`` unknowns."""
+    if velocities >= SUPERNODAL_FROM:
+        return {**CLARABEL_OPTIONS, "direct_solve_method": "faer", "max_threads": 1}
+    return {**CLARABEL_OPTIONS, "direct_solve_method": "qdldl"}
 
 
 def solve_kinematic_clarabel(
@@ -73,7 +81,7 @@ def solve_kinematic_clarabel(
     """min -(rhs/|live|) . u s.t. (live/|live|) . u = 1, corner rows in SOC(3). Returns the
     solution (``x``: per point (c, t1, t2), the layout of ``associative_columns``; ``duals``:
     the mechanism u; ``iterations`` and ``setup_seconds``, Clarabel's), and the points per
-    interface. ``options`` override ``CLARABEL_OPTIONS`` (Clarabel's settings by name)."""
+    interface. ``options`` override ``clarabel_options`` (Clarabel's settings by name)."""
     import clarabel
 
     G = corner_velocity_rows(problem, grid)
@@ -88,7 +96,7 @@ def solve_kinematic_clarabel(
     cones = [clarabel.ZeroConeT(1)] + [clarabel.SecondOrderConeT(3)] * n_points
     settings = clarabel.DefaultSettings()
     settings.verbose = False
-    for name, value in {**CLARABEL_OPTIONS, **(options or {})}.items():
+    for name, value in {**clarabel_options(n_u), **(options or {})}.items():
         setattr(settings, name, value)
     t0 = time.process_time()
     out = clarabel.DefaultSolver(sparse.csc_matrix((n_u, n_u)), -rhs, A, b, cones, settings)
