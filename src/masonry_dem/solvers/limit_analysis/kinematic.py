@@ -58,7 +58,8 @@ def corner_velocity_rows(problem: Problem, grid: int) -> sparse.csc_matrix:
 #: Clarabel's settings for the kinematic SOCP, measured on the ladder walls by
 #: ``python benchmarks/bench_limit_analysis.py --profile`` (docs/limit_analysis.md, "Where the
 #: time goes"): the iterative refinement off (0.79x the CPU at 1 041 blocks, 0.83x at 3 053,
-#: the same lambda to 1e-6; every mechanism is still checked by ``mechanism_violation``)
+#: 0.95x at 10 051 with qdldl, the same lambda to 1e-6; every mechanism is still checked by
+#: ``mechanism_violation``)
 CLARABEL_OPTIONS: dict[str, Any] = {"iterative_refinement_enable": False}
 #: from this many velocities (6 per free block) Clarabel factorizes its KKT system with
 #: ``faer`` (supernodal LDL^T) on one thread, below with ``qdldl``: faer took 1.23x qdldl's
