@@ -7,6 +7,9 @@
     python benchmarks/bench_limit_analysis.py --ladder 100 1000 10000   # blocks: LA vs pushover
     python benchmarks/bench_limit_analysis.py --speed 100 1000 10000    # build vs solve, the
                                                                # formulations and solvers
+    python benchmarks/bench_limit_analysis.py --profile 300 1000 3000   # the exact cone: size
+                                                               # per block, Clarabel's setup,
+                                                               # iterations and settings
 
 Times are wall-clock seconds of one run on this machine; compare the ratios printed in one
 run, not figures from different runs.
@@ -184,6 +187,86 @@ def speed(sizes: list[int], static_up_to: int, highs_up_to: int) -> None:
         )
 
 
+#: Clarabel's settings compared by ``--profile``: the package's (``clarabel_options``), the
+#: iterative refinement back on, and each factorization on one and two threads
+PROFILE_VARIANTS: dict[str, dict[str, object]] = {
+    "package": {},
+    "refine": {"iterative_refinement_enable": True},
+    "qdldl": {"direct_solve_method": "qdldl"},
+    "faer 1": {"direct_solve_method": "faer", "max_threads": 1},
+    "faer 2": {"direct_solve_method": "faer", "max_threads": 2},
+}
+
+
+def _normal_matrix_factor_seconds(G) -> float:
+    """CPU seconds of one numeric Cholesky (PARDISO, one thread, METIS) of G^T W G with a
+    positive definite 3 x 3 block W per cone: what one iteration of an interior point method
+    on the normal equations (6 rows per block) would factorize; nan without pypardiso."""
+    try:
+        from pypardiso import PyPardisoSolver
+    except ImportError:
+        return float("nan")
+    from scipy import sparse
+
+    p = G.shape[0] // 3
+    B = np.random.default_rng(0).standard_normal((p, 3, 3))
+    W = B @ B.transpose(0, 2, 1) + np.eye(3)
+    rows = np.repeat(np.arange(3 * p).reshape(-1, 3), 3, axis=1).ravel()
+    cols = np.tile(np.arange(3 * p).reshape(-1, 3), 3).ravel()
+    Wm = sparse.csr_matrix((W.ravel(), (rows, cols)), shape=(3 * p, 3 * p))
+    N = sparse.triu((G.T @ Wm @ G).tocsr(), format="csr")
+    N.sort_indices()
+    solver = PyPardisoSolver(mtype=2)
+    solver.libmkl.MKL_Set_Num_Threads(1)
+    solver.set_phase(11)
+    solver._call_pardiso(N, np.zeros(N.shape[0]))
+    solver.set_phase(22)
+    c0 = time.process_time()
+    solver._call_pardiso(N, np.zeros(N.shape[0]))
+    return time.process_time() - c0
+
+
+def profile(sizes: list[int]) -> None:
+    """Where the time of the exact cone goes, on the ladder's walls: the problem's size per
+    block, the build, Clarabel's setup and its iterations (CPU seconds, each variant of
+    ``PROFILE_VARIANTS``, with lambda), and one PARDISO factorization of the normal matrix."""
+    from masonry_dem.solvers.limit_analysis import formulation, kinematic
+
+    print(
+        f"{'blocks':>7s} {'u':>6s} {'cones':>7s} {'nnz A':>8s} {'build':>6s} {'variant':>8s} "
+        f"{'lambda':>9s} {'it':>3s} {'setup':>6s} {'solve':>7s} {'per it':>7s} {'x pkg':>6s}"
+    )
+    for target in sizes:
+        model = ladder_wall(target)
+
+        def build(model=model):
+            problem = formulation.Problem.of(model)
+            return problem, kinematic.corner_velocity_rows(problem, 2)
+
+        (problem, G), t_build, _ = _cpu(build)
+        n_u, cones = G.shape[1], G.shape[0] // 3
+        n = model.blocks.count
+        base = float("nan")
+        for name, options in PROFILE_VARIANTS.items():
+            (sol, _, _), t_solve, _ = _cpu(kinematic.solve_kinematic_clarabel, problem, 2, options)
+            if name == "package":
+                base = t_solve
+            per_it = t_solve / max(sol.iterations, 1)
+            print(
+                f"{n:7d} {n_u:6d} {cones:7d} {G.nnz + n_u:8d} {t_build:6.2f} {name:>8s} "
+                f"{sol.lam:9.6f} {sol.iterations:3d} {sol.setup_seconds:6.2f} "
+                f"{t_solve:7.2f} {per_it:7.3f} {t_solve / base:6.2f}",
+                flush=True,
+            )
+        t_n = _normal_matrix_factor_seconds(G.tocsr())
+        print(
+            f"{n:7d} per block: {n_u / n:.1f} velocities, {cones / n:.1f} cones, "
+            f"{(G.nnz + n_u) / n:.0f} nonzeros of A; PARDISO on the normal matrix "
+            f"({n_u} rows): {t_n:.3f} s per factorization",
+            flush=True,
+        )
+
+
 def main(argv: list[str] | None = None) -> None:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
     p.add_argument("--grid-study", action="store_true")
@@ -194,6 +277,7 @@ def main(argv: list[str] | None = None) -> None:
     )
     p.add_argument("--no-highs", action="store_true", help="ladder: Clarabel only")
     p.add_argument("--speed", nargs="*", type=int, default=None, metavar="BLOCKS")
+    p.add_argument("--profile", nargs="*", type=int, default=None, metavar="BLOCKS")
     p.add_argument("--static-up-to", type=int, default=1100, help="largest static SOCP (speed)")
     p.add_argument("--highs-up-to", type=int, default=320, help="largest LP (speed)")
     p.add_argument("--pushover-up-to", type=int, default=2000, help="largest ladder pushover")
@@ -206,8 +290,11 @@ def main(argv: list[str] | None = None) -> None:
         ladder(args.ladder or [100, 1000, 10000], args.pushover_up_to, not args.no_highs)
     if args.speed is not None:
         speed(args.speed or [100, 1000, 10000], args.static_up_to, args.highs_up_to)
+    if args.profile is not None:
+        profile(args.profile or [300, 1000, 3000])
     if not (
-        args.grid_study
+        args.profile is not None
+        or args.grid_study
         or args.cases is not None
         or args.ladder is not None
         or args.speed is not None

@@ -378,3 +378,29 @@ def test_ladder_wall_is_scale_free_and_its_mechanism_admissible():
     assert _lam(limit_analysis(small, friction_sides=4)) == pytest.approx(lam, rel=1e-6)
     big = _ladder_wall(17, scale=20.0)
     assert _lam(limit_analysis(big, backend="clarabel")) == pytest.approx(lam, rel=1e-6)
+
+
+def test_clarabel_factorizations_give_the_same_mechanism():
+    """The kinematic SOCP's factorization is chosen by size (qdldl below
+    ``SUPERNODAL_FROM`` velocities, faer on one thread from there, for speed alone); both,
+    and the iterative refinement on or off, must give the 298-block ladder wall's exact
+    0.465658 (the 4-face LP's, see above) and an admissible mechanism."""
+    from masonry_dem.solvers.limit_analysis import formulation, kinematic
+    from masonry_dem.solvers.limit_analysis.result import mechanism_violation
+
+    assert kinematic.clarabel_options(kinematic.SUPERNODAL_FROM)["direct_solve_method"] == "faer"
+    assert kinematic.clarabel_options(kinematic.SUPERNODAL_FROM - 1)["direct_solve_method"] == (
+        "qdldl"
+    )
+    model = _ladder_wall(17)
+    problem = formulation.Problem.of(model)
+    for options in (
+        {"direct_solve_method": "qdldl"},
+        {"direct_solve_method": "faer", "max_threads": 1},
+        {"direct_solve_method": "qdldl", "iterative_refinement_enable": True},
+    ):
+        sol, u, _ = kinematic.solve_kinematic_clarabel(problem, 2, options)
+        assert sol.status == "optimal", sol.detail
+        assert sol.lam == pytest.approx(0.465658, rel=1e-5), options
+        assert sol.iterations > 0
+        assert mechanism_violation(model, problem.velocities(u), None) < 1e-6, options

@@ -136,8 +136,9 @@ def solve_clarabel(
     P = sparse.csc_matrix((nvar, nvar))
     settings = clarabel.DefaultSettings()
     settings.verbose = False
-    # qdldl, not the default faer: 4 times less CPU on the ladder's 1 041-block wall, whose
-    # KKT systems are small and sparse (docs/limit_analysis.md)
+    # qdldl, not the default faer: the non-associative iteration's walls are small, where
+    # faer took 1.23x qdldl's CPU on one thread and 2.7x on two (the kinematic form's 1 041-block
+    # ladder wall, docs/limit_analysis.md "Where the time goes")
     settings.direct_solve_method = "qdldl"
     solver = clarabel.DefaultSolver(P, q, A, np.concatenate(b), cones, settings)
     sol = solver.solve()

@@ -95,6 +95,8 @@ class Solution:
     x: np.ndarray = field(default_factory=lambda: np.zeros(0))
     duals: np.ndarray = field(default_factory=lambda: np.zeros(0))
     detail: str = ""
+    iterations: int = 0  # the solver's own (interior point iterations)
+    setup_seconds: float = 0.0  # CPU seconds of the solver's setup (before its iterations)
 
 
 #: lambda is capped at this multiple of max(1, |dead| / |live|): reaching the cap is "no

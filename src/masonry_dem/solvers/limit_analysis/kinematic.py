@@ -20,6 +20,10 @@ block plus 4 per point)."""
 
 from __future__ import annotations
 
+import time
+from collections.abc import Mapping
+from typing import Any
+
 import numpy as np
 from scipy import sparse
 
@@ -51,10 +55,34 @@ def corner_velocity_rows(problem: Problem, grid: int) -> sparse.csc_matrix:
     return (C @ Hs).tocsc()
 
 
-def solve_kinematic_clarabel(problem: Problem, grid: int) -> tuple[Solution, np.ndarray, int]:
+#: Clarabel's settings for the kinematic SOCP, measured on the ladder walls by
+#: ``python benchmarks/bench_limit_analysis.py --profile`` (docs/limit_analysis.md, "Where the
+#: time goes"): the iterative refinement off (0.79x the CPU at 1 041 blocks, 0.83x at 3 053,
+#: 0.95x at 10 051 with qdldl, the same lambda to 1e-6; every mechanism is still checked by
+#: ``mechanism_violation``)
+CLARABEL_OPTIONS: dict[str, Any] = {"iterative_refinement_enable": False}
+#: from this many velocities (6 per free block) Clarabel factorizes its KKT system with
+#: ``faer`` (supernodal LDL^T) on one thread, below with ``qdldl``: faer took 1.23x qdldl's
+#: CPU at 1 041 blocks (6 240 velocities), 0.72x at 3 053 (18 312) and 0.32x at 10 051
+#: (60 300: 61 against 194 s); on two threads it took 2-2.7x the CPU of one on the shared
+#: machine
+SUPERNODAL_FROM = 10_000
+
+
+def clarabel_options(velocities: int) -> dict[str, Any]:
+    """Clarabel's settings for a kinematic SOCP of ``velocities`` unknowns."""
+    if velocities >= SUPERNODAL_FROM:
+        return {**CLARABEL_OPTIONS, "direct_solve_method": "faer", "max_threads": 1}
+    return {**CLARABEL_OPTIONS, "direct_solve_method": "qdldl"}
+
+
+def solve_kinematic_clarabel(
+    problem: Problem, grid: int, options: Mapping[str, Any] | None = None
+) -> tuple[Solution, np.ndarray, int]:
     """min -(rhs/|live|) . u s.t. (live/|live|) . u = 1, corner rows in SOC(3). Returns the
     solution (``x``: per point (c, t1, t2), the layout of ``associative_columns``; ``duals``:
-    the mechanism u), and the points per interface."""
+    the mechanism u; ``iterations`` and ``setup_seconds``, Clarabel's), and the points per
+    interface. ``options`` override ``clarabel_options`` (Clarabel's settings by name)."""
     import clarabel
 
     G = corner_velocity_rows(problem, grid)
@@ -69,10 +97,11 @@ def solve_kinematic_clarabel(problem: Problem, grid: int) -> tuple[Solution, np.
     cones = [clarabel.ZeroConeT(1)] + [clarabel.SecondOrderConeT(3)] * n_points
     settings = clarabel.DefaultSettings()
     settings.verbose = False
-    # qdldl, not the default faer: 4 times less CPU on the ladder's 1 041-block wall
-    # (docs/limit_analysis.md)
-    settings.direct_solve_method = "qdldl"
+    for name, value in {**clarabel_options(n_u), **(options or {})}.items():
+        setattr(settings, name, value)
+    t0 = time.process_time()
     out = clarabel.DefaultSolver(sparse.csc_matrix((n_u, n_u)), -rhs, A, b, cones, settings)
+    setup = time.process_time() - t0
     sol = out.solve()
     word = str(sol.status)
     K = n_points // max(problem.model.interfaces.count, 1)
@@ -92,4 +121,6 @@ def solve_kinematic_clarabel(problem: Problem, grid: int) -> tuple[Solution, np.
     z = np.asarray(sol.z)[1:].reshape(-1, 3)
     mu = np.repeat(problem.model.friction, K)
     x = np.column_stack([norm * z[:, 0], -norm * mu * z[:, 1], -norm * mu * z[:, 2]]).ravel()
-    return Solution("optimal", lam, x, u, f"Clarabel: {word} (kinematic)"), u, K
+    detail = f"Clarabel: {word} (kinematic, {sol.iterations} iterations)"
+    answer = Solution("optimal", lam, x, u, detail, int(sol.iterations), setup)
+    return answer, u, K
