@@ -252,8 +252,7 @@ class DiscreteProblem:
         entries go straight to a numeric factorization."""
         if floor is None:
             floor = self.residual_stiffness
-        T = self.law.tangent(response, floor, self.tangent_method)
-        self._zero_capacity_tangent(T, response, floor)
+        T = self.joint_tangents(response, floor)
         data = self._tangents.data(T)
         self.factorizations += 1
         fronts = self._factorizer()
@@ -263,6 +262,18 @@ class DiscreteProblem:
             idx = np.arange(6)
             T[:, idx, idx] += 1e-6 * self.law.kbar
             return fronts.factor(self._tangents.data(T))
+
+    def joint_tangents(self, response: LawResponse, floor: float | None = None) -> np.ndarray:
+        """(m, 6, 6) tangents of the joints at ``response``, as :meth:`factor` assembles them:
+        the law's consistent tangent with ``floor`` x kbar on the diagonal, and joints of no
+        strength at zero compression reduced to their normal stiffness (their state is set
+        by round-off, :meth:`_zero_capacity_tangent`). With kn and kt scaled together by f,
+        these scale by f exactly, whatever round-off put those joints on either side."""
+        if floor is None:
+            floor = self.residual_stiffness
+        T = self.law.tangent(response, floor, self.tangent_method)
+        self._zero_capacity_tangent(T, response, floor)
+        return T
 
     def _zero_capacity_tangent(self, T: np.ndarray, response: LawResponse, floor: float) -> None:
         """Joints of no strength at zero compression (no tensile strength, trial normal force
