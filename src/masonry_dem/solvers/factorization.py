@@ -12,8 +12,10 @@ Backends (``BACKENDS``), each an ordinary library:
   pivots (SuperLU's symmetric mode); partial pivoting (COLAMD) where a diagonal pivot is zero.
 * ``"pardiso"`` (Intel MKL PARDISO through ``pypardiso``; x86-64): the analysis (METIS
   ordering, matching and scaling, symbolic factorization) with the first matrix, then a
-  numeric factorization per matrix, on ``numba.get_num_threads()`` MKL threads (so one knob,
-  ``NUMBA_NUM_THREADS``, sets the threads of every kernel).
+  numeric factorization per matrix, on one MKL thread below ``PARALLEL_FROM`` unknowns and
+  on ``numba.get_num_threads()`` from it (so one knob, ``NUMBA_NUM_THREADS``, sets the
+  threads of every kernel), fixed for the handle at its analysis (PARDISO sizes its work
+  space for the threads of the analysis: a later factorization on more threads crashed).
 * ``"umfpack"`` (SuiteSparse UMFPACK through ``kvxopt``) and ``"mumps"`` (MUMPS through
   ``python-mumps``): the symbolic analysis with the first matrix, a numeric factorization per
   matrix.
@@ -61,6 +63,15 @@ SMALL = 100
 #: the order of preference from ``SMALL`` unknowns, fastest first (bench_scale.py: MUMPS
 #: before UMFPACK at 6 000 and 60 000 DOFs)
 _PREFERENCE = ("pardiso", "mumps", "umfpack", "superlu")
+#: PARDISO factorizes on one thread below this many unknowns, on ``numba.get_num_threads()``
+#: from it: on the tangents the validation set factorizes (244-1 813 DOFs) and on the default
+#: walls of 2 420 and 5 970 DOFs, two MKL threads took 1.48x the time of one in total (1.42x
+#: at 5 970 DOFs; 0.85x only under 500 DOFs, where a factorization takes 0.2-0.5 ms) on the
+#: 2-core machine shared with other sessions: ``python benchmarks/bench_factorization.py
+#: --walls 20 30`` (docs/solvers.md, "Scale"). A front this small gives the threads too
+#: little work between their synchronisations, and on a busy machine the second thread
+#: waits for a core.
+PARALLEL_FROM = 10_000
 
 
 class SingularMatrix(RuntimeError):
@@ -291,6 +302,8 @@ class _Pardiso:
         self.values = np.ones(indices.size)
         self.generations = _Generation()
         self.analysed = False
+        #: MKL threads of every call, set at the analysis
+        self.threads = 1 if n < PARALLEL_FROM else max(1, numba.get_num_threads())
         # the arguments of every call but the phase and the right-hand sides, made once: on
         # the validation walls (250-6 000 DOFs) building the 16 ctypes arguments at each
         # call cost about as much as PARDISO's own factorization
@@ -320,11 +333,12 @@ class _Pardiso:
         self._one = (self._b.ctypes.data_as(double_p), self._x.ctypes.data_as(double_p))
 
     def _call(self, phase: int, b: np.ndarray | None = None) -> np.ndarray:
-        """One call of MKL's pardiso on this handle (phase 12, 22, 33 or -1) on numba's
-        thread count; x for b (None: no right-hand side)."""
+        """One call of MKL's pardiso on this handle (phase 12, 22, 33 or -1) on the threads
+        of its analysis (``threads``: numba's count may change between calls, e.g. in
+        ``masonry_dem.serial_kernels``); x for b (None: no right-hand side)."""
         s = self.solver
         # the C entry point (the lower-case name is the Fortran one, which takes a pointer)
-        s.libmkl.MKL_Set_Num_Threads_Local(ctypes.c_int(numba.get_num_threads()))
+        s.libmkl.MKL_Set_Num_Threads_Local(ctypes.c_int(self.threads))
         self._phase.value = phase
         self._error.value = 0
         if b is None or b.ndim == 1:
