@@ -95,10 +95,17 @@ class Factorizer(Protocol):
 
     name: str
     n: int
+    #: the backend's own order of the entries: it stores ``data[layout]`` (None: CSC order),
+    #: so that an assembler can write them in that order (:meth:`factor_laid_out`)
+    layout: np.ndarray | None
 
     def factor(self, data: np.ndarray) -> Factors:
         """LU factors of the matrix whose stored entries (CSC order of the pattern) are
         ``data``; raises :class:`SingularMatrix` when it is singular."""
+        ...
+
+    def factor_laid_out(self, values: np.ndarray) -> Factors:
+        """:meth:`factor` of the entries given in ``layout`` order (``data[layout]``)."""
         ...
 
 
@@ -230,6 +237,11 @@ class _SuperLU:
         self.gather = permuted.data.astype(np.int64) - 1
         self.permuted = (permuted.indptr, permuted.indices)
 
+    layout: np.ndarray | None = None  # the CSC order
+
+    def factor_laid_out(self, values: np.ndarray) -> Factors:
+        return self.factor(values)
+
     def factor(self, data: np.ndarray) -> Factors:
         indptr, indices = self.permuted
         A = sparse.csc_matrix((data[self.gather], indices, indptr), shape=(self.n,) * 2)
@@ -296,6 +308,7 @@ class _Pardiso:
             # matching
             self.solver.set_iparm(i, value)
         ia, ja, self.gather = _transpose_gather(indptr, indices, n)
+        self.layout: np.ndarray | None = self.gather  # PARDISO stores the CSR order
         # PARDISO's 1-based CSR, made once (pypardiso's own call converts it at each call)
         self.ia = (ia + 1).astype(np.int32)
         self.ja = (ja + 1).astype(np.int32)
@@ -365,6 +378,13 @@ class _Pardiso:
     def factor(self, data: np.ndarray) -> Factors:
         # in place: the pointer handed to PARDISO stays valid
         np.take(data, self.gather, out=self.values)
+        return self._factor()
+
+    def factor_laid_out(self, values: np.ndarray) -> Factors:
+        np.copyto(self.values, values)  # a contiguous copy instead of the gather
+        return self._factor()
+
+    def _factor(self) -> Factors:
         # the first matrix is analysed with its values (the matching and scaling use them)
         self._call(22 if self.analysed else 12)
         self.analysed = True
@@ -422,6 +442,11 @@ class _Umfpack:
             raise ValueError("the pattern holds repeated entries")
         self.symbolic = None  # of the first matrix (its values choose UMFPACK's strategy)
 
+    layout: np.ndarray | None = None  # the CSC order
+
+    def factor_laid_out(self, values: np.ndarray) -> Factors:
+        return self.factor(values)
+
     def factor(self, data: np.ndarray) -> Factors:
         kvxopt, umfpack = _kvxopt()
         self.matrix.V = kvxopt.matrix(np.ascontiguousarray(data, dtype=float))
@@ -453,6 +478,11 @@ class _Mumps:
 
     def _coo(self, data: np.ndarray) -> sparse.coo_array:
         return sparse.coo_array((data, (self.rows, self.cols)), shape=(self.n, self.n))
+
+    layout: np.ndarray | None = None  # the CSC order
+
+    def factor_laid_out(self, values: np.ndarray) -> Factors:
+        return self.factor(values)
 
     def factor(self, data: np.ndarray) -> Factors:
         import mumps

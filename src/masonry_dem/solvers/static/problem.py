@@ -138,11 +138,27 @@ class TangentAssembler:
         self.terms = _entry_terms(k_pair, e_r[kept], e_c[kept], self.term_ptr, first, record_order)
         self.nnz = kept.size
         self.n = nf
+        self._layout: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
 
-    def data(self, T: np.ndarray) -> np.ndarray:
-        """The stored entries of :meth:`matrix`, in its CSC order."""
+    def data(self, T: np.ndarray, layout: np.ndarray | None = None) -> np.ndarray:
+        """The stored entries of :meth:`matrix`, in its CSC order, or in the order
+        ``layout`` (``data(T)[layout]``, the same bits: each entry is the same sum, written
+        where a backend stores it, which saves the backend its gather at each matrix)."""
+        terms, ptr = (self.terms, self.term_ptr) if layout is None else self._laid_out(layout)
         assemble = _assemble_tangent.for_rows(self.H_loc.shape[0])
-        return assemble(self.H_loc, np.ascontiguousarray(T), self.terms, self.term_ptr)
+        return assemble(self.H_loc, np.ascontiguousarray(T), terms, ptr)
+
+    def _laid_out(self, layout: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(terms, pointers) of the entries in the order ``layout``, worked out once per
+        layout (the last one is kept)."""
+        if self._layout is None or self._layout[0] is not layout:
+            counts = np.diff(self.term_ptr)[layout]
+            ptr = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+            # term t of entry k is term t - ptr[k] of entry layout[k]
+            start = np.repeat(self.term_ptr[layout] - ptr[:-1], counts)
+            terms = self.terms[start + np.arange(ptr[-1])]
+            self._layout = (layout, terms, ptr)
+        return self._layout[1], self._layout[2]
 
     def matrix(self, T: np.ndarray, data: np.ndarray | None = None) -> sparse.csc_matrix:
         """K_ff for the tangents T (or for entries ``data`` assembled already)."""
@@ -253,15 +269,15 @@ class DiscreteProblem:
         if floor is None:
             floor = self.residual_stiffness
         T = self.joint_tangents(response, floor)
-        data = self._tangents.data(T)
-        self.factorizations += 1
         fronts = self._factorizer()
+        values = self._tangents.data(T, fronts.layout)  # in the backend's own order
+        self.factorizations += 1
         try:
-            return fronts.factor(data)
+            return fronts.factor_laid_out(values)
         except SingularMatrix:  # exactly singular: stiffen the floor
             idx = np.arange(6)
             T[:, idx, idx] += 1e-6 * self.law.kbar
-            return fronts.factor(self._tangents.data(T))
+            return fronts.factor_laid_out(self._tangents.data(T, fronts.layout))
 
     def joint_tangents(self, response: LawResponse, floor: float | None = None) -> np.ndarray:
         """(m, 6, 6) tangents of the joints at ``response``, as :meth:`factor` assembles them:
