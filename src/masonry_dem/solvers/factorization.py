@@ -64,14 +64,15 @@ SMALL = 100
 #: before UMFPACK at 6 000 and 60 000 DOFs)
 _PREFERENCE = ("pardiso", "mumps", "umfpack", "superlu")
 #: PARDISO factorizes on one thread below this many unknowns, on ``numba.get_num_threads()``
-#: from it: on the tangents the validation set factorizes (244-1 813 DOFs) and on the default
-#: walls of 2 420 and 5 970 DOFs, two MKL threads took 1.48x the time of one in total (1.42x
-#: at 5 970 DOFs; 0.85x only under 500 DOFs, where a factorization takes 0.2-0.5 ms) on the
-#: 2-core machine shared with other sessions: ``python benchmarks/bench_factorization.py
-#: --walls 20 30`` (docs/solvers.md, "Scale"). A front this small gives the threads too
-#: little work between their synchronisations, and on a busy machine the second thread
-#: waits for a core.
-PARALLEL_FROM = 10_000
+#: from it: on the tangents the validation set factorizes (244-1 813 DOFs) two MKL threads
+#: took 1.1-4.4x the time of one on most (0.84-0.91x only under 500 DOFs, where a
+#: factorization takes 0.2-0.5 ms), on the 2-core machine shared with other sessions, the
+#: rounds interleaved: ``python benchmarks/bench_factorization.py`` (docs/solvers.md,
+#: "Scale"). A front this small gives the threads too little work between their
+#: synchronisations. From 2 000 unknowns the same benchmark scattered between 1.0x and 1.5x
+#: from one run to the next, and on a quiet machine the 5 970-DOF wall factorized in 9.6 ms
+#: on two threads against 17.7 ms of CPU on one: larger tangents keep numba's thread count.
+PARALLEL_FROM = 2_000
 
 
 class SingularMatrix(RuntimeError):
