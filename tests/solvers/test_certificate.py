@@ -340,3 +340,24 @@ def test_work_control_stops_at_max_load_factor_and_a_completed_run_has_no_collap
     assert hist.final_load_factor == pytest.approx(1.5, rel=1e-12)
     assert hist.collapse_multiplier is None
     assert hist.summary()["lambda_bracket"] is None
+
+
+def test_the_certificate_of_a_wall_does_not_move_with_its_joint_stiffness():
+    """A 9 x 3 in-plane wall, left column held, friction 29: with kn and kt scaled together
+    by f, every displacement of the path scales by 1 / f and its lambdas agree to 1e-15, so
+    rho = F_L.v / v.K_0 v, a ratio of two stiffnesses along the same mode, must agree too.
+    The metric K_0 is the dead-load state's tangent, where the head joints carry nothing:
+    round-off set their flags, and the raw law tangent gave each its elastic shear stiffness
+    or none. On 878b2f7 rho was 0.48 at f = 1, 0.29 at f = 10 and 0.31 at f = 1000, and past
+    the kink 0.21 and 0.048: failed at f = 1, a collapse at f = 10 and 1000. The limit-analysis
+    bound of this wall is 10, so the stop at 0.93 with the tangent's stiffness along the load
+    almost whole (Bergan's S 0.99) is no collapse at any f."""
+    rhos, statuses = [], []
+    for f in (1.0, 10.0, 1000.0):
+        kn = 108894312.318539 * f  # the wall of benchmarks/certificate_sweep.py, seed 18
+        material = InterfaceMaterial(kn=kn, kt=0.4 * kn, friction=29.03076327893564)
+        hist = pushover(tilted_wall(9, 3, material, direction=(1.0, 0.0, 0.0)))
+        rhos.append(hist.certificate.mode_rayleigh)
+        statuses.append(hist.status)
+    assert rhos == pytest.approx([rhos[0]] * 3, rel=1e-9)
+    assert statuses == ["failed"] * 3

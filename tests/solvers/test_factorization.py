@@ -8,6 +8,7 @@ Backends whose library is not installed are skipped (they are optional extras)."
 
 from __future__ import annotations
 
+import numba
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -96,6 +97,26 @@ def test_assembly_tangents_solve_as_a_dense_solve(backend, seed):
         x = factorizer.factor(K.data).solve(b)
         reference = np.linalg.solve(K.toarray(), b)
         np.testing.assert_allclose(x, reference, rtol=1e-8, atol=1e-10 * np.abs(reference).max())
+
+
+@pytest.mark.parametrize("backend", EVERY)
+def test_entries_assembled_in_the_backends_order_are_the_same_bits(backend):
+    """The assembler writes the entries where the backend stores them (``layout``: PARDISO's
+    CSR order) instead of the backend gathering them at each matrix: the same bits as the
+    CSC entries gathered, and the same solution as a dense solve."""
+    tangents, T = wall_tangents(3)
+    factorizer = fz.analyse(tangents.indptr, tangents.indices, tangents.n, backend)
+    data = tangents.data(T)
+    layout = factorizer.layout
+    values = tangents.data(T, layout)
+    expected = data if layout is None else data[layout]
+    assert np.array_equal(values, expected)
+    if layout is not None:  # the layout's terms are kept: a second matrix too
+        assert np.array_equal(tangents.data(2.0 * T, layout), tangents.data(2.0 * T)[layout])
+    b = np.random.default_rng(3).uniform(-1.0, 1.0, tangents.n)
+    x = factorizer.factor_laid_out(values).solve(b)
+    reference = np.linalg.solve(tangents.matrix(T).toarray(), b)
+    np.testing.assert_allclose(x, reference, rtol=1e-8, atol=1e-10 * np.abs(reference).max())
 
 
 @pytest.mark.parametrize("backend", EVERY)
@@ -193,3 +214,36 @@ def test_solutions_are_the_callers_and_many_right_hand_sides_solve_column_by_col
     assert X.shape == (40, 3)
     reference = np.linalg.solve(M.toarray(), B)
     np.testing.assert_allclose(X, reference, rtol=1e-9, atol=1e-11 * np.abs(reference).max())
+
+
+@pytest.mark.skipif("pardiso" not in INSTALLED, reason="pardiso is not installed")
+@pytest.mark.skipif(numba.config.NUMBA_NUM_THREADS < 2, reason="needs two kernel threads")
+def test_a_pardiso_handle_keeps_the_threads_of_its_analysis(monkeypatch):
+    """PARDISO sizes its work space for the threads of its analysis; the numba thread count
+    that sets them may change between calls (``kernel_threads_for`` runs small models on one
+    thread). A handle analysed on two threads and factorized again on one crashed the
+    process (segmentation fault) before each handle kept its analysis' count; now it solves
+    as a dense solve. ``PARALLEL_FROM`` lowered so that a small matrix takes two threads."""
+    monkeypatch.setattr(fz, "PARALLEL_FROM", 1)
+    before = numba.get_num_threads()
+    try:
+        numba.set_num_threads(2)
+        M = random_matrix(400, 0.02, 7)
+        factorizer = fz.analyse(M.indptr, M.indices, 400, "pardiso")
+        assert factorizer.threads == 2
+        assert_solves(factorizer, M, 1)
+        numba.set_num_threads(1)
+        for seed in (2, 3):
+            N = random_matrix(400, 0.02, 7)  # the same pattern, new values
+            N.data *= np.random.default_rng(seed).uniform(0.5, 2.0, N.nnz)
+            N = sparse.csc_matrix(N + sparse.diags(np.abs(N).sum(axis=1).A1))
+            assert np.array_equal(N.indices, M.indices) and np.array_equal(N.indptr, M.indptr)
+            assert_solves(factorizer, N, seed)
+    finally:
+        numba.set_num_threads(before)
+
+
+@pytest.mark.skipif("pardiso" not in INSTALLED, reason="pardiso is not installed")
+def test_pardiso_takes_one_thread_below_parallel_from():
+    M = random_matrix(50, 0.1, 3)
+    assert fz.analyse(M.indptr, M.indices, 50, "pardiso").threads == 1

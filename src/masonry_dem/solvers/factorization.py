@@ -12,8 +12,10 @@ Backends (``BACKENDS``), each an ordinary library:
   pivots (SuperLU's symmetric mode); partial pivoting (COLAMD) where a diagonal pivot is zero.
 * ``"pardiso"`` (Intel MKL PARDISO through ``pypardiso``; x86-64): the analysis (METIS
   ordering, matching and scaling, symbolic factorization) with the first matrix, then a
-  numeric factorization per matrix, on ``numba.get_num_threads()`` MKL threads (so one knob,
-  ``NUMBA_NUM_THREADS``, sets the threads of every kernel).
+  numeric factorization per matrix, on one MKL thread below ``PARALLEL_FROM`` unknowns and
+  on ``numba.get_num_threads()`` from it (so one knob, ``NUMBA_NUM_THREADS``, sets the
+  threads of every kernel), fixed for the handle at its analysis (PARDISO sizes its work
+  space for the threads of the analysis: a later factorization on more threads crashed).
 * ``"umfpack"`` (SuiteSparse UMFPACK through ``kvxopt``) and ``"mumps"`` (MUMPS through
   ``python-mumps``): the symbolic analysis with the first matrix, a numeric factorization per
   matrix.
@@ -61,6 +63,16 @@ SMALL = 100
 #: the order of preference from ``SMALL`` unknowns, fastest first (bench_scale.py: MUMPS
 #: before UMFPACK at 6 000 and 60 000 DOFs)
 _PREFERENCE = ("pardiso", "mumps", "umfpack", "superlu")
+#: PARDISO factorizes on one thread below this many unknowns, on ``numba.get_num_threads()``
+#: from it: on the tangents the validation set factorizes (244-1 813 DOFs) two MKL threads
+#: took 1.1-4.4x the time of one on most (0.84-0.91x only under 500 DOFs, where a
+#: factorization takes 0.2-0.5 ms), on the 2-core machine shared with other sessions, the
+#: rounds interleaved: ``python benchmarks/bench_factorization.py`` (docs/solvers.md,
+#: "Scale"). A front this small gives the threads too little work between their
+#: synchronisations. From 2 000 unknowns the same benchmark scattered between 1.0x and 1.5x
+#: from one run to the next, and on a quiet machine the 5 970-DOF wall factorized in 9.6 ms
+#: on two threads against 17.7 ms of CPU on one: larger tangents keep numba's thread count.
+PARALLEL_FROM = 2_000
 
 
 class SingularMatrix(RuntimeError):
@@ -84,10 +96,17 @@ class Factorizer(Protocol):
 
     name: str
     n: int
+    #: the backend's own order of the entries: it stores ``data[layout]`` (None: CSC order),
+    #: so that an assembler can write them in that order (:meth:`factor_laid_out`)
+    layout: np.ndarray | None
 
     def factor(self, data: np.ndarray) -> Factors:
         """LU factors of the matrix whose stored entries (CSC order of the pattern) are
         ``data``; raises :class:`SingularMatrix` when it is singular."""
+        ...
+
+    def factor_laid_out(self, values: np.ndarray) -> Factors:
+        """:meth:`factor` of the entries given in ``layout`` order (``data[layout]``)."""
         ...
 
 
@@ -219,6 +238,11 @@ class _SuperLU:
         self.gather = permuted.data.astype(np.int64) - 1
         self.permuted = (permuted.indptr, permuted.indices)
 
+    layout: np.ndarray | None = None  # the CSC order
+
+    def factor_laid_out(self, values: np.ndarray) -> Factors:
+        return self.factor(values)
+
     def factor(self, data: np.ndarray) -> Factors:
         indptr, indices = self.permuted
         A = sparse.csc_matrix((data[self.gather], indices, indptr), shape=(self.n,) * 2)
@@ -285,12 +309,15 @@ class _Pardiso:
             # matching
             self.solver.set_iparm(i, value)
         ia, ja, self.gather = _transpose_gather(indptr, indices, n)
+        self.layout: np.ndarray | None = self.gather  # PARDISO stores the CSR order
         # PARDISO's 1-based CSR, made once (pypardiso's own call converts it at each call)
         self.ia = (ia + 1).astype(np.int32)
         self.ja = (ja + 1).astype(np.int32)
         self.values = np.ones(indices.size)
         self.generations = _Generation()
         self.analysed = False
+        #: MKL threads of every call, set at the analysis
+        self.threads = 1 if n < PARALLEL_FROM else max(1, numba.get_num_threads())
         # the arguments of every call but the phase and the right-hand sides, made once: on
         # the validation walls (250-6 000 DOFs) building the 16 ctypes arguments at each
         # call cost about as much as PARDISO's own factorization
@@ -320,11 +347,12 @@ class _Pardiso:
         self._one = (self._b.ctypes.data_as(double_p), self._x.ctypes.data_as(double_p))
 
     def _call(self, phase: int, b: np.ndarray | None = None) -> np.ndarray:
-        """One call of MKL's pardiso on this handle (phase 12, 22, 33 or -1) on numba's
-        thread count; x for b (None: no right-hand side)."""
+        """One call of MKL's pardiso on this handle (phase 12, 22, 33 or -1) on the threads
+        of its analysis (``threads``: numba's count may change between calls, e.g. in
+        ``masonry_dem.serial_kernels``); x for b (None: no right-hand side)."""
         s = self.solver
         # the C entry point (the lower-case name is the Fortran one, which takes a pointer)
-        s.libmkl.MKL_Set_Num_Threads_Local(ctypes.c_int(numba.get_num_threads()))
+        s.libmkl.MKL_Set_Num_Threads_Local(ctypes.c_int(self.threads))
         self._phase.value = phase
         self._error.value = 0
         if b is None or b.ndim == 1:
@@ -351,6 +379,13 @@ class _Pardiso:
     def factor(self, data: np.ndarray) -> Factors:
         # in place: the pointer handed to PARDISO stays valid
         np.take(data, self.gather, out=self.values)
+        return self._factor()
+
+    def factor_laid_out(self, values: np.ndarray) -> Factors:
+        np.copyto(self.values, values)  # a contiguous copy instead of the gather
+        return self._factor()
+
+    def _factor(self) -> Factors:
         # the first matrix is analysed with its values (the matching and scaling use them)
         self._call(22 if self.analysed else 12)
         self.analysed = True
@@ -408,6 +443,11 @@ class _Umfpack:
             raise ValueError("the pattern holds repeated entries")
         self.symbolic = None  # of the first matrix (its values choose UMFPACK's strategy)
 
+    layout: np.ndarray | None = None  # the CSC order
+
+    def factor_laid_out(self, values: np.ndarray) -> Factors:
+        return self.factor(values)
+
     def factor(self, data: np.ndarray) -> Factors:
         kvxopt, umfpack = _kvxopt()
         self.matrix.V = kvxopt.matrix(np.ascontiguousarray(data, dtype=float))
@@ -439,6 +479,11 @@ class _Mumps:
 
     def _coo(self, data: np.ndarray) -> sparse.coo_array:
         return sparse.coo_array((data, (self.rows, self.cols)), shape=(self.n, self.n))
+
+    layout: np.ndarray | None = None  # the CSC order
+
+    def factor_laid_out(self, values: np.ndarray) -> Factors:
+        return self.factor(values)
 
     def factor(self, data: np.ndarray) -> Factors:
         import mumps

@@ -138,11 +138,27 @@ class TangentAssembler:
         self.terms = _entry_terms(k_pair, e_r[kept], e_c[kept], self.term_ptr, first, record_order)
         self.nnz = kept.size
         self.n = nf
+        self._layout: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
 
-    def data(self, T: np.ndarray) -> np.ndarray:
-        """The stored entries of :meth:`matrix`, in its CSC order."""
+    def data(self, T: np.ndarray, layout: np.ndarray | None = None) -> np.ndarray:
+        """The stored entries of :meth:`matrix`, in its CSC order, or in the order
+        ``layout`` (``data(T)[layout]``, the same bits: each entry is the same sum, written
+        where a backend stores it, which saves the backend its gather at each matrix)."""
+        terms, ptr = (self.terms, self.term_ptr) if layout is None else self._laid_out(layout)
         assemble = _assemble_tangent.for_rows(self.H_loc.shape[0])
-        return assemble(self.H_loc, np.ascontiguousarray(T), self.terms, self.term_ptr)
+        return assemble(self.H_loc, np.ascontiguousarray(T), terms, ptr)
+
+    def _laid_out(self, layout: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(terms, pointers) of the entries in the order ``layout``, worked out once per
+        layout (the last one is kept)."""
+        if self._layout is None or self._layout[0] is not layout:
+            counts = np.diff(self.term_ptr)[layout]
+            ptr = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+            # term t of entry k is term t - ptr[k] of entry layout[k]
+            start = np.repeat(self.term_ptr[layout] - ptr[:-1], counts)
+            terms = self.terms[start + np.arange(ptr[-1])]
+            self._layout = (layout, terms, ptr)
+        return self._layout[1], self._layout[2]
 
     def matrix(self, T: np.ndarray, data: np.ndarray | None = None) -> sparse.csc_matrix:
         """K_ff for the tangents T (or for entries ``data`` assembled already)."""
@@ -227,8 +243,12 @@ class DiscreteProblem:
         _, response, internal = self.law.forces(self.asm.H, q, plastic, cracked, self.asm.H_free_T)
         F_ext = dead_factor * self.F_dead + lam * self.F_live
         residual = F_ext - internal
-        scale = max(float(np.linalg.norm(self.weight * F_ext)), 1e-30)
-        return residual, float(np.linalg.norm(self.weight * residual)) / scale, response
+        # sqrt(x.x) is what np.linalg.norm computes for a real vector, the same bits without
+        # its dispatch (a tenth of the Python of a residual on the small validation walls)
+        weighted = self.weight * F_ext
+        scale = max(math.sqrt(float(weighted @ weighted)), 1e-30)
+        weighted = self.weight * residual
+        return residual, math.sqrt(float(weighted @ weighted)) / scale, response
 
     # ------------------------------------------------------------------ tangent
     @property
@@ -252,17 +272,28 @@ class DiscreteProblem:
         entries go straight to a numeric factorization."""
         if floor is None:
             floor = self.residual_stiffness
-        T = self.law.tangent(response, floor, self.tangent_method)
-        self._zero_capacity_tangent(T, response, floor)
-        data = self._tangents.data(T)
-        self.factorizations += 1
+        T = self.joint_tangents(response, floor)
         fronts = self._factorizer()
+        values = self._tangents.data(T, fronts.layout)  # in the backend's own order
+        self.factorizations += 1
         try:
-            return fronts.factor(data)
+            return fronts.factor_laid_out(values)
         except SingularMatrix:  # exactly singular: stiffen the floor
             idx = np.arange(6)
             T[:, idx, idx] += 1e-6 * self.law.kbar
-            return fronts.factor(self._tangents.data(T))
+            return fronts.factor_laid_out(self._tangents.data(T, fronts.layout))
+
+    def joint_tangents(self, response: LawResponse, floor: float | None = None) -> np.ndarray:
+        """(m, 6, 6) tangents of the joints at ``response``, as :meth:`factor` assembles them:
+        the law's consistent tangent with ``floor`` x kbar on the diagonal, and joints of no
+        strength at zero compression reduced to their normal stiffness (their state is set
+        by round-off, :meth:`_zero_capacity_tangent`). With kn and kt scaled together by f,
+        these scale by f exactly, whatever round-off put those joints on either side."""
+        if floor is None:
+            floor = self.residual_stiffness
+        T = self.law.tangent(response, floor, self.tangent_method)
+        self._zero_capacity_tangent(T, response, floor)
+        return T
 
     def _zero_capacity_tangent(self, T: np.ndarray, response: LawResponse, floor: float) -> None:
         """Joints of no strength at zero compression (no tensile strength, trial normal force
