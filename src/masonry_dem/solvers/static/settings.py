@@ -38,6 +38,12 @@ class StaticSettings:
         work-conjugate displacement of the live load prescribed, lambda free, which passes
         limit points and plastic plateaus, until the pushover curve is flat; ``"bracket"``:
         refine the load-control bracket and stop there.
+    secant_predictor: each search of work control starts on the line through the last two
+        converged states of the path, extended by the step (False: from the last state).
+        Newton then starts a fraction of a step from the answer on smooth stretches. Not
+        under load control, where the start picks among the equilibria of a non-associative
+        law at one lambda (a wall with openings: 0.085 -> 0.111; docs/solvers.md, "Steps
+        of the path").
 
     One equilibrium (the corrector)
     -------------------------------
@@ -144,6 +150,7 @@ class StaticSettings:
     max_steps: int = 1000
     max_load_factor: float = math.inf
     continuation: Continuation = "work"
+    secant_predictor: bool = True
     tolerance: float = 1e-8
     control_tolerance: float = 1e-6
     max_iterations: int = 40
