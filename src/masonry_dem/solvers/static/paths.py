@@ -282,6 +282,7 @@ def work_control(
     first_lambda = hist.collapse_bracket[1] if hist.collapse_bracket else lam
     peak = max(path_lam)
     flat_steps = 0
+    first_dw = step.size
     uncut = step.size  # the step before the present run of halvings
     transient_from = -1  # the step from which the last pseudo-transient step started
     transient_failed = False
@@ -321,7 +322,10 @@ def work_control(
         path_lam.append(lam)
         line.restart(w, moved.q, lam)
         peak = max(peak, lam)
-        step.size, step.cuts, flat_steps = max(step.size, uncut * s.resume_step), 0, 0
+        # a fraction of the step before the fold's halvings, or of the first step when longer
+        # (so that folds in a row, without growth in between, do not shrink the steps)
+        resume = max(uncut, first_dw) * s.resume_step
+        step.size, step.cuts, flat_steps = max(step.size, resume), 0, 0
 
     while len(hist.steps) < s.max_steps:
         goal = w + step.size
