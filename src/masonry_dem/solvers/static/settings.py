@@ -94,7 +94,8 @@ class StaticSettings:
     flat_slope: a step whose d(lambda)/dw is below this fraction of the elastic one gains
         nothing; three in a row end the path (a formed mechanism).
     resume_step: after a pseudo-transient (or dynamic-relaxation) step past a fold, work
-        control goes on with this fraction of its first step (or the present one if longer).
+        control goes on with this fraction of the longer of its step before the fold's
+        halvings and its first step (or the present one if longer).
     fold_match: two failed work steps whose searches stop at lambdas this close (relative)
         stop at one fold.
 
