@@ -134,18 +134,24 @@ def test_peak_does_not_depend_on_the_bracket_tolerance(panel_lambda, bracket):
 def test_kept_factorization_while_creeping_changes_nothing(panel_lambda, monkeypatch):
     """Where work control creeps along a fold (steps of 1e-10 of the Newton correction, no
     joint changing state) the factorized tangent is kept instead of refactored: the same
-    peak (bit for bit on this machine), and fewer than half the factorizations on this panel
-    (searches left to creep as long as the trust radius allows, as before the cap on cuts),
-    on the path this was measured on: the forward-difference tangent, 295 against 661. (With
-    the analytic tangent the refactored path itself takes fewer steps: 293 against 551.)"""
-    # the path this was measured on: uncapped searches, full steps after a fold
-    measured_on = StaticSettings(tangent="difference", search_cuts=10**6, resume_step=1.0)
+    peak (bit for bit on this machine), and fewer factorizations on this panel (searches left
+    to creep as long as the trust radius allows, as before the cap on cuts), on the path this
+    was measured on: the forward-difference tangent, 267 against 447 (295 against 661 when
+    work control resumed after a fold with its first step instead of the one before the
+    fold's halvings). (With the analytic tangent the refactored path itself takes fewer
+    steps: 293 against 551.)"""
+    # the path this was measured on: uncapped searches, full steps after a fold, each
+    # search from the last state (a secant start carries the round-off of one state into
+    # the next search)
+    measured_on = StaticSettings(
+        tangent="difference", search_cuts=10**6, resume_step=1.0, secant_predictor=False
+    )
     kept = pushover(_panel(), measured_on)
     refactored = pushover(_panel(), replace(measured_on, creep=0.0))  # refactor every step
     assert kept.collapse_multiplier == pytest.approx(refactored.collapse_multiplier, rel=1e-9)
     # the default path resumes with half a step after a fold: the same peak within the bracket
     assert kept.collapse_multiplier == pytest.approx(panel_lambda, rel=TOL)
-    assert kept.factorizations < 0.5 * refactored.factorizations
+    assert kept.factorizations < 0.65 * refactored.factorizations
 
 
 @pytest.mark.parametrize(("backend", "rel"), [("superlu", 1e-9), ("auto", 1e-3)])
@@ -190,25 +196,29 @@ def test_work_control_passes_a_fold_it_meets_twice(panel_lambda, monkeypatch):
     accept = StaticSolver.accept
     monkeypatch.setattr(StaticSolver, "accept", record_accept)
     monkeypatch.setattr(StaticSolver, "pseudo_transient", recording)
-    h = pushover(_panel(), StaticSettings())
+    # from the last state: the path on which this panel meets one fold twice (a secant
+    # start passes it at the first meeting)
+    h = pushover(_panel(), StaticSettings(secant_predictor=False))
     rise = StaticSettings().transient_rise
     assert any(t > lam * (1 + rise) * (1 + 1e-9) for t, lam in targets)
     assert h.collapse_multiplier == pytest.approx(panel_lambda, rel=TOL)
     targets.clear()
-    without = pushover(_panel(), StaticSettings(fold_match=-1.0))  # never the same fold
+    # never the same fold
+    without = pushover(_panel(), StaticSettings(fold_match=-1.0, secant_predictor=False))
     assert all(t == pytest.approx(lam * (1 + rise), rel=1e-12) for t, lam in targets)
     assert h.collapse_multiplier == pytest.approx(without.collapse_multiplier, rel=TOL)
 
 
 def test_work_control_resumes_with_half_a_step_after_a_fold(panel_lambda, monkeypatch):
-    """After a pseudo-transient step has moved the state past a fold, the full first work
-    step failed again most of the time; half of it finds the same peak (within the bracket
-    tolerance) with fewer Newton iterations on this panel."""
+    """After a pseudo-transient step has moved the state past a fold, the full step from
+    before the fold's halvings fails again more often than half of it, which finds the same
+    peak (within the bracket tolerance) with fewer Newton iterations on this panel (481
+    against 527, with the secant start of work control)."""
     half = pushover(_panel(), StaticSettings())
     full = pushover(_panel(), StaticSettings(resume_step=1.0))
     assert half.collapse_multiplier == pytest.approx(full.collapse_multiplier, rel=TOL)
     assert half.collapse_multiplier == pytest.approx(panel_lambda, rel=1e-12)
-    assert half.iterations < 0.9 * full.iterations
+    assert half.iterations < full.iterations
 
 
 def test_collapse_multiplier_does_not_depend_on_numbering(panel_lambda):

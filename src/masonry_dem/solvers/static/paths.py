@@ -61,6 +61,35 @@ class StepController:
         self.cuts += 1
 
 
+@dataclass
+class SecantPredictor:
+    """The start of the next search of work control: the line through the last two converged
+    states of the path, extended by the next step (``secant_predictor``). Along a smooth
+    stretch of the path Newton then starts within a fraction of the step of the answer
+    instead of a whole step away; a state reached by a jump (a pseudo-transient or
+    dynamic-relaxation step past a fold) starts a new line. The parameter ``t`` is what the
+    follower prescribes (lambda under load control, w under work control)."""
+
+    on: bool
+    states: list[tuple[float, np.ndarray, float]]  # (t, q, lambda), at most the last two
+
+    def add(self, t: float, q: np.ndarray, lam: float) -> None:
+        self.states = [*self.states[-1:], (t, q, lam)]
+
+    def restart(self, t: float, q: np.ndarray, lam: float) -> None:
+        self.states = [(t, q, lam)]
+
+    def start(self, t: float) -> tuple[np.ndarray | None, float | None]:
+        """(q, lambda) on the line at ``t``; (None, None) without two states on it."""
+        if not self.on or len(self.states) < 2:
+            return None, None
+        (t0, q0, lam0), (t1, q1, lam1) = self.states
+        if t1 == t0:
+            return None, None
+        f = (t - t1) / (t1 - t0)
+        return q1 + f * (q1 - q0), lam1 + f * (lam1 - lam0)
+
+
 def load_control(solver: StaticSolver, hist: History, record: Record) -> None:
     s = solver.settings
     lam = 0.0
@@ -113,7 +142,13 @@ def load_control(solver: StaticSolver, hist: History, record: Record) -> None:
                 # the bracket's halvings came from a long step only: resume with half
                 # the step that failed instead of creeping on at the bracket width
                 dlam = max(dlam, min(failed_step / 2, max_dlam))
-            if math.isfinite(lam_fail):
+            if math.isfinite(lam_fail) and not verified and out.iterations <= s.easy_iterations:
+                # an easy step inside a bracket opened by a longer step: the failure is
+                # re-tried at once from here (a step too long fails no more from nearer,
+                # and a limit fails again, which verifies it); halving the gap instead
+                # creeps up on a step-length failure in ever shorter steps
+                dlam = lam_fail - lam
+            elif math.isfinite(lam_fail):
                 dlam = (lam_fail - lam) / 2
             elif out.iterations <= s.easy_iterations or robust_ok:
                 # the robust strategy copes with long steps: grow them after it too
@@ -223,6 +258,9 @@ def work_control(
     path_w = [float(c @ (st.q.reshape(-1)[free] - q0)) for st in hist.steps]
     path_lam = [float(st.load_factor) for st in hist.steps]
     w = path_w[-1]
+    line = SecantPredictor(s.secant_predictor, [])
+    for st, stw in zip(hist.steps[-2:], path_w[-2:], strict=False):
+        line.add(stw, st.q.reshape(-1), float(st.load_factor))
     if len(path_w) > 1:
         # the first live-load step is elastic for walls that stand: its secant is the scale
         elastic_slope = (path_lam[1] - path_lam[0]) / max(path_w[1] - path_w[0], 1e-300)
@@ -245,6 +283,7 @@ def work_control(
     peak = max(path_lam)
     flat_steps = 0
     first_dw = step.size
+    uncut = step.size  # the step before the present run of halvings
     transient_from = -1  # the step from which the last pseudo-transient step started
     transient_failed = False
     reason = ""
@@ -281,15 +320,21 @@ def work_control(
         w = float(c @ (moved.q[free] - q0))
         path_w.append(w)
         path_lam.append(lam)
+        line.restart(w, moved.q, lam)
         peak = max(peak, lam)
-        step.size, step.cuts, flat_steps = max(step.size, first_dw * s.resume_step), 0, 0
+        # a fraction of the step before the fold's halvings, or of the first step when longer
+        # (so that folds in a row, without growth in between, do not shrink the steps)
+        resume = max(uncut, first_dw) * s.resume_step
+        step.size, step.cuts, flat_steps = max(step.size, resume), 0, 0
 
     while len(hist.steps) < s.max_steps:
         goal = w + step.size
+        q_start, lam_start = line.start(goal)
         out = solver.equilibrate(
-            lam,
+            lam if lam_start is None else lam_start,
             control=(c, goal + float(c @ q0), step.size),
             radius=control_radius(solver, c, step.size),
+            start=q_start,
         )
         if not out.ok and not out.past_limit:
             # on a plateau the search may meet equilibria short of the goal (lambda is
@@ -305,6 +350,8 @@ def work_control(
                 reason = f"a mechanism at lambda={peak:.6g}: {out.reason}"
                 stop = StopReason.DISPLACEMENT_LIMIT
                 break
+            if step.cuts == 0:
+                uncut = step.size
             step.cut()
             # a step below this cannot be told from no step (the control tolerance)
             tiny = 1e-4 * max(abs(w), first_w, 1e-4 * solver.problem.displacement_scale)
@@ -365,6 +412,7 @@ def work_control(
                 out = capped
         record(out)
         w, lam = goal, float(out.load_factor)
+        line.add(w, out.q, lam)
         path_w.append(w)
         path_lam.append(lam)
         peak = max(peak, lam)

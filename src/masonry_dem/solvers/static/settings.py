@@ -42,6 +42,12 @@ class StaticSettings:
         work-conjugate displacement of the live load prescribed, lambda free, which passes
         limit points and plastic plateaus, until the pushover curve is flat; ``"bracket"``:
         refine the load-control bracket and stop there.
+    secant_predictor: each search of work control starts on the line through the last two
+        converged states of the path, extended by the step (False: from the last state).
+        Newton then starts a fraction of a step from the answer on smooth stretches. Not
+        under load control, where the start picks among the equilibria of a non-associative
+        law at one lambda (a wall with openings: 0.085 -> 0.111; docs/solvers.md, "Steps
+        of the path").
 
     One equilibrium (the corrector)
     -------------------------------
@@ -92,7 +98,8 @@ class StaticSettings:
     flat_slope: a step whose d(lambda)/dw is below this fraction of the elastic one gains
         nothing; three in a row end the path (a formed mechanism).
     resume_step: after a pseudo-transient (or dynamic-relaxation) step past a fold, work
-        control goes on with this fraction of its first step (or the present one if longer).
+        control goes on with this fraction of the longer of its step before the fold's
+        halvings and its first step (or the present one if longer).
     fold_match: two failed work steps whose searches stop at lambdas this close (relative)
         stop at one fold.
 
@@ -148,6 +155,7 @@ class StaticSettings:
     max_steps: int = 1000
     max_load_factor: float = math.inf
     continuation: Continuation = "work"
+    secant_predictor: bool = True
     tolerance: float = 1e-8
     control_tolerance: float = 1e-6
     max_iterations: int = 40

@@ -1,0 +1,120 @@
+"""The steps of the path followers (solvers/static/paths.py): where each search starts, how
+a failed step is re-tried, and when a pseudo-transient step gives up."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from masonry_dem.geometry.builders import add_base, running_bond_wall, single_block
+from masonry_dem.geometry.selectors import column
+from masonry_dem.model import InterfaceMaterial, Model, SelfWeight, Support, WeightProportional
+from masonry_dem.solvers.incremental import StaticSettings, pushover
+from masonry_dem.solvers.static.outcome import Failure, Outcome
+from masonry_dem.solvers.static.paths import SecantPredictor
+from masonry_dem.solvers.static.solver import StaticSolver
+
+DRY = InterfaceMaterial(kn=2.4e9, kt=1.0e9, friction=0.7)
+TOL = 0.005  # the default bracket tolerance
+
+
+def _tilt(blocks, base, extra=()) -> Model:
+    return Model.build(
+        blocks,
+        DRY,
+        supports=[Support([base]), *extra],
+        loads=[SelfWeight(), WeightProportional((0.0, 0.0, 1.0))],
+    )
+
+
+def _panel() -> Model:
+    """3 x 13 running bond held on its left column, tilted out of plane (as in
+    test_incremental): its path meets folds where joints start to rock."""
+    wall = running_bond_wall(3, 13, 0.081, 0.21, 0.07, 20e3)
+    blocks, base = add_base(wall)
+    return _tilt(blocks, base, extra=[Support(column(wall, "left"), ["u1", "u3"])])
+
+
+def test_secant_predictor_extends_the_line_through_the_last_two_states():
+    """Exact: the start at t is q1 + (t - t1) / (t1 - t0) (q1 - q0), and lambda alike; one
+    state (a path that jumped) gives no start, nor does a predictor that is off."""
+    q0, q1 = np.array([0.0, 1.0, 2.0]), np.array([1.0, 3.0, 2.0])
+    line = SecantPredictor(True, [])
+    line.add(0.5, q0, 0.1)
+    assert line.start(2.0) == (None, None)
+    line.add(1.5, q1, 0.3)
+    q, lam = line.start(2.5)  # one more step of the same length
+    assert q == pytest.approx([2.0, 5.0, 2.0], abs=1e-15)
+    assert lam == pytest.approx(0.5, abs=1e-15)
+    q, lam = line.start(1.75)  # a quarter step
+    assert q == pytest.approx([1.25, 3.5, 2.0], abs=1e-15)
+    line.add(2.0, q, lam)  # the oldest state drops out
+    assert line.states[0][0] == 1.5
+    line.restart(3.0, q1, 0.4)
+    assert line.start(4.0) == (None, None)
+    assert SecantPredictor(False, [(0.0, q0, 0.0), (1.0, q1, 1.0)]).start(2.0) == (None, None)
+
+
+def test_load_control_retries_a_failure_from_the_first_easy_step_inside_its_bracket(
+    monkeypatch,
+):
+    """A load step that failed because it was long (here every step longer than 0.03 fails,
+    on an elastic block far from its rocking limit s / a = 0.5) is re-tried from the first
+    easy step inside the bracket, which passes it: 0.1 and 0.05 fail, 0.025 passes, then
+    0.05 at once. Halving the gap instead crept up on 0.05 in 7 ever shorter steps (0.0375,
+    0.04375, ... 0.0498) before the re-try."""
+    original = StaticSolver.equilibrate
+
+    def long_steps_fail(self, load_factor, *args, **kwargs):
+        if kwargs.get("control") is None and load_factor - self.load_factor > 0.03 + 1e-12:
+            response = self.residual(self.q, self.load_factor)[2]
+            return Outcome(
+                False, self.q, load_factor, response, 0, "too long", failure=Failure.STALL
+            )
+        return original(self, load_factor, *args, **kwargs)
+
+    monkeypatch.setattr(StaticSolver, "equilibrate", long_steps_fail)
+    blocks, base = add_base(single_block(0.2, 0.25, 0.1, 20e3))
+    h = pushover(
+        _tilt(blocks, base),
+        StaticSettings(initial_step=0.1, max_load_factor=0.2, continuation="bracket"),
+    )
+    assert h.status == "completed", h.reason
+    lams = h.load_factors
+    assert lams[1:3] == pytest.approx([0.025, 0.05], rel=1e-12)
+    assert lams[-1] == pytest.approx(0.2, rel=1e-12)
+
+
+def test_pseudo_transient_gives_up_when_its_shortest_time_step_fails(monkeypatch):
+    """When even the shortest pseudo time step (damping by the elastic stiffness) raises the
+    residual tenfold, repeating it factors the same matrix and fails the same way: the step
+    gives up at once (4 factorizations: floors 1e-3, 1e-2, 1e-1, 1) instead of spending
+    its budget of ``transient_steps`` factorizations."""
+    blocks, base = add_base(single_block(0.2, 0.25, 0.1, 20e3))
+    solver = StaticSolver(_tilt(blocks, base))
+    solver.run()  # the path to collapse: a converged state to start from
+    original = solver.residual
+    start = solver.q.copy()
+
+    def rising(q, lam, dead_factor=1.0):
+        r, n, response = original(q, lam, dead_factor)
+        moved = not np.array_equal(q, start)
+        return r, (1e3 * max(n, 1e-6) if moved else max(n, 1e-6)), response
+
+    monkeypatch.setattr(solver, "residual", rising)
+    before = solver.factorizations
+    out = solver.pseudo_transient(0.1)
+    assert not out.ok
+    assert out.failure is Failure.NO_REST
+    assert "shortest pseudo time step" in out.reason
+    assert solver.factorizations - before == 4
+    assert np.array_equal(out.q, start)
+
+
+def test_work_control_finds_the_same_peak_from_a_secant_start():
+    """The secant start changes where each search of work control begins, not the path's
+    equilibria: the same peak within the bracket tolerance, on a panel whose path folds."""
+    on = pushover(_panel(), StaticSettings())
+    off = pushover(_panel(), StaticSettings(secant_predictor=False))
+    assert on.status == off.status == "collapse", (on.reason, off.reason)
+    assert on.collapse_multiplier == pytest.approx(off.collapse_multiplier, rel=TOL)
