@@ -334,6 +334,11 @@ class Corrector:
         is near. It gives up when the displacements pass the limit (a mechanism) or when the
         residual has not decreased by a tenth over ``divergence_window`` iterations while the
         corrections do not shrink (the iterates drift: no equilibrium)."""
+        out = self._robust(load_factor, start, budget)
+        log.debug("robust at lambda=%.6g: %s", load_factor, "ok" if out.ok else out.reason)
+        return out
+
+    def _robust(self, load_factor: float, start: np.ndarray | None, budget: int | None) -> Outcome:
         s = self.settings
         free = self.problem.asm.free_index
         lu = self.problem.elastic_factor()

@@ -115,13 +115,7 @@ def load_control(solver: StaticSolver, hist: History, record: Record) -> None:
         near_zero = target <= ZERO_LOAD * s.tolerance * solver.problem.load_scale
         budget = s.robust_iterations or (s.zero_load_robust_iterations if near_zero else 0)
         if not out.ok and budget > 0 and not out.past_limit:
-            second = solver.robust(target, budget=budget)
-            log.debug(
-                "Newton failed at lambda=%.6g (%s); robust: %s",
-                target,
-                out.reason,
-                "ok" if second.ok else second.reason,
-            )
+            second = solver.robust(target, budget=budget)  # logs its outcome
             if second.ok:
                 out, robust_ok = second, True
             else:

@@ -73,6 +73,30 @@ def _entry_terms(pair, r, c, ptr, pair_start, record_order):
     return terms
 
 
+@numba.njit(cache=True)
+def _reduce_zero_capacity(T, trial, tensile_force, kbar, floor, contact_band):
+    """In place, the joints of :meth:`DiscreteProblem._zero_capacity_tangent`: no tensile
+    strength and a trial normal force within ``contact_band`` x the largest of zero keep
+    only their normal stiffness, with ``floor`` x kbar on the other diagonal terms. One
+    compiled pass: on the small validation walls the dozen numpy calls of the same
+    selection cost more than the law's tangent itself."""
+    m = trial.shape[0]
+    largest = 0.0
+    for i in range(m):
+        largest = max(largest, abs(trial[i, 2]))
+    band = contact_band * largest
+    if band == 0.0:  # the undeformed start: every joint at zero, none decided by round-off
+        return
+    for i in range(m):
+        if tensile_force[i] <= 0.0 and abs(trial[i, 2]) <= band:
+            normal = T[i, 2, 2]
+            for r in range(6):
+                for c in range(6):
+                    T[i, r, c] = 0.0
+                T[i, r, r] = floor * kbar[i, r]
+            T[i, 2, 2] = normal
+
+
 class TangentAssembler:
     """K_ff = H_f^T T H_f for per-interface 6x6 tangents T, with the sparsity pattern built
     once: each interface adds B = H_loc^T T H_loc (12 x 12, the DOFs of its two blocks) and
@@ -214,6 +238,8 @@ class DiscreteProblem:
         self._fronts: Factorizer | None = None  # the tangent's pattern, analysed once
         self._elastic: Factors | None = None
         self._scale: float | None = None
+        #: (lambda, dead factor), F_ext and its weighted norm of the last residual
+        self._load: tuple[tuple[float, float], np.ndarray, float] | None = None
 
     @property
     def displacement_scale(self) -> float:
@@ -241,14 +267,23 @@ class DiscreteProblem:
     ) -> tuple[np.ndarray, float, LawResponse]:
         """(R on the free DOFs, |R| / |F| in the weighted norm, the law's response)."""
         _, response, internal = self.law.forces(self.asm.H, q, plastic, cracked, self.asm.H_free_T)
-        F_ext = dead_factor * self.F_dead + lam * self.F_live
+        F_ext, scale = self._external(lam, dead_factor)
         residual = F_ext - internal
-        # sqrt(x.x) is what np.linalg.norm computes for a real vector, the same bits without
-        # its dispatch (a tenth of the Python of a residual on the small validation walls)
-        weighted = self.weight * F_ext
-        scale = max(math.sqrt(float(weighted @ weighted)), 1e-30)
         weighted = self.weight * residual
         return residual, math.sqrt(float(weighted @ weighted)) / scale, response
+
+    def _external(self, lam: float, dead_factor: float) -> tuple[np.ndarray, float]:
+        """(F_ext on the free DOFs, its weighted norm) at (lambda, dead_factor), kept for
+        the last pair: a search evaluates many residuals at one lambda."""
+        key = (lam, dead_factor)
+        if self._load is None or self._load[0] != key:
+            F_ext = dead_factor * self.F_dead + lam * self.F_live
+            # sqrt(x.x) is what np.linalg.norm computes for a real vector, the same bits
+            # without its dispatch
+            weighted = self.weight * F_ext
+            scale = max(math.sqrt(float(weighted @ weighted)), 1e-30)
+            self._load = (key, F_ext, scale)
+        return self._load[1], self._load[2]
 
     # ------------------------------------------------------------------ tangent
     @property
@@ -305,18 +340,9 @@ class DiscreteProblem:
         change state at any step length and the residual rises (docs/solvers.md, "Why
         Newton stalls from the dead-load state"). The residual is unchanged, so a
         converged state is still an exact equilibrium of the law."""
-        fn = response.trial[:, 2]
-        band = CONTACT_BAND * float(np.abs(fn).max(initial=0.0))
-        if band == 0.0:  # the undeformed start: every joint at zero, none decided by round-off
-            return
-        zero = np.flatnonzero((response.tensile_force <= 0.0) & (np.abs(fn) <= band))
-        if zero.size == 0:
-            return
-        normal = T[zero, 2, 2].copy()
-        T[zero] = 0.0
-        idx = np.arange(6)
-        T[zero[:, None], idx, idx] = floor * self.law.kbar[zero]
-        T[zero, 2, 2] = normal
+        _reduce_zero_capacity(
+            T, response.trial, response.tensile_force, self.law.kbar, float(floor), CONTACT_BAND
+        )
 
     def _factorizer(self) -> Factorizer:
         if self._fronts is None:
