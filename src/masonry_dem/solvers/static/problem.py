@@ -33,19 +33,25 @@ def _assemble_tangent(H_loc: np.ndarray, T: np.ndarray, terms: np.ndarray, ptr: 
     m = H_loc.shape[0]
     B = np.empty((m, 12, 12))
     for i in numba.prange(m):
-        A = np.empty((12, 6))
+        # the zeros of H_loc (three quarters of it: the unit translations and the lever arms
+        # of a rigid block) are skipped: each sum keeps its order over k, and a term h x t
+        # with h = 0 adds nothing to it (t is finite), so the entries are the same numbers
+        A = np.zeros((12, 6))
         for r in range(12):
-            for c in range(6):
-                total = 0.0
-                for k in range(6):
-                    total += H_loc[i, k, r] * T[i, k, c]
-                A[r, c] = total
+            for k in range(6):
+                h = H_loc[i, k, r]
+                if h != 0.0:
+                    for c in range(6):
+                        A[r, c] += h * T[i, k, c]
         for r in range(12):
             for c in range(12):
-                total = 0.0
-                for k in range(6):
-                    total += A[r, k] * H_loc[i, k, c]
-                B[i, r, c] = total
+                B[i, r, c] = 0.0
+        for c in range(12):
+            for k in range(6):
+                h = H_loc[i, k, c]
+                if h != 0.0:
+                    for r in range(12):
+                        B[i, r, c] += A[r, k] * h
     flat = B.reshape(-1)
     out = np.empty(ptr.size - 1)
     for j in numba.prange(ptr.size - 1):
