@@ -346,3 +346,42 @@ def test_an_elastic_step_of_a_dry_wall_takes_one_newton_iteration(lam):
     assert out.iterations == 1
     _, rnorm, _ = solver.residual(out.q, lam)
     assert rnorm <= solver.settings.tolerance
+
+
+def test_joints_of_no_strength_at_zero_compression_keep_only_their_normal_stiffness():
+    """``DiscreteProblem.joint_tangents`` reduces the joints with no tensile strength whose
+    trial normal force lies within CONTACT_BAND x the largest of zero (their law flags are
+    set by round-off) to T[2, 2] with ``floor`` x kbar on the other diagonal terms, and
+    leaves every other joint's tangent as the law gave it: a joint with tensile strength,
+    one pressed harder than the band, and the undeformed start (every trial force zero)."""
+    from masonry_dem.constitutive.law import CONTACT_BAND, LawResponse
+    from masonry_dem.solvers.static.problem import DiscreteProblem
+
+    blocks, base = add_base(running_bond_wall(3, 3, 0.2, 0.1, 0.1, 20e3))
+    problem = DiscreteProblem(_tilt(blocks, base))
+    m = problem.model.interfaces.count
+    assert m >= 6
+    rng = np.random.default_rng(7)
+    floor = 1e-9
+    T = rng.normal(size=(m, 6, 6))
+    trial = rng.normal(size=(m, 6))
+    trial[:, 2] = -1e4  # pressed
+    trial[0, 2] = -0.5 * CONTACT_BAND * 1e4  # within the band: reduced
+    trial[1, 2] = 0.5 * CONTACT_BAND * 1e4  # within the band, in tension: reduced
+    trial[2, 2] = -2.0 * CONTACT_BAND * 1e4  # outside the band: kept
+    trial[3, 2] = 0.0  # at zero but with tensile strength: kept
+    ft = np.zeros(m)
+    ft[3] = 1.0
+    response = LawResponse(trial, ft, trial.copy(), np.zeros(m, dtype=np.uint8), None)
+    reduced = T.copy()
+    problem._zero_capacity_tangent(reduced, response, floor)
+    kbar = problem.law.kbar
+    for i in (0, 1):
+        expected = np.diag(floor * kbar[i])
+        expected[2, 2] = T[i, 2, 2]
+        np.testing.assert_array_equal(reduced[i], expected)
+    np.testing.assert_array_equal(reduced[2:], T[2:])
+    start = LawResponse(0.0 * trial, np.zeros(m), 0.0 * trial, response.flags, None)
+    untouched = T.copy()
+    problem._zero_capacity_tangent(untouched, start, floor)
+    np.testing.assert_array_equal(untouched, T)
