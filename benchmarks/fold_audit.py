@@ -14,8 +14,10 @@ settings and monitor) with the associative bound ``dem_upper_bound`` given to it
 - ``--walls N``: N generated walls of ``benchmarks/certificate_sweep.py`` (its generator,
   ``--seed``).
 
-Where the path ends ``collapse``, a dynamic relaxation from its last converged state (plastic
-part and cracks held) to lambda = stop x (1 + ``rise``) with ``budget`` time steps, then
+Where the path ends ``collapse`` at lambda_c, a dynamic relaxation from its last converged
+state (plastic part and cracks held; on a falling curve below lambda_c) to lambda_c x
+(1 + ``rise``) with ``budget`` time steps (it also gives up when its residual has not halved
+over a quarter of them: ``dynamic_rescue``'s stall window), then
 Newton at that lambda (``StaticSolver.dynamic_rescue``). A polished state there (residual in
 the static norm under its tolerance) is an equilibrium of the same step problem above the
 certified collapse: that stop was a fold of the path, not its peak. "no rest" within the
@@ -85,10 +87,12 @@ class _Reasons(logging.Handler):
         self.messages.append(record.getMessage())
 
 
-def rest_above(solver: StaticSolver, stop: float, rise: float, budget: int) -> Above:
-    """From the solver's last converged state (at ``stop``), dynamic relaxation to
-    stop x (1 + rise) within ``budget`` time steps, then Newton there."""
-    target = stop * (1.0 + rise)
+def rest_above(solver: StaticSolver, peak: float, rise: float, budget: int) -> Above:
+    """From the solver's last converged state, dynamic relaxation to peak x (1 + rise)
+    within ``budget`` time steps, then Newton there. ``peak``: the multiplier the path
+    reports (a state past the peak of a falling curve lies below it)."""
+    target = peak * (1.0 + rise)
+    stop = solver.load_factor
     start = float(np.abs(solver.q.reshape(-1, 6)[:, :3]).max())
     before = solver.time_steps
     reasons = _Reasons()
@@ -134,9 +138,11 @@ def audit(
     bound_shown = f"{bound:.4f}" if bound is not None else f"({la.status})"
     line = f"{name:40s} {history.status!s:9s} {shown:>8s} {bound_shown:>7s} {seconds:6.1f} s"
     if history.status == "collapse":
-        above = rest_above(solver, solver.load_factor, rise, budget)
+        assert lam is not None
+        above = rest_above(solver, lam, rise, budget)
         line += (
-            f"  {above.verdict:5s} stop state {1e3 * above.start:.1f} mm (limit "
+            f"  {above.verdict:5s} last state {solver.load_factor:.4g}, "
+            f"{1e3 * above.start:.1f} mm (limit "
             f"{1e3 * above.limit:.1f}); {above} ({above.seconds:.1f} s)"
         )
     else:
