@@ -44,6 +44,26 @@ def wall(spec: dict, kn_factor: float = 1.0) -> Model:
     )
 
 
+def random_spec(rng: np.random.Generator) -> dict:
+    """One wall of the class of issue 18, drawn from ``rng`` (the fields ``wall`` reads)."""
+    return {
+        "blocks": int(rng.integers(1, 16)),
+        "courses": int(rng.integers(1, 21)),
+        "in_plane": bool(rng.integers(0, 2)),
+        "held": bool(rng.integers(0, 2)),
+        "friction": float(10 ** rng.uniform(np.log10(0.3), 2.0)),
+        "kn": float(10 ** rng.uniform(8.0, 13.0)),
+    }
+
+
+def describe(spec: dict) -> str:
+    """A wall's spec in one short line."""
+    return (
+        f"{spec['blocks']}x{spec['courses']} {'in' if spec['in_plane'] else 'out'}"
+        f"{' held' if spec['held'] else ''} mu={spec['friction']:.3g} kn={spec['kn']:.1e}"
+    )
+
+
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--walls", type=int, default=30)
@@ -59,14 +79,7 @@ def main(argv: list[str] | None = None) -> None:
         f"{'wall':34s} {'status':9s} {'stop':30s} {'lambda':>10s} {'mode':12s} {'rho':>9s} {'s':>6s}"
     )
     for _ in range(args.walls):
-        spec = {
-            "blocks": int(rng.integers(1, 16)),
-            "courses": int(rng.integers(1, 21)),
-            "in_plane": bool(rng.integers(0, 2)),
-            "held": bool(rng.integers(0, 2)),
-            "friction": float(10 ** rng.uniform(np.log10(0.3), 2.0)),
-            "kn": float(10 ** rng.uniform(8.0, 13.0)),
-        }
+        spec = random_spec(rng)
         t0 = time.perf_counter()
         hist = pushover(wall(spec))
         seconds = time.perf_counter() - t0
@@ -76,10 +89,7 @@ def main(argv: list[str] | None = None) -> None:
         lam = hist.collapse_multiplier
         bad = status == "collapse" and (cert is None or not cert.holds or lam is None or lam < 1e-3)
         flagged += bad
-        name = (
-            f"{spec['blocks']}x{spec['courses']} {'in' if spec['in_plane'] else 'out'}"
-            f"{' held' if spec['held'] else ''} mu={spec['friction']:.3g} kn={spec['kn']:.1e}"
-        )
+        name = describe(spec)
         mode = cert.mode.replace("singular tangent", "tangent") if cert else "-"
         rho = f"{cert.mode_rayleigh:.2e}" if cert else "-"
         shown = f"{lam:.5g}" if lam is not None else f"({hist.final_load_factor:.3g})"

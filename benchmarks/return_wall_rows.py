@@ -27,7 +27,7 @@ import platform
 import sys
 import time
 
-import numpy as np
+from fold_audit import rest_above
 
 from masonry_dem.cases.paper import RETURN_WALL_CASES, build_case
 from masonry_dem.solvers.dynamic_relaxation import DRSettings, DynamicRelaxation
@@ -49,25 +49,8 @@ def row(name: str, m: int, rise: float, budget: int, dr: bool) -> None:
     )
     bound = dem_upper_bound(case.model)
     print(f"  bound {bound.load_factor:.4f} ({bound.status})", flush=True)
-    target = stop * (1.0 + rise)
-    t0 = time.perf_counter()
-    before = solver.time_steps
-    polished = solver.dynamic_rescue(target, stop, budget=budget)
-    seconds = time.perf_counter() - t0
-    if polished is None:
-        print(
-            f"  above: no rest at {target:.4f} within {budget} time steps ({seconds:.1f} s)",
-            flush=True,
-        )
-    else:
-        rnorm = solver.residual(polished.q, target)[1]
-        moved = float(np.abs(polished.q.reshape(-1, 6)[:, :3]).max())
-        print(
-            f"  above: equilibrium at {target:.4f} (stop x {1 + rise:g}): residual "
-            f"{rnorm:.1e}, largest translation {1e3 * moved:.2f} mm, "
-            f"{solver.time_steps - before} time steps, {seconds:.1f} s",
-            flush=True,
-        )
+    above = rest_above(solver, stop, rise, budget)
+    print(f"  above: {above} ({above.seconds:.1f} s)", flush=True)
     if dr:
         t0 = time.perf_counter()
         relaxation = DynamicRelaxation(case.model, DRSettings(tolerance=1e-3))
