@@ -128,6 +128,13 @@ class StaticSettings:
     rescue_time_steps: budget of a dynamic relaxation of a failed load step; 0 disables it.
     stop_check_time_steps: budget of the dynamic relaxation that checks a stop of work
         control (to lambda x (1 + transient_rise)) before the path is given up; 0 disables it.
+        The relaxation also ends when the wall runs away (the displacement limit) or its
+        residual has not halved in a quarter of the budget; the budget covers the slowest
+        settling measured at a fold (58 000 time steps, docs/solvers.md "The stop check").
+    stop_check_singular: run that check also where the tangent of the stuck state is
+        singular along the load: a fold and a peak both have one, and only the check tells
+        them apart. False skips it there (faster, but a fold may then be certified as a
+        collapse: the 2-block return-wall rows, docs/solvers.md "The stop check").
     max_control_cuts: displacement control gives up after this many halvings in a row.
 
     Certificate of a collapse (see :mod:`masonry_dem.solvers.static.certificate`)
@@ -189,7 +196,8 @@ class StaticSettings:
     anderson: int = 5
     divergence_window: int = 30
     rescue_time_steps: int = 0
-    stop_check_time_steps: int = 4000
+    stop_check_time_steps: int = 60_000
+    stop_check_singular: bool = True
     max_control_cuts: int = 12
     certify: bool = True
     admissible_tolerance: float = 1e-6
