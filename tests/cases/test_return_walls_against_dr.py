@@ -20,7 +20,7 @@ import pytest
 
 from masonry_dem.cases.paper import build_case
 from masonry_dem.solvers.dynamic_relaxation import DRSettings, DynamicRelaxation
-from masonry_dem.solvers.static import StaticSettings, StaticSolver
+from masonry_dem.solvers.static import StaticSolver
 
 
 def test_dynamic_relaxation_passes_a_stall_judged_against_the_dead_load():
@@ -36,9 +36,7 @@ def test_dynamic_relaxation_passes_a_stall_judged_against_the_dead_load():
 
 def test_static_stop_with_2_block_returns_is_a_fold_below_an_equilibrium():
     case = build_case("S13", restraint="return-walls", return_blocks=2)
-    # the path as it stopped on 2bd1bc8, at its first fold (the check now passes it there:
-    # tests/solvers/test_folds.py)
-    solver = StaticSolver(case.model, StaticSettings(stop_check_singular=False))
+    solver = StaticSolver(case.model)
     history = solver.run()
     stop = history.collapse_multiplier
     assert history.status == "collapse", history.reason  # at 0.0855 on 878b2f7

@@ -280,13 +280,12 @@ def test_displacement_control_passes_the_folds_of_its_path_to_the_load_controlle
     assert "pseudo-transient step(s) past folds" in result.displacement.reason
 
 
-def test_a_stop_at_a_singular_tangent_is_checked_by_dynamic_relaxation():
+def test_a_stop_at_a_singular_tangent_skips_the_dynamic_relaxation_check():
     """S23 (two openings): work control stops where Newton finds no correction, at a state
-    whose tangent is singular along the load (rho 0.013 <= mode_stiffness). Such a state
-    may be a fold with rest above it (the 2-block return-wall rows, tests/solvers/
-    test_folds.py), so dynamic relaxation looks for rest 0.5 % higher; on S23 its residual
-    stalls (2.75e-3 over two windows of a quarter of the budget): the same certified lambda
-    0.084721. With ``stop_check_singular=False`` the check is skipped, no time step spent."""
+    whose tangent is singular along the load (rho 0.013 <= mode_stiffness): a limit point,
+    above which dynamic relaxation found no rest in its 2 000 time steps on 5133bd5. The
+    check is skipped there: the same certified lambda 0.084721, no time step of dynamic
+    relaxation."""
     from masonry_dem.cases.paper import build_case
     from masonry_dem.solvers.incremental import StaticSolver
 
@@ -296,11 +295,7 @@ def test_a_stop_at_a_singular_tangent_is_checked_by_dynamic_relaxation():
     assert hist.status == "collapse" and hist.stop is StopReason.PATH_STUCK
     assert hist.collapse_multiplier == pytest.approx(0.084721, rel=1e-4)
     assert hist.certificate.mode_rayleigh <= StaticSettings().mode_stiffness
-    assert solver.time_steps == StaticSettings().stop_check_time_steps // 2
-    skip = StaticSolver(case.model, replace(case.settings, stop_check_singular=False))
-    hist = skip.run(monitor=case.monitor)
-    assert hist.collapse_multiplier == pytest.approx(0.084721, rel=1e-4)
-    assert skip.time_steps == 0
+    assert solver.time_steps == 0
 
 
 def test_a_limit_stop_on_a_soft_rising_curve_is_not_a_collapse():

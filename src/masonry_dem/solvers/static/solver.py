@@ -214,9 +214,8 @@ class StaticSolver(Corrector):
 
     def _rests_at(self, lam: float) -> bool:
         """Does dynamic relaxation from the last converged state come to rest at ``lam``
-        (within 4000 time steps, this check's budget before ``stop_check_time_steps`` was
-        sized for folds of the path; a check at the dead-load state keeps it)?"""
-        budget = 4000
+        (within ``stop_check_time_steps``, at least 4000 time steps)?"""
+        budget = max(self.settings.stop_check_time_steps, 4000)
         out = self.dynamic_rescue(lam, self.load_factor, budget, polish=False)
         return bool(out is not None and out.ok)
 
