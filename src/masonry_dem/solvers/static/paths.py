@@ -376,10 +376,12 @@ def work_control(
                 stuck
                 and s.stop_check_time_steps > 0
                 and checked_from != len(hist.steps)
-                and not _singular_along_load(solver, hist)
+                and (s.stop_check_singular or not _singular_along_load(solver, hist))
             ):
                 # neither Newton nor the pseudo-transient step passes: before calling
                 # this a collapse, let dynamic relaxation look for rest a little higher
+                # (where the tangent is singular along the load only when asked: a fold
+                # of the path has that too, but so has a peak, and the check is dear)
                 checked_from = len(hist.steps)
                 target = lam + s.transient_rise * abs(lam)
                 rescued = solver.dynamic_rescue(target, lam, s.stop_check_time_steps)
@@ -472,8 +474,8 @@ def work_control(
 
 def _singular_along_load(solver: StaticSolver, hist: History) -> bool:
     """Is the tangent of the last converged state singular along the motion the live load
-    drives (the certificate's rho at most ``mode_stiffness``)? Then the path stopped at a
-    limit point, where dynamic relaxation finds no rest higher up: its check is skipped."""
+    drives (the certificate's rho at most ``mode_stiffness``)? A peak or a fold of the path:
+    the dynamic-relaxation check is skipped there unless ``stop_check_singular``."""
     from masonry_dem.solvers.static.certificate import _dead_load_tangent, _rayleigh
 
     F = solver.problem.F_live

@@ -128,6 +128,15 @@ class StaticSettings:
     rescue_time_steps: budget of a dynamic relaxation of a failed load step; 0 disables it.
     stop_check_time_steps: budget of the dynamic relaxation that checks a stop of work
         control (to lambda x (1 + transient_rise)) before the path is given up; 0 disables it.
+        The relaxation ends sooner when the wall runs past the displacement limit or its
+        residual has not halved in a quarter of the budget.
+    stop_check_singular: run that check also where the tangent of the stuck state is
+        singular along the load. A fold of the path has such a tangent as well as a peak,
+        and only the check tells them apart: with it on and a budget that covers a fold's
+        settling (60 000 time steps) the 2-block return-wall rows pass folds the default
+        certifies as collapses (S13/2: 0.0855 -> 0.0938), at the price of a relaxation of
+        the whole wall at every such stop (docs/solvers.md, "The stop check: folds and
+        peaks"). Off by default: that price is 5x on S23 and 100x on the S5 U wall.
     max_control_cuts: displacement control gives up after this many halvings in a row.
 
     Certificate of a collapse (see :mod:`masonry_dem.solvers.static.certificate`)
@@ -190,6 +199,7 @@ class StaticSettings:
     divergence_window: int = 30
     rescue_time_steps: int = 0
     stop_check_time_steps: int = 4000
+    stop_check_singular: bool = False
     max_control_cuts: int = 12
     certify: bool = True
     admissible_tolerance: float = 1e-6
