@@ -17,9 +17,9 @@ by ``python benchmarks/bench_scale.py`` (walls of 10^2 to 10^5 blocks; docs/solv
 
 Time: ``factorizations x`` (seconds per factorization, growing like n^FACTOR_EXPONENT)
 ``+ iterations x`` (seconds per Newton iteration without the factorization, linear in the
-interfaces), with the iterations and factorizations of the default pushover of the measured
-walls, growing like blocks^GROWTH. It is an order of magnitude on an idle machine, for a
-message; memory is the figure that refuses a run.
+interfaces), with the iterations and factorizations of the pushovers of the measured
+walls, growing like blocks^GROWTH. It is within a factor of two on an idle machine for
+walls like the benchmark's, a message, not a promise; memory is the figure that refuses a run.
 """
 
 from __future__ import annotations
@@ -42,21 +42,23 @@ BYTES_PER_FACTOR_ENTRY = 16.0
 #: bytes per block and per interface of one converged step kept in the History
 STEP_BYTES_PER_BLOCK = 48.0
 STEP_BYTES_PER_INTERFACE = 66.0
-#: converged steps of the default pushover (the 10^3-block default wall: 66 steps)
+#: converged steps of a pushover to collapse (the benchmark walls: 46-62 steps)
 STEPS = 70
-#: Newton iterations and factorizations of the default pushover at 10^3 blocks, and how they
-#: grow with the blocks (bench_scale.py, default wall: 163 / 99 at 106 blocks, 475 / 270 at
-#: 1 007, more than 639 / 488 at 10 051: slope about 0.4)
-ITERATIONS = 475
-FACTORIZATIONS = 270
-GROWTH = 0.4
+#: Newton iterations and factorizations of a pushover to collapse, and how they grow with
+#: the blocks. On the benchmark walls (``bench_scale.py``, Eurocode-6 slenderness, mortar
+#: joints) they do not grow: 645 / 300 at 909 blocks, 449 / 198 at 10 017, 465 / 208 at
+#: 99 878 (docs/solvers.md, "Scale")
+ITERATIONS = 500
+FACTORIZATIONS = 230
+GROWTH = 0.0
 #: seconds per factorization of n DOFs: FACTOR_SECONDS x (n / 6e4)^FACTOR_EXPONENT
-#: (PARDISO, 2 threads: 0.03 s at 6e3 DOFs, 0.5 s at 6e4)
-FACTOR_SECONDS = 0.5
-FACTOR_EXPONENT = 1.25
+#: (PARDISO, 2 threads: 0.147 s at 60 050 DOFs, 1.76 s at 599 216)
+FACTOR_SECONDS = 0.15
+FACTOR_EXPONENT = 1.08
 #: seconds per Newton iteration and interface without the factorization (law, residual,
-#: tangent assembly, line search: about 10 ms an iteration at 2 923 interfaces, profiled)
-ITERATION_SECONDS_PER_INTERFACE = 3e-6
+#: tangent assembly, solves, line search: 0.069 s an iteration at 29 850 interfaces, 0.34 s
+#: at about 3e5)
+ITERATION_SECONDS_PER_INTERFACE = 1.5e-6
 
 
 @dataclass(frozen=True)
