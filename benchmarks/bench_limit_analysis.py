@@ -139,6 +139,15 @@ def _cpu(fn, *args, **kwargs):
     return out, time.process_time() - c0, time.perf_counter() - t0
 
 
+def _kinematic_problem(model):
+    """The limit-analysis problem of ``model`` and its corner velocity rows (grid 2): what
+    a kinematic solve builds before Clarabel starts."""
+    from masonry_dem.solvers.limit_analysis import formulation, kinematic
+
+    problem = formulation.Problem.of(model)
+    return problem, kinematic.corner_velocity_rows(problem, 2)
+
+
 def speed(sizes: list[int], static_up_to: int, highs_up_to: int) -> None:
     """The ladder's walls: the time to build the problem (compatibility matrix and the cone
     rows, vectorised) against the solve, for the kinematic SOCP (Clarabel, the default of
@@ -154,11 +163,7 @@ def speed(sizes: list[int], static_up_to: int, highs_up_to: int) -> None:
     for target in sizes:
         model = ladder_wall(target)
 
-        def build(model=model):
-            problem = formulation.Problem.of(model)
-            return problem, kinematic.corner_velocity_rows(problem, 2)
-
-        (problem, _), t_build, _ = _cpu(build)
+        (problem, _), t_build, _ = _cpu(_kinematic_problem, model)
         (sol, _, _), t_kin, w_kin = _cpu(kinematic.solve_kinematic_clarabel, problem, 2)
         lam_s, t_s = None, float("nan")
         if model.blocks.count <= static_up_to:
@@ -230,7 +235,7 @@ def profile(sizes: list[int]) -> None:
     """Where the time of the exact cone goes, on the ladder's walls: the problem's size per
     block, the build, Clarabel's setup and its iterations (CPU seconds, each variant of
     ``PROFILE_VARIANTS``, with lambda), and one PARDISO factorization of the normal matrix."""
-    from masonry_dem.solvers.limit_analysis import formulation, kinematic
+    from masonry_dem.solvers.limit_analysis import kinematic
 
     print(
         f"{'blocks':>7s} {'u':>6s} {'cones':>7s} {'nnz A':>8s} {'build':>6s} {'variant':>8s} "
@@ -239,11 +244,7 @@ def profile(sizes: list[int]) -> None:
     for target in sizes:
         model = ladder_wall(target)
 
-        def build(model=model):
-            problem = formulation.Problem.of(model)
-            return problem, kinematic.corner_velocity_rows(problem, 2)
-
-        (problem, G), t_build, _ = _cpu(build)
+        (problem, G), t_build, _ = _cpu(_kinematic_problem, model)
         n_u, cones = G.shape[1], G.shape[0] // 3
         n = model.blocks.count
         base = float("nan")

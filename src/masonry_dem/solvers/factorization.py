@@ -64,14 +64,9 @@ SMALL = 100
 #: before UMFPACK at 6 000 and 60 000 DOFs)
 _PREFERENCE = ("pardiso", "mumps", "umfpack", "superlu")
 #: PARDISO factorizes on one thread below this many unknowns, on ``numba.get_num_threads()``
-#: from it: on the tangents the validation set factorizes (244-1 813 DOFs) two MKL threads
-#: took 1.1-4.4x the time of one on most (0.84-0.91x only under 500 DOFs, where a
-#: factorization takes 0.2-0.5 ms), on the 2-core machine shared with other sessions, the
-#: rounds interleaved: ``python benchmarks/bench_factorization.py`` (docs/solvers.md,
-#: "Scale"). A front this small gives the threads too little work between their
-#: synchronisations. From 2 000 unknowns the same benchmark scattered between 1.0x and 1.5x
-#: from one run to the next, and on a quiet machine the 5 970-DOF wall factorized in 9.6 ms
-#: on two threads against 17.7 ms of CPU on one: larger tangents keep numba's thread count.
+#: from it: a front this small gives the threads too little work between their
+#: synchronisations (measured by ``python benchmarks/bench_factorization.py``;
+#: docs/solvers.md, "Scale")
 PARALLEL_FROM = 2_000
 
 
@@ -192,6 +187,19 @@ class _HeldFactors:
 
 
 # --------------------------------------------------------------------------- SuperLU
+class _CSCOrder:
+    """A backend that stores the entries in the pattern's CSC order: the laid-out entries
+    are the CSC entries."""
+
+    layout: np.ndarray | None = None
+
+    def factor(self, data: np.ndarray) -> Factors:
+        raise NotImplementedError
+
+    def factor_laid_out(self, values: np.ndarray) -> Factors:
+        return self.factor(values)
+
+
 class _SuperLUFactors:
     def __init__(self, lu, numbering: np.ndarray | None) -> None:
         self.lu = lu
@@ -205,7 +213,7 @@ class _SuperLUFactors:
         return x
 
 
-class _SuperLU:
+class _SuperLU(_CSCOrder):
     """SuperLU with the ordering worked out once: the minimum degree of A^T + A (SuperLU's
     symmetric mode) on the pattern; each matrix is permuted symmetrically by a gather of its
     entries and factorized in that order with diagonal pivots (``relax=1``: no relaxed
@@ -237,11 +245,6 @@ class _SuperLU:
         permuted.sort_indices()
         self.gather = permuted.data.astype(np.int64) - 1
         self.permuted = (permuted.indptr, permuted.indices)
-
-    layout: np.ndarray | None = None  # the CSC order
-
-    def factor_laid_out(self, values: np.ndarray) -> Factors:
-        return self.factor(values)
 
     def factor(self, data: np.ndarray) -> Factors:
         indptr, indices = self.permuted
@@ -422,7 +425,7 @@ class _UmfpackFactors:
         return np.array(x).reshape(b.shape)
 
 
-class _Umfpack:
+class _Umfpack(_CSCOrder):
     """SuiteSparse UMFPACK (kvxopt): the symbolic analysis (its ordering and strategy) of
     the first matrix, a numeric factorization per matrix."""
 
@@ -443,11 +446,6 @@ class _Umfpack:
             raise ValueError("the pattern holds repeated entries")
         self.symbolic = None  # of the first matrix (its values choose UMFPACK's strategy)
 
-    layout: np.ndarray | None = None  # the CSC order
-
-    def factor_laid_out(self, values: np.ndarray) -> Factors:
-        return self.factor(values)
-
     def factor(self, data: np.ndarray) -> Factors:
         kvxopt, umfpack = _kvxopt()
         self.matrix.V = kvxopt.matrix(np.ascontiguousarray(data, dtype=float))
@@ -461,7 +459,7 @@ class _Umfpack:
 
 
 # --------------------------------------------------------------------------- MUMPS
-class _Mumps:
+class _Mumps(_CSCOrder):
     """MUMPS (sequential, python-mumps): the analysis (its automatic ordering) with the
     first matrix, a factorization per matrix."""
 
@@ -479,11 +477,6 @@ class _Mumps:
 
     def _coo(self, data: np.ndarray) -> sparse.coo_array:
         return sparse.coo_array((data, (self.rows, self.cols)), shape=(self.n, self.n))
-
-    layout: np.ndarray | None = None  # the CSC order
-
-    def factor_laid_out(self, values: np.ndarray) -> Factors:
-        return self.factor(values)
 
     def factor(self, data: np.ndarray) -> Factors:
         import mumps

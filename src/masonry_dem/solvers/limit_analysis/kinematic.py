@@ -55,17 +55,13 @@ def corner_velocity_rows(problem: Problem, grid: int) -> sparse.csc_matrix:
     return (C @ Hs).tocsc()
 
 
-#: Clarabel's settings for the kinematic SOCP, measured on the ladder walls by
-#: ``python benchmarks/bench_limit_analysis.py --profile`` (docs/limit_analysis.md, "Where the
-#: time goes"): the iterative refinement off (0.79x the CPU at 1 041 blocks, 0.83x at 3 053,
-#: 0.95x at 10 051 with qdldl, the same lambda to 1e-6; every mechanism is still checked by
-#: ``mechanism_violation``)
+#: Clarabel's settings for the kinematic SOCP: no iterative refinement (every mechanism is
+#: checked by ``mechanism_violation`` anyway, and the refinement cost CPU without moving
+#: lambda; docs/limit_analysis.md, "Where the time goes")
 CLARABEL_OPTIONS: dict[str, Any] = {"iterative_refinement_enable": False}
 #: from this many velocities (6 per free block) Clarabel factorizes its KKT system with
-#: ``faer`` (supernodal LDL^T) on one thread, below with ``qdldl``: faer took 1.23x qdldl's
-#: CPU at 1 041 blocks (6 240 velocities), 0.72x at 3 053 (18 312) and 0.32x at 10 051
-#: (60 300: 61 against 194 s); on two threads it took 2-2.7x the CPU of one on the shared
-#: machine
+#: ``faer`` (supernodal LDL^T, whose supernodes pay once the fronts are large) on one
+#: thread, below with ``qdldl`` (same section of docs/limit_analysis.md)
 SUPERNODAL_FROM = 10_000
 
 

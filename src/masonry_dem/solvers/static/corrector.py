@@ -452,21 +452,21 @@ class Corrector:
             q_new = q.copy()
             q_new[free] += dq
             r_new, n_new, resp_new = self.residual(q_new, target)
-            if not n_new < 10.0 * rnorm and floor >= 1.0:
-                # the shortest time step fails: repeating it would factor the same matrix
-                # and fail the same way until the budget is spent
-                return Outcome(
-                    False,
-                    q,
-                    target,
-                    response,
-                    it,
-                    f"no rest: the shortest pseudo time step raises the residual {rnorm:.2e} "
-                    f"to {n_new:.2e}",
-                    failure=Failure.NO_REST,
-                )
-            if not n_new < 10.0 * rnorm:  # too long a time step: repeat it shorter
-                floor = min(10.0 * floor, 1.0)
+            if not n_new < 10.0 * rnorm:
+                if floor >= 1.0:
+                    # the shortest time step fails: repeating it would factor the same
+                    # matrix and fail the same way until the budget is spent
+                    return Outcome(
+                        False,
+                        q,
+                        target,
+                        response,
+                        it,
+                        f"no rest: the shortest pseudo time step raises the residual "
+                        f"{rnorm:.2e} to {n_new:.2e}",
+                        failure=Failure.NO_REST,
+                    )
+                floor = min(10.0 * floor, 1.0)  # too long a time step: repeat it shorter
                 continue
             ratio = n_new / rnorm
             q, residual, rnorm, response = q_new, r_new, n_new, resp_new

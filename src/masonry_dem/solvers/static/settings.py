@@ -132,11 +132,10 @@ class StaticSettings:
         residual has not halved in a quarter of the budget.
     stop_check_singular: run that check also where the tangent of the stuck state is
         singular along the load. A fold of the path has such a tangent as well as a peak,
-        and only the check tells them apart: with it on and a budget that covers a fold's
-        settling (60 000 time steps) the 2-block return-wall rows pass folds the default
-        certifies as collapses (S13/2: 0.0855 -> 0.0938), at the price of a relaxation of
-        the whole wall at every such stop (docs/solvers.md, "The stop check: folds and
-        peaks"). Off by default: that price is 5x on S23 and 100x on the S5 U wall.
+        and only the check tells them apart; with a budget that covers a fold's settling
+        the path passes folds the default certifies as collapses, at the price of a
+        relaxation of the whole wall at every such stop (measured in docs/solvers.md, "The
+        stop check: folds and peaks"). Off by default for that price.
     max_control_cuts: displacement control gives up after this many halvings in a row.
 
     Certificate of a collapse (see :mod:`masonry_dem.solvers.static.certificate`)
