@@ -4,6 +4,8 @@ keyed on every kernel file, and a compilation is announced before it happens."""
 from __future__ import annotations
 
 import logging
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -110,3 +112,20 @@ def test_a_lazy_kernel_is_announced_on_its_first_call(monkeypatch, caplog):
         fd_tangent_rows.for_rows(10)
     fd_tangent_rows._announced.update(announced)
     assert caplog.text.count("compiling kernel fd_tangent_rows (serial), once per machine") == 1
+
+
+def test_the_warm_up_compiles_the_zero_capacity_reduction():
+    """Newton's joint tangents pass through a compiled reduction of the joints of no strength
+    at zero compression (``problem._reduce_zero_capacity``); the warm-up's tangent group builds
+    them the same way, so that kernel is compiled (or loaded) before the analysis, not on its
+    first Newton iteration. A fresh interpreter: in this one other tests may have called it."""
+    code = (
+        "from masonry_dem.solvers.warmup import _run_group; "
+        "from masonry_dem.solvers.static import problem; "
+        "_run_group('tangent', False); "
+        "print(len(problem._reduce_zero_capacity.signatures))"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=600
+    )
+    assert int(out.stdout.split()[-1]) >= 1

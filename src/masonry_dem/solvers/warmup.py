@@ -73,7 +73,8 @@ def _forces_group(lazy: bool = False) -> None:
 
 
 def _tangent_group() -> None:
-    """The tangent's kernels: the law's consistent tangent and its assembly."""
+    """The tangent's kernels: the joints' tangents as Newton builds them (the law's consistent
+    tangent, the zero-capacity reduction) and their assembly."""
     from masonry_dem.constitutive.law import LawResponse
 
     problem = _tiny_problem()
@@ -82,8 +83,7 @@ def _tangent_group() -> None:
     response = LawResponse(
         np.zeros((m, 6)), np.zeros(m), np.zeros((m, 6)), np.zeros(m, dtype=np.uint8), None
     )
-    problem.law.tangent(response, 1e-9, problem.tangent_method)
-    problem.tangent_assembler.data(np.zeros((m, 6, 6)))
+    problem.tangent_assembler.data(problem.joint_tangents(response, 1e-9))
 
 
 def _run_group(group: str, parallel: bool, lazy: bool = False) -> None:
