@@ -215,12 +215,9 @@ def test_readme_case_file_passes_the_schema(tmp_path):
     readme = (Path(__file__).resolve().parents[2] / "README.md").read_text()
     block = readme.split("## Case files")[1].split("```toml")[1].split("```")[0]
     block = block.replace("openings = [[0.2, 0.3, 0.4, 0.6]]", "# openings")
+    from masonry_dem._toml import tomllib
     from masonry_dem.cases.casefile import case_from_dict
 
-    try:
-        import tomllib
-    except ImportError:  # pragma: no cover
-        import tomli as tomllib
     case = case_from_dict(tomllib.loads(block), "README")
     assert case.settings.bracket_tolerance == 0.005
 

@@ -7,10 +7,7 @@ from pathlib import Path
 
 import pytest
 
-try:
-    import tomllib
-except ModuleNotFoundError:  # Python 3.10
-    import tomli as tomllib
+from masonry_dem._toml import tomllib
 
 _NAME = "baraldi_cecchi_2016.toml"
 
