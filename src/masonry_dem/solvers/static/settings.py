@@ -84,9 +84,10 @@ class StaticSettings:
         by a Broyden update along the shortest step tried (the change of the joint's actions
         over it) and solves again, at most this many times a search (0: off, the default).
         It passes the kinks where a yielded joint's consistent tangent sends it back through
-        its elastic range: fewer failed searches and steps on long walls, but on the
-        validation set no fewer factorizations, and a wall with openings (S23) moves by
-        -3.4 % (docs/solvers.md, "A secant correction of the joints' tangents").
+        its elastic range: fewer failed searches and steps where those dominate (long
+        walls), but off because it takes no fewer factorizations where they do not, and a
+        longer step may pick another equilibrium of the non-associative law, a lower one
+        (docs/solvers.md, "A secant correction of the joints' tangents").
     trust_seed: the trust radius of a search with no previous increment to go by (the dead
         load's first live step, a controlled step), in elastic units of the wall
         (``DiscreteProblem.displacement_scale``: the bonded assembly's largest translation
