@@ -27,7 +27,7 @@ import numpy as np
 from masonry_dem.model import Model
 from masonry_dem.solvers.factorization import Factors
 from masonry_dem.solvers.static.outcome import Failure, Outcome
-from masonry_dem.solvers.static.problem import DiscreteProblem
+from masonry_dem.solvers.static.problem import DiscreteProblem, secant_tangents
 from masonry_dem.solvers.static.settings import StaticSettings
 
 if TYPE_CHECKING:
@@ -129,7 +129,12 @@ class Corrector:
 
         Safeguards: the translation part of each correction is held within a trust radius
         (grown after full steps, cut by 8 when no step along the direction lowers the
-        residual), and the step is backtracked until the residual decreases.
+        residual), and the step is backtracked until the residual decreases. Before a cut,
+        up to ``secant_rounds`` times a search, the joints' tangents are corrected along the
+        shortest step tried (:func:`secant_tangents`) and the direction solved again: where
+        the consistent tangent of a yielded joint sends it back through its elastic range
+        (a rocking joint turned the other way), no step length lowers the residual, and the
+        corrected tangent carries what that joint did over the step.
         """
         s = self.settings
         free = self.problem.asm.free_index
@@ -140,6 +145,8 @@ class Corrector:
         residual, rnorm, response = self.residual(q, lam, dead_factor)
         floor = s.residual_stiffness
         lu = None  # the factorized tangent, kept while it converges fast (chord steps)
+        secant: np.ndarray | None = None  # joint tangents corrected at this state, if any
+        rounds = 0  # secant corrections in this search
         here = False  # lu was factorized at the current state
         history: list[tuple[float, float]]  # (merit, trust radius) of the iterates; set below
         budget: int
@@ -153,12 +160,12 @@ class Corrector:
             it to nothing and the search stalls far from an equilibrium that exists. The
             floor changes only the search direction, never the residual, so a converged
             state is still an exact equilibrium of the law."""
-            nonlocal floor, history, budget, lu, cuts
+            nonlocal floor, history, budget, lu, cuts, secant
             if not damped or floor >= s.max_floor:
                 return False
             assert radius is not None  # set above when not given
             floor = min(floor * 1e3, s.max_floor)
-            lu = None
+            lu, secant = None, None
             cuts = 0
             history = [(rnorm + constraint_error(q), radius)]
             budget = it + s.max_iterations  # a fresh budget for the damped search
@@ -187,7 +194,7 @@ class Corrector:
             self.iterations += 1
             fresh = lu is None
             if lu is None:
-                lu = self.problem.factor(response, floor)
+                lu = self.problem.factor(response, floor, secant)
                 here = True  # the tangent of this state (False once a step is taken with it)
             repeat = cut and not fresh  # same state, same tangent: the same direction
             cut = False
@@ -242,6 +249,20 @@ class Corrector:
             if accepted is None and not here:  # a stale tangent: refactor before cutting
                 lu = None
                 continue
+            if accepted is None and not repeat and rounds < s.secant_rounds:
+                # the tangent mispredicts the joints over every step tried: correct each
+                # joint's tangent by what it did over the shortest one, and solve again
+                base = (
+                    secant if secant is not None else self.problem.joint_tangents(response, floor)
+                )
+                secant = secant_tangents(
+                    base,
+                    self.problem.relative(f * dq),
+                    resp_try.actions - response.actions,
+                    self.law.kbar,
+                )
+                lu, rounds = None, rounds + 1
+                continue
             if accepted is None:
                 if not fresh:
                     # a search after a cut, with the tangent of this state: refactoring here
@@ -286,6 +307,7 @@ class Corrector:
             ):
                 lu = None
             q, lam, residual, rnorm, response, cerr = accepted
+            secant = None  # the correction belonged to the state left behind
             here = here and crept
             umax = self.increment(q)
             if not math.isfinite(umax) or umax > self.limit:

@@ -103,6 +103,22 @@ def _reduce_zero_capacity(T, trial, tensile_force, kbar, floor, contact_band):
             T[i, 2, 2] = normal
 
 
+def secant_tangents(T: np.ndarray, du: np.ndarray, da: np.ndarray, kbar: np.ndarray) -> np.ndarray:
+    """The joints' tangents T (m, 6, 6) corrected by one Broyden update each, so that each
+    reproduces the change of its actions ``da`` (m, 6) over the relative displacement ``du``
+    (m, 6) actually taken: T' = T + (da - T du) (K du)^T / (du . K du), with K = diag(kbar)
+    the joint's elastic stiffness (the metric that makes translations and rotations
+    commensurate). T' du = da exactly; T' v = T v for every v K-orthogonal to du; a joint
+    that did not move, or whose actions changed as T predicted, keeps T."""
+    Kdu = kbar * du
+    norm = np.einsum("ij,ij->i", du, Kdu)
+    miss = da - np.einsum("ijk,ik->ij", T, du)
+    moved = norm > 0.0
+    out = T.copy()
+    out[moved] += miss[moved][:, :, None] * (Kdu[moved] / norm[moved, None])[:, None, :]
+    return out
+
+
 class TangentAssembler:
     """K_ff = H_f^T T H_f for per-interface 6x6 tangents T, with the sparsity pattern built
     once: each interface adds B = H_loc^T T H_loc (12 x 12, the DOFs of its two blocks) and
@@ -304,16 +320,22 @@ class DiscreteProblem:
         """The fixed-pattern assembler of the tangent (its pattern: ``indptr``, ``indices``)."""
         return self._tangents
 
-    def factor(self, response: LawResponse, floor: float | None = None) -> Factors:
+    def factor(
+        self,
+        response: LawResponse,
+        floor: float | None = None,
+        tangents: np.ndarray | None = None,
+    ) -> Factors:
         """LU of the consistent tangent at ``response`` (with ``floor`` x the elastic
-        stiffness kept on the diagonal of every joint). The tangent is structurally symmetric
+        stiffness kept on the diagonal of every joint), or of the joints' ``tangents`` (m, 6,
+        6) given instead (:func:`secant_tangents`). The tangent is structurally symmetric
         with a regular diagonal (the residual stiffness); its pattern never changes, so it is
         analysed once (:func:`masonry_dem.solvers.factorization.analyse`: the ordering and
         symbolic factorization of the backend chosen for its size) and each tangent's
         entries go straight to a numeric factorization."""
         if floor is None:
             floor = self.residual_stiffness
-        T = self.joint_tangents(response, floor)
+        T = self.joint_tangents(response, floor) if tangents is None else tangents.copy()
         fronts = self._factorizer()
         values = self._tangents.data(T, fronts.layout)  # in the backend's own order
         self.factorizations += 1
@@ -323,6 +345,11 @@ class DiscreteProblem:
             idx = np.arange(6)
             T[:, idx, idx] += 1e-6 * self.law.kbar
             return fronts.factor_laid_out(self._tangents.data(T, fronts.layout))
+
+    def relative(self, dq: np.ndarray) -> np.ndarray:
+        """(m, 6) relative displacements of the joints for an increment ``dq`` of the free
+        DOFs."""
+        return np.asarray(self.asm.H_free @ dq).reshape(-1, 6)
 
     def joint_tangents(self, response: LawResponse, floor: float | None = None) -> np.ndarray:
         """(m, 6, 6) tangents of the joints at ``response``, as :meth:`factor` assembles them:

@@ -79,6 +79,15 @@ class StaticSettings:
     creep: a step shorter than this fraction of the Newton correction, with no joint changing
         state, leaves the tangent as it was (its factorization is kept).
     search_cuts: a search gives up after this many cuts (by 8) of its trust radius.
+    secant_rounds: before cutting its trust radius, a search that finds no decrease along the
+        direction of a tangent factorized at its present state corrects each joint's tangent
+        by a Broyden update along the shortest step tried (the change of the joint's actions
+        over it) and solves again, at most this many times a search (0: off, the default).
+        It passes the kinks where a yielded joint's consistent tangent sends it back through
+        its elastic range: fewer failed searches and steps where those dominate (long
+        walls), but off because it takes no fewer factorizations where they do not, and a
+        longer step may pick another equilibrium of the non-associative law, a lower one
+        (docs/solvers.md, "A secant correction of the joints' tangents").
     trust_seed: the trust radius of a search with no previous increment to go by (the dead
         load's first live step, a controlled step), in elastic units of the wall
         (``DiscreteProblem.displacement_scale``: the bonded assembly's largest translation
@@ -179,6 +188,7 @@ class StaticSettings:
     chord_ratio: float = 0.25
     creep: float = 1e-3
     search_cuts: int = 7
+    secant_rounds: int = 0
     trust_seed: float = 0.05
     radius_floor: float = 1e-9
     max_cuts: int = 10
@@ -232,6 +242,7 @@ class StaticSettings:
             "easy_iterations": 0,
             "stall_window": 1,
             "search_cuts": 1,
+            "secant_rounds": 0,
             "max_cuts": 0,
             "limit_cuts": 0,
             "transient_steps": 0,
