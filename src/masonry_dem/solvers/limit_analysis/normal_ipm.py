@@ -42,6 +42,8 @@ from typing import Any
 import numpy as np
 from scipy import sparse
 
+from masonry_dem.model import Model
+
 from . import cones
 from .formulation import Problem, Solution, lambda_cap
 from .kinematic import corner_velocity_rows
@@ -59,6 +61,9 @@ ADMISSIBLE = 1e-6
 EQUILIBRIUM = 1e-8
 #: the iteration gives up (and the caller falls back on Clarabel) after this many steps
 MAX_ITERATIONS = 80
+#: the associative problem takes this solver from this many velocities (6 per free block):
+#: ``python benchmarks/bench_limit_analysis.py --profile`` (docs/limit_analysis.md)
+NORMAL_EQUATIONS_FROM = 1_000
 #: fraction of the step to the cones' boundary
 STEP_FRACTION = 0.99
 
@@ -73,10 +78,21 @@ class Bracket:
     upper: float
     violation: float
     residual: float
+    forces: np.ndarray  # (p, 3) the statically admissible cone duals of the lower bound
 
     @property
     def width(self) -> float:
         return (self.upper - self.lower) / max(abs(self.upper), 1e-300)
+
+
+def normal_threads(velocities: int) -> int:
+    """PARDISO's threads: ``numba.get_num_threads()`` (the package's one knob,
+    ``NUMBA_NUM_THREADS``) from ``factorization.PARALLEL_FROM`` unknowns, one below."""
+    import numba
+
+    from masonry_dem.solvers.factorization import PARALLEL_FROM
+
+    return 1 if velocities < PARALLEL_FROM else max(1, numba.get_num_threads())
 
 
 # --------------------------------------------------------------------------- the cones
@@ -91,13 +107,11 @@ class _NormalMatrix:
     interface (its four corners couple the 12 velocities of its two blocks) into a fixed
     upper-triangular CSR pattern, and its Cholesky factors (PARDISO)."""
 
-    def __init__(self, G: sparse.csr_matrix, problem: Problem, K: int) -> None:
-        model = problem.model
+    def __init__(self, G: sparse.csr_matrix, model: Model, index: np.ndarray, K: int) -> None:
+        """``index``: the column of G of every DOF of the model, -1 for those not solved for."""
         its = model.interfaces
         m, n = its.count, G.shape[1]
         self.m, self.K, self.n = m, K, n
-        index = np.full(model.n_dofs, -1)
-        index[problem.free] = np.arange(n)
         dofs = np.concatenate(
             [6 * its.block_i[:, None] + np.arange(6), 6 * its.block_j[:, None] + np.arange(6)],
             axis=1,
@@ -188,6 +202,16 @@ def _w(w: np.ndarray, beta: np.ndarray, x: np.ndarray, power: int) -> np.ndarray
 
 
 @dataclass
+class _Dropped:
+    """The equilibrium rows of the DOFs held at zero (``drop``): ``GT`` (their rows of
+    G^T), and their entries of l and c. The certified forces must balance there too."""
+
+    GT: sparse.csr_matrix
+    ell: np.ndarray
+    c: np.ndarray
+
+
+@dataclass
 class _Kinematic:
     """The problem in the iteration's terms: ``min c . u`` s.t. ``l . u = 1``, ``G u`` in
     the cones, and its normal matrix."""
@@ -199,6 +223,7 @@ class _Kinematic:
     normal: _NormalMatrix
     shift: float
     threads: int
+    dropped: _Dropped
 
     @property
     def cones(self) -> int:
@@ -227,28 +252,39 @@ class _Point:
 
 
 def solve_kinematic_normal(
-    problem: Problem, grid: int, threads: int = 1, max_iterations: int = MAX_ITERATIONS
+    problem: Problem,
+    grid: int,
+    threads: int = 1,
+    max_iterations: int = MAX_ITERATIONS,
+    drop: np.ndarray | None = None,
 ) -> tuple[Solution, np.ndarray, int, Bracket] | None:
     """The kinematic SOCP of ``problem`` on the normal equations; None where it does not
-    reach a certified bracket (the caller then solves with Clarabel). Returns the solution in
-    ``kinematic.solve_kinematic_clarabel``'s layout, the mechanism u, the points per
-    interface and the bracket."""
+    reach a certified bracket (the caller then solves with Clarabel). ``drop`` (6n,) bool:
+    DOFs held at zero velocity (``mirror.mirror_dofs``); the bracket is still certified on
+    the whole problem. Returns the solution in ``kinematic.solve_kinematic_clarabel``'s
+    layout, the mechanism u (every free DOF), the points per interface and the bracket."""
     try:
         import pypardiso  # noqa: F401
     except ImportError:
         return None
     t0 = time.process_time()
-    G = corner_velocity_rows(problem, grid).tocsr()
+    model = problem.model
+    G_all = corner_velocity_rows(problem, grid).tocsr()
+    free = np.flatnonzero(problem.free)
+    keep = np.ones(free.size, dtype=bool) if drop is None else ~drop[free]
+    G = G_all[:, keep].tocsr()
     p = G.shape[0] // 3
-    K = p // max(problem.model.interfaces.count, 1)
+    K = p // max(model.interfaces.count, 1)
     norm = max(float(np.linalg.norm(problem.live)), 1e-300)
-    normal = _NormalMatrix(G, problem, K)
+    ell, c = problem.live / norm, -problem.rhs / norm
+    index = np.full(model.n_dofs, -1)
+    index[free[keep]] = np.arange(int(keep.sum()))
+    normal = _NormalMatrix(G, model, index, K)
     identity = (np.tile([1.0, 0.0, 0.0], (p, 1)), np.ones(p))  # W = I
     # a shift at rounding size keeps N definite where a DOF meets no corner
     shift = 1e-12 * float(normal.assemble(*identity, 0.0).diagonal().max(initial=1.0))
-    kin = _Kinematic(
-        G, G.T.tocsr(), problem.live / norm, -problem.rhs / norm, normal, shift, threads
-    )
+    dropped = _Dropped(G_all[:, ~keep].T.tocsr(), ell[~keep], c[~keep])
+    kin = _Kinematic(G, G.T.tocsr(), ell[keep], c[keep], normal, shift, threads, dropped)
     try:
         out = _iterate(kin, max_iterations, lambda_cap(problem.live, problem.rhs))
     except Exception as exc:  # noqa: BLE001 (PARDISO's errors are plain exceptions)
@@ -261,15 +297,19 @@ def solve_kinematic_normal(
         return None
     bracket, point, iterations = out
     seconds = time.process_time() - t0
-    u = point.u / float(kin.ell @ point.u)
-    mu_f = np.repeat(problem.model.friction, K)
-    z = point.z
+    u = np.zeros(free.size)
+    u[keep] = point.u / float(kin.ell @ point.u)
+    mu_f = np.repeat(model.friction, K)
+    z = bracket.forces
     x = np.column_stack([norm * z[:, 0], -norm * mu_f * z[:, 1], -norm * mu_f * z[:, 2]]).ravel()
     detail = (
-        f"normal-equation IPM: lambda in [{bracket.lower:.9g}, {bracket.upper:.9g}] "
+        f"normal-equation IPM{'' if drop is None else ' on the mirror-symmetric mechanisms'}: "
+        f"lambda in [{bracket.lower:.9g}, {bracket.upper:.9g}] "
         f"({iterations} iterations, {seconds:.2f} s CPU)"
     )
-    sol = Solution("optimal", bracket.upper, x, u, detail, iterations, 0.0)
+    sol = Solution(
+        "optimal", bracket.upper, x, u, detail, iterations, 0.0, (bracket.lower, bracket.upper)
+    )
     return sol, u, K, bracket
 
 
@@ -401,8 +441,12 @@ def _certify(kin: _Kinematic, w: np.ndarray, beta: np.ndarray, pt: _Point) -> Br
     for _ in range(2):  # the correction, refined once on the unshifted N = G^T S G
         v_w += kin.normal.solve(r - GT @ _w(w, beta, (G @ v_w).reshape(-1, 3), 2).ravel())
     z2 = pt.z + _w(w, beta, (G @ v_w).reshape(-1, 3), 2)
-    residual = float(np.linalg.norm(c - ell * pt.y - GT @ z2.ravel())) / max(
-        float(np.linalg.norm(c)), 1e-300
+    out = kin.dropped
+    rest = np.concatenate(
+        [c - ell * pt.y - GT @ z2.ravel(), out.c - out.ell * pt.y - out.GT @ z2.ravel()]
+    )
+    residual = float(np.linalg.norm(rest)) / max(
+        float(np.hypot(np.linalg.norm(c), np.linalg.norm(out.c))), 1e-300
     )
     # inside the cones to rounding (forces on a cone's edge are admissible)
     inside = float(_cone_margin(z2).min()) >= -1e-12 * float(np.abs(z2).max(initial=0.0))
@@ -417,4 +461,4 @@ def _certify(kin: _Kinematic, w: np.ndarray, beta: np.ndarray, pt: _Point) -> Br
     )
     if violation > ADMISSIBLE or residual > EQUILIBRIUM or not inside:
         return None
-    return Bracket(pt.y, upper, violation, residual)
+    return Bracket(pt.y, upper, violation, residual, z2)
