@@ -11,6 +11,7 @@ from scipy import sparse
 
 from .formulation import Problem, Solution, associative_columns, lambda_cap, objective_scale
 from .kinematic import solve_kinematic_clarabel
+from .mirror import mirror_dofs
 from .normal_ipm import NORMAL_EQUATIONS_FROM, normal_threads, solve_kinematic_normal
 
 
@@ -181,11 +182,17 @@ def solve_associative(
 
 def _solve_kinematic(problem: Problem, grid: int) -> Solution:
     """The kinematic SOCP: on the normal equations (``normal_ipm``, PARDISO) from
-    ``NORMAL_EQUATIONS_FROM`` velocities, where it reaches a certified bracket; by Clarabel
+    ``NORMAL_EQUATIONS_FROM`` velocities, where it reaches a certified bracket, on the
+    mirror-symmetric mechanisms where the model has a mirror plane (``mirror``); by Clarabel
     below, and wherever the normal equations give up (no PARDISO, no mechanism, no
     statics, a stalled iteration)."""
-    if problem.H_T.shape[0] >= NORMAL_EQUATIONS_FROM:
-        out = solve_kinematic_normal(problem, grid, threads=normal_threads(problem.H_T.shape[0]))
+    velocities = problem.H_T.shape[0]
+    if velocities >= NORMAL_EQUATIONS_FROM:
+        # a failure on the symmetric mechanisms goes to Clarabel: if the whole problem had
+        # a mechanism, its symmetric part would be one too
+        out = solve_kinematic_normal(
+            problem, grid, threads=normal_threads(velocities), drop=mirror_dofs(problem.model)
+        )
         if out is not None:
             return out[0]
     sol, _, _ = solve_kinematic_clarabel(problem, grid)

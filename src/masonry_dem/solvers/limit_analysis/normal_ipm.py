@@ -139,7 +139,7 @@ class _NormalMatrix:
         self.nnz = unique.size
         self._solver: Any = None
         self._threads = 1
-        #: CPU seconds of the numeric factorizations and of the solves
+        #: seconds of the numeric factorizations and of the solves
         self.seconds = [0.0, 0.0]
         self._N: sparse.csr_matrix | None = None
 
@@ -167,9 +167,9 @@ class _NormalMatrix:
             self._solver.set_phase(11)
             self._call(N, np.zeros(self.n))
         self._solver.set_phase(22)
-        t0 = time.process_time()
+        t0 = time.perf_counter()
         self._call(N, np.zeros(self.n))
-        self.seconds[0] += time.process_time() - t0
+        self.seconds[0] += time.perf_counter() - t0
         self._N = N
 
     def _call(self, N: sparse.csr_matrix, b: np.ndarray) -> np.ndarray:
@@ -181,11 +181,11 @@ class _NormalMatrix:
 
     def solve(self, b: np.ndarray) -> np.ndarray:
         self._solver.set_phase(33)
-        t0 = time.process_time()
+        t0 = time.perf_counter()
         try:
             return np.asarray(self._call(self._N, np.asfortranarray(b))).reshape(b.shape)
         finally:
-            self.seconds[1] += time.process_time() - t0
+            self.seconds[1] += time.perf_counter() - t0
 
     def release(self) -> None:
         if self._solver is not None:
@@ -209,6 +209,12 @@ class _Dropped:
     GT: sparse.csr_matrix
     ell: np.ndarray
     c: np.ndarray
+    lift: np.ndarray  # the solved cone of every cone (``_distinct_cones``)
+    share: np.ndarray  # the share of that cone's force each carries
+
+    def spread(self, z: np.ndarray) -> np.ndarray:
+        """The forces of every cone from those of the solved ones."""
+        return z[self.lift] * self.share[:, None]
 
 
 @dataclass
@@ -220,6 +226,7 @@ class _Kinematic:
     GT: sparse.csr_matrix
     ell: np.ndarray
     c: np.ndarray
+
     normal: _NormalMatrix
     shift: float
     threads: int
@@ -272,9 +279,11 @@ def solve_kinematic_normal(
     G_all = corner_velocity_rows(problem, grid).tocsr()
     free = np.flatnonzero(problem.free)
     keep = np.ones(free.size, dtype=bool) if drop is None else ~drop[free]
-    G = G_all[:, keep].tocsr()
+    K_all = G_all.shape[0] // 3 // max(model.interfaces.count, 1)
+    G_keep = G_all[:, keep].tocsr()
+    kept, lift, share, K = _distinct_cones(G_keep, model.interfaces.count, K_all)
+    G = G_keep[(3 * kept[:, None] + np.arange(3)).ravel()].tocsr()
     p = G.shape[0] // 3
-    K = p // max(model.interfaces.count, 1)
     norm = max(float(np.linalg.norm(problem.live)), 1e-300)
     ell, c = problem.live / norm, -problem.rhs / norm
     index = np.full(model.n_dofs, -1)
@@ -283,7 +292,7 @@ def solve_kinematic_normal(
     identity = (np.tile([1.0, 0.0, 0.0], (p, 1)), np.ones(p))  # W = I
     # a shift at rounding size keeps N definite where a DOF meets no corner
     shift = 1e-12 * float(normal.assemble(*identity, 0.0).diagonal().max(initial=1.0))
-    dropped = _Dropped(G_all[:, ~keep].T.tocsr(), ell[~keep], c[~keep])
+    dropped = _Dropped(G_all[:, ~keep].T.tocsr(), ell[~keep], c[~keep], lift, share)
     kin = _Kinematic(G, G.T.tocsr(), ell[keep], c[keep], normal, shift, threads, dropped)
     try:
         out = _iterate(kin, max_iterations, lambda_cap(problem.live, problem.rhs))
@@ -291,7 +300,7 @@ def solve_kinematic_normal(
         log.info("normal-equation IPM: %s; Clarabel instead", exc)
         return None
     finally:
-        log.debug("PARDISO: factorizations %.2f s, solves %.2f s (CPU)", *normal.seconds)
+        log.debug("PARDISO: factorizations %.2f s, solves %.2f s", *normal.seconds)
         normal.release()
     if out is None:
         return None
@@ -299,8 +308,8 @@ def solve_kinematic_normal(
     seconds = time.process_time() - t0
     u = np.zeros(free.size)
     u[keep] = point.u / float(kin.ell @ point.u)
-    mu_f = np.repeat(model.friction, K)
-    z = bracket.forces
+    mu_f = np.repeat(model.friction, K_all)
+    z = dropped.spread(bracket.forces)
     x = np.column_stack([norm * z[:, 0], -norm * mu_f * z[:, 1], -norm * mu_f * z[:, 2]]).ravel()
     detail = (
         f"normal-equation IPM{'' if drop is None else ' on the mirror-symmetric mechanisms'}: "
@@ -310,7 +319,34 @@ def solve_kinematic_normal(
     sol = Solution(
         "optimal", bracket.upper, x, u, detail, iterations, 0.0, (bracket.lower, bracket.upper)
     )
-    return sol, u, K, bracket
+    return sol, u, K_all, bracket
+
+
+def _distinct_cones(
+    G: sparse.csr_matrix, m: int, K: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+    """The cones of G that differ, when every interface has the same number K' of them (the
+    corners on either side of a mirror plane move alike): (kept cones, the kept cone of
+    every cone, the share of its force each carries, K'). Equal rows are told apart by
+    their product with a random vector (equal rows give equal products to the bit)."""
+    p = G.shape[0] // 3
+    every = np.arange(p)
+    same = (every, every, np.ones(p), K)
+    if m == 0 or p != m * K:
+        return same
+    h = (G @ np.random.default_rng(0).standard_normal(G.shape[1])).reshape(p, 3)
+    keys = np.column_stack([np.repeat(np.arange(m), K).astype(float), h])
+    _, first, inverse = np.unique(keys, axis=0, return_index=True, return_inverse=True)
+    inverse = inverse.ravel()
+    per = np.bincount(np.repeat(np.arange(m), K)[first], minlength=m)
+    if first.size == p or np.any(per != per[0]):
+        return same
+    order = np.argsort(first)
+    position = np.empty(first.size, dtype=np.int64)
+    position[order] = np.arange(first.size)
+    lift = position[inverse]
+    share = 1.0 / np.bincount(inverse)[inverse]
+    return first[order], lift, share, int(per[0])
 
 
 def _start(kin: _Kinematic) -> _Point:
@@ -443,7 +479,7 @@ def _certify(kin: _Kinematic, w: np.ndarray, beta: np.ndarray, pt: _Point) -> Br
     z2 = pt.z + _w(w, beta, (G @ v_w).reshape(-1, 3), 2)
     out = kin.dropped
     rest = np.concatenate(
-        [c - ell * pt.y - GT @ z2.ravel(), out.c - out.ell * pt.y - out.GT @ z2.ravel()]
+        [c - ell * pt.y - GT @ z2.ravel(), out.c - out.ell * pt.y - out.GT @ out.spread(z2).ravel()]
     )
     residual = float(np.linalg.norm(rest)) / max(
         float(np.hypot(np.linalg.norm(c), np.linalg.norm(out.c))), 1e-300
