@@ -109,31 +109,31 @@ def normal_entries(
     local: np.ndarray, w: np.ndarray, beta: np.ndarray, slot: np.ndarray, nnz: int
 ) -> np.ndarray:
     """The entries of the upper triangle of ``G^T W^2 G`` in its CSR pattern: per interface
-    i and corner k, ``(W_k G_ik)^T (W_k G_ik)`` with ``G_ik = local[i, k]`` (3 x 12, the
-    corner's rows on the velocities of the interface's two blocks), summed into
+    i and corner k, ``(W_k G_ik)^T (W_k G_ik)`` with ``G_ik = local[i, k]`` (3 x C, the
+    corner's rows on the C solved velocities of the interface's two blocks), summed into
     ``data[slot[i, a, b]]`` for a <= b (``slot``: the entry of the pair's upper-triangle
     position; -1 for a fixed DOF)."""
-    m, K = local.shape[0], local.shape[1]
+    m, K, C = local.shape[0], local.shape[1], local.shape[3]
     data = np.zeros(nnz)
-    wg = np.empty((3, 12))
-    block = np.empty((12, 12))
+    wg = np.empty((3, C))
+    block = np.empty((C, C))
     for i in range(m):
         block[:] = 0.0
         for k in range(K):
             c = i * K + k
             w0, w1, w2, bt = w[c, 0], w[c, 1], w[c, 2], beta[c]
-            for j in range(12):
+            for j in range(C):
                 x0, x1, x2 = local[i, k, 0, j], local[i, k, 1, j], local[i, k, 2, j]
                 d = w1 * x1 + w2 * x2
                 f = x0 + d / (1.0 + w0)
                 wg[0, j] = bt * (w0 * x0 + d)
                 wg[1, j] = bt * (x1 + f * w1)
                 wg[2, j] = bt * (x2 + f * w2)
-            for a in range(12):
-                for b in range(a, 12):
+            for a in range(C):
+                for b in range(a, C):
                     block[a, b] += wg[0, a] * wg[0, b] + wg[1, a] * wg[1, b] + wg[2, a] * wg[2, b]
-        for a in range(12):
-            for b in range(a, 12):
+        for a in range(C):
+            for b in range(a, C):
                 t = slot[i, a, b]
                 if t >= 0:
                     data[t] += block[a, b]

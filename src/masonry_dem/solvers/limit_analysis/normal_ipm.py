@@ -103,8 +103,8 @@ def _cone_margin(x: np.ndarray) -> np.ndarray:
 
 # --------------------------------------------------------------------------- the normal matrix
 class _NormalMatrix:
-    """``N = G^T S G`` (S block diagonal, 3 x 3 per cone) summed from one 12 x 12 matrix per
-    interface (its four corners couple the 12 velocities of its two blocks) into a fixed
+    """``N = G^T S G`` (S block diagonal, 3 x 3 per cone) summed from one C x C matrix per
+    interface (its corners couple the C <= 12 solved velocities of its two blocks) into a fixed
     upper-triangular CSR pattern, and its Cholesky factors (PARDISO)."""
 
     def __init__(self, G: sparse.csr_matrix, model: Model, index: np.ndarray, K: int) -> None:
@@ -117,21 +117,26 @@ class _NormalMatrix:
             axis=1,
         )
         cols = index[dofs]  # (m, 12) free columns, -1 where fixed
+        # the solved columns first, and only as many as the widest interface has (6 of 12
+        # on the mirror-symmetric mechanisms)
+        cols = np.take_along_axis(cols, np.argsort(cols < 0, axis=1, kind="stable"), axis=1)
+        C = max(int((cols >= 0).sum(axis=1).max(initial=1)), 1)
+        cols = np.ascontiguousarray(cols[:, :C])
         rows = np.arange(m * 3 * K).reshape(m, 3 * K)
         present = cols >= 0
-        local = np.zeros((m, 3 * K, 12))
+        local = np.zeros((m, 3 * K, C))
         r = np.broadcast_to(rows[:, :, None], local.shape)
         c = np.broadcast_to(np.where(present, cols, 0)[:, None, :], local.shape)
         local[...] = np.asarray(G[r.ravel(), c.ravel()]).reshape(local.shape)
         local *= present[:, None, :]
-        self.local = np.ascontiguousarray(local.reshape(m, K, 3, 12).transpose(0, 1, 2, 3))
-        # the pattern: the upper triangle of every interface's 12 x 12, duplicates summed
+        self.local = local.reshape(m, K, 3, C)
+        # the pattern: the upper triangle of every interface's C x C, duplicates summed
         lo = np.minimum(cols[:, :, None], cols[:, None, :]).astype(np.int64)
         hi = np.maximum(cols[:, :, None], cols[:, None, :]).astype(np.int64)
-        fixed = (lo < 0) | np.tri(12, k=-1, dtype=bool)[None]  # and each pair once (a <= b)
+        fixed = (lo < 0) | np.tri(C, k=-1, dtype=bool)[None]  # and each pair once (a <= b)
         keys = np.where(fixed, -1, lo * n + hi)
         unique, inverse = np.unique(keys[~fixed], return_inverse=True)
-        self.slot = np.full((m, 12, 12), -1, dtype=np.int64)
+        self.slot = np.full((m, C, C), -1, dtype=np.int64)
         self.slot[~fixed] = inverse
         self.indptr = np.searchsorted(unique // n, np.arange(n + 1)).astype(np.int32)
         self.indices = (unique % n).astype(np.int32)
@@ -150,27 +155,45 @@ class _NormalMatrix:
         return sparse.csr_matrix((data, self.indices, self.indptr), shape=(self.n, self.n))
 
     def factor(self, N: sparse.csr_matrix, threads: int) -> None:
+        """Cholesky (PARDISO's mtype 2), and from its first refused pivot on, LDL^T with
+        perturbed pivots (mtype -2): near the optimum the stuck corners make N positive
+        definite in exact arithmetic only. Cholesky took 0.6-0.7x the CPU of LDL^T per
+        factorization and 0.55x per solve on the 10^4-block wall's mirror problem."""
+        from pypardiso.pardiso_wrapper import PyPardisoError
+
+        self._threads = threads
         if self._solver is None:
-            from masonry_dem.solvers.factorization import _point_pypardiso_at_mkl
-
-            _point_pypardiso_at_mkl()
-            from pypardiso import PyPardisoSolver
-
-            # symmetric indefinite (pivots perturbed, not refused): near the optimum the
-            # stuck corners make N positive definite in exact arithmetic only
-            self._solver = PyPardisoSolver(mtype=-2)
-            self._solver.set_iparm(1, 1)
-            self._solver.set_iparm(2, 2)  # METIS
-            self._solver.set_iparm(8, 0)  # no refinement inside PARDISO (ours is on N)
-            self._solver.set_iparm(10, 8)  # pivots perturbed by 1e-8
-            self._threads = threads
-            self._solver.set_phase(11)
-            self._call(N, np.zeros(self.n))
-        self._solver.set_phase(22)
+            self._open(2, N)
         t0 = time.perf_counter()
-        self._call(N, np.zeros(self.n))
+        try:
+            self._solver.set_phase(22)
+            self._call(N, np.zeros(self.n))
+        except PyPardisoError:
+            if self._solver.mtype != 2:
+                raise
+            log.debug("normal-equation IPM: Cholesky refused a pivot; LDL^T from here on")
+            self.release()
+            self._open(-2, N)
+            self._solver.set_phase(22)
+            self._call(N, np.zeros(self.n))
         self.seconds[0] += time.perf_counter() - t0
         self._N = N
+
+    def _open(self, mtype: int, N: sparse.csr_matrix) -> None:
+        """A PARDISO handle of ``mtype`` and its analysis (METIS) of N's pattern."""
+        from masonry_dem.solvers.factorization import _point_pypardiso_at_mkl
+
+        _point_pypardiso_at_mkl()
+        from pypardiso import PyPardisoSolver
+
+        self._solver = PyPardisoSolver(mtype=mtype)
+        self._solver.set_iparm(1, 1)
+        self._solver.set_iparm(2, 2)  # METIS
+        self._solver.set_iparm(8, 0)  # no refinement inside PARDISO (ours is on N)
+        if mtype == -2:
+            self._solver.set_iparm(10, 8)  # pivots perturbed by 1e-8
+        self._solver.set_phase(11)
+        self._call(N, np.zeros(self.n))
 
     def _call(self, N: sparse.csr_matrix, b: np.ndarray) -> np.ndarray:
         import ctypes
