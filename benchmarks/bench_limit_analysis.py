@@ -7,6 +7,8 @@
     python benchmarks/bench_limit_analysis.py --ladder 100 1000 10000   # blocks: LA vs pushover
     python benchmarks/bench_limit_analysis.py --speed 100 1000 10000    # build vs solve, the
                                                                # formulations and solvers
+                                                               # (Clarabel against the
+                                                               # normal equations)
     python benchmarks/bench_limit_analysis.py --profile 300 1000 3000   # the exact cone: size
                                                                # per block, Clarabel's setup,
                                                                # iterations and settings
@@ -148,23 +150,38 @@ def _kinematic_problem(model):
     return problem, kinematic.corner_velocity_rows(problem, 2)
 
 
-def speed(sizes: list[int], static_up_to: int, highs_up_to: int) -> None:
+def speed(sizes: list[int], static_up_to: int, highs_up_to: int, clarabel_up_to: int) -> None:
     """The ladder's walls: the time to build the problem (compatibility matrix and the cone
-    rows, vectorised) against the solve, for the kinematic SOCP (Clarabel, the default of
-    the exact cone), the static SOCP it replaced (Clarabel, objective in force units) and
-    the LP (HiGHS IPM, 4-face pyramid, exact in plane). CPU seconds of this process."""
-    from masonry_dem.solvers.limit_analysis import formulation, kinematic
+    rows, vectorised) against the solve, for the kinematic SOCP by Clarabel and by the
+    interior point method on the normal equations (``normal_ipm``: on every DOF, and on the
+    mirror-symmetric ones, the package's choice for these in-plane walls), the static SOCP
+    it replaced (Clarabel, objective in force units) and the LP (HiGHS IPM, 4-face pyramid,
+    exact in plane); then the whole ``limit_analysis`` call (build, solve, mechanism check).
+    CPU seconds of this process, and the ratios of one run."""
+    from masonry_dem.solvers.limit_analysis import formulation, kinematic, normal_ipm
     from masonry_dem.solvers.limit_analysis.backends import solve_clarabel, solve_highs
+    from masonry_dem.solvers.limit_analysis.mirror import mirror_dofs
 
     print(
-        f"{'blocks':>7s} {'interf':>7s} {'build':>7s} {'kin.SOCP':>9s} {'cpu s':>7s} "
-        f"{'wall s':>7s} {'stat.SOCP':>9s} {'cpu s':>7s} {'LP HiGHS':>9s} {'cpu s':>7s}"
+        f"{'blocks':>7s} {'interf':>7s} {'build':>6s} {'Clarabel':>9s} {'cpu s':>7s} "
+        f"{'normal eq.':>10s} {'cpu s':>7s} {'it':>3s} {'mirror':>10s} {'cpu s':>7s} {'it':>3s} "
+        f"{'bracket width':>13s} {'Cl./mir.':>8s} {'whole':>7s} {'wall s':>7s} "
+        f"{'stat.SOCP':>9s} {'cpu s':>7s} {'LP HiGHS':>9s} {'cpu s':>7s}"
     )
     for target in sizes:
         model = ladder_wall(target)
+        # numba's kernels loaded (compiled on a first run) before anything is timed
+        normal_ipm.solve_kinematic_normal(formulation.Problem.of(ladder_wall(30)), 2)
 
         (problem, _), t_build, _ = _cpu(_kinematic_problem, model)
-        (sol, _, _), t_kin, w_kin = _cpu(kinematic.solve_kinematic_clarabel, problem, 2)
+        lam_c, t_c = None, float("nan")
+        if model.blocks.count <= clarabel_up_to:
+            (sol, _, _), t_c, _ = _cpu(kinematic.solve_kinematic_clarabel, problem, 2)
+            lam_c = sol.lam
+        full, t_f, _ = _cpu(normal_ipm.solve_kinematic_normal, problem, 2)
+        drop = mirror_dofs(model)
+        half, t_m, _ = _cpu(normal_ipm.solve_kinematic_normal, problem, 2, drop=drop)
+        whole, t_w, w_w = _cpu(limit_analysis, model, backend="clarabel")
         lam_s, t_s = None, float("nan")
         if model.blocks.count <= static_up_to:
             R, K = formulation.associative_columns(model, 2, None)
@@ -184,10 +201,25 @@ def speed(sizes: list[int], static_up_to: int, highs_up_to: int) -> None:
                 solve_highs, E, problem.live, problem.rhs, np.zeros(k), np.full(k, np.inf)
             )
             lam_h = lp.lam
+
+        def ipm(out) -> tuple[str, int, str]:
+            if out is None:
+                return "-", 0, "-"
+            sol, _, _, bracket = out
+            return f"{sol.lam:.6f}", sol.iterations, f"{bracket.width:.1e}"
+
+        lam_f, it_f, _ = ipm(full)
+        lam_m, it_m, width = ipm(half if drop is not None else None)
         print(
-            f"{model.blocks.count:7d} {model.interfaces.count:7d} {t_build:7.2f} "
-            f"{_fmt(sol.lam):>9s} {t_kin:7.2f} {w_kin:7.2f} {_fmt(lam_s):>9s} {t_s:7.2f} "
-            f"{_fmt(lam_h):>9s} {t_h:7.2f}",
+            f"{model.blocks.count:7d} {model.interfaces.count:7d} {t_build:6.2f} "
+            f"{_fmt(lam_c):>9s} {t_c:7.2f} {lam_f:>10s} {t_f:7.2f} {it_f:3d} "
+            f"{lam_m:>10s} {t_m:7.2f} {it_m:3d} {width:>13s} {t_c / t_m:8.2f} "
+            f"{t_w:7.2f} {w_w:7.2f} {_fmt(lam_s):>9s} {t_s:7.2f} {_fmt(lam_h):>9s} {t_h:7.2f}",
+            flush=True,
+        )
+        print(
+            f"        whole limit_analysis: {whole.status} {whole.load_factor:.6f}, "
+            f"bracket {whole.bracket}; {whole.reason}",
             flush=True,
         )
 
@@ -281,6 +313,9 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument("--profile", nargs="*", type=int, default=None, metavar="BLOCKS")
     p.add_argument("--static-up-to", type=int, default=1100, help="largest static SOCP (speed)")
     p.add_argument("--highs-up-to", type=int, default=320, help="largest LP (speed)")
+    p.add_argument(
+        "--clarabel-up-to", type=int, default=20_000, help="largest Clarabel SOCP (speed)"
+    )
     p.add_argument("--pushover-up-to", type=int, default=2000, help="largest ladder pushover")
     args = p.parse_args(argv)
     if args.grid_study:
@@ -290,7 +325,12 @@ def main(argv: list[str] | None = None) -> None:
     if args.ladder is not None:
         ladder(args.ladder or [100, 1000, 10000], args.pushover_up_to, not args.no_highs)
     if args.speed is not None:
-        speed(args.speed or [100, 1000, 10000], args.static_up_to, args.highs_up_to)
+        speed(
+            args.speed or [100, 1000, 10000],
+            args.static_up_to,
+            args.highs_up_to,
+            args.clarabel_up_to,
+        )
     if args.profile is not None:
         profile(args.profile or [300, 1000, 3000])
     if not (

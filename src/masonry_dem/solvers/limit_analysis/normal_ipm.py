@@ -21,7 +21,7 @@ matrix loses accuracy near the optimum; the iteration then stalls at relative ga
 * **upper bound** (kinematic theorem): the iterate's own mechanism u, rescaled to
   ``l . u = 1``, is admissible if ``G u`` lies in the cones; lambda_up = ``c . u``. Its
   largest cone violation, relative to the largest corner velocity, must be under
-  ``ADMISSIBLE`` (the tolerance ``result.mechanism_violation`` applies to every mechanism).
+  ``ADMISSIBLE`` (1e-8, Clarabel's feasibility tolerance: the bound holds to that order).
 * **lower bound** (static theorem): the iterate's forces z miss equilibrium by ``r = c - l y
   - G^T z``; the correction of least norm in the scaling's metric, ``z + W^2 G N^-1 r``,
   restores it, and if it stays in the cones (checked corner by corner) the corrected forces
@@ -53,9 +53,10 @@ log = logging.getLogger(__name__)
 #: the certified bracket's relative width at which the iteration stops: lambda is then known
 #: to 6 digits, as the ladder's and the validation tables' values are given
 BRACKET = 1e-6
-#: largest cone violation of an accepted mechanism, relative to its largest corner velocity
-#: (``result._ADMISSIBILITY_TOLERANCE``, the same check every mechanism passes)
-ADMISSIBLE = 1e-6
+#: largest cone violation of an accepted mechanism, relative to its largest corner velocity:
+#: Clarabel's feasibility tolerance (the upper bound is exact for a mechanism admissible to
+#: this; ``result.mechanism_violation`` checks every mechanism again at 1e-5)
+ADMISSIBLE = 1e-8
 #: largest equilibrium residual of accepted forces, relative to |c| (Clarabel's feasibility
 #: tolerance)
 EQUILIBRIUM = 1e-8
