@@ -62,8 +62,10 @@ ADMISSIBLE = 1e-8
 EQUILIBRIUM = 1e-8
 #: the iteration gives up (and the caller falls back on Clarabel) after this many steps
 MAX_ITERATIONS = 80
-#: the associative problem takes this solver from this many velocities (6 per free block):
-#: ``python benchmarks/bench_limit_analysis.py --profile`` (docs/limit_analysis.md)
+#: the exact cone takes this solver from this many velocities (6 per free block): on every
+#: DOF it took Clarabel's CPU time at 636 velocities (106 blocks) and 0.57x at 1 788 (298
+#: blocks); below, Clarabel's answers and its infeasibility certificates come at no cost
+#: (``python benchmarks/bench_limit_analysis.py --speed``, docs/limit_analysis.md "Speed")
 NORMAL_EQUATIONS_FROM = 1_000
 #: fraction of the step to the cones' boundary
 STEP_FRACTION = 0.99
@@ -329,6 +331,8 @@ def solve_kinematic_normal(
     if out is None:
         return None
     bracket, point, iterations = out
+    if bracket.upper < 0 or bracket.upper >= lambda_cap(problem.live, problem.rhs) * (1 - 1e-3):
+        return None  # no statics under the dead load, or no mechanism: Clarabel's words
     seconds = time.process_time() - t0
     u = np.zeros(free.size)
     u[keep] = point.u / float(kin.ell @ point.u)
