@@ -4,6 +4,9 @@
                                                                # capacities (cT within 1 %)
     python benchmarks/bench_limit_analysis.py --cases [NAMES]   # 18 cases: LA (assoc., HiGHS
                                                                # and Clarabel), non-assoc., pushover
+    python benchmarks/bench_limit_analysis.py --cone-cases [NAMES]   # exact cone: Clarabel
+                                                               # alone against the package's
+                                                               # choice (normal equations)
     python benchmarks/bench_limit_analysis.py --ladder 100 1000 10000   # blocks: LA vs pushover
     python benchmarks/bench_limit_analysis.py --speed 100 1000 10000    # build vs solve, the
                                                                # formulations and solvers
@@ -94,6 +97,38 @@ def cases(names: list[str], nonassoc_grid: int | None = None) -> None:
         for r in (assoc, cone, nonassoc):
             if r.status != "collapse":
                 print(f"       {r.method} {r.backend}: {r.reason}")
+
+
+def cone_cases(names: list[str]) -> None:
+    """The exact cone on the validation cases: Clarabel alone (the normal equations switched
+    off) against the package's choice (the normal equations from ``NORMAL_EQUATIONS_FROM``
+    velocities), lambda and CPU seconds of the whole ``limit_analysis`` call, one run."""
+    from masonry_dem.cases.paper import build_case, case_names
+    from masonry_dem.solvers.limit_analysis import backends, normal_ipm
+
+    limit_analysis(build_case("S11").model, backend="clarabel")  # numba's kernels loaded
+    print(
+        f"{'case':7s} {'veloc.':>6s} {'Clarabel':>13s} {'cpu s':>6s} {'package':>13s} "
+        f"{'cpu s':>6s} {'ratio':>6s}  solver"
+    )
+    for name in names or case_names():
+        model = build_case(name).model
+        try:
+            backends.NORMAL_EQUATIONS_FROM = 10**12
+            alone, t_a, _ = _cpu(limit_analysis, model, backend="clarabel")
+        finally:
+            backends.NORMAL_EQUATIONS_FROM = normal_ipm.NORMAL_EQUATIONS_FROM
+        chosen, t_b, _ = _cpu(limit_analysis, model, backend="clarabel")
+
+        def show(r) -> str:
+            return f"{r.load_factor:.6f}" if r.status == "collapse" else r.status
+
+        print(
+            f"{name:7s} {int(model.free.sum()):6d} {show(alone):>13s} {t_a:6.2f} "
+            f"{show(chosen):>13s} {t_b:6.2f} {t_b / t_a:6.2f}  "
+            f"{'normal eq.' if chosen.bracket else 'Clarabel'}",
+            flush=True,
+        )
 
 
 def ladder(sizes: list[int], pushover_up_to: int, highs: bool = True) -> None:
@@ -304,6 +339,7 @@ def main(argv: list[str] | None = None) -> None:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
     p.add_argument("--grid-study", action="store_true")
     p.add_argument("--cases", nargs="*", default=None, metavar="NAME")
+    p.add_argument("--cone-cases", nargs="*", default=None, metavar="NAME")
     p.add_argument("--ladder", nargs="*", type=int, default=None, metavar="BLOCKS")
     p.add_argument(
         "--nonassoc-grid", type=int, default=None, help="grid of the non-associative runs"
@@ -322,6 +358,8 @@ def main(argv: list[str] | None = None) -> None:
         grid_study()
     if args.cases is not None:
         cases(args.cases, args.nonassoc_grid)
+    if args.cone_cases is not None:
+        cone_cases(args.cone_cases)
     if args.ladder is not None:
         ladder(args.ladder or [100, 1000, 10000], args.pushover_up_to, not args.no_highs)
     if args.speed is not None:
@@ -337,6 +375,7 @@ def main(argv: list[str] | None = None) -> None:
         args.profile is not None
         or args.grid_study
         or args.cases is not None
+        or args.cone_cases is not None
         or args.ladder is not None
         or args.speed is not None
     ):
