@@ -12,7 +12,7 @@ from scipy import sparse
 from .formulation import Problem, Solution, associative_columns, lambda_cap, objective_scale
 from .kinematic import solve_kinematic_clarabel
 from .mirror import mirror_dofs
-from .normal_ipm import NORMAL_EQUATIONS_FROM, normal_threads, solve_kinematic_normal
+from .normal_ipm import NORMAL_EQUATIONS_FROM, solve_kinematic_normal
 
 
 def solve_highs(
@@ -190,9 +190,7 @@ def _solve_kinematic(problem: Problem, grid: int) -> Solution:
     if velocities >= NORMAL_EQUATIONS_FROM:
         # a failure on the symmetric mechanisms goes to Clarabel: if the whole problem had
         # a mechanism, its symmetric part would be one too
-        out = solve_kinematic_normal(
-            problem, grid, threads=normal_threads(velocities), drop=mirror_dofs(problem.model)
-        )
+        out = solve_kinematic_normal(problem, grid, drop=mirror_dofs(problem.model))
         if out is not None:
             return out[0]
     sol, _, _ = solve_kinematic_clarabel(problem, grid)

@@ -67,6 +67,10 @@ MAX_ITERATIONS = 80
 #: blocks); below, Clarabel's answers and its infeasibility certificates come at no cost
 #: (``python benchmarks/bench_limit_analysis.py --speed``, docs/limit_analysis.md "Speed")
 NORMAL_EQUATIONS_FROM = 1_000
+#: PARDISO's threads: one. On the shared 2-core machine (load 6-8) two threads took 1.2-1.3x
+#: the CPU and 1.2-1.5x the wall time of one on the 10^4-block wall (as faer's two threads
+#: did for Clarabel, ``kinematic.clarabel_options``); docs/limit_analysis.md, "Speed"
+THREADS = 1
 #: fraction of the step to the cones' boundary
 STEP_FRACTION = 0.99
 
@@ -86,16 +90,6 @@ class Bracket:
     @property
     def width(self) -> float:
         return (self.upper - self.lower) / max(abs(self.upper), 1e-300)
-
-
-def normal_threads(velocities: int) -> int:
-    """PARDISO's threads: ``numba.get_num_threads()`` (the package's one knob,
-    ``NUMBA_NUM_THREADS``) from ``factorization.PARALLEL_FROM`` unknowns, one below."""
-    import numba
-
-    from masonry_dem.solvers.factorization import PARALLEL_FROM
-
-    return 1 if velocities < PARALLEL_FROM else max(1, numba.get_num_threads())
 
 
 # --------------------------------------------------------------------------- the cones
@@ -287,7 +281,7 @@ class _Point:
 def solve_kinematic_normal(
     problem: Problem,
     grid: int,
-    threads: int = 1,
+    threads: int = THREADS,
     max_iterations: int = MAX_ITERATIONS,
     drop: np.ndarray | None = None,
 ) -> tuple[Solution, np.ndarray, int, Bracket] | None:
