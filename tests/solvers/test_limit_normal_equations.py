@@ -14,8 +14,6 @@ from masonry_dem.solvers.limit_analysis.kinematic import solve_kinematic_clarabe
 from masonry_dem.solvers.limit_analysis.mirror import mirror_dofs
 from masonry_dem.solvers.limit_analysis.result import mechanism_violation
 
-pytest.importorskip("pypardiso")
-
 GAMMA = 2.0e4
 
 
@@ -34,6 +32,11 @@ def _ladder_wall(side: int) -> Model:
     on a slab, tilted in plane."""
     wall = running_bond_wall(side, side, a=0.2, b=0.4, s=0.2, unit_weight=2000 * 9.81)
     return _on_base(wall, 0.6, direction=(1.0, 0.0, 0.0))
+
+
+def _pardiso() -> None:
+    """The normal equations need PARDISO (``pypardiso``, a test dependency on x86-64)."""
+    pytest.importorskip("pypardiso")
 
 
 def _interior(rng, p: int) -> np.ndarray:
@@ -74,6 +77,7 @@ def test_single_block_tilts_inside_the_bracket():
     weight's lever s/2 against the push's a/2; friction 0.6 > s/a): the certified bracket
     holds s/a (to the 1e-8 to which its mechanism and forces are admissible) and is within
     ``BRACKET``."""
+    _pardiso()
     a, s = 0.4, 0.1
     problem = formulation.Problem.of(_on_base(single_block(a, 0.3, s, GAMMA), 0.6))
     out = normal_ipm.solve_kinematic_normal(problem, 2)
@@ -102,6 +106,7 @@ def test_ladder_wall_bracket_holds_clarabels_multiplier():
     ones give brackets within ``BRACKET`` that hold Clarabel's multiplier (to its 1e-8
     tolerance); the mechanism is admissible, and the certified forces balance every free DOF
     (the out-of-plane ones too) at the bracket's lower end."""
+    _pardiso()
     model = _ladder_wall(17)
     problem = formulation.Problem.of(model)
     reference, _, _ = solve_kinematic_clarabel(problem, 2)
@@ -122,6 +127,7 @@ def test_ladder_wall_bracket_holds_clarabels_multiplier():
 def test_out_of_plane_wall_agrees_with_clarabel():
     """A wall pushed out of plane (no mirror plane: every DOF is solved for) against
     Clarabel's kinematic SOCP on the same problem."""
+    _pardiso()
     wall = running_bond_wall(6, 8, a=0.1, b=0.25, s=0.12, unit_weight=GAMMA)
     model = _on_base(wall, 0.6, direction=(0.0, 0.0, 1.0))
     problem = formulation.Problem.of(model)
@@ -136,6 +142,7 @@ def test_entry_point_reports_the_bracket_and_falls_back_without_pardiso(monkeypa
     """From ``NORMAL_EQUATIONS_FROM`` velocities the exact cone is solved on the normal
     equations and the result carries the bracket; without pypardiso the same call is
     Clarabel's, with no bracket and the same multiplier."""
+    _pardiso()
     model = _ladder_wall(17)
     assert 6 * (model.blocks.count - 1) >= normal_ipm.NORMAL_EQUATIONS_FROM
     r = limit_analysis(model, backend="clarabel")
