@@ -4,9 +4,14 @@
                                                                # capacities (cT within 1 %)
     python benchmarks/bench_limit_analysis.py --cases [NAMES]   # 18 cases: LA (assoc., HiGHS
                                                                # and Clarabel), non-assoc., pushover
+    python benchmarks/bench_limit_analysis.py --cone-cases [NAMES]   # exact cone: Clarabel
+                                                               # alone against the package's
+                                                               # choice (normal equations)
     python benchmarks/bench_limit_analysis.py --ladder 100 1000 10000   # blocks: LA vs pushover
     python benchmarks/bench_limit_analysis.py --speed 100 1000 10000    # build vs solve, the
                                                                # formulations and solvers
+                                                               # (Clarabel against the
+                                                               # normal equations)
     python benchmarks/bench_limit_analysis.py --profile 300 1000 3000   # the exact cone: size
                                                                # per block, Clarabel's setup,
                                                                # iterations and settings
@@ -94,6 +99,38 @@ def cases(names: list[str], nonassoc_grid: int | None = None) -> None:
                 print(f"       {r.method} {r.backend}: {r.reason}")
 
 
+def cone_cases(names: list[str]) -> None:
+    """The exact cone on the validation cases: Clarabel alone (the normal equations switched
+    off) against the package's choice (the normal equations from ``NORMAL_EQUATIONS_FROM``
+    velocities), lambda and CPU seconds of the whole ``limit_analysis`` call, one run."""
+    from masonry_dem.cases.paper import build_case, case_names
+    from masonry_dem.solvers.limit_analysis import backends, normal_ipm
+
+    limit_analysis(build_case("S11").model, backend="clarabel")  # numba's kernels loaded
+    print(
+        f"{'case':7s} {'veloc.':>6s} {'Clarabel':>13s} {'cpu s':>6s} {'package':>13s} "
+        f"{'cpu s':>6s} {'ratio':>6s}  solver"
+    )
+    for name in names or case_names():
+        model = build_case(name).model
+        try:
+            backends.NORMAL_EQUATIONS_FROM = 10**12
+            alone, t_a, _ = _cpu(limit_analysis, model, backend="clarabel")
+        finally:
+            backends.NORMAL_EQUATIONS_FROM = normal_ipm.NORMAL_EQUATIONS_FROM
+        chosen, t_b, _ = _cpu(limit_analysis, model, backend="clarabel")
+
+        def show(r) -> str:
+            return f"{r.load_factor:.6f}" if r.status == "collapse" else r.status
+
+        print(
+            f"{name:7s} {int(model.free.sum()):6d} {show(alone):>13s} {t_a:6.2f} "
+            f"{show(chosen):>13s} {t_b:6.2f} {t_b / t_a:6.2f}  "
+            f"{'normal eq.' if chosen.bracket else 'Clarabel'}",
+            flush=True,
+        )
+
+
 def ladder(sizes: list[int], pushover_up_to: int, highs: bool = True) -> None:
     """Square-ish running-bond walls on a base tilted in plane (mu 0.6): LA against pushover."""
     from masonry_dem.geometry.builders import add_base, running_bond_wall
@@ -148,23 +185,38 @@ def _kinematic_problem(model):
     return problem, kinematic.corner_velocity_rows(problem, 2)
 
 
-def speed(sizes: list[int], static_up_to: int, highs_up_to: int) -> None:
+def speed(sizes: list[int], static_up_to: int, highs_up_to: int, clarabel_up_to: int) -> None:
     """The ladder's walls: the time to build the problem (compatibility matrix and the cone
-    rows, vectorised) against the solve, for the kinematic SOCP (Clarabel, the default of
-    the exact cone), the static SOCP it replaced (Clarabel, objective in force units) and
-    the LP (HiGHS IPM, 4-face pyramid, exact in plane). CPU seconds of this process."""
-    from masonry_dem.solvers.limit_analysis import formulation, kinematic
+    rows, vectorised) against the solve, for the kinematic SOCP by Clarabel and by the
+    interior point method on the normal equations (``normal_ipm``: on every DOF, and on the
+    mirror-symmetric ones, the package's choice for these in-plane walls), the static SOCP
+    it replaced (Clarabel, objective in force units) and the LP (HiGHS IPM, 4-face pyramid,
+    exact in plane); then the whole ``limit_analysis`` call (build, solve, mechanism check).
+    CPU seconds of this process, and the ratios of one run."""
+    from masonry_dem.solvers.limit_analysis import formulation, kinematic, normal_ipm
     from masonry_dem.solvers.limit_analysis.backends import solve_clarabel, solve_highs
+    from masonry_dem.solvers.limit_analysis.mirror import mirror_dofs
 
     print(
-        f"{'blocks':>7s} {'interf':>7s} {'build':>7s} {'kin.SOCP':>9s} {'cpu s':>7s} "
-        f"{'wall s':>7s} {'stat.SOCP':>9s} {'cpu s':>7s} {'LP HiGHS':>9s} {'cpu s':>7s}"
+        f"{'blocks':>7s} {'interf':>7s} {'build':>6s} {'Clarabel':>9s} {'cpu s':>7s} "
+        f"{'normal eq.':>10s} {'cpu s':>7s} {'it':>3s} {'mirror':>10s} {'cpu s':>7s} {'it':>3s} "
+        f"{'bracket width':>13s} {'Cl./mir.':>8s} {'whole':>7s} {'wall s':>7s} "
+        f"{'stat.SOCP':>9s} {'cpu s':>7s} {'LP HiGHS':>9s} {'cpu s':>7s}"
     )
     for target in sizes:
         model = ladder_wall(target)
+        # numba's kernels loaded (compiled on a first run) before anything is timed
+        normal_ipm.solve_kinematic_normal(formulation.Problem.of(ladder_wall(30)), 2)
 
         (problem, _), t_build, _ = _cpu(_kinematic_problem, model)
-        (sol, _, _), t_kin, w_kin = _cpu(kinematic.solve_kinematic_clarabel, problem, 2)
+        lam_c, t_c = None, float("nan")
+        if model.blocks.count <= clarabel_up_to:
+            (sol, _, _), t_c, _ = _cpu(kinematic.solve_kinematic_clarabel, problem, 2)
+            lam_c = sol.lam
+        full, t_f, _ = _cpu(normal_ipm.solve_kinematic_normal, problem, 2)
+        drop = mirror_dofs(model)
+        half, t_m, _ = _cpu(normal_ipm.solve_kinematic_normal, problem, 2, drop=drop)
+        whole, t_w, w_w = _cpu(limit_analysis, model, backend="clarabel")
         lam_s, t_s = None, float("nan")
         if model.blocks.count <= static_up_to:
             R, K = formulation.associative_columns(model, 2, None)
@@ -184,10 +236,25 @@ def speed(sizes: list[int], static_up_to: int, highs_up_to: int) -> None:
                 solve_highs, E, problem.live, problem.rhs, np.zeros(k), np.full(k, np.inf)
             )
             lam_h = lp.lam
+
+        def ipm(out) -> tuple[str, int, str]:
+            if out is None:
+                return "-", 0, "-"
+            sol, _, _, bracket = out
+            return f"{sol.lam:.6f}", sol.iterations, f"{bracket.width:.1e}"
+
+        lam_f, it_f, _ = ipm(full)
+        lam_m, it_m, width = ipm(half if drop is not None else None)
         print(
-            f"{model.blocks.count:7d} {model.interfaces.count:7d} {t_build:7.2f} "
-            f"{_fmt(sol.lam):>9s} {t_kin:7.2f} {w_kin:7.2f} {_fmt(lam_s):>9s} {t_s:7.2f} "
-            f"{_fmt(lam_h):>9s} {t_h:7.2f}",
+            f"{model.blocks.count:7d} {model.interfaces.count:7d} {t_build:6.2f} "
+            f"{_fmt(lam_c):>9s} {t_c:7.2f} {lam_f:>10s} {t_f:7.2f} {it_f:3d} "
+            f"{lam_m:>10s} {t_m:7.2f} {it_m:3d} {width:>13s} {t_c / t_m:8.2f} "
+            f"{t_w:7.2f} {w_w:7.2f} {_fmt(lam_s):>9s} {t_s:7.2f} {_fmt(lam_h):>9s} {t_h:7.2f}",
+            flush=True,
+        )
+        print(
+            f"        whole limit_analysis: {whole.status} {whole.load_factor:.6f}, "
+            f"bracket {whole.bracket}; {whole.reason}",
             flush=True,
         )
 
@@ -272,6 +339,7 @@ def main(argv: list[str] | None = None) -> None:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
     p.add_argument("--grid-study", action="store_true")
     p.add_argument("--cases", nargs="*", default=None, metavar="NAME")
+    p.add_argument("--cone-cases", nargs="*", default=None, metavar="NAME")
     p.add_argument("--ladder", nargs="*", type=int, default=None, metavar="BLOCKS")
     p.add_argument(
         "--nonassoc-grid", type=int, default=None, help="grid of the non-associative runs"
@@ -281,22 +349,33 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument("--profile", nargs="*", type=int, default=None, metavar="BLOCKS")
     p.add_argument("--static-up-to", type=int, default=1100, help="largest static SOCP (speed)")
     p.add_argument("--highs-up-to", type=int, default=320, help="largest LP (speed)")
+    p.add_argument(
+        "--clarabel-up-to", type=int, default=20_000, help="largest Clarabel SOCP (speed)"
+    )
     p.add_argument("--pushover-up-to", type=int, default=2000, help="largest ladder pushover")
     args = p.parse_args(argv)
     if args.grid_study:
         grid_study()
     if args.cases is not None:
         cases(args.cases, args.nonassoc_grid)
+    if args.cone_cases is not None:
+        cone_cases(args.cone_cases)
     if args.ladder is not None:
         ladder(args.ladder or [100, 1000, 10000], args.pushover_up_to, not args.no_highs)
     if args.speed is not None:
-        speed(args.speed or [100, 1000, 10000], args.static_up_to, args.highs_up_to)
+        speed(
+            args.speed or [100, 1000, 10000],
+            args.static_up_to,
+            args.highs_up_to,
+            args.clarabel_up_to,
+        )
     if args.profile is not None:
         profile(args.profile or [300, 1000, 3000])
     if not (
         args.profile is not None
         or args.grid_study
         or args.cases is not None
+        or args.cone_cases is not None
         or args.ladder is not None
         or args.speed is not None
     ):

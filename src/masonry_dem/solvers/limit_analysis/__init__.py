@@ -25,7 +25,11 @@ kappa(alpha) (``dem_domain``: 1 for alpha = 1, 1.0655 for the default 1.5):
 
 The package, by role: ``interface`` (grid, pyramid, actions of point forces),
 ``formulation`` (equilibrium rows, units, lambda cap), ``backends`` (HiGHS; static Clarabel),
-``kinematic`` (the kinematic SOCP), ``dem_domain`` (kappa), ``non_associative``,
+``kinematic`` (the kinematic SOCP, Clarabel), ``normal_ipm`` (the same SOCP by an interior
+point method on the normal equations, PARDISO, stopped at a certified bracket of lambda; the
+exact cone's solver from ``NORMAL_EQUATIONS_FROM`` velocities), ``cones`` (its second-order
+cone kernels), ``mirror`` (a mirror plane's antisymmetric DOFs: a wall loaded in its plane is
+solved on 3 velocities a block), ``dem_domain`` (kappa), ``non_associative``,
 ``result`` (the result and the mechanism check), ``analysis`` (the entry points).
 
 Why the associative answer needs only the corners is argued in ``interface``: any grid that

@@ -11,6 +11,8 @@ from scipy import sparse
 
 from .formulation import Problem, Solution, associative_columns, lambda_cap, objective_scale
 from .kinematic import solve_kinematic_clarabel
+from .mirror import mirror_dofs
+from .normal_ipm import NORMAL_EQUATIONS_FROM, solve_kinematic_normal
 
 
 def solve_highs(
@@ -170,12 +172,29 @@ def solve_associative(
         sol = solve_highs(E, problem.live, problem.rhs, np.zeros(k), np.full(k, np.inf))
     else:  # velocities of the free DOFs; the live work row and 3 cone rows per point
         size = (problem.H_T.shape[0], 1 + R.shape[1])
-        sol, _, _ = solve_kinematic_clarabel(problem, grid)
+        sol = _solve_kinematic(problem, grid)
         if sol.status == "error":
             sol = _static_clarabel(problem, R, K, sol.detail)
     if sol.status == "optimal":
         sol.info_actions = (problem.a0 + R @ sol.x).reshape(-1, 6)  # type: ignore[attr-defined]
     return sol, size
+
+
+def _solve_kinematic(problem: Problem, grid: int) -> Solution:
+    """The kinematic SOCP: on the normal equations (``normal_ipm``, PARDISO) from
+    ``NORMAL_EQUATIONS_FROM`` velocities, where it reaches a certified bracket, on the
+    mirror-symmetric mechanisms where the model has a mirror plane (``mirror``); by Clarabel
+    below, and wherever the normal equations give up (no PARDISO, no mechanism, no
+    statics, a stalled iteration)."""
+    velocities = problem.H_T.shape[0]
+    if velocities >= NORMAL_EQUATIONS_FROM:
+        # a failure on the symmetric mechanisms goes to Clarabel: if the whole problem had
+        # a mechanism, its symmetric part would be one too
+        out = solve_kinematic_normal(problem, grid, drop=mirror_dofs(problem.model))
+        if out is not None:
+            return out[0]
+    sol, _, _ = solve_kinematic_clarabel(problem, grid)
+    return sol
 
 
 def _static_clarabel(problem: Problem, R, K: int, kinematic_detail: str) -> Solution:

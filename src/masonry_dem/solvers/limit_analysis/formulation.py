@@ -97,6 +97,8 @@ class Solution:
     detail: str = ""
     iterations: int = 0  # the solver's own (interior point iterations)
     setup_seconds: float = 0.0  # CPU seconds of the solver's setup (before its iterations)
+    #: (lower, upper): a certified bracket of lambda (``normal_ipm``), None where not certified
+    bracket: tuple[float, float] | None = None
 
 
 #: lambda is capped at this multiple of max(1, |dead| / |live|): reaching the cap is "no

@@ -25,6 +25,8 @@ class LimitAnalysisResult:
         lambda reaches ``LAMBDA_CAP`` x max(1, |dead| / |live|)) or
         "failed" (``reason`` says why, with the solver's own status).
     load_factor: the collapse multiplier (nan unless "collapse").
+    bracket: where the solver certifies lambda both ways, (lower, upper) with
+        ``load_factor`` = upper (``normal_ipm``); None otherwise.
     block_velocities: (n, 6) the collapse mechanism (zeros unless "collapse"), scaled so
         that the largest translation is 1 and the live load does positive work.
     interface_actions: (m, 6) local actions [f1, f2, fn, m1, m2, m3] at collapse.
@@ -48,6 +50,9 @@ class LimitAnalysisResult:
     info: dict[str, Any] = field(default_factory=dict)
     friction_scale: float = 1.0
     covers_dem: bool = False  # friction_scale >= kappa(alpha): the LA domain holds the DEM's
+    #: (lower, upper): lambda certified from both sides (statically admissible forces, an
+    #: admissible mechanism; ``normal_ipm``), None where the solver gives no such bracket
+    bracket: tuple[float, float] | None = None
 
     @property
     def bound(self) -> str:
@@ -68,6 +73,7 @@ class LimitAnalysisResult:
             "status": self.status,
             "reason": self.reason,
             "lambda": lam,
+            "lambda_bracket": None if self.bracket is None else [float(x) for x in self.bracket],
             "method": self.method,
             "bound": self.bound,
             "grid": self.grid,
@@ -141,6 +147,7 @@ def finish(problem: Problem, sol: Solution, size: tuple[int, int], result, **kw)
         sol.lam,
         f"collapse mechanism at lambda = {sol.lam:.6g} ({sol.detail})",
         block_velocities=problem.velocities(sol.duals),
+        bracket=sol.bracket,
         interface_actions=actions,
         **kw,
     )

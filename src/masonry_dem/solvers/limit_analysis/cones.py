@@ -1,0 +1,140 @@
+"""Second-order cones SOC(3) for the interior point method of ``normal_ipm``, as compiled
+loops over the cones (one cone is three numbers: numpy's batched 3 x 3 products cost more
+than the factorization on the ladder's walls).
+
+Notation of CVXOPT's cone solvers (Vandenberghe, "The CVXOPT linear and quadratic cone
+program solvers", 2010): ``J = diag(1, -1, -1)``; the Jordan product ``x o y = (x . y,
+x0 y1 + y0 x1)``, with identity ``e = (1, 0, 0)``; the Nesterov-Todd scaling of a pair of
+interior points ``s, z`` is ``W = beta Wbar``, ``Wbar = [[w0, w1^T], [w1, I + w1 w1^T /
+(1 + w0)]]`` with the scaling point ``w`` (``w^T J w = 1``) and ``beta = (det z / det s)^(1/4)``
+(``det x = x^T J x``), so that ``W s = W^-1 z = lam``; ``Wbar^-1 = J Wbar J``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+
+@numba.njit(cache=True)
+def nt_scaling(s: np.ndarray, z: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(w, beta, lam) of every cone: the scaling point (p, 3), the factor (p,) and the
+    scaled point ``lam = W s`` (p, 3)."""
+    p = s.shape[0]
+    w = np.empty((p, 3))
+    beta = np.empty(p)
+    lam = np.empty((p, 3))
+    for k in range(p):
+        ds = math.sqrt(max(s[k, 0] ** 2 - s[k, 1] ** 2 - s[k, 2] ** 2, 1e-300))
+        dz = math.sqrt(max(z[k, 0] ** 2 - z[k, 1] ** 2 - z[k, 2] ** 2, 1e-300))
+        sb0, sb1, sb2 = s[k, 0] / ds, s[k, 1] / ds, s[k, 2] / ds
+        zb0, zb1, zb2 = z[k, 0] / dz, z[k, 1] / dz, z[k, 2] / dz
+        gamma = math.sqrt(0.5 * (1.0 + sb0 * zb0 + sb1 * zb1 + sb2 * zb2))
+        w[k, 0] = (sb0 + zb0) / (2.0 * gamma)
+        w[k, 1] = (zb1 - sb1) / (2.0 * gamma)
+        w[k, 2] = (zb2 - sb2) / (2.0 * gamma)
+        beta[k] = math.sqrt(dz / ds)
+    apply_w(w, beta, s, 1, lam)
+    return w, beta, lam
+
+
+@numba.njit(cache=True)
+def apply_w(w: np.ndarray, beta: np.ndarray, x: np.ndarray, power: int, out: np.ndarray) -> None:
+    """out = W^power x per cone, power in (1, 2, -1)."""
+    for k in range(w.shape[0]):
+        w0, w1, w2 = w[k, 0], w[k, 1], w[k, 2]
+        x0, x1, x2 = x[k, 0], x[k, 1], x[k, 2]
+        times = 2 if power == 2 else 1
+        if power == -1:  # Wbar^-1 = J Wbar J
+            x1, x2 = -x1, -x2
+        for _ in range(times):
+            d = w1 * x1 + w2 * x2
+            y0 = w0 * x0 + d
+            f = x0 + d / (1.0 + w0)
+            x0, x1, x2 = y0, x1 + f * w1, x2 + f * w2
+        if power == -1:
+            out[k, 0], out[k, 1], out[k, 2] = x0 / beta[k], -x1 / beta[k], -x2 / beta[k]
+        else:
+            b = beta[k] ** times
+            out[k, 0], out[k, 1], out[k, 2] = b * x0, b * x1, b * x2
+
+
+@numba.njit(cache=True)
+def jordan(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """x o y per cone."""
+    out = np.empty_like(x)
+    for k in range(x.shape[0]):
+        out[k, 0] = x[k, 0] * y[k, 0] + x[k, 1] * y[k, 1] + x[k, 2] * y[k, 2]
+        out[k, 1] = x[k, 0] * y[k, 1] + y[k, 0] * x[k, 1]
+        out[k, 2] = x[k, 0] * y[k, 2] + y[k, 0] * x[k, 2]
+    return out
+
+
+@numba.njit(cache=True)
+def jordan_solve(lam: np.ndarray, r: np.ndarray) -> np.ndarray:
+    """v with ``lam o v = r`` per cone (lam interior: its arrow matrix inverted in closed
+    form)."""
+    v = np.empty_like(r)
+    for k in range(lam.shape[0]):
+        l0, l1, l2 = lam[k, 0], lam[k, 1], lam[k, 2]
+        det = l0 * l0 - l1 * l1 - l2 * l2
+        v0 = (l0 * r[k, 0] - l1 * r[k, 1] - l2 * r[k, 2]) / det
+        v[k, 0] = v0
+        v[k, 1] = (r[k, 1] - v0 * l1) / l0
+        v[k, 2] = (r[k, 2] - v0 * l2) / l0
+    return v
+
+
+@numba.njit(cache=True)
+def max_step(x: np.ndarray, d: np.ndarray) -> float:
+    """The largest alpha with x + alpha d in every cone (x interior): the smallest positive
+    root of ``det(x + alpha d) = a alpha^2 + 2 b alpha + c``, written without cancellation
+    (``c / (-b + sqrt(b^2 - a c))``); the cone is left only where a < 0, or b < 0 with real
+    roots."""
+    alpha = np.inf
+    for k in range(x.shape[0]):
+        a = d[k, 0] ** 2 - d[k, 1] ** 2 - d[k, 2] ** 2
+        b = x[k, 0] * d[k, 0] - x[k, 1] * d[k, 1] - x[k, 2] * d[k, 2]
+        c = max(x[k, 0] ** 2 - x[k, 1] ** 2 - x[k, 2] ** 2, 0.0)
+        disc = b * b - a * c
+        if a < 0 or (b < 0 and disc >= 0):
+            alpha = min(alpha, c / (-b + math.sqrt(max(disc, 0.0))))
+    return alpha
+
+
+@numba.njit(cache=True)
+def normal_entries(
+    local: np.ndarray, w: np.ndarray, beta: np.ndarray, slot: np.ndarray, nnz: int
+) -> np.ndarray:
+    """The entries of the upper triangle of ``G^T W^2 G`` in its CSR pattern: per interface
+    i and corner k, ``(W_k G_ik)^T (W_k G_ik)`` with ``G_ik = local[i, k]`` (3 x C, the
+    corner's rows on the C solved velocities of the interface's two blocks), summed into
+    ``data[slot[i, a, b]]`` for a <= b (``slot``: the entry of the pair's upper-triangle
+    position; -1 for a fixed DOF)."""
+    m, K, C = local.shape[0], local.shape[1], local.shape[3]
+    data = np.zeros(nnz)
+    wg = np.empty((3, C))
+    block = np.empty((C, C))
+    for i in range(m):
+        block[:] = 0.0
+        for k in range(K):
+            c = i * K + k
+            w0, w1, w2, bt = w[c, 0], w[c, 1], w[c, 2], beta[c]
+            for j in range(C):
+                x0, x1, x2 = local[i, k, 0, j], local[i, k, 1, j], local[i, k, 2, j]
+                d = w1 * x1 + w2 * x2
+                f = x0 + d / (1.0 + w0)
+                wg[0, j] = bt * (w0 * x0 + d)
+                wg[1, j] = bt * (x1 + f * w1)
+                wg[2, j] = bt * (x2 + f * w2)
+            for a in range(C):
+                for b in range(a, C):
+                    block[a, b] += wg[0, a] * wg[0, b] + wg[1, a] * wg[1, b] + wg[2, a] * wg[2, b]
+        for a in range(C):
+            for b in range(a, C):
+                t = slot[i, a, b]
+                if t >= 0:
+                    data[t] += block[a, b]
+    return data

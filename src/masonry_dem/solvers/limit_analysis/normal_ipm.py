@@ -1,0 +1,522 @@
+"""The kinematic SOCP by a primal-dual interior point method on the normal equations, stopped
+at a certified bracket of lambda.
+
+The problem is ``kinematic``'s: ``min c . u`` s.t. ``l . u = 1`` and ``s = G u`` in a product
+of p cones SOC(3) (the corner velocities ``(v_n, mu v_t1, mu v_t2)``), with ``c = -rhs / |live|``
+and ``l = live / |live|``; its dual is ``max y`` s.t. ``G^T z + l y = c``, z in the cones (the
+point forces). Clarabel factorizes the whole KKT system, 3 rows per cone and 6 per block (41
+rows a block); here the cones are eliminated through their Nesterov-Todd scalings, which leaves
+the normal matrix ``N = G^T W^2 G`` on the velocities (6 rows a block, 6 x 6 blocks on the block
+adjacency graph), summed from one 12 x 12 matrix per interface and factorized by PARDISO
+(Cholesky, METIS ordering, analysed once). The live-work row is a border, solved by a Schur
+complement (one more right-hand side per iteration). Mehrotra's predictor-corrector, as in
+CVXOPT's ``coneqp`` and Clarabel (without the homogeneous embedding: problems with no
+mechanism or no statics are left to Clarabel, which certifies infeasibility).
+
+Why a bracket, and not a gap of 1e-8: the corners that stay shut in the mechanism (most of a
+wall) have ``s -> 0``, so their scaling ``W^2 ~ z / s`` grows without bound and the normal
+matrix loses accuracy near the optimum; the iteration then stalls at relative gaps of about
+1e-7 to 1e-6. What it has by then is enough to certify lambda both ways:
+
+* **upper bound** (kinematic theorem): the iterate's own mechanism u, rescaled to
+  ``l . u = 1``, is admissible if ``G u`` lies in the cones; lambda_up = ``c . u``. Its
+  largest cone violation, relative to the largest corner velocity, must be under
+  ``ADMISSIBLE`` (1e-8, Clarabel's feasibility tolerance: the bound holds to that order).
+* **lower bound** (static theorem): the iterate's forces z miss equilibrium by ``r = c - l y
+  - G^T z``; the correction of least norm in the scaling's metric, ``z + W^2 G N^-1 r``,
+  restores it, and if it stays in the cones (checked corner by corner) the corrected forces
+  are statically admissible and lambda_low = y.
+
+The iteration stops when both hold and ``lambda_up - lambda_low <= BRACKET * lambda_up``.
+Where it cannot (too many iterations, a step that stalls, PARDISO missing or failing), it
+returns None and the caller solves with Clarabel.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from scipy import sparse
+
+from masonry_dem.model import Model
+
+from . import cones
+from .formulation import Problem, Solution, lambda_cap
+from .kinematic import corner_velocity_rows
+
+log = logging.getLogger(__name__)
+
+#: the certified bracket's relative width at which the iteration stops: lambda is then known
+#: to 6 digits, as the ladder's and the validation tables' values are given
+BRACKET = 1e-6
+#: largest cone violation of an accepted mechanism, relative to its largest corner velocity:
+#: Clarabel's feasibility tolerance (the upper bound is exact for a mechanism admissible to
+#: this; ``result.mechanism_violation`` checks every mechanism again at 1e-5)
+ADMISSIBLE = 1e-8
+#: largest equilibrium residual of accepted forces, relative to |c| (Clarabel's feasibility
+#: tolerance)
+EQUILIBRIUM = 1e-8
+#: the iteration gives up (and the caller falls back on Clarabel) after this many steps
+MAX_ITERATIONS = 80
+#: the exact cone takes this solver from this many velocities (6 per free block): on every
+#: DOF it took Clarabel's CPU time at 636 velocities (106 blocks) and 0.57x at 1 788 (298
+#: blocks); below, Clarabel's answers and its infeasibility certificates come at no cost
+#: (``python benchmarks/bench_limit_analysis.py --speed``, docs/limit_analysis.md "Speed")
+NORMAL_EQUATIONS_FROM = 1_000
+#: PARDISO's threads: one. On the shared 2-core machine (load 6-8) two threads took 1.2-1.3x
+#: the CPU and 1.2-1.5x the wall time of one on the 10^4-block wall (as faer's two threads
+#: did for Clarabel, ``kinematic.clarabel_options``); docs/limit_analysis.md, "Speed"
+THREADS = 1
+#: fraction of the step to the cones' boundary
+STEP_FRACTION = 0.99
+
+
+@dataclass
+class Bracket:
+    """A certified bracket of the associative multiplier: ``lower`` from statically
+    admissible forces (their equilibrium residual, relative to |c|, is ``residual``),
+    ``upper`` from a mechanism whose cone violation is ``violation``."""
+
+    lower: float
+    upper: float
+    violation: float
+    residual: float
+    forces: np.ndarray  # (p, 3) the statically admissible cone duals of the lower bound
+
+    @property
+    def width(self) -> float:
+        return (self.upper - self.lower) / max(abs(self.upper), 1e-300)
+
+
+# --------------------------------------------------------------------------- the cones
+def _cone_margin(x: np.ndarray) -> np.ndarray:
+    """x0 - |x1| per cone (>= 0 inside)."""
+    return x[:, 0] - np.hypot(x[:, 1], x[:, 2])
+
+
+# --------------------------------------------------------------------------- the normal matrix
+class _NormalMatrix:
+    """``N = G^T S G`` (S block diagonal, 3 x 3 per cone) summed from one C x C matrix per
+    interface (its corners couple the C <= 12 solved velocities of its two blocks) into a fixed
+    upper-triangular CSR pattern, and its Cholesky factors (PARDISO)."""
+
+    def __init__(self, G: sparse.csr_matrix, model: Model, index: np.ndarray, K: int) -> None:
+        """``index``: the column of G of every DOF of the model, -1 for those not solved for."""
+        its = model.interfaces
+        m, n = its.count, G.shape[1]
+        self.m, self.K, self.n = m, K, n
+        dofs = np.concatenate(
+            [6 * its.block_i[:, None] + np.arange(6), 6 * its.block_j[:, None] + np.arange(6)],
+            axis=1,
+        )
+        cols = index[dofs]  # (m, 12) free columns, -1 where fixed
+        # the solved columns first, and only as many as the widest interface has (6 of 12
+        # on the mirror-symmetric mechanisms)
+        cols = np.take_along_axis(cols, np.argsort(cols < 0, axis=1, kind="stable"), axis=1)
+        C = max(int((cols >= 0).sum(axis=1).max(initial=1)), 1)
+        cols = np.ascontiguousarray(cols[:, :C])
+        rows = np.arange(m * 3 * K).reshape(m, 3 * K)
+        present = cols >= 0
+        local = np.zeros((m, 3 * K, C))
+        r = np.broadcast_to(rows[:, :, None], local.shape)
+        c = np.broadcast_to(np.where(present, cols, 0)[:, None, :], local.shape)
+        local[...] = np.asarray(G[r.ravel(), c.ravel()]).reshape(local.shape)
+        local *= present[:, None, :]
+        self.local = local.reshape(m, K, 3, C)
+        # the pattern: the upper triangle of every interface's C x C, duplicates summed
+        lo = np.minimum(cols[:, :, None], cols[:, None, :]).astype(np.int64)
+        hi = np.maximum(cols[:, :, None], cols[:, None, :]).astype(np.int64)
+        fixed = (lo < 0) | np.tri(C, k=-1, dtype=bool)[None]  # and each pair once (a <= b)
+        keys = np.where(fixed, -1, lo * n + hi)
+        unique, inverse = np.unique(keys[~fixed], return_inverse=True)
+        self.slot = np.full((m, C, C), -1, dtype=np.int64)
+        self.slot[~fixed] = inverse
+        self.indptr = np.searchsorted(unique // n, np.arange(n + 1)).astype(np.int32)
+        self.indices = (unique % n).astype(np.int32)
+        self.diagonal = np.searchsorted(unique, np.arange(n, dtype=np.int64) * (n + 1))
+        self.nnz = unique.size
+        self._solver: Any = None
+        self._threads = 1
+        #: seconds of the numeric factorizations and of the solves
+        self.seconds = [0.0, 0.0]
+        self._N: sparse.csr_matrix | None = None
+
+    def assemble(self, w: np.ndarray, beta: np.ndarray, shift: float) -> sparse.csr_matrix:
+        """The upper triangle of ``G^T W^2 G + shift I`` (W: the scalings, ``cones``)."""
+        data = cones.normal_entries(self.local, w, beta, self.slot, self.nnz)
+        data[self.diagonal] += shift
+        return sparse.csr_matrix((data, self.indices, self.indptr), shape=(self.n, self.n))
+
+    def factor(self, N: sparse.csr_matrix, threads: int) -> None:
+        """Cholesky (PARDISO's mtype 2), and from its first refused pivot on, LDL^T with
+        perturbed pivots (mtype -2): near the optimum the stuck corners make N positive
+        definite in exact arithmetic only. Cholesky took 0.6-0.7x the CPU of LDL^T per
+        factorization and 0.55x per solve on the 10^4-block wall's mirror problem."""
+        from pypardiso.pardiso_wrapper import PyPardisoError
+
+        self._threads = threads
+        if self._solver is None:
+            self._open(2, N)
+        t0 = time.perf_counter()
+        try:
+            self._solver.set_phase(22)
+            self._call(N, np.zeros(self.n))
+        except PyPardisoError:
+            if self._solver.mtype != 2:
+                raise
+            log.debug("normal-equation IPM: Cholesky refused a pivot; LDL^T from here on")
+            self.release()
+            self._open(-2, N)
+            self._solver.set_phase(22)
+            self._call(N, np.zeros(self.n))
+        self.seconds[0] += time.perf_counter() - t0
+        self._N = N
+
+    def _open(self, mtype: int, N: sparse.csr_matrix) -> None:
+        """A PARDISO handle of ``mtype`` and its analysis (METIS) of N's pattern."""
+        from masonry_dem.solvers.factorization import _point_pypardiso_at_mkl
+
+        _point_pypardiso_at_mkl()
+        from pypardiso import PyPardisoSolver
+
+        self._solver = PyPardisoSolver(mtype=mtype)
+        self._solver.set_iparm(1, 1)
+        self._solver.set_iparm(2, 2)  # METIS
+        self._solver.set_iparm(8, 0)  # no refinement inside PARDISO (ours is on N)
+        if mtype == -2:
+            self._solver.set_iparm(10, 8)  # pivots perturbed by 1e-8
+        self._solver.set_phase(11)
+        self._call(N, np.zeros(self.n))
+
+    def _call(self, N: sparse.csr_matrix, b: np.ndarray) -> np.ndarray:
+        import ctypes
+
+        s = self._solver
+        s.libmkl.MKL_Set_Num_Threads_Local(ctypes.c_int(self._threads))
+        return s._call_pardiso(N, b)
+
+    def solve(self, b: np.ndarray) -> np.ndarray:
+        self._solver.set_phase(33)
+        t0 = time.perf_counter()
+        try:
+            return np.asarray(self._call(self._N, np.asfortranarray(b))).reshape(b.shape)
+        finally:
+            self.seconds[1] += time.perf_counter() - t0
+
+    def release(self) -> None:
+        if self._solver is not None:
+            self._solver.free_memory(everything=True)
+            self._solver = None
+
+
+# --------------------------------------------------------------------------- the iteration
+def _w(w: np.ndarray, beta: np.ndarray, x: np.ndarray, power: int) -> np.ndarray:
+    """W^power x per cone (x: (p, 3))."""
+    out = np.empty_like(x)
+    cones.apply_w(w, beta, np.ascontiguousarray(x), power, out)
+    return out
+
+
+@dataclass
+class _Dropped:
+    """The equilibrium rows of the DOFs held at zero (``drop``): ``GT`` (their rows of
+    G^T), and their entries of l and c. The certified forces must balance there too."""
+
+    GT: sparse.csr_matrix
+    ell: np.ndarray
+    c: np.ndarray
+    lift: np.ndarray  # the solved cone of every cone (``_distinct_cones``)
+    share: np.ndarray  # the share of that cone's force each carries
+
+    def spread(self, z: np.ndarray) -> np.ndarray:
+        """The forces of every cone from those of the solved ones."""
+        return z[self.lift] * self.share[:, None]
+
+
+@dataclass
+class _Kinematic:
+    """The problem in the iteration's terms: ``min c . u`` s.t. ``l . u = 1``, ``G u`` in
+    the cones, and its normal matrix."""
+
+    G: sparse.csr_matrix
+    GT: sparse.csr_matrix
+    ell: np.ndarray
+    c: np.ndarray
+
+    normal: _NormalMatrix
+    shift: float
+    threads: int
+    dropped: _Dropped
+
+    @property
+    def cones(self) -> int:
+        return self.G.shape[0] // 3
+
+
+#: a direction (du, dy, ds, dz)
+_Step = tuple[np.ndarray, float, np.ndarray, np.ndarray]
+
+
+@dataclass
+class _Point:
+    """An iterate: the mechanism u, the dual y of the live-work row, the cone slacks s
+    (``= G u`` at convergence) and the cone duals z (the point forces)."""
+
+    u: np.ndarray
+    y: float
+    s: np.ndarray
+    z: np.ndarray
+
+    def moved(self, step: _Step, alpha: float) -> _Point:
+        du, dy, ds, dz = step
+        return _Point(
+            self.u + alpha * du, self.y + alpha * dy, self.s + alpha * ds, self.z + alpha * dz
+        )
+
+
+def solve_kinematic_normal(
+    problem: Problem,
+    grid: int,
+    threads: int = THREADS,
+    max_iterations: int = MAX_ITERATIONS,
+    drop: np.ndarray | None = None,
+) -> tuple[Solution, np.ndarray, int, Bracket] | None:
+    """The kinematic SOCP of ``problem`` on the normal equations; None where it does not
+    reach a certified bracket (the caller then solves with Clarabel). ``drop`` (6n,) bool:
+    DOFs held at zero velocity (``mirror.mirror_dofs``); the bracket is still certified on
+    the whole problem. Returns the solution in ``kinematic.solve_kinematic_clarabel``'s
+    layout, the mechanism u (every free DOF), the points per interface and the bracket."""
+    try:
+        import pypardiso  # noqa: F401
+    except ImportError:
+        return None
+    t0 = time.process_time()
+    model = problem.model
+    G_all = corner_velocity_rows(problem, grid).tocsr()
+    free = np.flatnonzero(problem.free)
+    keep = np.ones(free.size, dtype=bool) if drop is None else ~drop[free]
+    K_all = G_all.shape[0] // 3 // max(model.interfaces.count, 1)
+    G_keep = G_all[:, keep].tocsr()
+    kept, lift, share, K = _distinct_cones(G_keep, model.interfaces.count, K_all)
+    G = G_keep[(3 * kept[:, None] + np.arange(3)).ravel()].tocsr()
+    p = G.shape[0] // 3
+    norm = max(float(np.linalg.norm(problem.live)), 1e-300)
+    ell, c = problem.live / norm, -problem.rhs / norm
+    index = np.full(model.n_dofs, -1)
+    index[free[keep]] = np.arange(int(keep.sum()))
+    normal = _NormalMatrix(G, model, index, K)
+    identity = (np.tile([1.0, 0.0, 0.0], (p, 1)), np.ones(p))  # W = I
+    # a shift at rounding size keeps N definite where a DOF meets no corner
+    shift = 1e-12 * float(normal.assemble(*identity, 0.0).diagonal().max(initial=1.0))
+    dropped = _Dropped(G_all[:, ~keep].T.tocsr(), ell[~keep], c[~keep], lift, share)
+    kin = _Kinematic(G, G.T.tocsr(), ell[keep], c[keep], normal, shift, threads, dropped)
+    try:
+        out = _iterate(kin, max_iterations, lambda_cap(problem.live, problem.rhs))
+    except Exception as exc:  # noqa: BLE001 (PARDISO's errors are plain exceptions)
+        log.info("normal-equation IPM: %s; Clarabel instead", exc)
+        return None
+    finally:
+        log.debug("PARDISO: factorizations %.2f s, solves %.2f s", *normal.seconds)
+        normal.release()
+    if out is None:
+        return None
+    bracket, point, iterations = out
+    if bracket.upper < 0 or bracket.upper >= lambda_cap(problem.live, problem.rhs) * (1 - 1e-3):
+        return None  # no statics under the dead load, or no mechanism: Clarabel's words
+    seconds = time.process_time() - t0
+    u = np.zeros(free.size)
+    u[keep] = point.u / float(kin.ell @ point.u)
+    mu_f = np.repeat(model.friction, K_all)
+    z = dropped.spread(bracket.forces)
+    x = np.column_stack([norm * z[:, 0], -norm * mu_f * z[:, 1], -norm * mu_f * z[:, 2]]).ravel()
+    detail = (
+        f"normal-equation IPM{'' if drop is None else ' on the mirror-symmetric mechanisms'}: "
+        f"lambda in [{bracket.lower:.9g}, {bracket.upper:.9g}] "
+        f"({iterations} iterations, {seconds:.2f} s CPU)"
+    )
+    sol = Solution(
+        "optimal", bracket.upper, x, u, detail, iterations, 0.0, (bracket.lower, bracket.upper)
+    )
+    return sol, u, K_all, bracket
+
+
+def _distinct_cones(
+    G: sparse.csr_matrix, m: int, K: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+    """The cones of G that differ, when every interface has the same number K' of them (the
+    corners on either side of a mirror plane move alike): (kept cones, the kept cone of
+    every cone, the share of its force each carries, K'). Equal rows are told apart by
+    their product with a random vector (equal rows give equal products to the bit)."""
+    p = G.shape[0] // 3
+    every = np.arange(p)
+    same = (every, every, np.ones(p), K)
+    if m == 0 or p != m * K:
+        return same
+    h = (G @ np.random.default_rng(0).standard_normal(G.shape[1])).reshape(p, 3)
+    keys = np.column_stack([np.repeat(np.arange(m), K).astype(float), h])
+    _, first, inverse = np.unique(keys, axis=0, return_index=True, return_inverse=True)
+    inverse = inverse.ravel()
+    per = np.bincount(np.repeat(np.arange(m), K)[first], minlength=m)
+    if first.size == p or np.any(per != per[0]):
+        return same
+    order = np.argsort(first)
+    position = np.empty(first.size, dtype=np.int64)
+    position[order] = np.arange(first.size)
+    lift = position[inverse]
+    share = 1.0 / np.bincount(inverse)[inverse]
+    return first[order], lift, share, int(per[0])
+
+
+def _start(kin: _Kinematic) -> _Point:
+    """Clarabel's start: the least-squares u with ``l . u = 1`` and the least-norm z, each
+    shifted into the cones."""
+    p = kin.cones
+    kin.normal.factor(
+        kin.normal.assemble(np.tile([1.0, 0.0, 0.0], (p, 1)), np.ones(p), kin.shift), kin.threads
+    )
+    w = kin.normal.solve(np.column_stack([kin.ell, kin.c]))
+    u = w[:, 0] / (kin.ell @ w[:, 0])
+    y = float(kin.ell @ w[:, 1]) / float(kin.ell @ w[:, 0])
+    s = (kin.G @ u).reshape(-1, 3)
+    z = (kin.G @ (w[:, 1] - y * w[:, 0])).reshape(-1, 3)
+    for x in (s, z):
+        gap = float(-_cone_margin(x).min())
+        if gap >= 0:
+            x[:, 0] += 1.0 + gap
+    return _Point(u, y, s, z)
+
+
+@dataclass
+class _Newton:
+    """The Newton system of one iterate, its normal matrix factorized: the cone scalings
+    (``w, beta``, and the scaled point ``lam``), the residuals and ``N^-1 l``."""
+
+    kin: _Kinematic
+    w: np.ndarray
+    beta: np.ndarray
+    lam: np.ndarray
+    r_d: np.ndarray  # c - l y - G^T z
+    r_e: float  # 1 - l . u
+    r_p: np.ndarray  # G u - s
+    ninv_l: np.ndarray = field(default_factory=lambda: np.zeros(0))
+
+    def rhs(self, r_c: np.ndarray, scale: float) -> tuple[np.ndarray, np.ndarray]:
+        """(W d_c, b) for the complementarity target r_c (``lam o (W ds + W^-1 dz) = r_c``)
+        and the residuals times ``scale``: ``N du - l dy = b``."""
+        w, beta, GT = self.w, self.beta, self.kin.GT
+        Wd = _w(w, beta, cones.jordan_solve(self.lam, r_c), 1)
+        Sr_p = _w(w, beta, self.r_p.reshape(-1, 3), 2).ravel()
+        return Wd, GT @ (Wd.ravel() - scale * Sr_p) - scale * self.r_d
+
+    def step(self, Wd: np.ndarray, x: np.ndarray, scale: float) -> _Step:
+        """The direction from ``x = N^-1 b``: the border's dy by its Schur complement, then
+        ``ds = G du + r_p`` and ``dz = W d_c - W^2 ds``."""
+        ell = self.kin.ell
+        dy = (scale * self.r_e - ell @ x) / (ell @ self.ninv_l)
+        du = x + dy * self.ninv_l
+        ds = (self.kin.G @ du + scale * self.r_p).reshape(-1, 3)
+        return du, float(dy), ds, Wd - _w(self.w, self.beta, ds, 2)
+
+
+def _iterate(kin: _Kinematic, max_iterations: int, cap: float):
+    """Mehrotra's predictor-corrector from Clarabel's start; (bracket, iterate, iterations)
+    of the first iterate whose certified bracket is within ``BRACKET``, or None."""
+    G, GT, ell, c, normal = kin.G, kin.GT, kin.ell, kin.c, kin.normal
+    p = kin.cones
+    pt = _start(kin)
+    e = np.zeros((p, 3))
+    e[:, 0] = 1.0
+    for it in range(1, max_iterations + 1):
+        mu = float(np.einsum("ij,ij->", pt.s, pt.z)) / p
+        w, beta, lam = cones.nt_scaling(pt.s, pt.z)
+        newton = _Newton(
+            kin,
+            w,
+            beta,
+            lam,
+            c - ell * pt.y - GT @ pt.z.ravel(),
+            1.0 - float(ell @ pt.u),
+            (G @ pt.u) - pt.s.ravel(),
+        )
+        normal.factor(normal.assemble(w, beta, kin.shift), kin.threads)
+        upper, lower = float(c @ pt.u), pt.y
+        if abs(upper - lower) <= 1e-5 * max(abs(upper), 1e-3):
+            bracket = _certify(kin, w, beta, pt)
+            if bracket is not None and bracket.width <= BRACKET:
+                return bracket, pt, it
+        lam_lam = cones.jordan(lam, lam)
+        Wd, b = newton.rhs(-lam_lam, 1.0)  # predictor (affine scaling)
+        both = normal.solve(np.column_stack([ell, b]))
+        newton.ninv_l = both[:, 0]
+        aff = newton.step(Wd, both[:, 1], 1.0)
+        alpha = min(1.0, cones.max_step(pt.s, aff[2]), cones.max_step(pt.z, aff[3]))
+        sigma = float(np.einsum("ij,ij->", pt.s + alpha * aff[2], pt.z + alpha * aff[3])) / p / mu
+        sigma = min(max(sigma, 0.0), 1.0) ** 3
+        # Mehrotra's corrector
+        second = cones.jordan(_w(w, beta, aff[2], 1), _w(w, beta, aff[3], -1))
+        Wd, b = newton.rhs(-lam_lam - second + sigma * mu * e, 1.0 - sigma)
+        d = newton.step(Wd, normal.solve(b), 1.0 - sigma)
+        alpha = min(
+            1.0, STEP_FRACTION * min(cones.max_step(pt.s, d[2]), cones.max_step(pt.z, d[3]))
+        )
+        log.debug(
+            "IPM %d: c.u %.9g y %.9g mu %.2e |r_d| %.2e |r_p| %.2e sigma %.3f alpha %.3f",
+            it,
+            upper,
+            lower,
+            mu,
+            float(np.abs(newton.r_d).max()),
+            float(np.abs(newton.r_p).max()),
+            sigma,
+            alpha,
+        )
+        if not np.isfinite(alpha) or alpha < 1e-8:
+            log.info("normal-equation IPM: the step stalled at iteration %d", it)
+            return None
+        pt = pt.moved(d, alpha)
+        if abs(float(c @ pt.u)) > cap:
+            return None
+    log.info("normal-equation IPM: no certified bracket within %.0e in %d steps", BRACKET, it)
+    return None
+
+
+def _certify(kin: _Kinematic, w: np.ndarray, beta: np.ndarray, pt: _Point) -> Bracket | None:
+    """The bracket of the iterate ``pt`` (module docstring), or None where either bound
+    fails its check. ``w, beta``: the scalings of ``pt``, whose normal matrix is factorized."""
+    G, GT, ell, c = kin.G, kin.GT, kin.ell, kin.c
+    lu = float(ell @ pt.u)
+    if lu <= 0:
+        return None
+    v = (G @ pt.u).reshape(-1, 3) / lu
+    scale = float(np.abs(v).max(initial=0.0))
+    violation = max(0.0, -float(_cone_margin(v).min())) / max(scale, 1e-300)
+    r = c - ell * pt.y - GT @ pt.z.ravel()
+    v_w = np.zeros_like(r)
+    for _ in range(2):  # the correction, refined once on the unshifted N = G^T S G
+        v_w += kin.normal.solve(r - GT @ _w(w, beta, (G @ v_w).reshape(-1, 3), 2).ravel())
+    z2 = pt.z + _w(w, beta, (G @ v_w).reshape(-1, 3), 2)
+    out = kin.dropped
+    rest = np.concatenate(
+        [c - ell * pt.y - GT @ z2.ravel(), out.c - out.ell * pt.y - out.GT @ out.spread(z2).ravel()]
+    )
+    residual = float(np.linalg.norm(rest)) / max(
+        float(np.hypot(np.linalg.norm(c), np.linalg.norm(out.c))), 1e-300
+    )
+    # inside the cones to rounding (forces on a cone's edge are admissible)
+    inside = float(_cone_margin(z2).min()) >= -1e-12 * float(np.abs(z2).max(initial=0.0))
+    upper = float(c @ pt.u) / lu
+    log.debug(
+        "certificate: upper %.9g (violation %.1e), lower %.9g (residual %.1e, inside %s)",
+        upper,
+        violation,
+        pt.y,
+        residual,
+        inside,
+    )
+    if violation > ADMISSIBLE or residual > EQUILIBRIUM or not inside:
+        return None
+    return Bracket(pt.y, upper, violation, residual, z2)

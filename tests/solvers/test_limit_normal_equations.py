@@ -1,0 +1,162 @@
+"""The interior point method on the normal equations (``limit_analysis.normal_ipm``), its cone
+kernels and the mirror reduction: closed forms, Clarabel's answers, and the certified bracket."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from masonry_dem.geometry.builders import add_base, running_bond_wall, single_block
+from masonry_dem.model import InterfaceMaterial, Model, SelfWeight, Support, WeightProportional
+from masonry_dem.solvers.limit_analysis import cones, formulation, limit_analysis, normal_ipm
+from masonry_dem.solvers.limit_analysis.dem_domain import dem_friction_scale
+from masonry_dem.solvers.limit_analysis.kinematic import solve_kinematic_clarabel
+from masonry_dem.solvers.limit_analysis.mirror import mirror_dofs
+from masonry_dem.solvers.limit_analysis.result import mechanism_violation
+
+GAMMA = 2.0e4
+
+
+def _on_base(blocks, mu: float, direction=(0.0, 0.0, 1.0)) -> Model:
+    blocks, base = add_base(blocks)
+    return Model.build(
+        blocks,
+        InterfaceMaterial(kn=1e9, kt=1e9, friction=mu),
+        [Support([base])],
+        [SelfWeight(), WeightProportional(direction)],
+    )
+
+
+def _ladder_wall(side: int) -> Model:
+    """The size ladder's wall: side x side courses of 0.4 x 0.2 x 0.2 m running bond, mu 0.6,
+    on a slab, tilted in plane."""
+    wall = running_bond_wall(side, side, a=0.2, b=0.4, s=0.2, unit_weight=2000 * 9.81)
+    return _on_base(wall, 0.6, direction=(1.0, 0.0, 0.0))
+
+
+def _pardiso() -> None:
+    """The normal equations need PARDISO (``pypardiso``, a test dependency on x86-64)."""
+    pytest.importorskip("pypardiso")
+
+
+def _interior(rng, p: int) -> np.ndarray:
+    x = rng.standard_normal((p, 3))
+    x[:, 0] = np.hypot(x[:, 1], x[:, 2]) + rng.uniform(1e-3, 2.0, p)
+    return x
+
+
+def test_cone_kernels_against_their_definitions():
+    """The Nesterov-Todd scaling maps s and z to one point, ``W s = W^-1 z = lam`` (its
+    definition), W^2 is W applied twice, the Jordan solve inverts the Jordan product, and the
+    largest step lands on the boundary (det = 0) with the point inside just before it."""
+    rng = np.random.default_rng(3)
+    s, z = _interior(rng, 50), _interior(rng, 50)
+    w, beta, lam = cones.nt_scaling(s, z)
+    out = np.empty_like(s)
+    cones.apply_w(w, beta, z, -1, out)
+    assert np.allclose(out, lam, rtol=1e-12, atol=1e-12)
+    once, twice = np.empty_like(s), np.empty_like(s)
+    cones.apply_w(w, beta, s, 1, once)
+    cones.apply_w(w, beta, once, 1, twice)
+    cones.apply_w(w, beta, s, 2, out)
+    assert np.allclose(out, twice, rtol=1e-12, atol=1e-12)
+    r = rng.standard_normal((50, 3))
+    assert np.allclose(cones.jordan(lam, cones.jordan_solve(lam, r)), r, atol=1e-10)
+    for k in range(5):
+        d = rng.standard_normal((1, 3)) * 3
+        alpha = cones.max_step(s[k : k + 1], d)
+        if np.isfinite(alpha):
+            edge = s[k] + alpha * d[0]
+            assert edge[0] ** 2 - edge[1] ** 2 - edge[2] ** 2 == pytest.approx(0.0, abs=1e-9)
+            inside = s[k] + 0.999 * alpha * d[0]
+            assert inside[0] > np.hypot(inside[1], inside[2])
+
+
+def test_single_block_tilts_inside_the_bracket():
+    """A block a high and s thick on a rigid base tilts out of plane at lambda = s/a (its
+    weight's lever s/2 against the push's a/2; friction 0.6 > s/a): the certified bracket
+    holds s/a (to the 1e-8 to which its mechanism and forces are admissible) and is within
+    ``BRACKET``."""
+    _pardiso()
+    a, s = 0.4, 0.1
+    problem = formulation.Problem.of(_on_base(single_block(a, 0.3, s, GAMMA), 0.6))
+    out = normal_ipm.solve_kinematic_normal(problem, 2)
+    assert out is not None
+    sol, u, K, bracket = out
+    assert bracket.lower - 1e-8 <= s / a <= bracket.upper + 1e-8
+    assert bracket.violation <= normal_ipm.ADMISSIBLE
+    assert bracket.width <= normal_ipm.BRACKET
+    assert sol.lam == bracket.upper and sol.bracket == (bracket.lower, bracket.upper)
+
+
+def test_mirror_plane_of_a_wall_in_its_plane():
+    """A wall of one leaf pushed in its plane (e1-e2, thickness along e3) is its own mirror
+    image through its mid-plane: the symmetric mechanisms have u3 = w1 = w2 = 0. Pushed out
+    of plane it is not (the load is on u3)."""
+    drop = mirror_dofs(_ladder_wall(4))
+    assert drop is not None
+    assert drop.reshape(-1, 6).all(axis=0).tolist() == [False, False, True, True, True, False]
+    wall = running_bond_wall(4, 4, a=0.2, b=0.4, s=0.2, unit_weight=GAMMA)
+    assert mirror_dofs(_on_base(wall, 0.6, direction=(0.0, 0.0, 1.0))) is None
+
+
+def test_ladder_wall_bracket_holds_clarabels_multiplier():
+    """The 298-block ladder wall, whose multiplier 0.465658 is the 4-face LP's (exact in plane,
+    ``test_limit_analysis``): the normal equations on every DOF and on the mirror-symmetric
+    ones give brackets within ``BRACKET`` that hold Clarabel's multiplier (to its 1e-8
+    tolerance); the mechanism is admissible, and the certified forces balance every free DOF
+    (the out-of-plane ones too) at the bracket's lower end."""
+    _pardiso()
+    model = _ladder_wall(17)
+    problem = formulation.Problem.of(model)
+    reference, _, _ = solve_kinematic_clarabel(problem, 2)
+    assert reference.lam == pytest.approx(0.465658, rel=1e-5)
+    drop = mirror_dofs(model)
+    for reduce in (None, drop):
+        out = normal_ipm.solve_kinematic_normal(problem, 2, drop=reduce)
+        assert out is not None
+        sol, u, K, bracket = out
+        assert bracket.width <= normal_ipm.BRACKET
+        assert bracket.lower - 1e-8 <= reference.lam <= bracket.upper + 1e-8
+        assert mechanism_violation(model, problem.velocities(u), None) < 1e-8
+        R = formulation.associative_columns(model, 2, None)[0]
+        residual = problem.H_T @ (R @ sol.x) - bracket.lower * problem.live - problem.rhs
+        assert np.abs(residual).max() < 1e-7 * np.abs(problem.rhs).max()
+
+
+def test_out_of_plane_wall_agrees_with_clarabel():
+    """A wall pushed out of plane (no mirror plane: every DOF is solved for) against
+    Clarabel's kinematic SOCP on the same problem."""
+    _pardiso()
+    wall = running_bond_wall(6, 8, a=0.1, b=0.25, s=0.12, unit_weight=GAMMA)
+    model = _on_base(wall, 0.6, direction=(0.0, 0.0, 1.0))
+    problem = formulation.Problem.of(model)
+    reference, _, _ = solve_kinematic_clarabel(problem, 2)
+    out = normal_ipm.solve_kinematic_normal(problem, 2, drop=mirror_dofs(model))
+    assert out is not None
+    bracket = out[3]
+    assert bracket.lower - 1e-8 <= reference.lam <= bracket.upper + 1e-8
+
+
+def test_entry_point_reports_the_bracket_and_falls_back_without_pardiso(monkeypatch):
+    """From ``NORMAL_EQUATIONS_FROM`` velocities the exact cone is solved on the normal
+    equations and the result carries the bracket; without pypardiso the same call is
+    Clarabel's, with no bracket and the same multiplier."""
+    _pardiso()
+    model = _ladder_wall(17)
+    assert 6 * (model.blocks.count - 1) >= normal_ipm.NORMAL_EQUATIONS_FROM
+    r = limit_analysis(model, backend="clarabel")
+    assert r.bracket is not None and "normal-equation" in r.reason
+    assert r.summary()["lambda_bracket"] == [r.bracket[0], r.bracket[1]]
+    monkeypatch.setitem(__import__("sys").modules, "pypardiso", None)
+    plain = limit_analysis(model, backend="clarabel")
+    assert plain.bracket is None and "Clarabel" in plain.reason
+    assert plain.load_factor == pytest.approx(r.load_factor, rel=1e-6)
+
+
+def test_friction_scale_of_many_interfaces_is_that_of_their_alphas():
+    """kappa over an array is the largest kappa of its distinct values (one per interface in
+    a model: the same answer as the scalars)."""
+    alphas = np.array([1.5] * 50_000 + [2.0] * 3)
+    assert dem_friction_scale(alphas) == dem_friction_scale(2.0)
+    assert dem_friction_scale(2.0) == pytest.approx(np.sqrt(5) / 2, rel=1e-8)
