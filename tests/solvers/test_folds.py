@@ -25,7 +25,7 @@ import pytest
 
 from masonry_dem.cases.paper import build_case
 from masonry_dem.solvers.limit_analysis.analysis import dem_upper_bound
-from masonry_dem.solvers.static import StaticSolver
+from masonry_dem.solvers.static import StaticSettings, StaticSolver
 
 
 def test_the_corner_check_passes_the_first_fold_of_s13_2():
@@ -54,3 +54,8 @@ def test_by_default_the_first_fold_of_s13_2_is_certified():
     cert = history.certificate
     assert cert.corner and cert.curve_slope == pytest.approx(0.17, abs=0.02)
     assert "not checked (fold_check_time_steps = 0)" in cert.reason
+
+
+def test_fold_check_time_steps_must_be_a_count():
+    with pytest.raises(ValueError, match="fold_check_time_steps"):
+        StaticSettings(fold_check_time_steps=-1)
