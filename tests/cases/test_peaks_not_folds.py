@@ -7,11 +7,14 @@ followed by Newton there (``StaticSolver.dynamic_rescue``) finds no equilibrium 
 steps. An equilibrium polished to the static tolerance above lambda_c would prove the stop a
 fold of the path, with the wall's collapse higher up. "No rest within B time steps" is
 evidence, not proof: a slower relaxation might still come to rest. So each test also checks
-that the relaxation did run (it did not stop at once because the collapse state already lay
-past its displacement limit, which it measures from the unloaded wall).
+that the relaxation did run (it measures its displacement limit from the state it starts
+from, as every search of the path does; measured from the unloaded wall, it used to stop at
+its first time step where the path had already moved that far: S11, S12, 10-11).
 """
 
 from __future__ import annotations
+
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -23,13 +26,14 @@ from masonry_dem.solvers.static import StaticSolver
 RISE = 0.01
 
 
-def _certified(case, bound: float | None) -> tuple[StaticSolver, float]:
+def _certified(case, bound: float | None) -> tuple[StaticSolver, float, bool]:
+    """(solver, collapse multiplier, whether the path stopped at a corner)."""
     solver = StaticSolver(case.model, case.settings, bound=bound)
     history = solver.run(monitor=case.monitor)
     assert history.status == "collapse", history.reason
     assert history.certificate is not None and history.certificate.holds
     assert history.collapse_multiplier is not None
-    return solver, history.collapse_multiplier
+    return solver, history.collapse_multiplier, history.certificate.corner
 
 
 def _relax_above(solver: StaticSolver, peak: float, budget: int):
@@ -46,7 +50,8 @@ def test_a_certified_collapse_of_s15_has_no_equilibrium_1_percent_above_it():
     its B = 50 000 time steps (1 s)."""
     case = build_case("S15")
     bound = dem_upper_bound(case.model).load_factor
-    solver, peak = _certified(case, bound)
+    solver, peak, corner = _certified(case, bound)
+    assert not corner  # a formed mechanism: the curve flat into the stop
     start = np.abs(solver.q.reshape(-1, 6)[:, :3]).max()
     assert start < solver.limit  # the relaxation starts inside its displacement limit
     polished, time_steps = _relax_above(solver, peak, budget=50_000)
@@ -54,27 +59,57 @@ def test_a_certified_collapse_of_s15_has_no_equilibrium_1_percent_above_it():
     assert polished is None, "an equilibrium 1 % above a certified collapse: a fold"
 
 
-@pytest.mark.xfail(
-    strict=True,
-    raises=AssertionError,
-    reason=(
-        "issue 18: on S13 with 2-block return walls the static path certifies its fold at "
-        "0.0855 as the collapse; dynamic relaxation + Newton find an equilibrium 1 % above it "
-        "(in about 42 000 time steps) and up to 0.110 (bound 0.116)"
-    ),
+def test_a_certified_collapse_of_s12_has_no_equilibrium_1_percent_above_it():
+    """S12 (Table 2, columns): certified at 0.1362 in a state 15.0 mm from the unloaded wall,
+    past the relaxation's limit of 14.1 mm measured from there (6305d5c: the relaxation
+    stopped at its first time step, so nothing was checked). Measured from the state it
+    starts from, the relaxation to 1.01 x the collapse forms a mechanism (passes half a
+    block) after about 14 700 of its B = 50 000 time steps."""
+    case = build_case("S12")
+    solver, peak, _ = _certified(case, None)
+    polished, time_steps = _relax_above(solver, peak, budget=50_000)
+    assert time_steps > 100  # the relaxation ran
+    assert polished is None, "an equilibrium 1 % above a certified collapse: a fold"
+
+
+@pytest.mark.parametrize(
+    "fold_check",
+    [
+        pytest.param(
+            0,
+            marks=pytest.mark.xfail(
+                strict=True,
+                raises=AssertionError,
+                reason=(
+                    "issue 18: by default (fold_check_time_steps 0) the static path on S13 "
+                    "with 2-block return walls certifies its fold at 0.0855 as the collapse; "
+                    "dynamic relaxation + Newton find an equilibrium 1 % above it (in about "
+                    "42 000 time steps) and up to 0.110 (bound 0.116)"
+                ),
+            ),
+            id="default",
+        ),
+        pytest.param(60_000, id="corner-check"),
+    ],
 )
-def test_a_certified_collapse_of_s13_with_2_block_returns_has_no_equilibrium_above_it():
-    """B = 100 000 time steps; on 878b2f7 the check finds rest at 1.01 x 0.0855 after
-    41 782 of them, Newton polishes it to 1.3e-9 with a largest translation of 2.1 mm.
-    The bound (0.1164) is left out of the run: it holds there, and costs a limit analysis.
-    A path that goes on to the wall's peak (0.110-0.116), or stops there without a
-    certificate, passes; the strict xfail then says so."""
+def test_a_certified_collapse_of_s13_with_2_block_returns_has_no_equilibrium_above_it(
+    fold_check: int,
+):
+    """B = 100 000 time steps. By default (and on 6305d5c) the path certifies its first
+    fold, 0.0855, and this check finds rest at 1.01 x that after 41 782 time steps
+    (polished by Newton to 1.3e-9, a largest translation of 2.1 mm). The path got stuck
+    there while its curve still rose at 0.17 of its elastic slope (a corner: the tangent,
+    singular along the load, is the one past the kink, along which the path never ran).
+    With ``fold_check_time_steps`` the stop is checked by dynamic relaxation, which passes
+    that fold; the path stops at the next, 0.0938, above which no rest is found. The bound
+    (0.1164) is left out of the run: it holds there, and costs a limit analysis. Not proof
+    that 0.0938 is the wall's peak: dynamic relaxation from the unloaded wall finds
+    equilibria up to 0.110 (docs/walls_that_meet.md)."""
     case = build_case("S13", restraint="return-walls", return_blocks=2)
-    solver = StaticSolver(case.model, case.settings)
+    solver = StaticSolver(case.model, replace(case.settings, fold_check_time_steps=fold_check))
     history = solver.run(monitor=case.monitor)
     peak = history.collapse_multiplier
-    if history.status != "collapse" or peak is None:
-        return  # no certified collapse, nothing to check
+    assert history.status == "collapse" and peak is not None, history.reason
     polished, time_steps = _relax_above(solver, peak, budget=100_000)
     assert time_steps > 100
     assert polished is None, f"equilibrium at {(1 + RISE) * peak:.4f} after {time_steps} time steps"

@@ -3,18 +3,23 @@ or a fold of the path, and only a look above it tells them apart.
 
 S13 of Restrepo Velez with 2-block return walls (``build_case("S13",
 restraint="return-walls", return_blocks=2)``): work control gets stuck at lambda 0.0855
-with the tangent singular along the load (Newton finds no correction that lowers the
-residual, the pseudo-transient step finds no rest). By default the dynamic-relaxation check
-of the stop is skipped at such a state and 0.0855 is certified as the collapse multiplier,
-yet a damped relaxation from that state comes to rest 0.5-1 % higher and Newton polishes it
-to the static tolerance (tests/cases/test_return_walls_against_dr.py), with equilibria up
-to 0.110 under the associative bound 0.116 (docs/walls_that_meet.md). With the check run
-there too (``stop_check_singular``) and a budget that covers the fold's settling (about
-50 000 time steps at 1.005 x the stop), the path passes that fold and stops at the next
-one, 0.0938 (docs/solvers.md, "The stop check: folds and peaks").
+(Newton finds no correction that lowers the residual in any direction forward, the
+pseudo-transient step finds no rest) while its curve still rises at 0.17 of its elastic
+slope: a corner, where the branch the path followed ends. The tangent there, taken past the
+kink, is singular along the load, so on 6305d5c the dynamic-relaxation check of the stop
+was skipped and 0.0855 was certified as the collapse multiplier, yet a damped relaxation
+from that state comes to rest 0.5-1 % higher and Newton polishes it to the static tolerance
+(tests/cases/test_return_walls_against_dr.py), with equilibria up to 0.110 under the
+associative bound 0.116 (docs/walls_that_meet.md). With ``fold_check_time_steps`` a stop
+at a corner is checked whatever its tangent, with a budget that covers a fold's settling
+(60 000; about 50 000 time steps at 1.005 x the stop): the path passes that fold and stops
+at the next one, 0.0938 (docs/solvers.md, "A corner is checked"). Off by default for its
+price on corners that are peaks (S23, the U walls).
 """
 
 from __future__ import annotations
+
+from dataclasses import replace
 
 import pytest
 
@@ -23,12 +28,11 @@ from masonry_dem.solvers.limit_analysis.analysis import dem_upper_bound
 from masonry_dem.solvers.static import StaticSettings, StaticSolver
 
 
-def test_the_stop_check_at_a_singular_tangent_passes_the_first_fold_of_s13_2():
+def test_the_corner_check_passes_the_first_fold_of_s13_2():
+    """6305d5c (and the default): collapse at 0.08551 with no time step of relaxation."""
     case = build_case("S13", restraint="return-walls", return_blocks=2)
-    settings = StaticSettings(stop_check_singular=True, stop_check_time_steps=60_000)
-    solver = StaticSolver(case.model, settings)
+    solver = StaticSolver(case.model, replace(case.settings, fold_check_time_steps=60_000))
     history = solver.run()
-    # 2bd1bc8 (and the default): collapse at 0.08551 with no time step of relaxation
     assert history.collapse_multiplier is not None, history.reason
     assert history.collapse_multiplier > 1.05 * 0.08551, history.reason
     assert solver.time_steps > 0  # the fold was passed by the relaxation, not by Newton
@@ -40,8 +44,18 @@ def test_by_default_the_first_fold_of_s13_2_is_certified():
     """The trade-off the default makes (fast, and the fold taken for the peak): pinned so
     that a change of the default is seen."""
     case = build_case("S13", restraint="return-walls", return_blocks=2)
-    solver = StaticSolver(case.model)
+    solver = StaticSolver(case.model, case.settings)
     history = solver.run()
     assert history.status == "collapse"
     assert history.collapse_multiplier == pytest.approx(0.08551, rel=1e-3)
     assert solver.time_steps == 0
+    # ... and the certificate says where the path stopped: at a corner, still rising at
+    # 0.17 of its elastic slope, unchecked
+    cert = history.certificate
+    assert cert.corner and cert.curve_slope == pytest.approx(0.17, abs=0.02)
+    assert "not checked (fold_check_time_steps = 0)" in cert.reason
+
+
+def test_fold_check_time_steps_must_be_a_count():
+    with pytest.raises(ValueError, match="fold_check_time_steps"):
+        StaticSettings(fold_check_time_steps=-1)

@@ -213,12 +213,15 @@ class Relaxation:
         dt: float,
         ramp_to: float | None = None,
         on_checkpoint: Checkpoint | None = None,
+        from_start: bool = False,
     ) -> _Relaxed:
         """Integrate from ``start`` at rest until equilibrium under lambda = ``target``.
 
         With ``ramp_to`` lambda grows from ``start.load_factor`` at ``ramp_rate`` (capped at
         ``ramp_to``), the plastic state is updated every time step, and ``on_checkpoint`` is
         called at each quasi-static state (residual below tolerance) passed on the way.
+        The displacement limit is measured from the unloaded wall, or with ``from_start``
+        from ``start`` (a search of the static path, which measures its steps so).
         """
         s = self.settings
         M = self.mass
@@ -235,6 +238,7 @@ class Relaxation:
         rel, resp, fint = self._forces(x, plastic, cracked)
         R = F - fint
         x0, f0 = x.copy(), fint.copy()
+        origin = x0[self._translation] if from_start else 0.0
         ke_prev = 0.0
         ke_peak = 0.0
         restart = True
@@ -355,7 +359,7 @@ class Relaxation:
                 den = float(dxs @ (M * dxs))
                 if num > 0 and den > 0:
                     c = 2.0 * s.viscous_ratio * math.sqrt(num / den)
-            umax = float(np.abs(x[self._translation]).max(initial=0.0))
+            umax = float(np.abs(x[self._translation] - origin).max(initial=0.0))
             if umax > self.limit:
                 return _Relaxed(
                     False,
@@ -400,13 +404,22 @@ class Relaxation:
         *,
         ramp_to: float | None = None,
         on_checkpoint: Checkpoint | None = None,
+        from_start: bool = False,
     ) -> _Relaxed:
         """One relaxation from ``start``, its time step halved after a blow-up (``on_blowup``
-        "cut"). The third argument is unused (the static solver's rescue passes None)."""
+        "cut"). The third argument is unused (the static solver's rescue passes None);
+        ``from_start``: see :meth:`_relax`."""
         s = self.settings
         dt = self._step_for(start)
         for _ in range(s.max_cuts + 1):
-            out = self._relax(start, target, dt, ramp_to=ramp_to, on_checkpoint=on_checkpoint)
+            out = self._relax(
+                start,
+                target,
+                dt,
+                ramp_to=ramp_to,
+                on_checkpoint=on_checkpoint,
+                from_start=from_start,
+            )
             out.courant = self._courant
             self.stats.courant = max(self.stats.courant, self._courant)
             if not out.ok and out.kind in ("mechanism", "stalled") and out.courant > 4.0:

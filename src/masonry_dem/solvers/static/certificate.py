@@ -43,6 +43,12 @@ motion: an in-plane held wall whose tangent is singular there carries 0.08 by DR
 
 A stop that fails (a) or (b), or exceeds the bound, is reported ``failed`` with the reason
 and every step kept.
+
+Reported beside them, not a condition: ``curve_slope``, the d lambda / d w of the step into
+the state over the elastic slope, and ``corner``, a stuck path that still rose there (at
+least ``flat_slope``): its branch ended at a kink, where a fold of the path has a singular
+tangent as well as a peak. Such a stop is a peak only if no rest is found above it, which
+the path checks with ``fold_check_time_steps`` (the reason says whether it did).
 """
 
 from __future__ import annotations
@@ -107,6 +113,11 @@ class Certificate:
     bound_status: str  # "within", "exceeded", or "not checked"
     within_bound: bool | None
     reason: str
+    # d lambda / d w of the step into the state checked, over the elastic slope; a stuck
+    # path that still rose there (at least flat_slope) stopped at a corner, where a fold of
+    # the path and a peak share a singular tangent (docs/solvers.md, "A corner is checked")
+    curve_slope: float = math.nan
+    corner: bool = False
     mode_vector: np.ndarray | None = field(default=None, repr=False)
 
     def as_dict(self) -> dict:
@@ -221,6 +232,14 @@ def certify(
             live_work = float(F @ dq) / size
             mode, mode_vector = "flat curve", dq / size
     mode_found = bool(mode != "none" and live_work > 0)
+    # the curve into the state: did the path stop at a corner, still rising?
+    curve_slope = math.nan
+    if last >= 1 and elastic_slope > 0 and path_w[last] != path_w[last - 1]:
+        step_slope = (path_lam[last] - path_lam[last - 1]) / (path_w[last] - path_w[last - 1])
+        curve_slope = float(step_slope / elastic_slope)
+    corner = bool(
+        hist.stop is StopReason.PATH_STUCK and curve_slope >= s.flat_slope and mode != "none"
+    )
     # a multiplier the residual cannot tell from zero load: the states found there are
     # equilibria only to the tolerance, so the mode must be one of the dead-load state
     # itself, singular to the floor of the tangent against the bonded elastic stiffness
@@ -293,6 +312,17 @@ def certify(
         if holds
         else "; ".join(why)
     )
+    if holds and corner:
+        reason += (
+            f"; the path stopped at a corner (its curve still rose at {curve_slope:.2g} of "
+            f"its elastic slope), where a fold of the path has a singular tangent too: "
+            + (
+                f"dynamic relaxation found no rest above it within {s.fold_check_time_steps} "
+                f"time steps"
+                if s.fold_check_time_steps > 0 and s.stop_check_time_steps > 0
+                else "not checked (fold_check_time_steps = 0)"
+            )
+        )
     return Certificate(
         holds=bool(holds),
         load_factor=lam,
@@ -317,6 +347,8 @@ def certify(
         bound_status=bound_status,
         within_bound=within,
         reason=reason,
+        curve_slope=curve_slope,
+        corner=corner,
         mode_vector=None if mode_vector is None else _full(problem, mode_vector),
     )
 

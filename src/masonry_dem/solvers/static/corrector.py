@@ -559,7 +559,10 @@ class Corrector:
             last,
             np.ones((self.model.interfaces.count, 6)),
         )
-        relaxed = self._dr._relax_with_cuts(start, target, None)
+        # its displacement limit measured from the start state, as every search of the path
+        # measures its step: from the unloaded wall a state already past the limit (a wall
+        # whose path had moved that far) failed at the first time step
+        relaxed = self._dr._relax_with_cuts(start, target, None, from_start=True)
         # time steps of an explicit relaxation are no Newton iterations (each costs a
         # residual, no factorization): counted apart, so that ``iterations`` compares paths
         self.time_steps += relaxed.cycles

@@ -372,19 +372,30 @@ def work_control(
                     fold_failed = True
                 else:
                     transient_failed = True
+            # a corner: stuck while the curve still rose (the last step gained at least
+            # flat_slope of the elastic stiffness), so the path never ran along the mechanism
+            # that the tangent, taken past the kink, may show: a fold or a peak
+            corner = (
+                stuck
+                and s.stop_check_time_steps > 0
+                and s.fold_check_time_steps > 0
+                and _still_rising(path_w, path_lam, s.flat_slope * elastic_slope)
+            )
+            budget = max(s.stop_check_time_steps, s.fold_check_time_steps if corner else 0)
             if (
                 stuck
                 and s.stop_check_time_steps > 0
                 and checked_from != len(hist.steps)
-                and (s.stop_check_singular or not _singular_along_load(solver, hist))
+                and (corner or s.stop_check_singular or not _singular_along_load(solver, hist))
             ):
                 # neither Newton nor the pseudo-transient step passes: before calling
                 # this a collapse, let dynamic relaxation look for rest a little higher
-                # (where the tangent is singular along the load only when asked: a fold
-                # of the path has that too, but so has a peak, and the check is dear)
+                # (where the tangent is singular along the load only at a corner, or when
+                # asked: a fold of the path has that too, but so has a flat peak, and the
+                # check is dear)
                 checked_from = len(hist.steps)
                 target = lam + s.transient_rise * abs(lam)
-                rescued = solver.dynamic_rescue(target, lam, s.stop_check_time_steps)
+                rescued = solver.dynamic_rescue(target, lam, budget)
                 log.debug(
                     "work control stuck at lambda=%.6g; dynamic relaxation to %.6g: %s",
                     lam,
@@ -470,6 +481,17 @@ def work_control(
         f"{reason}; load control first failed at {first_lambda:.6g} ({first_failure})",
     )
     return None
+
+
+def _still_rising(path_w: list[float], path_lam: list[float], flat: float) -> bool:
+    """Did the last step of the path gain load at a slope d lambda / d w of at least ``flat``
+    (or turn back in w while gaining load)? A path that stops so has not reached a flat
+    part of its curve."""
+    if len(path_w) < 2:
+        return False
+    dlam = path_lam[-1] - path_lam[-2]
+    dw = path_w[-1] - path_w[-2]
+    return dlam > 0 and (dw <= 0 or dlam >= flat * dw)
 
 
 def _singular_along_load(solver: StaticSolver, hist: History) -> bool:

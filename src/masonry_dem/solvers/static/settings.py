@@ -145,6 +145,16 @@ class StaticSettings:
         the path passes folds the default certifies as collapses, at the price of a
         relaxation of the whole wall at every such stop (measured in docs/solvers.md, "The
         stop check: folds and peaks"). Off by default for that price.
+    fold_check_time_steps: budget of that check where the path got stuck while its curve
+        still rose: the last step gained at least ``flat_slope`` of the elastic d lambda / d w
+        (a corner of the curve, where the tangent of the state, taken past the kink, may be
+        singular although the path never ran along a mechanism: a fold of the path, or a
+        peak). The check runs there whatever the tangent, with the larger of this and
+        ``stop_check_time_steps``; its budget covers the settling of a fold (docs/solvers.md,
+        "The stop check: folds and peaks"; 60 000 covers the folds measured). 0 (the
+        default): such stops are checked as any other, so a singular tangent skips the
+        check; off for its price, a stalled relaxation at every corner that is a peak
+        (``stop_check_time_steps`` = 0 disables both).
     max_control_cuts: displacement control gives up after this many halvings in a row.
 
     Certificate of a collapse (see :mod:`masonry_dem.solvers.static.certificate`)
@@ -209,6 +219,7 @@ class StaticSettings:
     rescue_time_steps: int = 0
     stop_check_time_steps: int = 4000
     stop_check_singular: bool = False
+    fold_check_time_steps: int = 0
     max_control_cuts: int = 12
     certify: bool = True
     admissible_tolerance: float = 1e-6
@@ -254,6 +265,7 @@ class StaticSettings:
             "divergence_window": 1,
             "rescue_time_steps": 0,
             "stop_check_time_steps": 0,
+            "fold_check_time_steps": 0,
             "max_control_cuts": 0,
         }
         check_count_fields(self, counts)
