@@ -15,7 +15,13 @@ from typing import Any, Literal, get_args
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from masonry_dem._validation import as_finite_array, block_indices, plain, positive_scalar
+from masonry_dem._validation import (
+    as_finite_array,
+    block_indices,
+    check_choice,
+    plain,
+    positive_scalar,
+)
 from masonry_dem.constitutive.strength import PROJECTIONS
 from masonry_dem.geometry.blocks import Blocks
 from masonry_dem.geometry.interfaces import Interfaces, detect_interfaces
@@ -82,12 +88,6 @@ LAW_OPTIONS: dict[str, tuple[str, ...]] = {
     "memory": get_args(Memory),
     "projection": PROJECTIONS,
 }
-
-
-def check_choice(name: str, value: object, allowed: tuple[str, ...]) -> None:
-    """ValueError naming ``name``, ``value`` and the ``allowed`` values unless it is one."""
-    if value not in allowed:
-        raise ValueError(f"{name} must be one of {allowed}, got {value!r}")
 
 
 def deprecated_law_option(owner: str, name: str, value: str | None) -> None:
