@@ -265,6 +265,13 @@ class PointLoad:
 
 
 Load = SelfWeight | WeightProportional | Pressure | PointLoad
+#: the loads by the name a case file gives them (``[[loads]] type``)
+LOAD_TYPES: dict[str, type[Load]] = {
+    "self_weight": SelfWeight,
+    "weight_proportional": WeightProportional,
+    "pressure": Pressure,
+    "point": PointLoad,
+}
 
 
 # --------------------------------------------------------------------------- model
