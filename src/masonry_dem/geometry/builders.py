@@ -5,23 +5,21 @@ A block measures ``block_height`` x ``block_length`` x ``thickness`` (the paper'
 along e2, e1, e3). Every builder also takes the paper's letters as keywords (``a=``, ``b=``,
 ``s=``), as case files and older scripts write them; giving both names of one size is an error.
 
-A builder is a frozen dataclass of its parameters with a ``blocks()`` method, made a function
-by :func:`builder`, which keeps the class's signature for help(), type checkers and the
-case-file schema. The parameters builders share (the counts, the unit and its letters) are
-declared once, in the classes they inherit (``_Along``, ``_Courses``, ``_Unit``).
+A builder is a frozen dataclass of its parameters, called for the blocks, made a function by
+:func:`~masonry_dem._parameters.function_of`: the parameters builders share (the counts, the
+unit and its letters) are declared once, in the classes they inherit (``_Along``,
+``_Courses``, ``_Unit``).
 """
 
 from __future__ import annotations
 
-import inspect
-import re
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import KW_ONLY, dataclass
-from typing import ParamSpec, Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from masonry_dem._parameters import function_of
 from masonry_dem._validation import as_finite_array, plain, positive_scalar
 from masonry_dem.geometry.blocks import Blocks
 
@@ -67,10 +65,6 @@ def _weight(unit_weight: float | None) -> float:
     return positive_scalar("unit_weight", unit_weight, strict=False)
 
 
-# Dataclass fields come base by base from the last base named: ``_RunningBondWall(_Unit,
-# _Courses, _Along)`` takes blocks_along_length, courses, the unit, then its own fields.
-
-
 @dataclass(frozen=True)
 class _Along:
     blocks_along_length: int
@@ -106,34 +100,6 @@ class _Unit:
         return _weight(self.unit_weight)
 
 
-class _Builds(Protocol):
-    def blocks(self) -> Blocks: ...
-
-
-P = ParamSpec("P")
-
-
-def builder(parameters: Callable[P, _Builds]) -> Callable[P, Blocks]:
-    """The public builder of a parameter class: its signature and docstring, named as the class
-    in snake case (``_RunningBondWall``: ``running_bond_wall``), returning the blocks of the
-    parameters given."""
-
-    def build(*args: P.args, **kwargs: P.kwargs) -> Blocks:
-        return parameters(*args, **kwargs).blocks()
-
-    signature = inspect.signature(parameters).replace(return_annotation="Blocks")
-    name = re.sub(r"(?<=.)(?=[A-Z])", "_", parameters.__name__.lstrip("_")).lower()
-    for attribute, value in (
-        ("__signature__", signature),
-        ("__name__", name),
-        ("__qualname__", name),
-        ("__doc__", parameters.__doc__),
-        ("__module__", parameters.__module__),
-    ):
-        setattr(build, attribute, value)
-    return build
-
-
 @dataclass(frozen=True)
 class _RunningBondWall(_Unit, _Courses, _Along):
     """A single-leaf running-bond wall with straight ends.
@@ -150,7 +116,7 @@ class _RunningBondWall(_Unit, _Courses, _Along):
     origin: Sequence[float] = (0.0, 0.0, 0.0)
     start_with_half: bool = False
 
-    def blocks(self) -> Blocks:
+    def __call__(self) -> Blocks:
         n = _count("blocks_along_length", self.blocks_along_length)
         nc = _count("courses", self.courses)
         a, b, s = self.size()
@@ -189,7 +155,7 @@ class _RunningBondWallOfSize(_Unit, _Extent):
 
     joint: float = 0.0
 
-    def blocks(self) -> Blocks:
+    def __call__(self) -> Blocks:
         length = positive_scalar("length", self.length)
         height = positive_scalar("height", self.height)
         a, b, s = self.size()
@@ -205,7 +171,7 @@ class _StackBondColumn(_Unit, _Courses):
     """Blocks stacked one on another (a column of ``courses`` blocks of ``block_height`` (a)
     x ``block_length`` (b) x ``thickness`` (s)), its base on y = 0."""
 
-    def blocks(self) -> Blocks:
+    def __call__(self) -> Blocks:
         nc = _count("courses", self.courses)
         a, b, s = self.size()
         k = np.arange(nc)
@@ -218,14 +184,14 @@ class _SingleBlock(_Unit):
     """One block of ``block_height`` (a) x ``block_length`` (b) x ``thickness`` (s) with its
     base on y = 0."""
 
-    def blocks(self) -> Blocks:
+    def __call__(self) -> Blocks:
         return stack_bond_column(1, *self.size(), self.unit_weight)
 
 
-running_bond_wall = builder(_RunningBondWall)
-running_bond_wall_of_size = builder(_RunningBondWallOfSize)
-stack_bond_column = builder(_StackBondColumn)
-single_block = builder(_SingleBlock)
+running_bond_wall = function_of(_RunningBondWall)
+running_bond_wall_of_size = function_of(_RunningBondWallOfSize)
+stack_bond_column = function_of(_StackBondColumn)
+single_block = function_of(_SingleBlock)
 
 
 def boxes(lower: ArrayLike, upper: ArrayLike, unit_weight: ArrayLike) -> Blocks:

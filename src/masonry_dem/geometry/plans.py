@@ -39,6 +39,7 @@ from typing import Literal, get_args
 import numpy as np
 from numpy.typing import NDArray
 
+from masonry_dem._parameters import function_of
 from masonry_dem._validation import positive_scalar
 from masonry_dem.geometry.blocks import Blocks
 from masonry_dem.geometry.builders import (
@@ -47,7 +48,6 @@ from masonry_dem.geometry.builders import (
     _Courses,
     _Unit,
     _weight,
-    builder,
     cut_openings,
 )
 
@@ -180,7 +180,7 @@ class _Plan(_Unit, _Courses, _Along):
     joint: float = 0.0
     facade_openings: Sequence[Sequence[float]] | None = None
 
-    def blocks(self) -> Blocks:
+    def __call__(self) -> Blocks:
         size = self.size()
         n, nc, cp, p, s, gamma = _common(
             self.blocks_along_length, self.courses, size, self.unit_weight, self.joint
@@ -297,10 +297,10 @@ class _BoxWall(_Plan):
         ]
 
 
-l_wall = builder(_LWall)
-u_wall = builder(_UWall)
-t_wall = builder(_TWall)
-box_wall = builder(_BoxWall)
+l_wall = function_of(_LWall)
+u_wall = function_of(_UWall)
+t_wall = function_of(_TWall)
+box_wall = function_of(_BoxWall)
 
 
 __all__ = ["box_wall", "l_wall", "t_wall", "u_wall"]
