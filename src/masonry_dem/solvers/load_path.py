@@ -17,8 +17,7 @@ from masonry_dem._validation import (
     positive,
     positive_or_none,
 )
-from masonry_dem.constitutive.law import Memory, Tension
-from masonry_dem.model import deprecated_law_option
+from masonry_dem.model import Memory, Tension, deprecated_law_option
 
 
 @dataclass(frozen=True)
