@@ -29,14 +29,20 @@ def function_of(parameters: Callable[P, Computation[T]]) -> Callable[P, T]:
     and docstring, named as the class in snake case (``_RunningBondWall``:
     ``running_bond_wall``)."""
 
-    def function(*args: P.args, **kwargs: P.kwargs) -> T:
-        return parameters(*args, **kwargs)()
-
     # the class's own __call__ (what an instance returns), not the class's constructor
     returns = inspect.signature(inspect.getattr_static(parameters, "__call__")).return_annotation
+    signature = inspect.signature(parameters).replace(return_annotation=returns)
     name = re.sub(r"(?<=.)(?=[A-Z])", "_", parameters.__name__.lstrip("_")).lower()
+
+    def function(*args: P.args, **kwargs: P.kwargs) -> T:
+        try:  # a wrong call named as the function, not as the private class
+            signature.bind(*args, **kwargs)
+        except TypeError as exc:
+            raise TypeError(f"{name}(): {exc}") from None
+        return parameters(*args, **kwargs)()
+
     for attribute, value in (
-        ("__signature__", inspect.signature(parameters).replace(return_annotation=returns)),
+        ("__signature__", signature),
         ("__name__", name),
         ("__qualname__", name),
         ("__doc__", parameters.__doc__),

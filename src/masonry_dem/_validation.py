@@ -93,9 +93,11 @@ def positive(default: float) -> float:
     return checked(default, lambda v: _finite(v) and v > 0, "a positive number")
 
 
-def positive_or_none(default: float | None = None) -> float | None:
-    """A field that takes a number > 0, or None (the solver's own value)."""
-    return checked(default, lambda v: v is None or (is_number(v) and v > 0), "a number > 0 or None")
+def positive_or_none(default: float | None = None, *, finite: bool = False) -> float | None:
+    """A field that takes a number > 0 (finite if ``finite``; inf: no limit), or None (the
+    solver's own value)."""
+    test = _finite if finite else is_number
+    return checked(default, lambda v: v is None or (test(v) and v > 0), "a number > 0 or None")
 
 
 def at_least(default: float, least: float, note: str = "") -> float:

@@ -203,11 +203,11 @@ def test_blocks_reject_non_positive_sizes_and_nan_by_name():
 def test_every_builder_shows_the_unit_in_its_signature_and_refuses_a_misspelt_keyword(build, head):
     """The unit's parameters are declared once (``builders._Unit``), yet each builder shows
     them in its own signature, after its counts, in the order positional calls rely on, with
-    the paper's letters as keywords; a keyword it does not have is a TypeError."""
+    the paper's letters as keywords; a keyword it does not have is a TypeError that names the builder."""
     params = inspect.signature(build).parameters
     unit = ["block_height", "block_length", "thickness", "unit_weight"]
     assert list(params)[: len(head) + 4] == head + unit
     assert all(params[k].kind is inspect.Parameter.KEYWORD_ONLY for k in ("a", "b", "s"))
     assert build.__doc__ and build.__name__ in repr(build)
-    with pytest.raises(TypeError, match="blok_height"):
+    with pytest.raises(TypeError, match=rf"^{build.__name__}\(\): .* 'blok_height'"):
         build(*([3] * len(head)), blok_height=0.1)

@@ -33,7 +33,7 @@ class DRSettings(LoadPathSettings):
     mass: MassRule = choice("stiffness", get_args(MassRule))
     dt_rule: TimeStepRule = choice("gershgorin", get_args(TimeStepRule))
     dt_fraction: float = positive(0.9)
-    dt: float | None = positive_or_none()
+    dt: float | None = positive_or_none(finite=True)
     stability: Stability = choice("elastic", get_args(Stability))
     damping: Damping = choice("kinetic", get_args(Damping))
     viscous_ratio: float = positive(1.0)
