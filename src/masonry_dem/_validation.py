@@ -3,8 +3,9 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Mapping
-from typing import Any
+from collections.abc import Callable
+from dataclasses import field, fields
+from typing import Any, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -51,46 +52,73 @@ def positive_scalar(name: str, value: Any, strict: bool = True) -> float:
     return float(arr)
 
 
-def _number(value: Any) -> bool:
+def is_number(value: Any) -> bool:
     """An int or a float (a boolean is no number here)."""
     return isinstance(value, (int, float)) and not isinstance(value, bool)
 
 
-def check_positive_fields(owner: Any, names: Iterable[str]) -> None:
-    """ValueError naming the first field of ``owner`` among ``names`` that is not a finite
-    number > 0."""
-    for name in names:
-        value = getattr(owner, name)
-        if not (_number(value) and math.isfinite(value) and value > 0):
-            raise ValueError(f"{name} must be a positive number, got {value!r}")
+def check_choice(name: str, value: object, allowed: tuple[str, ...]) -> None:
+    """ValueError naming ``name``, ``value`` and the ``allowed`` values unless it is one."""
+    if value not in allowed:
+        raise ValueError(f"{name} must be one of {allowed}, got {value!r}")
 
 
-def check_count_fields(owner: Any, least: Mapping[str, int]) -> None:
-    """ValueError naming the first field of ``owner`` that is not an integer at least
-    ``least[name]``."""
-    for name, low in least.items():
-        value = getattr(owner, name)
-        if not isinstance(value, int) or isinstance(value, bool) or value < low:
-            raise ValueError(f"{name} must be an integer >= {low}, got {value!r}")
+# A settings field states its own range where it is declared, ``tolerance: float =
+# positive(1e-8)``: the specifier returns a dataclasses.Field that carries the test and its
+# words, type checkers see the default's type, and ``check_fields`` runs every test.
+T = TypeVar("T")
 
 
-def check_load_path_fields(owner: Any) -> None:
-    """The fields of the load path that the static and the dynamic-relaxation settings share,
-    each refused by name: the step sizes and the bracket width (positive numbers),
-    ``max_steps`` (an integer >= 1), ``growth`` (a finite number >= 1), ``max_load_factor``
-    (a number > 0, inf: no cap) and ``displacement_limit`` (a number > 0, or None: the
-    solver's own)."""
-    check_positive_fields(owner, ("initial_step", "max_step", "bracket_tolerance"))
-    check_count_fields(owner, {"max_steps": 1})
-    growth = owner.growth
-    if not (_number(growth) and math.isfinite(growth) and growth >= 1):
-        raise ValueError(f"growth must be a number >= 1, got {growth!r}")
-    cap = owner.max_load_factor
-    if not (_number(cap) and cap > 0):  # NaN fails this too
-        raise ValueError(f"max_load_factor must be a number > 0 (inf: no cap), got {cap!r}")
-    limit = owner.displacement_limit
-    if limit is not None and not (_number(limit) and limit > 0):
-        raise ValueError(f"displacement_limit must be a number > 0 or None, got {limit!r}")
+def checked(default: T, test: Callable[[Any], bool], what: str) -> T:
+    """A dataclass field of ``default`` whose value must pass ``test``; ``what`` says what it
+    must be, after "NAME must be" in the error."""
+    return field(default=default, metadata={"test": test, "what": what})
+
+
+def check_fields(owner: Any) -> None:
+    """ValueError naming the first checked field of the dataclass ``owner`` whose value fails
+    its test, with the value."""
+    for f in fields(owner):
+        value = getattr(owner, f.name)
+        if "test" in f.metadata and not f.metadata["test"](value):
+            raise ValueError(f"{f.name} must be {f.metadata['what']}, got {value!r}")
+
+
+def _finite(value: Any) -> bool:
+    return is_number(value) and math.isfinite(value)
+
+
+def positive(default: float) -> float:
+    """A field that takes a finite number > 0."""
+    return checked(default, lambda v: _finite(v) and v > 0, "a positive number")
+
+
+def positive_or_none(default: float | None = None, *, finite: bool = False) -> float | None:
+    """A field that takes a number > 0 (finite if ``finite``; inf: no limit), or None (the
+    solver's own value)."""
+    test = _finite if finite else is_number
+    return checked(default, lambda v: v is None or (test(v) and v > 0), "a number > 0 or None")
+
+
+def at_least(default: float, least: float, note: str = "") -> float:
+    """A field that takes a finite number >= ``least``; ``note`` explains a special value."""
+    return checked(default, lambda v: _finite(v) and v >= least, f"a number >= {least:g}{note}")
+
+
+def finite(default: float) -> float:
+    """A field that takes any finite number."""
+    return checked(default, _finite, "a finite number")
+
+
+def count(default: int, least: int) -> int:
+    """A field that takes an integer >= ``least`` (a boolean or a float is refused)."""
+    test = lambda v: isinstance(v, int) and not isinstance(v, bool) and v >= least  # noqa: E731
+    return checked(default, test, f"an integer >= {least}")
+
+
+def choice(default: T, allowed: tuple[str, ...]) -> T:
+    """A field that takes one of ``allowed`` (the values of its ``Literal`` type)."""
+    return checked(default, lambda v: v in allowed, f"one of {allowed}")
 
 
 def plain(value: Any) -> str:

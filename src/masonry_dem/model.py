@@ -15,7 +15,14 @@ from typing import Any, Literal, get_args
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from masonry_dem._validation import as_finite_array, block_indices, plain, positive_scalar
+from masonry_dem._arrays import BoolArray, FloatArray
+from masonry_dem._validation import (
+    as_finite_array,
+    block_indices,
+    check_choice,
+    plain,
+    positive_scalar,
+)
 from masonry_dem.constitutive.strength import PROJECTIONS
 from masonry_dem.geometry.blocks import Blocks
 from masonry_dem.geometry.interfaces import Interfaces, detect_interfaces
@@ -84,12 +91,6 @@ LAW_OPTIONS: dict[str, tuple[str, ...]] = {
 }
 
 
-def check_choice(name: str, value: object, allowed: tuple[str, ...]) -> None:
-    """ValueError naming ``name``, ``value`` and the ``allowed`` values unless it is one."""
-    if value not in allowed:
-        raise ValueError(f"{name} must be one of {allowed}, got {value!r}")
-
-
 def deprecated_law_option(owner: str, name: str, value: str | None) -> None:
     """A law option (``tension``, ``memory``) still given to solver settings ``owner``: checked,
     with a DeprecationWarning (it belongs to the material; kept for one version)."""
@@ -105,7 +106,7 @@ def deprecated_law_option(owner: str, name: str, value: str | None) -> None:
     )
 
 
-def dof_mask(dofs: DofGroup | DofName | Sequence[DofGroup | DofName]) -> NDArray[np.bool_]:
+def dof_mask(dofs: DofGroup | DofName | Sequence[DofGroup | DofName]) -> BoolArray:
     """Boolean (6,) mask from a group name (``all``, ``translations``, ``rotations``,
     ``in_plane``, ``out_of_plane``) or a list of DOF names (``u1`` ... ``w3``)."""
     mask = np.zeros(6, dtype=bool)
@@ -154,7 +155,7 @@ class Support:
     dofs: DofGroup | DofName | Sequence[DofGroup | DofName] = "all"
     settles_with_wall: bool = False
 
-    def mask(self, n_blocks: int) -> NDArray[np.bool_]:
+    def mask(self, n_blocks: int) -> BoolArray:
         """(n_blocks, 6) fixed DOFs."""
         idx = block_indices("Support.blocks", self.blocks, n_blocks)
         if idx.size == 0:
@@ -179,7 +180,7 @@ class SelfWeight:
 
     live: bool = False
 
-    def vector(self, blocks: Blocks) -> NDArray[np.float64]:
+    def vector(self, blocks: Blocks) -> FloatArray:
         """(n, 6) generalised forces at the block centres."""
         out = np.zeros((blocks.count, 6))
         out[:, 1] = -blocks.weights
@@ -195,7 +196,7 @@ class WeightProportional:
     live: bool = True
     blocks: ArrayLike | None = None
 
-    def vector(self, blocks: Blocks) -> NDArray[np.float64]:
+    def vector(self, blocks: Blocks) -> FloatArray:
         """(n, 6) generalised forces at the block centres."""
         d = as_finite_array("direction", self.direction, (3,))
         norm = np.linalg.norm(d)
@@ -222,7 +223,7 @@ class Pressure:
     live: bool = True
     blocks: ArrayLike | None = None
 
-    def vector(self, blocks: Blocks) -> NDArray[np.float64]:
+    def vector(self, blocks: Blocks) -> FloatArray:
         """(n, 6) generalised forces at the block centres."""
         p = float(as_finite_array("pressure", self.value))
         if self.axis not in (0, 1, 2):
@@ -251,7 +252,7 @@ class PointLoad:
     offset: Sequence[float] = (0.0, 0.0, 0.0)
     live: bool = False
 
-    def vector(self, blocks: Blocks) -> NDArray[np.float64]:
+    def vector(self, blocks: Blocks) -> FloatArray:
         """(n, 6) generalised forces at the block centres."""
         idx = block_indices("PointLoad.blocks", self.blocks, blocks.count)
         f = as_finite_array("force", self.force, (3,))
@@ -264,6 +265,13 @@ class PointLoad:
 
 
 Load = SelfWeight | WeightProportional | Pressure | PointLoad
+#: the loads by the name a case file gives them (``[[loads]] type``)
+LOAD_TYPES: dict[str, type[Load]] = {
+    "self_weight": SelfWeight,
+    "weight_proportional": WeightProportional,
+    "pressure": Pressure,
+    "point": PointLoad,
+}
 
 
 # --------------------------------------------------------------------------- model
@@ -277,14 +285,14 @@ class Model:
 
     blocks: Blocks
     interfaces: Interfaces
-    kn: NDArray[np.float64]
-    kt: NDArray[np.float64]
-    friction: NDArray[np.float64]
-    tensile_strength: NDArray[np.float64]
-    alpha: NDArray[np.float64]
-    fixed: NDArray[np.bool_]
-    dead: NDArray[np.float64]
-    live: NDArray[np.float64]
+    kn: FloatArray
+    kt: FloatArray
+    friction: FloatArray
+    tensile_strength: FloatArray
+    alpha: FloatArray
+    fixed: BoolArray
+    dead: FloatArray
+    live: FloatArray
     name: str = "model"
     meta: dict[str, Any] = field(default_factory=dict)
     #: the interface law's options (of the ``material`` of :meth:`build`)
@@ -320,7 +328,7 @@ class Model:
         its = its.subset(np.flatnonzero(keep))
         m = its.count
 
-        def per_interface(mat: InterfaceMaterial) -> NDArray[np.float64]:
+        def per_interface(mat: InterfaceMaterial) -> FloatArray:
             alpha = np.nan if mat.alpha is None else mat.alpha
             return np.array([mat.kn, mat.kt, mat.friction, mat.tensile_strength, alpha])
 
@@ -369,7 +377,7 @@ class Model:
         return float(sizes.min())
 
     @property
-    def free(self) -> NDArray[np.bool_]:
+    def free(self) -> BoolArray:
         """(6n,) bool mask of free DOFs (block-major)."""
         return ~self.fixed.reshape(-1)
 

@@ -12,6 +12,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 # re-exported: the names of the codes of StepResult.state (docs/rendering.md)
+from masonry_dem._arrays import FloatArray
 from masonry_dem.constitutive.states import STATE_NAMES as STATE_NAMES
 from masonry_dem.export.results_folder import save_pushover_rows
 from masonry_dem.solvers.static.outcome import Status, StopReason
@@ -31,10 +32,10 @@ class StepResult:
 
     step: int
     load_factor: float
-    q: NDArray[np.float64]
-    actions: NDArray[np.float64]
+    q: FloatArray
+    actions: FloatArray
     state: NDArray[np.int32]
-    utilisation: NDArray[np.float64]
+    utilisation: FloatArray
     flags: NDArray[np.int32] | None = None
     control_displacement: float = 0.0
     iterations: int = 0
@@ -81,7 +82,7 @@ class History:
             self.collapse_bracket = None
 
     @property
-    def load_factors(self) -> NDArray[np.float64]:
+    def load_factors(self) -> FloatArray:
         """(steps,) lambda of every converged step."""
         kept = getattr(self.steps, "load_factors", None)  # streamed steps keep their scalars
         if kept is not None:
@@ -89,7 +90,7 @@ class History:
         return np.array([s.load_factor for s in self.steps])
 
     @property
-    def control_displacements(self) -> NDArray[np.float64]:
+    def control_displacements(self) -> FloatArray:
         """(steps,) the monitored (or largest) displacement of every step [m]."""
         kept = getattr(self.steps, "control_displacements", None)
         if kept is not None:

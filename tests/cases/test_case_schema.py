@@ -245,3 +245,17 @@ def test_law_options_belong_to_the_material(tmp_path, capsys):
     assert main(["run", str(path), "--out", str(tmp_path / "out"), "--quiet"]) == 2
     err = capsys.readouterr().err
     assert '[material].tension = "elastic"' in err and "brittle" in err and "plastic" in err
+
+
+def test_the_schema_and_the_case_file_know_the_same_load_types():
+    """A ``[[loads]]`` type the schema accepts is one the case file can build, and its keys are
+    the load's fields (``select`` for ``blocks``)."""
+    from dataclasses import fields
+
+    from masonry_dem.cases.schema import LOAD_TABLES
+    from masonry_dem.model import LOAD_TYPES
+
+    assert set(LOAD_TABLES) == set(LOAD_TYPES)
+    for kind, load in LOAD_TYPES.items():
+        keys = {"select" if f.name == "blocks" else f.name for f in fields(load)} | {"type"}
+        assert set(LOAD_TABLES[kind].model_fields) == keys, kind

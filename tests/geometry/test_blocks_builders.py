@@ -3,9 +3,12 @@ and bad input rejected with a message naming the field."""
 
 from __future__ import annotations
 
+import inspect
+
 import numpy as np
 import pytest
 
+import masonry_dem as md
 from masonry_dem.geometry.blocks import Blocks
 from masonry_dem.geometry.builders import (
     add_base,
@@ -182,3 +185,29 @@ def test_blocks_reject_non_positive_sizes_and_nan_by_name():
         stack_bond_column(2, 0.0, B, S, GAMMA)
     with pytest.raises(ValueError, match=r"^length"):
         running_bond_wall_of_size(np.nan, 1.0, A, B, S, GAMMA)
+
+
+@pytest.mark.parametrize(
+    "build, head",
+    [
+        (md.running_bond_wall, ["blocks_along_length", "courses"]),
+        (md.running_bond_wall_of_size, ["length", "height"]),
+        (md.stack_bond_column, ["courses"]),
+        (md.single_block, []),
+        (md.l_wall, ["blocks_along_length", "courses"]),
+        (md.u_wall, ["blocks_along_length", "courses"]),
+        (md.t_wall, ["blocks_along_length", "courses"]),
+        (md.box_wall, ["blocks_along_length", "courses"]),
+    ],
+)
+def test_every_builder_shows_the_unit_in_its_signature_and_refuses_a_misspelt_keyword(build, head):
+    """The unit's parameters are declared once (``builders._Unit``), yet each builder shows
+    them in its own signature, after its counts, in the order positional calls rely on, with
+    the paper's letters as keywords; a keyword it does not have is a TypeError that names the builder."""
+    params = inspect.signature(build).parameters
+    unit = ["block_height", "block_length", "thickness", "unit_weight"]
+    assert list(params)[: len(head) + 4] == head + unit
+    assert all(params[k].kind is inspect.Parameter.KEYWORD_ONLY for k in ("a", "b", "s"))
+    assert build.__doc__ and build.__name__ in repr(build)
+    with pytest.raises(TypeError, match=rf"^{build.__name__}\(\): .* 'blok_height'"):
+        build(*([3] * len(head)), blok_height=0.1)

@@ -1,9 +1,10 @@
 """The load-path fields the static and the dynamic-relaxation settings share are refused by
-name in both, with the same message (one check, ``_validation.check_load_path_fields``)."""
+name in both, with the same message (one base, ``solvers.load_path.LoadPathSettings``)."""
 
 from __future__ import annotations
 
 import math
+from dataclasses import fields
 
 import pytest
 
@@ -42,3 +43,14 @@ def test_both_settings_take_the_load_path_fields_at_their_limits(settings):
     s = settings(growth=1, max_load_factor=math.inf, displacement_limit=None, max_steps=1)
     assert (s.growth, s.max_load_factor, s.displacement_limit) == (1, math.inf, None)
     assert settings(displacement_limit=math.inf).displacement_limit == math.inf
+
+
+@pytest.mark.parametrize("settings", [StaticSettings, DRSettings])
+def test_every_checked_field_refuses_nan_by_its_name(settings):
+    """Each field that declares a range (``positive``, ``count``, ``choice``, ...) refuses a
+    NaN, naming itself: no range of a number, a count or a choice holds NaN."""
+    checked = [f.name for f in fields(settings) if "test" in f.metadata]
+    assert len(checked) >= 20
+    for name in checked:
+        with pytest.raises(ValueError, match=f"^{name} must be"):
+            settings(**{name: math.nan})

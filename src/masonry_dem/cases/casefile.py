@@ -11,7 +11,7 @@ from __future__ import annotations
 import inspect
 from collections.abc import Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass
+from dataclasses import MISSING, dataclass, fields
 from importlib import resources
 from pathlib import Path
 from typing import Any, Literal, cast, get_args
@@ -26,16 +26,13 @@ from masonry_dem.geometry import builders, plans
 from masonry_dem.geometry import selectors as sel
 from masonry_dem.geometry.blocks import Blocks
 from masonry_dem.model import (
+    LOAD_TYPES,
     DofName,
     InterfaceMaterial,
     Load,
     Model,
     Monitor,
-    PointLoad,
-    Pressure,
-    SelfWeight,
     Support,
-    WeightProportional,
 )
 from masonry_dem.solvers.incremental import DisplacementControl, StaticSettings
 
@@ -158,39 +155,33 @@ def select_blocks(
 def _load(
     spec: dict[str, Any], blocks: Blocks, wall: NDArray[np.bool_], base: int | None, k: int
 ) -> Load:
-    kind = _require(f"loads[{k}]", spec, "type")
+    """The load of a ``[[loads]]`` table: its keys are the fields of the load of its ``type``
+    (:data:`~masonry_dem.model.LOAD_TYPES`), with ``select`` for the blocks it acts on (default:
+    the wall, where the load may act on all blocks); arrays become tuples."""
     section = f"loads[{k}]"
-    if kind == "self_weight":
-        _unknown(section, spec, {"type", "live"})
-        return SelfWeight(live=spec.get("live", False))
-    if kind == "weight_proportional":
-        _unknown(section, spec, {"type", "direction", "live", "select"})
-        chosen = select_blocks(blocks, spec.get("select", "all"), wall, base)
-        return WeightProportional(
-            tuple(spec.get("direction", (0, 0, 1))), spec.get("live", True), chosen
+    kind = _require(section, spec, "type")
+    if kind not in LOAD_TYPES:
+        raise ValueError(
+            f"case file [{section}] type must be one of {', '.join(LOAD_TYPES)}, got {kind!r}"
         )
-    if kind == "pressure":
-        _unknown(section, spec, {"type", "value", "axis", "sign", "live", "select"})
-        chosen = select_blocks(blocks, spec.get("select", "all"), wall, base)
-        return Pressure(
-            float(_require(section, spec, "value")),
-            int(spec.get("axis", 2)),
-            int(spec.get("sign", 1)),
-            spec.get("live", True),
-            chosen,
-        )
-    if kind == "point":
-        _unknown(section, spec, {"type", "select", "force", "offset", "live"})
-        chosen = select_blocks(blocks, _require(section, spec, "select"), wall, base)
-        return PointLoad(
-            chosen,
-            tuple(_require(section, spec, "force")),
-            tuple(spec.get("offset", (0, 0, 0))),
-            spec.get("live", False),
-        )
-    raise ValueError(
-        f"case file [{section}] type must be self_weight, weight_proportional, pressure or point, got {kind!r}"
-    )
+    load = {f.name: f for f in fields(LOAD_TYPES[kind])}
+    keys = {"type", *load} - {"blocks"} | ({"select"} if "blocks" in load else set())
+    _unknown(section, spec, keys)
+    args: dict[str, Any] = {}
+    for name, f in load.items():
+        key = "select" if name == "blocks" else name
+        if f.default is MISSING:
+            value = _require(section, spec, key)
+        elif key in spec:
+            value = spec[key]
+        elif name == "blocks":
+            value = "all"
+        else:
+            continue
+        if name == "blocks":
+            value = select_blocks(blocks, value, wall, base)
+        args[name] = tuple(value) if isinstance(value, list) else value
+    return LOAD_TYPES[kind](**args)
 
 
 def check_case_data(data: dict[str, Any], source: str = "<dict>") -> None:

@@ -9,7 +9,7 @@ import logging
 import time
 from pathlib import Path
 
-from masonry_dem.cli.options import add_overwrite
+from masonry_dem.cli.options import add_case, add_output, add_overwrite
 
 log = logging.getLogger(__name__)
 
@@ -26,7 +26,7 @@ def add_parser(subparsers) -> None:
             "dilatancy) an estimate."
         ),
     )
-    p.add_argument("case", nargs="?", help="TOML case file (see README, 'Case files')")
+    add_case(p)
     kind = p.add_mutually_exclusive_group()
     kind.add_argument(
         "--associative", dest="associative", action="store_true", default=None, help="(default)"
@@ -40,8 +40,7 @@ def add_parser(subparsers) -> None:
         help="enlarge the friction by kappa(alpha) (1.0655 for alpha 1.5): a theorem-backed "
         "upper bound of the pushover's multiplier (docs/limit_analysis.md)",
     )
-    p.add_argument("--out", default="results/limit", help="results folder (default: %(default)s)")
-    p.add_argument("--no-render", action="store_true", help="skip the PNG of the mechanism")
+    add_output(p, "results/limit", "the PNG of the mechanism")
     add_overwrite(p)
     p.set_defaults(func=limit_command)
 

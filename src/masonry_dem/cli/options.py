@@ -13,6 +13,23 @@ OVERWRITE_HELP = (
 )
 
 
+def add_case(p: argparse.ArgumentParser) -> None:
+    """``CASE``: the case file to run, optional (the bundled default wall)."""
+    p.add_argument("case", nargs="?", help="TOML case file (see README, 'Case files')")
+
+
+def add_output(p: argparse.ArgumentParser, default: str, renders: str) -> None:
+    """``--out`` (the results folder, ``default`` unless given) and ``--no-render`` (skip
+    ``renders``, the PNGs the command would write)."""
+    p.add_argument("--out", default=default, help="results folder (default: %(default)s)")
+    p.add_argument("--no-render", action="store_true", help=f"skip {renders}")
+
+
+def add_results(p: argparse.ArgumentParser) -> None:
+    """``RESULTS``: the results folder a command reads."""
+    p.add_argument("results", help="results folder (blocks.pvd, interfaces.pvd, steps/, ...)")
+
+
 def add_overwrite(p: argparse.ArgumentParser) -> None:
     """``--overwrite``: a results folder that holds a run is refused without it."""
     p.add_argument("--overwrite", action="store_true", help=OVERWRITE_HELP)

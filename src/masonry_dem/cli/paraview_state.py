@@ -1,28 +1,30 @@
 """``masonry-dem paraview-state NAME RESULTS``: copy a ParaView state next to a results folder
-with its paths filled in, so a double-click (or ``paraview --state=...``) opens it."""
+with its paths filled in, so a double-click (or ``paraview --state=...``) opens it.
+
+The data file paths, the camera and the warp scale are filled in. States: damage_map
+(interfaces coloured by state), deformed_shape (Warp By Vector on displacement), force_view
+(normal force and utilisation), mechanism (the collapse mode, joints by relative motion; needs
+mechanism_blocks.vtu and mechanism_interfaces.vtu, written when a run ends in collapse). 'all'
+writes every state the folder has the data for.
+"""
 
 from __future__ import annotations
 
 import argparse
 import sys
 
+from masonry_dem.cli.options import add_results
 from masonry_dem.export.paraview_state import STATES
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
     p = subparsers.add_parser(
         "paraview-state",
-        help="write a ParaView state (damage map, deformed shape, forces, mechanism) into a "
-        "results folder",
-        description="Copy a ParaView state into a results folder with the data file paths, "
-        "the camera and the warp scale filled in. States: damage_map (interfaces coloured by "
-        "state), deformed_shape (Warp By Vector on displacement), force_view (normal force and "
-        "utilisation), mechanism (the collapse mode, joints by relative motion; needs "
-        "mechanism_blocks.vtu and mechanism_interfaces.vtu, written when a run ends in "
-        "collapse). 'all' writes every state the folder has the data for.",
+        help="write a ParaView state (damage map, deformed shape, forces, mechanism)",
+        description=__doc__,
     )
     p.add_argument("name", choices=STATES + ("all",), help="state to copy")
-    p.add_argument("results", help="results folder (blocks.pvd, interfaces.pvd, steps/)")
+    add_results(p)
     p.add_argument(
         "--scale", type=float, default=None, help="Warp By Vector scale factor (default: automatic)"
     )

@@ -1,10 +1,17 @@
 """``masonry-dem render RESULTS``: PNG of a step (and optionally the animation and the pushover
-curve) written next to the results."""
+curve) written next to the results.
+
+Renders off-screen. Interfaces coloured by state: green elastic, red sliding, magenta rocking,
+orange sliding+rocking, blue detached. Files are written next to the results:
+render_<view>_<step>.png, animation_<view>.gif, pushover.png, mechanism_<view>.png.
+"""
 
 from __future__ import annotations
 
 import argparse
 import re
+
+from masonry_dem.cli.options import add_results
 
 VIEW_CHOICES = ("front", "back", "oblique", "side")  # keep in step with export.render.VIEWS
 
@@ -28,14 +35,10 @@ def _size(text: str) -> tuple[int, int]:
 def add_parser(subparsers) -> argparse.ArgumentParser:
     p = subparsers.add_parser(
         "render",
-        help="render a results folder: deformed wall with damage colours (PNG), animation, "
-        "pushover curve",
-        description="Render a results folder off-screen. Interfaces coloured by state: green "
-        "elastic, red sliding, magenta rocking, orange sliding+rocking, blue detached. Files are "
-        "written next to the results: render_<view>_<step>.png, animation_<view>.gif, "
-        "pushover.png, mechanism_<view>.png.",
+        help="render a results folder: a step's PNG, an animation, the pushover curve",
+        description=__doc__,
     )
-    p.add_argument("results", help="results folder (blocks.pvd, interfaces.pvd, steps/, ...)")
+    add_results(p)
     p.add_argument(
         "--step", type=_step, default="last", help="step number, or 'last' (default) / 'first'"
     )

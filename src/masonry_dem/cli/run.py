@@ -9,7 +9,7 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from masonry_dem.cli.options import add_overwrite
+from masonry_dem.cli.options import add_case, add_output, add_overwrite
 from masonry_dem.export.run_case import Progress, estimate_run, run_case
 
 if TYPE_CHECKING:
@@ -23,13 +23,8 @@ def add_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) 
         help="run a case file (default: the bundled wall) and write VTU/PVD, summary.json and a PNG",
         description="Run the pushover analysis of a case file. With no CASE, the bundled default wall.",
     )
-    p.add_argument("case", nargs="?", help="TOML case file (see README, 'Case files')")
-    p.add_argument("--out", default="results/default", help="results folder (default: %(default)s)")
-    p.add_argument(
-        "--no-render",
-        action="store_true",
-        help="skip the PNGs of the last step and of the collapse mechanism",
-    )
+    add_case(p)
+    add_output(p, "results/default", "the PNGs of the last step and of the collapse mechanism")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     add_overwrite(p)
     p.add_argument(

@@ -10,7 +10,7 @@ import json
 from pathlib import Path
 from typing import Any
 
-from masonry_dem.cli.options import whole_number
+from masonry_dem.cli.options import add_output, whole_number
 
 
 def add_parser(subparsers: Any) -> None:
@@ -22,10 +22,7 @@ def add_parser(subparsers: Any) -> None:
     )
     p.add_argument("case", nargs="?", help="one case (OL1, S11, 2-3, ...); default: all")
     p.add_argument("--json", action="store_true", help="print the rows as a JSON array")
-    p.add_argument(
-        "--out", default="results/validation", help="results folder (default: %(default)s)"
-    )
-    p.add_argument("--no-render", action="store_true", help="skip the PNGs")
+    add_output(p, "results/validation", "the PNGs")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.add_argument(
         "--jobs",

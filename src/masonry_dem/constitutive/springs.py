@@ -22,7 +22,7 @@ The history starts from the unloaded state; row k of a path is the total displac
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass
+from dataclasses import KW_ONLY, dataclass
 from functools import cached_property
 from typing import Final
 
@@ -30,6 +30,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import minimize_scalar
 
+from masonry_dem._parameters import function_of
 from masonry_dem.constitutive.strength import DIRECTIONS, radial_factor
 
 __all__ = [
@@ -318,43 +319,48 @@ def _interface(
     )
 
 
-def shear_strength_numeric(
-    l1: float,
-    l2: float,
-    normal_force: float,
-    friction: float,
-    tensile_strength: float = 0.0,
-    angles: ArrayLike = 0.0,
-    n: int = 32,
-    kn: float | None = None,
-    ks: float | None = None,
-    steps: int = 20,
-) -> NDArray:
+@dataclass(frozen=True)
+class _StrengthRun:
+    """A strength run of the spring model: an ``l1`` x ``l2`` interface with ``friction`` and
+    ``tensile_strength``, under the constant ``normal_force``, of ``n`` x ``n`` springs of
+    stiffness ``kn``, ``ks`` (None: the reference interface's), loaded in ``steps`` steps."""
+
+    l1: float
+    l2: float
+    normal_force: float
+    friction: float
+    tensile_strength: float = 0.0
+    _: KW_ONLY
+    n: int = 32
+    kn: float | None = None
+    ks: float | None = None
+    steps: int = 20
+
+    def interface(self, l1: float, l2: float, tensile_strength: float) -> SpringInterface:
+        return _interface(l1, l2, self.n, self.kn, self.ks, self.friction, tensile_strength)
+
+
+@dataclass(frozen=True)
+class _ShearStrengthNumeric(_StrengthRun):
     """Spring-model shear strength |f| (N) for pure relative shear along each of ``angles``.
 
     One incremental analysis per direction (angle from y1, rad), all run at once, under the
     constant ``normal_force``; returns the shear force at the last step, shape of ``angles``.
     """
-    iface = _interface(l1, l2, n, kn, ks, friction, tensile_strength)
-    ang = np.asarray(angles, dtype=float)
-    paths = iface.rotation_paths(ang.ravel(), np.full(ang.size, 0.5 * np.pi), normal_force, steps)
-    ult = iface.run(paths, normal_force=normal_force).ultimate
-    return np.hypot(ult[:, 0], ult[:, 1]).reshape(ang.shape)
+
+    angles: ArrayLike = 0.0
+
+    def __call__(self) -> NDArray:
+        iface = self.interface(self.l1, self.l2, self.tensile_strength)
+        ang = np.asarray(self.angles, dtype=float)
+        fn = self.normal_force
+        paths = iface.rotation_paths(ang.ravel(), np.full(ang.size, 0.5 * np.pi), fn, self.steps)
+        ult = iface.run(paths, normal_force=fn).ultimate
+        return np.hypot(ult[:, 0], ult[:, 1]).reshape(ang.shape)
 
 
-def torsion_strength_numeric(
-    l1: float,
-    l2: float,
-    normal_force: float,
-    friction: float,
-    tensile_strength: float = 0.0,
-    m1: float = 0.0,
-    m2: float = 0.0,
-    n: int = 32,
-    kn: float | None = None,
-    ks: float | None = None,
-    steps: int = 20,
-) -> float:
+@dataclass(frozen=True)
+class _TorsionStrengthNumeric(_StrengthRun):
     """Spring-model pure-torsion strength (N m): an incremental relative rotation delta3.
 
     Without bending moments the interface of ``n x n`` springs (with its tensile strength) is
@@ -364,26 +370,36 @@ def torsion_strength_numeric(
     ``l1' = l1 - 2|m2|/(ft - fn)``, ``l2' = l2 - 2|m1|/(ft - fn)``, which is discretized by its
     own ``n x n`` springs and twisted about its centre (so the resultant shear is zero).
     """
-    ft = tensile_strength * l1 * l2
-    cap = ft - normal_force
-    if cap <= 0:
-        raise ValueError(
-            f"normal_force must be below the tensile capacity {ft!r}, got {normal_force!r}"
-        )
-    if m1 == 0 and m2 == 0:
-        iface = _interface(l1, l2, n, kn, ks, friction, tensile_strength)
-        fn = normal_force
-    else:
-        l1r = l1 - 2.0 * abs(m2) / cap
-        l2r = l2 - 2.0 * abs(m1) / cap
-        if l1r <= 0 or l2r <= 0:
+
+    m1: float = 0.0
+    m2: float = 0.0
+
+    def __call__(self) -> float:
+        l1, l2, m1, m2 = self.l1, self.l2, self.m1, self.m2
+        ft = self.tensile_strength * l1 * l2
+        cap = ft - self.normal_force
+        if cap <= 0:
             raise ValueError(
-                f"bending moments m1={m1!r}, m2={m2!r} reach the rocking limit: no compressed area"
+                f"normal_force must be below the tensile capacity {ft!r}, got {self.normal_force!r}"
             )
-        iface = _interface(l1r, l2r, n, kn, ks, friction, 0.0)
-        fn = -cap
-    path = iface.rotation_paths(0.0, np.zeros(1), fn, steps)
-    return float(iface.run(path, normal_force=fn).ultimate[0, 5])
+        if m1 == 0 and m2 == 0:
+            iface = self.interface(l1, l2, self.tensile_strength)
+            fn = self.normal_force
+        else:
+            l1r = l1 - 2.0 * abs(m2) / cap
+            l2r = l2 - 2.0 * abs(m1) / cap
+            if l1r <= 0 or l2r <= 0:
+                raise ValueError(
+                    f"bending moments m1={m1!r}, m2={m2!r} reach the rocking limit: no compressed area"
+                )
+            iface = self.interface(l1r, l2r, 0.0)
+            fn = -cap
+        path = iface.rotation_paths(0.0, np.zeros(1), fn, self.steps)
+        return float(iface.run(path, normal_force=fn).ultimate[0, 5])
+
+
+shear_strength_numeric = function_of(_ShearStrengthNumeric)
+torsion_strength_numeric = function_of(_TorsionStrengthNumeric)
 
 
 def _direction_angle(direction: str) -> float:

@@ -8,22 +8,23 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from masonry_dem._arrays import FloatArray, Rows
 from masonry_dem._validation import as_finite_array, require_positive
 
 
 @dataclass(frozen=True)
-class Blocks:
-    """Rigid box blocks.
+class Blocks(Rows):
+    """Rigid box blocks (``count``, ``len`` and ``subset`` of :class:`~masonry_dem._arrays.Rows`).
 
     centres: (n, 3) block centres [m]; sizes: (n, 3) edge lengths along e1, e2, e3 [m];
     unit_weight: (n,) weight per unit volume [N/m^3].
     """
 
-    centres: NDArray[np.float64]
-    sizes: NDArray[np.float64]
-    unit_weight: NDArray[np.float64]
+    centres: FloatArray
+    sizes: FloatArray
+    unit_weight: FloatArray
 
     def __post_init__(self) -> None:
         centres = as_finite_array("centres", self.centres, (None, 3))
@@ -54,32 +55,20 @@ class Blocks:
         return cls((lo + hi) / 2, hi - lo, as_finite_array("unit_weight", unit_weight))
 
     @property
-    def count(self) -> int:
-        return int(self.centres.shape[0])
-
-    def __len__(self) -> int:
-        return self.count
-
-    @property
-    def lower(self) -> NDArray[np.float64]:
+    def lower(self) -> FloatArray:
         return self.centres - self.sizes / 2
 
     @property
-    def upper(self) -> NDArray[np.float64]:
+    def upper(self) -> FloatArray:
         return self.centres + self.sizes / 2
 
     @property
-    def volumes(self) -> NDArray[np.float64]:
+    def volumes(self) -> FloatArray:
         return np.asarray(np.prod(self.sizes, axis=1), dtype=np.float64)
 
     @property
-    def weights(self) -> NDArray[np.float64]:
+    def weights(self) -> FloatArray:
         return self.volumes * self.unit_weight
-
-    def subset(self, index: ArrayLike | slice) -> Blocks:
-        """The blocks at ``index`` (indices, a boolean mask or a slice)."""
-        idx = index if isinstance(index, slice) else np.asarray(index)
-        return Blocks(self.centres[idx], self.sizes[idx], self.unit_weight[idx])
 
     def permuted(self, order: ArrayLike) -> Blocks:
         """The same blocks in another order (for numbering-independence checks)."""
@@ -93,7 +82,7 @@ class Blocks:
             np.concatenate([p.unit_weight for p in parts]),
         )
 
-    def corner_points(self) -> NDArray[np.float64]:
+    def corner_points(self) -> FloatArray:
         """(n, 8, 3) corners in VTK hexahedron order."""
         signs = np.array(
             [

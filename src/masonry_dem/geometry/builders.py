@@ -4,15 +4,22 @@ supports (rigid base, return walls), and user lists of boxes.
 A block measures ``block_height`` x ``block_length`` x ``thickness`` (the paper's a x b x s,
 along e2, e1, e3). Every builder also takes the paper's letters as keywords (``a=``, ``b=``,
 ``s=``), as case files and older scripts write them; giving both names of one size is an error.
+
+A builder is a frozen dataclass of its parameters, called for the blocks, made a function by
+:func:`~masonry_dem._parameters.function_of`: the parameters builders share (the counts, the
+unit and its letters) are declared once, in the classes they inherit (``_Along``,
+``_Courses``, ``_Unit``).
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import KW_ONLY, dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from masonry_dem._parameters import function_of
 from masonry_dem._validation import as_finite_array, plain, positive_scalar
 from masonry_dem.geometry.blocks import Blocks
 
@@ -58,21 +65,43 @@ def _weight(unit_weight: float | None) -> float:
     return positive_scalar("unit_weight", unit_weight, strict=False)
 
 
-def running_bond_wall(
-    blocks_along_length: int,
-    courses: int,
-    block_height: float | None = None,
-    block_length: float | None = None,
-    thickness: float | None = None,
-    unit_weight: float | None = None,
-    joint: float = 0.0,
-    origin: Sequence[float] = (0.0, 0.0, 0.0),
-    start_with_half: bool = False,
-    *,
-    a: float | None = None,
-    b: float | None = None,
-    s: float | None = None,
-) -> Blocks:
+@dataclass(frozen=True)
+class _Along:
+    blocks_along_length: int
+
+
+@dataclass(frozen=True)
+class _Courses:
+    courses: int
+
+
+@dataclass(frozen=True)
+class _Unit:
+    """The masonry unit: a block of ``block_height`` x ``block_length`` x ``thickness`` [m]
+    (the paper's a x b x s, along e2, e1, e3; the letters are keywords too) that weighs
+    ``unit_weight`` per unit volume [N/m^3]."""
+
+    block_height: float | None = None
+    block_length: float | None = None
+    thickness: float | None = None
+    unit_weight: float | None = None
+    _: KW_ONLY
+    a: float | None = None
+    b: float | None = None
+    s: float | None = None
+
+    def size(self) -> tuple[float, float, float]:
+        """(a, b, s), validated: each given by its name or by its letter."""
+        return block_size(
+            self.block_height, self.block_length, self.thickness, self.a, self.b, self.s
+        )
+
+    def weight(self) -> float:
+        return _weight(self.unit_weight)
+
+
+@dataclass(frozen=True)
+class _RunningBondWall(_Unit, _Courses, _Along):
     """A single-leaf running-bond wall with straight ends.
 
     Course k (from the bottom) holds ``blocks_along_length`` whole blocks when k is even and,
@@ -82,89 +111,87 @@ def running_bond_wall(
     measures n(b+e) x courses(a+e) x s. The wall's lower-left-back corner sits at ``origin``.
     Block sizes a, b, s: ``block_height``, ``block_length``, ``thickness``.
     """
-    n = _count("blocks_along_length", blocks_along_length)
-    nc = _count("courses", courses)
-    a, b, s = block_size(block_height, block_length, thickness, a, b, s)
-    e = positive_scalar("joint", joint, strict=False)
-    gamma = _weight(unit_weight)
-    px, py = b + e, a + e
-    half_course = (np.arange(nc) % 2 == 1) ^ bool(start_with_half)
-    # Each course is cut at integer or half-integer pitches; describe blocks by their cut points.
-    per_course = np.where(half_course, n + 1, n)
-    course = np.repeat(np.arange(nc), per_course)
-    pos = np.arange(course.size) - np.repeat(np.cumsum(per_course) - per_course, per_course)
-    shifted = half_course[course]
-    left = np.where(shifted, np.maximum(pos - 0.5, 0.0), pos)
-    right = np.where(shifted, np.minimum(pos + 0.5, n), pos + 1.0)
-    x0, y0, z0 = as_finite_array("origin", origin, (3,))
-    lower = np.stack([x0 + left * px, y0 + course * py, np.full(course.size, z0)], axis=1)
-    upper = np.stack(
-        [x0 + right * px, y0 + (course + 1) * py, np.full(course.size, z0 + s)], axis=1
-    )
-    return Blocks.from_boxes(lower, upper, gamma)
+
+    joint: float = 0.0
+    origin: Sequence[float] = (0.0, 0.0, 0.0)
+    start_with_half: bool = False
+
+    def __call__(self) -> Blocks:
+        n = _count("blocks_along_length", self.blocks_along_length)
+        nc = _count("courses", self.courses)
+        a, b, s = self.size()
+        e = positive_scalar("joint", self.joint, strict=False)
+        gamma = self.weight()
+        px, py = b + e, a + e
+        half_course = (np.arange(nc) % 2 == 1) ^ bool(self.start_with_half)
+        # Each course is cut at integer or half-integer pitches; describe blocks by their cut
+        # points.
+        per_course = np.where(half_course, n + 1, n)
+        course = np.repeat(np.arange(nc), per_course)
+        pos = np.arange(course.size) - np.repeat(np.cumsum(per_course) - per_course, per_course)
+        shifted = half_course[course]
+        left = np.where(shifted, np.maximum(pos - 0.5, 0.0), pos)
+        right = np.where(shifted, np.minimum(pos + 0.5, n), pos + 1.0)
+        x0, y0, z0 = as_finite_array("origin", self.origin, (3,))
+        lower = np.stack([x0 + left * px, y0 + course * py, np.full(course.size, z0)], axis=1)
+        upper = np.stack(
+            [x0 + right * px, y0 + (course + 1) * py, np.full(course.size, z0 + s)], axis=1
+        )
+        return Blocks.from_boxes(lower, upper, gamma)
 
 
-def running_bond_wall_of_size(
-    length: float,
-    height: float,
-    block_height: float | None = None,
-    block_length: float | None = None,
-    thickness: float | None = None,
-    unit_weight: float | None = None,
-    joint: float = 0.0,
-    *,
-    a: float | None = None,
-    b: float | None = None,
-    s: float | None = None,
-) -> Blocks:
+@dataclass(frozen=True)
+class _Extent:
+    length: float
+    height: float
+
+
+@dataclass(frozen=True)
+class _RunningBondWallOfSize(_Unit, _Extent):
     """A running-bond wall of the given overall size (``length`` x ``height`` [m]): the
     nearest whole numbers of blocks of ``block_length`` (b) and courses of ``block_height``
     (a), with the pitch stretched (by less than half a block) so the wall is exactly that
     size; ``thickness`` (s)."""
-    length = positive_scalar("length", length)
-    height = positive_scalar("height", height)
-    a, b, s = block_size(block_height, block_length, thickness, a, b, s)
-    e = positive_scalar("joint", joint, strict=False)
-    n = max(1, round(length / (b + e)))
-    nc = max(1, round(height / (a + e)))
-    pitch_x, pitch_y = length / n, height / nc
-    return running_bond_wall(n, nc, pitch_y, pitch_x, s, unit_weight, joint=0.0)
+
+    joint: float = 0.0
+
+    def __call__(self) -> Blocks:
+        length = positive_scalar("length", self.length)
+        height = positive_scalar("height", self.height)
+        a, b, s = self.size()
+        e = positive_scalar("joint", self.joint, strict=False)
+        n = max(1, round(length / (b + e)))
+        nc = max(1, round(height / (a + e)))
+        pitch_x, pitch_y = length / n, height / nc
+        return running_bond_wall(n, nc, pitch_y, pitch_x, s, self.unit_weight, joint=0.0)
 
 
-def stack_bond_column(
-    courses: int,
-    block_height: float | None = None,
-    block_length: float | None = None,
-    thickness: float | None = None,
-    unit_weight: float | None = None,
-    *,
-    a: float | None = None,
-    b: float | None = None,
-    s: float | None = None,
-) -> Blocks:
+@dataclass(frozen=True)
+class _StackBondColumn(_Unit, _Courses):
     """Blocks stacked one on another (a column of ``courses`` blocks of ``block_height`` (a)
     x ``block_length`` (b) x ``thickness`` (s)), its base on y = 0."""
-    nc = _count("courses", courses)
-    a, b, s = block_size(block_height, block_length, thickness, a, b, s)
-    k = np.arange(nc)
-    centres = np.stack([np.full(nc, b / 2), (k + 0.5) * a, np.full(nc, s / 2)], axis=1)
-    return Blocks(centres, np.tile([b, a, s], (nc, 1)), np.full(nc, _weight(unit_weight)))
+
+    def __call__(self) -> Blocks:
+        nc = _count("courses", self.courses)
+        a, b, s = self.size()
+        k = np.arange(nc)
+        centres = np.stack([np.full(nc, b / 2), (k + 0.5) * a, np.full(nc, s / 2)], axis=1)
+        return Blocks(centres, np.tile([b, a, s], (nc, 1)), np.full(nc, self.weight()))
 
 
-def single_block(
-    block_height: float | None = None,
-    block_length: float | None = None,
-    thickness: float | None = None,
-    unit_weight: float | None = None,
-    *,
-    a: float | None = None,
-    b: float | None = None,
-    s: float | None = None,
-) -> Blocks:
+@dataclass(frozen=True)
+class _SingleBlock(_Unit):
     """One block of ``block_height`` (a) x ``block_length`` (b) x ``thickness`` (s) with its
     base on y = 0."""
-    a, b, s = block_size(block_height, block_length, thickness, a, b, s)
-    return stack_bond_column(1, a, b, s, unit_weight)
+
+    def __call__(self) -> Blocks:
+        return stack_bond_column(1, *self.size(), self.unit_weight)
+
+
+running_bond_wall = function_of(_RunningBondWall)
+running_bond_wall_of_size = function_of(_RunningBondWallOfSize)
+stack_bond_column = function_of(_StackBondColumn)
+single_block = function_of(_SingleBlock)
 
 
 def boxes(lower: ArrayLike, upper: ArrayLike, unit_weight: ArrayLike) -> Blocks:

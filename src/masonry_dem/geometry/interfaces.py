@@ -10,70 +10,52 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
 
+from masonry_dem._arrays import FloatArray, IndexArray, Rows
 from masonry_dem.geometry.blocks import Blocks
 
 
 @dataclass(frozen=True)
-class Interfaces:
-    """Interfaces as arrays, one row per interface.
+class Interfaces(Rows):
+    """Interfaces as arrays, one row per interface (``count``, ``len`` and ``subset`` of
+    :class:`~masonry_dem._arrays.Rows`).
 
     block_i, block_j: (m,) block indices; axis: (m,) global normal axis 0/1/2;
     centre: (m, 3); l1, l2: (m,) sides along the local axes y1, y2.
     """
 
-    block_i: NDArray[np.intp]
-    block_j: NDArray[np.intp]
-    axis: NDArray[np.intp]
-    centre: NDArray[np.float64]
-    l1: NDArray[np.float64]
-    l2: NDArray[np.float64]
+    block_i: IndexArray
+    block_j: IndexArray
+    axis: IndexArray
+    centre: FloatArray
+    l1: FloatArray
+    l2: FloatArray
 
     @property
-    def count(self) -> int:
-        return int(self.block_i.shape[0])
-
-    def __len__(self) -> int:
-        return self.count
-
-    @property
-    def area(self) -> NDArray[np.float64]:
+    def area(self) -> FloatArray:
         return self.l1 * self.l2
 
     @property
-    def inertia1(self) -> NDArray[np.float64]:
+    def inertia1(self) -> FloatArray:
         """Second moment about y1 (bending m1; stresses vary along y2)."""
         return self.l1 * self.l2**3 / 12.0
 
     @property
-    def inertia2(self) -> NDArray[np.float64]:
+    def inertia2(self) -> FloatArray:
         """Second moment about y2 (bending m2; stresses vary along y1)."""
         return self.l2 * self.l1**3 / 12.0
 
     @property
-    def polar(self) -> NDArray[np.float64]:
+    def polar(self) -> FloatArray:
         return self.inertia1 + self.inertia2
 
     @property
-    def local_axes(self) -> NDArray[np.intp]:
+    def local_axes(self) -> IndexArray:
         """(m, 3) global axis index of y1, y2, y3."""
         n = self.axis
         return np.stack([(n + 1) % 3, (n + 2) % 3, n], axis=1)
 
-    def subset(self, index: ArrayLike | slice) -> Interfaces:
-        """The interfaces at ``index`` (indices, a boolean mask or a slice)."""
-        idx = index if isinstance(index, slice) else np.asarray(index)
-        return Interfaces(
-            self.block_i[idx],
-            self.block_j[idx],
-            self.axis[idx],
-            self.centre[idx],
-            self.l1[idx],
-            self.l2[idx],
-        )
-
-    def corner_points(self) -> NDArray[np.float64]:
+    def corner_points(self) -> FloatArray:
         """(m, 4, 3) corners of each interface rectangle, counter-clockwise about y3."""
         axes = self.local_axes
         rows = np.arange(self.count)
@@ -135,7 +117,7 @@ def subdivide_interfaces(interfaces: Interfaces, n1: int, n2: int) -> Interfaces
     )
 
 
-def _pairs_sharing_keys(keys: NDArray[np.intp], owners: NDArray[np.intp]) -> NDArray[np.intp]:
+def _pairs_sharing_keys(keys: IndexArray, owners: IndexArray) -> IndexArray:
     """All pairs (a, b), a < b, of owners that share a key; (k, 2), unique."""
     order = np.argsort(keys, kind="stable")
     keys, owners = keys[order], owners[order]
@@ -159,9 +141,7 @@ def _pairs_sharing_keys(keys: NDArray[np.intp], owners: NDArray[np.intp]) -> NDA
     return np.stack([code // n, code % n], axis=1)
 
 
-def candidate_pairs(
-    lower: NDArray[np.float64], upper: NDArray[np.float64], pad: float
-) -> NDArray[np.intp]:
+def candidate_pairs(lower: FloatArray, upper: FloatArray, pad: float) -> IndexArray:
     """Pairs of boxes whose padded bounding boxes may touch, by uniform grid hashing.
 
     Near-linear in the number of boxes for walls of similar blocks; a large box (a base slab)

@@ -33,15 +33,23 @@ The parts are found back by :func:`masonry_dem.geometry.selectors.part` (``facad
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import KW_ONLY, dataclass
 from typing import Literal, get_args
 
 import numpy as np
 from numpy.typing import NDArray
 
+from masonry_dem._parameters import function_of
 from masonry_dem._validation import positive_scalar
 from masonry_dem.geometry.blocks import Blocks
-from masonry_dem.geometry.builders import _count, _weight, block_size, cut_openings
+from masonry_dem.geometry.builders import (
+    _Along,
+    _count,
+    _Courses,
+    _Unit,
+    _weight,
+    cut_openings,
+)
 
 SHORTEST_PIECE = 0.3  # in block lengths: a shorter piece stays with its neighbour
 
@@ -163,148 +171,136 @@ def _facade_openings(
     return cut_openings(blocks, openings, among=facade, field="facade_openings")
 
 
-def l_wall(
-    blocks_along_length: int,
-    courses: int,
-    block_height: float | None = None,
-    block_length: float | None = None,
-    thickness: float | None = None,
-    unit_weight: float | None = None,
-    return_blocks: int = 4,
-    corner: Corner = "left",
-    joint: float = 0.0,
-    facade_openings: Sequence[Sequence[float]] | None = None,
-    *,
-    a: float | None = None,
-    b: float | None = None,
-    s: float | None = None,
-) -> Blocks:
+@dataclass(frozen=True)
+class _Plan(_Unit, _Courses, _Along):
+    """The parameters every plan shares (the facade's, the unit's, ``joint`` and the
+    ``facade_openings``); a plan gives its runs of blocks."""
+
+    _: KW_ONLY
+    joint: float = 0.0
+    facade_openings: Sequence[Sequence[float]] | None = None
+
+    def __call__(self) -> Blocks:
+        size = self.size()
+        n, nc, cp, p, s, gamma = _common(
+            self.blocks_along_length, self.courses, size, self.unit_weight, self.joint
+        )
+        blocks = _assemble(self.runs(n * p, p, s), nc, p, cp, gamma)
+        return _facade_openings(self.arranged(blocks, n * p, gamma), self.facade_openings, s)
+
+    def runs(self, length: float, pitch: float, s: float) -> list[_Run]:
+        """The runs of the plan, its facade ``length`` long (outside to outside)."""
+        raise NotImplementedError
+
+    def arranged(self, blocks: Blocks, length: float, gamma: float) -> Blocks:
+        """The blocks of the runs as the plan places them (as assembled by default)."""
+        return blocks
+
+
+@dataclass(frozen=True)
+class _LWall(_Plan):
     """A facade with one return wall at its ``corner`` (``left``: x = 0, or ``right``),
     interlocked there; the other end of the facade is straight, as in a running-bond wall.
     ``facade_openings``: (x_min, y_min, x_max, y_max) rectangles cut out of the facade."""
-    size = block_size(block_height, block_length, thickness, a, b, s)
-    n, nc, cp, p, s, gamma = _common(blocks_along_length, courses, size, unit_weight, joint)
-    m = _count("return_blocks", return_blocks)
-    if corner not in CORNERS:
-        raise ValueError(f"corner must be one of {CORNERS}, got {corner!r}")
-    length = n * p
-    facade = _Run(0, 0.0, 1, (0.0, s), (0.0, length, 0), (s, length, 1))
-    ret = _returns(m, p, s, (0.0, s))
-    blocks = _assemble([facade, ret], nc, p, cp, gamma)
-    if corner == "right":  # the mirror image about the facade's middle
+
+    return_blocks: int = 4
+    corner: Corner = "left"
+
+    def runs(self, length: float, pitch: float, s: float) -> list[_Run]:
+        m = _count("return_blocks", self.return_blocks)
+        if self.corner not in CORNERS:
+            raise ValueError(f"corner must be one of {CORNERS}, got {self.corner!r}")
+        facade = _Run(0, 0.0, 1, (0.0, s), (0.0, length, 0), (s, length, 1))
+        return [facade, _returns(m, pitch, s, (0.0, s))]
+
+    def arranged(self, blocks: Blocks, length: float, gamma: float) -> Blocks:
+        if self.corner == "left":
+            return blocks
+        # the mirror image about the facade's middle
         lo, hi = blocks.lower.copy(), blocks.upper.copy()
         lo[:, 0], hi[:, 0] = length - blocks.upper[:, 0], length - blocks.lower[:, 0]
         order = np.lexsort((lo[:, 2], lo[:, 0], lo[:, 1]))
-        blocks = Blocks.from_boxes(lo[order], hi[order], gamma)
-    return _facade_openings(blocks, facade_openings, s)
+        return Blocks.from_boxes(lo[order], hi[order], gamma)
 
 
-def u_wall(
-    blocks_along_length: int,
-    courses: int,
-    block_height: float | None = None,
-    block_length: float | None = None,
-    thickness: float | None = None,
-    unit_weight: float | None = None,
-    return_blocks: int = 4,
-    joint: float = 0.0,
-    facade_openings: Sequence[Sequence[float]] | None = None,
-    *,
-    a: float | None = None,
-    b: float | None = None,
-    s: float | None = None,
-) -> Blocks:
+@dataclass(frozen=True)
+class _UWall(_Plan):
     """A facade between two return walls of ``return_blocks`` blocks, interlocked at both
     corners (mirror symmetric about x = n b / 2)."""
-    size = block_size(block_height, block_length, thickness, a, b, s)
-    n, nc, cp, p, s, gamma = _common(blocks_along_length, courses, size, unit_weight, joint)
-    m = _count("return_blocks", return_blocks)
-    length = n * p
-    facade = _Run(0, 0.0, 1, (0.0, s), (0.0, length, 0), (s, length - s, 1))
-    left = _returns(m, p, s, (0.0, s))
-    right = _returns(m, p, s, (length - s, length))
-    blocks = _assemble([facade, left, right], nc, p, cp, gamma)
-    return _facade_openings(blocks, facade_openings, s)
+
+    return_blocks: int = 4
+
+    def runs(self, length: float, pitch: float, s: float) -> list[_Run]:
+        m = _count("return_blocks", self.return_blocks)
+        facade = _Run(0, 0.0, 1, (0.0, s), (0.0, length, 0), (s, length - s, 1))
+        left = _returns(m, pitch, s, (0.0, s))
+        right = _returns(m, pitch, s, (length - s, length))
+        return [facade, left, right]
 
 
-def t_wall(
-    blocks_along_length: int,
-    courses: int,
-    block_height: float | None = None,
-    block_length: float | None = None,
-    thickness: float | None = None,
-    unit_weight: float | None = None,
-    return_blocks: int = 4,
-    cross_at: float | None = None,
-    joint: float = 0.0,
-    facade_openings: Sequence[Sequence[float]] | None = None,
-    *,
-    a: float | None = None,
-    b: float | None = None,
-    s: float | None = None,
-) -> Blocks:
+@dataclass(frozen=True)
+class _TWall(_Plan):
     """A facade with a cross wall of ``return_blocks`` blocks behind it, centred at
     x = ``cross_at`` (default: the facade's middle); the cross wall runs through the facade in
     the odd courses (its end block shows in the outer face) and butts against the facade's
     back in the even ones. Both ends of the facade are straight."""
-    size = block_size(block_height, block_length, thickness, a, b, s)
-    n, nc, cp, p, s, gamma = _common(blocks_along_length, courses, size, unit_weight, joint)
-    m = _count("return_blocks", return_blocks)
-    length = n * p
-    xc = length / 2 if cross_at is None else positive_scalar("cross_at", cross_at)
-    x0, x1 = xc - s / 2, xc + s / 2
-    shortest = SHORTEST_PIECE * p
-    if x0 < shortest or x1 > length - shortest:
-        raise ValueError(
-            f"cross_at = {xc:g} puts the cross wall within 0.3 block of the facade's "
-            f"ends; allowed range [{s / 2 + shortest:g}, {length - s / 2 - shortest:g}] m"
-        )
-    facade = _Run(0, 0.0, 1, (0.0, s), (0.0, length, 0), (0.0, x0, 1))
-    facade_right = _Run(0, 0.0, 1, (0.0, s), (0.0, 0.0, 0), (x1, length, 1))
-    cross = _returns(m, p, s, (x0, x1))
-    blocks = _assemble([facade, facade_right, cross], nc, p, cp, gamma)
-    return _facade_openings(blocks, facade_openings, s)
+
+    return_blocks: int = 4
+    cross_at: float | None = None
+
+    def runs(self, length: float, pitch: float, s: float) -> list[_Run]:
+        m = _count("return_blocks", self.return_blocks)
+        xc = length / 2 if self.cross_at is None else positive_scalar("cross_at", self.cross_at)
+        x0, x1 = xc - s / 2, xc + s / 2
+        shortest = SHORTEST_PIECE * pitch
+        if x0 < shortest or x1 > length - shortest:
+            raise ValueError(
+                f"cross_at = {xc:g} puts the cross wall within 0.3 block of the facade's "
+                f"ends; allowed range [{s / 2 + shortest:g}, {length - s / 2 - shortest:g}] m"
+            )
+        facade = _Run(0, 0.0, 1, (0.0, s), (0.0, length, 0), (0.0, x0, 1))
+        facade_right = _Run(0, 0.0, 1, (0.0, s), (0.0, 0.0, 0), (x1, length, 1))
+        return [facade, facade_right, _returns(m, pitch, s, (x0, x1))]
 
 
-def box_wall(
-    blocks_along_length: int,
-    courses: int,
-    block_height: float | None = None,
-    block_length: float | None = None,
-    thickness: float | None = None,
-    unit_weight: float | None = None,
-    blocks_along_depth: int | None = None,
-    joint: float = 0.0,
-    facade_openings: Sequence[Sequence[float]] | None = None,
-    *,
-    a: float | None = None,
-    b: float | None = None,
-    s: float | None = None,
-) -> Blocks:
+@dataclass(frozen=True)
+class _BoxWall(_Plan):
     """A closed box of four walls, n b by m b outside (``blocks_along_depth`` = m, default
     n), the front wall (the facade) at z in [0, s], the back wall at z in [s - m b, 2 s - m b].
     Each wall runs through the corner where it starts (anticlockwise from above) in the even
     courses and through the one where it ends in the odd courses: a square box (m = n) is
     the same seen from each side."""
-    size = block_size(block_height, block_length, thickness, a, b, s)
-    n, nc, cp, p, s, gamma = _common(blocks_along_length, courses, size, unit_weight, joint)
-    m = n if blocks_along_depth is None else _count("blocks_along_depth", blocks_along_depth)
-    if m * p <= 2 * s + 2 * SHORTEST_PIECE * p:
-        raise ValueError(f"blocks_along_depth = {m} leaves no side wall between the corners")
-    lx, lz = n * p, m * p
-    back = s - lz  # z of the back wall's outer face
 
-    def run(axis: int, origin: float, sense: int, band: tuple[float, float], length: float) -> _Run:
-        return _Run(axis, origin, sense, band, (0.0, length - s, 0), (s, length, 1))
+    blocks_along_depth: int | None = None
 
-    runs = [
-        run(0, 0.0, 1, (0.0, s), lx),  # front, from the front-left corner
-        run(2, s, -1, (lx - s, lx), lz),  # right, from the front-right corner
-        run(0, lx, -1, (back, back + s), lx),  # back, from the back-right corner
-        run(2, back, 1, (0.0, s), lz),  # left, from the back-left corner
-    ]
-    blocks = _assemble(runs, nc, p, cp, gamma)
-    return _facade_openings(blocks, facade_openings, s)
+    def runs(self, length: float, pitch: float, s: float) -> list[_Run]:
+        lx, lz = length, length  # square unless a depth is given
+        if self.blocks_along_depth is not None:
+            m = _count("blocks_along_depth", self.blocks_along_depth)
+            lz = m * pitch
+            if lz <= 2 * s + 2 * SHORTEST_PIECE * pitch:
+                raise ValueError(
+                    f"blocks_along_depth = {m} leaves no side wall between the corners"
+                )
+        back = s - lz  # z of the back wall's outer face
+
+        def run(
+            axis: int, origin: float, sense: int, band: tuple[float, float], side: float
+        ) -> _Run:
+            return _Run(axis, origin, sense, band, (0.0, side - s, 0), (s, side, 1))
+
+        return [
+            run(0, 0.0, 1, (0.0, s), lx),  # front, from the front-left corner
+            run(2, s, -1, (lx - s, lx), lz),  # right, from the front-right corner
+            run(0, lx, -1, (back, back + s), lx),  # back, from the back-right corner
+            run(2, back, 1, (0.0, s), lz),  # left, from the back-left corner
+        ]
+
+
+l_wall = function_of(_LWall)
+u_wall = function_of(_UWall)
+t_wall = function_of(_TWall)
+box_wall = function_of(_BoxWall)
 
 
 __all__ = ["box_wall", "l_wall", "t_wall", "u_wall"]

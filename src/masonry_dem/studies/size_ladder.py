@@ -115,14 +115,14 @@ def progress_line(row: dict[str, Any]) -> str:
 
 #: the columns of :func:`ladder_text`
 LADDER_COLUMNS = (
-    text.Column("blocks", "7d", lambda r: r["blocks"]),
-    text.Column("interf", "7d", lambda r: r["interfaces"]),
+    text.Column("blocks", "7d"),
+    text.Column("interf", "7d", "interfaces"),
     text.Column("method", "<7", lambda r: Method(r["method"]).short),
-    text.Column("status", "<11", lambda r: r["status"]),
-    text.Column("lambda", ">10.5g", lambda r: r["lambda"]),
-    text.Column("seconds", "8.2f", lambda r: r["seconds"]),
-    text.Column("x static lambda", ">15.3f", lambda r: r["ratio_to_static"]),
-    text.Column("x static time", ">13.3f", lambda r: r["time_ratio_to_static"]),
+    text.Column("status", "<11"),
+    text.Column("lambda", ">10.5g"),
+    text.Column("seconds", "8.2f"),
+    text.Column("x static lambda", ">15.3f", "ratio_to_static"),
+    text.Column("x static time", ">13.3f", "time_ratio_to_static"),
 )
 
 

@@ -393,15 +393,15 @@ def progress_line(row: dict[str, Any]) -> str:
 
 #: the columns of :func:`table`
 TABLE_COLUMNS = (
-    text.Column("case", "<8", lambda r: r["case"]),
+    text.Column("case", "<8"),
     text.Column("method", "<8", lambda r: Method(r["method"]).short),
-    text.Column("settings", "<20", lambda r: r["label"]),
-    text.Column("status", "<9", lambda r: r["status"]),
-    text.Column("lambda", "11.5g", lambda r: r["lambda"]),
-    text.Column("err conv", "9.2%", lambda r: r["error_vs_converged"]),
+    text.Column("settings", "<20", "label"),
+    text.Column("status", "<9"),
+    text.Column("lambda", "11.5g"),
+    text.Column("err conv", "9.2%", "error_vs_converged"),
     text.Column("err own", "8.2%", lambda r: r.get("error_vs_own")),
-    text.Column("err test", "9.2%", lambda r: r["error_vs_test"]),
-    text.Column("seconds", "8.2f", lambda r: r["seconds"]),
+    text.Column("err test", "9.2%", "error_vs_test"),
+    text.Column("seconds", "8.2f"),
     text.Column("work", "9d", lambda r: r.get("time_steps", r.get("iterations"))),
     text.Column("pareto", ">6", lambda r: "*" if r.get("pareto") else ""),
 )

@@ -24,12 +24,13 @@ def progress_line(what: str, row: Row) -> str:
 @dataclass(frozen=True)
 class Column:
     """A column of :func:`text_table`: its title, the format of its values (``"<8"``,
-    ``"11.5g"``, ``"9.2%"``: a width in every one) and how a row gives its value (None is
-    shown as ``-``); ``gap`` goes before it."""
+    ``"11.5g"``, ``"9.2%"``: a width in every one) and how a row gives its value: a function
+    of the row, or the row's key (default: the title). A missing value (None) is shown as
+    ``-``; ``gap`` goes before the column."""
 
     title: str
     spec: str
-    value: Callable[[Row], Any]
+    value: Callable[[Row], Any] | str | None = None
     gap: str = " "
 
     def _fit(self) -> str:
@@ -42,7 +43,8 @@ class Column:
         return format(self.title, self._fit())
 
     def cell(self, row: Row) -> str:
-        value = self.value(row)
+        get = self.value
+        value = get(row) if callable(get) else row[self.title if get is None else get]
         return format("-", self._fit()) if value is None else format(value, self.spec)
 
 

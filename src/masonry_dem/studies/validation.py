@@ -178,15 +178,15 @@ def _label(row: text.Row) -> str:
 #: the columns of :func:`format_table`
 TABLE_COLUMNS = (
     text.Column("case", "<7", _label),
-    text.Column("table", "<5", lambda r: r["table"]),
+    text.Column("table", "<5"),
     text.Column("ours", ">9", lambda r: _number(r["ours"], r["unit"])),
     text.Column("paper", ">9", lambda r: _number(r["paper_dem"], r["unit"])),
     text.Column("ref", ">9", lambda r: _number(r["reference"], r["unit"])),
     text.Column("err ref", ">8", lambda r: _pct(r["error_vs_reference"])),
     text.Column("err pap", ">8", lambda r: _pct(r["error_vs_paper"])),
-    text.Column("steps", "5d", lambda r: r["steps"]),
-    text.Column("s", "6.2f", lambda r: r["seconds"]),
-    text.Column("status", "", lambda r: r["status"], gap="  "),
+    text.Column("steps", "5d"),
+    text.Column("s", "6.2f", "seconds"),
+    text.Column("status", "", gap="  "),
 )
 
 

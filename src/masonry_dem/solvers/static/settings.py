@@ -3,17 +3,13 @@
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, fields
 from typing import Literal, get_args
 
-from masonry_dem._validation import (
-    check_count_fields,
-    check_load_path_fields,
-    check_positive_fields,
-)
-from masonry_dem.constitutive.law import TANGENT_METHODS, Memory, TangentMethod, Tension
-from masonry_dem.model import DofName, check_choice, deprecated_law_option
+from masonry_dem._validation import at_least, choice, count, finite, positive
+from masonry_dem.constitutive.law import TANGENT_METHODS, TangentMethod
+from masonry_dem.model import DofName
+from masonry_dem.solvers.load_path import LoadPathSettings
 
 #: what follows the first failure of load control (see ``StaticSettings.continuation``)
 Continuation = Literal["work", "bracket"]
@@ -21,7 +17,7 @@ CONTINUATION: tuple[str, ...] = get_args(Continuation)
 
 
 @dataclass(frozen=True)
-class StaticSettings:
+class StaticSettings(LoadPathSettings):
     """Knobs of the static solver. Step sizes are in units of the load scale |F_D| / |F_L|
     (1 for a tilt table, where the live load is the weight turned horizontal).
 
@@ -173,119 +169,49 @@ class StaticSettings:
         given) by this fraction (the bound's own discretisation and solver tolerance).
     """
 
-    initial_step: float = 0.02
-    max_step: float = 1.0
-    growth: float = 1.5
-    easy_iterations: int = 6
-    bracket_tolerance: float = 0.005
-    refine: bool = True
-    max_steps: int = 1000
-    max_load_factor: float = math.inf
-    continuation: Continuation = "work"
+    easy_iterations: int = count(6, least=0)
+    continuation: Continuation = choice("work", CONTINUATION)
     secant_predictor: bool = True
-    tolerance: float = 1e-8
-    control_tolerance: float = 1e-6
-    max_iterations: int = 40
-    displacement_limit: float | None = None
-    limit_elastic_multiple: float = 0.0
-    residual_stiffness: float = 1e-9
-    tangent: TangentMethod = "analytic"
-    tension: Tension | None = None
-    memory: Memory | None = None
-    stall_window: int = 8
-    stall_decrease: float = 0.5
-    max_floor: float = 1e-3
-    chord_ratio: float = 0.25
-    creep: float = 1e-3
-    search_cuts: int = 7
-    secant_rounds: int = 0
-    trust_seed: float = 0.05
-    radius_floor: float = 1e-9
-    max_cuts: int = 10
-    limit_cuts: int = 2
-    flat_slope: float = 1e-3
-    resume_step: float = 0.5
-    fold_match: float = 1e-3
-    transient_steps: int = 100
-    transient_after: int = 2
-    transient_rise: float = 0.005
-    transient_start: float = 1e-3
-    transient_shrink: float = 0.25
-    transient_window: int = 30
-    robust_iterations: int = 0
-    zero_load_robust_iterations: int = 2000
-    anderson: int = 5
-    divergence_window: int = 30
-    rescue_time_steps: int = 0
-    stop_check_time_steps: int = 4000
+    tolerance: float = positive(1e-8)
+    control_tolerance: float = positive(1e-6)
+    max_iterations: int = count(40, least=1)
+    limit_elastic_multiple: float = at_least(0.0, 0.0, " (0: off)")
+    residual_stiffness: float = positive(1e-9)
+    tangent: TangentMethod = choice("analytic", TANGENT_METHODS)
+    stall_window: int = count(8, least=1)
+    stall_decrease: float = positive(0.5)
+    max_floor: float = positive(1e-3)
+    chord_ratio: float = positive(0.25)
+    creep: float = finite(1e-3)
+    search_cuts: int = count(7, least=1)
+    secant_rounds: int = count(0, least=0)
+    trust_seed: float = positive(0.05)
+    radius_floor: float = positive(1e-9)
+    max_cuts: int = count(10, least=0)
+    limit_cuts: int = count(2, least=0)
+    flat_slope: float = finite(1e-3)
+    resume_step: float = positive(0.5)
+    fold_match: float = finite(1e-3)
+    transient_steps: int = count(100, least=0)
+    transient_after: int = count(2, least=0)
+    transient_rise: float = positive(0.005)
+    transient_start: float = positive(1e-3)
+    transient_shrink: float = positive(0.25)
+    transient_window: int = count(30, least=1)
+    robust_iterations: int = count(0, least=0)
+    zero_load_robust_iterations: int = count(2000, least=0)
+    anderson: int = count(5, least=1)
+    divergence_window: int = count(30, least=1)
+    rescue_time_steps: int = count(0, least=0)
+    stop_check_time_steps: int = count(4000, least=0)
     stop_check_singular: bool = False
-    fold_check_time_steps: int = 0
-    max_control_cuts: int = 12
+    fold_check_time_steps: int = count(0, least=0)
+    max_control_cuts: int = count(12, least=0)
     certify: bool = True
-    admissible_tolerance: float = 1e-6
-    mode_stiffness: float = 0.05
-    mode_displacement: float = 0.5
-    bound_tolerance: float = 0.01
-
-    def __post_init__(self) -> None:
-        check_load_path_fields(self)
-        positive = (
-            "tolerance",
-            "control_tolerance",
-            "residual_stiffness",
-            "max_floor",
-            "chord_ratio",
-            "transient_rise",
-            "transient_start",
-            "transient_shrink",
-            "resume_step",
-            "stall_decrease",
-            "trust_seed",
-            "radius_floor",
-            "admissible_tolerance",
-            "mode_stiffness",
-            "mode_displacement",
-            "bound_tolerance",
-        )
-        check_positive_fields(self, positive)
-        counts = {
-            "max_iterations": 1,
-            "easy_iterations": 0,
-            "stall_window": 1,
-            "search_cuts": 1,
-            "secant_rounds": 0,
-            "max_cuts": 0,
-            "limit_cuts": 0,
-            "transient_steps": 0,
-            "transient_after": 0,
-            "transient_window": 1,
-            "robust_iterations": 0,
-            "zero_load_robust_iterations": 0,
-            "anderson": 1,
-            "divergence_window": 1,
-            "rescue_time_steps": 0,
-            "stop_check_time_steps": 0,
-            "fold_check_time_steps": 0,
-            "max_control_cuts": 0,
-        }
-        check_count_fields(self, counts)
-        for name in ("creep", "flat_slope", "fold_match"):
-            value = getattr(self, name)
-            if not (isinstance(value, (int, float)) and math.isfinite(value)):
-                raise ValueError(f"{name} must be a finite number, got {value!r}")
-        if not (
-            isinstance(self.limit_elastic_multiple, (int, float))
-            and math.isfinite(self.limit_elastic_multiple)
-            and self.limit_elastic_multiple >= 0
-        ):
-            raise ValueError(
-                "limit_elastic_multiple must be a number >= 0 (0: off), got "
-                f"{self.limit_elastic_multiple!r}"
-            )
-        deprecated_law_option("StaticSettings", "tension", self.tension)
-        deprecated_law_option("StaticSettings", "memory", self.memory)
-        check_choice("tangent", self.tangent, TANGENT_METHODS)
-        check_choice("continuation", self.continuation, CONTINUATION)
+    admissible_tolerance: float = positive(1e-6)
+    mode_stiffness: float = positive(0.05)
+    mode_displacement: float = positive(0.5)
+    bound_tolerance: float = positive(0.01)
 
 
 SETTING_NAMES = tuple(f.name for f in fields(StaticSettings))

@@ -1,0 +1,61 @@
+"""The settings of a load path that the static and the dynamic-relaxation solvers share:
+:class:`LoadPathSettings`, the base of both solvers' settings. Each field states its range
+where it is declared (the specifiers of :mod:`masonry_dem._validation`), and one check at
+construction refuses a value out of range by the field's name."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from masonry_dem._validation import (
+    at_least,
+    check_fields,
+    checked,
+    count,
+    is_number,
+    positive,
+    positive_or_none,
+)
+from masonry_dem.model import Memory, Tension, deprecated_law_option
+
+
+@dataclass(frozen=True)
+class LoadPathSettings:
+    """How a solver steps lambda from the dead-load state to a collapse (step sizes in units
+    of the load scale |F_D| / |F_L|: 1 for a tilt table, where the live load is the weight
+    turned horizontal).
+
+    initial_step, max_step, growth: the first and the largest lambda increment; an easy step
+        makes the next one ``growth`` times longer.
+    bracket_tolerance: width of the collapse bracket, relative to lambda.
+    refine: halve a failed load step (False: stop at the first failure, an upper bracket only).
+    max_steps: converged steps of a run.
+    max_load_factor: the run ends ``completed`` when lambda reaches it (inf: no cap).
+    displacement_limit: largest translation [m] still in the small-displacement range (None:
+        the solver's own, from the size of the blocks).
+    tension, memory: deprecated (None: the material's). They are the interface law's, set on
+        :class:`~masonry_dem.model.InterfaceMaterial`; given here they warn and override it.
+
+    A subclass declares its own fields with their ranges in the same way.
+    """
+
+    initial_step: float = positive(0.02)
+    max_step: float = positive(1.0)
+    growth: float = at_least(1.5, 1.0)
+    bracket_tolerance: float = positive(0.005)
+    refine: bool = True
+    max_steps: int = count(1000, least=1)
+    # NaN fails the test too
+    max_load_factor: float = checked(
+        math.inf, lambda v: is_number(v) and v > 0, "a number > 0 (inf: no cap)"
+    )
+    displacement_limit: float | None = positive_or_none()
+    tension: Tension | None = None
+    memory: Memory | None = None
+
+    def __post_init__(self) -> None:
+        check_fields(self)
+        # here, not in a subclass, so that the warning points at the caller
+        deprecated_law_option(type(self).__name__, "tension", self.tension)
+        deprecated_law_option(type(self).__name__, "memory", self.memory)
