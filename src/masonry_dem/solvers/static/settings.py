@@ -85,7 +85,6 @@ class StaticSettings(LoadPathSettings):
         longer step may pick another equilibrium of the non-associative law, a lower one
         (docs/solvers.md, "A secant correction of the joints' tangents").
     trust_seed: the trust radius of a search with no previous increment to go by (the dead
-    secant_rounds: int = count(0, least=0)
         load's first live step, a controlled step), in elastic units of the wall
         (``DiscreteProblem.displacement_scale``: the bonded assembly's largest translation
         under the dead load). In units of the wall, not metres, so that a wall with kn and kt
@@ -186,6 +185,7 @@ class StaticSettings(LoadPathSettings):
     creep: float = finite(1e-3)
     search_cuts: int = count(7, least=1)
     trust_seed: float = positive(0.05)
+    secant_rounds: int = count(0, least=0)
     radius_floor: float = positive(1e-9)
     max_cuts: int = count(10, least=0)
     limit_cuts: int = count(2, least=0)
