@@ -75,11 +75,13 @@ def test_load_control_past_the_limit_point(block):
 
 
 def test_unrefined_bracket_says_so(block):
-    """Without refinement a first step beyond collapse stops the run at [0, 3]. That is no
+    """Without refinement a first step beyond collapse (``initial_step``; the elastic first
+    step would stop just below s/a) stops the run at [0, 3]. That is no
     collapse: the state it stops in is the dead load's, with its whole elastic stiffness
     along the load (also across the bracket's tolerance), so the run ends failed (no
     lambda), and the reason says the bracket was not refined and why it is no collapse."""
-    hist = StaticSolver(block, StaticSettings(initial_step=3.0, max_step=3.0, refine=False)).run()
+    first = StaticSettings(initial_step=3.0, max_step=3.0, refine=False, elastic_first_step=False)
+    hist = StaticSolver(block, first).run()
     assert_clean(hist)
     assert hist.status == "failed"
     assert hist.stop == StopReason.LOAD_BRACKET
@@ -101,7 +103,8 @@ def test_bracket_refined_when_work_control_finds_nothing_higher(block, monkeypat
         return "forced", StopReason.PATH_STUCK
 
     monkeypatch.setattr(paths, "work_control", nothing_higher)
-    hist = StaticSolver(block, StaticSettings(initial_step=0.1)).run()
+    # steps of 0.1 (the elastic first step would reach s/a at once, before any hand-over)
+    hist = StaticSolver(block, StaticSettings(initial_step=0.1, elastic_first_step=False)).run()
     assert_clean(hist)
     assert len(calls) == 1 and calls[0] < S / A  # handed over once, below the collapse
     lo, hi = hist.collapse_bracket
