@@ -176,3 +176,15 @@ def test_the_first_live_step_is_the_elastic_range_and_takes_no_newton_iteration(
     solver = StaticSolver(model, StaticSettings(elastic_first_step=False))
     off = solver.run()
     assert off.steps[1].load_factor == pytest.approx(0.02 * solver.problem.load_scale, rel=1e-12)
+
+
+def test_an_elastic_range_shorter_than_the_initial_step_leaves_the_first_step_alone():
+    """Where the first joint yields before ``initial_step`` (a block tilting at s/a = 0.5
+    asked to start with 0.8), the first step is ``initial_step``, as with the setting off:
+    a short elastic range says nothing of how far Newton goes beyond it."""
+    blocks, base = add_base(single_block(0.2, 0.25, 0.1, 20e3))
+    model = _tilt(blocks, base)
+    on = pushover(model, StaticSettings(initial_step=0.8, max_step=0.8))
+    off = pushover(model, StaticSettings(initial_step=0.8, max_step=0.8, elastic_first_step=False))
+    assert on.load_factors == pytest.approx(off.load_factors, rel=1e-12)
+    assert on.collapse_multiplier == pytest.approx(0.5, rel=TOL)

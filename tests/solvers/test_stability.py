@@ -75,13 +75,11 @@ def test_load_control_past_the_limit_point(block):
 
 
 def test_unrefined_bracket_says_so(block):
-    """Without refinement a first step beyond collapse (``initial_step``; the elastic first
-    step would stop just below s/a) stops the run at [0, 3]. That is no
+    """Without refinement a first step beyond collapse stops the run at [0, 3]. That is no
     collapse: the state it stops in is the dead load's, with its whole elastic stiffness
     along the load (also across the bracket's tolerance), so the run ends failed (no
     lambda), and the reason says the bracket was not refined and why it is no collapse."""
-    first = StaticSettings(initial_step=3.0, max_step=3.0, refine=False, elastic_first_step=False)
-    hist = StaticSolver(block, first).run()
+    hist = StaticSolver(block, StaticSettings(initial_step=3.0, max_step=3.0, refine=False)).run()
     assert_clean(hist)
     assert hist.status == "failed"
     assert hist.stop == StopReason.LOAD_BRACKET

@@ -167,9 +167,13 @@ def load_control(solver: StaticSolver, hist: History, record: Record) -> None:
     max_dlam = s.max_step * solver.problem.load_scale
     start: np.ndarray | None = None  # the elastic predictor of the first step
     if s.elastic_first_step:
+        # the first step is the longer of initial_step and the elastic range: inside the
+        # range the elastic predictor is the equilibrium, so a shorter step only creeps; a
+        # range shorter than initial_step (a few joints yield first) says nothing of how far
+        # Newton goes from there (docs/solvers.md, "Steps of the path, session 14")
         cap = min(max_dlam, s.max_load_factor)
         elastic = elastic_range(solver, cap)
-        if elastic is not None:
+        if elastic is not None and elastic.load_factor >= dlam:
             dlam = min(elastic.load_factor, cap)
             start = solver.q.copy()
             start[solver.problem.free] += dlam * elastic.rate
