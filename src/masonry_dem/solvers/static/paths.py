@@ -112,7 +112,7 @@ def elastic_range(solver: StaticSolver, cap: float) -> ElasticRange | None:
     Joints with no tensile strength at zero compression (within the law's contact band, the
     head joints of a dry wall under its own weight) carry no load and have no elastic range:
     they are left out, as the tangent leaves them out (``DiscreteProblem.joint_tangents``);
-    so are joints already at their capacity. None when the tangent gives no response (a
+    so are joints already yielded (a criterion of the law violated: non-zero flags). None when the tangent gives no response (a
     singular tangent) or when some joint that carries load has no elastic range at all."""
     problem = solver.problem
     law = problem.law
@@ -126,9 +126,9 @@ def elastic_range(solver: StaticSolver, cap: float) -> ElasticRange | None:
     per_unit = problem.asm.relative_displacements(moved)
     normal = np.abs(response.trial[:, 2])
     no_load = (response.tensile_force <= 0.0) & (normal <= CONTACT_BAND * normal.max(initial=0.0))
-    # at capacity to within the round-off of the return: yielded already
-    margin = 1.0 - solver.settings.admissible_tolerance
-    inside = law.utilisation(law.respond(base, solver.plastic, solver.cracked)) < margin
+    # the law's own test: a joint is inside its domain where no criterion is violated (its
+    # flags are zero); one at capacity under the dead load has yielded already
+    inside = law.respond(base, solver.plastic, solver.cracked, utilisation=False).flags == 0
     rows = inside & ~no_load
     if not rows.any():
         return None
@@ -145,8 +145,8 @@ def elastic_range(solver: StaticSolver, cap: float) -> ElasticRange | None:
     )
 
     def over(lam: float) -> bool:
-        util = sub.utilisation(sub.respond(base + lam * per_unit, plastic, cracked))
-        return bool(np.any(util >= margin))
+        trial = sub.respond(base + lam * per_unit, plastic, cracked, utilisation=False)
+        return bool(np.any(trial.flags != 0))
 
     hi = cap
     if not over(hi):
