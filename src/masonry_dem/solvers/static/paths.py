@@ -112,8 +112,9 @@ def elastic_range(solver: StaticSolver, cap: float) -> ElasticRange | None:
     Joints with no tensile strength at zero compression (within the law's contact band, the
     head joints of a dry wall under its own weight) carry no load and have no elastic range:
     they are left out, as the tangent leaves them out (``DiscreteProblem.joint_tangents``);
-    so are joints already yielded (a criterion of the law violated: non-zero flags). None when the tangent gives no response (a
-    singular tangent) or when some joint that carries load has no elastic range at all."""
+    so are joints already yielded (a criterion of the law violated: non-zero flags). None
+    when the tangent gives no response (a singular tangent) or when some joint that carries
+    load has no elastic range at all."""
     problem = solver.problem
     law = problem.law
     _, _, response = solver.residual(solver.q, solver.load_factor)
