@@ -49,10 +49,10 @@ class StaticSettings:
         law at one lambda (a wall with openings: 0.085 -> 0.111; docs/solvers.md, "Steps
         of the path").
     elastic_first_step: where the elastic range is longer than ``initial_step``, the first
-        live step goes to its end, the load factor at which the first joint that carries
-        load reaches its strength domain along the tangent response K_t^-1 F_L of the
-        dead-load state, started from that response (no Newton iteration while no joint
-        changes state); False: ``initial_step`` always.
+        live step goes to ``bracket_tolerance`` short of its end (the load factor at which
+        the first joint that carries load reaches its strength domain along the tangent
+        response K_t^-1 F_L of the dead-load state), started from that response (no Newton
+        iteration while no joint changes state); False: ``initial_step`` always.
 
     One equilibrium (the corrector)
     -------------------------------
