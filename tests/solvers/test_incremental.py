@@ -197,15 +197,17 @@ def test_work_control_passes_a_fold_it_meets_twice(panel_lambda, monkeypatch):
     accept = StaticSolver.accept
     monkeypatch.setattr(StaticSolver, "accept", record_accept)
     monkeypatch.setattr(StaticSolver, "pseudo_transient", recording)
-    # from the last state: the path on which this panel meets one fold twice (a secant
-    # start passes it at the first meeting)
-    h = pushover(_panel(), StaticSettings(secant_predictor=False))
+    # from the last state and from the first step of initial_step: the path on which this
+    # panel meets one fold twice (a secant start passes it at the first meeting, and so does
+    # the path from the elastic first step)
+    path = StaticSettings(secant_predictor=False, elastic_first_step=False)
+    h = pushover(_panel(), path)
     rise = StaticSettings().transient_rise
     assert any(t > lam * (1 + rise) * (1 + 1e-9) for t, lam in targets)
     assert h.collapse_multiplier == pytest.approx(panel_lambda, rel=TOL)
     targets.clear()
     # never the same fold
-    without = pushover(_panel(), StaticSettings(fold_match=-1.0, secant_predictor=False))
+    without = pushover(_panel(), replace(path, fold_match=-1.0))
     assert all(t == pytest.approx(lam * (1 + rise), rel=1e-12) for t, lam in targets)
     assert h.collapse_multiplier == pytest.approx(without.collapse_multiplier, rel=TOL)
 

@@ -11,7 +11,7 @@ from masonry_dem.geometry.selectors import column
 from masonry_dem.model import InterfaceMaterial, Model, SelfWeight, Support, WeightProportional
 from masonry_dem.solvers.incremental import StaticSettings, pushover
 from masonry_dem.solvers.static.outcome import Failure, Outcome
-from masonry_dem.solvers.static.paths import SecantPredictor
+from masonry_dem.solvers.static.paths import SecantPredictor, elastic_range
 from masonry_dem.solvers.static.solver import StaticSolver
 
 DRY = InterfaceMaterial(kn=2.4e9, kt=1.0e9, friction=0.7)
@@ -91,8 +91,11 @@ def test_pseudo_transient_gives_up_when_its_shortest_time_step_fails(monkeypatch
     gives up at once (4 factorizations: floors 1e-3, 1e-2, 1e-1, 1) instead of spending
     its budget of ``transient_steps`` factorizations."""
     blocks, base = add_base(single_block(0.2, 0.25, 0.1, 20e3))
-    solver = StaticSolver(_tilt(blocks, base))
-    solver.run()  # the path to collapse: a converged state to start from
+    # the path of load steps to collapse, which ends with the joint rocking: a yielded state
+    # to start from (the elastic first step would end inside the domain, where the step
+    # back to 0.1 is elastic and exact)
+    solver = StaticSolver(_tilt(blocks, base), StaticSettings(elastic_first_step=False))
+    solver.run()
     original = solver.residual
     start = solver.q.copy()
 
@@ -118,3 +121,71 @@ def test_work_control_finds_the_same_peak_from_a_secant_start():
     off = pushover(_panel(), StaticSettings(secant_predictor=False))
     assert on.status == off.status == "collapse", (on.reason, off.reason)
     assert on.collapse_multiplier == pytest.approx(off.collapse_multiplier, rel=TOL)
+
+
+def _standing(solver: StaticSolver) -> StaticSolver:
+    """The solver at its dead-load state, as load control finds it."""
+    dead = solver.dead_load()
+    assert dead.ok, dead.reason
+    solver.accept(dead, 0, 0.0)
+    return solver
+
+
+@pytest.mark.parametrize(
+    "a, s, friction, closed_form",
+    [(0.2, 0.1, 0.7, 0.5), (0.3, 0.06, 0.7, 0.2), (0.05, 0.2, 0.45, 0.45)],
+    ids=["tilts at s/a", "tilts at s/a, slender", "slides at mu"],
+)
+def test_the_elastic_range_of_a_block_on_its_base_ends_at_its_collapse_load(
+    a, s, friction, closed_form
+):
+    """Closed form: a rigid block on a rigid base under its weight W and a horizontal lambda W
+    loads its one joint with N = W, V = lambda W, M = lambda W a / 2 at once and in proportion,
+    so the joint reaches its strength domain (|M| <= N s / 2: lambda = s / a; V <= mu N:
+    lambda = mu) at the lower of the two, which is also the block's collapse load. The
+    bisection stops just inside (to 1e-6 of lambda)."""
+    blocks, base = add_base(single_block(a, 0.25, s, 20e3))
+    material = InterfaceMaterial(kn=2.4e9, kt=1.0e9, friction=friction)
+    model = Model.build(
+        blocks,
+        material,
+        supports=[Support([base])],
+        loads=[SelfWeight(), WeightProportional((0.0, 0.0, 1.0))],
+    )
+    elastic = elastic_range(_standing(StaticSolver(model)), cap=10.0)
+    assert elastic is not None
+    assert elastic.load_factor == pytest.approx(closed_form, rel=1e-5)
+    assert elastic.load_factor <= closed_form
+
+
+def test_the_first_live_step_is_the_elastic_range_and_takes_no_newton_iteration():
+    """A free-standing running-bond wall stays elastic until its base joints rock, at
+    lambda = s / H (the whole wall tilting as one block): the first live step goes to a
+    bracket tolerance short of it at once (at the very end of the range the base joints sit
+    on the edge of their domain), started from the elastic predictor q_D + lambda K_t^-1 F_L,
+    which is the equilibrium (no Newton iteration), with every joint inside its domain. With
+    the setting off the first step is ``initial_step`` load scales, as before."""
+    a, s, courses = 0.081, 0.07, 9
+    blocks, base = add_base(running_bond_wall(4, courses, a, 0.21, s, 20e3))
+    model = _tilt(blocks, base)
+    h = pushover(model)
+    first = h.steps[1]
+    assert first.iterations == 0
+    assert first.load_factor == pytest.approx((1 - TOL) * s / (courses * a), rel=1e-5)
+    assert first.utilisation.max() <= 1.0
+    assert h.collapse_multiplier == pytest.approx(s / (courses * a), rel=TOL)
+    solver = StaticSolver(model, StaticSettings(elastic_first_step=False))
+    off = solver.run()
+    assert off.steps[1].load_factor == pytest.approx(0.02 * solver.problem.load_scale, rel=1e-12)
+
+
+def test_an_elastic_range_shorter_than_the_initial_step_leaves_the_first_step_alone():
+    """Where the first joint yields before ``initial_step`` (a block tilting at s/a = 0.5
+    asked to start with 0.8), the first step is ``initial_step``, as with the setting off:
+    a short elastic range says nothing of how far Newton goes beyond it."""
+    blocks, base = add_base(single_block(0.2, 0.25, 0.1, 20e3))
+    model = _tilt(blocks, base)
+    on = pushover(model, StaticSettings(initial_step=0.8, max_step=0.8))
+    off = pushover(model, StaticSettings(initial_step=0.8, max_step=0.8, elastic_first_step=False))
+    assert on.load_factors == pytest.approx(off.load_factors, rel=1e-12)
+    assert on.collapse_multiplier == pytest.approx(0.5, rel=TOL)

@@ -101,7 +101,8 @@ def test_bracket_refined_when_work_control_finds_nothing_higher(block, monkeypat
         return "forced", StopReason.PATH_STUCK
 
     monkeypatch.setattr(paths, "work_control", nothing_higher)
-    hist = StaticSolver(block, StaticSettings(initial_step=0.1)).run()
+    # steps of 0.1 (the elastic first step would reach s/a at once, before any hand-over)
+    hist = StaticSolver(block, StaticSettings(initial_step=0.1, elastic_first_step=False)).run()
     assert_clean(hist)
     assert len(calls) == 1 and calls[0] < S / A  # handed over once, below the collapse
     lo, hi = hist.collapse_bracket

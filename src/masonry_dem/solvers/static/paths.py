@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from masonry_dem.constitutive.law import CONTACT_BAND
 from masonry_dem.results import History
 from masonry_dem.solvers.static.certificate import ZERO_LOAD
 from masonry_dem.solvers.static.outcome import Outcome, Status, StopReason
@@ -90,11 +91,98 @@ class SecantPredictor:
         return q1 + f * (q1 - q0), lam1 + f * (lam1 - lam0)
 
 
+@dataclass(frozen=True)
+class ElasticRange:
+    """The elastic range of the live load from the last converged state (the dead-load
+    state): the tangent response ``rate`` = K_t^-1 F_L of the free DOFs, and the largest
+    ``load_factor`` up to which every joint that carries load stays inside its strength
+    domain along it (inf: none reaches it below ``cap``)."""
+
+    load_factor: float
+    rate: np.ndarray
+
+
+def elastic_range(solver: StaticSolver, cap: float) -> ElasticRange | None:
+    """The load factor at which the first joint that carries load reaches its strength
+    domain along the tangent response to the live load from the last converged state, in
+    closed form up to a bisection: along q + lambda K_t^-1 F_L the trial actions of each
+    joint are affine in lambda, and the strength domain is convex, so the lambdas at which
+    every joint stays inside form one interval [0, lambda_e] (found to 1e-6 of itself).
+
+    Joints with no tensile strength at zero compression (within the law's contact band, the
+    head joints of a dry wall under its own weight) carry no load and have no elastic range:
+    they are left out, as the tangent leaves them out (``DiscreteProblem.joint_tangents``);
+    so are joints already yielded (a criterion of the law violated: non-zero flags). None
+    when the tangent gives no response (a singular tangent) or when some joint that carries
+    load has no elastic range at all."""
+    problem = solver.problem
+    law = problem.law
+    _, _, response = solver.residual(solver.q, solver.load_factor)
+    rate = problem.factor(response).solve(problem.F_live)
+    if not np.all(np.isfinite(rate)):
+        return None
+    moved = np.zeros_like(solver.q)
+    moved[problem.free] = rate
+    base = problem.asm.relative_displacements(solver.q)
+    per_unit = problem.asm.relative_displacements(moved)
+    normal = np.abs(response.trial[:, 2])
+    no_load = (response.tensile_force <= 0.0) & (normal <= CONTACT_BAND * normal.max(initial=0.0))
+    # the law's own test: a joint is inside its domain where no criterion is violated (its
+    # flags are zero); one at capacity under the dead load has yielded already
+    inside = law.respond(base, solver.plastic, solver.cracked, utilisation=False).flags == 0
+    rows = inside & ~no_load
+    if not rows.any():
+        return None
+    base, per_unit = base[rows], per_unit[rows]
+    plastic, cracked = solver.plastic[rows], solver.cracked[rows]
+    sub = replace(
+        law,
+        kbar=law.kbar[rows],
+        l1=law.l1[rows],
+        l2=law.l2[rows],
+        friction=law.friction[rows],
+        tensile_force=law.tensile_force[rows],
+        alpha=law.alpha[rows],
+    )
+
+    def over(lam: float) -> bool:
+        trial = sub.respond(base + lam * per_unit, plastic, cracked, utilisation=False)
+        return bool(np.any(trial.flags != 0))
+
+    hi = cap
+    if not over(hi):
+        return ElasticRange(math.inf, rate)
+    lo = 0.0
+    for _ in range(60):  # to 1e-6 of lambda_e from a cap up to 2^40 times larger
+        if hi - lo <= 1e-6 * hi:
+            break
+        mid = 0.5 * (lo + hi)
+        lo, hi = (lo, mid) if over(mid) else (mid, hi)
+    return ElasticRange(lo, rate) if lo > 0.0 else None
+
+
 def load_control(solver: StaticSolver, hist: History, record: Record) -> None:
     s = solver.settings
     lam = 0.0
     dlam = s.initial_step * solver.problem.load_scale
     max_dlam = s.max_step * solver.problem.load_scale
+    start: np.ndarray | None = None  # the elastic predictor of the first step
+    if s.elastic_first_step:
+        # the first step is the longer of initial_step and the elastic range: inside the
+        # range the elastic predictor is the equilibrium, so a shorter step only creeps; a
+        # range shorter than initial_step (a few joints yield first) says nothing of how far
+        # Newton goes from there (docs/solvers.md, "Steps of the path, session 14"). It ends
+        # a bracket tolerance short of the range: at its very end a joint sits on the edge
+        # of its domain (a joint of no tension at zero force), whose state round-off decides,
+        # the worst start for the next search
+        cap = min(max_dlam, s.max_load_factor)
+        elastic = elastic_range(solver, cap)
+        short = (1.0 - s.bracket_tolerance) * (elastic.load_factor if elastic else 0.0)
+        if elastic is not None and short >= dlam:
+            dlam = min(short, cap)
+            start = solver.q.copy()
+            start[solver.problem.free] += dlam * elastic.rate
+            log.debug("the first live step: the elastic range, lambda=%.6g", dlam)
     lam_fail = math.inf
     failed_step = dlam
     last_reason = ""
@@ -103,7 +191,8 @@ def load_control(solver: StaticSolver, hist: History, record: Record) -> None:
     work_reason: tuple[str, StopReason] | None = None
     for _ in range(s.max_steps):
         target = min(lam + dlam, s.max_load_factor)
-        out = solver.equilibrate(target)
+        out = solver.equilibrate(target, start=start)
+        start = None
         robust_ok = False
         if not out.ok and s.rescue_time_steps > 0 and not out.past_limit:
             rescued = solver.dynamic_rescue(target, lam)

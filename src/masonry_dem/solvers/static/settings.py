@@ -44,6 +44,11 @@ class StaticSettings(LoadPathSettings):
         under load control, where the start picks among the equilibria of a non-associative
         law at one lambda (a wall with openings: 0.085 -> 0.111; docs/solvers.md, "Steps
         of the path").
+    elastic_first_step: where the elastic range is longer than ``initial_step``, the first
+        live step goes to ``bracket_tolerance`` short of its end (the load factor at which
+        the first joint that carries load reaches its strength domain along the tangent
+        response K_t^-1 F_L of the dead-load state), started from that response (no Newton
+        iteration while no joint changes state); False: ``initial_step`` always.
 
     One equilibrium (the corrector)
     -------------------------------
@@ -172,6 +177,7 @@ class StaticSettings(LoadPathSettings):
     easy_iterations: int = count(6, least=0)
     continuation: Continuation = choice("work", CONTINUATION)
     secant_predictor: bool = True
+    elastic_first_step: bool = True
     tolerance: float = positive(1e-8)
     control_tolerance: float = positive(1e-6)
     max_iterations: int = count(40, least=1)
