@@ -11,8 +11,8 @@ from masonry_dem.geometry.selectors import column
 from masonry_dem.model import InterfaceMaterial, Model, SelfWeight, Support, WeightProportional
 from masonry_dem.solvers.incremental import StaticSettings, pushover
 from masonry_dem.solvers.static.outcome import Failure, Outcome
-from masonry_dem.solvers.static.paths import SecantPredictor, elastic_range
 from masonry_dem.solvers.static.solver import StaticSolver
+from masonry_dem.solvers.static.steps import SecantPredictor, elastic_range
 
 DRY = InterfaceMaterial(kn=2.4e9, kt=1.0e9, friction=0.7)
 TOL = 0.005  # the default bracket tolerance

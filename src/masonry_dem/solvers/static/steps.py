@@ -1,0 +1,139 @@
+"""How long the next step of a path is and where it starts: the step rule shared by the path
+followers (:class:`StepController`), work control's secant start (:class:`SecantPredictor`)
+and the first live step's length from the wall's elastic solution (:func:`elastic_range`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from masonry_dem.constitutive.law import CONTACT_BAND
+
+if TYPE_CHECKING:
+    from masonry_dem.solvers.static.solver import StaticSolver
+
+__all__ = ["ElasticRange", "SecantPredictor", "StepController", "elastic_range"]
+
+
+@dataclass
+class StepController:
+    """The step length of a path follower: ``growth`` times longer after an easy step (at
+    most ``easy_iterations`` corrector iterations; None: after every converged step), at most
+    ``cap``; halved after a failure, counting the halvings in a row (``cuts``)."""
+
+    size: float
+    growth: float
+    cap: float = math.inf
+    easy_iterations: int | None = None
+    cuts: int = 0
+
+    def grow(self, iterations: int) -> None:
+        if self.easy_iterations is None or iterations <= self.easy_iterations:
+            self.size = min(self.size * self.growth, self.cap)
+
+    def cut(self) -> None:
+        self.size /= 2
+        self.cuts += 1
+
+
+@dataclass
+class SecantPredictor:
+    """The start of the next search of work control: the line through the last two converged
+    states of the path, extended by the next step (``secant_predictor``). Along a smooth
+    stretch of the path Newton then starts within a fraction of the step of the answer
+    instead of a whole step away; a state reached by a jump (a pseudo-transient or
+    dynamic-relaxation step past a fold) starts a new line. The parameter ``t`` is what the
+    follower prescribes (lambda under load control, w under work control)."""
+
+    on: bool
+    states: list[tuple[float, np.ndarray, float]]  # (t, q, lambda), at most the last two
+
+    def add(self, t: float, q: np.ndarray, lam: float) -> None:
+        self.states = [*self.states[-1:], (t, q, lam)]
+
+    def restart(self, t: float, q: np.ndarray, lam: float) -> None:
+        self.states = [(t, q, lam)]
+
+    def start(self, t: float) -> tuple[np.ndarray | None, float | None]:
+        """(q, lambda) on the line at ``t``; (None, None) without two states on it."""
+        if not self.on or len(self.states) < 2:
+            return None, None
+        (t0, q0, lam0), (t1, q1, lam1) = self.states
+        if t1 == t0:
+            return None, None
+        f = (t - t1) / (t1 - t0)
+        return q1 + f * (q1 - q0), lam1 + f * (lam1 - lam0)
+
+
+@dataclass(frozen=True)
+class ElasticRange:
+    """The elastic range of the live load from the last converged state (the dead-load
+    state): the tangent response ``rate`` = K_t^-1 F_L of the free DOFs, and the largest
+    ``load_factor`` up to which every joint that carries load stays inside its strength
+    domain along it (inf: none reaches it below ``cap``)."""
+
+    load_factor: float
+    rate: np.ndarray
+
+
+def elastic_range(solver: StaticSolver, cap: float) -> ElasticRange | None:
+    """The load factor at which the first joint that carries load reaches its strength
+    domain along the tangent response to the live load from the last converged state, in
+    closed form up to a bisection: along q + lambda K_t^-1 F_L the trial actions of each
+    joint are affine in lambda, and the strength domain is convex, so the lambdas at which
+    every joint stays inside form one interval [0, lambda_e] (found to 1e-6 of itself).
+
+    Joints with no tensile strength at zero compression (within the law's contact band, the
+    head joints of a dry wall under its own weight) carry no load and have no elastic range:
+    they are left out, as the tangent leaves them out (``DiscreteProblem.joint_tangents``);
+    so are joints already yielded (a criterion of the law violated: non-zero flags). None
+    when the tangent gives no response (a singular tangent) or when some joint that carries
+    load has no elastic range at all."""
+    problem = solver.problem
+    law = problem.law
+    _, _, response = solver.residual(solver.q, solver.load_factor)
+    rate = problem.factor(response).solve(problem.F_live)
+    if not np.all(np.isfinite(rate)):
+        return None
+    moved = np.zeros_like(solver.q)
+    moved[problem.free] = rate
+    base = problem.asm.relative_displacements(solver.q)
+    per_unit = problem.asm.relative_displacements(moved)
+    normal = np.abs(response.trial[:, 2])
+    no_load = (response.tensile_force <= 0.0) & (normal <= CONTACT_BAND * normal.max(initial=0.0))
+    # the law's own test: a joint is inside its domain where no criterion is violated (its
+    # flags are zero); one at capacity under the dead load has yielded already
+    inside = law.respond(base, solver.plastic, solver.cracked, utilisation=False).flags == 0
+    rows = inside & ~no_load
+    if not rows.any():
+        return None
+    base, per_unit = base[rows], per_unit[rows]
+    plastic, cracked = solver.plastic[rows], solver.cracked[rows]
+    sub = replace(
+        law,
+        kbar=law.kbar[rows],
+        l1=law.l1[rows],
+        l2=law.l2[rows],
+        friction=law.friction[rows],
+        tensile_force=law.tensile_force[rows],
+        alpha=law.alpha[rows],
+    )
+
+    def over(lam: float) -> bool:
+        trial = sub.respond(base + lam * per_unit, plastic, cracked, utilisation=False)
+        return bool(np.any(trial.flags != 0))
+
+    hi = cap
+    if not over(hi):
+        return ElasticRange(math.inf, rate)
+    lo = 0.0
+    for _ in range(60):  # to 1e-6 of lambda_e from a cap up to 2^40 times larger
+        if hi - lo <= 1e-6 * hi:
+            break
+        mid = 0.5 * (lo + hi)
+        lo, hi = (lo, mid) if over(mid) else (mid, hi)
+    return ElasticRange(lo, rate) if lo > 0.0 else None
