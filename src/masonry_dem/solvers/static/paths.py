@@ -57,10 +57,10 @@ def load_control(solver: StaticSolver, hist: History, record: Record) -> None:
         # the first step is the longer of initial_step and the elastic range: inside the
         # range the elastic predictor is the equilibrium, so a shorter step only creeps; a
         # range shorter than initial_step (a few joints yield first) says nothing of how far
-        # Newton goes from there (docs/solvers.md, "Steps of the path, session 14"). It ends
-        # a bracket tolerance short of the range: at its very end a joint sits on the edge
-        # of its domain (a joint of no tension at zero force), whose state round-off decides,
-        # the worst start for the next search
+        # Newton goes from there (docs/solvers.md, "Steps of the path: the elastic first
+        # step"). It ends a bracket tolerance short of the range: at its very end a joint
+        # sits on the edge of its domain (a joint of no tension at zero force), whose state
+        # round-off decides, the worst start for the next search
         cap = min(max_dlam, s.max_load_factor)
         elastic = elastic_range(solver, cap)
         short = (1.0 - s.bracket_tolerance) * (elastic.load_factor if elastic else 0.0)
