@@ -15,8 +15,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from masonry_dem.geometry.builders import add_base, single_block
-from masonry_dem.model import InterfaceMaterial, Model, SelfWeight, Support, WeightProportional
+from helpers.walls import on_base
+from masonry_dem.geometry.builders import single_block
 from masonry_dem.solvers.static.problem import DiscreteProblem, secant_tangents
 
 
@@ -60,14 +60,7 @@ def test_a_joint_that_did_not_move_keeps_its_tangent():
 
 def _rocking_block() -> DiscreteProblem:
     """A block a = 0.2 wide, s = 0.1 deep on a base, tilted: its base joint rocks."""
-    blocks, base = add_base(single_block(0.2, 0.25, 0.1, 20e3))
-    model = Model.build(
-        blocks,
-        InterfaceMaterial(kn=2.4e9, kt=1.0e9, friction=0.7),
-        supports=[Support([base])],
-        loads=[SelfWeight(), WeightProportional((0.0, 0.0, 1.0))],
-    )
-    return DiscreteProblem(model)
+    return DiscreteProblem(on_base(single_block(0.2, 0.25, 0.1, 20e3), kn=2.4e9))
 
 
 def test_a_rocking_joint_turned_back_gets_the_moment_flip_of_its_step():
