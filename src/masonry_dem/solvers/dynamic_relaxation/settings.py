@@ -20,16 +20,47 @@ Stability = Literal["elastic", "current"]
 
 @dataclass(frozen=True)
 class DRSettings(LoadPathSettings):
-    """Knobs of dynamic relaxation (defaults: see docs/solvers.md for why).
+    """Knobs of dynamic relaxation (why each default has its value: docs/solvers.md).
 
     The load path's fields (steps, bracket, caps) are those of
     :class:`~masonry_dem.solvers.load_path.LoadPathSettings`, as in
-    :class:`~masonry_dem.solvers.incremental.StaticSettings`, with a shorter ``max_step``;
-    ``ramp_rate`` is lambda (in load scales) per unit of pseudo time (the stiffness-scaled
-    stable step is 2).
+    :class:`~masonry_dem.solvers.static.settings.StaticSettings`; only ``max_step`` has its
+    own default here.
+
+    max_step: the largest lambda increment of a load step (shorter than the static solver's:
+        each step is relaxed from the last converged state).
+    mass: ``"stiffness"`` (M_ii from the rows of the elastic K: the stable step is 2 on every
+        wall) or ``"density"`` (the blocks' masses and inertias, one common factor).
+    dt_rule: how the stability limit 2 / sqrt(lambda_max(M^-1 K)) is estimated:
+        ``"gershgorin"`` (a bound, never under) or ``"power"`` (power iterations, 5 % margin).
+    dt_fraction: the time step as a fraction of that limit.
+    dt: the time step by hand (None: from ``dt_rule`` and ``dt_fraction``).
+    stability: the stiffness the limit is taken from: ``"elastic"`` (bounds every state of the
+        law) or ``"current"`` (the secant stiffness of the last converged state).
+    damping: ``"kinetic"`` (velocities zeroed at each peak of the kinetic energy) or
+        ``"viscous"`` (Underwood's adaptive C = 2 xi omega_min M).
+    viscous_ratio: xi of the viscous damping, as a fraction of critical.
+    loading: ``"steps"`` (load steps relaxed one by one, as in the static solver) or
+        ``"ramp"`` (lambda grows continuously, then the passed states are verified).
+    ramp_rate: lambda, in load scales, per unit of pseudo time of the ramp (the stable step
+        is 2).
+    check_every, ramp_tolerance: the ramp offers a state for verification every
+        ``check_every`` time steps when its relative residual is at most ``ramp_tolerance``.
+    tolerance, energy_tolerance: a relaxation is at rest when its relative residual is at most
+        ``tolerance`` and its kinetic energy at most ``energy_tolerance`` times its peak.
+    max_cycles: the most time steps one relaxation may take while its residual keeps halving.
+    stall_factor, min_stall_window: a relaxation whose residual does not halve within
+        ``stall_factor`` times the time steps of the slowest converged one (at least
+        ``min_stall_window``) has stalled: a mechanism, or too close to one to settle.
+    max_time_steps: time steps of the whole run; spent, the run ends ``failed``.
+    on_blowup: a time step found above the stability limit is ``"cut"`` (halved, and the
+        relaxation repeated from its start) or ends the run (``"refuse"``).
+    max_cuts: the most halvings of the time step in one run.
+    blowup_patience: steps above the stability limit that end a relaxation.
+    power_iterations: iterations of ``dt_rule="power"``.
     """
 
-    max_step: float = positive(0.2)  # redeclared with its own default (the base's is 1.0)
+    max_step: float = positive(0.2)
     mass: MassRule = choice("stiffness", get_args(MassRule))
     dt_rule: TimeStepRule = choice("gershgorin", get_args(TimeStepRule))
     dt_fraction: float = positive(0.9)
@@ -48,7 +79,7 @@ class DRSettings(LoadPathSettings):
     max_cycles: int = count(400_000, least=1)
     stall_factor: float = positive(5.0)
     min_stall_window: int = count(200, least=1)
-    max_time_steps: int = 2_000_000
+    max_time_steps: int = count(2_000_000, least=1)
     on_blowup: OnBlowup = choice("cut", get_args(OnBlowup))
     max_cuts: int = count(6, least=0)
     blowup_patience: int = count(5, least=1)
