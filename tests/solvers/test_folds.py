@@ -19,6 +19,7 @@ price on corners that are peaks (S23, the U walls).
 
 from __future__ import annotations
 
+import math
 from dataclasses import replace
 
 import pytest
@@ -26,6 +27,7 @@ import pytest
 from masonry_dem.cases.paper import build_case
 from masonry_dem.solvers.limit_analysis.analysis import dem_upper_bound
 from masonry_dem.solvers.static import StaticSettings, StaticSolver
+from masonry_dem.solvers.static.certificate import curve_slope, still_rising
 
 
 def test_the_corner_check_passes_the_first_fold_of_s13_2():
@@ -59,3 +61,39 @@ def test_by_default_the_first_fold_of_s13_2_is_certified():
 def test_fold_check_time_steps_must_be_a_count():
     with pytest.raises(ValueError, match="fold_check_time_steps"):
         StaticSettings(fold_check_time_steps=-1)
+
+
+@pytest.mark.parametrize(
+    ("path_w", "path_lam", "slope", "rising"),
+    [
+        # elastic slope 2: a last step at d lambda / d w = 1 is half of it, rising
+        ([0.0, 1.0, 2.0], [0.0, 2.0, 3.0], 0.5, True),
+        # flat to 1e-4 of the elastic slope (flat_slope 1e-3): not rising
+        ([0.0, 1.0, 2.0], [0.0, 2.0, 2.0002], 1e-4, False),
+        # falling past the peak: negative slope
+        ([0.0, 1.0, 2.0], [0.0, 2.0, 1.0], -0.5, False),
+        # turned back in w while gaining load (a snap-back): still rising
+        ([0.0, 1.0, 0.9], [0.0, 2.0, 2.1], math.inf, True),
+        # back in w while losing load: d lambda / d w > 0, yet the curve did not rise
+        ([0.0, 1.0, 0.9], [0.0, 2.0, 1.9], -math.inf, False),
+        # no move at all
+        ([0.0, 1.0, 1.0], [0.0, 2.0, 2.0], -math.inf, False),
+        # one state: no step
+        ([0.0], [0.0], math.nan, False),
+    ],
+    ids=["rising", "flat", "falling", "snap-back", "back-and-down", "still", "one-state"],
+)
+def test_one_measure_of_a_corner_serves_the_stop_check_and_the_certificate(
+    path_w, path_lam, slope, rising
+):
+    """``certificate.curve_slope`` on hand-made curves (elastic slope 2): the d lambda / d w
+    of the last step over the elastic slope. Work control's stop check and the certificate
+    both call it (before, the path counted a step that turned back in w while gaining load
+    as rising and the certificate did not: its slope came out negative)."""
+    value = curve_slope(path_w, path_lam, 2.0)
+    if math.isnan(slope):
+        assert math.isnan(value)
+    else:
+        assert value == pytest.approx(slope, rel=1e-9)
+    assert still_rising(value, StaticSettings().flat_slope) is rising
+    assert math.isnan(curve_slope([0.0, 1.0], [0.0, 1.0], 0.0))  # no elastic slope

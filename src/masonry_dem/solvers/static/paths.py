@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from masonry_dem.results import History
-from masonry_dem.solvers.static.certificate import ZERO_LOAD
+from masonry_dem.solvers.static.certificate import ZERO_LOAD, curve_slope, still_rising
 from masonry_dem.solvers.static.outcome import Outcome, Status, StopReason
 from masonry_dem.solvers.static.settings import DisplacementControl
 from masonry_dem.solvers.static.steps import (
@@ -354,7 +354,7 @@ def work_control(
                 stuck
                 and s.stop_check_time_steps > 0
                 and s.fold_check_time_steps > 0
-                and _still_rising(path_w, path_lam, s.flat_slope * elastic_slope)
+                and still_rising(curve_slope(path_w, path_lam, elastic_slope), s.flat_slope)
             )
             budget = max(s.stop_check_time_steps, s.fold_check_time_steps if corner else 0)
             if (
@@ -456,17 +456,6 @@ def work_control(
         f"{reason}; load control first failed at {first_lambda:.6g} ({first_failure})",
     )
     return None
-
-
-def _still_rising(path_w: list[float], path_lam: list[float], flat: float) -> bool:
-    """Did the last step of the path gain load at a slope d lambda / d w of at least ``flat``
-    (or turn back in w while gaining load)? A path that stops so has not reached a flat
-    part of its curve."""
-    if len(path_w) < 2:
-        return False
-    dlam = path_lam[-1] - path_lam[-2]
-    dw = path_w[-1] - path_w[-2]
-    return dlam > 0 and (dw <= 0 or dlam >= flat * dw)
 
 
 def _singular_along_load(solver: StaticSolver, hist: History) -> bool:
