@@ -285,16 +285,28 @@ def certify(
         # equilibria were still being found: the wall left the small-displacement range of
         # the geometrically linear model before its curve stopped rising (joints so soft
         # that the displacement at the peak would be a sizeable part of a block)
-        moved = float(np.abs((q - hist.steps[0].q.reshape(-1))[free][problem.translation]).max())
-        why.append(
-            f"the wall left the small-displacement range before its curve stopped rising: "
-            f"{moved:.3g} m from the dead-load state (limit {problem.limit:.3g} m, half the "
-            f"smallest moving block) at lambda {lam_state:.6g}, where the tangent still keeps "
-            f"{rho:.3g} of its stiffness along the load (> {tolerance:g}); its joints are too "
-            f"soft for a small-displacement analysis to reach the peak (the dead load alone "
-            f"moves it {problem.displacement_scale:.3g} m bonded): stiffer joints in the same "
-            f"kt/kn ratio give the multiplier"
-        )
+        moved = moved_from_dead_load(problem, hist, q)
+        if moved > problem.limit:
+            why.append(
+                f"the wall left the small-displacement range before its curve stopped "
+                f"rising: {moved:.3g} m from the dead-load state (limit {problem.limit:.3g} "
+                f"m, half the smallest moving block) at lambda {lam_state:.6g}, where the "
+                f"tangent still keeps {rho:.3g} of its stiffness along the load "
+                f"(> {tolerance:g}); its joints are too soft for a small-displacement "
+                f"analysis to reach the peak (the dead load alone moves it "
+                f"{problem.displacement_scale:.3g} m bonded): stiffer joints in the same "
+                f"kt/kn ratio give the multiplier"
+            )
+        else:
+            # no state passed the limit: the searches from the last one ran off
+            why.append(
+                f"no state left the small-displacement range: the last, at lambda "
+                f"{lam_state:.6g}, is {moved:.3g} m from the dead-load state (limit "
+                f"{problem.limit:.3g} m, half the smallest moving block), and only the "
+                f"searches from it ran past the limit, while the curve still rose into it at "
+                f"{slope:.2g} of its elastic slope and its tangent keeps {rho:.3g} of its "
+                f"stiffness along the load (> {tolerance:g}): no mechanism formed there"
+            )
     elif not mode_found:
         why.append(
             f"no collapse mode: the tangent keeps {rho:.3g} of the elastic stiffness along "
@@ -369,6 +381,14 @@ def curve_slope(
     if dw <= 0:
         return math.inf if dlam > 0 else -math.inf
     return dlam / dw / elastic_slope
+
+
+def moved_from_dead_load(problem: DiscreteProblem, hist: History, q: np.ndarray) -> float:
+    """The largest translation of the state ``q`` (all DOFs) from the dead-load state (the
+    first of ``hist``): the one measure of the displacement limit in the path's stop reason
+    and in the certificate (elastic displacement under the dead load never counts)."""
+    dq = (np.asarray(q).reshape(-1) - hist.steps[0].q.reshape(-1))[problem.free]
+    return float(np.abs(dq[problem.translation]).max(initial=0.0))
 
 
 def still_rising(slope: float, flat_slope: float) -> bool:

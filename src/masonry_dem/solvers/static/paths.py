@@ -25,7 +25,12 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from masonry_dem.results import History
-from masonry_dem.solvers.static.certificate import ZERO_LOAD, curve_slope, still_rising
+from masonry_dem.solvers.static.certificate import (
+    ZERO_LOAD,
+    curve_slope,
+    moved_from_dead_load,
+    still_rising,
+)
 from masonry_dem.solvers.static.outcome import Outcome, Status, StopReason
 from masonry_dem.solvers.static.settings import DisplacementControl
 from masonry_dem.solvers.static.steps import (
@@ -316,7 +321,31 @@ def work_control(
         if not out.ok:
             log.debug("work step to w=%.6g failed: %s", goal, out.reason)
             if out.past_limit and step.cuts >= s.limit_cuts:
-                reason = f"a mechanism at lambda={peak:.6g}: {out.reason}"
+                if (
+                    s.stop_check_time_steps > 0
+                    and s.fold_check_time_steps > 0
+                    and checked_from != len(hist.steps)
+                    and still_rising(curve_slope(path_w, path_lam, elastic_slope), s.flat_slope)
+                ):
+                    # a corner too: the searches run off while the curve still rose into
+                    # the state (no state left the small-displacement range), so the wall
+                    # may snap through to rest higher up, as at a stuck corner
+                    checked_from = len(hist.steps)
+                    rescued = solver.dynamic_rescue(
+                        lam + s.transient_rise * abs(lam), lam, s.fold_check_time_steps
+                    )
+                    if rescued is not None:
+                        accept_moved(rescued)
+                        transient_failed = False
+                        continue
+                # measured from the dead-load state, as the certificate measures it
+                ran = moved_from_dead_load(solver.problem, hist, out.q)
+                reason = (
+                    f"a search from the state at lambda={lam:.6g} "
+                    f"({moved_from_dead_load(solver.problem, hist, solver.q):.3g} m from the "
+                    f"dead-load state) ran past the displacement limit {solver.limit:.3g} m "
+                    f"(to {ran:.3g} m from the dead-load state; peak {peak:.6g})"
+                )
                 stop = StopReason.DISPLACEMENT_LIMIT
                 break
             if step.cuts == 0:
