@@ -54,7 +54,7 @@ the path checks with ``fold_check_time_steps`` (the reason says whether it did).
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field
 from typing import TYPE_CHECKING
 
@@ -233,12 +233,9 @@ def certify(
             mode, mode_vector = "flat curve", dq / size
     mode_found = bool(mode != "none" and live_work > 0)
     # the curve into the state: did the path stop at a corner, still rising?
-    curve_slope = math.nan
-    if last >= 1 and elastic_slope > 0 and path_w[last] != path_w[last - 1]:
-        step_slope = (path_lam[last] - path_lam[last - 1]) / (path_w[last] - path_w[last - 1])
-        curve_slope = float(step_slope / elastic_slope)
+    slope = curve_slope(path_w, path_lam, elastic_slope)
     corner = bool(
-        hist.stop is StopReason.PATH_STUCK and curve_slope >= s.flat_slope and mode != "none"
+        hist.stop is StopReason.PATH_STUCK and still_rising(slope, s.flat_slope) and mode != "none"
     )
     # a multiplier the residual cannot tell from zero load: the states found there are
     # equilibria only to the tolerance, so the mode must be one of the dead-load state
@@ -288,16 +285,28 @@ def certify(
         # equilibria were still being found: the wall left the small-displacement range of
         # the geometrically linear model before its curve stopped rising (joints so soft
         # that the displacement at the peak would be a sizeable part of a block)
-        moved = float(np.abs((q - hist.steps[0].q.reshape(-1))[free][problem.translation]).max())
-        why.append(
-            f"the wall left the small-displacement range before its curve stopped rising: "
-            f"{moved:.3g} m from the dead-load state (limit {problem.limit:.3g} m, half the "
-            f"smallest moving block) at lambda {lam_state:.6g}, where the tangent still keeps "
-            f"{rho:.3g} of its stiffness along the load (> {tolerance:g}); its joints are too "
-            f"soft for a small-displacement analysis to reach the peak (the dead load alone "
-            f"moves it {problem.displacement_scale:.3g} m bonded): stiffer joints in the same "
-            f"kt/kn ratio give the multiplier"
-        )
+        moved = moved_from_dead_load(problem, hist, q)
+        if moved > problem.limit:
+            why.append(
+                f"the wall left the small-displacement range before its curve stopped "
+                f"rising: {moved:.3g} m from the dead-load state (limit {problem.limit:.3g} "
+                f"m, half the smallest moving block) at lambda {lam_state:.6g}, where the "
+                f"tangent still keeps {rho:.3g} of its stiffness along the load "
+                f"(> {tolerance:g}); its joints are too soft for a small-displacement "
+                f"analysis to reach the peak (the dead load alone moves it "
+                f"{problem.displacement_scale:.3g} m bonded): stiffer joints in the same "
+                f"kt/kn ratio give the multiplier"
+            )
+        else:
+            # no state passed the limit: the searches from the last one ran off
+            why.append(
+                f"no state left the small-displacement range: the last, at lambda "
+                f"{lam_state:.6g}, is {moved:.3g} m from the dead-load state (limit "
+                f"{problem.limit:.3g} m, half the smallest moving block), and only the "
+                f"searches from it ran past the limit, while the curve still rose into it at "
+                f"{slope:.2g} of its elastic slope and its tangent keeps {rho:.3g} of its "
+                f"stiffness along the load (> {tolerance:g}): no mechanism formed there"
+            )
     elif not mode_found:
         why.append(
             f"no collapse mode: the tangent keeps {rho:.3g} of the elastic stiffness along "
@@ -314,7 +323,7 @@ def certify(
     )
     if holds and corner:
         reason += (
-            f"; the path stopped at a corner (its curve still rose at {curve_slope:.2g} of "
+            f"; the path stopped at a corner (its curve still rose at {slope:.2g} of "
             f"its elastic slope), where a fold of the path has a singular tangent too: "
             + (
                 f"dynamic relaxation found no rest above it within {s.fold_check_time_steps} "
@@ -347,10 +356,46 @@ def certify(
         bound_status=bound_status,
         within_bound=within,
         reason=reason,
-        curve_slope=curve_slope,
+        curve_slope=slope,
         corner=corner,
         mode_vector=None if mode_vector is None else _full(problem, mode_vector),
     )
+
+
+def curve_slope(
+    path_w: Sequence[float] | np.ndarray,
+    path_lam: Sequence[float] | np.ndarray,
+    elastic_slope: float,
+) -> float:
+    """The slope of the last step of a pushover curve, d lambda / d w over ``elastic_slope``
+    (w the work-conjugate displacement of the live load, from the dead-load state): the one
+    measure of "still rising" that the stop check of work control and the certificate
+    share. A step that turned back in w (dw <= 0) while gaining load is a snap-back of the
+    curve, still rising: +inf; one that went back in w losing load, or made no move: -inf
+    (its d lambda / d w is positive or undefined, but the curve did not rise). nan with
+    fewer than two states or no elastic slope."""
+    if len(path_w) < 2 or not elastic_slope > 0:
+        return math.nan
+    dlam = float(path_lam[-1] - path_lam[-2])
+    dw = float(path_w[-1] - path_w[-2])
+    if dw <= 0:
+        return math.inf if dlam > 0 else -math.inf
+    return dlam / dw / elastic_slope
+
+
+def moved_from_dead_load(problem: DiscreteProblem, hist: History, q: np.ndarray) -> float:
+    """The largest translation of the state ``q`` (all DOFs) from the dead-load state (the
+    first of ``hist``): the one measure of the displacement limit in the path's stop reason
+    and in the certificate (elastic displacement under the dead load never counts)."""
+    dq = (np.asarray(q).reshape(-1) - hist.steps[0].q.reshape(-1))[problem.free]
+    return float(np.abs(dq[problem.translation]).max(initial=0.0))
+
+
+def still_rising(slope: float, flat_slope: float) -> bool:
+    """Did a step of ``curve_slope`` ``slope`` still rise, at ``flat_slope`` of the elastic
+    slope or more (work control's measure of a formed mechanism)? A stuck path that still
+    rose stopped at a corner: the end of its branch, a fold or a peak."""
+    return bool(slope >= flat_slope)
 
 
 def _full(problem: DiscreteProblem, x: np.ndarray) -> np.ndarray:

@@ -530,7 +530,9 @@ class Corrector:
         tolerance). Newton stops at kinks of the projection (joints on the edge between two
         states) where no correction lowers the residual; the damped motion goes round them.
         ``polish=False``: only whether the relaxation came to rest (``ok``; the state
-        returned is the last converged one)."""
+        returned is the last converged one). With ``fold_probe_every``, Newton is tried
+        from the relaxation's states on the way (:meth:`Relaxation._relax`'s probe): Newton
+        converges from states far short of the relaxation's own rest."""
         from masonry_dem.solvers.dynamic_relaxation import (
             DRSettings,
             DynamicRelaxation,
@@ -562,7 +564,20 @@ class Corrector:
         # its displacement limit measured from the start state, as every search of the path
         # measures its step: from the unloaded wall a state already past the limit (a wall
         # whose path had moved that far) failed at the first time step
-        relaxed = self._dr._relax_with_cuts(start, target, None, from_start=True)
+        found: list[Outcome] = []
+
+        def probe(x: np.ndarray) -> bool:
+            q = self.q.copy()
+            q[free] = x
+            out = self.equilibrate(target, start=q)
+            if out.ok:
+                found.append(out)
+            return out.ok
+
+        every = s.fold_probe_every if polish else 0
+        relaxed = self._dr._relax_with_cuts(
+            start, target, None, from_start=True, probe=probe if every else None, probe_every=every
+        )
         # time steps of an explicit relaxation are no Newton iterations (each costs a
         # residual, no factorization): counted apart, so that ``iterations`` compares paths
         self.time_steps += relaxed.cycles
@@ -571,6 +586,14 @@ class Corrector:
         if not relaxed.ok:
             log.debug("dynamic rescue at lambda=%.6g failed: %s", target, relaxed.reason)
             return None
+        if found:
+            log.debug(
+                "dynamic rescue at lambda=%.6g: Newton converged from the relaxation's state "
+                "after %d time steps",
+                target,
+                relaxed.cycles,
+            )
+            return found[-1]
         q = self.q.copy()
         q[free] = relaxed.x
         polished = self.equilibrate(target, start=q)

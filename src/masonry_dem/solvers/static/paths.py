@@ -25,7 +25,12 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from masonry_dem.results import History
-from masonry_dem.solvers.static.certificate import ZERO_LOAD
+from masonry_dem.solvers.static.certificate import (
+    ZERO_LOAD,
+    curve_slope,
+    moved_from_dead_load,
+    still_rising,
+)
 from masonry_dem.solvers.static.outcome import Outcome, Status, StopReason
 from masonry_dem.solvers.static.settings import DisplacementControl
 from masonry_dem.solvers.static.steps import (
@@ -316,7 +321,31 @@ def work_control(
         if not out.ok:
             log.debug("work step to w=%.6g failed: %s", goal, out.reason)
             if out.past_limit and step.cuts >= s.limit_cuts:
-                reason = f"a mechanism at lambda={peak:.6g}: {out.reason}"
+                if (
+                    s.stop_check_time_steps > 0
+                    and s.fold_check_time_steps > 0
+                    and checked_from != len(hist.steps)
+                    and still_rising(curve_slope(path_w, path_lam, elastic_slope), s.flat_slope)
+                ):
+                    # a corner too: the searches run off while the curve still rose into
+                    # the state (no state left the small-displacement range), so the wall
+                    # may snap through to rest higher up, as at a stuck corner
+                    checked_from = len(hist.steps)
+                    rescued = solver.dynamic_rescue(
+                        lam + s.transient_rise * abs(lam), lam, s.fold_check_time_steps
+                    )
+                    if rescued is not None:
+                        accept_moved(rescued)
+                        transient_failed = False
+                        continue
+                # measured from the dead-load state, as the certificate measures it
+                ran = moved_from_dead_load(solver.problem, hist, out.q)
+                reason = (
+                    f"a search from the state at lambda={lam:.6g} "
+                    f"({moved_from_dead_load(solver.problem, hist, solver.q):.3g} m from the "
+                    f"dead-load state) ran past the displacement limit {solver.limit:.3g} m "
+                    f"(to {ran:.3g} m from the dead-load state; peak {peak:.6g})"
+                )
                 stop = StopReason.DISPLACEMENT_LIMIT
                 break
             if step.cuts == 0:
@@ -354,7 +383,7 @@ def work_control(
                 stuck
                 and s.stop_check_time_steps > 0
                 and s.fold_check_time_steps > 0
-                and _still_rising(path_w, path_lam, s.flat_slope * elastic_slope)
+                and still_rising(curve_slope(path_w, path_lam, elastic_slope), s.flat_slope)
             )
             budget = max(s.stop_check_time_steps, s.fold_check_time_steps if corner else 0)
             if (
@@ -456,17 +485,6 @@ def work_control(
         f"{reason}; load control first failed at {first_lambda:.6g} ({first_failure})",
     )
     return None
-
-
-def _still_rising(path_w: list[float], path_lam: list[float], flat: float) -> bool:
-    """Did the last step of the path gain load at a slope d lambda / d w of at least ``flat``
-    (or turn back in w while gaining load)? A path that stops so has not reached a flat
-    part of its curve."""
-    if len(path_w) < 2:
-        return False
-    dlam = path_lam[-1] - path_lam[-2]
-    dw = path_w[-1] - path_w[-2]
-    return dlam > 0 and (dw <= 0 or dlam >= flat * dw)
 
 
 def _singular_along_load(solver: StaticSolver, hist: History) -> bool:
