@@ -15,8 +15,11 @@ range, the certificate, the tangents the stop check asks for) is ``other``.
 
 ``--scale N`` is ``bench_scale.scale_wall(N)`` (30: 909 blocks, 100: 10 017); ``--case`` a
 validation case (its own settings and monitor). ``--set name=value`` overrides a
-``StaticSettings`` field, to compare a rule against the default in one run. Counts are
-exact whatever the machine's load; the seconds are not.
+``StaticSettings`` field. ``--against name=value`` runs each wall a second time with that
+override too, the two in turn ``--repeat`` times (keeping each one's fastest), and prints
+the ratios of seconds, factorizations and iterations (this run over the other): a rule
+against the rule before, in one run. Counts are exact whatever the machine's load; the
+seconds are not, so only their ratios within one run compare.
 """
 
 from __future__ import annotations
@@ -127,6 +130,8 @@ def main() -> int:
     p.add_argument("--cases", action="store_true", help="all 18 validation cases")
     p.add_argument("--brief", action="store_true", help="one line a wall, and the totals")
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE")
+    p.add_argument("--against", action="append", default=[], metavar="NAME=VALUE")
+    p.add_argument("--repeat", type=int, default=1, help="runs of each, in turn (--against)")
     p.add_argument("--rows", action="store_true", help="print every search")
     p.add_argument("--json", default=None)
     a = p.parse_args()
@@ -137,6 +142,7 @@ def main() -> int:
     from masonry_dem.solvers.static import StaticSettings
 
     changes = {k: _value(v) for k, v in (item.split("=", 1) for item in a.set)}
+    other = {k: _value(v) for k, v in (item.split("=", 1) for item in a.against)}
     walls = [(f"scale_wall({n})", scale_wall(n), StaticSettings(), None) for n in a.scale]
     for name in case_names() if a.cases else a.case:
         case = build_case(name)
@@ -145,12 +151,32 @@ def main() -> int:
     for label, model, settings, monitor in walls:
         settings = replace(settings, **changes) if changes else settings
         r = audit(model, settings, monitor)
+        if other:
+            b = audit(model, replace(settings, **other), monitor)
+            for _ in range(a.repeat - 1):  # in turn, so both see the same machine
+                r["seconds"] = min(r["seconds"], audit(model, settings, monitor)["seconds"])
+                b["seconds"] = min(
+                    b["seconds"], audit(model, replace(settings, **other), monitor)["seconds"]
+                )
+            results[f"{label} against"] = b
         results[label] = r
         print(
             f"{label}: {r['status']} lambda={r['lambda']:.7g} steps={r['steps']} "
             f"iterations={r['iterations']} factorizations={r['factorizations']} "
             f"(other {r['other']}) {r['seconds']:.1f} s"
         )
+        if other:
+            print(
+                f"{label}, {' '.join(a.against)}: {b['status']} lambda={b['lambda']:.7g} "
+                f"steps={b['steps']} iterations={b['iterations']} "
+                f"factorizations={b['factorizations']} {b['seconds']:.1f} s"
+            )
+            print(
+                f"{label}, this over that: seconds {r['seconds'] / b['seconds']:.2f}x, "
+                f"factorizations {r['factorizations'] / b['factorizations']:.2f}x, "
+                f"iterations {r['iterations'] / b['iterations']:.2f}x, "
+                f"lambda {r['lambda'] / b['lambda'] - 1:+.3%}"
+            )
         if a.brief:
             continue
         kinds = sorted({k.split("/")[0] for k in r["by"]})
@@ -171,11 +197,12 @@ def main() -> int:
                     f"{'y' if row['ok'] else 'n'}   {row['why']}"
                 )
         sys.stdout.flush()
-    if len(results) > 1:
-        total = {k: sum(r[k] for r in results.values()) for k in ("steps", "iterations")}
-        f = sum(r["factorizations"] for r in results.values())
+    mine = [r for k, r in results.items() if not k.endswith(" against")]
+    if len(mine) > 1:
+        total = {k: sum(r[k] for r in mine) for k in ("steps", "iterations")}
+        f = sum(r["factorizations"] for r in mine)
         print(
-            f"total: {len(results)} walls, steps={total['steps']} "
+            f"total: {len(mine)} walls, steps={total['steps']} "
             f"iterations={total['iterations']} factorizations={f}"
         )
     if a.json:
