@@ -17,7 +17,8 @@ range, the certificate, the tangents the stop check asks for) is ``other``.
 validation case (its own settings and monitor). ``--set name=value`` overrides a
 ``StaticSettings`` field. ``--against name=value`` runs each wall a second time with that
 override too, the two in turn ``--repeat`` times (keeping each one's fastest), and prints
-the ratios of seconds, factorizations and iterations (this run over the other): a rule
+the ratios of seconds (wall clock and the process's CPU), factorizations and iterations
+(this run over the other): a rule
 against the rule before, in one run. Counts are exact whatever the machine's load; the
 seconds are not, so only their ratios within one run compare.
 """
@@ -101,9 +102,9 @@ def audit(model, settings, monitor=None) -> dict:
 
     for name in ("equilibrate", "pseudo_transient", "robust", "dynamic_rescue"):
         wrap(name)
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     hist = solver.run(monitor=monitor)
-    seconds = time.perf_counter() - t0
+    seconds, cpu = time.perf_counter() - t0, time.process_time() - c0
     lam = hist.collapse_multiplier
     by = Counter()
     for r in rows:
@@ -118,6 +119,7 @@ def audit(model, settings, monitor=None) -> dict:
         "factorizations": solver.factorizations,
         "other": solver.factorizations - sum(r["factorizations"] for r in rows),
         "seconds": seconds,
+        "cpu": cpu,
         "rows": rows,
         "by": {f"{k[0]}/{'ok' if k[1] else 'failed'}/{k[2]}": v for k, v in by.items()},
     }
@@ -154,25 +156,27 @@ def main() -> int:
         if other:
             b = audit(model, replace(settings, **other), monitor)
             for _ in range(a.repeat - 1):  # in turn, so both see the same machine
-                r["seconds"] = min(r["seconds"], audit(model, settings, monitor)["seconds"])
-                b["seconds"] = min(
-                    b["seconds"], audit(model, replace(settings, **other), monitor)["seconds"]
-                )
+                for kept, again in ((r, settings), (b, replace(settings, **other))):
+                    more = audit(model, again, monitor)
+                    kept["seconds"] = min(kept["seconds"], more["seconds"])
+                    kept["cpu"] = min(kept["cpu"], more["cpu"])
             results[f"{label} against"] = b
         results[label] = r
         print(
             f"{label}: {r['status']} lambda={r['lambda']:.7g} steps={r['steps']} "
             f"iterations={r['iterations']} factorizations={r['factorizations']} "
-            f"(other {r['other']}) {r['seconds']:.1f} s"
+            f"(other {r['other']}) {r['seconds']:.1f} s ({r['cpu']:.1f} s of CPU)"
         )
         if other:
             print(
                 f"{label}, {' '.join(a.against)}: {b['status']} lambda={b['lambda']:.7g} "
                 f"steps={b['steps']} iterations={b['iterations']} "
-                f"factorizations={b['factorizations']} {b['seconds']:.1f} s"
+                f"factorizations={b['factorizations']} {b['seconds']:.1f} s "
+                f"({b['cpu']:.1f} s of CPU)"
             )
             print(
-                f"{label}, this over that: seconds {r['seconds'] / b['seconds']:.2f}x, "
+                f"{label}, this over that: seconds {r['seconds'] / b['seconds']:.2f}x "
+                f"(CPU {r['cpu'] / b['cpu']:.2f}x), "
                 f"factorizations {r['factorizations'] / b['factorizations']:.2f}x, "
                 f"iterations {r['iterations'] / b['iterations']:.2f}x, "
                 f"lambda {r['lambda'] / b['lambda'] - 1:+.3%}"
