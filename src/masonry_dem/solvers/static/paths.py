@@ -37,6 +37,8 @@ from masonry_dem.solvers.static.steps import (
     SecantPredictor,
     StepController,
     elastic_range,
+    straight,
+    transient_target,
 )
 
 if TYPE_CHECKING:
@@ -266,12 +268,14 @@ def work_control(
     last_fold: float | None = None  # lambda where the last failed search stopped
     fold_failed = False  # a pseudo-transient step past a fold found no rest
 
-    def transient(why: str, above: float | None = None) -> bool:
-        """A pseudo-transient step to a lambda a little higher (and past ``above``),
+    def transient(why: str, stopped: float, above: float | None = None) -> bool:
+        """A pseudo-transient step to a lambda a little higher (or up to where the failed
+        search ``stopped``, on a straight path: ``transient_target``; and past ``above``),
         once from each state."""
         nonlocal transient_from
         transient_from = len(hist.steps)
-        target = lam + s.transient_rise * abs(lam)
+        on_line = straight(path_w, path_lam, elastic_slope)
+        target = transient_target(lam, stopped, s.transient_rise, s.transient_reach, on_line)
         if above is not None:  # just past a fold known to within s.fold_match
             target = max(target, above + s.fold_match * abs(above))
         moved = solver.pseudo_transient(target)
@@ -370,7 +374,7 @@ def work_control(
                 and transient_from != len(hist.steps)
             ):
                 # Newton stops at a fold of the path
-                if transient(out.reason, above=fold if refold else None):
+                if transient(out.reason, fold, above=fold if refold else None):
                     continue
                 if refold:
                     fold_failed = True

@@ -119,6 +119,12 @@ class StaticSettings(LoadPathSettings):
     transient_after: tried once work control has halved its step this many times in a row.
     transient_rise: it relaxes to lambda x (1 + transient_rise): far enough to leave the
         fold, near enough not to jump past the peak.
+    transient_reach: where the path is still straight (its last step rose at least half as
+        steeply as the elastic slope), it relaxes instead to the lambda at which the failed
+        work search before it stopped (the lambda of the path at that search's goal, on a
+        straight path), at most lambda x (1 + transient_reach): a chain of folds is then
+        passed in the steps work control asked for, not in rises of transient_rise.
+        0: always transient_rise.
     transient_start, transient_shrink, transient_window: first pseudo time step 1 /
         ``transient_start`` (the tangent's floor, in units of the elastic stiffness), divided
         by ``transient_shrink`` beyond the residual ratio after a step that lowers the
@@ -208,6 +214,7 @@ class StaticSettings(LoadPathSettings):
     transient_steps: int = count(100, least=0)
     transient_after: int = count(2, least=0)
     transient_rise: float = positive(0.005)
+    transient_reach: float = at_least(0.1, 0.0, " (0: off)")
     transient_start: float = positive(1e-3)
     transient_shrink: float = positive(0.25)
     transient_window: int = count(30, least=1)

@@ -1,0 +1,218 @@
+"""Where the factorizations of a pushover go: one row per equilibrium search of the path.
+
+    python benchmarks/path_audit.py --scale 30 [--scale 100] [--case S11 ...] [--set k=v ...]
+        [--rows] [--json FILE]
+
+Each wall runs the default static pushover (``StaticSolver(model, settings).run()``); the
+searches the path followers ask for (``equilibrate``, ``pseudo_transient``, ``robust``,
+``dynamic_rescue``) are wrapped on the solver instance, and each call is one row: the
+controller that asked (``load``: lambda prescribed; ``work``: the work-conjugate
+displacement prescribed; ``transient``: a pseudo-transient step; ``rescue``/``robust``),
+lambda it ended at, the step it was asked for (d lambda, or d w in m), Newton iterations,
+factorizations, and whether it converged (and if not, why). The totals split the
+factorizations by controller and by converged/failed; what no search took (the elastic
+range, the certificate, the tangents the stop check asks for) is ``other``.
+
+``--scale N`` is ``bench_scale.scale_wall(N)`` (30: 909 blocks, 100: 10 017); ``--case`` a
+validation case (its own settings and monitor). ``--set name=value`` overrides a
+``StaticSettings`` field. ``--against name=value`` runs each wall a second time with that
+override too, the two in turn ``--repeat`` times (keeping each one's fastest), and prints
+the ratios of seconds (wall clock and the process's CPU), factorizations and iterations
+(this run over the other): a rule
+against the rule before, in one run. Counts are exact whatever the machine's load; the
+seconds are not, so only their ratios within one run compare.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from collections import Counter
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+
+def _value(text: str):
+    for kind in (int, float):
+        try:
+            return kind(text)
+        except ValueError:
+            pass
+    return {"true": True, "false": False}.get(text.lower(), text)
+
+
+def audit(model, settings, monitor=None) -> dict:
+    """Run the pushover and return its rows and totals."""
+    from masonry_dem.solvers.static import StaticSolver
+
+    solver = StaticSolver(model, settings)
+    rows: list[dict] = []
+    depth = [0]
+    free = solver.problem.asm.free_index
+    c = solver.problem.F_live / float(np.linalg.norm(solver.problem.F_live))
+    dead: list[np.ndarray] = []  # the dead-load state, w's origin
+
+    def wrap(name: str) -> None:
+        inner = getattr(solver, name)
+
+        def call(*args, **kwargs):
+            depth[0] += 1
+            f0, i0, t0 = solver.factorizations, solver.iterations, time.perf_counter()
+            try:
+                out = inner(*args, **kwargs)
+            finally:
+                depth[0] -= 1
+            if depth[0] == 0:
+                kind = name
+                asked = float(args[0]) if args else float("nan")
+                if name == "equilibrate":
+                    control = kwargs.get("control")
+                    kind = "load" if control is None else "work"
+                    asked = float(control[2]) if control is not None else asked
+                elif name == "pseudo_transient":
+                    kind = "transient"
+                elif name == "dynamic_rescue":
+                    kind = "rescue"
+                ok = out is not None and bool(out.ok)
+                if ok and not dead:
+                    dead.append(out.q[free].copy())
+                w = float(c @ (out.q[free] - dead[0])) if out is not None and dead else 0.0
+                rows.append(
+                    {
+                        "kind": kind,
+                        "asked": asked,
+                        "lambda": float(out.load_factor) if out is not None else float("nan"),
+                        "w": w,
+                        "iterations": solver.iterations - i0,
+                        "factorizations": solver.factorizations - f0,
+                        "ok": ok,
+                        "why": "" if ok or out is None else str(out.failure.value),
+                        "seconds": time.perf_counter() - t0,
+                    }
+                )
+            return out
+
+        setattr(solver, name, call)
+
+    for name in ("equilibrate", "pseudo_transient", "robust", "dynamic_rescue"):
+        wrap(name)
+    t0, c0 = time.perf_counter(), time.process_time()
+    hist = solver.run(monitor=monitor)
+    seconds, cpu = time.perf_counter() - t0, time.process_time() - c0
+    lam = hist.collapse_multiplier
+    by = Counter()
+    for r in rows:
+        by[(r["kind"], r["ok"], "n")] += 1
+        by[(r["kind"], r["ok"], "f")] += r["factorizations"]
+        by[(r["kind"], r["ok"], "i")] += r["iterations"]
+    return {
+        "status": str(hist.status),
+        "lambda": float(lam if lam is not None else hist.final_load_factor),
+        "steps": len(hist.steps),
+        "iterations": solver.iterations,
+        "factorizations": solver.factorizations,
+        "other": solver.factorizations - sum(r["factorizations"] for r in rows),
+        "seconds": seconds,
+        "cpu": cpu,
+        "rows": rows,
+        "by": {f"{k[0]}/{'ok' if k[1] else 'failed'}/{k[2]}": v for k, v in by.items()},
+    }
+
+
+def main() -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--scale", type=int, action="append", default=[], help="scale_wall(N)")
+    p.add_argument("--case", action="append", default=[], help="a validation case")
+    p.add_argument("--cases", action="store_true", help="all 18 validation cases")
+    p.add_argument("--brief", action="store_true", help="one line a wall, and the totals")
+    p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE")
+    p.add_argument("--against", action="append", default=[], metavar="NAME=VALUE")
+    p.add_argument("--repeat", type=int, default=1, help="runs of each, in turn (--against)")
+    p.add_argument("--rows", action="store_true", help="print every search")
+    p.add_argument("--json", default=None)
+    a = p.parse_args()
+
+    from bench_scale import scale_wall
+
+    from masonry_dem.cases.paper import build_case, case_names
+    from masonry_dem.solvers.static import StaticSettings
+
+    changes = {k: _value(v) for k, v in (item.split("=", 1) for item in a.set)}
+    other = {k: _value(v) for k, v in (item.split("=", 1) for item in a.against)}
+    walls = [(f"scale_wall({n})", scale_wall(n), StaticSettings(), None) for n in a.scale]
+    for name in case_names() if a.cases else a.case:
+        case = build_case(name)
+        walls.append((name, case.model, case.settings, case.monitor))
+    results = {}
+    for label, model, settings, monitor in walls:
+        settings = replace(settings, **changes) if changes else settings
+        r = audit(model, settings, monitor)
+        if other:
+            b = audit(model, replace(settings, **other), monitor)
+            for _ in range(a.repeat - 1):  # in turn, so both see the same machine
+                for kept, again in ((r, settings), (b, replace(settings, **other))):
+                    more = audit(model, again, monitor)
+                    kept["seconds"] = min(kept["seconds"], more["seconds"])
+                    kept["cpu"] = min(kept["cpu"], more["cpu"])
+            results[f"{label} against"] = b
+        results[label] = r
+        print(
+            f"{label}: {r['status']} lambda={r['lambda']:.7g} steps={r['steps']} "
+            f"iterations={r['iterations']} factorizations={r['factorizations']} "
+            f"(other {r['other']}) {r['seconds']:.1f} s ({r['cpu']:.1f} s of CPU)"
+        )
+        if other:
+            print(
+                f"{label}, {' '.join(a.against)}: {b['status']} lambda={b['lambda']:.7g} "
+                f"steps={b['steps']} iterations={b['iterations']} "
+                f"factorizations={b['factorizations']} {b['seconds']:.1f} s "
+                f"({b['cpu']:.1f} s of CPU)"
+            )
+            print(
+                f"{label}, this over that: seconds {r['seconds'] / b['seconds']:.2f}x "
+                f"(CPU {r['cpu'] / b['cpu']:.2f}x), "
+                f"factorizations {r['factorizations'] / b['factorizations']:.2f}x, "
+                f"iterations {r['iterations'] / b['iterations']:.2f}x, "
+                f"lambda {r['lambda'] / b['lambda'] - 1:+.3%}"
+            )
+        if a.brief:
+            continue
+        kinds = sorted({k.split("/")[0] for k in r["by"]})
+        print("  controller  | converged: n, iterations, factorizations | failed: n, it, f")
+        for kind in kinds:
+            ok = [r["by"].get(f"{kind}/ok/{x}", 0) for x in "nif"]
+            bad = [r["by"].get(f"{kind}/failed/{x}", 0) for x in "nif"]
+            print(
+                f"  {kind:11s} | {ok[0]:5d} {ok[1]:6d} {ok[2]:6d} | {bad[0]:5d} {bad[1]:6d} {bad[2]:6d}"
+            )
+        if a.rows:
+            print("    #  kind       lambda      w [m]        asked   it  f  ok  why")
+            for i, row in enumerate(r["rows"]):
+                print(
+                    f"  {i:3d}  {row['kind']:9s} {row['lambda']:.7f} {row['w']:10.4g} "
+                    f"{row['asked']:11.4g} "
+                    f"{row['iterations']:4d} {row['factorizations']:2d}  "
+                    f"{'y' if row['ok'] else 'n'}   {row['why']}"
+                )
+        sys.stdout.flush()
+    mine = [r for k, r in results.items() if not k.endswith(" against")]
+    if len(mine) > 1:
+        total = {k: sum(r[k] for r in mine) for k in ("steps", "iterations")}
+        f = sum(r["factorizations"] for r in mine)
+        print(
+            f"total: {len(mine)} walls, steps={total['steps']} "
+            f"iterations={total['iterations']} factorizations={f}"
+        )
+    if a.json:
+        Path(a.json).write_text(json.dumps(results, indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
