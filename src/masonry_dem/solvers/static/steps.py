@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from masonry_dem.constitutive.law import CONTACT_BAND
+from masonry_dem.solvers.static.certificate import curve_slope
 
 if TYPE_CHECKING:
     from masonry_dem.solvers.static.solver import StaticSolver
@@ -145,11 +146,9 @@ def elastic_range(solver: StaticSolver, cap: float) -> ElasticRange | None:
 
 def straight(path_w: list[float], path_lam: list[float], elastic_slope: float) -> bool:
     """Did the last step of the path (w, lambda) rise forward at least ``STRAIGHT`` times the
-    elastic slope d lambda / d w?"""
-    if len(path_w) < 2 or not elastic_slope > 0:
-        return False
-    dw = path_w[-1] - path_w[-2]
-    return dw > 0 and path_lam[-1] - path_lam[-2] >= STRAIGHT * elastic_slope * dw
+    elastic slope d lambda / d w? (The certificate's measure of the curve's slope; a step
+    back in w, a snap-back included, is not straight.)"""
+    return STRAIGHT <= curve_slope(path_w, path_lam, elastic_slope) < math.inf
 
 
 def transient_target(lam: float, stopped: float, rise: float, reach: float, on_line: bool) -> float:
