@@ -27,7 +27,7 @@ import numpy as np
 from masonry_dem.model import Model
 from masonry_dem.solvers.factorization import Factors
 from masonry_dem.solvers.static.outcome import Failure, Outcome
-from masonry_dem.solvers.static.problem import DiscreteProblem, secant_tangents
+from masonry_dem.solvers.static.problem import DiscreteProblem, reversed_flow, secant_tangents
 from masonry_dem.solvers.static.settings import StaticSettings
 
 if TYPE_CHECKING:
@@ -260,6 +260,7 @@ class Corrector:
                     self.problem.relative(f * dq),
                     resp_try.actions - response.actions,
                     self.law.kbar,
+                    reversed_flow(response, resp_try, self.law.kbar),
                 )
                 lu, rounds = None, rounds + 1
                 continue
