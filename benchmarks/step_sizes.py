@@ -90,7 +90,7 @@ def _run(name: str, divisor: float, changes: dict, check: int) -> str:
 def main(argv: list[str] | None = None) -> int:
     set_thread_wait_policy()
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("cases", nargs="*", default=["S23"], help="validation cases or walls")
+    p.add_argument("cases", nargs="*", help="validation cases or walls (default: S23)")
     p.add_argument("--divisors", nargs="+", type=float, default=[1, 2, 4, 8])
     p.add_argument("--settings", nargs="+", default=[], metavar="FIELD=VALUE")
     p.add_argument("--against", nargs="+", default=[], metavar="FIELD=VALUE")
@@ -102,6 +102,7 @@ def main(argv: list[str] | None = None) -> int:
     columns = [base] + ([{**base, **_parse_settings(args.against)}] if args.against else [])
     warm_up()
     names = list(args.cases) + (list(WALLS) if args.walls else [])
+    names = names or ["S23"]
     check = args.check_time_steps if args.check else 0
     head = f"{'lambda':>10s} {'status':9s} {'steps':>5s} {'iters':>5s} {'facs':>5s}"
     if check:
