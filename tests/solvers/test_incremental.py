@@ -217,8 +217,8 @@ def test_work_control_resumes_with_half_a_step_after_a_fold(panel_lambda, monkey
     before the fold's halvings fails again more often than half of it, which finds the same
     peak (within the bracket tolerance) with fewer Newton iterations on this panel (481
     against 527, with the secant start of work control). Measured with the secant correction
-    of the joints' tangents off (``secant_rounds=0``): with its default round, the full
-    step takes the fewer iterations here (315 against 370), at the same peak."""
+    of the joints' tangents off (``secant_rounds=0``, the default): with one round of it,
+    the full step takes the fewer iterations here (315 against 370), at the same peak."""
     measured_on = StaticSettings(secant_rounds=0)
     half = pushover(_panel(), measured_on)
     full = pushover(_panel(), replace(measured_on, resume_step=1.0))

@@ -83,17 +83,17 @@ class StaticSettings(LoadPathSettings):
     secant_rounds: before cutting its trust radius, a search that finds no decrease along the
         direction of a tangent factorized at its present state corrects each joint's tangent
         by a Broyden update along the shortest step tried (the change of the joint's actions
-        over it) and solves again, at most this many times a search (0: off). A joint that
-        this step carried through its elastic range, to yield the other way, gets its
-        elastic stiffness instead: its chord would let Newton land on the equilibrium where
-        it yields the other way, which a path of shorter steps does not reach (S23 0.0819
-        and 0.0781 at two step sizes, against 0.0847 as the steps shrink). It passes the
-        kinks where a yielded joint's consistent tangent sends it back through its elastic
-        range. 1 (the default): the 10 017-block wall takes 141 factorizations against 198
-        and 0.61x the CPU, and the 909-block wall 217 against 301; the validation set takes
-        8 % more factorizations, with every lambda within 0.2 %. Two rounds take more
-        factorizations on the validation set and on the 909-block wall (docs/solvers.md,
-        "A secant correction of the joints' tangents").
+        over it) and solves again, at most this many times a search (0: off, the default;
+        never in the damped search of the dead load). A joint that this step carried
+        through its elastic range, to yield the other way, gets its elastic stiffness
+        instead: its chord would let Newton land on the equilibrium where it yields the
+        other way, which a path of shorter steps does not reach (S23 0.0819 and 0.0781 at
+        two step sizes, against 0.0847 as the steps shrink). It passes the kinks where a
+        yielded joint's consistent tangent sends it back through its elastic range. With 1:
+        the 10 017-block wall takes 141 factorizations against 198 and 0.62x the CPU, the
+        909-block wall 217 against 301, every validation lambda moves by under 0.2 %; off
+        because the validation set takes 7.6 % more factorizations and is slower
+        (docs/solvers.md, "A secant correction of the joints' tangents").
     trust_seed: the trust radius of a search with no previous increment to go by (the dead
         load's first live step, a controlled step), in elastic units of the wall
         (``DiscreteProblem.displacement_scale``: the bonded assembly's largest translation
@@ -196,7 +196,7 @@ class StaticSettings(LoadPathSettings):
     creep: float = finite(1e-3)
     search_cuts: int = count(7, least=1)
     trust_seed: float = positive(0.05)
-    secant_rounds: int = count(1, least=0)
+    secant_rounds: int = count(0, least=0)
     radius_floor: float = positive(1e-9)
     max_cuts: int = count(10, least=0)
     limit_cuts: int = count(2, least=0)
