@@ -216,11 +216,14 @@ def test_work_control_resumes_with_half_a_step_after_a_fold(panel_lambda, monkey
     """After a pseudo-transient step has moved the state past a fold, the full step from
     before the fold's halvings fails again more often than half of it, which finds the same
     peak (within the bracket tolerance) with fewer Newton iterations on this panel (481
-    against 527, with the secant start of work control)."""
-    half = pushover(_panel(), StaticSettings())
-    full = pushover(_panel(), StaticSettings(resume_step=1.0))
+    against 527, with the secant start of work control). Measured with the secant correction
+    of the joints' tangents off (``secant_rounds=0``, the default): with one round of it,
+    the full step takes the fewer iterations here (315 against 370), at the same peak."""
+    measured_on = StaticSettings(secant_rounds=0)
+    half = pushover(_panel(), measured_on)
+    full = pushover(_panel(), replace(measured_on, resume_step=1.0))
     assert half.collapse_multiplier == pytest.approx(full.collapse_multiplier, rel=TOL)
-    assert half.collapse_multiplier == pytest.approx(panel_lambda, rel=1e-12)
+    assert half.collapse_multiplier == pytest.approx(panel_lambda, rel=TOL)
     assert half.iterations < full.iterations
 
 

@@ -17,7 +17,7 @@ import pytest
 
 from helpers.walls import on_base
 from masonry_dem.geometry.builders import single_block
-from masonry_dem.solvers.static.problem import DiscreteProblem, secant_tangents
+from masonry_dem.solvers.static.problem import DiscreteProblem, reversed_flow, secant_tangents
 
 
 def _random(m: int, seed: int = 0):
@@ -56,6 +56,16 @@ def test_a_joint_that_did_not_move_keeps_its_tangent():
     S = secant_tangents(T, du, da, kbar)
     assert np.array_equal(S[3], T[3])
     assert not np.array_equal(S[4], T[4])
+
+
+def test_a_joint_whose_flow_reversed_gets_its_elastic_stiffness():
+    T, du, da, kbar = _random(10, seed=4)
+    unloading = np.zeros(10, dtype=bool)
+    unloading[[2, 7]] = True
+    S = secant_tangents(T, du, da, kbar, unloading)
+    assert np.array_equal(S[2], np.diag(kbar[2])) and np.array_equal(S[7], np.diag(kbar[7]))
+    kept = ~unloading
+    assert np.array_equal(S[kept], secant_tangents(T, du, da, kbar)[kept])
 
 
 def _rocking_block() -> DiscreteProblem:
@@ -101,6 +111,44 @@ def test_a_rocking_joint_turned_back_gets_the_moment_flip_of_its_step():
     S = secant_tangents(T, du, da, law.kbar)
     assert np.allclose(np.einsum("ijk,ik->ij", S, du), da, atol=1e-9 * capacity)
     assert 0.0 < S[0, bending, bending] < k
+    # the step took the joint from one face of its domain to the opposite one: its flow
+    # reversed, and the correction gives it its elastic stiffness instead of that chord
+    assert reversed_flow(rocked, back, law.kbar)[0]
+    assert secant_tangents(T, du, da, law.kbar, reversed_flow(rocked, back, law.kbar))[
+        0, bending, bending
+    ] == pytest.approx(k)
+    # rotated on the same way (or back by less than its elastic range) it is not reversed
+    for scale in (-10.0, 0.4):
+        q_on = q.copy()
+        q_on[problem.free] += scale * 2 * capacity / k * unit(bending)
+        _, _, on = problem.residual(q_on, 0.0, plastic, cracked)
+        assert not reversed_flow(rocked, on, law.kbar)[0]
+
+
+@pytest.mark.parametrize("rounds", [None, 2], ids=["default", "two rounds"])
+@pytest.mark.parametrize("divisor", [1, 2, 4])
+def test_s23_does_not_move_with_the_step_size(divisor, rounds):
+    """S23 (a wall with openings, 253 blocks), its path with ``initial_step`` and
+    ``max_step`` divided by 1, 2 and 4, with the default settings and with two rounds of the
+    correction: within 1 % of 0.08472, the value the path converges to as the steps shrink
+    (0.084719-0.084720 from x1 to x1/8 with the correction off). The Broyden update alone
+    (the chord for every joint, also for those the step turned through their elastic range
+    to yield the other way) lands on another equilibrium at some step sizes: 0.0819 at x1
+    with two rounds, 0.0781 at x1/4 with one (``benchmarks/step_sizes.py``; docs/solvers.md,
+    "A secant correction of the joints' tangents")."""
+    from dataclasses import replace
+
+    from masonry_dem.cases.paper import build_case
+    from masonry_dem.solvers.static.solver import StaticSolver
+
+    case = build_case("S23")
+    s = case.settings
+    settings = replace(s, initial_step=s.initial_step / divisor, max_step=s.max_step / divisor)
+    if rounds is not None:
+        settings = replace(settings, secant_rounds=rounds)
+    hist = StaticSolver(case.model, settings).run(monitor=case.monitor)
+    assert hist.status == "collapse", hist.reason
+    assert hist.collapse_multiplier == pytest.approx(0.08472, rel=0.01)
 
 
 def test_a_negative_number_of_rounds_is_refused_by_name():

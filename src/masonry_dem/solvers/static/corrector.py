@@ -27,7 +27,7 @@ import numpy as np
 from masonry_dem.model import Model
 from masonry_dem.solvers.factorization import Factors
 from masonry_dem.solvers.static.outcome import Failure, Outcome
-from masonry_dem.solvers.static.problem import DiscreteProblem, secant_tangents
+from masonry_dem.solvers.static.problem import DiscreteProblem, reversed_flow, secant_tangents
 from masonry_dem.solvers.static.settings import StaticSettings
 
 if TYPE_CHECKING:
@@ -134,7 +134,10 @@ class Corrector:
         shortest step tried (:func:`secant_tangents`) and the direction solved again: where
         the consistent tangent of a yielded joint sends it back through its elastic range
         (a rocking joint turned the other way), no step length lowers the residual, and the
-        corrected tangent carries what that joint did over the step.
+        corrected tangent carries what that joint did over the step. A joint that the step
+        carried through its elastic range to yield the other way (:func:`reversed_flow`)
+        gets its elastic stiffness instead of that chord, which would pick the equilibrium
+        where it yields the other way (another branch of the path).
         """
         s = self.settings
         free = self.problem.asm.free_index
@@ -249,9 +252,11 @@ class Corrector:
             if accepted is None and not here:  # a stale tangent: refactor before cutting
                 lu = None
                 continue
-            if accepted is None and not repeat and rounds < s.secant_rounds:
+            if accepted is None and not repeat and not damped and rounds < s.secant_rounds:
                 # the tangent mispredicts the joints over every step tried: correct each
-                # joint's tangent by what it did over the shortest one, and solve again
+                # joint's tangent by what it did over the shortest one, and solve again (not
+                # in the damped search of the dead load: it starts from the unloaded wall, no
+                # joint has yielded on a path, and its fallback is the floor)
                 base = (
                     secant if secant is not None else self.problem.joint_tangents(response, floor)
                 )
@@ -260,6 +265,7 @@ class Corrector:
                     self.problem.relative(f * dq),
                     resp_try.actions - response.actions,
                     self.law.kbar,
+                    reversed_flow(response, resp_try, self.law.kbar),
                 )
                 lu, rounds = None, rounds + 1
                 continue
