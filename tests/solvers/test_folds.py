@@ -62,7 +62,9 @@ def test_without_the_corner_check_the_first_fold_of_s13_2_is_certified():
     peak), as on d01d26a: pinned, and the certificate says where the path stopped: at a
     corner, still rising at 0.17 of its elastic slope, unchecked."""
     case = build_case("S13", restraint="return-walls", return_blocks=2)
-    solver = StaticSolver(case.model, replace(case.settings, fold_check_time_steps=0))
+    solver = StaticSolver(
+        case.model, replace(case.settings, fold_check_time_steps=0, transient_reach=0.0)
+    )
     history = solver.run()
     assert history.status == "collapse"
     assert history.collapse_multiplier == pytest.approx(0.08551, rel=1e-3)
@@ -114,7 +116,8 @@ def test_one_measure_of_a_corner_serves_the_stop_check_and_the_certificate(
 
 
 def test_a_search_that_runs_off_at_a_rising_corner_is_measured_once_and_checked():
-    """S6 with 2-block return walls. Without the corner check (as on d01d26a) the path stops
+    """S6 with 2-block return walls. Without the corner check and with the pseudo-transient
+    step's rise of 0.5 % only (``transient_reach=0``, as on d01d26a) the path stops
     at lambda 0.0455, where the searches from the last state run past the displacement limit
     (14.1 mm, half the smallest moving block) while the curve still rose into it at 0.8 of
     its elastic slope. The stop reason then gave the limit as if a mechanism had formed,
@@ -124,7 +127,9 @@ def test_a_search_that_runs_off_at_a_rising_corner_is_measured_once_and_checked(
     default such a stop is a corner too, and the check passes it: the path goes on to a
     certified collapse at 0.108, under the associative bound 0.1133."""
     case = build_case("S6", restraint="return-walls", return_blocks=2)
-    solver = StaticSolver(case.model, replace(case.settings, fold_check_time_steps=0))
+    solver = StaticSolver(
+        case.model, replace(case.settings, fold_check_time_steps=0, transient_reach=0.0)
+    )
     hist = solver.run(monitor=case.monitor)
     assert hist.status == "failed" and hist.stop is StopReason.DISPLACEMENT_LIMIT
     moved = moved_from_dead_load(solver.problem, hist, solver.q)

@@ -135,7 +135,9 @@ def test_s23_does_not_move_with_the_step_size(divisor, rounds):
     (the chord for every joint, also for those the step turned through their elastic range
     to yield the other way) lands on another equilibrium at some step sizes: 0.0819 at x1
     with two rounds, 0.0781 at x1/4 with one (``benchmarks/step_sizes.py``; docs/solvers.md,
-    "A secant correction of the joints' tangents")."""
+    "A secant correction of the joints' tangents"). The corner check is off: it is the
+    path's own stop that must not move (with the check, the stop at 0.0847 is a fold the
+    check passes, test_certificate)."""
     from dataclasses import replace
 
     from masonry_dem.cases.paper import build_case
@@ -143,7 +145,12 @@ def test_s23_does_not_move_with_the_step_size(divisor, rounds):
 
     case = build_case("S23")
     s = case.settings
-    settings = replace(s, initial_step=s.initial_step / divisor, max_step=s.max_step / divisor)
+    settings = replace(
+        s,
+        initial_step=s.initial_step / divisor,
+        max_step=s.max_step / divisor,
+        fold_check_time_steps=0,
+    )
     if rounds is not None:
         settings = replace(settings, secant_rounds=rounds)
     hist = StaticSolver(case.model, settings).run(monitor=case.monitor)
