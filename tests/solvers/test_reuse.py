@@ -17,7 +17,6 @@ from masonry_dem.geometry import builders
 from masonry_dem.solvers import factorization as fz
 from masonry_dem.solvers.incremental import StaticSettings, StaticSolver
 from masonry_dem.solvers.krylov import gmres
-from masonry_dem.solvers.static import problem as problem_module
 
 
 def _matrix_and_change(n: int, rank: int, seed: int):
@@ -67,12 +66,10 @@ def test_reused_factorizations_reach_the_same_equilibria(backend, monkeypatch):
     """The same pushover with a factorization per tangent and with GMRES on the newest
     factors (to 1e-10): the same path (steps and their load factors within 1e-7, the
     displacements of every step within 1e-6 of the largest) and the same collapse
-    multiplier within 1e-7, with fewer factorizations; reuse is forced at every size
-    (``REUSE_FROM`` = 0)."""
+    multiplier within 1e-7, with fewer factorizations."""
     if backend not in fz.installed():
         pytest.skip(f"{backend} is not installed")
     monkeypatch.setenv(fz.ENVIRONMENT, backend)
-    monkeypatch.setattr(problem_module, "REUSE_FROM", 0)
     runs = []
     for iterations in (0, 12):
         solver = StaticSolver(
@@ -89,13 +86,6 @@ def test_reused_factorizations_reach_the_same_equilibria(backend, monkeypatch):
         np.testing.assert_allclose(b.q, a.q, rtol=0, atol=1e-6 * scale)
     assert reused.problem.krylov_solves > 0  # the reuse did take place
     assert reused.factorizations < fresh.factorizations
-
-
-def test_below_reuse_from_every_tangent_is_factorized(monkeypatch):
-    monkeypatch.setattr(problem_module, "REUSE_FROM", 10**9)
-    solver = StaticSolver(_wall(), StaticSettings(krylov_iterations=12))
-    solver.run()
-    assert solver.problem.krylov_iterations == 0
 
 
 @pytest.mark.parametrize(

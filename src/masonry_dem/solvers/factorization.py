@@ -10,8 +10,8 @@ Backends (``BACKENDS``), each an ordinary library:
 * ``"superlu"`` (scipy, always present): the minimum-degree ordering of A^T + A worked out
   once, later matrices permuted by one gather of their entries and factorized with diagonal
   pivots (SuperLU's symmetric mode); partial pivoting (COLAMD) where a diagonal pivot is zero.
-* ``"pardiso"`` (Intel MKL PARDISO through ``pypardiso``; x86-64): the analysis (METIS
-  ordering, matching and scaling, symbolic factorization) with the first matrix, then a
+* ``"pardiso"`` (Intel MKL PARDISO through ``pypardiso``; x86-64): the analysis (minimum
+  degree ordering, matching and scaling, symbolic factorization) with the first matrix, then a
   numeric factorization per matrix, on one MKL thread below ``PARALLEL_FROM`` unknowns and
   on ``numba.get_num_threads()`` from it (so one knob, ``NUMBA_NUM_THREADS``, sets the
   threads of every kernel), fixed for the handle at its analysis (PARDISO sizes its work
@@ -294,8 +294,8 @@ def _point_pypardiso_at_mkl() -> None:
 
 
 class _Pardiso:
-    """MKL PARDISO, real unsymmetric (mtype 11: METIS ordering, weighted matching and
-    scaling, pivots perturbed rather than refused, iterative refinement). The analysis
+    """MKL PARDISO, real unsymmetric (mtype 11: minimum-degree ordering, weighted matching
+    and scaling, pivots perturbed rather than refused, iterative refinement). The analysis
     (phase 11) runs with the first matrix, whose values the matching and scaling use."""
 
     name = "pardiso"
@@ -307,9 +307,14 @@ class _Pardiso:
         self.n = n
         self.solver = PyPardisoSolver(mtype=11)
         self.solver.set_iparm(1, 1)  # iparm given (not the defaults)
-        for i, value in {2: 2, 8: 0, 10: 13, 11: 1, 13: 1, 35: 0}.items():
-            # METIS, refinement only after a perturbed pivot, perturbation 1e-13, scaling,
-            # matching
+        for i, value in {2: 0, 8: 0, 10: 13, 11: 1, 13: 1, 35: 0}.items():
+            # the minimum-degree ordering, refinement only after a perturbed pivot,
+            # perturbation 1e-13, scaling, matching. Minimum degree rather than METIS: on
+            # the tangents of the benchmark walls (300-60 000 unknowns) METIS took 1.03-1.45x
+            # the time of a factorization and solve, in one run on one thread
+            # (``python benchmarks/bench_scale.py --pardiso-options``; docs/solvers.md,
+            # "Cheaper linear solves"). The matching and scaling cost nothing measurable and
+            # keep large entries on the diagonal where a yielded joint leaves a small one.
             self.solver.set_iparm(i, value)
         ia, ja, self.gather = _transpose_gather(indptr, indices, n)
         self.layout: np.ndarray | None = self.gather  # PARDISO stores the CSR order

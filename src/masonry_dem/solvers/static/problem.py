@@ -23,10 +23,6 @@ from masonry_dem.model import Model
 from masonry_dem.solvers.factorization import Factorizer, Factors, SingularMatrix, analyse
 from masonry_dem.solvers.krylov import gmres
 
-#: tangents of fewer unknowns are always factorized afresh (:meth:`DiscreteProblem.tangent_solve`):
-#: there a factorization costs little more than a solve, so a GMRES iteration saves nothing
-REUSE_FROM = 0
-
 
 @kernel(parallel=True, fastmath={"contract"})
 def _assemble_tangent(H_loc: np.ndarray, T: np.ndarray, terms: np.ndarray, ptr: np.ndarray):
@@ -375,11 +371,11 @@ class DiscreteProblem:
         solve runs GMRES preconditioned with the newest factors of a tangent (at most
         ``iterations`` iterations, to ``tolerance`` x the right-hand side in the residual's
         norm), and factorizes this tangent only when GMRES does not get there (from then on
-        it solves with those factors). ``iterations`` 0, no earlier factorization, or a
-        system under ``REUSE_FROM`` unknowns: the factors of :meth:`factor`."""
+        it solves with those factors). ``iterations`` 0, or no earlier factorization: the
+        factors of :meth:`factor`."""
         if floor is None:
             floor = self.residual_stiffness
-        if iterations == 0 or self._newest is None or self._tangents.n < REUSE_FROM:
+        if iterations == 0 or self._newest is None:
             return self.factor(response, floor, tangents)
         T = self.joint_tangents(response, floor) if tangents is None else tangents.copy()
         return _Reused(self, T, iterations, tolerance)
