@@ -303,9 +303,9 @@ def small_walls(repeat: int) -> None:
 #: MKL's manual numbers them from 1, and as ``pypardiso.set_iparm`` takes it) -> value
 PARDISO_VARIANTS = {
     "package": {},
-    "metis": {2: 2},  # the nested-dissection ordering (the package's before session 15)
-    "no matching": {11: 0, 13: 0},  # neither scaling nor weighted matching (MC64)
-    "metis, no matching": {2: 2, 11: 0, 13: 0},
+    "metis": {2: 2},  # the nested-dissection ordering
+    "matching": {11: 1, 13: 1},  # scaling and weighted matching (MC64)
+    "metis+matching": {2: 2, 11: 1, 13: 1},  # the options before session 15
 }
 
 
