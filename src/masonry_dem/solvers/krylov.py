@@ -5,7 +5,7 @@ change of low rank against the whole matrix. With the LU factors P of an earlier
 preconditioner, K P^-1 is the identity plus that change, and GMRES converges in about as many
 iterations as the change has rank (exactly so in exact arithmetic). Each iteration costs one
 solve with P and one product with K, far less than a factorization of K on all but the
-smallest walls (``docs/solvers.md``, "Reusing a factorization").
+smallest walls (``docs/solvers.md``, "Cheaper linear solves").
 """
 
 from __future__ import annotations

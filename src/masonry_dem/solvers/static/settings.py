@@ -81,13 +81,15 @@ class StaticSettings(LoadPathSettings):
         state, leaves the tangent as it was (its factorization is kept).
     search_cuts: a search gives up after this many cuts (by 8) of its trust radius.
     krylov_iterations: a Newton iteration solves its tangent by GMRES preconditioned with
-        the newest factorization of a tangent, in at most this many iterations, and
-        factorizes its tangent only when GMRES does not reach ``krylov_tolerance`` in them
-        (0: a factorization per tangent). Between two iterations the tangent changes only in
-        the joints that changed state, a change of low rank, and GMRES converges in about as
-        many iterations as it has rank; each costs a solve with the old factors, so it pays
-        while that many solves cost less than a factorization (docs/solvers.md, "Reusing a
-        factorization").
+        the newest factorization of a tangent, within a budget of this many GMRES iterations
+        per tangent (over all its solves), and factorizes its tangent only when GMRES does
+        not reach ``krylov_tolerance`` within it (0, the default: a factorization per
+        tangent). Between two iterations the tangent changes only in the joints that changed
+        state, a change of low rank, and GMRES converges in about as many iterations as it
+        has rank; each costs a solve with the old factors, so it pays while that many solves
+        cost less than a factorization. Off because on the measured walls (250-60 000
+        unknowns) they do not: the same answers and 19-23 % fewer factorizations, but
+        1.4-1.6x the CPU (docs/solvers.md, "Cheaper linear solves").
     krylov_tolerance: that GMRES solve is done when its residual is this fraction of the
         right-hand side (in the residual's norm). Small enough that the inexact Newton
         direction is the exact one for every decision of the search (an inexact Newton
