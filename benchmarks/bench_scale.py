@@ -314,7 +314,9 @@ def pardiso_options(sizes: list[int], repeat: int) -> None:
     (kvxopt, symbolic once, numeric per matrix) when installed, on the dead-load tangents of
     ``scale_wall(N)``: the median of ``repeat`` factorizations each followed by a solve, the
     variants in turn in this process, as a ratio to the package's PARDISO (one thread: run
-    with NUMBA_NUM_THREADS=1 MKL_NUM_THREADS=1)."""
+    with NUMBA_NUM_THREADS=1 MKL_NUM_THREADS=1), and the entries of the LU factors of each
+    PARDISO variant and the operations of its factorization (PARDISO's own counts,
+    iparm(18) and iparm(19): they do not depend on the load of the machine)."""
     import importlib.util
     import warnings
 
@@ -331,11 +333,14 @@ def pardiso_options(sizes: list[int], repeat: int) -> None:
         t = solver.problem.tangent_assembler
         b = np.random.default_rng(0).standard_normal(t.n)
         runs: dict = {}
+        fill = {}
         for name, iparm in PARDISO_VARIANTS.items():
             f = fz._Pardiso(t.indptr, t.indices, t.n)
-            for i, value in iparm.items():
+            # iparm(18) = iparm(19) = -1: report the fill and the factorization's operations
+            for i, value in {18: -1, 19: -1, **iparm}.items():
                 f.solver.set_iparm(i, value)
             f.factor(data)
+            fill[name] = (int(f.solver.iparm[17]), int(f.solver.iparm[18]))  # LU entries, MFLOP
             runs[name] = lambda f=f, data=data, b=b: f.factor(data).solve(b)
         if klu:
             runs["klu"] = _klu_run(t, data, b)
@@ -348,6 +353,8 @@ def pardiso_options(sizes: list[int], repeat: int) -> None:
         ref = float(np.median(times["package"]))
         cells = " ".join(f"{np.median(times[k]) / ref:>15.2f}" for k in names[1:])
         print(f"{solver.model.blocks.count:>6} {t.n:>6} {ref * 1e3:>10.3f} {cells}", flush=True)
+        print(f"{'':>6} {'':>6} {'LU entries':>10} " + " ".join(f"{fill[k][0]:>15,d}" for k in PARDISO_VARIANTS), flush=True)  # fmt: skip
+        print(f"{'':>6} {'':>6} {'MFLOP':>10} " + " ".join(f"{fill[k][1]:>15,d}" for k in PARDISO_VARIANTS), flush=True)  # fmt: skip
 
 
 def _klu_run(t, data: np.ndarray, b: np.ndarray):

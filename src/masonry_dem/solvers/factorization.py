@@ -314,7 +314,8 @@ class _Pardiso:
             # pivots serve, as in SuperLU's symmetric mode. METIS with the matching and
             # scaling (the options before session 15) took 1.06-1.33x the time of a
             # factorization and solve from 300 to 60 000 unknowns, in one run on one thread
-            # (``python benchmarks/bench_scale.py --pardiso-options``; docs/solvers.md,
+            # (``python benchmarks/bench_scale.py --pardiso-options``, which also prints the
+            # fill and operations: fewer with minimum degree at every size; docs/solvers.md,
             # "Cheaper linear solves").
             self.solver.set_iparm(i, value)
         ia, ja, self.gather = _transpose_gather(indptr, indices, n)
