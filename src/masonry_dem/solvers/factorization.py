@@ -312,7 +312,7 @@ class _Pardiso:
             # perturbation 1e-13, no scaling, no matching. The tangent is structurally
             # symmetric with a regular diagonal (the residual stiffness), so its diagonal
             # pivots serve, as in SuperLU's symmetric mode. METIS with the matching and
-            # scaling (the options before session 15) took 1.06-1.33x the time of a
+            # scaling (the options before session 15) took 1.05-1.33x the time of a
             # factorization and solve from 300 to 60 000 unknowns, in one run on one thread
             # (``python benchmarks/bench_scale.py --pardiso-options``, which also prints the
             # fill and operations: fewer with minimum degree at every size; docs/solvers.md,
