@@ -6,6 +6,7 @@ Run:  python benchmarks/bench_scale.py [--sizes 10 30 100 316] [--pushover-up-to
                                        [--pushover-budget S] [--multifrontal-from REF]
                                        [--no-pushover] [--json FILE]
        python benchmarks/bench_scale.py --small [--repeat 200]   # the backends, 6-2 400 DOFs
+       python benchmarks/bench_scale.py --pardiso-options --sizes 12 16 30 100 [--repeat 40]
 
 The walls (``scale_wall``) are a family a structural engineer would analyse, chosen by two
 stated rules, not tuned to the solver: the bundled default block (Orduna's a = 0.081,
@@ -298,6 +299,88 @@ def small_walls(repeat: int) -> None:
         print(f"{solver.model.blocks.count:>6} {t.n:>5} {cells}", flush=True)
 
 
+#: PARDISO's options against the package's (``factorization._Pardiso``): iparm number (as
+#: MKL's manual numbers them from 1, and as ``pypardiso.set_iparm`` takes it) -> value
+PARDISO_VARIANTS = {
+    "package": {},
+    "metis": {2: 2},  # the nested-dissection ordering
+    "matching": {11: 1, 13: 1},  # scaling and weighted matching (MC64)
+    "metis+matching": {2: 2, 11: 1, 13: 1},  # the options before session 15
+}
+
+
+def pardiso_options(sizes: list[int], repeat: int) -> None:
+    """PARDISO with other orderings and with the weighted matching and scaling, and KLU
+    (kvxopt, symbolic once, numeric per matrix) when installed, on the dead-load tangents of
+    ``scale_wall(N)``: the median of ``repeat`` factorizations each followed by a solve, the
+    variants in turn in this process, as a ratio to the package's PARDISO (one thread: run
+    with NUMBA_NUM_THREADS=1 MKL_NUM_THREADS=1), and the entries of the LU factors of each
+    PARDISO variant and the operations of its factorization (PARDISO's own counts,
+    iparm(18) and iparm(19): they do not depend on the load of the machine)."""
+    import importlib.util
+    import warnings
+
+    from masonry_dem.solvers import factorization as fz
+
+    warnings.filterwarnings("ignore", module="pypardiso")  # "0 is no input iparm"
+    klu = importlib.util.find_spec("kvxopt") is not None
+    names = list(PARDISO_VARIANTS) + (["klu"] if klu else [])
+    print(
+        f"{'blocks':>6} {'DOFs':>6} {'package ms':>10} " + " ".join(f"{b:>15}" for b in names[1:])
+    )
+    for n in sizes:
+        solver, data = _dead_load_tangent(scale_wall(n))
+        t = solver.problem.tangent_assembler
+        b = np.random.default_rng(0).standard_normal(t.n)
+        runs: dict = {}
+        fill = {}
+        for name, iparm in PARDISO_VARIANTS.items():
+            f = fz._Pardiso(t.indptr, t.indices, t.n)
+            # iparm(18) = iparm(19) = -1: report the fill and the factorization's operations
+            for i, value in {18: -1, 19: -1, **iparm}.items():
+                f.solver.set_iparm(i, value)
+            f.factor(data)
+            fill[name] = (int(f.solver.iparm[17]), int(f.solver.iparm[18]))  # LU entries, MFLOP
+            runs[name] = lambda f=f, data=data, b=b: f.factor(data).solve(b)
+        if klu:
+            runs["klu"] = _klu_run(t, data, b)
+        times: dict[str, list[float]] = {k: [] for k in runs}
+        for _ in range(repeat):
+            for k, run in runs.items():
+                t0 = time.perf_counter()
+                run()
+                times[k].append(time.perf_counter() - t0)
+        ref = float(np.median(times["package"]))
+        cells = " ".join(f"{np.median(times[k]) / ref:>15.2f}" for k in names[1:])
+        print(f"{solver.model.blocks.count:>6} {t.n:>6} {ref * 1e3:>10.3f} {cells}", flush=True)
+        print(f"{'':>6} {'':>6} {'LU entries':>10} " + " ".join(f"{fill[k][0]:>15,d}" for k in PARDISO_VARIANTS), flush=True)  # fmt: skip
+        print(f"{'':>6} {'':>6} {'MFLOP':>10} " + " ".join(f"{fill[k][1]:>15,d}" for k in PARDISO_VARIANTS), flush=True)  # fmt: skip
+
+
+def _klu_run(t, data: np.ndarray, b: np.ndarray):
+    """A factorization and solve by KLU (kvxopt.klu), its symbolic analysis done once."""
+    import importlib
+
+    kvxopt = importlib.import_module("kvxopt")
+    klu = importlib.import_module("kvxopt.klu")
+    cols = np.repeat(np.arange(t.n, dtype=np.int64), np.diff(t.indptr))
+    A = kvxopt.spmatrix(
+        kvxopt.matrix(data.copy()),
+        kvxopt.matrix(t.indices.astype(np.int64)),
+        kvxopt.matrix(cols),
+        (t.n, t.n),
+    )
+    symbolic = klu.symbolic(A)
+
+    def run() -> None:
+        A.V = kvxopt.matrix(data)
+        numeric = klu.numeric(A, symbolic)
+        x = kvxopt.matrix(b)
+        klu.solve(A, symbolic, numeric, x)
+
+    return run
+
+
 class _OverBudget(Exception):
     pass
 
@@ -409,7 +492,15 @@ def main() -> int:
     p.add_argument("--json", default=None, help="also write the results to this file")
     p.add_argument("--small", action="store_true",
                    help="only the backends on small walls (6-2 400 DOFs), in this process")  # fmt: skip
+    p.add_argument("--pardiso-options", action="store_true",
+                   help="only PARDISO's ordering and matching variants and KLU on --sizes, in this process")  # fmt: skip
     args = p.parse_args()
+    if args.pardiso_options:
+        from masonry_dem.studies.runs import warm_up
+
+        warm_up()
+        pardiso_options(args.sizes, args.repeat)
+        return 0
     if any(t < 1 for t in args.threads):
         p.error(f"--threads must be positive counts, got {args.threads}")
     if args.small:

@@ -247,3 +247,33 @@ def test_a_pardiso_handle_keeps_the_threads_of_its_analysis(monkeypatch):
 def test_pardiso_takes_one_thread_below_parallel_from():
     M = random_matrix(50, 0.1, 3)
     assert fz.analyse(M.indptr, M.indices, 50, "pardiso").threads == 1
+
+
+@pytest.mark.parametrize("backend", EVERY)
+@pytest.mark.parametrize(("seed", "fraction"), [(0, 0.9), (1, 1.0)])
+def test_tangents_with_joints_left_only_their_normal_stiffness_solve_as_a_dense_solve(
+    backend, seed, fraction
+):
+    """Joints of no strength at zero compression keep only their normal stiffness and a
+    floor of 1e-9 x kbar on the other diagonal terms (``DiscreteProblem._zero_capacity_
+    tangent``). With most joints so (a dry wall under its own weight), shear and rotation of
+    the blocks are held by the floor alone: a tangent whose condition number is about 1e12,
+    whose diagonal entries span nine orders, the case PARDISO's weighted matching was for;
+    since session 15 it pivots on the diagonal. Each backend must leave a backward error
+    |K x - b| / (|K| |x|) of round-off (1e-14; a bad pivot leaves orders more) and agree
+    with a dense solve as far as the conditioning allows (1e-4 of the largest entry)."""
+    tangents, T = wall_tangents(seed)
+    rng = np.random.default_rng(seed)
+    reduced = rng.random(T.shape[0]) < fraction
+    normal = T[reduced, 2, 2].copy()
+    T[reduced] = 0.0
+    T[reduced, np.arange(6)[:, None], np.arange(6)[:, None]] = 1e-9 * 1e9
+    T[reduced, 2, 2] = normal
+    K = tangents.matrix(T)
+    factorizer = fz.analyse(tangents.indptr, tangents.indices, tangents.n, backend)
+    b = rng.uniform(-1.0, 1.0, tangents.n)
+    x = factorizer.factor(K.data).solve(b)
+    reference = np.linalg.solve(K.toarray(), b)
+    assert np.linalg.cond(K.toarray()) > 1e11  # as ill conditioned as intended
+    assert np.abs(K @ x - b).max() <= 1e-14 * np.abs(K).max() * np.abs(x).max()
+    np.testing.assert_allclose(x, reference, rtol=0, atol=1e-4 * np.abs(reference).max())

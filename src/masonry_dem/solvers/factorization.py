@@ -10,8 +10,8 @@ Backends (``BACKENDS``), each an ordinary library:
 * ``"superlu"`` (scipy, always present): the minimum-degree ordering of A^T + A worked out
   once, later matrices permuted by one gather of their entries and factorized with diagonal
   pivots (SuperLU's symmetric mode); partial pivoting (COLAMD) where a diagonal pivot is zero.
-* ``"pardiso"`` (Intel MKL PARDISO through ``pypardiso``; x86-64): the analysis (METIS
-  ordering, matching and scaling, symbolic factorization) with the first matrix, then a
+* ``"pardiso"`` (Intel MKL PARDISO through ``pypardiso``; x86-64): the analysis (minimum
+  degree ordering, symbolic factorization) with the first matrix, then a
   numeric factorization per matrix, on one MKL thread below ``PARALLEL_FROM`` unknowns and
   on ``numba.get_num_threads()`` from it (so one knob, ``NUMBA_NUM_THREADS``, sets the
   threads of every kernel), fixed for the handle at its analysis (PARDISO sizes its work
@@ -294,9 +294,9 @@ def _point_pypardiso_at_mkl() -> None:
 
 
 class _Pardiso:
-    """MKL PARDISO, real unsymmetric (mtype 11: METIS ordering, weighted matching and
-    scaling, pivots perturbed rather than refused, iterative refinement). The analysis
-    (phase 11) runs with the first matrix, whose values the matching and scaling use."""
+    """MKL PARDISO, real unsymmetric (mtype 11: minimum-degree ordering, diagonal pivots
+    perturbed rather than refused, iterative refinement after a perturbed pivot). The
+    analysis (phase 11) runs with the first matrix."""
 
     name = "pardiso"
 
@@ -307,9 +307,16 @@ class _Pardiso:
         self.n = n
         self.solver = PyPardisoSolver(mtype=11)
         self.solver.set_iparm(1, 1)  # iparm given (not the defaults)
-        for i, value in {2: 2, 8: 0, 10: 13, 11: 1, 13: 1, 35: 0}.items():
-            # METIS, refinement only after a perturbed pivot, perturbation 1e-13, scaling,
-            # matching
+        for i, value in {2: 0, 8: 0, 10: 13, 11: 0, 13: 0, 35: 0}.items():
+            # the minimum-degree ordering, refinement only after a perturbed pivot,
+            # perturbation 1e-13, no scaling, no matching. The tangent is structurally
+            # symmetric with a regular diagonal (the residual stiffness), so its diagonal
+            # pivots serve, as in SuperLU's symmetric mode. METIS with the matching and
+            # scaling (the options before session 15) took 1.05-1.33x the time of a
+            # factorization and solve from 300 to 60 000 unknowns, in one run on one thread
+            # (``python benchmarks/bench_scale.py --pardiso-options``, which also prints the
+            # fill and operations: fewer with minimum degree at every size; docs/solvers.md,
+            # "Cheaper linear solves").
             self.solver.set_iparm(i, value)
         ia, ja, self.gather = _transpose_gather(indptr, indices, n)
         self.layout: np.ndarray | None = self.gather  # PARDISO stores the CSR order
@@ -389,7 +396,7 @@ class _Pardiso:
         return self._factor()
 
     def _factor(self) -> Factors:
-        # the first matrix is analysed with its values (the matching and scaling use them)
+        # phase 12 (analysis and factorization) for the first matrix, 22 after it
         self._call(22 if self.analysed else 12)
         self.analysed = True
         return _HeldFactors("pardiso", self.generations, self.solve)
