@@ -105,11 +105,6 @@ def at_least(default: float, least: float, note: str = "") -> float:
     return checked(default, lambda v: _finite(v) and v >= least, f"a number >= {least:g}{note}")
 
 
-def fraction(default: float) -> float:
-    """A field that takes a number strictly between 0 and 1."""
-    return checked(default, lambda v: _finite(v) and 0 < v < 1, "a number between 0 and 1")
-
-
 def finite(default: float) -> float:
     """A field that takes any finite number."""
     return checked(default, _finite, "a finite number")

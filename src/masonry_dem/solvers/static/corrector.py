@@ -197,9 +197,7 @@ class Corrector:
             self.iterations += 1
             fresh = lu is None
             if lu is None:
-                lu = self.problem.tangent_solver(
-                    response, floor, secant, s.krylov_iterations, s.krylov_tolerance
-                )
+                lu = self.problem.factor(response, floor, secant)
                 here = True  # the tangent of this state (False once a step is taken with it)
             repeat = cut and not fresh  # same state, same tangent: the same direction
             cut = False

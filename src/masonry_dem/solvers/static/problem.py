@@ -21,7 +21,6 @@ from masonry_dem.constitutive.law import CONTACT_BAND, InterfaceLaw, LawResponse
 from masonry_dem.jit import kernel
 from masonry_dem.model import Model
 from masonry_dem.solvers.factorization import Factorizer, Factors, SingularMatrix, analyse
-from masonry_dem.solvers.krylov import gmres
 
 
 @kernel(parallel=True, fastmath={"contract"})
@@ -288,11 +287,6 @@ class DiscreteProblem:
         self.moving_translations = free[self.translation]  # DOF numbers
         self.factorizations = 0
         self._fronts: Factorizer | None = None  # the tangent's pattern, analysed once
-        #: the newest factors of a tangent (the preconditioner of :meth:`tangent_solver`)
-        self._newest: Factors | None = None
-        #: GMRES iterations of the reused factorizations, and their solves that converged
-        self.krylov_iterations = 0
-        self.krylov_solves = 0
         self._elastic: Factors | None = None
         self._scale: float | None = None
         #: (lambda, dead factor), F_ext and its weighted norm of the last residual
@@ -371,43 +365,15 @@ class DiscreteProblem:
         if floor is None:
             floor = self.residual_stiffness
         T = self.joint_tangents(response, floor) if tangents is None else tangents.copy()
-        return self._factor_values(T, self._tangents.data(T, self._factorizer().layout))
-
-    def _factor_values(self, T: np.ndarray, values: np.ndarray) -> Factors:
-        """The factors of the tangent of joint tangents T, assembled already (``values``, in
-        the backend's order); they become the preconditioner of later reused solves."""
         fronts = self._factorizer()
+        values = self._tangents.data(T, fronts.layout)  # in the backend's own order
         self.factorizations += 1
         try:
-            factors = fronts.factor_laid_out(values)
+            return fronts.factor_laid_out(values)
         except SingularMatrix:  # exactly singular: stiffen the floor
             idx = np.arange(6)
-            T = T.copy()
             T[:, idx, idx] += 1e-6 * self.law.kbar
-            factors = fronts.factor_laid_out(self._tangents.data(T, fronts.layout))
-        self._newest = factors
-        return factors
-
-    def tangent_solver(
-        self,
-        response: LawResponse,
-        floor: float | None = None,
-        tangents: np.ndarray | None = None,
-        iterations: int = 0,
-        tolerance: float = 1e-6,
-    ) -> Factors:
-        """A solver of the tangent of :meth:`factor`, reusing the newest factorization: each
-        solve runs GMRES preconditioned with the newest factors of a tangent (at most
-        ``iterations`` iterations, to ``tolerance`` x the right-hand side in the residual's
-        norm), and factorizes this tangent only when GMRES does not get there (from then on
-        it solves with those factors). ``iterations`` 0, or no earlier factorization: the
-        factors of :meth:`factor`."""
-        if floor is None:
-            floor = self.residual_stiffness
-        if iterations == 0 or self._newest is None:
-            return self.factor(response, floor, tangents)
-        T = self.joint_tangents(response, floor) if tangents is None else tangents.copy()
-        return _Reused(self, T, iterations, tolerance)
+            return fronts.factor_laid_out(self._tangents.data(T, fronts.layout))
 
     def relative(self, dq: np.ndarray) -> np.ndarray:
         """(m, 6) relative displacements of the joints for an increment ``dq`` of the free
@@ -467,46 +433,3 @@ class DiscreteProblem:
             return math.inf
         size = float(np.abs(x[self.translation]).max(initial=0.0))
         return size if math.isfinite(size) else math.inf
-
-
-class _Reused:
-    """The solves of one tangent by GMRES preconditioned with the problem's newest factors
-    (:meth:`DiscreteProblem.tangent_solver`); the tangent is factorized at its first solve
-    that GMRES cannot do in its iterations, and solves with its own factors from then on."""
-
-    def __init__(
-        self, problem: DiscreteProblem, T: np.ndarray, iterations: int, tolerance: float
-    ) -> None:
-        self.problem = problem
-        self.T = T
-        fronts = problem._factorizer()
-        assembler = problem._tangents
-        self.values = assembler.data(T, fronts.layout)
-        data = self.values
-        if fronts.layout is not None:  # back to the CSC order of the pattern
-            data = np.empty_like(self.values)
-            data[fronts.layout] = self.values
-        self.matrix = assembler.matrix(T, data)
-        self.iterations = iterations
-        self.tolerance = tolerance
-        self.own: Factors | None = None
-
-    def solve(self, b: np.ndarray) -> np.ndarray:
-        if b.ndim == 2:
-            return np.stack([self.solve(column) for column in b.T], axis=1)
-        p = self.problem
-        if self.own is None and self.iterations > 0:
-            assert p._newest is not None  # a reused solver is made only after a factorization
-            x, spent = gmres(
-                self.matrix.__matmul__, p._newest, b, p.weight, self.iterations, self.tolerance
-            )
-            p.krylov_iterations += spent
-            # the iterations are a budget of the tangent, not of each solve: once its solves
-            # have cost as much as a factorization, the next one factorizes it
-            self.iterations -= spent
-            if x is not None:
-                p.krylov_solves += 1
-                return x
-        if self.own is None:
-            self.own = p._factor_values(self.T, self.values)
-        return self.own.solve(b)

@@ -6,7 +6,7 @@ from __future__ import annotations
 from dataclasses import dataclass, fields
 from typing import Literal, get_args
 
-from masonry_dem._validation import at_least, choice, count, finite, fraction, positive
+from masonry_dem._validation import at_least, choice, count, finite, positive
 from masonry_dem.constitutive.law import TANGENT_METHODS, TangentMethod
 from masonry_dem.model import DofName
 from masonry_dem.solvers.load_path import LoadPathSettings
@@ -80,21 +80,6 @@ class StaticSettings(LoadPathSettings):
     creep: a step shorter than this fraction of the Newton correction, with no joint changing
         state, leaves the tangent as it was (its factorization is kept).
     search_cuts: a search gives up after this many cuts (by 8) of its trust radius.
-    krylov_iterations: a Newton iteration solves its tangent by GMRES preconditioned with
-        the newest factorization of a tangent, within a budget of this many GMRES iterations
-        per tangent (over all its solves), and factorizes its tangent only when GMRES does
-        not reach ``krylov_tolerance`` within it (0, the default: a factorization per
-        tangent). Between two iterations the tangent changes only in the joints that changed
-        state, a change of low rank, and GMRES converges in about as many iterations as it
-        has rank; each costs a solve with the old factors, so it pays while that many solves
-        cost less than a factorization. Off because on the measured walls (250-60 000
-        unknowns) they do not: the same answers and 19-23 % fewer factorizations, but
-        1.4-1.6x the CPU (docs/solvers.md, "Cheaper linear solves").
-    krylov_tolerance: that GMRES solve is done when its residual is this fraction of the
-        right-hand side (in the residual's norm). Small enough that the inexact Newton
-        direction is the exact one for every decision of the search (an inexact Newton
-        method converges as Newton's while the forcing term is well below the ratio of two
-        successive residuals, about 1e-2 in the last iterations).
     secant_rounds: before cutting its trust radius, a search that finds no decrease along the
         direction of a tangent factorized at its present state corrects each joint's tangent
         by a Broyden update along the shortest step tried (the change of the joint's actions
@@ -223,8 +208,6 @@ class StaticSettings(LoadPathSettings):
     chord_ratio: float = positive(0.25)
     creep: float = finite(1e-3)
     search_cuts: int = count(7, least=1)
-    krylov_iterations: int = count(0, least=0)
-    krylov_tolerance: float = fraction(1e-6)
     trust_seed: float = positive(0.05)
     secant_rounds: int = count(0, least=0)
     radius_floor: float = positive(1e-9)
