@@ -311,12 +311,8 @@ class _Pardiso:
             # the minimum-degree ordering, refinement only after a perturbed pivot,
             # perturbation 1e-13, no scaling, no matching. The tangent is structurally
             # symmetric with a regular diagonal (the residual stiffness), so its diagonal
-            # pivots serve, as in SuperLU's symmetric mode. METIS with the matching and
-            # scaling (the options before session 15) took 1.05-1.33x the time of a
-            # factorization and solve from 300 to 60 000 unknowns, in one run on one thread
-            # (``python benchmarks/bench_scale.py --pardiso-options``, which also prints the
-            # fill and operations: fewer with minimum degree at every size; docs/solvers.md,
-            # "Cheaper linear solves").
+            # pivots serve, as in SuperLU's symmetric mode; minimum degree fills less than
+            # METIS on these tangents (docs/solvers.md, "Cheaper linear solves").
             self.solver.set_iparm(i, value)
         ia, ja, self.gather = _transpose_gather(indptr, indices, n)
         self.layout: np.ndarray | None = self.gather  # PARDISO stores the CSR order

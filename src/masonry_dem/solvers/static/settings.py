@@ -84,16 +84,13 @@ class StaticSettings(LoadPathSettings):
         direction of a tangent factorized at its present state corrects each joint's tangent
         by a Broyden update along the shortest step tried (the change of the joint's actions
         over it) and solves again, at most this many times a search (0: off, the default;
-        never in the damped search of the dead load). A joint that this step carried
-        through its elastic range, to yield the other way, gets its elastic stiffness
-        instead: its chord would let Newton land on the equilibrium where it yields the
-        other way, which a path of shorter steps does not reach (S23 0.0819 and 0.0781 at
-        two step sizes, against 0.0847 as the steps shrink). It passes the kinks where a
-        yielded joint's consistent tangent sends it back through its elastic range. With 1:
-        the 10 017-block wall takes 141 factorizations against 198 and 0.62x the CPU, the
-        909-block wall 217 against 301, every validation lambda moves by under 0.2 %; off
-        because the validation set takes 7.6 % more factorizations and is slower
-        (docs/solvers.md, "A secant correction of the joints' tangents").
+        never in the damped search of the dead load). It passes the kinks where a yielded
+        joint's consistent tangent sends it back through its elastic range. A joint that
+        the step carried through its elastic range, to yield the other way, gets its
+        elastic stiffness instead: its chord would let Newton land on the equilibrium where
+        it yields the other way, which a path of shorter steps does not reach. Off because
+        it saves CPU on large walls but costs it on the validation set (docs/solvers.md, "A
+        secant correction of the joints' tangents").
     trust_seed: the trust radius of a search with no previous increment to go by (the dead
         load's first live step, a controlled step), in elastic units of the wall
         (``DiscreteProblem.displacement_scale``: the bonded assembly's largest translation
@@ -162,18 +159,17 @@ class StaticSettings(LoadPathSettings):
         (a corner of the curve, where the tangent of the state, taken past the kink, may be
         singular although the path never ran along a mechanism: a fold of the path, or a
         peak). The check runs there whatever the tangent, with the larger of this and
-        ``stop_check_time_steps``; its budget covers the settling of a fold (docs/solvers.md,
-        "The corner check on by default": with ``fold_probe_every`` every fold measured
-        passes within 14 000 time steps; the stall window, a quarter of the budget, let the
-        slowest through at 7 500 and not at 5 000). A corner that is a peak costs half the budget
-        (a stalled relaxation). A path whose searches run past the displacement limit while
-        its curve still rose is a corner too. 0: such stops are checked as any other, so a
-        singular tangent skips the check (``stop_check_time_steps`` = 0 disables both).
+        ``stop_check_time_steps``; its budget covers the settling of every fold measured
+        (docs/solvers.md, "The corner check on by default"). A corner that is a peak costs
+        half the budget (a stalled relaxation). A path whose searches run past the
+        displacement limit while its curve still rose is a corner too. 0: such stops are
+        checked as any other, so a singular tangent skips the check
+        (``stop_check_time_steps`` = 0 disables both).
     fold_probe_every: while a check (or a rescue) relaxes, Newton is tried at its target
         from the relaxation's state at the first peak of the kinetic energy at least this
-        many time steps after the last try; a converged search ends the relaxation (the
-        equilibrium is found long before the motion dies out: S13/2's first fold in 4 215
-        time steps against 50 000). 0: the relaxation runs to its own tolerance.
+        many time steps after the last try; a converged search ends the relaxation (Newton
+        finds the equilibrium long before the motion dies out). 0: the relaxation runs to
+        its own tolerance.
     max_control_cuts: displacement control gives up after this many halvings in a row.
 
     Certificate of a collapse (see :mod:`masonry_dem.solvers.static.certificate`)
