@@ -230,9 +230,10 @@ class Relaxation:
         ``probe(x)``: asked at the first peak of the kinetic energy at least ``probe_every``
         time steps after the last question (a state of the motion at rest for an instant);
         True ends the relaxation as converged at x (the probe found the equilibrium from
-        there). Asked only where the residual was the lowest so far, Newton converged later
-        and erratically (S13/2's first fold after 19 361 time steps with 250 between
-        probes, 6 011 with 500, 19 846 with 1 000; at every peak 3 234 and 4 215).
+        there). At a peak of the kinetic energy the state is momentarily at rest, the
+        nearest the motion comes to an equilibrium, which is where Newton is likeliest to
+        converge from (docs/solvers.md, "The corner check on by default", compares it with
+        asking at a new lowest residual).
         """
         s = self.settings
         M = self.mass

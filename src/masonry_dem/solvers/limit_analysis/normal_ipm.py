@@ -67,9 +67,8 @@ MAX_ITERATIONS = 80
 #: blocks); below, Clarabel's answers and its infeasibility certificates come at no cost
 #: (``python benchmarks/bench_limit_analysis.py --speed``, docs/limit_analysis.md "Speed")
 NORMAL_EQUATIONS_FROM = 1_000
-#: PARDISO's threads: one. On the shared 2-core machine (load 6-8) two threads took 1.2-1.3x
-#: the CPU and 1.2-1.5x the wall time of one on the 10^4-block wall (as faer's two threads
-#: did for Clarabel, ``kinematic.clarabel_options``); docs/limit_analysis.md, "Speed"
+#: PARDISO's threads: one; two cost more CPU and wall time on a shared 2-core machine, as
+#: faer's did for Clarabel (``kinematic.clarabel_options``; docs/limit_analysis.md, "Speed")
 THREADS = 1
 #: fraction of the step to the cones' boundary
 STEP_FRACTION = 0.99
@@ -154,8 +153,8 @@ class _NormalMatrix:
     def factor(self, N: sparse.csr_matrix, threads: int) -> None:
         """Cholesky (PARDISO's mtype 2), and from its first refused pivot on, LDL^T with
         perturbed pivots (mtype -2): near the optimum the stuck corners make N positive
-        definite in exact arithmetic only. Cholesky took 0.6-0.7x the CPU of LDL^T per
-        factorization and 0.55x per solve on the 10^4-block wall's mirror problem."""
+        definite in exact arithmetic only. Cholesky is tried first because it is the cheaper
+        factorization and solve (docs/limit_analysis.md, "Speed")."""
         from pypardiso.pardiso_wrapper import PyPardisoError
 
         self._threads = threads

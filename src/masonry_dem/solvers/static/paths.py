@@ -290,6 +290,33 @@ def work_control(
             accept_moved(moved)
         return moved.ok
 
+    def at_corner() -> bool:
+        """Did the path's curve still rise into its last state (the corner check is on)? A
+        path stuck there, or whose searches ran off from there, never ran along the
+        mechanism its tangent, taken past the kink, may show: a fold or a peak."""
+        return (
+            s.stop_check_time_steps > 0
+            and s.fold_check_time_steps > 0
+            and still_rising(curve_slope(path_w, path_lam, elastic_slope), s.flat_slope)
+        )
+
+    def rest_above(budget: int) -> bool:
+        """Dynamic relaxation looks for rest a little above the last state (once from each
+        state), and the path goes on from there if it finds it."""
+        nonlocal checked_from
+        checked_from = len(hist.steps)
+        target = lam + s.transient_rise * abs(lam)
+        rescued = solver.dynamic_rescue(target, lam, budget)
+        log.debug(
+            "work control stuck at lambda=%.6g; dynamic relaxation to %.6g: %s",
+            lam,
+            target,
+            "ok" if rescued else "no rest",
+        )
+        if rescued is not None:
+            accept_moved(rescued)
+        return rescued is not None
+
     def accept_moved(moved: Outcome) -> None:
         """Go on from a state found at a higher lambda (not by a work step)."""
         nonlocal lam, w, peak, flat_steps
@@ -325,23 +352,16 @@ def work_control(
         if not out.ok:
             log.debug("work step to w=%.6g failed: %s", goal, out.reason)
             if out.past_limit and step.cuts >= s.limit_cuts:
+                # a corner too: the searches run off while the curve still rose into the
+                # state (no state left the small-displacement range), so the wall may snap
+                # through to rest higher up, as at a stuck corner
                 if (
-                    s.stop_check_time_steps > 0
-                    and s.fold_check_time_steps > 0
-                    and checked_from != len(hist.steps)
-                    and still_rising(curve_slope(path_w, path_lam, elastic_slope), s.flat_slope)
+                    checked_from != len(hist.steps)
+                    and at_corner()
+                    and rest_above(s.fold_check_time_steps)
                 ):
-                    # a corner too: the searches run off while the curve still rose into
-                    # the state (no state left the small-displacement range), so the wall
-                    # may snap through to rest higher up, as at a stuck corner
-                    checked_from = len(hist.steps)
-                    rescued = solver.dynamic_rescue(
-                        lam + s.transient_rise * abs(lam), lam, s.fold_check_time_steps
-                    )
-                    if rescued is not None:
-                        accept_moved(rescued)
-                        transient_failed = False
-                        continue
+                    transient_failed = False
+                    continue
                 # measured from the dead-load state, as the certificate measures it
                 ran = moved_from_dead_load(solver.problem, hist, out.q)
                 reason = (
@@ -380,40 +400,21 @@ def work_control(
                     fold_failed = True
                 else:
                     transient_failed = True
-            # a corner: stuck while the curve still rose (the last step gained at least
-            # flat_slope of the elastic stiffness), so the path never ran along the mechanism
-            # that the tangent, taken past the kink, may show: a fold or a peak
-            corner = (
-                stuck
-                and s.stop_check_time_steps > 0
-                and s.fold_check_time_steps > 0
-                and still_rising(curve_slope(path_w, path_lam, elastic_slope), s.flat_slope)
-            )
+            # neither Newton nor the pseudo-transient step passes: before calling this a
+            # collapse, let dynamic relaxation look for rest a little higher (where the
+            # tangent is singular along the load only at a corner, or when asked: a fold of
+            # the path has that too, but so has a flat peak, and the check is dear)
+            corner = stuck and at_corner()
             budget = max(s.stop_check_time_steps, s.fold_check_time_steps if corner else 0)
             if (
                 stuck
                 and s.stop_check_time_steps > 0
                 and checked_from != len(hist.steps)
                 and (corner or s.stop_check_singular or not _singular_along_load(solver, hist))
+                and rest_above(budget)
             ):
-                # neither Newton nor the pseudo-transient step passes: before calling
-                # this a collapse, let dynamic relaxation look for rest a little higher
-                # (where the tangent is singular along the load only at a corner, or when
-                # asked: a fold of the path has that too, but so has a flat peak, and the
-                # check is dear)
-                checked_from = len(hist.steps)
-                target = lam + s.transient_rise * abs(lam)
-                rescued = solver.dynamic_rescue(target, lam, budget)
-                log.debug(
-                    "work control stuck at lambda=%.6g; dynamic relaxation to %.6g: %s",
-                    lam,
-                    target,
-                    "ok" if rescued else "no rest",
-                )
-                if rescued is not None:
-                    accept_moved(rescued)
-                    transient_failed = False
-                    continue
+                transient_failed = False
+                continue
             if stuck:
                 reason = f"no equilibrium beyond lambda={lam:.6g} under work control ({out.reason})"
                 stop = StopReason.PATH_STUCK
@@ -436,9 +437,7 @@ def work_control(
                 Status.COMPLETED, StopReason.MAX_LOAD_FACTOR, f"reached max_load_factor {lam:.6g}"
             )
             return None
-        total = float(
-            np.abs(out.q - hist.steps[0].q.reshape(-1))[free][solver.problem.translation].max()
-        )
+        total = moved_from_dead_load(solver.problem, hist, out.q)
         if total > solver.limit:
             reason = (
                 f"a mechanism: displacements {total:.3g} m exceed the limit "
