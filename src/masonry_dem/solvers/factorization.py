@@ -296,7 +296,7 @@ def _point_pypardiso_at_mkl() -> None:
 class _Pardiso:
     """MKL PARDISO, real unsymmetric (mtype 11: minimum-degree ordering, diagonal pivots
     perturbed rather than refused, iterative refinement after a perturbed pivot). The
-    analysis (phase 11) runs with the first matrix."""
+    analysis runs once, with the first matrix's factorization (phase 12)."""
 
     name = "pardiso"
 
