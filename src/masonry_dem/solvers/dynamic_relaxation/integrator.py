@@ -111,6 +111,25 @@ class _State:
     factors: NDArray[np.float64]
 
 
+def _converged_creep(
+    creep: NDArray[np.float64],
+    before: NDArray[np.float64] | None,
+    mass: NDArray[np.float64],
+    cos_min: float,
+) -> NDArray[np.float64] | None:
+    """The direction of ``creep`` (unit in the mass norm) if it points the way the creep
+    ``before`` it did (mass-weighted cosine above ``cos_min``), else None."""
+    if before is None:
+        return None
+    norm = math.sqrt(float(creep @ (mass * creep)))
+    norm_before = math.sqrt(float(before @ (mass * before)))
+    if norm <= 0.0 or norm_before <= 0.0:
+        return None
+    if float(creep @ (mass * before)) / (norm * norm_before) <= cos_min:
+        return None
+    return creep / norm
+
+
 class Relaxation:
     """The relaxations of one model: keeps the assembly, the masses and the time step.
     :class:`~masonry_dem.solvers.dynamic_relaxation.solver.DynamicRelaxation` follows the load
@@ -219,6 +238,7 @@ class Relaxation:
         from_start: bool = False,
         probe: Probe | None = None,
         probe_every: int = 0,
+        creep_cos: float = 0.0,
     ) -> _Relaxed:
         """Integrate from ``start`` at rest until equilibrium under lambda = ``target``.
 
@@ -234,6 +254,20 @@ class Relaxation:
         nearest the motion comes to an equilibrium, which is where Newton is likeliest to
         converge from (docs/solvers.md, "The corner check on by default", compares it with
         asking at a new lowest residual).
+
+        ``creep_cos`` > 0 (kinetic damping at a fixed load): the motion along a converged
+        creep is not damped. Kinetic damping zeroes every velocity at each peak of the
+        wall's kinetic energy, and the fast modes peak every few time steps, so a slow mode
+        (a wall snapping through along a mechanism towards a fold's rest) only creeps: its
+        velocity is killed long before it has moved. The creep is measured between the
+        probes' times (every ``probe_every`` time steps): the mean of the states at the
+        kinetic-energy peaks, window against window. Where two successive creeps point the
+        same way (mass-weighted cosine above ``creep_cos``), the component of the velocity
+        along that creep is kept at each peak as long as it points forward, and only the
+        rest is damped: the slow mode moves at its own pace, the fast ones are damped as
+        before. A rest state along it is then reached in fewer time steps; where the
+        motion turns (an overshoot past the rest, or a new direction) the forward
+        component vanishes and the damping is the usual one.
         """
         s = self.settings
         M = self.mass
@@ -262,7 +296,15 @@ class Relaxation:
         )
         window = self._stall_window()
         best_before, best_now = math.inf, math.inf
-        probed = 0  # the time step of the last probe
+        probed = 0  # the time step of the last probe (or creep measure)
+        # the creep: mean state of the kinetic-energy peaks per window, the last window's
+        # creep, and the direction (unit in the mass norm) kept undamped
+        creeping = creep_cos > 0.0 and s.damping == "kinetic" and not ramp
+        peak_sum = np.zeros_like(x)
+        peak_count = 0
+        mean_before = x.copy()
+        creep_before: NDArray[np.float64] | None = None
+        keep: NDArray[np.float64] | None = None
         # a ramp runs until a mechanism forms or lambda reaches its top: only the budget ends it
         for cycle in range(1, (s.max_time_steps if ramp else s.max_cycles) + 1):
             self.stats.time_steps += 1
@@ -311,16 +353,31 @@ class Relaxation:
                 ke_new = 0.5 * float(v @ (M * v))
                 if ke_new < ke_prev:  # a peak of the kinetic energy has passed
                     self.stats.kinetic_resets += 1
-                    v[:] = 0.0
-                    ke_prev = 0.0
+                    forward = float(v_old @ (M * keep)) if keep is not None else 0.0
+                    if keep is not None and forward > 0.0:  # the creep goes on undamped
+                        v = forward * keep
+                        ke_prev = 0.5 * forward * forward
+                    else:
+                        v = np.zeros_like(v)
+                        ke_prev = 0.0
                     restart = True
                     if not ramp:  # back to the peak, about a quarter step ago
                         x = x - 0.5 * dt * v_old
                         rel, resp, fint = self._forces(x, plastic, cracked)
                         R = F - fint
-                        if probe is not None and cycle - probed >= probe_every:
+                        if creeping:
+                            peak_sum += x
+                            peak_count += 1
+                        if (probe is not None or creeping) and cycle - probed >= probe_every:
                             probed = cycle
-                            if probe(x):
+                            if creeping:
+                                mean = peak_sum / peak_count
+                                creep = mean - mean_before
+                                keep = _converged_creep(creep, creep_before, M, creep_cos)
+                                creep_before, mean_before = creep, mean
+                                peak_sum[:] = 0.0
+                                peak_count = 0
+                            if probe is not None and probe(x):
                                 return _Relaxed(True, "converged", x, lam, resp, cycle)
                     continue
                 ke_prev = ke_new
@@ -424,10 +481,11 @@ class Relaxation:
         from_start: bool = False,
         probe: Probe | None = None,
         probe_every: int = 0,
+        creep_cos: float = 0.0,
     ) -> _Relaxed:
         """One relaxation from ``start``, its time step halved after a blow-up (``on_blowup``
         "cut"). The third argument is unused (the static solver's rescue passes None);
-        ``from_start``, ``probe``, ``probe_every``: see :meth:`_relax`."""
+        ``from_start``, ``probe``, ``probe_every``, ``creep_cos``: see :meth:`_relax`."""
         s = self.settings
         dt = self._step_for(start)
         for _ in range(s.max_cuts + 1):
@@ -440,6 +498,7 @@ class Relaxation:
                 from_start=from_start,
                 probe=probe,
                 probe_every=probe_every,
+                creep_cos=creep_cos,
             )
             out.courant = self._courant
             self.stats.courant = max(self.stats.courant, self._courant)

@@ -170,6 +170,12 @@ class StaticSettings(LoadPathSettings):
         many time steps after the last try; a converged search ends the relaxation (Newton
         finds the equilibrium long before the motion dies out). 0: the relaxation runs to
         its own tolerance.
+    fold_creep_cos: while such a check relaxes, the motion along its creep (the mean state
+        at the kinetic-energy peaks, from one probe's time to the next) is not damped once
+        two successive creeps point the same way, their mass-weighted cosine above this:
+        kinetic damping kills a slow mode's velocity at every peak of the fast ones, and a
+        wall snapping through to a fold's rest moves along such a mode. 0: every velocity
+        is zeroed at each peak, as before. Needs ``fold_probe_every`` (its windows).
     max_control_cuts: displacement control gives up after this many halvings in a row.
 
     Certificate of a collapse (see :mod:`masonry_dem.solvers.static.certificate`)
@@ -226,8 +232,9 @@ class StaticSettings(LoadPathSettings):
     rescue_time_steps: int = count(0, least=0)
     stop_check_time_steps: int = count(4000, least=0)
     stop_check_singular: bool = False
-    fold_check_time_steps: int = count(30_000, least=0)
+    fold_check_time_steps: int = count(20_000, least=0)
     fold_probe_every: int = count(500, least=0)
+    fold_creep_cos: float = at_least(0.95, 0.0, " (0: off)")
     max_control_cuts: int = count(12, least=0)
     certify: bool = True
     admissible_tolerance: float = positive(1e-6)

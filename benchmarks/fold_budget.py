@@ -1,0 +1,89 @@
+"""The corner check's budget against its cost and the folds it passes (issue 18, task
+`verdict`; docs/solvers.md, "The creep of a snap-through kept undamped").
+
+    python benchmarks/fold_budget.py [--walls U S23 S6/2 S13/2]
+        [--variants fold_creep_cos=0 "" fold_check_time_steps=20000 ...]
+
+Each wall (a validation case, ``NAME/m`` with return walls of m blocks, or ``U``:
+bench_walls_that_meet's S5 U wall) is pushed over once per variant (StaticSettings fields as
+``name=value`` separated by commas; "" is the default), one after the other in this process,
+and one row printed each: lambda, status, steps, factorizations, relaxation time steps and
+CPU seconds (process time; compare them only within a run).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from dataclasses import replace
+from pathlib import Path
+
+from masonry_dem.cases.paper import build_case
+from masonry_dem.solvers.static import StaticSettings, StaticSolver
+
+
+def wall(name: str):
+    """(model, settings, monitor) of a wall named as in the module docstring."""
+    if name == "U":
+        sys.path.insert(0, str(Path(__file__).parent))
+        from bench_walls_that_meet import build, walls
+
+        model, _ = build(walls("S5")[0], held=False)
+        return model, None, None
+    if "/" in name:
+        row, m = name.split("/")
+        case = build_case(row, restraint="return-walls", return_blocks=int(m))
+    else:
+        case = build_case(name)
+    return case.model, case.settings, case.monitor
+
+
+def parse(variant: str) -> dict[str, object]:
+    """``a=1,b=x`` -> {"a": 1, "b": "x"} (ints, floats and booleans converted)."""
+    out: dict[str, object] = {}
+    for item in filter(None, variant.split(",")):
+        key, _, text = item.partition("=")
+        value: object = text
+        if text.lower() in ("true", "false"):
+            value = text.lower() == "true"
+        else:
+            for kind in (int, float):
+                try:
+                    value = kind(text)
+                    break
+                except ValueError:
+                    pass
+        out[key.strip()] = value
+    return out
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    p.add_argument("--walls", nargs="*", default=["U", "S23", "S6/2", "S13/2"])
+    p.add_argument("--variants", nargs="*", default=["fold_creep_cos=0", ""])
+    args = p.parse_args(argv)
+    print(
+        f"{'wall':7s} {'variant':40s} {'lambda':>10s} {'status':>10s} {'steps':>5s} "
+        f"{'fact':>5s} {'t-steps':>8s} {'CPU s':>7s}"
+    )
+    for name in args.walls:
+        model, settings, monitor = wall(name)
+        for variant in args.variants:
+            chosen = replace(settings or StaticSettings(), **parse(variant))
+            t0 = time.process_time()
+            solver = StaticSolver(model, chosen)
+            h = solver.run(monitor=monitor)
+            cpu = time.process_time() - t0
+            lam = h.collapse_multiplier
+            print(
+                f"{name:7s} {variant or '(default)':40s} "
+                f"{lam if lam is not None else float('nan'):10.6f} {h.status:>10s} "
+                f"{len(h.steps):5d} {h.factorizations:5d} {solver.time_steps:8d} {cpu:7.2f}",
+                flush=True,
+            )
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
