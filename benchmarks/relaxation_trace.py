@@ -1,24 +1,29 @@
 """How a corner check's relaxation moves above a peak and above a fold (issue 18, task
-`verdict`; docs/solvers.md, "A peak verdict in the relaxation's own time scale").
+`verdict`; docs/solvers.md, "Above a peak and above a fold").
 
     python benchmarks/relaxation_trace.py [--walls S23 U S6/2 S13/2] [--window 500]
-        [--steps 30000] [--probe-every 500]
+        [--steps 30000] [--probe-every 500] [--only-last] [--keep-creep] [--line] [--probes]
 
 Each wall is run by the static pushover with its default settings; every corner check
 (``Corrector.dynamic_rescue`` called by work control's ``rest_above``) is recorded: its start
-state, target and whether it found rest. Then each recorded check is relaxed again, kinetic
-damping exactly as ``Relaxation._relax`` does it, with Newton probes at the kinetic-energy
-peaks as in the check (so a fold ends where the check ended), and per window of time steps
+state, target and whether it found rest. Then each recorded check is relaxed again with
+kinetic damping as ``Relaxation._relax`` does it, every velocity zeroed at each
+kinetic-energy peak (``--keep-creep``: the velocity along a converged creep kept, as
+``fold_creep_cos`` does, with a cosine of 0.95), with Newton probes at the kinetic-energy
+peaks as in the check (so a fold ends where a probe converges), and per window of time steps
 it prints:
 
-- ``res``: the lowest relative residual in the window;
-- ``ke``: the highest kinetic energy in the window (relative to the first window's);
-- ``move``: largest translation from the start (m);
-- ``P_L``: the live load's work over the window, F_L . dx, over |F_L| |dx|;
-- ``cos``: cosine between this window's increment and the last one's;
-- ``R_d``: the out-of-balance force along the window's motion, R . dx / |dx|, over |F|;
-- ``peaks``: kinetic-energy peaks (resets) in the window;
-- ``unres``: the verdict of ``Relaxation``'s unresisted-mode test at this window, if any.
+- ``res``: the lowest relative residual in the window; ``ke``: the highest kinetic energy
+  (relative to the first window's); ``move``: the largest translation from the start (m);
+- ``creep``: the mass norm of the creep, the mean of the states at the kinetic-energy peaks
+  of this window less the last window's; ``ratio``: over the last window's creep; ``cos``:
+  the mass-weighted cosine between the two;
+- ``P_L``: the cosine between the creep and F_L (the live load's work along it);
+- ``R_c``: the mean out-of-balance force at the peaks along the creep, over |F|;
+- ``peaks``: kinetic-energy peaks in the window;
+- with ``--line``: the out-of-balance force along the straight line from the start through
+  the state, at 1, 2, 4 ... times its distance up to the displacement limit;
+- with ``--probes``: each probe's Newton outcome (residual before and after, failure).
 """
 
 from __future__ import annotations
@@ -263,6 +268,8 @@ def main(argv=None) -> int:
     p.add_argument("--probe-every", type=int, default=500)
     p.add_argument("--only-last", action="store_true", help="trace only the last check")
     p.add_argument("--keep-creep", action="store_true", help="no damping along the creep")
+    p.add_argument("--line", action="store_true", help="the force along the line")
+    p.add_argument("--probes", action="store_true", help="each probe's Newton outcome")
     args = p.parse_args(argv)
     for name in args.walls:
         t0 = time.perf_counter()
@@ -286,6 +293,8 @@ def main(argv=None) -> int:
                 args.window,
                 args.probe_every,
                 min(args.steps, used + args.window) if found else args.steps,
+                line=args.line,
+                show_probes=args.probes,
                 keep_creep=args.keep_creep,
             )
     return 0
