@@ -120,6 +120,36 @@ def test_entries_assembled_in_the_backends_order_are_the_same_bits(backend):
 
 
 @pytest.mark.parametrize("backend", EVERY)
+def test_a_tangent_updated_from_the_last_one_is_the_same_bits(backend):
+    """``update`` works out again only the joints whose tangent changed since its last
+    matrix and the entries they add to: every entry the same number as a whole assembly
+    (``data``), in the backend's layout, whether no joint, a few or all of them changed; a
+    change of layout starts anew, and the entries returned are a copy (a caller that
+    writes into them leaves the next update alone)."""
+    tangents, T = wall_tangents(4)
+    layout = fz.analyse(tangents.indptr, tangents.indices, tangents.n, backend).layout
+    rng = np.random.default_rng(5)
+
+    def whole(T):
+        data = tangents.data(T)
+        return data if layout is None else data[layout]
+
+    T = T.copy()
+    first = tangents.update(T, layout)
+    assert np.array_equal(first, whole(T))
+    first[:] = np.nan  # a copy: the kept entries are untouched
+    assert np.array_equal(tangents.update(T, layout), whole(T))  # no joint changed
+    for changed in (1, 3, T.shape[0]):
+        joints = rng.choice(T.shape[0], changed, replace=False)
+        T[joints] *= rng.uniform(0.5, 2.0, size=(changed, 6, 6))
+        assert np.array_equal(tangents.update(T, layout), whole(T))
+    other = None if layout is not None else np.arange(tangents.nnz)[::-1].copy()
+    assert np.array_equal(tangents.update(T, other), tangents.data(T, other))
+    T[0, 2, 2] *= 3.0  # back to the first layout after the other: anew, the same bits
+    assert np.array_equal(tangents.update(T, layout), whole(T))
+
+
+@pytest.mark.parametrize("backend", EVERY)
 def test_a_block_on_its_base_tilts_at_s_over_a_with_every_backend(backend, monkeypatch):
     """The rigid block of width s and height a on a fixed base, tilted: it overturns at
     lambda = s / a (moment balance about the toe) whichever library factorizes."""
