@@ -307,3 +307,36 @@ def test_tangents_with_joints_left_only_their_normal_stiffness_solve_as_a_dense_
     assert np.linalg.cond(K.toarray()) > 1e11  # as ill conditioned as intended
     assert np.abs(K @ x - b).max() <= 1e-14 * np.abs(K).max() * np.abs(x).max()
     np.testing.assert_allclose(x, reference, rtol=0, atol=1e-4 * np.abs(reference).max())
+
+
+@pytest.mark.skipif("pardiso" not in INSTALLED, reason="pardiso is not installed")
+def test_one_pardiso_handle_serves_cholesky_and_ldlt_of_the_upper_triangle():
+    """``PardisoHandle`` with the normal matrix's options (the limit analysis's interior
+    point: METIS, no refinement): Cholesky (mtype 2) of a symmetric positive definite
+    matrix's upper triangle solves as a dense solve, one right-hand side or two columns; on
+    an indefinite matrix it refuses a pivot with ``SingularMatrix`` (the interior point
+    then goes over to LDL^T), and LDL^T with perturbed pivots (mtype -2) solves that one."""
+    rng = np.random.default_rng(7)
+    n = 40
+    G = sparse.random(3 * n, n, density=0.1, rng=rng) + sparse.eye(3 * n, n)
+    spd = (G.T @ G + 0.1 * sparse.identity(n)).toarray()
+    indefinite = spd - 1.5 * np.eye(n) * np.abs(np.linalg.eigvalsh(spd)).max() / 2.0
+    b = rng.uniform(-1.0, 1.0, (n, 2))
+    for mtype, M, refuses in ((2, spd, False), (2, indefinite, True), (-2, indefinite, False)):
+        upper = sparse.csr_matrix(np.triu(M))
+        upper.sort_indices()
+        options = {2: 2, 8: 0, **({10: 8} if mtype == -2 else {})}
+        handle = fz.PardisoHandle(upper.indptr, upper.indices, n, mtype, options)
+        np.copyto(handle.values, upper.data)
+        handle.call(11)
+        if refuses:
+            with pytest.raises(fz.SingularMatrix, match="phase 22"):
+                handle.call(22)
+            handle.release()
+            assert not handle.analysed
+            continue
+        handle.call(22)
+        reference = np.linalg.solve(M, b)
+        np.testing.assert_allclose(handle.call(33, b[:, 0]), reference[:, 0], rtol=1e-8)
+        np.testing.assert_allclose(handle.call(33, b), reference, rtol=1e-8)
+        handle.release()
