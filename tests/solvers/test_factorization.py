@@ -120,6 +120,36 @@ def test_entries_assembled_in_the_backends_order_are_the_same_bits(backend):
 
 
 @pytest.mark.parametrize("backend", EVERY)
+def test_a_tangent_updated_from_the_last_one_is_the_same_bits(backend):
+    """``update`` works out again only the joints whose tangent changed since its last
+    matrix and the entries they add to: every entry the same number as a whole assembly
+    (``data``), in the backend's layout, whether no joint, a few or all of them changed; a
+    change of layout starts anew, and the entries returned are a copy (a caller that
+    writes into them leaves the next update alone)."""
+    tangents, T = wall_tangents(4)
+    layout = fz.analyse(tangents.indptr, tangents.indices, tangents.n, backend).layout
+    rng = np.random.default_rng(5)
+
+    def whole(T):
+        data = tangents.data(T)
+        return data if layout is None else data[layout]
+
+    T = T.copy()
+    first = tangents.update(T, layout)
+    assert np.array_equal(first, whole(T))
+    first[:] = np.nan  # a copy: the kept entries are untouched
+    assert np.array_equal(tangents.update(T, layout), whole(T))  # no joint changed
+    for changed in (1, 3, T.shape[0]):
+        joints = rng.choice(T.shape[0], changed, replace=False)
+        T[joints] *= rng.uniform(0.5, 2.0, size=(changed, 6, 6))
+        assert np.array_equal(tangents.update(T, layout), whole(T))
+    other = None if layout is not None else np.arange(tangents.nnz)[::-1].copy()
+    assert np.array_equal(tangents.update(T, other), tangents.data(T, other))
+    T[0, 2, 2] *= 3.0  # back to the first layout after the other: anew, the same bits
+    assert np.array_equal(tangents.update(T, layout), whole(T))
+
+
+@pytest.mark.parametrize("backend", EVERY)
 def test_a_block_on_its_base_tilts_at_s_over_a_with_every_backend(backend, monkeypatch):
     """The rigid block of width s and height a on a fixed base, tilted: it overturns at
     lambda = s / a (moment balance about the toe) whichever library factorizes."""
@@ -277,3 +307,36 @@ def test_tangents_with_joints_left_only_their_normal_stiffness_solve_as_a_dense_
     assert np.linalg.cond(K.toarray()) > 1e11  # as ill conditioned as intended
     assert np.abs(K @ x - b).max() <= 1e-14 * np.abs(K).max() * np.abs(x).max()
     np.testing.assert_allclose(x, reference, rtol=0, atol=1e-4 * np.abs(reference).max())
+
+
+@pytest.mark.skipif("pardiso" not in INSTALLED, reason="pardiso is not installed")
+def test_one_pardiso_handle_serves_cholesky_and_ldlt_of_the_upper_triangle():
+    """``PardisoHandle`` with the normal matrix's options (the limit analysis's interior
+    point: METIS, no refinement): Cholesky (mtype 2) of a symmetric positive definite
+    matrix's upper triangle solves as a dense solve, one right-hand side or two columns; on
+    an indefinite matrix it refuses a pivot with ``SingularMatrix`` (the interior point
+    then goes over to LDL^T), and LDL^T with perturbed pivots (mtype -2) solves that one."""
+    rng = np.random.default_rng(7)
+    n = 40
+    G = sparse.random(3 * n, n, density=0.1, rng=rng) + sparse.eye(3 * n, n)
+    spd = (G.T @ G + 0.1 * sparse.identity(n)).toarray()
+    indefinite = spd - 1.5 * np.eye(n) * np.abs(np.linalg.eigvalsh(spd)).max() / 2.0
+    b = rng.uniform(-1.0, 1.0, (n, 2))
+    for mtype, M, refuses in ((2, spd, False), (2, indefinite, True), (-2, indefinite, False)):
+        upper = sparse.csr_matrix(np.triu(M))
+        upper.sort_indices()
+        options = {2: 2, 8: 0, **({10: 8} if mtype == -2 else {})}
+        handle = fz.PardisoHandle(upper.indptr, upper.indices, n, mtype, options)
+        np.copyto(handle.values, upper.data)
+        handle.call(11)
+        if refuses:
+            with pytest.raises(fz.SingularMatrix, match="phase 22"):
+                handle.call(22)
+            handle.release()
+            assert not handle.analysed
+            continue
+        handle.call(22)
+        reference = np.linalg.solve(M, b)
+        np.testing.assert_allclose(handle.call(33, b[:, 0]), reference[:, 0], rtol=1e-8)
+        np.testing.assert_allclose(handle.call(33, b), reference, rtol=1e-8)
+        handle.release()

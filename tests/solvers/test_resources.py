@@ -82,6 +82,27 @@ def test_the_model_part_of_the_estimate_is_what_the_model_and_the_solver_allocat
     assert est.memory == pytest.approx(sum(est.parts.values()))
 
 
+def test_the_kept_part_of_the_estimate_is_what_the_tangents_update_keeps():
+    """tracemalloc's memory still held after the first ``TangentAssembler.update`` of a 20 x
+    20 wall (the store it keeps for the next tangents: each joint's tangent and block, the
+    entries and the joint index; the entries it returns are dropped) against the estimate's
+    ``kept`` part: within 1.25x either way."""
+    wall = md.running_bond_wall(20, 20, 0.081, 0.21, 0.07, 20e3)
+    blocks, base = md.add_base(wall)
+    model = Model.build(blocks, md.InterfaceMaterial(kn=1e9, kt=0.4e9, friction=0.7),
+                        [md.Support([base])])  # fmt: skip
+    tangents = StaticSolver(model).problem.tangent_assembler
+    T = np.tile(np.eye(6), (model.interfaces.count, 1, 1))
+    tangents.update(T)  # the kernel compiled or loaded before the count
+    tangents._kept = None
+    tracemalloc.start()
+    tangents.update(T)
+    held = tracemalloc.get_traced_memory()[0]
+    tracemalloc.stop()
+    est = resources.estimate(model.blocks.count, model.interfaces.count, model.n_dofs)
+    assert est.parts["kept"] / 1.25 <= held <= 1.25 * est.parts["kept"]
+
+
 def test_the_estimate_grows_faster_than_the_wall():
     """Factors of a planar wall grow like n log n: ten times the blocks, more than ten
     times the factors' memory, and more time."""

@@ -142,6 +142,7 @@ def test_a_controlled_step_that_converges_slowly_is_not_a_stall(monkeypatch):
         return data if layout is None else data[layout]  # in the backend's order
 
     monkeypatch.setattr(problem.TangentAssembler, "data", too_stiff)
+    monkeypatch.setattr(problem.TangentAssembler, "update", too_stiff)  # what Newton factors
     slow = solver.equilibrate(0.0, control=control, radius=radius)
     assert slow.ok, slow.reason
     assert slow.iterations > solver.settings.stall_window  # linear, as intended

@@ -16,6 +16,8 @@ Backends (``BACKENDS``), each an ordinary library:
   on ``numba.get_num_threads()`` from it (so one knob, ``NUMBA_NUM_THREADS``, sets the
   threads of every kernel), fixed for the handle at its analysis (PARDISO sizes its work
   space for the threads of the analysis: a later factorization on more threads crashed).
+  Its handle (:class:`PardisoHandle`: a matrix type, a fixed pattern, options, the call's
+  arguments made once) also serves the limit analysis's normal matrix (Cholesky or LDL^T).
 * ``"umfpack"`` (SuiteSparse UMFPACK through ``kvxopt``) and ``"mumps"`` (MUMPS through
   ``python-mumps``): the symbolic analysis with the first matrix, a numeric factorization per
   matrix.
@@ -293,40 +295,42 @@ def _point_pypardiso_at_mkl() -> None:
             return
 
 
-class _Pardiso:
-    """MKL PARDISO, real unsymmetric (mtype 11: minimum-degree ordering, diagonal pivots
-    perturbed rather than refused, iterative refinement after a perturbed pivot). The
-    analysis runs once, with the first matrix's factorization (phase 12)."""
+class PardisoHandle:
+    """One MKL PARDISO handle: a matrix type (``mtype``), a fixed CSR pattern (made 1-based
+    once) and its options (``iparm``, numbered from 1 as in MKL's manual and in pypardiso's
+    ``set_iparm``), the values in place (:attr:`values`: write them, then :meth:`call`), on
+    ``threads`` MKL threads. Both PARDISO users of the package run through it: the tangent's
+    LU (:class:`_Pardiso`, real unsymmetric, mtype 11) and the normal matrix of the limit
+    analysis's interior-point method (Cholesky, mtype 2, or LDL^T, -2:
+    ``limit_analysis.normal_ipm``). The arguments of every call but the phase and the
+    right-hand sides are made once: on the validation walls (250-6 000 DOFs) building the
+    16 ctypes arguments at each call cost about as much as PARDISO's own factorization."""
 
-    name = "pardiso"
-
-    def __init__(self, indptr: np.ndarray, indices: np.ndarray, n: int) -> None:
+    def __init__(
+        self,
+        indptr: np.ndarray,
+        indices: np.ndarray,
+        n: int,
+        mtype: int,
+        iparm: dict[int, int],
+        threads: int = 1,
+    ) -> None:
         _point_pypardiso_at_mkl()
         from pypardiso import PyPardisoSolver
 
         self.n = n
-        self.solver = PyPardisoSolver(mtype=11)
+        self.mtype = mtype
+        #: MKL threads of every call (PARDISO sizes its work space for those of the analysis:
+        #: a later factorization on more threads crashed)
+        self.threads = threads
+        self.solver = PyPardisoSolver(mtype=mtype)  # its pt, iparm, perm and MKL library
         self.solver.set_iparm(1, 1)  # iparm given (not the defaults)
-        for i, value in {2: 0, 8: 0, 10: 13, 11: 0, 13: 0, 35: 0}.items():
-            # the minimum-degree ordering, refinement only after a perturbed pivot,
-            # perturbation 1e-13, no scaling, no matching. The tangent is structurally
-            # symmetric with a regular diagonal (the residual stiffness), so its diagonal
-            # pivots serve, as in SuperLU's symmetric mode; minimum degree fills less than
-            # METIS on these tangents (docs/solvers.md, "Cheaper linear solves").
+        for i, value in iparm.items():
             self.solver.set_iparm(i, value)
-        ia, ja, self.gather = _transpose_gather(indptr, indices, n)
-        self.layout: np.ndarray | None = self.gather  # PARDISO stores the CSR order
-        # PARDISO's 1-based CSR, made once (pypardiso's own call converts it at each call)
-        self.ia = (ia + 1).astype(np.int32)
-        self.ja = (ja + 1).astype(np.int32)
-        self.values = np.ones(indices.size)
-        self.generations = _Generation()
-        self.analysed = False
-        #: MKL threads of every call, set at the analysis
-        self.threads = 1 if n < PARALLEL_FROM else max(1, numba.get_num_threads())
-        # the arguments of every call but the phase and the right-hand sides, made once: on
-        # the validation walls (250-6 000 DOFs) building the 16 ctypes arguments at each
-        # call cost about as much as PARDISO's own factorization
+        self.ia = (np.asarray(indptr) + 1).astype(np.int32)
+        self.ja = (np.asarray(indices) + 1).astype(np.int32)
+        self.values = np.ones(self.ja.size)
+        self.analysed = False  # a phase that analyses has run (its memory is held)
         int_p = ctypes.POINTER(ctypes.c_int32)
         double_p = ctypes.POINTER(ctypes.c_double)
         s = self.solver
@@ -339,7 +343,7 @@ class _Pardiso:
             s.pt.ctypes.data_as(ctypes.POINTER(s._pt_type[0])),
             ctypes.byref(ctypes.c_int32(1)),  # maxfct
             ctypes.byref(ctypes.c_int32(1)),  # mnum
-            ctypes.byref(ctypes.c_int32(s.mtype)),
+            ctypes.byref(ctypes.c_int32(mtype)),
             ctypes.byref(self._phase),
             ctypes.byref(ctypes.c_int32(n)),
             self.values.ctypes.data_as(double_p),
@@ -352,10 +356,11 @@ class _Pardiso:
         )
         self._one = (self._b.ctypes.data_as(double_p), self._x.ctypes.data_as(double_p))
 
-    def _call(self, phase: int, b: np.ndarray | None = None) -> np.ndarray:
-        """One call of MKL's pardiso on this handle (phase 12, 22, 33 or -1) on the threads
-        of its analysis (``threads``: numba's count may change between calls, e.g. in
-        ``masonry_dem.serial_kernels``); x for b (None: no right-hand side)."""
+    def call(self, phase: int, b: np.ndarray | None = None) -> np.ndarray:
+        """One call of MKL's pardiso on this handle (phase 11, 12, 22, 33 or -1) with
+        :attr:`values`; x for b (one right-hand side, or one a column; None: none). A
+        PARDISO error raises :class:`SingularMatrix` (a zero or refused pivot, a
+        factorization that lacks memory: the caller's matrix is the cause)."""
         s = self.solver
         # the C entry point (the lower-case name is the Fortran one, which takes a pointer)
         s.libmkl.MKL_Set_Num_Threads_Local(ctypes.c_int(self.threads))
@@ -378,9 +383,56 @@ class _Pardiso:
                 x.ctypes.data_as(double_p),
                 ctypes.byref(self._error),
             )
+        if phase == -1:
+            self.analysed = False
         if self._error.value != 0:
             raise SingularMatrix(f"pardiso: error {self._error.value} in phase {phase}")
+        if phase in (11, 12, 13):
+            self.analysed = True
         return x
+
+    def release(self) -> None:
+        """PARDISO's memory of this handle is the library's: released (phase -1)."""
+        if self.analysed:
+            self.call(-1)
+
+    def __del__(self) -> None:
+        try:
+            self.release()
+        except Exception:  # noqa: BLE001 (at interpreter exit the library may be gone)
+            pass
+
+
+class _Pardiso:
+    """MKL PARDISO, real unsymmetric (mtype 11: minimum-degree ordering, diagonal pivots
+    perturbed rather than refused, iterative refinement after a perturbed pivot). The
+    analysis runs once, with the first matrix's factorization (phase 12)."""
+
+    name = "pardiso"
+
+    def __init__(self, indptr: np.ndarray, indices: np.ndarray, n: int) -> None:
+        self.n = n
+        ia, ja, self.gather = _transpose_gather(indptr, indices, n)
+        self.layout: np.ndarray | None = self.gather  # PARDISO stores the CSR order
+        #: MKL threads of every call, fixed at the analysis
+        self.threads = 1 if n < PARALLEL_FROM else max(1, numba.get_num_threads())
+        # the minimum-degree ordering, refinement only after a perturbed pivot, perturbation
+        # 1e-13, no scaling, no matching, 1-based indices. The tangent is structurally
+        # symmetric with a regular diagonal (the residual stiffness), so its diagonal pivots
+        # serve, as in SuperLU's symmetric mode; minimum degree fills less than METIS on
+        # these tangents (docs/solvers.md, "Cheaper linear solves").
+        options = {2: 0, 8: 0, 10: 13, 11: 0, 13: 0, 35: 0}
+        self.handle = PardisoHandle(ia, ja, n, 11, options, self.threads)
+        self.solver = self.handle.solver  # its iparm: options set and counts read by benchmarks
+        self.values = self.handle.values
+        self.generations = _Generation()
+
+    @property
+    def analysed(self) -> bool:
+        return self.handle.analysed
+
+    def _call(self, phase: int, b: np.ndarray | None = None) -> np.ndarray:
+        return self.handle.call(phase, b)
 
     def factor(self, data: np.ndarray) -> Factors:
         # in place: the pointer handed to PARDISO stays valid
@@ -394,19 +446,10 @@ class _Pardiso:
     def _factor(self) -> Factors:
         # phase 12 (analysis and factorization) for the first matrix, 22 after it
         self._call(22 if self.analysed else 12)
-        self.analysed = True
         return _HeldFactors("pardiso", self.generations, self.solve)
 
     def solve(self, b: np.ndarray) -> np.ndarray:
         return self._call(33, b).reshape(b.shape)
-
-    def __del__(self) -> None:
-        """PARDISO's memory is the library's: released with the handle (phase -1)."""
-        if getattr(self, "analysed", False):
-            try:
-                self._call(-1)
-            except Exception:  # noqa: BLE001 (at interpreter exit the library may be gone)
-                pass
 
 
 # --------------------------------------------------------------------------- UMFPACK

@@ -9,6 +9,8 @@ by ``python benchmarks/bench_scale.py`` (walls of 10^2 to 10^5 blocks; docs/solv
 * ``model``: blocks, interfaces, the compatibility matrix H and the interface law's arrays;
 * ``assembly``: the fixed-pattern tangent assembler (for each interface 144 terms: where
   they go, one (12 x 12) block of the tangent) and the tangent's entries;
+* ``kept``: what the tangent's update keeps between factorizations (each joint's tangent
+  and 12 x 12 block, the entries, and which entries each joint adds to);
 * ``factors``: the sparse LU of the tangent. A running-bond wall is a planar graph of blocks,
   so with a nested-dissection ordering the factors of its n DOFs hold about
   ``FILL_PER_DOF x n x log2(n / 6)`` entries (George's bound: O(n log n) for planar graphs);
@@ -35,6 +37,10 @@ RUNTIME_BYTES = 250e6
 #: arrays, the tangent assembler's 144 terms per interface and its construction's sort)
 MODEL_BYTES_PER_BLOCK = 2_000.0
 MODEL_BYTES_PER_INTERFACE = 12_000.0
+#: bytes per interface of ``TangentAssembler.update``'s store: the joint's tangent (288)
+#: and block (1 152), its share of the entries (82 of them, 656) and of their joint index
+#: (141 terms, 564): 2 670 on the 909-block wall
+KEPT_BYTES_PER_INTERFACE = 2_700.0
 #: entries of the LU factors per DOF per log2(n / 6) (PARDISO, METIS ordering); 16 bytes
 #: per entry with its index and the library's work space
 FILL_PER_DOF = 22.0
@@ -103,6 +109,7 @@ def estimate(blocks: int, interfaces: int | None = None, dofs: int | None = None
     parts = {
         "runtime": RUNTIME_BYTES,
         "model": MODEL_BYTES_PER_BLOCK * blocks + MODEL_BYTES_PER_INTERFACE * m,
+        "kept": KEPT_BYTES_PER_INTERFACE * m,
         "factors": BYTES_PER_FACTOR_ENTRY * fill,
         "history": STEPS * (STEP_BYTES_PER_BLOCK * blocks + STEP_BYTES_PER_INTERFACE * m),
     }

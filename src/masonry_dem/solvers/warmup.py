@@ -74,7 +74,7 @@ def _forces_group(lazy: bool = False) -> None:
 
 def _tangent_group() -> None:
     """The tangent's kernels: the joints' tangents as Newton builds them (the law's consistent
-    tangent, the zero-capacity reduction) and their assembly."""
+    tangent, the zero-capacity reduction) and their assembly (whole, and updated)."""
     from masonry_dem.constitutive.law import LawResponse
 
     problem = _tiny_problem()
@@ -83,7 +83,9 @@ def _tangent_group() -> None:
     response = LawResponse(
         np.zeros((m, 6)), np.zeros(m), np.zeros((m, 6)), np.zeros(m, dtype=np.uint8), None
     )
-    problem.tangent_assembler.data(problem.joint_tangents(response, 1e-9))
+    T = problem.joint_tangents(response, 1e-9)
+    problem.tangent_assembler.data(T)
+    problem.tangent_assembler.update(T)  # the assembly of the tangents Newton factorizes
 
 
 def _run_group(group: str, parallel: bool, lazy: bool = False) -> None:

@@ -37,7 +37,7 @@ from __future__ import annotations
 import logging
 import time
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy import sparse
@@ -47,6 +47,9 @@ from masonry_dem.model import Model
 from . import cones
 from .formulation import Problem, Solution, lambda_cap
 from .kinematic import corner_velocity_rows
+
+if TYPE_CHECKING:
+    from masonry_dem.solvers.factorization import PardisoHandle
 
 log = logging.getLogger(__name__)
 
@@ -138,11 +141,9 @@ class _NormalMatrix:
         self.indices = (unique % n).astype(np.int32)
         self.diagonal = np.searchsorted(unique, np.arange(n, dtype=np.int64) * (n + 1))
         self.nnz = unique.size
-        self._solver: Any = None
-        self._threads = 1
+        self._handle: PardisoHandle | None = None  # of the last matrix factorized
         #: seconds of the numeric factorizations and of the solves
         self.seconds = [0.0, 0.0]
-        self._N: sparse.csr_matrix | None = None
 
     def assemble(self, w: np.ndarray, beta: np.ndarray, shift: float) -> sparse.csr_matrix:
         """The upper triangle of ``G^T W^2 G + shift I`` (W: the scalings, ``cones``)."""
@@ -155,61 +156,49 @@ class _NormalMatrix:
         perturbed pivots (mtype -2): near the optimum the stuck corners make N positive
         definite in exact arithmetic only. Cholesky is tried first because it is the cheaper
         factorization and solve (docs/limit_analysis.md, "Speed")."""
-        from pypardiso.pardiso_wrapper import PyPardisoError
+        from masonry_dem.solvers.factorization import SingularMatrix
 
-        self._threads = threads
-        if self._solver is None:
-            self._open(2, N)
+        if self._handle is None:
+            self._open(2, N, threads)
+        assert self._handle is not None
+        self._handle.threads = threads
         t0 = time.perf_counter()
         try:
-            self._solver.set_phase(22)
-            self._call(N, np.zeros(self.n))
-        except PyPardisoError:
-            if self._solver.mtype != 2:
+            np.copyto(self._handle.values, N.data)
+            self._handle.call(22)
+        except SingularMatrix:
+            if self._handle.mtype != 2:
                 raise
             log.debug("normal-equation IPM: Cholesky refused a pivot; LDL^T from here on")
             self.release()
-            self._open(-2, N)
-            self._solver.set_phase(22)
-            self._call(N, np.zeros(self.n))
+            self._open(-2, N, threads)
+            np.copyto(self._handle.values, N.data)
+            self._handle.call(22)
         self.seconds[0] += time.perf_counter() - t0
-        self._N = N
 
-    def _open(self, mtype: int, N: sparse.csr_matrix) -> None:
-        """A PARDISO handle of ``mtype`` and its analysis (METIS) of N's pattern."""
-        from masonry_dem.solvers.factorization import _point_pypardiso_at_mkl
+    def _open(self, mtype: int, N: sparse.csr_matrix, threads: int) -> None:
+        """A PARDISO handle of ``mtype`` on N's pattern and its analysis (METIS, phase 11),
+        with no refinement inside PARDISO (ours is on N) and, for LDL^T, pivots perturbed
+        by 1e-8."""
+        from masonry_dem.solvers.factorization import PardisoHandle
 
-        _point_pypardiso_at_mkl()
-        from pypardiso import PyPardisoSolver
-
-        self._solver = PyPardisoSolver(mtype=mtype)
-        self._solver.set_iparm(1, 1)
-        self._solver.set_iparm(2, 2)  # METIS
-        self._solver.set_iparm(8, 0)  # no refinement inside PARDISO (ours is on N)
-        if mtype == -2:
-            self._solver.set_iparm(10, 8)  # pivots perturbed by 1e-8
-        self._solver.set_phase(11)
-        self._call(N, np.zeros(self.n))
-
-    def _call(self, N: sparse.csr_matrix, b: np.ndarray) -> np.ndarray:
-        import ctypes
-
-        s = self._solver
-        s.libmkl.MKL_Set_Num_Threads_Local(ctypes.c_int(self._threads))
-        return s._call_pardiso(N, b)
+        options = {2: 2, 8: 0, **({10: 8} if mtype == -2 else {})}
+        self._handle = PardisoHandle(self.indptr, self.indices, self.n, mtype, options, threads)
+        np.copyto(self._handle.values, N.data)
+        self._handle.call(11)
 
     def solve(self, b: np.ndarray) -> np.ndarray:
-        self._solver.set_phase(33)
+        assert self._handle is not None
         t0 = time.perf_counter()
         try:
-            return np.asarray(self._call(self._N, np.asfortranarray(b))).reshape(b.shape)
+            return np.ascontiguousarray(self._handle.call(33, b)).reshape(b.shape)
         finally:
             self.seconds[1] += time.perf_counter() - t0
 
     def release(self) -> None:
-        if self._solver is not None:
-            self._solver.free_memory(everything=True)
-            self._solver = None
+        if self._handle is not None:
+            self._handle.release()
+            self._handle = None
 
 
 # --------------------------------------------------------------------------- the iteration
