@@ -25,6 +25,17 @@ was optimised). Both run in fresh subprocesses on the same saved inputs, alterna
 ``--rounds`` times; the fastest call is kept and the outputs are compared::
 
     python benchmarks/bench_constitutive.py --law [--cases S15 OL2 2-3] [--baseline REV]
+
+With ``--forces`` it times ``InterfaceLaw.forces`` (one time step of a dynamic relaxation,
+one Newton residual: ``H x``, the law, ``H^T actions``) on the S5 U wall of
+bench_walls_that_meet.py (326 blocks, 921 interfaces) at the dead-load state and at the
+last state of its pushover, against git revision ``--baseline`` (give faf4f27, the commit
+before the early-out), the same way: fresh subprocesses on the same saved inputs, alternating
+``--rounds`` times, fastest call kept, outputs compared bit for bit. It prints the rows the
+strength check settles (elastic, detached) and runs (sliding, rocking), the seconds per call
+of both trees and their ratio, and scipy's ``H @ x`` then ``H_T @ y`` for scale::
+
+    NUMBA_NUM_THREADS=1 python benchmarks/bench_constitutive.py --forces --baseline faf4f27
 """
 
 from __future__ import annotations
@@ -191,9 +202,11 @@ def baseline_source(rev: str, folder: str) -> str:
     return os.path.join(folder, "src")
 
 
-def run_worker(src: str, inputs: list[str], out: str) -> dict[str, np.ndarray]:
+def run_worker(
+    src: str, inputs: list[str], out: str, flag: str = "--law-worker"
+) -> dict[str, np.ndarray]:
     env = dict(os.environ, PYTHONPATH=src)
-    cmd = [sys.executable, os.path.abspath(__file__), "--law-worker", out, *inputs]
+    cmd = [sys.executable, os.path.abspath(__file__), flag, out, *inputs]
     subprocess.run(cmd, check=True, env=env)
     with np.load(out) as d:
         return {k: d[k] for k in d.files}
@@ -238,6 +251,121 @@ def law_main(cases: list[str], baseline: str, rounds: int) -> int:
     return 0
 
 
+# --------------------------------------------------------------------------------------------
+# InterfaceLaw.forces on the U wall, against a git revision
+
+FORCES_OUTPUTS = ("rel", "trial", "actions", "flags", "internal")
+
+
+def forces_inputs(folder: str) -> str:
+    """Save the S5 U wall's law, H on the free DOFs and its dead-load and last states."""
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    from bench_walls_that_meet import build, walls
+
+    from masonry_dem.solvers.incremental import StaticSolver
+
+    model, _ = build(walls("S5")[0], False)
+    solver = StaticSolver(model)
+    history = solver.run()
+    law, asm = solver.problem.law, solver.problem.asm
+    H, H_T = asm.H_free.tocsr(), asm.H_free_T.tocsr()
+    m = law.kbar.shape[0]
+    free = asm.free_index
+    path = os.path.join(folder, "forces_u_wall.npz")
+    np.savez(
+        path,
+        **{
+            f: np.broadcast_to(getattr(law, f), (m,) if f != "kbar" else (m, 6)) for f in LAW_FIELDS
+        },
+        tension=law.tension,
+        memory=law.memory,
+        projection=law.projection,
+        **{
+            f"H_{k}": v for k, v in (("data", H.data), ("indices", H.indices), ("indptr", H.indptr))
+        },
+        **{
+            f"T_{k}": v
+            for k, v in (("data", H_T.data), ("indices", H_T.indices), ("indptr", H_T.indptr))
+        },
+        H_shape=H.shape,
+        T_shape=H_T.shape,
+        dead=np.asarray(history.steps[0].q).reshape(-1)[free],
+        last=np.asarray(history.steps[-1].q).reshape(-1)[free],
+    )
+    return path
+
+
+def forces_worker(path: str, out: str) -> None:
+    """Time ``forces`` of the imported masonry_dem per call on each state; write times and
+    outputs."""
+    from scipy import sparse
+
+    from masonry_dem.constitutive.law import InterfaceLaw
+
+    d = np.load(path)
+    fields = (np.array(d[f]) for f in LAW_FIELDS)
+    law = InterfaceLaw(*fields, str(d["tension"]), str(d["memory"]), str(d["projection"]))
+    H = sparse.csr_matrix((d["H_data"], d["H_indices"], d["H_indptr"]), shape=tuple(d["H_shape"]))
+    H_T = sparse.csr_matrix((d["T_data"], d["T_indices"], d["T_indptr"]), shape=tuple(d["T_shape"]))
+    m = law.kbar.shape[0]
+    plastic, cracked = np.zeros((m, 6)), np.zeros(m, dtype=bool)
+    result = {}
+    for state in ("dead", "last"):
+        x = np.array(d[state])
+        rel, r, internal = law.forces(H, x, plastic, cracked, H_T)
+        outputs = {"rel": rel, "trial": r.trial, "actions": r.actions, "flags": r.flags}
+        outputs["internal"] = internal
+        result.update({f"{state}:{k}": v for k, v in outputs.items()})
+        result[f"{state}:time"] = np.array(
+            per_call(lambda x=x: law.forces(H, x, plastic, cracked, H_T))
+        )
+        result[f"{state}:spmv"] = np.array(per_call(lambda x=x: H_T @ (H @ x)))
+    np.savez(out, **result)
+
+
+def forces_main(baseline: str, rounds: int) -> int:
+    import masonry_dem
+    from masonry_dem.constitutive.states import FLAG_DETACHED, FLAG_SHEAR_TORSION
+
+    current = os.path.dirname(os.path.dirname(os.path.abspath(masonry_dem.__file__)))
+    with tempfile.TemporaryDirectory() as tmp:
+        old = baseline_source(baseline, os.path.join(tmp, "baseline"))
+        path = forces_inputs(tmp)
+        runs: dict[str, list[dict]] = {"before": [], "after": []}
+        for k in range(rounds):  # alternate, so both see the same machine load
+            for label, src in (("before", old), ("after", current)):
+                out = os.path.join(tmp, f"forces_{label}{k}.npz")
+                runs[label].append(run_worker(src, [path], out, "--forces-worker"))
+
+    threads = os.environ.get("NUMBA_NUM_THREADS", "all")
+    print(f"python {platform.python_version()}, numpy {np.__version__}, {platform.machine()}")
+    print(f"S5 U wall; baseline {baseline[:12]}; NUMBA_NUM_THREADS={threads}; fastest call")
+    print(f"over {rounds} alternating rounds; rows: elastic/detached/sliding/rocking only")
+    head = f"{'state':5s} {'rows':>19s} {'before [us]':>11s} {'after [us]':>10s} {'ratio':>6s}"
+    print(head + f" {'scipy H, H_T [us]':>17s}  outputs")
+    for state in ("dead", "last"):
+        before, after = runs["before"][0], runs["after"][0]
+        flags = after[f"{state}:flags"]
+        rows = (
+            int(np.sum(flags == 0)),
+            int(np.sum(flags == FLAG_DETACHED)),
+            int(np.sum(flags & FLAG_SHEAR_TORSION > 0)),
+            int(np.sum((flags > 0) & (flags < FLAG_DETACHED) & (flags & FLAG_SHEAR_TORSION == 0))),
+        )
+        same = all(
+            after[f"{state}:{f}"].tobytes() == before[f"{state}:{f}"].tobytes()
+            for f in FORCES_OUTPUTS
+        )
+        tb = min(float(r[f"{state}:time"]) for r in runs["before"])
+        ta = min(float(r[f"{state}:time"]) for r in runs["after"])
+        spmv = min(float(r[f"{state}:spmv"]) for r in runs["after"])
+        print(
+            f"{state:5s} {'/'.join(map(str, rows)):>19s} {tb * 1e6:11.1f} {ta * 1e6:10.1f} "
+            f"{tb / ta:6.2f} {spmv * 1e6:17.1f}  {'same bits' if same else 'DIFFERENT'}"
+        )
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--interfaces", type=int, default=1_000_000)
@@ -249,13 +377,20 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--cases", nargs="+", default=["S15", "OL2", "2-3"])
     p.add_argument("--baseline", default=LAW_BASELINE, help="git revision to compare with")
     p.add_argument("--rounds", type=int, default=3)
+    p.add_argument("--forces", action="store_true", help="time InterfaceLaw.forces (see above)")
     p.add_argument("--law-worker", nargs="+", help=argparse.SUPPRESS)  # OUT INPUT...
+    p.add_argument("--forces-worker", nargs=2, help=argparse.SUPPRESS)  # OUT INPUT
     args = p.parse_args(argv)
     if args.law_worker:
         law_worker(args.law_worker[1:], args.law_worker[0])
         return 0
+    if args.forces_worker:
+        forces_worker(args.forces_worker[1], args.forces_worker[0])
+        return 0
     if args.law:
         return law_main(args.cases, args.baseline, args.rounds)
+    if args.forces:
+        return forces_main(args.baseline, args.rounds)
 
     rows: list[tuple[str, str, float, str]] = []
 
