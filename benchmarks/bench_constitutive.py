@@ -36,6 +36,11 @@ strength check settles (elastic, detached) and runs (sliding, rocking), the seco
 of both trees and their ratio, and scipy's ``H @ x`` then ``H_T @ y`` for scale::
 
     NUMBA_NUM_THREADS=1 python benchmarks/bench_constitutive.py --forces --baseline faf4f27
+
+With ``--pushover`` as well it then runs the U wall's pushover (``StaticSolver``, after one
+run to warm up) on both trees, alternating ``--rounds`` times, and prints the mean
+wall-clock and CPU seconds of each, the seconds spent in ``InterfaceLaw.forces`` (timed by
+wrapping it) and the ratios, with the calls, factorizations and lambda (which must agree).
 """
 
 from __future__ import annotations
@@ -206,6 +211,7 @@ def run_worker(
     src: str, inputs: list[str], out: str, flag: str = "--law-worker"
 ) -> dict[str, np.ndarray]:
     env = dict(os.environ, PYTHONPATH=src)
+    env.setdefault("OMP_WAIT_POLICY", "PASSIVE")  # the same for both trees
     cmd = [sys.executable, os.path.abspath(__file__), flag, out, *inputs]
     subprocess.run(cmd, check=True, env=env)
     with np.load(out) as d:
@@ -323,7 +329,62 @@ def forces_worker(path: str, out: str) -> None:
     np.savez(out, **result)
 
 
-def forces_main(baseline: str, rounds: int) -> int:
+def pushover_worker(out: str) -> None:
+    """The U wall's pushover on the imported masonry_dem, after one run to warm up: seconds
+    (wall-clock, CPU, inside ``InterfaceLaw.forces``), calls, factorizations, lambda."""
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    from bench_walls_that_meet import build, walls
+
+    from masonry_dem.constitutive.law import InterfaceLaw
+    from masonry_dem.solvers.incremental import StaticSolver
+
+    model, _ = build(walls("S5")[0], False)
+    StaticSolver(model).run()
+    spent = [0.0, 0.0]
+    plain = InterfaceLaw.forces
+
+    def timed(self, *args, **kwargs):
+        t0 = time.perf_counter()
+        result = plain(self, *args, **kwargs)
+        spent[0] += time.perf_counter() - t0
+        spent[1] += 1
+        return result
+
+    InterfaceLaw.forces = timed
+    t0, c0 = time.perf_counter(), time.process_time()
+    history = StaticSolver(model).run()
+    wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+    np.savez(
+        out,
+        wall=wall,
+        cpu=cpu,
+        forces=spent[0],
+        calls=spent[1],
+        factorizations=history.factorizations,
+        lam=history.collapse_multiplier,
+    )
+
+
+def pushover_main(old: str, current: str, rounds: int, tmp: str) -> None:
+    runs: dict[str, list[dict]] = {"before": [], "after": []}
+    for k in range(rounds):
+        for label, src in (("before", old), ("after", current)):
+            out = os.path.join(tmp, f"pushover_{label}{k}.npz")
+            runs[label].append(run_worker(src, [], out, "--pushover-worker"))
+    mean = {
+        label: {key: float(np.mean([r[key] for r in rs])) for key in rs[0]}
+        for label, rs in runs.items()
+    }
+    b, a = mean["before"], mean["after"]
+    print(f"U wall pushover, mean of {rounds} alternating rounds:")
+    print(f"{'':22s} {'before':>9s} {'after':>9s} {'ratio':>6s}")
+    for key, name in (("wall", "wall-clock [s]"), ("cpu", "CPU [s]"), ("forces", "in forces [s]")):
+        print(f"{name:22s} {b[key]:9.2f} {a[key]:9.2f} {b[key] / a[key]:6.2f}")
+    for key in ("calls", "factorizations", "lam"):
+        print(f"{key:22s} {b[key]:9.6g} {a[key]:9.6g}")
+
+
+def forces_main(baseline: str, rounds: int, pushover: bool = False) -> int:
     import masonry_dem
     from masonry_dem.constitutive.states import FLAG_DETACHED, FLAG_SHEAR_TORSION
 
@@ -336,6 +397,8 @@ def forces_main(baseline: str, rounds: int) -> int:
             for label, src in (("before", old), ("after", current)):
                 out = os.path.join(tmp, f"forces_{label}{k}.npz")
                 runs[label].append(run_worker(src, [path], out, "--forces-worker"))
+        if pushover:
+            pushover_main(old, current, rounds, tmp)
 
     threads = os.environ.get("NUMBA_NUM_THREADS", "all")
     print(f"python {platform.python_version()}, numpy {np.__version__}, {platform.machine()}")
@@ -379,7 +442,9 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--rounds", type=int, default=3)
     p.add_argument("--forces", action="store_true", help="time InterfaceLaw.forces (see above)")
     p.add_argument("--law-worker", nargs="+", help=argparse.SUPPRESS)  # OUT INPUT...
+    p.add_argument("--pushover", action="store_true", help="with --forces: the U wall's pushover")
     p.add_argument("--forces-worker", nargs=2, help=argparse.SUPPRESS)  # OUT INPUT
+    p.add_argument("--pushover-worker", nargs=1, help=argparse.SUPPRESS)  # OUT
     args = p.parse_args(argv)
     if args.law_worker:
         law_worker(args.law_worker[1:], args.law_worker[0])
@@ -387,10 +452,13 @@ def main(argv: list[str] | None = None) -> int:
     if args.forces_worker:
         forces_worker(args.forces_worker[1], args.forces_worker[0])
         return 0
+    if args.pushover_worker:
+        pushover_worker(args.pushover_worker[0])
+        return 0
     if args.law:
         return law_main(args.cases, args.baseline, args.rounds)
     if args.forces:
-        return forces_main(args.baseline, args.rounds)
+        return forces_main(args.baseline, args.rounds, args.pushover)
 
     rows: list[tuple[str, str, float, str]] = []
 
