@@ -365,16 +365,20 @@ def pushover_worker(out: str) -> None:
     )
 
 
-def pushover_main(old: str, current: str, rounds: int, tmp: str) -> None:
+def pushover_runs(old: str, current: str, rounds: int, tmp: str) -> dict[str, dict]:
+    """Mean outputs of :func:`pushover_worker` on both trees, alternating ``rounds`` times."""
     runs: dict[str, list[dict]] = {"before": [], "after": []}
     for k in range(rounds):
         for label, src in (("before", old), ("after", current)):
             out = os.path.join(tmp, f"pushover_{label}{k}.npz")
             runs[label].append(run_worker(src, [], out, "--pushover-worker"))
-    mean = {
+    return {
         label: {key: float(np.mean([r[key] for r in rs])) for key in rs[0]}
         for label, rs in runs.items()
     }
+
+
+def print_pushover(mean: dict[str, dict], rounds: int) -> None:
     b, a = mean["before"], mean["after"]
     print(f"U wall pushover, mean of {rounds} alternating rounds:")
     print(f"{'':22s} {'before':>9s} {'after':>9s} {'ratio':>6s}")
@@ -397,8 +401,7 @@ def forces_main(baseline: str, rounds: int, pushover: bool = False) -> int:
             for label, src in (("before", old), ("after", current)):
                 out = os.path.join(tmp, f"forces_{label}{k}.npz")
                 runs[label].append(run_worker(src, [path], out, "--forces-worker"))
-        if pushover:
-            pushover_main(old, current, rounds, tmp)
+        pushed = pushover_runs(old, current, rounds, tmp) if pushover else None
 
     threads = os.environ.get("NUMBA_NUM_THREADS", "all")
     print(f"python {platform.python_version()}, numpy {np.__version__}, {platform.machine()}")
@@ -426,6 +429,8 @@ def forces_main(baseline: str, rounds: int, pushover: bool = False) -> int:
             f"{state:5s} {'/'.join(map(str, rows)):>19s} {tb * 1e6:11.1f} {ta * 1e6:10.1f} "
             f"{tb / ta:6.2f} {spmv * 1e6:17.1f}  {'same bits' if same else 'DIFFERENT'}"
         )
+    if pushed is not None:
+        print_pushover(pushed, rounds)
     return 0
 
 
