@@ -37,6 +37,13 @@ of both trees and their ratio, and scipy's ``H @ x`` then ``H_T @ y`` for scale:
 
     NUMBA_NUM_THREADS=1 python benchmarks/bench_constitutive.py --forces --baseline faf4f27
 
+With ``--parts`` instead it prints where a call of ``forces`` goes on this tree, on the same
+two states: the strength check of each kind of row (elastic, detached, sliding, rocking
+only, and zero trials: what any row costs), the early-out's test of a row, and the loop of
+``H x`` through signed (scipy's) and unsigned index arrays::
+
+    NUMBA_NUM_THREADS=1 python benchmarks/bench_constitutive.py --forces --parts
+
 With ``--pushover`` as well it then runs the U wall's pushover (``StaticSolver``, after one
 run to warm up) on both trees, alternating ``--rounds`` times, and prints the mean
 wall-clock and CPU seconds of each, the seconds spent in ``InterfaceLaw.forces`` (timed by
@@ -329,6 +336,97 @@ def forces_worker(path: str, out: str) -> None:
     np.savez(out, **result)
 
 
+def forces_parts(path: str) -> None:
+    """Print the cost of the parts of one ``forces`` call on the saved U wall states."""
+    import math
+
+    import numba
+    from scipy import sparse
+
+    from masonry_dem.constitutive.check_kernels import nb_evaluate_row
+    from masonry_dem.constitutive.law import InterfaceLaw
+    from masonry_dem.constitutive.law_kernels import nb_plain_row
+
+    @numba.njit(error_model="numpy")
+    def check_rows(trial, ft, l1, l2, friction, alpha, snap1, snap2, actions, flags):
+        util = np.empty(0)
+        on = trial.shape[0] >= 0
+        for i in range(trial.shape[0]):
+            nb_evaluate_row(i, trial, ft, l1, l2, friction, alpha, snap1, snap2, on, on, on, actions, flags, util)  # fmt: skip
+
+    @numba.njit(error_model="numpy")
+    def plain_rows(trial, ft, l1, l2, friction, snap1, snap2, torsion):
+        n = 0
+        for i in range(trial.shape[0]):
+            t = trial[i]
+            n += nb_plain_row(t[0], t[1], t[2], t[3], t[4], t[5], ft[i], l1[i], l2[i], friction[i], snap1[i], snap2[i], torsion[i])  # fmt: skip
+        return n
+
+    @numba.njit(error_model="numpy")
+    def product(x, ptr, idx, val, out):
+        start = ptr[0]
+        for r in range(out.shape[0]):
+            end = ptr[r + 1]
+            total = 0.0
+            t = start
+            while t < end:
+                total += val[t] * x[idx[t]]
+                t += 1
+            start = end
+            out[r] = total
+
+    d = np.load(path)
+    fields = (np.array(d[f]) for f in LAW_FIELDS)
+    law = InterfaceLaw(*fields, str(d["tension"]), str(d["memory"]), str(d["projection"]))
+    H = sparse.csr_matrix((d["H_data"], d["H_indices"], d["H_indptr"]), shape=tuple(d["H_shape"]))
+    H_T = H.T.tocsr()
+    m = law.kbar.shape[0]
+    dom = law._domain
+    unsigned = np.uint32 if H.indices.dtype.itemsize == 4 else np.uint64
+    print(
+        f"{'state':5s} {'rows':18s} {'n':>4s} {'check [ns/row]':>14s} {'early-out [ns/row]':>18s}"
+    )
+    for state in ("dead", "last"):
+        x = np.array(d[state])
+        _, r, _ = law.forces(H, x, np.zeros((m, 6)), np.zeros(m, dtype=bool), H_T)
+        kinds = {
+            "elastic": r.flags == 0,
+            "detached": r.flags == 8,
+            "sliding": r.flags & 1 > 0,
+            "rocking only": (r.flags > 0) & (r.flags < 8) & (r.flags & 1 == 0),
+            "zero trial": r.flags == 0,
+        }
+        for kind, rows in kinds.items():
+            n = int(rows.sum())
+            if n == 0:
+                continue
+            trial = (
+                np.zeros((n, 6)) if kind == "zero trial" else np.ascontiguousarray(r.trial[rows])
+            )
+            ft = np.ascontiguousarray(r.tensile_force[rows])
+            arrays = [np.ascontiguousarray(a[rows]) for a in dom.kernel_arrays]
+            torsion = np.ascontiguousarray(dom.torsion_constant[rows])
+            act, flags = np.empty((n, 6)), np.empty(n, dtype=np.uint8)
+            l1, l2, mu, _, s1, s2 = arrays
+            checked = (trial, ft, *arrays, act, flags)
+            t_check = per_call(lambda a=checked: check_rows(*a))
+            tested = (trial, ft, l1, l2, mu, s1, s2, torsion)
+            t_plain = per_call(lambda a=tested: plain_rows(*a))
+            print(
+                f"{state:5s} {kind:18s} {n:4d} {t_check / n * 1e9:14.0f} {t_plain / n * 1e9:18.0f}"
+            )
+    x = np.array(d["last"])
+    out = np.empty(H.shape[0])
+    signed = per_call(lambda: product(x, H.indptr, H.indices, H.data, out))
+    ptr, idx = H.indptr.view(unsigned), H.indices.view(unsigned)
+    plain = per_call(lambda: product(x, ptr, idx, H.data, out))
+    print(
+        f"H x ({H.nnz} entries): signed indices {signed * 1e6:.1f} us, unsigned "
+        f"{plain * 1e6:.1f} us, scipy {per_call(lambda: H @ x) * 1e6:.1f} us"
+    )
+    assert math.isfinite(signed)
+
+
 def pushover_worker(out: str) -> None:
     """The U wall's pushover on the imported masonry_dem, after one run to warm up: seconds
     (wall-clock, CPU, inside ``InterfaceLaw.forces``), calls, factorizations, lambda."""
@@ -448,6 +546,7 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--forces", action="store_true", help="time InterfaceLaw.forces (see above)")
     p.add_argument("--law-worker", nargs="+", help=argparse.SUPPRESS)  # OUT INPUT...
     p.add_argument("--pushover", action="store_true", help="with --forces: the U wall's pushover")
+    p.add_argument("--parts", action="store_true", help="with --forces: where a call goes")
     p.add_argument("--forces-worker", nargs=2, help=argparse.SUPPRESS)  # OUT INPUT
     p.add_argument("--pushover-worker", nargs=1, help=argparse.SUPPRESS)  # OUT
     args = p.parse_args(argv)
@@ -462,6 +561,10 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     if args.law:
         return law_main(args.cases, args.baseline, args.rounds)
+    if args.forces and args.parts:
+        with tempfile.TemporaryDirectory() as tmp:
+            forces_parts(forces_inputs(tmp))
+        return 0
     if args.forces:
         return forces_main(args.baseline, args.rounds, args.pushover)
 
