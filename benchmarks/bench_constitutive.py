@@ -25,6 +25,29 @@ was optimised). Both run in fresh subprocesses on the same saved inputs, alterna
 ``--rounds`` times; the fastest call is kept and the outputs are compared::
 
     python benchmarks/bench_constitutive.py --law [--cases S15 OL2 2-3] [--baseline REV]
+
+With ``--forces`` it times ``InterfaceLaw.forces`` (one time step of a dynamic relaxation,
+one Newton residual: ``H x``, the law, ``H^T actions``) on the S5 U wall of
+bench_walls_that_meet.py (326 blocks, 921 interfaces) at the dead-load state and at the
+last state of its pushover, against git revision ``--baseline`` (give faf4f27, the commit
+before the early-out), the same way: fresh subprocesses on the same saved inputs, alternating
+``--rounds`` times, fastest call kept, outputs compared bit for bit. It prints the rows the
+strength check settles (elastic, detached) and runs (sliding, rocking), the seconds per call
+of both trees and their ratio, and scipy's ``H @ x`` then ``H_T @ y`` for scale::
+
+    NUMBA_NUM_THREADS=1 python benchmarks/bench_constitutive.py --forces --baseline faf4f27
+
+With ``--parts`` instead it prints where a call of ``forces`` goes on this tree, on the same
+two states: the strength check of each kind of row (elastic, detached, sliding, rocking
+only, and zero trials: what any row costs), the early-out's test of a row, and the loop of
+``H x`` through signed (scipy's) and unsigned index arrays::
+
+    NUMBA_NUM_THREADS=1 python benchmarks/bench_constitutive.py --forces --parts
+
+With ``--pushover`` as well it then runs the U wall's pushover (``StaticSolver``, after one
+run to warm up) on both trees, alternating ``--rounds`` times, and prints the mean
+wall-clock and CPU seconds of each, the seconds spent in ``InterfaceLaw.forces`` (timed by
+wrapping it) and the ratios, with the calls, factorizations and lambda (which must agree).
 """
 
 from __future__ import annotations
@@ -191,9 +214,12 @@ def baseline_source(rev: str, folder: str) -> str:
     return os.path.join(folder, "src")
 
 
-def run_worker(src: str, inputs: list[str], out: str) -> dict[str, np.ndarray]:
+def run_worker(
+    src: str, inputs: list[str], out: str, flag: str = "--law-worker"
+) -> dict[str, np.ndarray]:
     env = dict(os.environ, PYTHONPATH=src)
-    cmd = [sys.executable, os.path.abspath(__file__), "--law-worker", out, *inputs]
+    env.setdefault("OMP_WAIT_POLICY", "PASSIVE")  # the same for both trees
+    cmd = [sys.executable, os.path.abspath(__file__), flag, out, *inputs]
     subprocess.run(cmd, check=True, env=env)
     with np.load(out) as d:
         return {k: d[k] for k in d.files}
@@ -238,6 +264,274 @@ def law_main(cases: list[str], baseline: str, rounds: int) -> int:
     return 0
 
 
+# --------------------------------------------------------------------------------------------
+# InterfaceLaw.forces on the U wall, against a git revision
+
+FORCES_OUTPUTS = ("rel", "trial", "actions", "flags", "internal")
+
+
+def forces_inputs(folder: str) -> str:
+    """Save the S5 U wall's law, H on the free DOFs and its dead-load and last states."""
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    from bench_walls_that_meet import build, walls
+
+    from masonry_dem.solvers.incremental import StaticSolver
+
+    model, _ = build(walls("S5")[0], False)
+    solver = StaticSolver(model)
+    history = solver.run()
+    law, asm = solver.problem.law, solver.problem.asm
+    H, H_T = asm.H_free.tocsr(), asm.H_free_T.tocsr()
+    m = law.kbar.shape[0]
+    free = asm.free_index
+    path = os.path.join(folder, "forces_u_wall.npz")
+    np.savez(
+        path,
+        **{
+            f: np.broadcast_to(getattr(law, f), (m,) if f != "kbar" else (m, 6)) for f in LAW_FIELDS
+        },
+        tension=law.tension,
+        memory=law.memory,
+        projection=law.projection,
+        **{
+            f"H_{k}": v for k, v in (("data", H.data), ("indices", H.indices), ("indptr", H.indptr))
+        },
+        **{
+            f"T_{k}": v
+            for k, v in (("data", H_T.data), ("indices", H_T.indices), ("indptr", H_T.indptr))
+        },
+        H_shape=H.shape,
+        T_shape=H_T.shape,
+        dead=np.asarray(history.steps[0].q).reshape(-1)[free],
+        last=np.asarray(history.steps[-1].q).reshape(-1)[free],
+    )
+    return path
+
+
+def forces_worker(path: str, out: str) -> None:
+    """Time ``forces`` of the imported masonry_dem per call on each state; write times and
+    outputs."""
+    from scipy import sparse
+
+    from masonry_dem.constitutive.law import InterfaceLaw
+
+    d = np.load(path)
+    fields = (np.array(d[f]) for f in LAW_FIELDS)
+    law = InterfaceLaw(*fields, str(d["tension"]), str(d["memory"]), str(d["projection"]))
+    H = sparse.csr_matrix((d["H_data"], d["H_indices"], d["H_indptr"]), shape=tuple(d["H_shape"]))
+    H_T = sparse.csr_matrix((d["T_data"], d["T_indices"], d["T_indptr"]), shape=tuple(d["T_shape"]))
+    m = law.kbar.shape[0]
+    plastic, cracked = np.zeros((m, 6)), np.zeros(m, dtype=bool)
+    result = {}
+    for state in ("dead", "last"):
+        x = np.array(d[state])
+        rel, r, internal = law.forces(H, x, plastic, cracked, H_T)
+        outputs = {"rel": rel, "trial": r.trial, "actions": r.actions, "flags": r.flags}
+        outputs["internal"] = internal
+        result.update({f"{state}:{k}": v for k, v in outputs.items()})
+        result[f"{state}:time"] = np.array(
+            per_call(lambda x=x: law.forces(H, x, plastic, cracked, H_T))
+        )
+        result[f"{state}:spmv"] = np.array(per_call(lambda x=x: H_T @ (H @ x)))
+    np.savez(out, **result)
+
+
+def forces_parts(path: str) -> None:
+    """Print the cost of the parts of one ``forces`` call on the saved U wall states."""
+    import math
+
+    import numba
+    from scipy import sparse
+
+    from masonry_dem.constitutive.check_kernels import nb_evaluate_row
+    from masonry_dem.constitutive.law import InterfaceLaw
+    from masonry_dem.constitutive.law_kernels import nb_plain_row
+
+    @numba.njit(error_model="numpy")
+    def check_rows(trial, ft, l1, l2, friction, alpha, snap1, snap2, actions, flags):
+        util = np.empty(0)
+        on = trial.shape[0] >= 0
+        for i in range(trial.shape[0]):
+            nb_evaluate_row(i, trial, ft, l1, l2, friction, alpha, snap1, snap2, on, on, on, actions, flags, util)  # fmt: skip
+
+    @numba.njit(error_model="numpy")
+    def plain_rows(trial, ft, l1, l2, friction, snap1, snap2, torsion):
+        n = 0
+        for i in range(trial.shape[0]):
+            t = trial[i]
+            n += nb_plain_row(t[0], t[1], t[2], t[3], t[4], t[5], ft[i], l1[i], l2[i], friction[i], snap1[i], snap2[i], torsion[i])  # fmt: skip
+        return n
+
+    @numba.njit(error_model="numpy")
+    def product(x, ptr, idx, val, out):
+        start = ptr[0]
+        for r in range(out.shape[0]):
+            end = ptr[r + 1]
+            total = 0.0
+            t = start
+            while t < end:
+                total += val[t] * x[idx[t]]
+                t += 1
+            start = end
+            out[r] = total
+
+    d = np.load(path)
+    fields = (np.array(d[f]) for f in LAW_FIELDS)
+    law = InterfaceLaw(*fields, str(d["tension"]), str(d["memory"]), str(d["projection"]))
+    H = sparse.csr_matrix((d["H_data"], d["H_indices"], d["H_indptr"]), shape=tuple(d["H_shape"]))
+    H_T = H.T.tocsr()
+    m = law.kbar.shape[0]
+    dom = law._domain
+    unsigned = np.uint32 if H.indices.dtype.itemsize == 4 else np.uint64
+    print(
+        f"{'state':5s} {'rows':18s} {'n':>4s} {'check [ns/row]':>14s} {'early-out [ns/row]':>18s}"
+    )
+    for state in ("dead", "last"):
+        x = np.array(d[state])
+        _, r, _ = law.forces(H, x, np.zeros((m, 6)), np.zeros(m, dtype=bool), H_T)
+        kinds = {
+            "elastic": r.flags == 0,
+            "detached": r.flags == 8,
+            "sliding": r.flags & 1 > 0,
+            "rocking only": (r.flags > 0) & (r.flags < 8) & (r.flags & 1 == 0),
+            "zero trial": r.flags == 0,
+        }
+        for kind, rows in kinds.items():
+            n = int(rows.sum())
+            if n == 0:
+                continue
+            trial = (
+                np.zeros((n, 6)) if kind == "zero trial" else np.ascontiguousarray(r.trial[rows])
+            )
+            ft = np.ascontiguousarray(r.tensile_force[rows])
+            arrays = [np.ascontiguousarray(a[rows]) for a in dom.kernel_arrays]
+            torsion = np.ascontiguousarray(dom.torsion_constant[rows])
+            act, flags = np.empty((n, 6)), np.empty(n, dtype=np.uint8)
+            l1, l2, mu, _, s1, s2 = arrays
+            checked = (trial, ft, *arrays, act, flags)
+            t_check = per_call(lambda a=checked: check_rows(*a))
+            tested = (trial, ft, l1, l2, mu, s1, s2, torsion)
+            t_plain = per_call(lambda a=tested: plain_rows(*a))
+            print(
+                f"{state:5s} {kind:18s} {n:4d} {t_check / n * 1e9:14.0f} {t_plain / n * 1e9:18.0f}"
+            )
+    x = np.array(d["last"])
+    out = np.empty(H.shape[0])
+    signed = per_call(lambda: product(x, H.indptr, H.indices, H.data, out))
+    ptr, idx = H.indptr.view(unsigned), H.indices.view(unsigned)
+    plain = per_call(lambda: product(x, ptr, idx, H.data, out))
+    print(
+        f"H x ({H.nnz} entries): signed indices {signed * 1e6:.1f} us, unsigned "
+        f"{plain * 1e6:.1f} us, scipy {per_call(lambda: H @ x) * 1e6:.1f} us"
+    )
+    assert math.isfinite(signed)
+
+
+def pushover_worker(out: str) -> None:
+    """The U wall's pushover on the imported masonry_dem, after one run to warm up: seconds
+    (wall-clock, CPU, inside ``InterfaceLaw.forces``), calls, factorizations, lambda."""
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    from bench_walls_that_meet import build, walls
+
+    from masonry_dem.constitutive.law import InterfaceLaw
+    from masonry_dem.solvers.incremental import StaticSolver
+
+    model, _ = build(walls("S5")[0], False)
+    StaticSolver(model).run()
+    spent = [0.0, 0.0]
+    plain = InterfaceLaw.forces
+
+    def timed(self, *args, **kwargs):
+        t0 = time.perf_counter()
+        result = plain(self, *args, **kwargs)
+        spent[0] += time.perf_counter() - t0
+        spent[1] += 1
+        return result
+
+    InterfaceLaw.forces = timed
+    t0, c0 = time.perf_counter(), time.process_time()
+    history = StaticSolver(model).run()
+    wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+    np.savez(
+        out,
+        wall=wall,
+        cpu=cpu,
+        forces=spent[0],
+        calls=spent[1],
+        factorizations=history.factorizations,
+        lam=history.collapse_multiplier,
+    )
+
+
+def pushover_runs(old: str, current: str, rounds: int, tmp: str) -> dict[str, dict]:
+    """Mean outputs of :func:`pushover_worker` on both trees, alternating ``rounds`` times."""
+    runs: dict[str, list[dict]] = {"before": [], "after": []}
+    for k in range(rounds):
+        for label, src in (("before", old), ("after", current)):
+            out = os.path.join(tmp, f"pushover_{label}{k}.npz")
+            runs[label].append(run_worker(src, [], out, "--pushover-worker"))
+    return {
+        label: {key: float(np.mean([r[key] for r in rs])) for key in rs[0]}
+        for label, rs in runs.items()
+    }
+
+
+def print_pushover(mean: dict[str, dict], rounds: int) -> None:
+    b, a = mean["before"], mean["after"]
+    print(f"U wall pushover, mean of {rounds} alternating rounds:")
+    print(f"{'':22s} {'before':>9s} {'after':>9s} {'ratio':>6s}")
+    for key, name in (("wall", "wall-clock [s]"), ("cpu", "CPU [s]"), ("forces", "in forces [s]")):
+        print(f"{name:22s} {b[key]:9.2f} {a[key]:9.2f} {b[key] / a[key]:6.2f}")
+    for key in ("calls", "factorizations", "lam"):
+        print(f"{key:22s} {b[key]:9.6g} {a[key]:9.6g}")
+
+
+def forces_main(baseline: str, rounds: int, pushover: bool = False) -> int:
+    import masonry_dem
+    from masonry_dem.constitutive.states import FLAG_DETACHED, FLAG_SHEAR_TORSION
+
+    current = os.path.dirname(os.path.dirname(os.path.abspath(masonry_dem.__file__)))
+    with tempfile.TemporaryDirectory() as tmp:
+        old = baseline_source(baseline, os.path.join(tmp, "baseline"))
+        path = forces_inputs(tmp)
+        runs: dict[str, list[dict]] = {"before": [], "after": []}
+        for k in range(rounds):  # alternate, so both see the same machine load
+            for label, src in (("before", old), ("after", current)):
+                out = os.path.join(tmp, f"forces_{label}{k}.npz")
+                runs[label].append(run_worker(src, [path], out, "--forces-worker"))
+        pushed = pushover_runs(old, current, rounds, tmp) if pushover else None
+
+    threads = os.environ.get("NUMBA_NUM_THREADS", "all")
+    print(f"python {platform.python_version()}, numpy {np.__version__}, {platform.machine()}")
+    print(f"S5 U wall; baseline {baseline[:12]}; NUMBA_NUM_THREADS={threads}; fastest call")
+    print(f"over {rounds} alternating rounds; rows: elastic/detached/sliding/rocking only")
+    head = f"{'state':5s} {'rows':>19s} {'before [us]':>11s} {'after [us]':>10s} {'ratio':>6s}"
+    print(head + f" {'scipy H, H_T [us]':>17s}  outputs")
+    for state in ("dead", "last"):
+        before, after = runs["before"][0], runs["after"][0]
+        flags = after[f"{state}:flags"]
+        rows = (
+            int(np.sum(flags == 0)),
+            int(np.sum(flags == FLAG_DETACHED)),
+            int(np.sum(flags & FLAG_SHEAR_TORSION > 0)),
+            int(np.sum((flags > 0) & (flags < FLAG_DETACHED) & (flags & FLAG_SHEAR_TORSION == 0))),
+        )
+        same = all(
+            after[f"{state}:{f}"].tobytes() == before[f"{state}:{f}"].tobytes()
+            for f in FORCES_OUTPUTS
+        )
+        tb = min(float(r[f"{state}:time"]) for r in runs["before"])
+        ta = min(float(r[f"{state}:time"]) for r in runs["after"])
+        spmv = min(float(r[f"{state}:spmv"]) for r in runs["after"])
+        print(
+            f"{state:5s} {'/'.join(map(str, rows)):>19s} {tb * 1e6:11.1f} {ta * 1e6:10.1f} "
+            f"{tb / ta:6.2f} {spmv * 1e6:17.1f}  {'same bits' if same else 'DIFFERENT'}"
+        )
+    if pushed is not None:
+        print_pushover(pushed, rounds)
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--interfaces", type=int, default=1_000_000)
@@ -249,13 +543,30 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--cases", nargs="+", default=["S15", "OL2", "2-3"])
     p.add_argument("--baseline", default=LAW_BASELINE, help="git revision to compare with")
     p.add_argument("--rounds", type=int, default=3)
+    p.add_argument("--forces", action="store_true", help="time InterfaceLaw.forces (see above)")
     p.add_argument("--law-worker", nargs="+", help=argparse.SUPPRESS)  # OUT INPUT...
+    p.add_argument("--pushover", action="store_true", help="with --forces: the U wall's pushover")
+    p.add_argument("--parts", action="store_true", help="with --forces: where a call goes")
+    p.add_argument("--forces-worker", nargs=2, help=argparse.SUPPRESS)  # OUT INPUT
+    p.add_argument("--pushover-worker", nargs=1, help=argparse.SUPPRESS)  # OUT
     args = p.parse_args(argv)
     if args.law_worker:
         law_worker(args.law_worker[1:], args.law_worker[0])
         return 0
+    if args.forces_worker:
+        forces_worker(args.forces_worker[1], args.forces_worker[0])
+        return 0
+    if args.pushover_worker:
+        pushover_worker(args.pushover_worker[0])
+        return 0
     if args.law:
         return law_main(args.cases, args.baseline, args.rounds)
+    if args.forces and args.parts:
+        with tempfile.TemporaryDirectory() as tmp:
+            forces_parts(forces_inputs(tmp))
+        return 0
+    if args.forces:
+        return forces_main(args.baseline, args.rounds, args.pushover)
 
     rows: list[tuple[str, str, float, str]] = []
 

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from masonry_dem import jit
-from masonry_dem.constitutive.law import InterfaceLaw
+from masonry_dem.constitutive.law import InterfaceLaw, _unsigned
 from masonry_dem.constitutive.law_kernels import forces
 from masonry_dem.constitutive.states import (
     FLAG_DETACHED,
@@ -56,10 +56,12 @@ def test_the_two_variants_give_the_same_bits():
     H = sparse.random(6 * m, n, density=0.1, random_state=4, format="csr") * 1e-6
     H_T = H.T.tocsr()
     x = rng.normal(size=n)
+    dom = law._domain
     args = (
-        x, H.indptr, H.indices, H.data, law.kbar, np.zeros((m, 6)), np.zeros(m, dtype=bool),
-        np.ascontiguousarray(law.tensile_force), *law._domain.kernel_arrays, True, True,
-        H_T.indptr, H_T.indices, H_T.data, n,
+        x, _unsigned(H.indptr), _unsigned(H.indices), H.data, law.kbar, np.zeros((m, 6)),
+        np.zeros(m, dtype=bool), np.ascontiguousarray(law.tensile_force), *dom.kernel_arrays,
+        dom.torsion_constant, True, True, _unsigned(H_T.indptr), _unsigned(H_T.indices),
+        H_T.data, n,
     )  # fmt: skip
     one = forces.serial(*args)
     two = forces.parallel(*args)

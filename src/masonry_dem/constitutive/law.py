@@ -136,6 +136,14 @@ class InterfaceLaw:
         checked_field("tensile_force", self.tensile_force, m, minimum=0.0, strict=False)
         return StrengthDomain.of(m, self.l1, self.l2, self.friction, self.alpha)
 
+    @cached_property
+    def _tensile_rows(self) -> np.ndarray:
+        """ft of every row, (m,) and contiguous: the compiled forces read one per row (a
+        scalar ``tensile_force`` was read past its end)."""
+        m = self.kbar.shape[0]
+        ft = checked_field("tensile_force", self.tensile_force, m, minimum=0.0, strict=False)
+        return np.ascontiguousarray(ft)
+
     def _check(self, trial: np.ndarray, ft: np.ndarray) -> StrengthCheck:
         if not np.isfinite(trial.sum()):  # one cheap test; _actions says what is wrong
             trial = checked_actions(trial)
@@ -182,18 +190,19 @@ class InterfaceLaw:
         kernel = forces.for_rows(self.kbar.shape[0])
         rel, trial, ft, actions, flags, internal, finite = kernel(
             np.ascontiguousarray(x, dtype=float),
-            H.indptr,
-            H.indices,
+            _unsigned(H.indptr),
+            _unsigned(H.indices),
             H.data,
-            self.kbar,
+            np.ascontiguousarray(self.kbar, dtype=float),
             np.ascontiguousarray(plastic, dtype=float),
             np.ascontiguousarray(cracked, dtype=bool),
-            np.ascontiguousarray(self.tensile_force, dtype=float),
+            self._tensile_rows,
             *dom.kernel_arrays,
+            dom.torsion_constant,
             self.projection == "energy",
             self.tension == "brittle",
-            H_T.indptr,
-            H_T.indices,
+            _unsigned(H_T.indptr),
+            _unsigned(H_T.indices),
             H_T.data,
             H_T.shape[0],
         )
@@ -264,6 +273,12 @@ class InterfaceLaw:
         if self.tension != "brittle":
             return cracked
         return cracked | ((response.flags & DETACHED_FLAG) > 0)
+
+
+def _unsigned(index: np.ndarray) -> np.ndarray:
+    """The unsigned view of a sparse matrix's index array (int32 or int64, never negative):
+    a compiled gather through it needs no test for negative indices."""
+    return index.view(np.uint32 if index.dtype.itemsize == 4 else np.uint64)
 
 
 def fd_tangent(
