@@ -280,8 +280,9 @@ def nb_check_row(
     the row's constants give ``(p1, p2, pn, p4, p5, p6, flags, utilisation, radial_failed,
     energy_failed)``: the projection, its flags, the utilisation (0 with
     ``projection_only``) and whether the radial factor and the energy projection did not
-    converge (0 or 1 each). Scalars, not the arrays: a row function taking nine arrays cost
-    about 40 ns a call more (their references), a tenth of a sliding row."""
+    converge (0 or 1 each). Scalars, not the arrays: every array a compiled row function
+    takes adds the cost of its reference to each call (docs/solvers.md, "One evaluation of
+    the interface law")."""
     n_radial = 0
     n_energy = 0
 

@@ -402,7 +402,7 @@ def nb_plain_row(f1, f2, fn, m1, m2, m3, fti, l1, l2, mu, snap1, snap2, torsion)
     distance from the centre, so it grows with each side and is homogeneous of degree one,
     ``cT(l1', l2') >= s cT(l1, l2)`` with ``s = min(l1'/l1, l2'/l2)``; ``torsion`` is
     cT(l1, l2). A NaN fails the comparisons and leaves the row to the check. Scalars in and
-    out: a row function taking the arrays cost about 40 ns a call more (their references)."""
+    out, as :func:`~masonry_dem.constitutive.check_kernels.nb_check_row`."""
     if fn > fti:
         return ROW_DETACHED
     cap = fti - fn
