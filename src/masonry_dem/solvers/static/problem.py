@@ -312,10 +312,9 @@ class TangentAssembler:
         """:meth:`data` of the tangents T (a copy: the same bits), worked out from the last
         matrix :meth:`update` assembled in the same ``layout``: only the joints whose tangent
         changed since, and the entries they add to. Between two factorized tangents of a
-        path the elastic joints keep theirs (on the 909-block wall's pushover a median of
-        213 of its 2 640 joints changed), so the products of the others and the sums of
-        the entries they leave alone are not worked out again (docs/solvers.md, "Where the
-        909-block pushover's seconds go"). It keeps the joints' tangents and 12 x 12 blocks
+        path most joints (the elastic ones) keep theirs, so their products and the sums of
+        the entries they alone add to are not worked out again (measured in docs/solvers.md,
+        "Where the 909-block pushover's seconds go"). It keeps the joints' tangents and 12 x 12 blocks
         and the entries (``resources.KEPT_BYTES_PER_INTERFACE``)."""
         kept = self._kept
         everything = kept is None or kept.layout is not layout
