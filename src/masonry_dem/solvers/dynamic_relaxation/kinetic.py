@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from masonry_dem.constitutive import law_kernels
-from masonry_dem.jit import Kernel, _dispatcher
+from masonry_dem.jit import _KERNELS, Kernel, _dispatcher
 
 #: how a call of :func:`kinetic_steps` ended
 PEAK, CONVERGED, STALLED, BUDGET, BLOWUP, MECHANISM, MAX_CYCLES, NOT_FINITE = range(8)
@@ -168,10 +168,13 @@ def _variant(law_kernel: Any, suffix: str) -> Any:
 
 
 #: the serial variant calls the law's serial kernel, the parallel one its parallel kernel
-#: (picked by :meth:`~masonry_dem.jit.Kernel.for_rows`, like the law's)
+#: (picked by :meth:`~masonry_dem.jit.Kernel.for_rows`, like the law's); compiled on its
+#: first call (about 2 s, announced then; an analysis that never relaxes does not pay it)
+#: or by ``masonry-dem warmup`` with the other lazy kernels
 kinetic_steps = Kernel(
     "kinetic_steps",
     _variant(law_kernels.forces.serial, ""),
     _variant(law_kernels.forces.parallel, "_parallel"),
     eager=False,
 )
+_KERNELS.append(kinetic_steps)
