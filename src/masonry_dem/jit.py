@@ -186,6 +186,7 @@ def mark_announced(parallel: bool) -> None:
 def kernels() -> tuple[Kernel, ...]:
     """Every kernel of the package (their modules imported)."""
     import masonry_dem.constitutive.law_kernels  # noqa: F401
+    import masonry_dem.solvers.dynamic_relaxation.kinetic  # noqa: F401
     import masonry_dem.solvers.static.problem  # noqa: F401
 
     return tuple(_KERNELS)

@@ -30,7 +30,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cached_property
-from typing import Literal, get_args
+from typing import Any, Literal, get_args
 
 import numpy as np
 from scipy import sparse
@@ -209,6 +209,34 @@ class InterfaceLaw:
         if not finite:
             checked_actions(trial)  # says which action is not finite
         return rel, LawResponse(trial, ft, actions, flags, None), internal
+
+    def kernel_operands(
+        self,
+        H: sparse.csr_matrix,
+        plastic: np.ndarray,
+        cracked: np.ndarray,
+        H_T: sparse.csr_matrix,
+    ) -> tuple[Any, ...]:
+        """The arguments of the kernel of :meth:`forces` after x, in its order: for a
+        compiled caller that evaluates the law itself (a relaxation's time steps)."""
+        dom = self._domain
+        return (
+            _unsigned(H.indptr),
+            _unsigned(H.indices),
+            H.data,
+            np.ascontiguousarray(self.kbar, dtype=float),
+            np.ascontiguousarray(plastic, dtype=float),
+            np.ascontiguousarray(cracked, dtype=bool),
+            self._tensile_rows,
+            *dom.kernel_arrays,
+            dom.torsion_constant,
+            self.projection == "energy",
+            self.tension == "brittle",
+            _unsigned(H_T.indptr),
+            _unsigned(H_T.indices),
+            H_T.data,
+            H_T.shape[0],
+        )
 
     def utilisation(self, r: LawResponse) -> np.ndarray:
         """(m,) utilisation of the trial actions of ``r`` (see :func:`check_strength`)."""

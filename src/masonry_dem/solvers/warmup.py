@@ -48,8 +48,10 @@ def _tiny_problem():  # -> DiscreteProblem
 
 def _forces_group(lazy: bool = False) -> None:
     """The residual's kernels: the law's forces, the strength check, and with ``lazy`` the
-    forward difference (compiled on its first call otherwise: most analyses never call it)."""
+    forward difference and the relaxation's time steps (compiled on their first call
+    otherwise: many analyses never call them)."""
     from masonry_dem.constitutive.law import fd_tangent
+    from masonry_dem.solvers.dynamic_relaxation.integrator import Relaxation, _State
 
     problem = _tiny_problem()
     m = problem.model.interfaces.count
@@ -70,6 +72,10 @@ def _forces_group(lazy: bool = False) -> None:
         law.projection,
         np.zeros(m, dtype=bool),
     )
+    relaxation = Relaxation(problem.model)
+    nf = relaxation.Hf.shape[1]
+    at_rest = _State(np.zeros(nf), np.zeros((m, 6)), np.zeros(m, dtype=bool), 0.0, np.ones((m, 6)))
+    relaxation._relax(at_rest, 0.0, relaxation.dt)
 
 
 def _tangent_group() -> None:

@@ -66,6 +66,7 @@ from scipy import sparse
 
 from masonry_dem.constitutive.law import LawResponse
 from masonry_dem.model import Model
+from masonry_dem.solvers.dynamic_relaxation import kinetic as kin
 from masonry_dem.solvers.dynamic_relaxation.settings import DRSettings, DRStats
 from masonry_dem.solvers.static.problem import DiscreteProblem
 
@@ -270,6 +271,10 @@ class Relaxation:
         component vanishes and the damping is the usual one.
         """
         s = self.settings
+        if s.compiled_steps and s.damping == "kinetic" and ramp_to is None:
+            return self._relax_compiled(
+                start, target, dt, from_start, probe, probe_every, creep_cos
+            )
         M = self.mass
         W = self._weight
         x = start.x.copy()
@@ -452,6 +457,133 @@ class Relaxation:
             resp,
             s.max_cycles,
             f"no rest within max_cycles={s.max_cycles} (residual {rnorm:.2e})",
+        )
+
+    def _relax_compiled(
+        self,
+        start: _State,
+        target: float,
+        dt: float,
+        from_start: bool,
+        probe: Probe | None,
+        probe_every: int,
+        creep_cos: float,
+    ) -> _Relaxed:
+        """:meth:`_relax` with kinetic damping at a fixed load, its time steps in
+        :data:`~masonry_dem.solvers.dynamic_relaxation.kinetic.kinetic_steps` (the same
+        operations in the same order, so the same bits); this side asks the probe and
+        measures the creep at the peaks where they are due, and words the ending."""
+        s = self.settings
+        M = self.mass
+        W = self._weight
+        x = start.x.copy()
+        plastic = start.plastic.copy()
+        cracked = start.cracked.copy()
+        v = np.zeros_like(x)
+        lam = target
+        F = self.F_dead + lam * self.F_live
+        rel, resp, fint = self._forces(x, plastic, cracked)
+        R = F - fint
+        trans = np.flatnonzero(self._translation)
+        origin = x[trans] if from_start else np.zeros(trans.size)
+        self._courant = 0.0
+        fscale = max(
+            float(np.linalg.norm(self.F_dead + max(abs(target), 1e-12) * self.F_live)), 1e-30
+        )
+        Fn = max(float(np.linalg.norm(W * F)), 1e-30)
+        window = self._stall_window()
+        creeping = creep_cos > 0.0
+        asking = probe is not None or creeping
+        peak_sum = np.zeros_like(x)
+        mean_before = x.copy()
+        creep_before: NDArray[np.float64] | None = None
+        keep: NDArray[np.float64] | None = None
+        fs = np.array([0.0, 0.0, math.inf, math.inf, 0.0, math.nan])
+        ints = np.zeros(8, dtype=np.int64)
+        ints[kin.RESTART] = 1
+        operands = self.law.kernel_operands(self.Hf, plastic, cracked, self.asm.H_free_T)
+        steps = kin.kinetic_steps.for_rows(self.m)
+        while True:
+            code, rel, trial, ft, actions, flags = steps(
+                x, v, fint, R, F, M, W,
+                keep if keep is not None else peak_sum, keep is not None,
+                peak_sum, creeping, asking, trans, origin, fs, ints,
+                dt, Fn, fscale, s.tolerance, s.energy_tolerance, self.limit, window,
+                s.max_cycles, s.max_time_steps - self.stats.time_steps, probe_every,
+                s.blowup_patience,
+                rel, resp.trial, resp.tensile_force, resp.actions, resp.flags,
+                *operands,
+            )  # fmt: skip
+            self.stats.time_steps += int(ints[kin.STEPS])
+            self.stats.kinetic_resets += int(ints[kin.RESETS])
+            self.stats.law_evaluations += int(ints[kin.EVALUATIONS])
+            ints[kin.STEPS] = ints[kin.RESETS] = ints[kin.EVALUATIONS] = 0
+            self._courant = float(fs[kin.COURANT])
+            resp = LawResponse(trial, ft, actions, flags, None)
+            cycle = int(ints[kin.CYCLE])
+            if code != kin.PEAK:
+                break
+            ints[kin.PROBED] = cycle
+            if creeping:
+                mean = peak_sum / int(ints[kin.PEAK_COUNT])
+                creep = mean - mean_before
+                keep = _converged_creep(creep, creep_before, M, creep_cos)
+                creep_before, mean_before = creep, mean
+                peak_sum[:] = 0.0
+                ints[kin.PEAK_COUNT] = 0
+            if probe is not None:
+                here = x.copy()  # the loop goes on in x: the probe keeps its own
+                if probe(here):
+                    return _Relaxed(True, "converged", here, lam, resp, cycle)
+        if code == kin.NOT_FINITE:
+            self._forces(x, plastic, cracked)  # says which action is not finite
+            raise FloatingPointError("non-finite interface actions in a relaxation")
+        if code == kin.CONVERGED:
+            return _Relaxed(True, "converged", x, lam, resp, cycle)
+        if code == kin.STALLED:
+            why = f"residual stalled at {fs[kin.BEST_NOW]:.2e} over {window} time steps"
+            return _Relaxed(False, "stalled", x, lam, resp, cycle, why)
+        if code == kin.BUDGET:
+            why = f"time-step budget max_time_steps={s.max_time_steps} spent at lambda={lam:.6g}"
+            return _Relaxed(False, "budget", start.x, lam, resp, cycle, why)
+        if code == kin.BLOWUP:
+            rabs = float(np.linalg.norm(R))
+            over = int(ints[kin.OVER])
+            what = (
+                "non-finite forces"
+                if not math.isfinite(rabs)
+                else f"omega^2 dt^2 > 4 in {over} time steps"
+                if over >= s.blowup_patience
+                else "the residual grew by 1e8"
+            )
+            return _Relaxed(
+                False,
+                "blowup",
+                start.x,
+                lam,
+                resp,
+                cycle,
+                f"blow-up at lambda={lam:.6g} after {cycle} time steps with dt={dt:.4g} "
+                f"({what}; estimated stable limit {self.dt_limit:.4g})",
+            )
+        if code == kin.MECHANISM:
+            return _Relaxed(
+                False,
+                "mechanism",
+                x,
+                lam,
+                resp,
+                cycle,
+                f"displacements exceed the limit {self.limit:.3g} m (a mechanism has formed)",
+            )
+        return _Relaxed(
+            False,
+            "stalled",
+            x,
+            lam,
+            resp,
+            s.max_cycles,
+            f"no rest within max_cycles={s.max_cycles} (residual {fs[kin.RNORM]:.2e})",
         )
 
     def _stall_window(self) -> int:

@@ -58,6 +58,9 @@ class DRSettings(LoadPathSettings):
     max_cuts: the most halvings of the time step in one run.
     blowup_patience: steps above the stability limit that end a relaxation.
     power_iterations: iterations of ``dt_rule="power"``.
+    compiled_steps: the time steps of kinetic damping at a fixed load run in one compiled
+        function (the same bits as the Python loop, which False selects; docs/solvers.md,
+        "One compiled time step").
     """
 
     max_step: float = positive(0.2)
@@ -84,6 +87,7 @@ class DRSettings(LoadPathSettings):
     max_cuts: int = count(6, least=0)
     blowup_patience: int = count(5, least=1)
     power_iterations: int = count(30, least=1)
+    compiled_steps: bool = True
 
 
 @dataclass
