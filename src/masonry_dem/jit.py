@@ -176,6 +176,30 @@ def kernel(
     return wrap
 
 
+def calling_kernel(
+    name: str, py_func: Callable[..., Any], callee_global: str, callee: Kernel, **options: Any
+) -> Kernel:
+    """A lazy :class:`Kernel` named ``name`` of ``py_func``, which calls another kernel
+    through its global ``callee_global``: the serial variant calls ``callee``'s serial
+    variant, the parallel one its parallel variant (so :meth:`Kernel.for_rows` picks both
+    alike), each compiled with ``numba.njit(**options)`` into its own cache files."""
+
+    def variant(dispatcher: Any, suffix: str) -> Any:
+        scope = dict(py_func.__globals__)
+        scope[callee_global] = dispatcher
+        twin = types.FunctionType(
+            py_func.__code__, scope, name + suffix, py_func.__defaults__, py_func.__closure__
+        )
+        twin.__qualname__ = name + suffix
+        twin.__doc__ = py_func.__doc__
+        return _dispatcher(twin, options)
+
+    parallel = None if callee.parallel is None else variant(callee.parallel, "_parallel")
+    k = Kernel(name, variant(callee.serial, ""), parallel, eager=False)
+    _KERNELS.append(k)
+    return k
+
+
 def mark_announced(parallel: bool) -> None:
     """The kernels' compilation is announced already (by the warm-up): their first calls
     stay quiet (the serial variants, and the parallel ones with ``parallel``)."""

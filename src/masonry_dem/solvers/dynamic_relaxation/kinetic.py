@@ -12,13 +12,12 @@ step"); ``DRSettings.compiled_steps=False`` selects the Python loop.
 
 from __future__ import annotations
 
-import types
 from typing import Any
 
 import numpy as np
 
 from masonry_dem.constitutive import law_kernels
-from masonry_dem.jit import _KERNELS, Kernel, _dispatcher
+from masonry_dem.jit import calling_kernel
 
 #: how a call of :func:`kinetic_steps` ended
 PEAK, CONVERGED, STALLED, BUDGET, BLOWUP, MECHANISM, MAX_CYCLES, NOT_FINITE = range(8)
@@ -158,23 +157,10 @@ def _steps(  # type: ignore[no-untyped-def]  # numba types the arguments
     return code, rel, trial, ft, actions, flags
 
 
-def _variant(law_kernel: Any, suffix: str) -> Any:
-    """A dispatcher of :func:`_steps` that calls ``law_kernel`` (its own cache files)."""
-    scope = dict(globals())
-    scope["_forces"] = law_kernel
-    twin = types.FunctionType(_steps.__code__, scope, "kinetic_steps" + suffix)
-    twin.__qualname__ = "kinetic_steps" + suffix
-    return _dispatcher(twin, {"error_model": "numpy"})
-
-
 #: the serial variant calls the law's serial kernel, the parallel one its parallel kernel
 #: (picked by :meth:`~masonry_dem.jit.Kernel.for_rows`, like the law's); compiled on its
-#: first call (about 2 s, announced then; an analysis that never relaxes does not pay it)
-#: or by ``masonry-dem warmup`` with the other lazy kernels
-kinetic_steps = Kernel(
-    "kinetic_steps",
-    _variant(law_kernels.forces.serial, ""),
-    _variant(law_kernels.forces.parallel, "_parallel"),
-    eager=False,
+#: first call (announced then; an analysis that never relaxes does not pay it) or by
+#: ``masonry-dem warmup`` with the other lazy kernels
+kinetic_steps = calling_kernel(
+    "kinetic_steps", _steps, "_forces", law_kernels.forces, error_model="numpy"
 )
-_KERNELS.append(kinetic_steps)
