@@ -1,7 +1,7 @@
 """Where the factorizations of a pushover go: one row per equilibrium search of the path.
 
     python benchmarks/path_audit.py --scale 30 [--scale 100] [--case S11 ...] [--set k=v ...]
-        [--rows] [--json FILE]
+        [--u-wall S5] [--flat-wall S5] [--rows] [--json FILE]
 
 Each wall runs the default static pushover (``StaticSolver(model, settings).run()``); the
 searches the path followers ask for (``equilibrate``, ``pseudo_transient``, ``robust``,
@@ -14,7 +14,10 @@ factorizations by controller and by converged/failed; what no search took (the e
 range, the certificate, the tangents the stop check asks for) is ``other``.
 
 ``--scale N`` is ``bench_scale.scale_wall(N)`` (30: 909 blocks, 100: 10 017); ``--case`` a
-validation case (its own settings and monitor). ``--set name=value`` overrides a
+validation case (its own settings and monitor). ``--u-wall SIZE`` and ``--flat-wall SIZE``
+are the U wall (returns as blocks, base fixed) and the flat wall of the same block count
+(end columns held) of ``bench_walls_that_meet`` (``SIZE``: S5 or big), both tilted, with
+the default settings, as that benchmark pushes them. ``--set name=value`` overrides a
 ``StaticSettings`` field. ``--against name=value`` runs each wall a second time with that
 override too, the two in turn ``--repeat`` times (keeping each one's fastest), and prints
 the ratios of seconds (wall clock and the process's CPU), factorizations and iterations
@@ -130,6 +133,8 @@ def main() -> int:
     p.add_argument("--scale", type=int, action="append", default=[], help="scale_wall(N)")
     p.add_argument("--case", action="append", default=[], help="a validation case")
     p.add_argument("--cases", action="store_true", help="all 18 validation cases")
+    p.add_argument("--u-wall", action="append", default=[], metavar="SIZE", help="S5 or big")
+    p.add_argument("--flat-wall", action="append", default=[], metavar="SIZE", help="S5 or big")
     p.add_argument("--brief", action="store_true", help="one line a wall, and the totals")
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE")
     p.add_argument("--against", action="append", default=[], metavar="NAME=VALUE")
@@ -139,6 +144,8 @@ def main() -> int:
     a = p.parse_args()
 
     from bench_scale import scale_wall
+    from bench_walls_that_meet import SIZES, build
+    from bench_walls_that_meet import walls as meeting_walls
 
     from masonry_dem.cases.paper import build_case, case_names
     from masonry_dem.solvers.static import StaticSettings
@@ -146,6 +153,13 @@ def main() -> int:
     changes = {k: _value(v) for k, v in (item.split("=", 1) for item in a.set)}
     other = {k: _value(v) for k, v in (item.split("=", 1) for item in a.against)}
     walls = [(f"scale_wall({n})", scale_wall(n), StaticSettings(), None) for n in a.scale]
+    for kind, sizes in (("U", a.u_wall), ("flat", a.flat_wall)):
+        for size in sizes:
+            if size not in SIZES:
+                p.error(f"--{kind.lower()}-wall {size!r}: the sizes are {', '.join(SIZES)}")
+            u, flat = meeting_walls(size)
+            model = build(u, held=False)[0] if kind == "U" else build(flat, held=True)[0]
+            walls.append((f"{kind} wall {size}", model, StaticSettings(), None))
     for name in case_names() if a.cases else a.case:
         case = build_case(name)
         walls.append((name, case.model, case.settings, case.monitor))
