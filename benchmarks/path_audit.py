@@ -1,7 +1,7 @@
 """Where the factorizations of a pushover go: one row per equilibrium search of the path.
 
     python benchmarks/path_audit.py --scale 30 [--scale 100] [--case S11 ...] [--set k=v ...]
-        [--rows] [--json FILE]
+        [--u-wall S5] [--flat-wall S5] [--rows] [--states] [--json FILE]
 
 Each wall runs the default static pushover (``StaticSolver(model, settings).run()``); the
 searches the path followers ask for (``equilibrate``, ``pseudo_transient``, ``robust``,
@@ -14,7 +14,12 @@ factorizations by controller and by converged/failed; what no search took (the e
 range, the certificate, the tangents the stop check asks for) is ``other``.
 
 ``--scale N`` is ``bench_scale.scale_wall(N)`` (30: 909 blocks, 100: 10 017); ``--case`` a
-validation case (its own settings and monitor). ``--set name=value`` overrides a
+validation case (its own settings and monitor). ``--u-wall SIZE`` and ``--flat-wall SIZE``
+are the U wall (returns as blocks, base fixed) and the flat wall of the same block count
+(end columns held) of ``bench_walls_that_meet`` (``SIZE``: S5 or big), both tilted, with
+the default settings, as that benchmark pushes them. ``--states`` prints, per recorded step,
+the joints whose damage state changed since the step before (on a U wall, also how many
+of them touch a return: a block whose centre lies behind the facade). ``--set name=value`` overrides a
 ``StaticSettings`` field. ``--against name=value`` runs each wall a second time with that
 override too, the two in turn ``--repeat`` times (keeping each one's fastest), and prints
 the ratios of seconds (wall clock and the process's CPU), factorizations and iterations
@@ -47,8 +52,10 @@ def _value(text: str):
     return {"true": True, "false": False}.get(text.lower(), text)
 
 
-def audit(model, settings, monitor=None) -> dict:
-    """Run the pushover and return its rows and totals."""
+def audit(model, settings, monitor=None, part=None) -> dict:
+    """Run the pushover and return its rows and totals, and per recorded step the joints whose
+    damage state changed since the step before (``changed``; of them in ``part``, a boolean
+    mask of the joints, ``in_part``)."""
     from masonry_dem.solvers.static import StaticSolver
 
     solver = StaticSolver(model, settings)
@@ -106,6 +113,18 @@ def audit(model, settings, monitor=None) -> dict:
     hist = solver.run(monitor=monitor)
     seconds, cpu = time.perf_counter() - t0, time.process_time() - c0
     lam = hist.collapse_multiplier
+    states = []
+    for before, st in zip(hist.steps, hist.steps[1:], strict=False):
+        moved = st.state != before.state
+        states.append(
+            {
+                "step": st.step,
+                "lambda": float(st.load_factor),
+                "iterations": st.iterations,
+                "changed": int(moved.sum()),
+                "in_part": int(moved[part].sum()) if part is not None else 0,
+            }
+        )
     by = Counter()
     for r in rows:
         by[(r["kind"], r["ok"], "n")] += 1
@@ -121,6 +140,7 @@ def audit(model, settings, monitor=None) -> dict:
         "seconds": seconds,
         "cpu": cpu,
         "rows": rows,
+        "states": states,
         "by": {f"{k[0]}/{'ok' if k[1] else 'failed'}/{k[2]}": v for k, v in by.items()},
     }
 
@@ -130,15 +150,20 @@ def main() -> int:
     p.add_argument("--scale", type=int, action="append", default=[], help="scale_wall(N)")
     p.add_argument("--case", action="append", default=[], help="a validation case")
     p.add_argument("--cases", action="store_true", help="all 18 validation cases")
+    p.add_argument("--u-wall", action="append", default=[], metavar="SIZE", help="S5 or big")
+    p.add_argument("--flat-wall", action="append", default=[], metavar="SIZE", help="S5 or big")
     p.add_argument("--brief", action="store_true", help="one line a wall, and the totals")
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE")
     p.add_argument("--against", action="append", default=[], metavar="NAME=VALUE")
     p.add_argument("--repeat", type=int, default=1, help="runs of each, in turn (--against)")
     p.add_argument("--rows", action="store_true", help="print every search")
+    p.add_argument("--states", action="store_true", help="joints whose state changed, step by step")
     p.add_argument("--json", default=None)
     a = p.parse_args()
 
     from bench_scale import scale_wall
+    from bench_walls_that_meet import SIZES, build
+    from bench_walls_that_meet import walls as meeting_walls
 
     from masonry_dem.cases.paper import build_case, case_names
     from masonry_dem.solvers.static import StaticSettings
@@ -146,13 +171,27 @@ def main() -> int:
     changes = {k: _value(v) for k, v in (item.split("=", 1) for item in a.set)}
     other = {k: _value(v) for k, v in (item.split("=", 1) for item in a.against)}
     walls = [(f"scale_wall({n})", scale_wall(n), StaticSettings(), None) for n in a.scale]
+    parts: dict[str, np.ndarray] = {}  # per wall, the joints counted apart (--states)
+    for kind, sizes in (("U", a.u_wall), ("flat", a.flat_wall)):
+        for size in sizes:
+            if size not in SIZES:
+                p.error(f"--{kind.lower()}-wall {size!r}: the sizes are {', '.join(SIZES)}")
+            u, flat = meeting_walls(size)
+            model = build(u, held=False)[0] if kind == "U" else build(flat, held=True)[0]
+            walls.append((f"{kind} wall {size}", model, StaticSettings(), None))
+            if kind == "U":  # the returns: blocks whose centre is behind the facade's
+                z = model.blocks.centres[:, 2]
+                behind = z < 0.5 * z.max()
+                parts[walls[-1][0]] = (
+                    behind[model.interfaces.block_i] | behind[model.interfaces.block_j]
+                )
     for name in case_names() if a.cases else a.case:
         case = build_case(name)
         walls.append((name, case.model, case.settings, case.monitor))
     results = {}
     for label, model, settings, monitor in walls:
         settings = replace(settings, **changes) if changes else settings
-        r = audit(model, settings, monitor)
+        r = audit(model, settings, monitor, parts.get(label))
         if other:
             b = audit(model, replace(settings, **other), monitor)
             for _ in range(a.repeat - 1):  # in turn, so both see the same machine
@@ -191,6 +230,21 @@ def main() -> int:
             print(
                 f"  {kind:11s} | {ok[0]:5d} {ok[1]:6d} {ok[2]:6d} | {bad[0]:5d} {bad[1]:6d} {bad[2]:6d}"
             )
+        if a.states:
+            part = label in parts
+            print("  step  lambda     it  changed" + ("  of them in the returns" if part else ""))
+            for st in r["states"]:
+                print(
+                    f"  {st['step']:4d}  {st['lambda']:.5f} {st['iterations']:3d} "
+                    f"{st['changed']:7d}" + (f"  {st['in_part']:7d}" if part else "")
+                )
+            if part:
+                n = int(parts[label].sum())
+                print(
+                    f"  joints: {len(parts[label])}, {n} of them touch a return; changes: "
+                    f"{sum(st['changed'] for st in r['states'])}, "
+                    f"{sum(st['in_part'] for st in r['states'])} of them in the returns"
+                )
         if a.rows:
             print("    #  kind       lambda      w [m]        asked   it  f  ok  why")
             for i, row in enumerate(r["rows"]):
