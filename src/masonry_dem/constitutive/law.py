@@ -186,25 +186,9 @@ class InterfaceLaw:
         utilisation=False)``, generalised forces ``H_T @ actions``), the same bits, in one
         compiled pass: a Newton residual or a time step without its intermediate arrays and
         calls."""
-        dom = self._domain
         kernel = forces.for_rows(self.kbar.shape[0])
         rel, trial, ft, actions, flags, internal, finite = kernel(
-            np.ascontiguousarray(x, dtype=float),
-            _unsigned(H.indptr),
-            _unsigned(H.indices),
-            H.data,
-            np.ascontiguousarray(self.kbar, dtype=float),
-            np.ascontiguousarray(plastic, dtype=float),
-            np.ascontiguousarray(cracked, dtype=bool),
-            self._tensile_rows,
-            *dom.kernel_arrays,
-            dom.torsion_constant,
-            self.projection == "energy",
-            self.tension == "brittle",
-            _unsigned(H_T.indptr),
-            _unsigned(H_T.indices),
-            H_T.data,
-            H_T.shape[0],
+            np.ascontiguousarray(x, dtype=float), *self.kernel_operands(H, plastic, cracked, H_T)
         )
         if not finite:
             checked_actions(trial)  # says which action is not finite

@@ -24,6 +24,31 @@ from masonry_dem.model import Model
 from masonry_dem.solvers.factorization import Factorizer, Factors, SingularMatrix, analyse
 
 
+@numba.njit(fastmath={"contract"})
+def _joint_block(H_loc: np.ndarray, T: np.ndarray, i: int, B: np.ndarray) -> None:
+    """B[i] = H_loc[i]^T T[i] H_loc[i], the 12 x 12 block of joint i, as sequential fused
+    multiply-adds (compiled into its callers). The zeros of H_loc (three quarters of it: the
+    unit translations and the lever arms of a rigid block) are skipped: each sum keeps its
+    order over k, and a term h x t with h = 0 adds nothing to it (t is finite), so the
+    entries are the same numbers."""
+    A = np.zeros((12, 6))
+    for r in range(12):
+        for k in range(6):
+            h = H_loc[i, k, r]
+            if h != 0.0:
+                for c in range(6):
+                    A[r, c] += h * T[i, k, c]
+    for r in range(12):
+        for c in range(12):
+            B[i, r, c] = 0.0
+    for c in range(12):
+        for k in range(6):
+            h = H_loc[i, k, c]
+            if h != 0.0:
+                for r in range(12):
+                    B[i, r, c] += A[r, k] * h
+
+
 @kernel(parallel=True, fastmath={"contract"})
 def _assemble_tangent(H_loc: np.ndarray, T: np.ndarray, terms: np.ndarray, ptr: np.ndarray):
     """The stored entries of K = sum over interfaces of H_loc^T T H_loc (12 x 12 each):
@@ -34,25 +59,7 @@ def _assemble_tangent(H_loc: np.ndarray, T: np.ndarray, terms: np.ndarray, ptr: 
     m = H_loc.shape[0]
     B = np.empty((m, 12, 12))
     for i in numba.prange(m):
-        # the zeros of H_loc (three quarters of it: the unit translations and the lever arms
-        # of a rigid block) are skipped: each sum keeps its order over k, and a term h x t
-        # with h = 0 adds nothing to it (t is finite), so the entries are the same numbers
-        A = np.zeros((12, 6))
-        for r in range(12):
-            for k in range(6):
-                h = H_loc[i, k, r]
-                if h != 0.0:
-                    for c in range(6):
-                        A[r, c] += h * T[i, k, c]
-        for r in range(12):
-            for c in range(12):
-                B[i, r, c] = 0.0
-        for c in range(12):
-            for k in range(6):
-                h = H_loc[i, k, c]
-                if h != 0.0:
-                    for r in range(12):
-                        B[i, r, c] += A[r, k] * h
+        _joint_block(H_loc, T, i, B)
     flat = B.reshape(-1)
     out = np.empty(ptr.size - 1)
     for j in numba.prange(ptr.size - 1):
@@ -98,23 +105,7 @@ def _update_tangent(
         for k in range(6):
             for c in range(6):
                 T_kept[i, k, c] = T[i, k, c]
-        # the products of _assemble_tangent, term for term
-        A = np.zeros((12, 6))
-        for r in range(12):
-            for k in range(6):
-                h = H_loc[i, k, r]
-                if h != 0.0:
-                    for c in range(6):
-                        A[r, c] += h * T[i, k, c]
-        for r in range(12):
-            for c in range(12):
-                B[i, r, c] = 0.0
-        for c in range(12):
-            for k in range(6):
-                h = H_loc[i, k, c]
-                if h != 0.0:
-                    for r in range(12):
-                        B[i, r, c] += A[r, k] * h
+        _joint_block(H_loc, T, i, B)  # the products of _assemble_tangent
     dirty = np.zeros(out.size, dtype=np.bool_)
     count = 0
     for i in range(m):
