@@ -131,6 +131,26 @@ def _converged_creep(
     return creep / norm
 
 
+@dataclass
+class _Creep:
+    """The creep of a relaxation (see :meth:`Relaxation._relax`): the mean state of the
+    kinetic-energy peaks of the last window, the last window's creep, and the direction kept
+    undamped (None while the creeps do not point the same way)."""
+
+    mean_before: NDArray[np.float64]
+    before: NDArray[np.float64] | None = None
+    keep: NDArray[np.float64] | None = None
+
+    def measure(
+        self, peak_sum: NDArray[np.float64], count: int, mass: NDArray[np.float64], cos_min: float
+    ) -> None:
+        """A window ends: its mean state of the peaks (their sum and count) against the last."""
+        mean = peak_sum / count
+        creep = mean - self.mean_before
+        self.keep = _converged_creep(creep, self.before, mass, cos_min)
+        self.before, self.mean_before = creep, mean
+
+
 class Relaxation:
     """The relaxations of one model: keeps the assembly, the masses and the time step.
     :class:`~masonry_dem.solvers.dynamic_relaxation.solver.DynamicRelaxation` follows the load
@@ -307,36 +327,18 @@ class Relaxation:
         creeping = creep_cos > 0.0 and s.damping == "kinetic" and not ramp
         peak_sum = np.zeros_like(x)
         peak_count = 0
-        mean_before = x.copy()
-        creep_before: NDArray[np.float64] | None = None
-        keep: NDArray[np.float64] | None = None
+        tracked = _Creep(x.copy())
         # a ramp runs until a mechanism forms or lambda reaches its top: only the budget ends it
         for cycle in range(1, (s.max_time_steps if ramp else s.max_cycles) + 1):
             self.stats.time_steps += 1
             if self.stats.time_steps > s.max_time_steps:
-                return _Relaxed(
-                    False,
-                    "budget",
-                    start.x,
-                    lam,
-                    resp,
-                    cycle,
-                    f"time-step budget max_time_steps={s.max_time_steps} spent at lambda={lam:.6g}",
-                )
+                return self._spent(start, lam, resp, cycle)
             Fn = max(float(np.linalg.norm(W * F)), 1e-30)
             rnorm = float(np.linalg.norm(W * R)) / Fn
             best_now = min(best_now, rnorm)
             if not ramp and cycle % window == 0:
                 if best_now > 0.5 * best_before:
-                    return _Relaxed(
-                        False,
-                        "stalled",
-                        x,
-                        lam,
-                        resp,
-                        cycle,
-                        f"residual stalled at {best_now:.2e} over {window} time steps",
-                    )
+                    return self._stalled(x, lam, resp, cycle, best_now, window)
                 best_before, best_now = best_now, math.inf
             ke = 0.5 * float(v @ (M * v))
             ke_peak = max(ke_peak, ke)
@@ -358,6 +360,7 @@ class Relaxation:
                 ke_new = 0.5 * float(v @ (M * v))
                 if ke_new < ke_prev:  # a peak of the kinetic energy has passed
                     self.stats.kinetic_resets += 1
+                    keep = tracked.keep
                     forward = float(v_old @ (M * keep)) if keep is not None else 0.0
                     if keep is not None and forward > 0.0:  # the creep goes on undamped
                         v = forward * keep
@@ -376,10 +379,7 @@ class Relaxation:
                         if (probe is not None or creeping) and cycle - probed >= probe_every:
                             probed = cycle
                             if creeping:
-                                mean = peak_sum / peak_count
-                                creep = mean - mean_before
-                                keep = _converged_creep(creep, creep_before, M, creep_cos)
-                                creep_before, mean_before = creep, mean
+                                tracked.measure(peak_sum, peak_count, M, creep_cos)
                                 peak_sum[:] = 0.0
                                 peak_count = 0
                             if probe is not None and probe(x):
@@ -415,23 +415,7 @@ class Relaxation:
                 over += 1
             rabs = float(np.linalg.norm(R))
             if not math.isfinite(rabs) or over >= s.blowup_patience or rabs > 1e8 * fscale:
-                why = (
-                    "non-finite forces"
-                    if not math.isfinite(rabs)
-                    else f"omega^2 dt^2 > 4 in {over} time steps"
-                    if over >= s.blowup_patience
-                    else "the residual grew by 1e8"
-                )
-                return _Relaxed(
-                    False,
-                    "blowup",
-                    start.x,
-                    lam,
-                    resp,
-                    cycle,
-                    f"blow-up at lambda={lam:.6g} after {cycle} time steps with dt={dt:.4g} "
-                    f"({why}; estimated stable limit {self.dt_limit:.4g})",
-                )
+                return self._blown_up(start, lam, resp, cycle, dt, rabs, over)
             if s.damping == "viscous":
                 dxs = x - x0
                 num = float(dxs @ (fint - f0))
@@ -440,24 +424,8 @@ class Relaxation:
                     c = 2.0 * s.viscous_ratio * math.sqrt(num / den)
             umax = float(np.abs(x[self._translation] - origin).max(initial=0.0))
             if umax > self.limit:
-                return _Relaxed(
-                    False,
-                    "mechanism",
-                    x,
-                    lam,
-                    resp,
-                    cycle,
-                    f"displacements exceed the limit {self.limit:.3g} m (a mechanism has formed)",
-                )
-        return _Relaxed(
-            False,
-            "stalled",
-            x,
-            lam,
-            resp,
-            s.max_cycles,
-            f"no rest within max_cycles={s.max_cycles} (residual {rnorm:.2e})",
-        )
+                return self._mechanism(x, lam, resp, cycle)
+        return self._no_rest(x, lam, resp, rnorm)
 
     def _relax_compiled(
         self,
@@ -495,9 +463,7 @@ class Relaxation:
         creeping = creep_cos > 0.0
         asking = probe is not None or creeping
         peak_sum = np.zeros_like(x)
-        mean_before = x.copy()
-        creep_before: NDArray[np.float64] | None = None
-        keep: NDArray[np.float64] | None = None
+        tracked = _Creep(x.copy())
         fs = np.array([0.0, 0.0, math.inf, math.inf, 0.0, math.nan])
         ints = np.zeros(8, dtype=np.int64)
         ints[kin.RESTART] = 1
@@ -506,7 +472,7 @@ class Relaxation:
         while True:
             code, rel, trial, ft, actions, flags = steps(
                 x, v, fint, R, F, M, W,
-                keep if keep is not None else peak_sum, keep is not None,
+                tracked.keep if tracked.keep is not None else peak_sum, tracked.keep is not None,
                 peak_sum, creeping, asking, trans, origin, fs, ints,
                 dt, Fn, fscale, s.tolerance, s.energy_tolerance, self.limit, window,
                 s.max_cycles, s.max_time_steps - self.stats.time_steps, probe_every,
@@ -525,10 +491,7 @@ class Relaxation:
                 break
             ints[kin.PROBED] = cycle
             if creeping:
-                mean = peak_sum / int(ints[kin.PEAK_COUNT])
-                creep = mean - mean_before
-                keep = _converged_creep(creep, creep_before, M, creep_cos)
-                creep_before, mean_before = creep, mean
+                tracked.measure(peak_sum, int(ints[kin.PEAK_COUNT]), M, creep_cos)
                 peak_sum[:] = 0.0
                 ints[kin.PEAK_COUNT] = 0
             if probe is not None:
@@ -541,50 +504,58 @@ class Relaxation:
         if code == kin.CONVERGED:
             return _Relaxed(True, "converged", x, lam, resp, cycle)
         if code == kin.STALLED:
-            why = f"residual stalled at {fs[kin.BEST_NOW]:.2e} over {window} time steps"
-            return _Relaxed(False, "stalled", x, lam, resp, cycle, why)
+            return self._stalled(x, lam, resp, cycle, float(fs[kin.BEST_NOW]), window)
         if code == kin.BUDGET:
-            why = f"time-step budget max_time_steps={s.max_time_steps} spent at lambda={lam:.6g}"
-            return _Relaxed(False, "budget", start.x, lam, resp, cycle, why)
+            return self._spent(start, lam, resp, cycle)
         if code == kin.BLOWUP:
             rabs = float(np.linalg.norm(R))
-            over = int(ints[kin.OVER])
-            what = (
-                "non-finite forces"
-                if not math.isfinite(rabs)
-                else f"omega^2 dt^2 > 4 in {over} time steps"
-                if over >= s.blowup_patience
-                else "the residual grew by 1e8"
-            )
-            return _Relaxed(
-                False,
-                "blowup",
-                start.x,
-                lam,
-                resp,
-                cycle,
-                f"blow-up at lambda={lam:.6g} after {cycle} time steps with dt={dt:.4g} "
-                f"({what}; estimated stable limit {self.dt_limit:.4g})",
-            )
+            return self._blown_up(start, lam, resp, cycle, dt, rabs, int(ints[kin.OVER]))
         if code == kin.MECHANISM:
-            return _Relaxed(
-                False,
-                "mechanism",
-                x,
-                lam,
-                resp,
-                cycle,
-                f"displacements exceed the limit {self.limit:.3g} m (a mechanism has formed)",
-            )
-        return _Relaxed(
-            False,
-            "stalled",
-            x,
-            lam,
-            resp,
-            s.max_cycles,
-            f"no rest within max_cycles={s.max_cycles} (residual {fs[kin.RNORM]:.2e})",
+            return self._mechanism(x, lam, resp, cycle)
+        return self._no_rest(x, lam, resp, float(fs[kin.RNORM]))
+
+    # ------------------------------------------------------------------ endings (both loops)
+    def _spent(self, start: _State, lam: float, resp: LawResponse, cycle: int) -> _Relaxed:
+        budget = self.settings.max_time_steps
+        why = f"time-step budget max_time_steps={budget} spent at lambda={lam:.6g}"
+        return _Relaxed(False, "budget", start.x, lam, resp, cycle, why)
+
+    def _stalled(
+        self, x: NDArray[np.float64], lam: float, resp: LawResponse, cycle: int,
+        best: float, window: int,
+    ) -> _Relaxed:  # fmt: skip
+        why = f"residual stalled at {best:.2e} over {window} time steps"
+        return _Relaxed(False, "stalled", x, lam, resp, cycle, why)
+
+    def _blown_up(
+        self, start: _State, lam: float, resp: LawResponse, cycle: int, dt: float,
+        rabs: float, over: int,
+    ) -> _Relaxed:  # fmt: skip
+        what = (
+            "non-finite forces"
+            if not math.isfinite(rabs)
+            else f"omega^2 dt^2 > 4 in {over} time steps"
+            if over >= self.settings.blowup_patience
+            else "the residual grew by 1e8"
         )
+        why = (
+            f"blow-up at lambda={lam:.6g} after {cycle} time steps with dt={dt:.4g} "
+            f"({what}; estimated stable limit {self.dt_limit:.4g})"
+        )
+        return _Relaxed(False, "blowup", start.x, lam, resp, cycle, why)
+
+    def _mechanism(
+        self, x: NDArray[np.float64], lam: float, resp: LawResponse, cycle: int
+    ) -> _Relaxed:
+        why = f"displacements exceed the limit {self.limit:.3g} m (a mechanism has formed)"
+        return _Relaxed(False, "mechanism", x, lam, resp, cycle, why)
+
+    def _no_rest(
+        self, x: NDArray[np.float64], lam: float, resp: LawResponse, rnorm: float
+    ) -> _Relaxed:
+        cycles = self.settings.max_cycles
+        why = f"no rest within max_cycles={cycles} (residual {rnorm:.2e})"
+        return _Relaxed(False, "stalled", x, lam, resp, cycles, why)
 
     def _stall_window(self) -> int:
         """Time steps a relaxation may take without halving its residual: ``stall_factor``
