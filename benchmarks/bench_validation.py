@@ -72,7 +72,7 @@ def run(
     )
 
 
-def _parse_settings(items: list[str]) -> dict:
+def parse_settings(items: list[str]) -> dict:
     """``FIELD=VALUE`` pairs as StaticSettings changes, values typed like the field's default."""
     defaults = {f.name: getattr(StaticSettings(), f.name) for f in fields(StaticSettings)}
     out: dict = {}
@@ -107,7 +107,7 @@ def main(argv: list[str] | None = None) -> None:
         help="StaticSettings fields for every case (e.g. memory=slip tension=plastic)",
     )
     args = p.parse_args(argv)
-    settings = _parse_settings(args.settings)
+    settings = parse_settings(args.settings)
     if args.sensitivity:
         base: dict[str, float | None] = {}
         print(f"{'case':6s} {'change':45s} {'lambda':>10s} {'base':>10s} {'move':>7s}")

@@ -19,43 +19,11 @@ import time
 from dataclasses import replace
 from pathlib import Path
 
-from masonry_dem.cases.paper import build_case
 from masonry_dem.solvers.static import StaticSettings, StaticSolver
 
-
-def wall(name: str):
-    """(model, settings, monitor) of a wall named as in the module docstring."""
-    if name == "U":
-        sys.path.insert(0, str(Path(__file__).parent))
-        from bench_walls_that_meet import build, walls
-
-        model, _ = build(walls("S5")[0], held=False)
-        return model, None, None
-    if "/" in name:
-        row, m = name.split("/")
-        case = build_case(row, restraint="return-walls", return_blocks=int(m))
-    else:
-        case = build_case(name)
-    return case.model, case.settings, case.monitor
-
-
-def parse(variant: str) -> dict[str, object]:
-    """``a=1,b=x`` -> {"a": 1, "b": "x"} (ints, floats and booleans converted)."""
-    out: dict[str, object] = {}
-    for item in filter(None, variant.split(",")):
-        key, _, text = item.partition("=")
-        value: object = text
-        if text.lower() in ("true", "false"):
-            value = text.lower() == "true"
-        else:
-            for kind in (int, float):
-                try:
-                    value = kind(text)
-                    break
-                except ValueError:
-                    pass
-        out[key.strip()] = value
-    return out
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_validation import parse_settings  # noqa: E402
+from relaxation_trace import wall  # noqa: E402
 
 
 def main(argv=None) -> int:
@@ -70,7 +38,10 @@ def main(argv=None) -> int:
     for name in args.walls:
         model, settings, monitor = wall(name)
         for variant in args.variants:
-            chosen = replace(settings or StaticSettings(), **parse(variant))
+            chosen = replace(
+                settings or StaticSettings(),
+                **parse_settings(variant.split(",") if variant else []),
+            )
             t0 = time.process_time()
             solver = StaticSolver(model, chosen)
             h = solver.run(monitor=monitor)

@@ -43,15 +43,6 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 
-def _value(text: str):
-    for kind in (int, float):
-        try:
-            return kind(text)
-        except ValueError:
-            pass
-    return {"true": True, "false": False}.get(text.lower(), text)
-
-
 def audit(model, settings, monitor=None, part=None) -> dict:
     """Run the pushover and return its rows and totals, and per recorded step the joints whose
     damage state changed since the step before (``changed``; of them in ``part``, a boolean
@@ -162,14 +153,15 @@ def main() -> int:
     a = p.parse_args()
 
     from bench_scale import scale_wall
+    from bench_validation import parse_settings
     from bench_walls_that_meet import SIZES, build
     from bench_walls_that_meet import walls as meeting_walls
 
     from masonry_dem.cases.paper import build_case, case_names
     from masonry_dem.solvers.static import StaticSettings
 
-    changes = {k: _value(v) for k, v in (item.split("=", 1) for item in a.set)}
-    other = {k: _value(v) for k, v in (item.split("=", 1) for item in a.against)}
+    changes = parse_settings(a.set)
+    other = parse_settings(a.against)
     walls = [(f"scale_wall({n})", scale_wall(n), StaticSettings(), None) for n in a.scale]
     parts: dict[str, np.ndarray] = {}  # per wall, the joints counted apart (--states)
     for kind, sizes in (("U", a.u_wall), ("flat", a.flat_wall)):

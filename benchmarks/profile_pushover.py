@@ -42,15 +42,6 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 
-def _value(text: str):
-    for kind in (int, float):
-        try:
-            return kind(text)
-        except ValueError:
-            pass
-    return {"true": True, "false": False}.get(text.lower(), text)
-
-
 def _parts() -> dict[str, list[tuple[object, str]]]:
     """(owner, method name) of each part; the owner is a class or a module."""
     from masonry_dem.constitutive.law import InterfaceLaw
@@ -158,11 +149,12 @@ def main() -> int:
     a = p.parse_args()
 
     from bench_scale import scale_wall
+    from bench_validation import parse_settings
 
     from masonry_dem.cases.paper import build_case
     from masonry_dem.solvers.static import StaticSettings, StaticSolver
 
-    changes = {k: _value(v) for k, v in (item.split("=", 1) for item in a.set)}
+    changes = parse_settings(a.set)
     walls = [(f"scale_wall({n})", scale_wall(n), StaticSettings(), None) for n in a.scale]
     for name in a.case:
         case = build_case(name)

@@ -32,11 +32,12 @@ import argparse
 import math
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
 from masonry_dem.cases.paper import build_case
-from masonry_dem.solvers.dynamic_relaxation import DRSettings, DynamicRelaxation, _State
+from masonry_dem.solvers.dynamic_relaxation import _State
 from masonry_dem.solvers.static import StaticSolver
 from masonry_dem.solvers.static.corrector import Corrector
 
@@ -45,7 +46,7 @@ def wall(name: str):
     """(model, settings, monitor) of a validation case, ``NAME/m`` (return walls of m
     blocks) or ``U`` (bench_walls_that_meet's S5 U wall)."""
     if name == "U":
-        sys.path.insert(0, "benchmarks")
+        sys.path.insert(0, str(Path(__file__).resolve().parent))
         from bench_walls_that_meet import build, walls
 
         model, _ = build(walls("S5")[0], held=False)
@@ -128,18 +129,7 @@ def trace(
     show_probes=False,
     keep_creep=False,
 ):
-    s = corrector.settings
-    dr = DynamicRelaxation(
-        corrector.model,
-        DRSettings(
-            tension=s.tension,
-            memory=s.memory,
-            tolerance=1e-6,
-            max_cycles=budget,
-            min_stall_window=budget // 4,
-            displacement_limit=corrector.limit,
-        ),
-    )
+    dr = corrector.relaxation(budget)  # the check's own, fresh
     free = corrector.problem.asm.free_index
     # the corrector as it was at the check (the path moved it on since)
     corrector.q = q_saved.copy()

@@ -528,6 +528,25 @@ class Corrector:
             failure=Failure.NO_REST,
         )
 
+    def relaxation(self, budget: int) -> DynamicRelaxation:
+        """The dynamic relaxation of this wall that a rescue or a stop check runs: the same
+        law and displacement limit, ``budget`` time steps, stalled when its residual has not
+        halved in a quarter of them."""
+        from masonry_dem.solvers.dynamic_relaxation import DRSettings, DynamicRelaxation
+
+        s = self.settings
+        return DynamicRelaxation(
+            self.model,
+            DRSettings(
+                tension=s.tension,
+                memory=s.memory,
+                tolerance=1e-6,
+                max_cycles=budget,
+                min_stall_window=budget // 4,
+                displacement_limit=self.limit,
+            ),
+        )
+
     def dynamic_rescue(
         self, target: float, last: float, budget: int | None = None, polish: bool = True
     ) -> Outcome | None:
@@ -542,27 +561,13 @@ class Corrector:
         ``fold_creep_cos`` the motion along a converged creep is not damped between them
         (:meth:`Relaxation._relax`'s ``creep_cos``), so a wall snapping through to a fold's
         rest gets there in fewer time steps."""
-        from masonry_dem.solvers.dynamic_relaxation import (
-            DRSettings,
-            DynamicRelaxation,
-            _State,
-        )
+        from masonry_dem.solvers.dynamic_relaxation import _State
 
         s = self.settings
         free = self.problem.asm.free_index
         budget = s.rescue_time_steps if budget is None else budget
         if self._dr is None or self._dr.settings.max_cycles != budget:
-            self._dr = DynamicRelaxation(
-                self.model,
-                DRSettings(
-                    tension=s.tension,
-                    memory=s.memory,
-                    tolerance=1e-6,
-                    max_cycles=budget,
-                    min_stall_window=budget // 4,
-                    displacement_limit=self.limit,
-                ),
-            )
+            self._dr = self.relaxation(budget)
         start = _State(
             self.q[free].copy(),
             self.plastic.copy(),
