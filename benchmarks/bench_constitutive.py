@@ -39,7 +39,9 @@ of both trees and their ratio, and scipy's ``H @ x`` then ``H_T @ y`` for scale:
 
 With ``--parts`` instead it prints where a call of ``forces`` goes on this tree, on the same
 two states: the strength check of each kind of row (elastic, detached, sliding, rocking
-only, and zero trials: what any row costs), the early-out's test of a row, and the loop of
+only, and zero trials: what any row costs) with the interface's constants stored (as
+``forces`` reads them) and computed in the row (as before they were stored), the early-out's
+test of a row, and the loop of
 ``H x`` through signed (scipy's) and unsigned index arrays::
 
     NUMBA_NUM_THREADS=1 python benchmarks/bench_constitutive.py --forces --parts
@@ -343,16 +345,25 @@ def forces_parts(path: str) -> None:
     import numba
     from scipy import sparse
 
-    from masonry_dem.constitutive.check_kernels import nb_evaluate_row
+    from masonry_dem.constitutive.check_kernels import nb_check_row
     from masonry_dem.constitutive.law import InterfaceLaw
     from masonry_dem.constitutive.law_kernels import nb_plain_row
 
     @numba.njit(error_model="numpy")
-    def check_rows(trial, ft, l1, l2, friction, alpha, snap1, snap2, actions, flags):
-        util = np.empty(0)
+    def check_rows(trial, ft, l1, l2, friction, alpha, snap1, snap2, constants, actions, flags):
+        # as the forces kernel calls the check: the interface's constants stored, or (an
+        # empty ``constants``) computed in the row
         on = trial.shape[0] >= 0
+        stored = constants.shape[0] > 0
+        c1 = c2 = c3 = c4 = 0.0
         for i in range(trial.shape[0]):
-            nb_evaluate_row(i, trial, ft, l1, l2, friction, alpha, snap1, snap2, on, on, on, actions, flags, util)  # fmt: skip
+            t = trial[i]
+            if stored:
+                c1, c2, c3, c4 = constants[i, 1], constants[i, 2], constants[i, 3], constants[i, 4]
+            p = nb_check_row(t[0], t[1], t[2], t[3], t[4], t[5], ft[i], l1[i], l2[i], friction[i], alpha[i], snap1[i], snap2[i], on, on, on, stored, c1, c2, c3, c4)  # fmt: skip
+            actions[i, 0], actions[i, 1], actions[i, 2] = p[0], p[1], p[2]
+            actions[i, 3], actions[i, 4], actions[i, 5] = p[3], p[4], p[5]
+            flags[i] = p[6]
 
     @numba.njit(error_model="numpy")
     def plain_rows(trial, ft, l1, l2, friction, snap1, snap2, torsion):
@@ -385,6 +396,7 @@ def forces_parts(path: str) -> None:
     unsigned = np.uint32 if H.indices.dtype.itemsize == 4 else np.uint64
     print(
         f"{'state':5s} {'rows':18s} {'n':>4s} {'check [ns/row]':>14s} {'early-out [ns/row]':>18s}"
+        f" {'constants computed [ns/row]':>27s}"
     )
     for state in ("dead", "last"):
         x = np.array(d[state])
@@ -406,14 +418,18 @@ def forces_parts(path: str) -> None:
             ft = np.ascontiguousarray(r.tensile_force[rows])
             arrays = [np.ascontiguousarray(a[rows]) for a in dom.kernel_arrays]
             torsion = np.ascontiguousarray(dom.torsion_constant[rows])
+            constants = np.ascontiguousarray(dom.row_constants[rows])
             act, flags = np.empty((n, 6)), np.empty(n, dtype=np.uint8)
             l1, l2, mu, _, s1, s2 = arrays
-            checked = (trial, ft, *arrays, act, flags)
+            checked = (trial, ft, *arrays, constants, act, flags)
             t_check = per_call(lambda a=checked: check_rows(*a))
+            computed = (trial, ft, *arrays, np.empty((0, 5)), act, flags)
+            t_computed = per_call(lambda a=computed: check_rows(*a))
             tested = (trial, ft, l1, l2, mu, s1, s2, torsion)
             t_plain = per_call(lambda a=tested: plain_rows(*a))
             print(
                 f"{state:5s} {kind:18s} {n:4d} {t_check / n * 1e9:14.0f} {t_plain / n * 1e9:18.0f}"
+                f" {t_computed / n * 1e9:27.0f}"
             )
     x = np.array(d["last"])
     out = np.empty(H.shape[0])

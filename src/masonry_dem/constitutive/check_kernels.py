@@ -40,7 +40,9 @@ __all__ = [
     "nb_evaluate_row",
     "nb_radial_factor",
     "nb_reduced_side",
+    "nb_slide_constants",
     "nb_torsion_constant",
+    "row_constants",
 ]
 
 #: safeguarded Newton of the energy projection: iteration cap, and the relative step below
@@ -137,11 +139,10 @@ def _nb_safe_ratio(demand: float, capacity: float) -> float:
 
 
 @_jit
-def _nb_shear_half(tau, a, b, r0, z0, alpha, power) -> tuple[float, float]:
-    """g = d/dt of half the squared distance from (a sqrt(1 - t^alpha), b t) to (r0, z0) at
-    t = tau^power, and dg/dtau; smooth on t in [0, 2^(-1/alpha)]. One row."""
-    t = tau**power
-    ta = t**alpha
+def _nb_shear_terms(tau, t, ta, a, b, r0, z0, alpha, power) -> tuple[float, float]:
+    """:func:`_nb_shear_half` at ``t = tau^power`` with ``ta = t^alpha`` given: the caller
+    that knows them (the switch point's constants, :func:`nb_slide_constants`) skips their
+    powers."""
     u = 1.0 - ta
     su = math.sqrt(u)
     du = -alpha * ta / t
@@ -152,6 +153,21 @@ def _nb_shear_half(tau, a, b, r0, z0, alpha, power) -> tuple[float, float]:
     g = (r - r0) * dr + (b * t - z0) * b
     dg = (dr * dr + (r - r0) * d2r + b * b) * power * t / tau
     return g, dg
+
+
+@_jit
+def _nb_power(x: float, p: float) -> float:
+    """``x ** p``, without the call where p = 1 (pow(x, 1) is x exactly: its result is
+    representable and the libm's pow errs by less than one unit in the last place)."""
+    return x if p == 1.0 else x**p
+
+
+@_jit
+def _nb_shear_half(tau, a, b, r0, z0, alpha, power) -> tuple[float, float]:
+    """g = d/dt of half the squared distance from (a sqrt(1 - t^alpha), b t) to (r0, z0) at
+    t = tau^power, and dg/dtau; smooth on t in [0, 2^(-1/alpha)]. One row."""
+    t = _nb_power(tau, power)
+    return _nb_shear_terms(tau, t, t**alpha, a, b, r0, z0, alpha, power)
 
 
 @_jit
@@ -200,7 +216,9 @@ def _nb_bracketed_newton(torsion, a, b, r0, z0, alpha, power, hi, start) -> tupl
 
 
 @_jit
-def _nb_energy_closest_point(r0, z0, a, b, alpha, radial) -> tuple[float, float, bool]:
+def _nb_energy_closest_point(
+    r0, z0, a, b, alpha, radial, t_switch, ta_switch, shear_hi
+) -> tuple[float, float, bool]:
     """Closest point (r, z) of the curve (z/b)^alpha + (r/a)^2 = 1 to (r0, z0) outside it.
 
     r = |f| and z = |m3| / rho, with rho^2 = J / A: Euclidean distance in (r, z) is the
@@ -212,28 +230,28 @@ def _nb_energy_closest_point(r0, z0, a, b, alpha, radial) -> tuple[float, float,
     switch point x^2 = t^alpha = 1/2 says which half holds the minimum; there Newton's method
     is kept inside the bracket (bisection where a step would leave it), a few steps each.
     ``radial`` (the factor that takes the trial radially onto the curve), if given, starts
-    Newton at the radial point, usually a few steps from the answer.
+    Newton at the radial point, usually a few steps from the answer. ``t_switch``,
+    ``ta_switch`` and ``shear_hi`` are the switch point's constants of the row's alpha
+    (:func:`nb_slide_constants`).
     Degenerate capacities: b = 0 (no torsion, e.g. a joint rocking on a corner) keeps
     the shear up to a and drops the torsion; a = 0 drops both. One row; False if Newton did not converge."""
     r = 0.0
     z = 0.0
     ok = True
     if r0 > 0 and z0 > 0 and a > 0 and b > 0:
-        t_switch = 0.5 ** (1.0 / alpha)
         x_switch = math.sqrt(0.5)
         power = 2.0 if alpha < 2.0 else 1.0
-        near_shear = _nb_shear_half(t_switch, a, b, r0, z0, alpha, 1.0)[0] >= 0.0
+        g_switch = _nb_shear_terms(t_switch, t_switch, ta_switch, a, b, r0, z0, alpha, 1.0)[0]
+        near_shear = g_switch >= 0.0
         # alpha = 1 has a vertex on the shear axis; points in its normal cone return to it
         vertex = alpha == 1.0 and (r0 - a) * 0.5 * a >= z0 * b
         if vertex:
             r = a
         if near_shear and not vertex:
             p = power
-            start = (radial * z0 / b) ** (1 / p)
-            tau, ok = _nb_bracketed_newton(
-                False, a, b, r0, z0, alpha, p, t_switch ** (1 / p), start
-            )
-            t = tau**p
+            start = _nb_power(radial * z0 / b, 1 / p)
+            tau, ok = _nb_bracketed_newton(False, a, b, r0, z0, alpha, p, shear_hi, start)
+            t = _nb_power(tau, p)
             r = a * math.sqrt(max(1.0 - t**alpha, 0.0))
             z = b * t
         if not near_shear:  # (after the vertex, as the numpy version does)
@@ -259,6 +277,41 @@ def nb_energy_radius(l1: float, l2: float) -> float:
     return math.sqrt((l1 * l1 + l2 * l2) / 12.0)
 
 
+#: the columns of a row's constants (:data:`row_constants`): the torsion constant of the
+#: whole rectangle, and :func:`nb_slide_constants`
+ROW_TORSION, ROW_T_SWITCH, ROW_TA_SWITCH, ROW_SHEAR_HI, ROW_RHO = range(5)
+
+
+@_jit
+def nb_slide_constants(l1: float, l2: float, alpha: float) -> tuple[float, float, float, float]:
+    """The constants of a sliding row's energy return that depend on the interface alone:
+    the switch point between the two halves of the curve, ``t_switch = 2^(-1/alpha)``, its
+    ``t_switch^alpha``, the shear half's bracket ``t_switch^(1/power)`` and the energy
+    radius rho (:func:`nb_energy_radius`). The expressions the return used to evaluate at
+    every call, so a row gets the same bits whether they are stored or computed here."""
+    t_switch = 0.5 ** (1.0 / alpha)
+    power = 2.0 if alpha < 2.0 else 1.0
+    shear_hi = _nb_power(t_switch, 1 / power)
+    return t_switch, t_switch**alpha, shear_hi, nb_energy_radius(l1, l2)
+
+
+@kernel(error_model="numpy")
+def row_constants(l1, l2, alpha, torsion):
+    """(m, 5) constants of every row, columns :data:`ROW_TORSION` .. :data:`ROW_RHO`:
+    ``torsion`` (cT of the whole rectangles) and :func:`nb_slide_constants`, stored once per
+    interface so that the forces kernel does not recompute their powers at every call."""
+    m = l1.shape[0]
+    out = np.empty((m, 5))
+    for i in range(m):
+        out[i, ROW_TORSION] = torsion[i]
+        t_switch, ta_switch, shear_hi, rho = nb_slide_constants(l1[i], l2[i], alpha[i])
+        out[i, ROW_T_SWITCH] = t_switch
+        out[i, ROW_TA_SWITCH] = ta_switch
+        out[i, ROW_SHEAR_HI] = shear_hi
+        out[i, ROW_RHO] = rho
+    return out
+
+
 @_jit
 def nb_reduced_side(side: float, abs_moment: float, cap: float, snap: float) -> float:
     """Side of the rectangle of uniform compression ``cap`` carrying the bending moment
@@ -275,9 +328,11 @@ def nb_reduced_side(side: float, abs_moment: float, cap: float, snap: float) -> 
 def nb_check_row(
     f1, f2, fn, m1, m2, m3, fti, l1, l2, mu, al, snap1, snap2,
     torsion_bending_interaction, projection_only, energy,
+    stored, t_switch, ta_switch, shear_hi, rho,
 ):  # fmt: skip
     """The strength check of one row, scalars in and out: the trial actions ``f1 .. m3`` and
-    the row's constants give ``(p1, p2, pn, p4, p5, p6, flags, utilisation, radial_failed,
+    the row's constants (``t_switch`` .. ``rho``: :func:`nb_slide_constants`, computed here
+    unless ``stored``) give ``(p1, p2, pn, p4, p5, p6, flags, utilisation, radial_failed,
     energy_failed)``: the projection, its flags, the utilisation (0 with
     ``projection_only``) and whether the radial factor and the energy projection did not
     converge (0 or 1 each). Scalars, not the arrays: every array a compiled row function
@@ -345,8 +400,11 @@ def nb_check_row(
         p2 *= s
         p6 *= s
     elif sliding:
-        rho = nb_energy_radius(l1, l2)
-        r, z, ok = _nb_energy_closest_point(shear, abs_m3 / rho, fsu, m3u / rho, al, s)
+        if not stored:
+            t_switch, ta_switch, shear_hi, rho = nb_slide_constants(l1, l2, al)
+        r, z, ok = _nb_energy_closest_point(
+            shear, abs_m3 / rho, fsu, m3u / rho, al, s, t_switch, ta_switch, shear_hi
+        )
         n_energy += 0 if ok else 1
         shear_scale = _nb_safe_ratio(r, shear)
         if not math.isfinite(shear_scale):
@@ -413,13 +471,15 @@ def nb_evaluate_row(
     flags,
     util,
 ):
-    """Row ``i`` of :func:`_nb_evaluate` (:func:`nb_check_row` of the row, written into
-    ``proj``, ``flags`` and, unless ``projection_only``, ``util``); returns whether its radial
-    factor and its energy projection did not converge (0 or 1 each)."""
+    """Row ``i`` of :func:`_nb_evaluate` (:func:`nb_check_row` of the row, which computes the
+    constants of a sliding row, written into ``proj``, ``flags`` and, unless
+    ``projection_only``, ``util``); returns whether its radial factor and its energy
+    projection did not converge (0 or 1 each)."""
+    stored = act.shape[0] < 0  # False, as a variable: a literal would compile the row again
     p1, p2, pn, p4, p5, p6, flag, u, n_radial, n_energy = nb_check_row(
         act[i, 0], act[i, 1], act[i, 2], act[i, 3], act[i, 4], act[i, 5], ft[i], l1[i], l2[i],
         friction[i], alpha[i], snap1[i], snap2[i], torsion_bending_interaction, projection_only,
-        energy,
+        energy, stored, 0.0, 0.0, 0.0, 0.0,
     )  # fmt: skip
     proj[i, 0] = p1
     proj[i, 1] = p2

@@ -213,7 +213,7 @@ class InterfaceLaw:
             np.ascontiguousarray(cracked, dtype=bool),
             self._tensile_rows,
             *dom.kernel_arrays,
-            dom.torsion_constant,
+            dom.row_constants,
             self.projection == "energy",
             self.tension == "brittle",
             _unsigned(H_T.indptr),

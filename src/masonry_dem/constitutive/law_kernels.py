@@ -14,8 +14,14 @@ import numba
 import numpy as np
 
 from masonry_dem.constitutive.check_kernels import (
+    ROW_RHO,
+    ROW_SHEAR_HI,
+    ROW_T_SWITCH,
+    ROW_TA_SWITCH,
+    ROW_TORSION,
     SHEAR_TORSION_TOLERANCE,
     TINY_CAPACITY,
+    nb_check_row,
     nb_energy_radius,
     nb_evaluate_row,
     nb_radial_factor,
@@ -427,13 +433,15 @@ def nb_plain_row(f1, f2, fn, m1, m2, m3, fti, l1, l2, mu, snap1, snap2, torsion)
 @kernel(parallel=True, error_model="numpy")
 def forces(
     x, h_ptr, h_idx, h_val, kbar, plastic, cracked, tensile_force,
-    l1, l2, friction, alpha, snap1, snap2, torsion, energy, brittle, t_ptr, t_idx, t_val, n_out,
+    l1, l2, friction, alpha, snap1, snap2, constants, energy, brittle, t_ptr, t_idx, t_val, n_out,
 ):  # fmt: skip
     """Relative displacements ``H x``, trial actions, their projection (flags) and the
     generalised forces ``H^T actions`` in one pass: the operations of the sparse products
     (row by row, from 0, in stored order) and of :meth:`InterfaceLaw.respond`, so the same
     bits. Rows with a plain answer skip the strength check (:func:`nb_plain_row`, the same
-    bits). The index arrays are unsigned (views of scipy's): a signed index costs a
+    bits), and sliding rows read their interface's constants from ``constants``
+    (:data:`~masonry_dem.constitutive.check_kernels.row_constants`, the same bits as
+    computing them). The index arrays are unsigned (views of scipy's): a signed index costs a
     wraparound test per gather, which doubled the time of the products. The last value is
     False, with nothing projected, if a trial action is not finite."""
     m = kbar.shape[0]
@@ -465,12 +473,11 @@ def forces(
         finite += 0.0 * value
     if not finite == 0.0:
         return rel, trial, ft, actions, flags, internal, False
-    util = np.empty(0)
     on = finite == 0.0  # True, as a variable: a literal True would compile the row again
     for i in numba.prange(m):
         plain = nb_plain_row(
             trial[i, 0], trial[i, 1], trial[i, 2], trial[i, 3], trial[i, 4], trial[i, 5],
-            ft[i], l1[i], l2[i], friction[i], snap1[i], snap2[i], torsion[i],
+            ft[i], l1[i], l2[i], friction[i], snap1[i], snap2[i], constants[i, ROW_TORSION],
         )  # fmt: skip
         if plain == ROW_ELASTIC:
             for j in range(6):
@@ -480,8 +487,20 @@ def forces(
                 actions[i, j] = 0.0
             actions[i, 2] = ft[i]
             flags[i] = FLAG_DETACHED
-        else:
-            nb_evaluate_row(i, trial, ft, l1, l2, friction, alpha, snap1, snap2, on, on, energy, actions, flags, util)  # fmt: skip
+        else:  # the check of the row, with its interface's constants (scalars: see nb_check_row)
+            p1, p2, pn, p4, p5, p6, flag, _, _, _ = nb_check_row(
+                trial[i, 0], trial[i, 1], trial[i, 2], trial[i, 3], trial[i, 4], trial[i, 5],
+                ft[i], l1[i], l2[i], friction[i], alpha[i], snap1[i], snap2[i], on, on, energy,
+                on, constants[i, ROW_T_SWITCH], constants[i, ROW_TA_SWITCH],
+                constants[i, ROW_SHEAR_HI], constants[i, ROW_RHO],
+            )  # fmt: skip
+            actions[i, 0] = p1
+            actions[i, 1] = p2
+            actions[i, 2] = pn
+            actions[i, 3] = p4
+            actions[i, 4] = p5
+            actions[i, 5] = p6
+            flags[i] = flag
     if brittle:
         for i in range(m):
             if flags[i] & FLAG_DETACHED:
