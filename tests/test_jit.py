@@ -60,7 +60,7 @@ def test_the_two_variants_give_the_same_bits():
     args = (
         x, _unsigned(H.indptr), _unsigned(H.indices), H.data, law.kbar, np.zeros((m, 6)),
         np.zeros(m, dtype=bool), np.ascontiguousarray(law.tensile_force), *dom.kernel_arrays,
-        dom.torsion_constant, True, True, _unsigned(H_T.indptr), _unsigned(H_T.indices),
+        dom.row_constants, True, True, _unsigned(H_T.indptr), _unsigned(H_T.indices),
         H_T.data, n,
     )  # fmt: skip
     one = forces.serial(*args)

@@ -38,7 +38,9 @@ __all__ = [
     "nb_check_row",
     "nb_energy_radius",
     "nb_evaluate_row",
+    "nb_project_rows",
     "nb_radial_factor",
+    "nb_radial_factors",
     "nb_reduced_side",
     "nb_slide_constants",
     "nb_torsion_constant",
@@ -95,37 +97,101 @@ def nb_torsion_constant(l1: float, l2: float) -> float:
 
 
 @_jit
+def _nb_radial_step(tau: float, ln_a: float, ln_c: float, alpha: float) -> tuple[float, bool]:
+    """One step of :func:`_radial_newton` on one row: the next tau, and whether the step was
+    below the tolerance (the row stops there)."""
+    p = math.exp(alpha * (tau + ln_a))
+    q = math.exp(2.0 * (tau + ln_c))
+    total = p + q
+    step = math.log(total) * total / (alpha * p + 2.0 * q)
+    tau = tau - step
+    return tau, not abs(step) > NEWTON_RTOL
+
+
+@_jit
 def _nb_radial_t(big_a: float, big_c: float, alpha: float) -> tuple[float, bool]:
-    """:func:`_radial_t` and :func:`_radial_newton` of one row; False if Newton did not
+    """:func:`_radial_newton` of one row (alpha other than 1 and 2); False if Newton did not
     converge."""
-    if alpha == 2.0:
-        return 1.0 / math.hypot(big_a, big_c), True
-    if alpha == 1.0:
-        return 2.0 / (big_a + math.sqrt(big_a * big_a + 4.0 * big_c * big_c)), True
     ln_a = math.log(big_a)  # -inf where A underflowed to 0
     ln_c = math.log(big_c)
     tau = 0.0
     for _ in range(NEWTON_MAX_ITER):
-        p = math.exp(alpha * (tau + ln_a))
-        q = math.exp(2.0 * (tau + ln_c))
-        total = p + q
-        step = math.log(total) * total / (alpha * p + 2.0 * q)
-        tau = tau - step
-        if not abs(step) > NEWTON_RTOL:
+        tau, done = _nb_radial_step(tau, ln_a, ln_c, alpha)
+        if done:
             return math.exp(tau), True
     return math.exp(tau), False
 
 
 @_jit
-def nb_radial_factor(a: float, c: float, alpha: float) -> tuple[float, bool]:
-    """:func:`_radial_factor` of one row."""
+def _nb_radial_closed(a: float, c: float, alpha: float) -> tuple[float, bool, float, float, float]:
+    """The radial factor of one row where it has a closed form, ``(s, newton, m, A, C)``:
+    ``newton`` says it has none (both demands, alpha other than 1 and 2), and then
+    ``s = t / m`` with t from :func:`_nb_radial_t` of ``A, C`` (see :func:`_radial_t`)."""
     m = max(a, c)
     s = 1.0 / m  # inf at a = c = 0, 0 at inf
-    ok = True
+    newton = False
+    big_a = 0.0
+    big_c = 0.0
     if min(a, c) > 0 and m < math.inf:
-        t, ok = _nb_radial_t(a / m, c / m, alpha)
+        big_a = a / m
+        big_c = c / m
+        if alpha == 2.0:
+            s = 1.0 / math.hypot(big_a, big_c) / m
+        elif alpha == 1.0:
+            s = 2.0 / (big_a + math.sqrt(big_a * big_a + 4.0 * big_c * big_c)) / m
+        else:
+            newton = True
+    return s, newton, m, big_a, big_c
+
+
+@_jit
+def nb_radial_factor(a: float, c: float, alpha: float) -> tuple[float, bool]:
+    """:func:`_radial_factor` of one row."""
+    s, newton, m, big_a, big_c = _nb_radial_closed(a, c, alpha)
+    ok = True
+    if newton:
+        t, ok = _nb_radial_t(big_a, big_c, alpha)
         s = t / m
     return s, ok
+
+
+@_jit
+def nb_radial_factors(a1, c1, alpha1, a2, c2, alpha2) -> tuple[float, bool, float, bool]:
+    """:func:`nb_radial_factor` of two rows, ``(s1, ok1, s2, ok2)``, the same bits: where
+    both need Newton their steps alternate in one loop, each row stopping at its own
+    convergence, so that the processor overlaps the two chains of exp and log (a row's
+    steps wait on each other; the two rows' do not)."""
+    s1, newton1, m1, big_a1, big_c1 = _nb_radial_closed(a1, c1, alpha1)
+    s2, newton2, m2, big_a2, big_c2 = _nb_radial_closed(a2, c2, alpha2)
+    ok1 = True
+    ok2 = True
+    if newton1 and newton2:
+        ln_a1 = math.log(big_a1)
+        ln_c1 = math.log(big_c1)
+        ln_a2 = math.log(big_a2)
+        ln_c2 = math.log(big_c2)
+        tau1 = 0.0
+        tau2 = 0.0
+        done1 = False
+        done2 = False
+        for _ in range(NEWTON_MAX_ITER):
+            if not done1:
+                tau1, done1 = _nb_radial_step(tau1, ln_a1, ln_c1, alpha1)
+            if not done2:
+                tau2, done2 = _nb_radial_step(tau2, ln_a2, ln_c2, alpha2)
+            if done1 and done2:
+                break
+        s1 = math.exp(tau1) / m1
+        s2 = math.exp(tau2) / m2
+        ok1 = done1
+        ok2 = done2
+    elif newton1:
+        t1, ok1 = _nb_radial_t(big_a1, big_c1, alpha1)
+        s1 = t1 / m1
+    elif newton2:
+        t2, ok2 = _nb_radial_t(big_a2, big_c2, alpha2)
+        s2 = t2 / m2
+    return s1, ok1, s2, ok2
 
 
 @_jit
@@ -186,33 +252,106 @@ def _nb_torsion_half(x, a, b, r0, z0, alpha) -> tuple[float, float]:
 
 
 @_jit
+def _nb_bracket_start(hi: float, start: float) -> float:
+    """The first iterate of :func:`_nb_bracketed_newton`: ``start``, mid-bracket if outside."""
+    x = 0.5 * hi
+    if start > 0.0 and start < hi:
+        x = start
+    return x
+
+
+@_jit
+def _nb_bracket_step(
+    torsion, a, b, r0, z0, alpha, power, lo, hi, x
+) -> tuple[float, float, float, bool]:
+    """One step of :func:`_nb_bracketed_newton`: ``(lo, hi, x, stop)``."""
+    if torsion:
+        g, dg = _nb_torsion_half(x, a, b, r0, z0, alpha)
+    else:
+        g, dg = _nb_shear_half(x, a, b, r0, z0, alpha, power)
+    if g > 0:
+        hi = x
+    else:
+        lo = x
+    step = g / dg
+    newton = x - step
+    # a step below tolerance is taken even where it rounds onto the bracket's end
+    done = abs(step) <= PROJECTION_TOL * (x if x > 1e-300 else 1e-300)
+    inside = newton > lo and newton < hi and math.isfinite(newton)
+    x = newton if (inside or done) else 0.5 * (lo + hi)
+    stop = done or hi - lo <= 4.0 * np.spacing(hi)  # converged, or bracket at round-off
+    return lo, hi, x, stop
+
+
+@_jit
 def _nb_bracketed_newton(torsion, a, b, r0, z0, alpha, power, hi, start) -> tuple[float, bool]:
     """Root of g on [0, hi] (g(0) < 0 < g(hi), one sign change) for one row, g being
     :func:`_nb_torsion_half` if ``torsion`` else :func:`_nb_shear_half`: Newton's method from
     ``start`` (mid-bracket if outside it) kept inside the shrinking bracket (bisection where a
     step would leave it); False if it did not converge."""
     lo = 0.0
-    x = 0.5 * hi
-    if start > 0.0 and start < hi:
-        x = start
+    x = _nb_bracket_start(hi, start)
     for _ in range(PROJECTION_MAX_ITER):
-        if torsion:
-            g, dg = _nb_torsion_half(x, a, b, r0, z0, alpha)
-        else:
-            g, dg = _nb_shear_half(x, a, b, r0, z0, alpha, power)
-        if g > 0:
-            hi = x
-        else:
-            lo = x
-        step = g / dg
-        newton = x - step
-        # a step below tolerance is taken even where it rounds onto the bracket's end
-        done = abs(step) <= PROJECTION_TOL * (x if x > 1e-300 else 1e-300)
-        inside = newton > lo and newton < hi and math.isfinite(newton)
-        x = newton if (inside or done) else 0.5 * (lo + hi)
-        if done or hi - lo <= 4.0 * np.spacing(hi):  # converged, or bracket at round-off
+        lo, hi, x, stop = _nb_bracket_step(torsion, a, b, r0, z0, alpha, power, lo, hi, x)
+        if stop:
             return x, True
     return x, False
+
+
+@_jit
+def _nb_closest_setup(
+    r0, z0, a, b, alpha, radial, t_switch, ta_switch, shear_hi
+) -> tuple[bool, bool, float, float, float, float]:
+    """The part of :func:`_nb_energy_closest_point` before Newton: ``(newton, torsion,
+    power, hi, start, r)``, whether Newton runs and on which half of the curve, its power,
+    bracket and start, and r where it does not run (a vertex)."""
+    newton = False
+    torsion = False
+    power = 1.0
+    hi = 0.0
+    start = 0.0
+    r = 0.0
+    if r0 > 0 and z0 > 0 and a > 0 and b > 0:
+        power = 2.0 if alpha < 2.0 else 1.0
+        g_switch = _nb_shear_terms(t_switch, t_switch, ta_switch, a, b, r0, z0, alpha, 1.0)[0]
+        near_shear = g_switch >= 0.0
+        # alpha = 1 has a vertex on the shear axis; points in its normal cone return to it
+        vertex = alpha == 1.0 and (r0 - a) * 0.5 * a >= z0 * b
+        if vertex:
+            r = a
+        if near_shear and not vertex:
+            newton = True
+            start = _nb_power(radial * z0 / b, 1 / power)
+            hi = shear_hi
+        if not near_shear:  # (after the vertex, as the numpy version does)
+            newton = True
+            torsion = True
+            start = radial * r0 / a
+            hi = math.sqrt(0.5)
+            power = 1.0
+    return newton, torsion, power, hi, start, r
+
+
+@_jit
+def _nb_closest_finish(newton, torsion, x, r0, z0, a, b, alpha, power, r) -> tuple[float, float]:
+    """The part of :func:`_nb_energy_closest_point` after Newton (``x`` its root): (r, z)."""
+    z = 0.0
+    if newton and not torsion:
+        t = _nb_power(x, power)
+        r = a * math.sqrt(max(1.0 - t**alpha, 0.0))
+        z = b * t
+    if newton and torsion:
+        r = a * x
+        z = b * max(1.0 - x * x, 0.0) ** (1.0 / alpha)
+    # one of r0, z0 zero: the point is on an axis and so is its closest point
+    if r0 == 0 and b > 0:
+        z = b * min(1.0, _nb_safe_ratio(z0, b))
+    if z0 == 0:
+        r = min(r0, a)
+    if b == 0:
+        r = min(r0, a)
+        z = 0.0
+    return r, z
 
 
 @_jit
@@ -235,39 +374,58 @@ def _nb_energy_closest_point(
     (:func:`nb_slide_constants`).
     Degenerate capacities: b = 0 (no torsion, e.g. a joint rocking on a corner) keeps
     the shear up to a and drops the torsion; a = 0 drops both. One row; False if Newton did not converge."""
-    r = 0.0
-    z = 0.0
+    newton, torsion, power, hi, start, r = _nb_closest_setup(
+        r0, z0, a, b, alpha, radial, t_switch, ta_switch, shear_hi
+    )
+    x = 0.0
     ok = True
-    if r0 > 0 and z0 > 0 and a > 0 and b > 0:
-        x_switch = math.sqrt(0.5)
-        power = 2.0 if alpha < 2.0 else 1.0
-        g_switch = _nb_shear_terms(t_switch, t_switch, ta_switch, a, b, r0, z0, alpha, 1.0)[0]
-        near_shear = g_switch >= 0.0
-        # alpha = 1 has a vertex on the shear axis; points in its normal cone return to it
-        vertex = alpha == 1.0 and (r0 - a) * 0.5 * a >= z0 * b
-        if vertex:
-            r = a
-        if near_shear and not vertex:
-            p = power
-            start = _nb_power(radial * z0 / b, 1 / p)
-            tau, ok = _nb_bracketed_newton(False, a, b, r0, z0, alpha, p, shear_hi, start)
-            t = _nb_power(tau, p)
-            r = a * math.sqrt(max(1.0 - t**alpha, 0.0))
-            z = b * t
-        if not near_shear:  # (after the vertex, as the numpy version does)
-            start = radial * r0 / a
-            x, ok = _nb_bracketed_newton(True, a, b, r0, z0, alpha, 1.0, x_switch, start)
-            r = a * x
-            z = b * max(1.0 - x * x, 0.0) ** (1.0 / alpha)
-    # one of r0, z0 zero: the point is on an axis and so is its closest point
-    if r0 == 0 and b > 0:
-        z = b * min(1.0, _nb_safe_ratio(z0, b))
-    if z0 == 0:
-        r = min(r0, a)
-    if b == 0:
-        r = min(r0, a)
-        z = 0.0
+    if newton:
+        x, ok = _nb_bracketed_newton(torsion, a, b, r0, z0, alpha, power, hi, start)
+    r, z = _nb_closest_finish(newton, torsion, x, r0, z0, a, b, alpha, power, r)
     return r, z, ok
+
+
+@_jit
+def _nb_energy_closest_points(first, second) -> tuple[float, float, bool, float, float, bool]:
+    """:func:`_nb_energy_closest_point` of two rows, each given as the tuple of its
+    arguments: ``(r1, z1, ok1, r2, z2, ok2)``, the same bits. Where both run Newton their
+    steps alternate in one loop, each row stopping at its own convergence (see
+    :func:`nb_radial_factors`)."""
+    r01, z01, a1, b1, alpha1, radial1, t_switch1, ta_switch1, shear_hi1 = first
+    r02, z02, a2, b2, alpha2, radial2, t_switch2, ta_switch2, shear_hi2 = second
+    newton1, torsion1, power1, hi1, start1, r1 = _nb_closest_setup(*first)
+    newton2, torsion2, power2, hi2, start2, r2 = _nb_closest_setup(*second)
+    x1 = 0.0
+    x2 = 0.0
+    ok1 = True
+    ok2 = True
+    if newton1 and newton2:
+        lo1 = 0.0
+        lo2 = 0.0
+        x1 = _nb_bracket_start(hi1, start1)
+        x2 = _nb_bracket_start(hi2, start2)
+        stop1 = False
+        stop2 = False
+        for _ in range(PROJECTION_MAX_ITER):
+            if not stop1:
+                lo1, hi1, x1, stop1 = _nb_bracket_step(
+                    torsion1, a1, b1, r01, z01, alpha1, power1, lo1, hi1, x1
+                )
+            if not stop2:
+                lo2, hi2, x2, stop2 = _nb_bracket_step(
+                    torsion2, a2, b2, r02, z02, alpha2, power2, lo2, hi2, x2
+                )
+            if stop1 and stop2:
+                break
+        ok1 = stop1
+        ok2 = stop2
+    elif newton1:
+        x1, ok1 = _nb_bracketed_newton(torsion1, a1, b1, r01, z01, alpha1, power1, hi1, start1)
+    elif newton2:
+        x2, ok2 = _nb_bracketed_newton(torsion2, a2, b2, r02, z02, alpha2, power2, hi2, start2)
+    r1, z1 = _nb_closest_finish(newton1, torsion1, x1, r01, z01, a1, b1, alpha1, power1, r1)
+    r2, z2 = _nb_closest_finish(newton2, torsion2, x2, r02, z02, a2, b2, alpha2, power2, r2)
+    return r1, z1, ok1, r2, z2, ok2
 
 
 @_jit
@@ -325,22 +483,10 @@ def nb_reduced_side(side: float, abs_moment: float, cap: float, snap: float) -> 
 
 
 @_jit
-def nb_check_row(
-    f1, f2, fn, m1, m2, m3, fti, l1, l2, mu, al, snap1, snap2,
-    torsion_bending_interaction, projection_only, energy,
-    stored, t_switch, ta_switch, shear_hi, rho,
-):  # fmt: skip
-    """The strength check of one row, scalars in and out: the trial actions ``f1 .. m3`` and
-    the row's constants (``t_switch`` .. ``rho``: :func:`nb_slide_constants`, computed here
-    unless ``stored``) give ``(p1, p2, pn, p4, p5, p6, flags, utilisation, radial_failed,
-    energy_failed)``: the projection, its flags, the utilisation (0 with
-    ``projection_only``) and whether the radial factor and the energy projection did not
-    converge (0 or 1 each). Scalars, not the arrays: every array a compiled row function
-    takes adds the cost of its reference to each call (docs/solvers.md, "One evaluation of
-    the interface law")."""
-    n_radial = 0
-    n_energy = 0
-
+def _nb_demands(f1, f2, fn, m1, m2, m3, fti, l1, l2, mu, snap1, snap2, torsion_bending_interaction):  # fmt: skip
+    """The first part of :func:`nb_check_row`: detachment, the rocking clip and the
+    shear-torsion demand/capacity ratios of one row, ``(detached, rock1, rock2, abs_m1,
+    abs_m2, m1_lim, m2_lim, abs_m1c, abs_m2c, fsu, abs_m3, m3u, shear, a, c)``."""
     # detachment
     detached = fn > fti
     live = not detached
@@ -372,6 +518,76 @@ def nb_check_row(
     shear = math.hypot(f1, f2)
     a = abs_m3 / m3u if abs_m3 > 0 else 0.0  # 0/0 = 0, d/0 = inf (no capacity)
     c = shear / fsu if shear > 0 else 0.0
+    return detached, rock1, rock2, abs_m1, abs_m2, m1_lim, m2_lim, abs_m1c, abs_m2c, fsu, abs_m3, m3u, shear, a, c  # fmt: skip
+
+
+@_jit
+def _nb_energy_actions(f1, f2, m3, shear, abs_m3, fsu, m3u, al, s, rho, r, z):
+    """(f1', f2', m3') of a sliding row from the closest point (r, z) of its energy return
+    (the radial return ``s`` at capacities on the edge of floating point)."""
+    shear_scale = _nb_safe_ratio(r, shear)
+    if not math.isfinite(shear_scale):
+        shear_scale = 0.0
+    m3_new = math.copysign(z * rho, m3)
+    # capacities at the edge of floating point (subnormal friction or sides): the
+    # radial return, which lands on the boundary by construction
+    phi = _nb_safe_ratio(z * rho, m3u) ** al + _nb_safe_ratio(r, fsu) ** 2
+    off = not abs(phi - 1.0) <= 1e-9 and m3u > 0 and fsu > 0
+    off = off or abs_m3 == 0  # pure shear: the same point, with the radial round-off
+    off = off or fsu < TINY_CAPACITY
+    if off:
+        shear_scale = s
+        m3_new = m3 * s
+    return f1 * shear_scale, f2 * shear_scale, m3_new
+
+
+@_jit
+def _nb_row_flags(sliding, rock1, rock2, detached) -> int:
+    """The bit flags of a checked row."""
+    return (
+        (FLAG_SHEAR_TORSION if sliding else 0)
+        | (FLAG_ROCKING_1 if rock1 else 0)
+        | (FLAG_ROCKING_2 if rock2 else 0)
+        | (FLAG_DETACHED if detached else 0)
+    )
+
+
+@_jit
+def nb_check_row(
+    f1, f2, fn, m1, m2, m3, fti, l1, l2, mu, al, snap1, snap2,
+    torsion_bending_interaction, projection_only, energy,
+    stored, t_switch, ta_switch, shear_hi, rho,
+):  # fmt: skip
+    """The strength check of one row, scalars in and out: the trial actions ``f1 .. m3`` and
+    the row's constants (``t_switch`` .. ``rho``: :func:`nb_slide_constants`, computed here
+    unless ``stored``) give ``(p1, p2, pn, p4, p5, p6, flags, utilisation, radial_failed,
+    energy_failed)``: the projection, its flags, the utilisation (0 with
+    ``projection_only``) and whether the radial factor and the energy projection did not
+    converge (0 or 1 each). Scalars, not the arrays: every array a compiled row function
+    takes adds the cost of its reference to each call (docs/solvers.md, "One evaluation of
+    the interface law")."""
+    n_radial = 0
+    n_energy = 0
+    (
+        detached,
+        rock1,
+        rock2,
+        abs_m1,
+        abs_m2,
+        m1_lim,
+        m2_lim,
+        abs_m1c,
+        abs_m2c,
+        fsu,
+        abs_m3,
+        m3u,
+        shear,
+        a,
+        c,
+    ) = _nb_demands(  # fmt: skip  # noqa: E501
+        f1, f2, fn, m1, m2, m3, fti, l1, l2, mu, snap1, snap2, torsion_bending_interaction
+    )
+    live = not detached
 
     u_st = 0.0
     s = 1.0
@@ -406,22 +622,7 @@ def nb_check_row(
             shear, abs_m3 / rho, fsu, m3u / rho, al, s, t_switch, ta_switch, shear_hi
         )
         n_energy += 0 if ok else 1
-        shear_scale = _nb_safe_ratio(r, shear)
-        if not math.isfinite(shear_scale):
-            shear_scale = 0.0
-        m3_new = math.copysign(z * rho, m3)
-        # capacities at the edge of floating point (subnormal friction or sides): the
-        # radial return, which lands on the boundary by construction
-        phi = _nb_safe_ratio(z * rho, m3u) ** al + _nb_safe_ratio(r, fsu) ** 2
-        off = not abs(phi - 1.0) <= 1e-9 and m3u > 0 and fsu > 0
-        off = off or abs_m3 == 0  # pure shear: the same point, with the radial round-off
-        off = off or fsu < TINY_CAPACITY
-        if off:
-            shear_scale = s
-            m3_new = m3 * s
-        p1 = f1 * shear_scale
-        p2 = f2 * shear_scale
-        p6 = m3_new
+        p1, p2, p6 = _nb_energy_actions(f1, f2, m3, shear, abs_m3, fsu, m3u, al, s, rho, r, z)
     if detached:
         p1 = 0.0
         p2 = 0.0
@@ -430,12 +631,7 @@ def nb_check_row(
         p5 = 0.0
         p6 = 0.0
 
-    flags = (
-        (FLAG_SHEAR_TORSION if sliding else 0)
-        | (FLAG_ROCKING_1 if rock1 else 0)
-        | (FLAG_ROCKING_2 if rock2 else 0)
-        | (FLAG_DETACHED if detached else 0)
-    )
+    flags = _nb_row_flags(sliding, rock1, rock2, detached)
     util = 0.0
     if projection_only:
         return p1, p2, pn, p4, p5, p6, flags, util, n_radial, n_energy
@@ -451,6 +647,70 @@ def nb_check_row(
         u_rock2 = abs_m2 / m2_lim if abs_m2 > 0 else 0.0
         util = max(max(max(u_rock, u_rock2), u_tension), u_st)
     return p1, p2, pn, p4, p5, p6, flags, util, n_radial, n_energy
+
+
+@_jit
+def nb_project_rows(first, second, energy):
+    """The projection and flags of two rows (:func:`nb_check_row` with the torsion-bending
+    interaction, ``projection_only`` and the rows' stored constants), the same bits: each
+    row is a tuple ``(f1, f2, fn, m1, m2, m3, ft, l1, l2, mu, alpha, snap1, snap2, t_switch,
+    ta_switch, shear_hi, rho)``; returns ``(p1 .. p6)`` and the flags of each. The iterations
+    of the two rows' radial factors and energy returns alternate in one loop
+    (:func:`nb_radial_factors`, :func:`_nb_energy_closest_points`): one row's steps wait on
+    each other, the two rows' do not, so the processor overlaps them."""
+    f1, f2, fn, m1, m2, m3, fti, l1, l2, mu, al, snap1, snap2, t_switch, ta_switch, shear_hi, rho = first  # fmt: skip  # noqa: E501
+    f1_b, f2_b, fn_b, m1_b, m2_b, m3_b, fti_b, l1_b, l2_b, mu_b, al_b, snap1_b, snap2_b, t_switch_b, ta_switch_b, shear_hi_b, rho_b = second  # fmt: skip  # noqa: E501
+    on = True
+    detached, rock1, rock2, _, _, _, _, abs_m1c, abs_m2c, fsu, abs_m3, m3u, shear, a, c = _nb_demands(f1, f2, fn, m1, m2, m3, fti, l1, l2, mu, snap1, snap2, on)  # fmt: skip  # noqa: E501
+    detached_b, rock1_b, rock2_b, _, _, _, _, abs_m1c_b, abs_m2c_b, fsu_b, abs_m3_b, m3u_b, shear_b, a_b, c_b = _nb_demands(f1_b, f2_b, fn_b, m1_b, m2_b, m3_b, fti_b, l1_b, l2_b, mu_b, snap1_b, snap2_b, on)  # fmt: skip  # noqa: E501
+    # a + c^2 >= a^alpha + c^2 for a, c <= 1 and alpha >= 1: below 1 no row slides
+    check = not detached and not a + c * c < 0.999
+    check_b = not detached_b and not a_b + c_b * c_b < 0.999
+    s = 1.0
+    s_b = 1.0
+    if check and check_b:
+        s, _, s_b, _ = nb_radial_factors(a, c, al, a_b, c_b, al_b)
+    elif check:
+        s = nb_radial_factor(a, c, al)[0]
+    elif check_b:
+        s_b = nb_radial_factor(a_b, c_b, al_b)[0]
+    sliding = check and 1.0 / s > 1.0 + SHEAR_TORSION_TOLERANCE
+    sliding_b = check_b and 1.0 / s_b > 1.0 + SHEAR_TORSION_TOLERANCE
+
+    # projection (untouched entries are kept bitwise)
+    p1, p2, pn, p4, p5, p6 = f1, f2, fn, math.copysign(abs_m1c, m1), math.copysign(abs_m2c, m2), m3  # fmt: skip  # noqa: E501
+    p1_b, p2_b, pn_b, p4_b, p5_b, p6_b = f1_b, f2_b, fn_b, math.copysign(abs_m1c_b, m1_b), math.copysign(abs_m2c_b, m2_b), m3_b  # fmt: skip  # noqa: E501
+    if not energy:
+        if sliding:
+            p1 *= s
+            p2 *= s
+            p6 *= s
+        if sliding_b:
+            p1_b *= s_b
+            p2_b *= s_b
+            p6_b *= s_b
+    elif sliding or sliding_b:
+        point = (shear, abs_m3 / rho, fsu, m3u / rho, al, s, t_switch, ta_switch, shear_hi)
+        point_b = (shear_b, abs_m3_b / rho_b, fsu_b, m3u_b / rho_b, al_b, s_b, t_switch_b, ta_switch_b, shear_hi_b)  # fmt: skip  # noqa: E501
+        if sliding and sliding_b:
+            r, z, _, r_b, z_b, _ = _nb_energy_closest_points(point, point_b)
+        elif sliding:
+            r, z, _ = _nb_energy_closest_point(*point)
+            r_b = z_b = 0.0
+        else:
+            r_b, z_b, _ = _nb_energy_closest_point(*point_b)
+            r = z = 0.0
+        if sliding:
+            p1, p2, p6 = _nb_energy_actions(f1, f2, m3, shear, abs_m3, fsu, m3u, al, s, rho, r, z)
+        if sliding_b:
+            p1_b, p2_b, p6_b = _nb_energy_actions(f1_b, f2_b, m3_b, shear_b, abs_m3_b, fsu_b, m3u_b, al_b, s_b, rho_b, r_b, z_b)  # fmt: skip  # noqa: E501
+    if detached:
+        p1, p2, pn, p4, p5, p6 = 0.0, 0.0, fti, 0.0, 0.0, 0.0
+    if detached_b:
+        p1_b, p2_b, pn_b, p4_b, p5_b, p6_b = 0.0, 0.0, fti_b, 0.0, 0.0, 0.0
+    flags = _nb_row_flags(sliding, rock1, rock2, detached)
+    flags_b = _nb_row_flags(sliding_b, rock1_b, rock2_b, detached_b)
+    return (p1, p2, pn, p4, p5, p6), flags, (p1_b, p2_b, pn_b, p4_b, p5_b, p6_b), flags_b
 
 
 @_jit

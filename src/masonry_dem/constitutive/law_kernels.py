@@ -21,9 +21,9 @@ from masonry_dem.constitutive.check_kernels import (
     ROW_TORSION,
     SHEAR_TORSION_TOLERANCE,
     TINY_CAPACITY,
-    nb_check_row,
     nb_energy_radius,
     nb_evaluate_row,
+    nb_project_rows,
     nb_radial_factor,
     nb_reduced_side,
     nb_torsion_constant,
@@ -430,6 +430,17 @@ def nb_plain_row(f1, f2, fn, m1, m2, m3, fti, l1, l2, mu, snap1, snap2, torsion)
     return ROW_ELASTIC if a + c * c < SETTLED_ELASTIC_BELOW else ROW_CHECK
 
 
+@numba.njit(error_model="numpy", inline="always")
+def _row(i, trial, ft, l1, l2, friction, alpha, snap1, snap2, constants):
+    """Row ``i``'s trial actions and constants, as :func:`nb_project_rows` takes them."""
+    t = trial[i]
+    c = constants[i]
+    return (
+        t[0], t[1], t[2], t[3], t[4], t[5], ft[i], l1[i], l2[i], friction[i], alpha[i],
+        snap1[i], snap2[i], c[ROW_T_SWITCH], c[ROW_TA_SWITCH], c[ROW_SHEAR_HI], c[ROW_RHO],
+    )  # fmt: skip
+
+
 @kernel(parallel=True, error_model="numpy")
 def forces(
     x, h_ptr, h_idx, h_val, kbar, plastic, cracked, tensile_force,
@@ -473,7 +484,7 @@ def forces(
         finite += 0.0 * value
     if not finite == 0.0:
         return rel, trial, ft, actions, flags, internal, False
-    on = finite == 0.0  # True, as a variable: a literal True would compile the row again
+    checked = np.zeros(m, dtype=np.bool_)
     for i in numba.prange(m):
         plain = nb_plain_row(
             trial[i, 0], trial[i, 1], trial[i, 2], trial[i, 3], trial[i, 4], trial[i, 5],
@@ -487,20 +498,22 @@ def forces(
                 actions[i, j] = 0.0
             actions[i, 2] = ft[i]
             flags[i] = FLAG_DETACHED
-        else:  # the check of the row, with its interface's constants (scalars: see nb_check_row)
-            p1, p2, pn, p4, p5, p6, flag, _, _, _ = nb_check_row(
-                trial[i, 0], trial[i, 1], trial[i, 2], trial[i, 3], trial[i, 4], trial[i, 5],
-                ft[i], l1[i], l2[i], friction[i], alpha[i], snap1[i], snap2[i], on, on, energy,
-                on, constants[i, ROW_T_SWITCH], constants[i, ROW_TA_SWITCH],
-                constants[i, ROW_SHEAR_HI], constants[i, ROW_RHO],
-            )  # fmt: skip
-            actions[i, 0] = p1
-            actions[i, 1] = p2
-            actions[i, 2] = pn
-            actions[i, 3] = p4
-            actions[i, 4] = p5
-            actions[i, 5] = p6
-            flags[i] = flag
+        else:
+            checked[i] = True
+    # the other rows two by two: their iterations overlap (nb_project_rows)
+    rows = np.flatnonzero(checked)
+    n = rows.shape[0]
+    for k in numba.prange((n + 1) // 2):
+        i = rows[2 * k]
+        j = rows[2 * k + 1] if 2 * k + 1 < n else i  # the last row alone: twice
+        first = _row(i, trial, ft, l1, l2, friction, alpha, snap1, snap2, constants)
+        second = _row(j, trial, ft, l1, l2, friction, alpha, snap1, snap2, constants)
+        p, flag, q, flag2 = nb_project_rows(first, second, energy)
+        for c in range(6):
+            actions[i, c] = p[c]
+            actions[j, c] = q[c]
+        flags[i] = flag
+        flags[j] = flag2
     if brittle:
         for i in range(m):
             if flags[i] & FLAG_DETACHED:
