@@ -39,9 +39,9 @@ of both trees and their ratio, and scipy's ``H @ x`` then ``H_T @ y`` for scale:
 
 With ``--parts`` instead it prints where a call of ``forces`` goes on this tree, on the same
 two states: the strength check of each kind of row (elastic, detached, sliding, rocking
-only, and zero trials: what any row costs) with the interface's constants stored (as
-``forces`` reads them) and computed in the row (as before they were stored), the early-out's
-test of a row, and the loop of
+only, and zero trials: what any row costs) one at a time with the interface's constants
+stored and computed in the row (as before they were stored), and two by two as ``forces``
+checks them (``nb_project_rows``), the early-out's test of a row, and the loop of
 ``H x`` through signed (scipy's) and unsigned index arrays::
 
     NUMBA_NUM_THREADS=1 python benchmarks/bench_constitutive.py --forces --parts
@@ -345,7 +345,7 @@ def forces_parts(path: str) -> None:
     import numba
     from scipy import sparse
 
-    from masonry_dem.constitutive.check_kernels import nb_check_row
+    from masonry_dem.constitutive.check_kernels import nb_check_row, nb_project_rows
     from masonry_dem.constitutive.law import InterfaceLaw
     from masonry_dem.constitutive.law_kernels import nb_plain_row
 
@@ -364,6 +364,25 @@ def forces_parts(path: str) -> None:
             actions[i, 0], actions[i, 1], actions[i, 2] = p[0], p[1], p[2]
             actions[i, 3], actions[i, 4], actions[i, 5] = p[3], p[4], p[5]
             flags[i] = p[6]
+
+    @numba.njit(error_model="numpy")
+    def pair_rows(trial, ft, l1, l2, friction, alpha, snap1, snap2, constants, actions, flags):
+        # as the forces kernel checks them: consecutive rows two by two (an odd last row
+        # with itself)
+        n = trial.shape[0]
+        for k in range((n + 1) // 2):
+            i = 2 * k
+            j = i + 1 if i + 1 < n else i
+            t, c = trial[i], constants[i]
+            first = (t[0], t[1], t[2], t[3], t[4], t[5], ft[i], l1[i], l2[i], friction[i], alpha[i], snap1[i], snap2[i], c[1], c[2], c[3], c[4])  # fmt: skip
+            t, c = trial[j], constants[j]
+            second = (t[0], t[1], t[2], t[3], t[4], t[5], ft[j], l1[j], l2[j], friction[j], alpha[j], snap1[j], snap2[j], c[1], c[2], c[3], c[4])  # fmt: skip
+            p, flag, q, flag_b = nb_project_rows(first, second, True)
+            for c in range(6):
+                actions[i, c] = p[c]
+                actions[j, c] = q[c]
+            flags[i] = flag
+            flags[j] = flag_b
 
     @numba.njit(error_model="numpy")
     def plain_rows(trial, ft, l1, l2, friction, snap1, snap2, torsion):
@@ -396,7 +415,7 @@ def forces_parts(path: str) -> None:
     unsigned = np.uint32 if H.indices.dtype.itemsize == 4 else np.uint64
     print(
         f"{'state':5s} {'rows':18s} {'n':>4s} {'check [ns/row]':>14s} {'early-out [ns/row]':>18s}"
-        f" {'constants computed [ns/row]':>27s}"
+        f" {'constants computed [ns/row]':>27s} {'two by two [ns/row]':>19s}"
     )
     for state in ("dead", "last"):
         x = np.array(d[state])
@@ -425,11 +444,12 @@ def forces_parts(path: str) -> None:
             t_check = per_call(lambda a=checked: check_rows(*a))
             computed = (trial, ft, *arrays, np.empty((0, 5)), act, flags)
             t_computed = per_call(lambda a=computed: check_rows(*a))
+            t_pairs = per_call(lambda a=checked: pair_rows(*a))
             tested = (trial, ft, l1, l2, mu, s1, s2, torsion)
             t_plain = per_call(lambda a=tested: plain_rows(*a))
             print(
                 f"{state:5s} {kind:18s} {n:4d} {t_check / n * 1e9:14.0f} {t_plain / n * 1e9:18.0f}"
-                f" {t_computed / n * 1e9:27.0f}"
+                f" {t_computed / n * 1e9:27.0f} {t_pairs / n * 1e9:19.0f}"
             )
     x = np.array(d["last"])
     out = np.empty(H.shape[0])
