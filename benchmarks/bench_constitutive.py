@@ -38,11 +38,13 @@ of both trees and their ratio, and scipy's ``H @ x`` then ``H_T @ y`` for scale:
     NUMBA_NUM_THREADS=1 python benchmarks/bench_constitutive.py --forces --baseline faf4f27
 
 With ``--parts`` instead it prints where a call of ``forces`` goes on this tree, on the same
-two states: the strength check of each kind of row (elastic, detached, sliding, rocking
-only, and zero trials: what any row costs) one at a time with the interface's constants
-stored and computed in the row (as before they were stored), and two by two as ``forces``
-checks them (``nb_project_rows``), the early-out's test of a row, and the loop of
-``H x`` through signed (scipy's) and unsigned index arrays::
+two states and on S23's last: the strength check of each kind of row (elastic, detached,
+sliding, rocking only, and zero trials: what any row costs) one at a time with the
+interface's constants stored and computed in the row (as before they were stored), and two
+by two as ``forces`` checks them (``nb_project_rows``); the Newton steps of a sliding row's
+radial factor and energy return; the early-out's test of a row; the latency of pow, exp,
+log, sqrt and a division in a chain of dependent operations; and the loop of ``H x``
+through signed (scipy's) and unsigned index arrays::
 
     NUMBA_NUM_THREADS=1 python benchmarks/bench_constitutive.py --forces --parts
 
@@ -338,14 +340,26 @@ def forces_worker(path: str, out: str) -> None:
     np.savez(out, **result)
 
 
-def forces_parts(path: str) -> None:
-    """Print the cost of the parts of one ``forces`` call on the saved U wall states."""
+def forces_parts(path: str, s23: str | None = None) -> None:
+    """Print the cost of the parts of one ``forces`` call on the saved U wall states (and the
+    rows of S23's last state, saved by :func:`law_inputs`, if given)."""
     import math
 
     import numba
     from scipy import sparse
 
-    from masonry_dem.constitutive.check_kernels import nb_check_row, nb_project_rows
+    from masonry_dem.constitutive.check_kernels import (
+        NEWTON_MAX_ITER,
+        PROJECTION_MAX_ITER,
+        _nb_bracket_start,
+        _nb_bracket_step,
+        _nb_closest_setup,
+        _nb_demands,
+        _nb_radial_closed,
+        _nb_radial_step,
+        nb_check_row,
+        nb_project_rows,
+    )
     from masonry_dem.constitutive.law import InterfaceLaw
     from masonry_dem.constitutive.law_kernels import nb_plain_row
 
@@ -385,6 +399,53 @@ def forces_parts(path: str) -> None:
             flags[j] = flag_b
 
     @numba.njit(error_model="numpy")
+    def iterations(trial, ft, l1, l2, friction, alpha, snap1, snap2, constants, out):
+        # per row, through the check's own parts: the radial factor's Newton steps, the
+        # energy return's bracketed Newton steps, and whether it ran on the shear half
+        for i in range(trial.shape[0]):
+            t, c = trial[i], constants[i]
+            _, _, _, _, _, _, _, _, _, fsu, abs_m3, m3u, shear, a, cc = _nb_demands(t[0], t[1], t[2], t[3], t[4], t[5], ft[i], l1[i], l2[i], friction[i], snap1[i], snap2[i], True)  # fmt: skip
+            s, newton, m, big_a, big_c = _nb_radial_closed(a, cc, alpha[i])
+            steps = 0
+            if newton:
+                ln_a, ln_c, tau, done = math.log(big_a), math.log(big_c), 0.0, False
+                while not done and steps < NEWTON_MAX_ITER:
+                    tau, done = _nb_radial_step(tau, ln_a, ln_c, alpha[i])
+                    steps += 1
+                s = math.exp(tau) / m
+            out[i, 0] = steps
+            rho = c[4]
+            point = (shear, abs_m3 / rho, fsu, m3u / rho, alpha[i], s, c[1], c[2], c[3])
+            run, torsion, power, hi, start, _ = _nb_closest_setup(*point)
+            steps = 0
+            if run:
+                lo, x, stop = 0.0, _nb_bracket_start(hi, start), False
+                while not stop and steps < PROJECTION_MAX_ITER:
+                    lo, hi, x, stop = _nb_bracket_step(torsion, fsu, m3u / rho, shear, abs_m3 / rho, alpha[i], power, lo, hi, x)  # fmt: skip
+                    steps += 1
+            out[i, 1] = steps
+            out[i, 2] = 1.0 if run and not torsion else 0.0
+
+    @numba.njit(error_model="numpy")
+    def chain(kind, x0, n):
+        # n dependent operations: their latency (the Newton steps wait on each result)
+        x = x0
+        for _ in range(n):
+            if kind == 0:
+                x = (x + 0.5) ** 1.5 * 0.5
+            elif kind == 1:
+                x = math.exp(0.1 * x)
+            elif kind == 2:
+                x = math.log(x + 2.0)
+            elif kind == 3:
+                x = math.sqrt(x + 0.5)
+            elif kind == 4:
+                x = 0.75 / (x + 0.5)
+            else:
+                x = (x + 0.5) * 0.75
+        return x
+
+    @numba.njit(error_model="numpy")
     def plain_rows(trial, ft, l1, l2, friction, snap1, snap2, torsion):
         n = 0
         for i in range(trial.shape[0]):
@@ -411,15 +472,22 @@ def forces_parts(path: str) -> None:
     H = sparse.csr_matrix((d["H_data"], d["H_indices"], d["H_indptr"]), shape=tuple(d["H_shape"]))
     H_T = H.T.tocsr()
     m = law.kbar.shape[0]
-    dom = law._domain
     unsigned = np.uint32 if H.indices.dtype.itemsize == 4 else np.uint64
     print(
         f"{'state':5s} {'rows':18s} {'n':>4s} {'check [ns/row]':>14s} {'early-out [ns/row]':>18s}"
         f" {'constants computed [ns/row]':>27s} {'two by two [ns/row]':>19s}"
     )
+    states = []
     for state in ("dead", "last"):
         x = np.array(d[state])
         _, r, _ = law.forces(H, x, np.zeros((m, 6)), np.zeros(m, dtype=bool), H_T)
+        states.append((state, r, law._domain))
+    if s23 is not None:  # S23's last pushover state (law_inputs), through its own law
+        e = np.load(s23)
+        s23_law = InterfaceLaw(*(np.array(e[f]) for f in LAW_FIELDS), str(e["tension"]), str(e["memory"]))  # fmt: skip
+        r = s23_law.respond(e["relative"], e["plastic"], e["cracked"])
+        states.append(("S23", r, s23_law._domain))
+    for state, r, dom in states:
         kinds = {
             "elastic": r.flags == 0,
             "detached": r.flags == 8,
@@ -451,6 +519,27 @@ def forces_parts(path: str) -> None:
                 f"{state:5s} {kind:18s} {n:4d} {t_check / n * 1e9:14.0f} {t_plain / n * 1e9:18.0f}"
                 f" {t_computed / n * 1e9:27.0f} {t_pairs / n * 1e9:19.0f}"
             )
+            if kind == "sliding":
+                count = np.zeros((n, 3))
+                iterations(trial, ft, *arrays, constants, count)
+                ran = count[:, 1] > 0
+                shear = count[ran, 2].mean()
+                print(
+                    f"      {n} sliding rows: radial factor {count[:, 0].mean():.2f} Newton steps a "
+                    f"row (at most {count[:, 0].max():.0f}); energy return {count[ran, 1].mean():.2f} "
+                    f"(at most {count[:, 1].max():.0f}) on {ran.sum()} rows, {shear:.0%} of them "
+                    "on the shear half"
+                )
+    steps = 100_000
+    base = per_call(lambda: chain(5, 0.3, steps))
+    latency = {
+        name: (per_call(lambda k=k: chain(k, 0.3, steps)) - base) / steps * 1e9
+        for k, name in enumerate(("pow", "exp", "log", "sqrt", "division"))
+    }
+    print(
+        "latency in a chain of dependent operations [ns]: "
+        + ", ".join(f"{k} {v:.1f}" for k, v in latency.items())
+    )
     x = np.array(d["last"])
     out = np.empty(H.shape[0])
     signed = per_call(lambda: product(x, H.indptr, H.indices, H.data, out))
@@ -599,7 +688,7 @@ def main(argv: list[str] | None = None) -> int:
         return law_main(args.cases, args.baseline, args.rounds)
     if args.forces and args.parts:
         with tempfile.TemporaryDirectory() as tmp:
-            forces_parts(forces_inputs(tmp))
+            forces_parts(forces_inputs(tmp), law_inputs("S23", tmp))
         return 0
     if args.forces:
         return forces_main(args.baseline, args.rounds, args.pushover)
