@@ -415,8 +415,9 @@ def forces_parts(path: str, s23: str | None = None) -> None:
                 s = math.exp(tau) / m
             out[i, 0] = steps
             rho = c[4]
-            point = (shear, abs_m3 / rho, fsu, m3u / rho, alpha[i], s, c[1], c[2], c[3])
-            run, torsion, power, hi, start, _ = _nb_closest_setup(*point)
+            run, torsion, power, hi, start, _ = _nb_closest_setup(
+                shear, abs_m3 / rho, fsu, m3u / rho, alpha[i], s, c[1], c[2], c[3]
+            )
             steps = 0
             if run:
                 lo, x, stop = 0.0, _nb_bracket_start(hi, start), False

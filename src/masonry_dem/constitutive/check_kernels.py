@@ -66,6 +66,8 @@ SNAP: Final[float] = 1e-12
 
 #: the row functions: compiled into the kernels that call them (x/0 = inf or nan, as numpy)
 _jit = numba.njit(error_model="numpy")
+#: the parts of the row check: inlined into the functions that call them
+_part = numba.njit(error_model="numpy", inline="always")
 
 
 @_jit
@@ -96,7 +98,7 @@ def nb_torsion_constant(l1: float, l2: float) -> float:
     return c
 
 
-@_jit
+@_part
 def _nb_radial_step(tau: float, ln_a: float, ln_c: float, alpha: float) -> tuple[float, bool]:
     """One step of :func:`_radial_newton` on one row: the next tau, and whether the step was
     below the tolerance (the row stops there)."""
@@ -122,7 +124,7 @@ def _nb_radial_t(big_a: float, big_c: float, alpha: float) -> tuple[float, bool]
     return math.exp(tau), False
 
 
-@_jit
+@_part
 def _nb_radial_closed(a: float, c: float, alpha: float) -> tuple[float, bool, float, float, float]:
     """The radial factor of one row where it has a closed form, ``(s, newton, m, A, C)``:
     ``newton`` says it has none (both demands, alpha other than 1 and 2), and then
@@ -251,7 +253,7 @@ def _nb_torsion_half(x, a, b, r0, z0, alpha) -> tuple[float, float]:
     return g, dg
 
 
-@_jit
+@_part
 def _nb_bracket_start(hi: float, start: float) -> float:
     """The first iterate of :func:`_nb_bracketed_newton`: ``start``, mid-bracket if outside."""
     x = 0.5 * hi
@@ -260,7 +262,7 @@ def _nb_bracket_start(hi: float, start: float) -> float:
     return x
 
 
-@_jit
+@_part
 def _nb_bracket_step(
     torsion, a, b, r0, z0, alpha, power, lo, hi, x
 ) -> tuple[float, float, float, bool]:
@@ -298,7 +300,7 @@ def _nb_bracketed_newton(torsion, a, b, r0, z0, alpha, power, hi, start) -> tupl
     return x, False
 
 
-@_jit
+@_part
 def _nb_closest_setup(
     r0, z0, a, b, alpha, radial, t_switch, ta_switch, shear_hi
 ) -> tuple[bool, bool, float, float, float, float]:
@@ -332,7 +334,7 @@ def _nb_closest_setup(
     return newton, torsion, power, hi, start, r
 
 
-@_jit
+@_part
 def _nb_closest_finish(newton, torsion, x, r0, z0, a, b, alpha, power, r) -> tuple[float, float]:
     """The part of :func:`_nb_energy_closest_point` after Newton (``x`` its root): (r, z)."""
     z = 0.0
@@ -393,8 +395,12 @@ def _nb_energy_closest_points(first, second) -> tuple[float, float, bool, float,
     :func:`nb_radial_factors`)."""
     r01, z01, a1, b1, alpha1, radial1, t_switch1, ta_switch1, shear_hi1 = first
     r02, z02, a2, b2, alpha2, radial2, t_switch2, ta_switch2, shear_hi2 = second
-    newton1, torsion1, power1, hi1, start1, r1 = _nb_closest_setup(*first)
-    newton2, torsion2, power2, hi2, start2, r2 = _nb_closest_setup(*second)
+    newton1, torsion1, power1, hi1, start1, r1 = _nb_closest_setup(
+        r01, z01, a1, b1, alpha1, radial1, t_switch1, ta_switch1, shear_hi1
+    )
+    newton2, torsion2, power2, hi2, start2, r2 = _nb_closest_setup(
+        r02, z02, a2, b2, alpha2, radial2, t_switch2, ta_switch2, shear_hi2
+    )
     x1 = 0.0
     x2 = 0.0
     ok1 = True
@@ -482,7 +488,7 @@ def nb_reduced_side(side: float, abs_moment: float, cap: float, snap: float) -> 
     return reduced
 
 
-@_jit
+@_part
 def _nb_demands(f1, f2, fn, m1, m2, m3, fti, l1, l2, mu, snap1, snap2, torsion_bending_interaction):  # fmt: skip
     """The first part of :func:`nb_check_row`: detachment, the rocking clip and the
     shear-torsion demand/capacity ratios of one row, ``(detached, rock1, rock2, abs_m1,
@@ -521,7 +527,7 @@ def _nb_demands(f1, f2, fn, m1, m2, m3, fti, l1, l2, mu, snap1, snap2, torsion_b
     return detached, rock1, rock2, abs_m1, abs_m2, m1_lim, m2_lim, abs_m1c, abs_m2c, fsu, abs_m3, m3u, shear, a, c  # fmt: skip
 
 
-@_jit
+@_part
 def _nb_energy_actions(f1, f2, m3, shear, abs_m3, fsu, m3u, al, s, rho, r, z):
     """(f1', f2', m3') of a sliding row from the closest point (r, z) of its energy return
     (the radial return ``s`` at capacities on the edge of floating point)."""
@@ -541,7 +547,7 @@ def _nb_energy_actions(f1, f2, m3, shear, abs_m3, fsu, m3u, al, s, rho, r, z):
     return f1 * shear_scale, f2 * shear_scale, m3_new
 
 
-@_jit
+@_part
 def _nb_row_flags(sliding, rock1, rock2, detached) -> int:
     """The bit flags of a checked row."""
     return (
