@@ -237,10 +237,6 @@ def work_control(
     line = SecantPredictor(s.secant_predictor, [])
     for st, stw in zip(hist.steps[-2:], path_w[-2:], strict=False):
         line.add(stw, st.q.reshape(-1), float(st.load_factor))
-    if not s.hand_over_secant:
-        # the last load step's secant spans the joint events of a step that load control
-        # found hard: the first search starts from the last state (its tangent) instead
-        line.restart(path_w[-1], hist.steps[-1].q.reshape(-1), path_lam[-1])
     if len(path_w) > 1:
         # the first live-load step is elastic for walls that stand: its secant is the scale
         elastic_slope = (path_lam[1] - path_lam[0]) / max(path_w[1] - path_w[0], 1e-300)
@@ -258,8 +254,6 @@ def work_control(
         s.growth,
         easy_iterations=s.easy_iterations,
     )
-    if s.regrow_to_first:
-        step.regrow = step.size
     lam = path_lam[-1]
     first_lambda = hist.collapse_bracket[1] if hist.collapse_bracket else lam
     peak = max(path_lam)

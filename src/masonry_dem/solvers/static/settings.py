@@ -114,14 +114,6 @@ class StaticSettings(LoadPathSettings):
         halvings and its first step (or the present one if longer).
     fold_match: two failed work steps whose searches stop at lambdas this close (relative)
         stop at one fold.
-    regrow_to_first: a converged work step shorter than work control's first step grows
-        ``growth`` times whatever its iterations, up to that first step; longer ones grow
-        after easy steps only. Halvings at a fold (or at the hand-over) are local to it, and
-        the steps after it take as many iterations as at the first step's length, so they
-        never counted as easy and stayed short. False (default): only easy steps grow.
-    hand_over_secant: the first search of work control starts on the secant through the
-        last two load-control states (False: from the last state, along its tangent). That
-        secant spans the joint events of the load step before the failure.
 
     Pseudo-transient step (where Newton stops at a fold of the path)
     ----------------------------------------------------------------
@@ -226,8 +218,6 @@ class StaticSettings(LoadPathSettings):
     flat_slope: float = finite(1e-3)
     resume_step: float = positive(0.5)
     fold_match: float = finite(1e-3)
-    regrow_to_first: bool = False
-    hand_over_secant: bool = True
     transient_steps: int = count(100, least=0)
     transient_after: int = count(2, least=0)
     transient_rise: float = positive(0.005)

@@ -38,22 +38,17 @@ STRAIGHT = 0.5
 class StepController:
     """The step length of a path follower: ``growth`` times longer after an easy step (at
     most ``easy_iterations`` corrector iterations; None: after every converged step), at most
-    ``cap``; halved after a failure, counting the halvings in a row (``cuts``). A step
-    shorter than ``regrow`` grows after every converged step, up to ``regrow``: the scale
-    the path's steps had before halvings shortened them (0: off)."""
+    ``cap``; halved after a failure, counting the halvings in a row (``cuts``)."""
 
     size: float
     growth: float
     cap: float = math.inf
     easy_iterations: int | None = None
     cuts: int = 0
-    regrow: float = 0.0
 
     def grow(self, iterations: int) -> None:
         if self.easy_iterations is None or iterations <= self.easy_iterations:
             self.size = min(self.size * self.growth, self.cap)
-        elif self.size < self.regrow:
-            self.size = min(self.size * self.growth, self.regrow, self.cap)
 
     def cut(self) -> None:
         self.size /= 2
