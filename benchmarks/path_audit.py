@@ -27,7 +27,7 @@ the ratios of seconds (wall clock and the process's CPU), factorizations and ite
 against the rule before, in one run. Counts are exact whatever the machine's load; the
 seconds are not, so only their ratios within one run compare.
 
-Three probes of the path (issue 21, session 17), each on top of a default run:
+Four probes of the path (issue 21, session 17), each on top of a default run:
 
 * ``--events`` adds to each work search of ``--rows`` the joints whose state the tangent of
   its start state predicts to change within the step (``events``: the law's flags at the
@@ -39,6 +39,9 @@ Three probes of the path (issue 21, session 17), each on top of a default run:
   each for M times the step the path took from there (on the secant through that state and
   the one before, as work control starts): converged or not, iterations, factorizations. How
   far Newton's basin reaches along the path, against the step the rule chose.
+* ``--transients`` prints, for each pseudo-transient step, whether it came to rest, its
+  time steps, the longest run of them over which its residual did not halve (what
+  ``transient_window`` bounds) and its largest residual over the start's.
 * ``--hand-over`` stops at the state where load control hands over to work control and
   tries from it the first work step and its halvings, from the three starts a search can
   take (the secant through the last two load steps, the state itself, the state moved along
@@ -90,12 +93,35 @@ def predicted_events(solver, dw: float, pieces: int = 16) -> tuple[int, int, flo
     return int((before != start).sum()), crossed, first
 
 
-def audit(model, settings, monitor=None, part=None, events=False, keep=False) -> dict:
+def halving_stretch(residuals: list[float]) -> tuple[int, float]:
+    """Of the residuals a pseudo-transient step evaluated (its start first; a time step whose
+    residual is ten times the last accepted one is refused and retried shorter, so it is
+    left out): the longest run of accepted time steps over which the best residual so far
+    did not halve (what ``transient_window`` bounds), and the largest accepted residual over
+    the start's."""
+    accepted = [residuals[0]]
+    for r in residuals[1:]:
+        if r < 10.0 * accepted[-1]:
+            accepted.append(r)
+    best = np.minimum.accumulate(np.asarray(accepted))
+    longest, anchor = 0, 0
+    for i in range(len(best)):
+        while best[i] <= 0.5 * best[anchor]:
+            anchor += 1
+        longest = max(longest, i - anchor)
+    return longest, max(accepted) / accepted[0] if accepted[0] > 0 else math.inf
+
+
+def audit(
+    model, settings, monitor=None, part=None, events=False, keep=False, transients=False
+) -> dict:
     """Run the pushover and return its rows and totals, and per recorded step the joints whose
     damage state changed since the step before (``changed``; of them in ``part``, a boolean
     mask of the joints, ``in_part``). ``events``: each work row also gets
     :func:`predicted_events` of its step. ``keep``: the solver and its converged states
-    (``snapshots[k]``: the state of step k, to resume from) are returned too."""
+    (``snapshots[k]``: the state of step k, to resume from) are returned too.
+    ``transients``: each pseudo-transient row also gets :func:`halving_stretch` of its
+    residuals (``stretch``, ``rise``)."""
     from masonry_dem.solvers.static import StaticSolver
 
     solver = StaticSolver(model, settings)
@@ -122,12 +148,24 @@ def audit(model, settings, monitor=None, part=None, events=False, keep=False) ->
             predicted = None
             if events and depth[0] == 0 and kwargs.get("control") is not None:
                 predicted = predicted_events(solver, float(kwargs["control"][2]))
+            residuals: list[float] = []
+            patched = transients and depth[0] == 0 and name == "pseudo_transient"
+            if patched:
+
+                def residual(q, lam, dead_factor=1.0):
+                    r = type(solver).residual(solver, q, lam, dead_factor)
+                    residuals.append(float(r[1]))
+                    return r
+
+                solver.residual = residual
             depth[0] += 1
             f0, i0, t0 = solver.factorizations, solver.iterations, time.perf_counter()
             try:
                 out = inner(*args, **kwargs)
             finally:
                 depth[0] -= 1
+                if patched:
+                    del solver.residual  # the class's own again
             if depth[0] == 0:
                 kind = name
                 asked = float(args[0]) if args else float("nan")
@@ -158,6 +196,10 @@ def audit(model, settings, monitor=None, part=None, events=False, keep=False) ->
                 )
                 if predicted is not None:
                     rows[-1].update(zip(("events", "crossed", "next"), predicted, strict=True))
+                if residuals:
+                    rows[-1].update(
+                        zip(("stretch", "rise"), halving_stretch(residuals), strict=True)
+                    )
             return out
 
         setattr(solver, name, call)
@@ -337,6 +379,9 @@ def main() -> int:
     p.add_argument("--events", action="store_true", help="with --rows: predicted joint events")
     p.add_argument("--reach", type=float, nargs="+", default=[], metavar="M")
     p.add_argument("--hand-over", action="store_true", help="the first work steps, three starts")
+    p.add_argument(
+        "--transients", action="store_true", help="each pseudo-transient step's residual"
+    )
     p.add_argument("--json", default=None)
     a = p.parse_args()
 
@@ -374,7 +419,7 @@ def main() -> int:
         if a.hand_over:
             print(f"{label}:")
             hand_over(model, settings)
-        r = audit(model, settings, monitor, parts.get(label), a.events, keep=bool(a.reach))
+        r = audit(model, settings, monitor, parts.get(label), a.events, bool(a.reach), a.transients)
         if other:
             b = audit(model, replace(settings, **other), monitor)
             for _ in range(a.repeat - 1):  # in turn, so both see the same machine
@@ -403,6 +448,15 @@ def main() -> int:
                 f"iterations {r['iterations'] / b['iterations']:.2f}x, "
                 f"lambda {r['lambda'] / b['lambda'] - 1:+.3%}"
             )
+        if a.transients:
+            for row in r["rows"]:
+                if "stretch" in row:
+                    print(
+                        f"  pseudo-transient to {row['asked']:.6g}: "
+                        f"{'rest' if row['ok'] else row['why']} after "
+                        f"{row['iterations']} time steps; longest run without halving the "
+                        f"residual {row['stretch']}, largest residual {row['rise']:.3g}x the start's"
+                    )
         if a.reach:
             reach(r, a.reach)
             for key in ("solver", "hist", "snapshots"):
