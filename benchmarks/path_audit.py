@@ -14,7 +14,9 @@ factorizations by controller and by converged/failed; what no search took (the e
 range, the certificate, the tangents the stop check asks for) is ``other``.
 
 ``--scale N`` is ``bench_scale.scale_wall(N)`` (30: 909 blocks, 100: 10 017); ``--case`` a
-validation case (its own settings and monitor). ``--u-wall SIZE`` and ``--flat-wall SIZE``
+validation case (its own settings and monitor); ``--return-blocks B`` (repeatable) builds
+those cases with their return walls as blocks, B blocks long (``--cases``: the seven
+Restrepo Velez specimens that have them), named ``S11/2`` etc. ``--u-wall SIZE`` and ``--flat-wall SIZE``
 are the U wall (returns as blocks, base fixed) and the flat wall of the same block count
 (end columns held) of ``bench_walls_that_meet`` (``SIZE``: S5 or big), both tilted, with
 the default settings, as that benchmark pushes them. ``--states`` prints, per recorded step,
@@ -368,6 +370,14 @@ def main() -> int:
     p.add_argument("--scale", type=int, action="append", default=[], help="scale_wall(N)")
     p.add_argument("--case", action="append", default=[], help="a validation case")
     p.add_argument("--cases", action="store_true", help="all 18 validation cases")
+    p.add_argument(
+        "--return-blocks",
+        type=int,
+        action="append",
+        default=[],
+        metavar="B",
+        help="the cases with return walls of B blocks (with --cases: the 7 of Table 2)",
+    )
     p.add_argument("--u-wall", action="append", default=[], metavar="SIZE", help="S5 or big")
     p.add_argument("--flat-wall", action="append", default=[], metavar="SIZE", help="S5 or big")
     p.add_argument("--brief", action="store_true", help="one line a wall, and the totals")
@@ -390,7 +400,7 @@ def main() -> int:
     from bench_walls_that_meet import SIZES, build
     from bench_walls_that_meet import walls as meeting_walls
 
-    from masonry_dem.cases.paper import build_case, case_names
+    from masonry_dem.cases.paper import RETURN_WALL_CASES, build_case, case_names
     from masonry_dem.solvers.static import StaticSettings
 
     changes = parse_settings(a.set)
@@ -410,9 +420,15 @@ def main() -> int:
                 parts[walls[-1][0]] = (
                     behind[model.interfaces.block_i] | behind[model.interfaces.block_j]
                 )
-    for name in case_names() if a.cases else a.case:
-        case = build_case(name)
-        walls.append((name, case.model, case.settings, case.monitor))
+    for blocks in a.return_blocks or [None]:
+        names = (RETURN_WALL_CASES if blocks else case_names()) if a.cases else a.case
+        for name in names:
+            if blocks is None:
+                case = build_case(name)
+            else:
+                case = build_case(name, restraint="return-walls", return_blocks=blocks)
+            label = name if blocks is None else f"{name}/{blocks}"
+            walls.append((label, case.model, case.settings, case.monitor))
     results = {}
     for label, model, settings, monitor in walls:
         settings = replace(settings, **changes) if changes else settings

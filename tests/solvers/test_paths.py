@@ -124,8 +124,7 @@ def test_pseudo_transient_gives_up_when_its_shortest_time_step_fails(monkeypatch
 def test_pseudo_transient_gives_up_after_its_window_without_a_halving(monkeypatch):
     """A pseudo-transient step whose residual takes every time step (none raises it
     tenfold) but never halves gives up after ``transient_window`` accepted steps, one
-    factorization each: 25 at the default window (the longest run without a halving of
-    the pseudo-transient steps measured that came to rest: 24)."""
+    factorization each."""
     blocks, base = add_base(single_block(0.2, 0.25, 0.1, 20e3))
     solver = StaticSolver(_tilt(blocks, base), StaticSettings(elastic_first_step=False))
     solver.run()
@@ -137,7 +136,6 @@ def test_pseudo_transient_gives_up_after_its_window_without_a_halving(monkeypatc
 
     monkeypatch.setattr(solver, "residual", steady)
     window = solver.settings.transient_window
-    assert window == 25
     before = solver.factorizations
     out = solver.pseudo_transient(0.1)
     assert not out.ok

@@ -131,8 +131,6 @@ class StaticSettings(LoadPathSettings):
         ``transient_start`` (the tangent's floor, in units of the elastic stiffness), divided
         by ``transient_shrink`` beyond the residual ratio after a step that lowers the
         residual; it gives up when the residual has not halved in ``transient_window`` steps.
-        25: just longer than any run without a halving of the pseudo-transient steps
-        measured that came to rest (24), so one that finds no rest stops sooner.
 
     Other strategies (off by default, or checks)
     --------------------------------------------
@@ -226,7 +224,7 @@ class StaticSettings(LoadPathSettings):
     transient_reach: float = at_least(0.1, 0.0, " (0: off)")
     transient_start: float = positive(1e-3)
     transient_shrink: float = positive(0.25)
-    transient_window: int = count(25, least=1)
+    transient_window: int = count(30, least=1)
     robust_iterations: int = count(0, least=0)
     zero_load_robust_iterations: int = count(2000, least=0)
     anderson: int = count(5, least=1)
