@@ -30,7 +30,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from bench_validation import _parse_settings  # noqa: E402
+from bench_validation import parse_settings  # noqa: E402
 
 from masonry_dem import set_thread_wait_policy  # noqa: E402
 from masonry_dem.cases.paper import build_case, case_names  # noqa: E402
@@ -95,8 +95,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--scale-only", action="store_true", help="no validation case")
     p.add_argument("--breakdown", action="store_true")
     args = p.parse_args(argv)
-    base = _parse_settings(args.settings)
-    columns = [base] + ([{**base, **_parse_settings(args.against)}] if args.against else [])
+    base = parse_settings(args.settings)
+    columns = [base] + ([{**base, **parse_settings(args.against)}] if args.against else [])
     if args.breakdown:
         _counted("equilibrate")
         _counted("pseudo_transient")

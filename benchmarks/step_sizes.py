@@ -26,7 +26,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
-from bench_validation import _parse_settings  # noqa: E402
+from bench_validation import parse_settings  # noqa: E402
 
 from masonry_dem import set_thread_wait_policy  # noqa: E402
 from masonry_dem.cases.paper import build_case  # noqa: E402
@@ -98,8 +98,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--check", action="store_true", help="relax the peak state at 0.99, 1.01")
     p.add_argument("--check-time-steps", type=int, default=20000)
     args = p.parse_args(argv)
-    base = _parse_settings(args.settings)
-    columns = [base] + ([{**base, **_parse_settings(args.against)}] if args.against else [])
+    base = parse_settings(args.settings)
+    columns = [base] + ([{**base, **parse_settings(args.against)}] if args.against else [])
     warm_up()
     names = list(args.cases) + (list(WALLS) if args.walls else [])
     names = names or ["S23"]

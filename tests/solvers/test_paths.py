@@ -121,6 +121,29 @@ def test_pseudo_transient_gives_up_when_its_shortest_time_step_fails(monkeypatch
     assert np.array_equal(out.q, start)
 
 
+def test_pseudo_transient_gives_up_after_its_window_without_a_halving(monkeypatch):
+    """A pseudo-transient step whose residual takes every time step (none raises it
+    tenfold) but never halves gives up after ``transient_window`` accepted steps, one
+    factorization each."""
+    blocks, base = add_base(single_block(0.2, 0.25, 0.1, 20e3))
+    solver = StaticSolver(_tilt(blocks, base), StaticSettings(elastic_first_step=False))
+    solver.run()
+    original = solver.residual
+
+    def steady(q, lam, dead_factor=1.0):
+        r, _, response = original(q, lam, dead_factor)
+        return r, 1e-3, response  # accepted at every step, never halved
+
+    monkeypatch.setattr(solver, "residual", steady)
+    window = solver.settings.transient_window
+    before = solver.factorizations
+    out = solver.pseudo_transient(0.1)
+    assert not out.ok
+    assert out.failure is Failure.NO_REST
+    assert f"has not halved in {window} pseudo time steps" in out.reason
+    assert solver.factorizations - before == window
+
+
 def test_work_control_finds_the_same_peak_from_a_secant_start():
     """The secant start changes where each search of work control begins, not the path's
     equilibria: the same peak within the bracket tolerance, on a panel whose path folds."""
