@@ -524,10 +524,17 @@ def _validate(
         return None
 
 
-def check_case(data: Any, source: str, builders: Mapping[str, Any], settings_type: type) -> None:
+def check_case(
+    data: Any,
+    source: str,
+    builders: Mapping[str, Any],
+    settings_type: type,
+    warn: bool = True,
+) -> None:
     """Raise :class:`CaseError` for the first fault of ``data`` (a parsed case file) against
     the schema, naming ``source`` and the table path; log a warning for values allowed but
-    unusual (friction above 2)."""
+    unusual (friction above 2) when ``warn`` (a check ahead of the load that repeats it
+    passes False, so the warning is logged once)."""
     errors: list[str] = []
     top = _validate(TOP, data, (), source, errors)
     if top is not None:
@@ -564,7 +571,7 @@ def check_case(data: Any, source: str, builders: Mapping[str, Any], settings_typ
                 for key, table in (("control", CONTROL), ("monitor", MONITOR)):
                     if data["analysis"].get(key) is not None:
                         _validate(table, data["analysis"][key], ("analysis", key), source, errors)
-        if material is not None:
+        if material is not None and warn:
             _warn_above(data["material"], "[material]", source)
     if errors:
         more = f" (and {len(errors) - 1} more)" if len(errors) > 1 else ""

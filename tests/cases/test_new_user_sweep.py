@@ -1,0 +1,130 @@
+"""What a new user tried (docs/new_user_sweep.md): closed forms through case files on the
+builders nobody tuned for, and inputs whose errors named no field or the wrong table.
+
+Each error case ends the command line with exit code 2 and one line naming the file, the
+table path and the value (never a traceback), and raises a ValueError (CaseError) from Python.
+"""
+
+from __future__ import annotations
+
+import copy
+
+import pytest
+
+from helpers.case_files import write_case
+from masonry_dem.cases.casefile import case_from_dict
+from masonry_dem.cases.schema import CaseError
+from masonry_dem.cli import main
+from masonry_dem.export.run_case import run_case
+from masonry_dem.geometry.blocks import Blocks
+
+A, B, S = 0.2, 0.21, 0.07  # s / a = 0.35, below mu = 0.7: the blocks tilt before they slide
+
+WALL = {
+    "name": "wall",
+    "geometry": {
+        "builder": "running_bond_wall",
+        "blocks_along_length": 2,
+        "courses": 3,
+        "block_height": 0.081,
+        "block_length": 0.21,
+        "thickness": 0.07,
+        "unit_weight": 20e3,
+        "base": True,
+    },
+    "material": {"kn": 1e9, "kt": 0.4e9, "friction": 0.7},
+    "supports": [{"select": "base"}],
+    "loads": [{"type": "self_weight"}, {"type": "weight_proportional", "direction": [0, 0, 1]}],
+}
+
+
+def _one_line_error(tmp_path, capsys, data: dict) -> str:
+    case = write_case(tmp_path, data)
+    code = main(["run", str(case), "--out", str(tmp_path / "out"), "--no-render", "--quiet"])
+    err = [line for line in capsys.readouterr().err.splitlines() if line.strip()]
+    assert code == 2, err
+    assert len(err) == 1, err
+    assert str(case) in err[0], err[0]
+    return err[0]
+
+
+@pytest.mark.parametrize("key", ["courses", "blocks_along_length"])
+def test_a_negative_count_is_named_by_the_schema_not_by_the_memory_estimate(key, tmp_path, capsys):
+    """The memory estimate counted the blocks of ``courses = -1`` before the schema saw it and
+    failed with "blocks must be >= 0, got -2", naming neither the file nor the key."""
+    data = copy.deepcopy(WALL)
+    data["geometry"][key] = -1
+    line = _one_line_error(tmp_path, capsys, data)
+    assert f"[geometry].{key} = -1" in line
+    assert "from 1 to 10000" in line
+
+
+def test_a_limit_option_without_the_limit_method_names_the_file_and_the_key(tmp_path, capsys):
+    data = copy.deepcopy(WALL)
+    data["analysis"] = {"grid": 8}
+    line = _one_line_error(tmp_path, capsys, data)
+    assert "[analysis].grid = 8" in line
+    assert 'method = "limit"' in line
+
+
+def test_overlapping_blocks_are_a_fault_of_the_geometry(tmp_path, capsys):
+    """Two boxes sharing a volume were reported under ``[supports]``."""
+    data = copy.deepcopy(WALL)
+    data["geometry"] = {
+        "builder": "boxes",
+        "lower": [[0, 0, 0], [0.1, 0, 0]],
+        "upper": [[0.2, 0.1, 0.1], [0.3, 0.1, 0.1]],
+        "unit_weight": 20e3,
+        "base": True,
+    }
+    line = _one_line_error(tmp_path, capsys, data)
+    assert ": [geometry]: blocks overlap: block 0" in line
+    with pytest.raises(CaseError, match=r"\[geometry\]: blocks overlap"):
+        case_from_dict(data, "boxes.toml")
+
+
+def test_a_box_with_its_corners_swapped_names_the_corners():
+    """``upper`` below ``lower`` was named as "sizes must be positive", a name the user
+    never wrote."""
+    with pytest.raises(ValueError, match=r"upper\[1\] must lie above lower\[1\] along e1"):
+        Blocks.from_boxes([[0, 0, 0], [0, 0.1, 0]], [[0.2, 0.1, 0.1], [-0.2, 0.2, 0.1]], 20e3)
+    with pytest.raises(ValueError, match=r"along e2"):
+        Blocks.from_boxes([[0, 0, 0]], [[0.2, 0.0, 0.1]], 20e3)
+
+
+@pytest.mark.parametrize(
+    ("builder", "extra"),
+    [
+        ("l_wall", {"return_blocks": 2}),
+        ("u_wall", {"return_blocks": 2}),
+        ("t_wall", {"return_blocks": 2}),
+        ("box_wall", {}),
+    ],
+)
+@pytest.mark.parametrize("direction", [[0, 0, 1], [1, 0, 0]])
+def test_one_course_of_any_plan_tilts_at_s_over_a(builder, extra, direction, tmp_path):
+    """One course on a base, dry joints: no joint above the base carries a normal force, so
+    friction ties no block to its neighbours and each block overturns alone about its base
+    edge at lambda = (half its width along the load) / (half its height). The narrowest
+    width along e3 is the facade's thickness s and along e1 a return wall's (or the cross
+    wall's, or a box side's) thickness s: lambda = s / a = 0.35 both ways, below mu = 0.7.
+    Run as ``masonry-dem run`` runs a case file, with the certificate and its bound."""
+    data = copy.deepcopy(WALL)
+    data["geometry"] = {
+        "builder": builder,
+        "blocks_along_length": 4,
+        "courses": 1,
+        "block_height": A,
+        "block_length": B,
+        "thickness": S,
+        "unit_weight": 20e3,
+        "base": True,
+        **extra,
+    }
+    data["loads"][1]["direction"] = direction
+    summary = run_case(case_from_dict(data, f"{builder}.toml"), tmp_path / "out", render=False)
+    assert summary["status"] == "collapse", summary["reason"]
+    assert summary["lambda"] == pytest.approx(S / A, rel=1e-6)
+    assert summary["certificate"]["holds"]
+    # the associative bound is above the DEM's multiplier, never below it
+    assert summary["limit_analysis_bound"] >= S / A * (1 - 1e-6)
