@@ -17,6 +17,9 @@ from masonry_dem.cases.schema import CaseError
 from masonry_dem.cli import main
 from masonry_dem.export.run_case import run_case
 from masonry_dem.geometry.blocks import Blocks
+from masonry_dem.geometry.builders import single_block
+from masonry_dem.geometry.interfaces import detect_interfaces
+from masonry_dem.model import InterfaceMaterial
 
 A, B, S = 0.2, 0.21, 0.07  # s / a = 0.35, below mu = 0.7: the blocks tilt before they slide
 
@@ -128,3 +131,18 @@ def test_one_course_of_any_plan_tilts_at_s_over_a(builder, extra, direction, tmp
     assert summary["certificate"]["holds"]
     # the associative bound is above the DEM's multiplier, never below it
     assert summary["limit_analysis_bound"] >= S / A * (1 - 1e-6)
+
+
+def test_numbers_written_as_text_are_refused_by_name_in_python():
+    """``InterfaceMaterial(kn="1e9")`` was accepted (numpy reads the text as a number) and kept
+    the text, which failed in the first analysis with numpy's "ufunc 'isnan' not supported"."""
+    with pytest.raises(ValueError, match=r'^kn must be a number, got the text "1e9"'):
+        InterfaceMaterial(kn="1e9", kt=1e9, friction=0.7)  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match=r"^block_height must be a number, got the text"):
+        single_block("0.4", 0.2, 0.1, 20e3)  # type: ignore[arg-type]
+
+
+def test_a_negative_contact_tolerance_is_named():
+    """It failed inside numpy: "repeats may not contain negative values"."""
+    with pytest.raises(ValueError, match=r"^tol must be non-negative, got -1"):
+        detect_interfaces(single_block(0.4, 0.2, 0.1, 20e3), tol=-1.0)
