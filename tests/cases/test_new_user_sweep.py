@@ -9,10 +9,11 @@ from __future__ import annotations
 
 import copy
 
+import numpy as np
 import pytest
 
 from helpers.case_files import write_case
-from masonry_dem.cases.casefile import case_from_dict
+from masonry_dem.cases.casefile import build_blocks, case_from_dict
 from masonry_dem.cases.schema import CaseError
 from masonry_dem.cli import main
 from masonry_dem.export.run_case import run_case
@@ -22,6 +23,7 @@ from masonry_dem.geometry.interfaces import detect_interfaces
 from masonry_dem.model import InterfaceMaterial
 
 A, B, S = 0.2, 0.21, 0.07  # s / a = 0.35, below mu = 0.7: the blocks tilt before they slide
+S_WALL = 0.07  # the thickness of WALL
 
 WALL = {
     "name": "wall",
@@ -146,3 +148,59 @@ def test_a_negative_contact_tolerance_is_named():
     """It failed inside numpy: "repeats may not contain negative values"."""
     with pytest.raises(ValueError, match=r"^tol must be non-negative, got -1"):
         detect_interfaces(single_block(0.4, 0.2, 0.1, 20e3), tol=-1.0)
+
+
+def _window_wall(lintels: bool | None, top: float = 0.567) -> dict:
+    """A 6 x 10 dry wall with a window two blocks wide over courses 3 to 6."""
+    data = copy.deepcopy(WALL)
+    data["geometry"].update(blocks_along_length=6, courses=10, openings=[[0.42, 0.243, 0.84, top]])
+    if lintels is not None:
+        data["geometry"]["lintels"] = lintels
+    return data
+
+
+def test_a_window_without_lintels_names_the_block_that_hangs(caplog):
+    """Course 7 over the window has a block (x 0.525 to 0.735) with nothing under it: on dry
+    joints it hangs on head joints that carry no normal force, and the pushover fails under
+    the dead load (``no equilibrium under the dead load``); the builder now says why."""
+    with caplog.at_level("WARNING", logger="masonry_dem.geometry.builders"):
+        build_blocks(_window_wall(None)["geometry"])
+    assert "openings leave 1 block(s) with nothing under them" in caplog.text
+    assert "[0.63, 0.6075, 0.035]" in caplog.text
+    assert "lintels = true" in caplog.text
+
+
+def test_a_window_with_lintels_tilts_at_the_closed_form(tmp_path, caplog):
+    """With ``lintels = true`` (straight jambs, a lintel over the window: how the paper's
+    specimens S23 and S34 are built) the free-standing wall stands and overturns out of
+    plane about a bed joint. For a rigid rotation of everything above the bed joint at
+    height z about its front edge, virtual work gives lambda(z) = (s / 2) / (y_G(z) - z),
+    y_G(z) the centroid height of the blocks above it; the wall's multiplier is the least
+    over its bed joints. Here the least is at the base and equals s / H = 0.07 / 0.81, as
+    without the window: the window's courses 3 to 6 are centred at mid-height, so taking
+    them out leaves y_G at H / 2."""
+    data = _window_wall(True)
+    with caplog.at_level("WARNING", logger="masonry_dem.geometry.builders"):
+        blocks, _, wall = build_blocks(data["geometry"])
+    assert "nothing under them" not in caplog.text
+    volume, yc = blocks.volumes[wall], blocks.centres[wall, 1]
+    beds = np.unique(blocks.lower[wall, 1])
+    closed = min(
+        S_WALL / 2 / (np.sum(volume[yc > z] * yc[yc > z]) / np.sum(volume[yc > z]) - z)
+        for z in beds
+    )
+    assert closed == pytest.approx(S_WALL / 0.81, rel=1e-12)
+    summary = run_case(case_from_dict(data, "window.toml"), tmp_path / "out", render=False)
+    assert summary["status"] == "collapse", summary["reason"]
+    assert summary["lambda"] == pytest.approx(closed, rel=1e-6)
+    assert summary["certificate"]["holds"]
+
+
+def test_lintels_need_openings_whose_top_is_a_bed_joint(tmp_path, capsys):
+    line = _one_line_error(tmp_path, capsys, _window_wall(True, top=0.6))
+    assert "[geometry]: openings[0]: a lintel sits on a bed joint, but y_max = 0.6" in line
+    assert "the nearest are y = 0.567 and 0.648" in line
+    data = copy.deepcopy(WALL)
+    data["geometry"]["lintels"] = True
+    with pytest.raises(CaseError, match=r"lintels = true builds lintels over the openings"):
+        case_from_dict(data, "wall.toml")

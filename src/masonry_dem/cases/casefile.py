@@ -53,7 +53,7 @@ _BUILDERS = {
     "u_wall": plans.u_wall,
     "box_wall": plans.box_wall,
 }
-_GEOMETRY_EXTRA = {"builder", "base", "openings"}
+_GEOMETRY_EXTRA = {"builder", "base", "openings", "lintels"}
 
 
 @dataclass(frozen=True)
@@ -103,7 +103,11 @@ def build_blocks(
     except TypeError as exc:
         raise ValueError(f"case file [geometry] for builder {builder!r}: {exc}") from exc
     if geometry.get("openings"):
-        blocks = builders.cut_openings(blocks, geometry["openings"])
+        blocks = builders.cut_openings(
+            blocks, geometry["openings"], lintels=geometry.get("lintels", False)
+        )
+    elif geometry.get("lintels", False):
+        raise ValueError("lintels = true builds lintels over the openings, but none are given")
     wall = np.ones(blocks.count, dtype=bool)
     base = None
     if geometry.get("base", False):

@@ -434,6 +434,7 @@ def _geometry_table(builder: str, func: Callable) -> type[BaseModel]:
         "builder": str,
         "base": (bool, False),
         "openings": (list[_OPENING] | None, None),
+        "lintels": (bool, False),
     }
     for name, p in inspect.signature(func).parameters.items():
         kind = _by_annotation(name, p.annotation)
