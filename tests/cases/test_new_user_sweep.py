@@ -17,10 +17,18 @@ from masonry_dem.cases.casefile import build_blocks, case_from_dict
 from masonry_dem.cases.schema import CaseError
 from masonry_dem.cli import main
 from masonry_dem.export.run_case import run_case
+from masonry_dem.export.writer import warn_large_closure
 from masonry_dem.geometry.blocks import Blocks
-from masonry_dem.geometry.builders import single_block
+from masonry_dem.geometry.builders import add_base, single_block, stack_bond_column
 from masonry_dem.geometry.interfaces import detect_interfaces
-from masonry_dem.model import InterfaceMaterial
+from masonry_dem.model import (
+    InterfaceMaterial,
+    Model,
+    SelfWeight,
+    Support,
+    WeightProportional,
+)
+from masonry_dem.solvers.incremental import StaticSettings, pushover
 
 A, B, S = 0.2, 0.21, 0.07  # s / a = 0.35, below mu = 0.7: the blocks tilt before they slide
 S_WALL = 0.07  # the thickness of WALL
@@ -204,3 +212,25 @@ def test_lintels_need_openings_whose_top_is_a_bed_joint(tmp_path, capsys):
     data["geometry"]["lintels"] = True
     with pytest.raises(CaseError, match=r"lintels = true builds lintels over the openings"):
         case_from_dict(data, "wall.toml")
+
+
+@pytest.mark.parametrize(("kn", "warned"), [(2e6, True), (1e9, False)])
+def test_a_wall_too_tall_for_its_kn_is_named_at_the_dead_load(kn, warned, tmp_path, caplog):
+    """A 10 m column of 40 blocks 0.25 high on a base: under its own weight the base joint
+    carries the whole column, a mean closure of gamma H / kn = 20e3 x 10 / kn, 0.1 m or 40 %
+    of the 0.25 m blocks at kn = 2e6 (the run then ends ``failed`` 0.5 % short of t/H with a
+    reason about the tangent; at kn = 1e7 and above it collapses at t/H = 0.03). The writer
+    now says so at the first step; at kn = 1e9 (a share of 8e-4) it says nothing."""
+    column = stack_bond_column(40, 0.25, 0.5, 0.3, 20e3)
+    blocks, base = add_base(column)
+    model = Model.build(
+        blocks,
+        InterfaceMaterial(kn=kn, kt=0.4 * kn, friction=0.7),
+        [Support([base])],
+        [SelfWeight(), WeightProportional((0, 0, 1))],
+    )
+    with caplog.at_level("WARNING", logger="masonry_dem.export.writer"):
+        pushover(model, StaticSettings(max_steps=3), out=tmp_path / "out")
+    assert ("outside small displacements" in caplog.text) is warned
+    first = pushover(model, StaticSettings(max_steps=1)).steps[0]
+    assert warn_large_closure(model, first) == pytest.approx(20e3 * 10 / kn / 0.25, rel=1e-6)
