@@ -234,3 +234,38 @@ def test_a_wall_too_tall_for_its_kn_is_named_at_the_dead_load(kn, warned, tmp_pa
     assert ("outside small displacements" in caplog.text) is warned
     first = pushover(model, StaticSettings(max_steps=1)).steps[0]
     assert warn_large_closure(model, first) == pytest.approx(20e3 * 10 / kn / 0.25, rel=1e-6)
+
+
+def _live(load: dict) -> dict:
+    data = copy.deepcopy(WALL)
+    data["loads"][1] = load
+    return data
+
+
+@pytest.mark.parametrize(
+    ("data", "said"),
+    [
+        (_live({"type": "pressure", "value": 0.0}), "is zero on every block"),
+        (
+            _live({"type": "point", "select": "course:-1", "force": [0, 0, 0], "live": True}),
+            "is zero",
+        ),
+        (_live({"type": "pressure", "value": 100.0, "select": "base"}), "only on held DOFs"),
+        ({**WALL, "geometry": {**WALL["geometry"], "unit_weight": 0.0}}, "is zero"),
+        ({**WALL, "supports": [{"select": "base"}, {"select": "all"}]}, "only on held DOFs"),
+    ],
+    ids=["pressure 0", "force 0", "pressure on the base", "weightless", "every block held"],
+)
+def test_a_live_load_that_pushes_nothing_is_named(data, said, caplog):
+    """Each ran to ``completed`` at lambda = 0 ("no live load: the dead-load state is the
+    answer"), exit code 0, without a word about the load the user did give."""
+    with caplog.at_level("WARNING", logger="masonry_dem.model"):
+        case_from_dict(copy.deepcopy(data), "idle.toml")
+    assert "loads[1]" in caplog.text and said in caplog.text
+    assert "nothing pushes the wall" in caplog.text
+
+
+def test_a_live_load_that_pushes_is_not_named(caplog):
+    with caplog.at_level("WARNING", logger="masonry_dem.model"):
+        case_from_dict(copy.deepcopy(WALL), "wall.toml")
+    assert "nothing pushes" not in caplog.text
