@@ -149,8 +149,10 @@ class ResultsWriter:
     def __exit__(self, exc_type, exc, tb) -> None:
         if exc is None:
             try:
-                self.close()  # a write that failed after the solver's last step
-            except OSError as err:
+                # the background writes may lag the solver by hundreds of steps: a write that
+                # fails, or a Ctrl-C while they finish, comes after the solver's last step
+                self.close()
+            except BaseException as err:  # else summary.json would say running for ever
                 self.abort(err)
                 raise
             return
