@@ -45,6 +45,8 @@ def require_positive(name: str, arr: NDArray[np.float64], strict: bool = True) -
 def positive_scalar(name: str, value: Any, strict: bool = True) -> float:
     if isinstance(value, (bool, np.bool_)):  # True would be read as 1.0
         raise ValueError(f"{name} must be a number, got the boolean {plain(value)}")
+    if isinstance(value, (str, bytes)):  # numpy reads "1e9" as 1e9, but the caller keeps text
+        raise ValueError(f"{name} must be a number, got the text {plain(value)}")
     arr = as_finite_array(name, value)
     if arr.ndim != 0:
         raise ValueError(f"{name} must be a scalar, got shape {arr.shape}")

@@ -83,6 +83,29 @@ class InterfaceMaterial:
             check_choice(name, getattr(self, name), allowed)
 
 
+def _warn_idle_load(k: int, load: Load, vector: FloatArray, fixed: BoolArray) -> None:
+    """Name a live load that pushes nothing: zero everywhere (weightless blocks, a pressure
+    or force of 0) or only on held DOFs (a pressure on the base). The pushover then ends
+    ``completed`` at lambda = 0 ("no live load"), which reads as an answer."""
+    if not load.live:
+        return
+    what = f"loads[{k}] ({type(load).__name__}, live)"
+    if not vector.any():
+        log.warning(
+            "%s is zero on every block (weightless blocks, a pressure or force of 0): "
+            "nothing pushes the wall and the pushover stops at lambda = 0",
+            what,
+        )
+    elif not vector[~fixed].any():
+        held = np.flatnonzero(vector.any(axis=1))
+        log.warning(
+            "%s acts only on held DOFs (blocks %s): nothing pushes the wall and the "
+            "pushover stops at lambda = 0",
+            what,
+            ", ".join(map(str, held[:5])) + (" ..." if held.size > 5 else ""),
+        )
+
+
 #: the interface law's options of :class:`InterfaceMaterial` and their allowed values
 LAW_OPTIONS: dict[str, tuple[str, ...]] = {
     "tension": get_args(Tension),
@@ -340,8 +363,10 @@ class Model:
 
         dead = np.zeros((n, 6))
         live = np.zeros((n, 6))
-        for load in loads:
-            (live if load.live else dead)[...] += load.vector(blocks)
+        for k, load in enumerate(loads):
+            vector = load.vector(blocks)
+            (live if load.live else dead)[...] += vector
+            _warn_idle_load(k, load, vector, fixed)
         kn, kt, friction, tensile, alpha = props.T.copy()
         model = cls(
             blocks,

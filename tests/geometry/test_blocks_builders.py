@@ -179,7 +179,7 @@ def test_blocks_reject_non_positive_sizes_and_nan_by_name():
         Blocks([[0, 0, 0]], [[1, 1, 1], [1, 1, 1]], 1.0)
     with pytest.raises(ValueError, match="at least one block"):
         Blocks(np.zeros((0, 3)), np.zeros((0, 3)), 1.0)
-    with pytest.raises(ValueError, match=r"^sizes must be positive"):
+    with pytest.raises(ValueError, match=r"^upper\[0\] must lie above lower\[0\] along e2"):
         boxes([[0, 0, 0]], [[1, 0, 1]], 1.0)  # flat box: upper == lower along e2
     with pytest.raises(ValueError, match=r"^block_height must be positive"):
         stack_bond_column(2, 0.0, B, S, GAMMA)

@@ -25,6 +25,7 @@ from masonry_dem.cases.schema import CaseError, check_case, located
 from masonry_dem.geometry import builders, plans
 from masonry_dem.geometry import selectors as sel
 from masonry_dem.geometry.blocks import Blocks
+from masonry_dem.geometry.interfaces import detect_interfaces
 from masonry_dem.model import (
     LOAD_TYPES,
     DofName,
@@ -52,7 +53,7 @@ _BUILDERS = {
     "u_wall": plans.u_wall,
     "box_wall": plans.box_wall,
 }
-_GEOMETRY_EXTRA = {"builder", "base", "openings"}
+_GEOMETRY_EXTRA = {"builder", "base", "openings", "lintels"}
 
 
 @dataclass(frozen=True)
@@ -102,7 +103,11 @@ def build_blocks(
     except TypeError as exc:
         raise ValueError(f"case file [geometry] for builder {builder!r}: {exc}") from exc
     if geometry.get("openings"):
-        blocks = builders.cut_openings(blocks, geometry["openings"])
+        blocks = builders.cut_openings(
+            blocks, geometry["openings"], lintels=geometry.get("lintels", False)
+        )
+    elif geometry.get("lintels", False):
+        raise ValueError("lintels = true builds lintels over the openings, but none are given")
     wall = np.ones(blocks.count, dtype=bool)
     base = None
     if geometry.get("base", False):
@@ -184,10 +189,11 @@ def _load(
     return LOAD_TYPES[kind](**args)
 
 
-def check_case_data(data: dict[str, Any], source: str = "<dict>") -> None:
+def check_case_data(data: dict[str, Any], source: str = "<dict>", warn: bool = True) -> None:
     """Check a parsed case file against the schema without building anything: CaseError (a
-    ValueError) naming ``source``, the table path and the value."""
-    check_case(data, source, _BUILDERS, StaticSettings)
+    ValueError) naming ``source``, the table path and the value; ``warn``: log the values
+    allowed but unusual (friction above 2)."""
+    check_case(data, source, _BUILDERS, StaticSettings, warn=warn)
 
 
 def case_from_dict(data: dict[str, Any], source: str = "<dict>") -> Case:
@@ -217,12 +223,23 @@ def case_from_dict(data: dict[str, Any], source: str = "<dict>") -> Case:
         )
     limit_options = {k: analysis.pop(k) for k in LIMIT_OPTIONS if k in analysis}
     if limit_options and method != "limit":
-        raise ValueError(f'case file [analysis] {", ".join(limit_options)} need method = "limit"')
+        key, value = next(iter(limit_options.items()))
+        raise CaseError(
+            f"case file {source}: [analysis].{key} = {plain(value)}: an option of the limit "
+            f'analysis; it needs method = "limit" in [analysis] (method is "{method}")'
+        )
     with _at(source, "[analysis]"):
         settings = StaticSettings(**analysis)
+    with _at(source, "[geometry]"):  # blocks that overlap are the geometry's fault
+        interfaces = detect_interfaces(blocks)
     with _at(source, "[supports]"):  # what Model.build refuses is a mechanism or a support
         model = Model.build(
-            blocks, material, supports, loads, name=str(data.get("name", Path(source).stem))
+            blocks,
+            material,
+            supports,
+            loads,
+            name=str(data.get("name", Path(source).stem)),
+            interfaces=interfaces,
         )
     control = None
     if control_spec is not None:

@@ -26,7 +26,7 @@ from masonry_dem.geometry import selectors as sel
 from masonry_dem.geometry.blocks import Blocks
 from masonry_dem.geometry.builders import (
     add_base,
-    cut_openings,
+    openings_with_lintels,
     running_bond_wall,
     running_bond_wall_of_size,
 )
@@ -257,44 +257,6 @@ def _openings(n: int, a: Assumptions, central_pier: int, pitch: float, course: f
     return [(x_left, y0, x_left + w * pitch, y1), (x_right, y0, x_right + w * pitch, y1)]
 
 
-def _split_at_jambs(wall: Blocks, rects) -> Blocks:
-    """Cut the blocks that straddle a jamb of an opening at the jamb, so the openings have
-    straight jambs of half blocks (as built) instead of blocks balanced on a corner."""
-    lo, hi = wall.lower.copy(), wall.upper.copy()
-    for x0, y0, x1, y1 in rects:
-        yc = (lo[:, 1] + hi[:, 1]) / 2
-        rows = (yc > y0) & (yc < y1)
-        for x in (x0, x1):
-            cut = rows & (lo[:, 0] < x - 1e-9) & (hi[:, 0] > x + 1e-9)
-            left_hi, right_lo = hi[cut].copy(), lo[cut].copy()
-            left_hi[:, 0] = x
-            right_lo[:, 0] = x
-            lo = np.vstack([lo[~cut], lo[cut], right_lo])
-            hi = np.vstack([hi[~cut], left_hi, hi[cut]])
-            rows = np.concatenate([rows[~cut], rows[cut], rows[cut]])
-    return Blocks.from_boxes(lo, hi, wall.unit_weight[0])
-
-
-def _with_lintels(wall: Blocks, rects, course: float) -> Blocks:
-    """A lintel over each opening: the blocks of the course above it that overlap the opening
-    become one block (dry joints cannot span an opening; the specimens had lintels). Where
-    head joints of that course fall on the jambs, the blocks beside them are taken in too, so
-    that a lintel always bears on both piers (one exactly as wide as the opening fell in)."""
-    keep = np.ones(wall.count, dtype=bool)
-    lintels = []
-    for x0, _, x1, y1 in rects:
-        over = (
-            (np.abs(wall.lower[:, 1] - y1) < 1e-6 * course)
-            & (wall.upper[:, 0] > x0 - 1e-9)
-            & (wall.lower[:, 0] < x1 + 1e-9)
-        )
-        lo = np.array([wall.lower[over, 0].min(), y1, wall.lower[over, 2].min()])
-        hi = np.array([wall.upper[over, 0].max(), y1 + course, wall.upper[over, 2].max()])
-        lintels.append(Blocks.from_boxes(lo[None], hi[None], wall.unit_weight[over][0]))
-        keep &= ~over
-    return Blocks.concatenate(wall.subset(np.flatnonzero(keep)), *lintels)
-
-
 def default_return_blocks(data: dict) -> int:
     """The fewest whole blocks at least half the wall's height (see Assumptions)."""
     height = data["courses"] * data["block_height_a"]
@@ -349,7 +311,7 @@ def _restrepo_velez(spec: dict, data: dict, a: Assumptions) -> PaperCase:
         pier = 4 if name == "S23" else 2
         # half-pier offsets of the running bond: cut whole blocks of the even courses
         rects = _openings(n, a, pier, hb, ha)
-        wall = _with_lintels(cut_openings(_split_at_jambs(wall, rects), rects), rects, ha)
+        wall = openings_with_lintels(wall, rects, ha)
         extra["openings"] = rects
     blocks, base = add_base(wall)
     widx = np.arange(wall.count)

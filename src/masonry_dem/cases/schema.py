@@ -434,6 +434,7 @@ def _geometry_table(builder: str, func: Callable) -> type[BaseModel]:
         "builder": str,
         "base": (bool, False),
         "openings": (list[_OPENING] | None, None),
+        "lintels": (bool, False),
     }
     for name, p in inspect.signature(func).parameters.items():
         kind = _by_annotation(name, p.annotation)
@@ -524,10 +525,17 @@ def _validate(
         return None
 
 
-def check_case(data: Any, source: str, builders: Mapping[str, Any], settings_type: type) -> None:
+def check_case(
+    data: Any,
+    source: str,
+    builders: Mapping[str, Any],
+    settings_type: type,
+    warn: bool = True,
+) -> None:
     """Raise :class:`CaseError` for the first fault of ``data`` (a parsed case file) against
     the schema, naming ``source`` and the table path; log a warning for values allowed but
-    unusual (friction above 2)."""
+    unusual (friction above 2) when ``warn`` (a check ahead of the load that repeats it
+    passes False, so the warning is logged once)."""
     errors: list[str] = []
     top = _validate(TOP, data, (), source, errors)
     if top is not None:
@@ -564,7 +572,7 @@ def check_case(data: Any, source: str, builders: Mapping[str, Any], settings_typ
                 for key, table in (("control", CONTROL), ("monitor", MONITOR)):
                     if data["analysis"].get(key) is not None:
                         _validate(table, data["analysis"][key], ("analysis", key), source, errors)
-        if material is not None:
+        if material is not None and warn:
             _warn_above(data["material"], "[material]", source)
     if errors:
         more = f" (and {len(errors) - 1} more)" if len(errors) > 1 else ""

@@ -37,6 +37,8 @@ from typing import Any
 
 import numpy as np
 
+from masonry_dem._signals import deferred_signals
+
 try:
     import fcntl
 except ImportError:  # pragma: no cover - Windows: the pid in summary.json is the only sign
@@ -382,26 +384,29 @@ def claim(folder: Path | str, overwrite: bool, start: Mapping[str, Any]) -> RunF
     fd = _lock(folder)
     try:
         previous = state(folder, _locked_here=True)
-        if previous.kind != "empty":
-            if not overwrite:
-                raise ResultsFolderError(
-                    errno.EEXIST,
-                    f"{previous.describe(folder)}; pass --overwrite (overwrite=True) to replace "
-                    "it, or choose another --out",
-                )
-            count = remove_own_files(folder)
-            log.info("removed %d files of the previous run from %s", count, folder)
-        write_summary(
-            folder,
-            {
-                "status": RUNNING,
-                "reason": "the analysis is running",
-                "pid": os.getpid(),
-                "host": socket.gethostname(),
-                "started": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
-            },
-            start,
-        )
+        # a Ctrl-C while the old run is removed would leave part of it and no summary:
+        # it waits until the folder is this run's (summary.json running), then stops it
+        with deferred_signals():
+            if previous.kind != "empty":
+                if not overwrite:
+                    raise ResultsFolderError(
+                        errno.EEXIST,
+                        f"{previous.describe(folder)}; pass --overwrite (overwrite=True) to replace "
+                        "it, or choose another --out",
+                    )
+                count = remove_own_files(folder)
+                log.info("removed %d files of the previous run from %s", count, folder)
+            write_summary(
+                folder,
+                {
+                    "status": RUNNING,
+                    "reason": "the analysis is running",
+                    "pid": os.getpid(),
+                    "host": socket.gethostname(),
+                    "started": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+                },
+                start,
+            )
     except BaseException:
         if fd is not None:
             os.close(fd)

@@ -101,17 +101,20 @@ def estimate_run(case: str | Path | Model | None, max_memory: str | None = None)
 
 
 def _geometry_of(case: str | Path | None) -> dict[str, Any] | None:
-    """The ``[geometry]`` table of a case file, read without building anything (None for the
-    bundled wall or a file that does not parse)."""
-    from masonry_dem._toml import tomllib
+    """The ``[geometry]`` table of a case file, read and checked by the schema without
+    building anything (None for the bundled wall, a file that does not parse or a case the
+    schema refuses: loading the case then names the fault, where counting blocks from a
+    negative ``courses`` named none)."""
+    from masonry_dem.cases.casefile import check_case_data, read_case_data
 
     if case is None:
         return None
     try:
-        geometry = tomllib.loads(Path(case).read_text()).get("geometry")
-    except (OSError, tomllib.TOMLDecodeError, UnicodeDecodeError):
+        data, source = read_case_data(case)
+        check_case_data(data, source, warn=False)  # load_case warns
+    except (OSError, ValueError):  # CaseError is a ValueError: load_case raises it again
         return None
-    return geometry if isinstance(geometry, dict) else None
+    return dict(data["geometry"])
 
 
 class Progress:

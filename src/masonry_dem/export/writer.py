@@ -24,6 +24,42 @@ from masonry_dem.results import History, StepResult
 log = logging.getLogger(__name__)
 
 
+#: a joint closing by more than this share of its blocks' size along its normal is outside
+#: small displacements (a strain of 10 % is large by any convention)
+LARGE_CLOSURE = 0.1
+
+
+def warn_large_closure(model: Model, step: StepResult) -> float:
+    """Log a warning when a joint of ``step`` (the first state of a run: the dead load)
+    closes by more than :data:`LARGE_CLOSURE` of the smaller of its two blocks along its
+    normal (the mean closure, -fn / (kn area)); return the largest such share. A wall too
+    tall for its kn then fails short of its peak, its elastic drift past the displacement
+    limit, with a reason about the tangent that does not say why."""
+    its = model.interfaces
+    if its.count == 0 or step.actions.shape[0] != its.count:
+        return 0.0
+    closure = np.maximum(-step.actions[:, 2], 0.0) / (model.kn * its.area)
+    sizes = model.blocks.sizes
+    depth = np.minimum(sizes[its.block_i, its.axis], sizes[its.block_j, its.axis])
+    share = closure / depth
+    k = int(np.argmax(share))
+    if share[k] > LARGE_CLOSURE:
+        log.warning(
+            "at lambda = %s joint %d (blocks %d and %d) closes by %.3g m, %.0f %% of its "
+            "blocks' %.3g m: outside small displacements, the analysis may stop short of the "
+            "collapse; raise kn (now %.3g N/m^3) or check the units",
+            f"{step.load_factor:.4g}",
+            k,
+            its.block_i[k],
+            its.block_j[k],
+            closure[k],
+            100 * share[k],
+            depth[k],
+            model.kn[k],
+        )
+    return float(share[k])
+
+
 class ResultsWriter:
     """Callback for the solvers: ``writer(step)`` writes one step and refreshes both PVDs
     together.
@@ -74,6 +110,8 @@ class ResultsWriter:
 
     def __call__(self, step: StepResult, force: bool = False) -> None:
         self._raise_failed()
+        if self._count == 0:
+            warn_large_closure(self.model, step)
         self._count += 1
         if not force:
             self._curve.append((step.step, step.load_factor, step.control_displacement))
@@ -111,8 +149,10 @@ class ResultsWriter:
     def __exit__(self, exc_type, exc, tb) -> None:
         if exc is None:
             try:
-                self.close()  # a write that failed after the solver's last step
-            except OSError as err:
+                # the background writes may lag the solver by hundreds of steps: a write that
+                # fails, or a Ctrl-C while they finish, comes after the solver's last step
+                self.close()
+            except BaseException as err:  # else summary.json would say running for ever
                 self.abort(err)
                 raise
             return

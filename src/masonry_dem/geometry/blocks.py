@@ -52,6 +52,13 @@ class Blocks(Rows):
         """Blocks from lower and upper corners, each (n, 3)."""
         lo = as_finite_array("lower", lower, (None, 3))
         hi = as_finite_array("upper", upper, (lo.shape[0], 3))
+        flat = hi <= lo
+        if flat.any():  # named by the corners given, not by the sizes they make
+            k, axis = (int(i) for i in np.argwhere(flat)[0])
+            raise ValueError(
+                f"upper[{k}] must lie above lower[{k}] along e{axis + 1} (a box of positive "
+                f"size): got lower[{k}] = {lo[k].tolist()}, upper[{k}] = {hi[k].tolist()}"
+            )
         return cls((lo + hi) / 2, hi - lo, as_finite_array("unit_weight", unit_weight))
 
     @property

@@ -13,6 +13,7 @@ unit and its letters) are declared once, in the classes they inherit (``_Along``
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Sequence
 from dataclasses import KW_ONLY, dataclass
 
@@ -22,6 +23,8 @@ from numpy.typing import ArrayLike, NDArray
 from masonry_dem._parameters import function_of
 from masonry_dem._validation import as_finite_array, plain, positive_scalar
 from masonry_dem.geometry.blocks import Blocks
+
+log = logging.getLogger(__name__)
 
 
 def _count(name: str, value: object) -> int:
@@ -204,6 +207,7 @@ def cut_openings(
     openings: Sequence[Sequence[float]],
     among: NDArray[np.bool_] | None = None,
     field: str = "openings",
+    lintels: bool = False,
 ) -> Blocks:
     """Remove every block whose centre lies inside one of the rectangular openings.
 
@@ -211,21 +215,141 @@ def cut_openings(
     are cut in whole blocks: choose their edges on block boundaries for clean jambs.
     ``among``: a mask of the blocks an opening may remove (None: every block), e.g. the facade
     of walls that meet; ``field`` names the argument in errors.
+
+    Dry joints cannot span an opening: a block of the course above it with nothing under it
+    hangs on the friction of head joints that carry no normal force, and the wall has no
+    equilibrium under its own weight. ``lintels=True`` builds the openings as the paper's
+    specimens were built: straight jambs (the blocks that straddle a jamb are cut at it,
+    :func:`split_at_jambs`) and a lintel over each opening whose top is a bed joint below the
+    top of the wall (:func:`add_lintels`). Without lintels, blocks left with nothing under
+    them are named in a warning.
     """
+    rects = [_opening(field, k, rect) for k, rect in enumerate(openings)]
+    if lintels:
+        if among is not None:
+            raise ValueError(f"{field}: lintels are built for the openings of a plain wall only")
+        course = float(np.median(blocks.sizes[:, 1]))
+        return openings_with_lintels(blocks, rects, course, field=field)
+    cut = _remove_inside(blocks, rects, among, field)
+    hanging = unsupported_blocks(cut)
+    if hanging.size:
+        log.warning(
+            "%s leave %d block(s) with nothing under them (first: centre %s): dry joints "
+            "(tensile strength 0) cannot carry them and the wall has no equilibrium under "
+            "its own weight; build lintels over the openings (lintels = true)",
+            field,
+            hanging.size,
+            plain(cut.centres[hanging[0]].round(6).tolist()),
+        )
+    return cut
+
+
+def openings_with_lintels(
+    blocks: Blocks, rects: Sequence[Sequence[float]], course: float, field: str = "openings"
+) -> Blocks:
+    """The openings (x_min, y_min, x_max, y_max) built as the paper's specimens were: jambs
+    straightened (:func:`split_at_jambs`), the blocks inside removed, and a lintel over each
+    opening (:func:`add_lintels`; ``course``: the course height [m])."""
+    checked = [_opening(field, k, rect) for k, rect in enumerate(rects)]
+    cut = _remove_inside(split_at_jambs(blocks, checked), checked, None, field)
+    return add_lintels(cut, checked, course, field=field)
+
+
+def _remove_inside(
+    blocks: Blocks,
+    rects: Sequence[tuple[float, float, float, float]],
+    among: NDArray[np.bool_] | None,
+    field: str,
+) -> Blocks:
     c = blocks.centres
     eligible = np.ones(blocks.count, dtype=bool) if among is None else among
     keep = np.ones(blocks.count, dtype=bool)
-    for k, rect in enumerate(openings):
-        x0, y0, x1, y1 = as_finite_array(f"{field}[{k}]", rect, (4,))
-        if x1 <= x0 or y1 <= y0:
-            raise ValueError(
-                f"{field}[{k}] must have x_max > x_min and y_max > y_min, got {plain(rect)}"
-            )
+    for k, (x0, y0, x1, y1) in enumerate(rects):
         inside = eligible & (c[:, 0] > x0) & (c[:, 0] < x1) & (c[:, 1] > y0) & (c[:, 1] < y1)
         if not inside.any():
-            raise ValueError(f"{field}[{k}] = {plain(rect)} removes no block")
+            raise ValueError(f"{field}[{k}] = {plain(list(rects[k]))} removes no block")
         keep &= ~inside
+    if not keep.any():
+        raise ValueError(f"{field} = {plain([list(r) for r in rects])} remove every block")
     return blocks.subset(np.flatnonzero(keep))
+
+
+def _opening(field: str, k: int, rect: Sequence[float]) -> tuple[float, float, float, float]:
+    x0, y0, x1, y1 = (float(v) for v in as_finite_array(f"{field}[{k}]", rect, (4,)))
+    if x1 <= x0 or y1 <= y0:
+        raise ValueError(
+            f"{field}[{k}] must have x_max > x_min and y_max > y_min, got {plain(rect)}"
+        )
+    return x0, y0, x1, y1
+
+
+def unsupported_blocks(blocks: Blocks) -> NDArray[np.intp]:
+    """Blocks above the lowest level with no block under them (no bed joint below): under
+    their own weight they hang on the friction of their head joints alone."""
+    from masonry_dem.geometry.interfaces import detect_interfaces
+
+    its = detect_interfaces(blocks)
+    bed = its.axis == 1
+    i, j = its.block_i[bed], its.block_j[bed]
+    upper = np.where(blocks.centres[i, 1] > blocks.centres[j, 1], i, j)
+    held = np.zeros(blocks.count, dtype=bool)
+    held[upper] = True
+    bottom = blocks.lower[:, 1].min()
+    held |= blocks.lower[:, 1] <= bottom + 1e-6 * float(np.median(blocks.sizes))
+    return np.flatnonzero(~held)
+
+
+def split_at_jambs(blocks: Blocks, rects: Sequence[Sequence[float]]) -> Blocks:
+    """Cut the blocks that straddle a jamb of an opening at the jamb, so the openings have
+    straight jambs of half blocks (as built) instead of blocks balanced on a corner."""
+    lo, hi = blocks.lower.copy(), blocks.upper.copy()
+    gamma = blocks.unit_weight.copy()
+    for x0, y0, x1, y1 in rects:
+        yc = (lo[:, 1] + hi[:, 1]) / 2
+        rows = (yc > y0) & (yc < y1)
+        for x in (x0, x1):
+            cut = rows & (lo[:, 0] < x - 1e-9) & (hi[:, 0] > x + 1e-9)
+            left_hi, right_lo = hi[cut].copy(), lo[cut].copy()
+            left_hi[:, 0] = x
+            right_lo[:, 0] = x
+            lo = np.vstack([lo[~cut], lo[cut], right_lo])
+            hi = np.vstack([hi[~cut], left_hi, hi[cut]])
+            gamma = np.concatenate([gamma[~cut], gamma[cut], gamma[cut]])
+            rows = np.concatenate([rows[~cut], rows[cut], rows[cut]])
+    return Blocks.from_boxes(lo, hi, gamma)
+
+
+def add_lintels(
+    blocks: Blocks, rects: Sequence[Sequence[float]], course: float, field: str = "openings"
+) -> Blocks:
+    """A lintel over each opening: the blocks of the course above it that overlap the opening
+    become one block (dry joints cannot span an opening). Where head joints of that course
+    fall on the jambs, the blocks beside them are taken in too, so that a lintel always bears
+    on both piers (one exactly as wide as the opening fell in). ``course``: the course height
+    [m]; an opening that reaches the top of the wall needs no lintel."""
+    keep = np.ones(blocks.count, dtype=bool)
+    lintels = []
+    top = blocks.upper[:, 1].max()
+    for k, (x0, _, x1, y1) in enumerate(rects):
+        over = (
+            (np.abs(blocks.lower[:, 1] - y1) < 1e-6 * course)
+            & (blocks.upper[:, 0] > x0 - 1e-9)
+            & (blocks.lower[:, 0] < x1 + 1e-9)
+        )
+        if not over.any():
+            if y1 >= top - 1e-6 * course:
+                continue  # the opening reaches the top: nothing above it to carry
+            beds = np.unique(blocks.lower[:, 1])
+            near = np.sort(beds[np.argsort(np.abs(beds - y1))[:2]])
+            raise ValueError(
+                f"{field}[{k}]: a lintel sits on a bed joint, but y_max = {plain(y1)} is none "
+                f"(the nearest are y = {' and '.join(plain(round(float(y), 9)) for y in near)})"
+            )
+        lo = np.array([blocks.lower[over, 0].min(), y1, blocks.lower[over, 2].min()])
+        hi = np.array([blocks.upper[over, 0].max(), y1 + course, blocks.upper[over, 2].max()])
+        lintels.append(Blocks.from_boxes(lo[None], hi[None], blocks.unit_weight[over][0]))
+        keep &= ~over
+    return Blocks.concatenate(blocks.subset(np.flatnonzero(keep)), *lintels)
 
 
 def add_base(

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from masonry_dem._arrays import FloatArray, IndexArray, Rows
+from masonry_dem._validation import positive_scalar
 from masonry_dem.geometry.blocks import Blocks
 
 
@@ -172,7 +173,8 @@ def detect_interfaces(blocks: Blocks, tol: float | None = None) -> Interfaces:
     Raises ValueError if two blocks overlap (share a volume larger than ``tol`` in every axis).
     """
     size_scale = float(np.median(blocks.sizes))
-    tol = 1e-6 * size_scale if tol is None else float(tol)
+    # a negative tolerance failed inside numpy ("repeats may not contain negative values")
+    tol = 1e-6 * size_scale if tol is None else positive_scalar("tol", tol, strict=False)
     lower, upper = blocks.lower, blocks.upper
     pairs = candidate_pairs(lower, upper, tol)
     if pairs.size == 0:
