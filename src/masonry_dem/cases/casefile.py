@@ -245,7 +245,8 @@ def case_from_dict(data: dict[str, Any], source: str = "<dict>") -> Case:
     if control_spec is not None:
         with _at(source, "[analysis].control.block"):
             model.dof_index(control_spec["block"], control_spec["dof"])
-        control = DisplacementControl(**control_spec)
+        with _at(source, "[analysis].control"):
+            control = DisplacementControl(**control_spec)
     monitor = None
     if monitor_spec is not None:
         with _at(source, "[analysis].monitor.block"):

@@ -42,6 +42,11 @@ class Corrector:
     to the next equilibrium of the :class:`DiscreteProblem`."""
 
     def __init__(self, model: Model, settings: StaticSettings | None = None) -> None:
+        if settings is not None and not isinstance(settings, StaticSettings):
+            raise TypeError(
+                f"settings must be a StaticSettings (e.g. StaticSettings(max_steps=5)) or None, "
+                f"got a {type(settings).__name__}"
+            )
         self.model = model
         self.settings = settings or StaticSettings()
         s = self.settings

@@ -56,6 +56,7 @@ class StopReason(_Text):
     CONTROL_REACHED = "control displacement reached"
     CONTROL_STUCK = "displacement control stuck"
     CONTROL_BUDGET = "displacement control: max_steps spent short of the target"
+    SINGULAR_TANGENT = "singular tangent"  # no factorization, even with a stiffened floor
 
 
 class Failure(Enum):

@@ -82,7 +82,9 @@ def load_control(solver: StaticSolver, hist: History, record: Record) -> None:
     verified = False  # the first failure was re-tried from the end of the bracket
     hand_over = True  # work control takes over at the first failure (continuation="work")
     work_reason: tuple[str, StopReason] | None = None
-    for _ in range(s.max_steps):
+    # max_steps counts converged steps, as the other path followers do: the failed attempts
+    # of a bracket are bounded by its halvings down to the bracket tolerance
+    while len(hist.steps) < s.max_steps:
         target = min(lam + dlam, s.max_load_factor)
         out = solver.equilibrate(target, start=start)
         start = None

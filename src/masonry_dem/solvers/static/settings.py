@@ -3,10 +3,20 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, fields
+from numbers import Integral
 from typing import Literal, get_args
 
-from masonry_dem._validation import at_least, choice, count, finite, positive
+from masonry_dem._validation import (
+    at_least,
+    check_choice,
+    choice,
+    count,
+    finite,
+    is_number,
+    positive,
+)
 from masonry_dem.constitutive.law import TANGENT_METHODS, TangentMethod
 from masonry_dem.model import DofName
 from masonry_dem.solvers.load_path import LoadPathSettings
@@ -254,3 +264,12 @@ class DisplacementControl:
     dof: DofName
     target: float
     steps: int = 50
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.block, Integral) or isinstance(self.block, bool) or self.block < 0:
+            raise ValueError(f"block must be an integer >= 0, got {self.block!r}")
+        check_choice("dof", self.dof, get_args(DofName))
+        if not is_number(self.target) or not math.isfinite(self.target) or self.target == 0:
+            raise ValueError(f"target must be a finite number other than 0, got {self.target!r}")
+        if not isinstance(self.steps, Integral) or isinstance(self.steps, bool) or self.steps < 1:
+            raise ValueError(f"steps must be an integer >= 1, got {self.steps!r}")

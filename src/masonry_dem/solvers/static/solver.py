@@ -22,6 +22,7 @@ import numpy as np
 from masonry_dem._threads import kernel_threads_for
 from masonry_dem.model import Model, Monitor
 from masonry_dem.results import History, StepResult
+from masonry_dem.solvers.factorization import SingularMatrix
 from masonry_dem.solvers.static import paths
 from masonry_dem.solvers.static.certificate import Bound, certify
 from masonry_dem.solvers.static.corrector import Corrector
@@ -121,7 +122,17 @@ class StaticSolver(Corrector):
             hist = History(steps=steps)
             log.info("%s: the History's steps go to %s", self.model.name, steps.folder)
         with kernel_threads_for(self.model.interfaces.count):
-            return self._run(hist, control, callback, monitor)
+            try:
+                return self._run(hist, control, callback, monitor)
+            except SingularMatrix as exc:  # the steps recorded so far are kept
+                hist.end(
+                    Status.FAILED,
+                    StopReason.SINGULAR_TANGENT,
+                    f"the tangent stiffness cannot be factored, even with a stiffened floor "
+                    f"({exc}): joint stiffnesses (kn, kt) many decades apart, or a wall "
+                    f"with no stiffness along some mode",
+                )
+                return hist
 
     def _run(
         self,
