@@ -74,7 +74,8 @@ def test_a_certified_collapse_of_s12_has_no_equilibrium_1_percent_above_it():
     strict=True,
     raises=AssertionError,
     reason=(
-        "issue 18: by default the path on S13 with 2-block return walls passes four folds "
+        "issue 21 (the return-wall rows; issue 18's certificate holds there: a limit point "
+        "of the path): by default the path on S13 with 2-block return walls passes four folds "
         "(0.0855 -> 0.1082) and certifies the fifth, 0.1082; dynamic relaxation + Newton "
         "find an equilibrium 1 % above it (after about 7 600 time steps with the creep kept "
         "undamped, 42 000 without), where the corner check at 0.5 % finds none within its "
