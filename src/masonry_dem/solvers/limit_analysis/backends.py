@@ -22,11 +22,13 @@ def solve_highs(
     lower: np.ndarray,
     upper: np.ndarray,
     ineq: tuple[sparse.csc_matrix, np.ndarray] | None = None,
+    dead_load_first: bool = True,
 ) -> Solution:
     """max lambda s.t. E x - lambda live = rhs, [C x <= d], lower <= x <= upper, by HiGHS's
     interior point method (scipy's ``linprog``; the simplex methods were 2-8 times slower on
     these degenerate LPs, benchmarks/bench_limit_analysis.py). First with lambda = 0 (is
-    there an equilibrium under the dead load?), then free."""
+    there an equilibrium under the dead load?), then free; ``dead_load_first`` False skips
+    the first solve (half the time), and an infeasible free solve is then "infeasible"."""
     from scipy.optimize import linprog
 
     n_eq, k = E.shape
@@ -38,15 +40,18 @@ def solve_highs(
         b_ub = d
     bounds = np.column_stack([np.concatenate([lower, [0.0]]), np.concatenate([upper, [0.0]])])
     c = np.zeros(k + 1)
-    res = linprog(c, A_ub, b_ub, A, rhs, bounds=bounds, method="highs-ipm")
-    if res.status == 2:
-        return Solution("dead load", detail=f"HiGHS: {res.message} (at lambda = 0)")
-    if res.status != 0:
-        return _highs_error(res)
+    if dead_load_first:
+        res = linprog(c, A_ub, b_ub, A, rhs, bounds=bounds, method="highs-ipm")
+        if res.status == 2:
+            return Solution("dead load", detail=f"HiGHS: {res.message} (at lambda = 0)")
+        if res.status != 0:
+            return _highs_error(res)
     cap = lambda_cap(live, rhs)
     bounds[k] = (0.0, cap)
     c[k] = -objective_scale(live)
     res = linprog(c, A_ub, b_ub, A, rhs, bounds=bounds, method="highs-ipm")
+    if res.status == 2 and not dead_load_first:
+        return Solution("infeasible", detail=f"HiGHS: {res.message}")
     if res.status == 3:
         return Solution("unbounded", detail=f"HiGHS: {res.message}")
     if res.status != 0:

@@ -104,9 +104,14 @@ def non_associative(
                 (np.ones(npts * D), (np.repeat(np.arange(npts), D), 4 * m + np.arange(npts * D))),
                 shape=(npts, k),
             )
+            # no lambda = 0 solve first (half of each iteration's time): the associative
+            # start checked the dead load, and the frozen capacities are those of the
+            # collapse, not of the dead load's equilibrium
             sol = solve_highs(
-                E, problem.live, problem.rhs, np.zeros(k), np.full(k, np.inf), (C, capk)
+                E, problem.live, problem.rhs, np.zeros(k), np.full(k, np.inf), (C, capk), False
             )
+            if sol.status == "infeasible":
+                sol = Solution("dead load", detail=f"{sol.detail} (frozen capacities)")
         size = (E.shape[1] + 1, E.shape[0] + (m * K if dirs is not None else 0))
         if sol.status != "optimal":
             return finish(problem, sol, size, result, iterations=it, load_factors=tuple(lams))
