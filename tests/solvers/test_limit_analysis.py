@@ -404,3 +404,26 @@ def test_clarabel_factorizations_give_the_same_mechanism():
         assert sol.lam == pytest.approx(0.465658, rel=1e-5), options
         assert sol.iterations > 0
         assert mechanism_violation(model, problem.velocities(u), None) < 1e-6, options
+
+
+def test_non_associative_lp_iteration_solves_one_lp_each(monkeypatch):
+    """The frozen-capacity iteration on HiGHS: the associative start checks the dead load
+    (a lambda = 0 LP, then the free one), and each iteration solves only its free LP, so
+    ``2 + iterations`` LPs (the lambda = 0 LP of every iteration was half the solves on the
+    29-block L wall, docs/limit_analysis.md "Cost on small walls"). The answer is unchanged:
+    the block slides without dilating at lambda = mu = 0.2 (mu < s/a = 0.25)."""
+    import scipy.optimize
+
+    calls = []
+    linprog = scipy.optimize.linprog
+
+    def counted(*args, **kwargs):
+        calls.append(kwargs.get("bounds"))
+        return linprog(*args, **kwargs)
+
+    monkeypatch.setattr(scipy.optimize, "linprog", counted)
+    model = _on_base(single_block(0.4, 0.3, 0.1, GAMMA), 0.2)
+    r = limit_analysis(model, associative=False, backend="highs")
+    assert _lam(r) == pytest.approx(0.2, rel=1e-6)
+    assert r.iterations >= 3
+    assert len(calls) == 2 + r.iterations
