@@ -1,4 +1,4 @@
-"""The non-associative limit analysis on a small L wall: minutes where the pushover takes
+"""The non-associative limit analysis on a small L wall: a minute where the pushover takes
 a fraction of a second, and a multiplier 20-26 % above the pushover's certified one.
 
 Found by the new-user sweep (session 17, docs/new_user_sweep.md): ``masonry-dem limit
@@ -6,10 +6,15 @@ Found by the new-user sweep (session 17, docs/new_user_sweep.md): ``masonry-dem 
 43 blocks, dry, mu 0.7, tilted along e3) took 74 s and 151 s (load about 3 on 2 cores) for
 lambda 0.3349 and 0.2822, where the pushover, certified against the associative bound,
 gives 0.2790 and 0.2242 in 0.1-0.4 s. The non-associative multiplier is documented as an
-estimate, not a bound (docs/limit_analysis.md); what is reported is its time on a wall this
-small and its distance from the certified answer. Prints both, in one run.
+estimate, not a bound (docs/limit_analysis.md, "Cost on small walls" has the diagnosis).
 
     PYTHONPATH=src python benchmarks/new_user_limit_l_wall.py [--courses 4 6]
+        # the pushover against the non-associative limit analysis, in one run
+    PYTHONPATH=src python benchmarks/new_user_limit_l_wall.py --grids
+        # where the time goes (solves, seconds per solve) and where the +20 % comes from:
+        # HiGHS and Clarabel on grids 4 and 8, and the DEM's own collapse actions frozen
+    PYTHONPATH=src python benchmarks/new_user_limit_l_wall.py --lp
+        # one frozen-capacity LP with and without the lambda = 0 LP first (ratio, one run)
 """
 
 from __future__ import annotations
@@ -17,35 +22,132 @@ from __future__ import annotations
 import argparse
 import time
 
+import numpy as np
+
 import masonry_dem as md
+from masonry_dem.solvers.limit_analysis import backends, non_associative
+from masonry_dem.solvers.limit_analysis.formulation import Solution
+
+
+def l_wall_model(courses: int) -> md.Model:
+    wall = md.l_wall(4, courses, 0.081, 0.21, 0.07, 20e3, return_blocks=3)
+    blocks, base = md.add_base(wall)
+    return md.Model.build(
+        blocks,
+        md.InterfaceMaterial(kn=1e9, kt=0.4e9, friction=0.7),
+        [md.Support([base])],
+        [md.SelfWeight(), md.WeightProportional((0, 0, 1))],
+        name=f"L wall, {courses} courses",
+    )
+
+
+def compare(courses: int) -> None:
+    model = l_wall_model(courses)
+    t0 = time.perf_counter()
+    history = md.pushover(model)
+    t1 = time.perf_counter()
+    la = md.limit_analysis(model, associative=False)
+    t2 = time.perf_counter()
+    print(
+        f"{model.name} ({model.blocks.count} blocks): pushover {history.status} "
+        f"{history.final_load_factor:.5f} in {t1 - t0:.2f} s; non-associative limit "
+        f"analysis {la.status} {la.load_factor:.5f} in {t2 - t1:.1f} s, {la.iterations} "
+        f"iterations ({la.load_factor / history.final_load_factor - 1:+.1%}, "
+        f"{(t2 - t1) / (t1 - t0):.0f}x the time)"
+    )
+
+
+def grids(courses: int) -> None:
+    model = l_wall_model(courses)
+    history = md.pushover(model)
+    lam_p = history.final_load_factor
+    print(f"{model.name}: pushover {lam_p:.4f}, {model.interfaces.count} interfaces")
+
+    def show(label: str, r, seconds: float) -> None:
+        lams = r.load_factors
+        print(
+            f"  {label}: {r.status} {lams[-1]:.4f} ({lams[-1] / lam_p - 1:+.1%}), first "
+            f"{lams[0]:.4f}, {len(lams)} solves in {seconds:.1f} s "
+            f"({seconds / len(lams):.2f} s a solve)",
+            flush=True,
+        )
+
+    for backend in ("highs", "clarabel"):
+        t = time.perf_counter()
+        r = md.limit_analysis(model, backend=backend)
+        show(f"associative, {backend}", r, time.perf_counter() - t)
+        for grid in (4, 8):
+            t = time.perf_counter()
+            r = md.limit_analysis(model, associative=False, backend=backend, grid=grid)
+            show(f"non-associative, {backend}, grid {grid}", r, time.perf_counter() - t)
+    # the frozen capacities of the DEM's own actions at its collapse (its last step)
+    actions = np.asarray(history.steps[-1].actions, float)
+    real_start = non_associative.solve_associative
+
+    def dem_start(problem, grid, dirs):
+        sol = Solution("optimal", lam_p, None, None, "the DEM's actions")
+        sol.info_actions = actions  # type: ignore[attr-defined]
+        return sol, (0, 0)
+
+    non_associative.solve_associative = dem_start
+    try:
+        for backend, grid, iterations in (("highs", 8, 1), ("clarabel", 8, 1), ("clarabel", 8, 50)):
+            t = time.perf_counter()
+            r = md.limit_analysis(
+                model, associative=False, backend=backend, grid=grid, max_iterations=iterations
+            )
+            label = "one solve" if iterations == 1 else "iterated"
+            show(
+                f"DEM's actions frozen, {backend}, grid {grid}, {label}", r, time.perf_counter() - t
+            )
+    finally:
+        non_associative.solve_associative = real_start
+
+
+def lp_ratio(courses: int, repeat: int = 2) -> None:
+    model = l_wall_model(courses)
+    captured = []
+    real = non_associative.solve_highs
+
+    def capture(*args, **kwargs):
+        captured.append(args[:6])
+        raise StopIteration
+
+    non_associative.solve_highs = capture
+    try:
+        md.limit_analysis(model, associative=False)
+    except StopIteration:
+        pass
+    finally:
+        non_associative.solve_highs = real
+    args = captured[0]
+    seconds = {True: 0.0, False: 0.0}
+    lams = {}
+    for _ in range(repeat):
+        for first in (True, False):
+            t = time.perf_counter()
+            lams[first] = backends.solve_highs(*args, dead_load_first=first).lam
+            seconds[first] += time.perf_counter() - t
+    print(
+        f"{model.name}, first frozen LP ({args[0].shape[1]} columns): with the lambda = 0 LP "
+        f"{seconds[True] / repeat:.2f} s, without {seconds[False] / repeat:.2f} s "
+        f"({seconds[True] / seconds[False]:.2f}x); lambda {lams[True]:.6f} and {lams[False]:.6f}"
+    )
 
 
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--courses", type=int, nargs="+", default=[4])
+    parser.add_argument("--grids", action="store_true")
+    parser.add_argument("--lp", action="store_true")
     args = parser.parse_args(argv)
     for courses in args.courses:
-        wall = md.l_wall(4, courses, 0.081, 0.21, 0.07, 20e3, return_blocks=3)
-        blocks, base = md.add_base(wall)
-        model = md.Model.build(
-            blocks,
-            md.InterfaceMaterial(kn=1e9, kt=0.4e9, friction=0.7),
-            [md.Support([base])],
-            [md.SelfWeight(), md.WeightProportional((0, 0, 1))],
-            name=f"L wall, {courses} courses",
-        )
-        t0 = time.perf_counter()
-        history = md.pushover(model)
-        t1 = time.perf_counter()
-        la = md.limit_analysis(model, associative=False)
-        t2 = time.perf_counter()
-        print(
-            f"{model.name} ({blocks.count} blocks): pushover {history.status} "
-            f"{history.final_load_factor:.5f} in {t1 - t0:.2f} s; non-associative limit "
-            f"analysis {la.status} {la.load_factor:.5f} in {t2 - t1:.1f} s "
-            f"({la.load_factor / history.final_load_factor - 1:+.1%}, "
-            f"{(t2 - t1) / (t1 - t0):.0f}x the time)"
-        )
+        if args.grids:
+            grids(courses)
+        elif args.lp:
+            lp_ratio(courses)
+        else:
+            compare(courses)
 
 
 if __name__ == "__main__":
