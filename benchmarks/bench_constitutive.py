@@ -350,15 +350,17 @@ def forces_parts(path: str, s23: str | None = None) -> None:
 
     from masonry_dem.constitutive.check_kernels import (
         NEWTON_MAX_ITER,
-        PROJECTION_MAX_ITER,
-        _nb_bracket_start,
-        _nb_bracket_step,
-        _nb_closest_setup,
         _nb_demands,
         _nb_radial_closed,
         _nb_radial_step,
         nb_check_row,
         nb_project_rows,
+    )
+    from masonry_dem.constitutive.energy_return import (
+        PROJECTION_MAX_ITER,
+        _nb_bracket_start,
+        _nb_bracket_step,
+        _nb_closest_setup,
     )
     from masonry_dem.constitutive.law import InterfaceLaw
     from masonry_dem.constitutive.law_kernels import nb_plain_row

@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import field, fields
+from numbers import Integral
 from typing import Any, TypeVar
 
 import numpy as np
@@ -112,10 +113,14 @@ def finite(default: float) -> float:
     return checked(default, _finite, "a finite number")
 
 
+def is_count(value: Any, least: int) -> bool:
+    """Whether ``value`` is an integer >= ``least`` (numpy's too; a boolean or a float is not)."""
+    return isinstance(value, Integral) and not isinstance(value, bool) and int(value) >= least
+
+
 def count(default: int, least: int) -> int:
     """A field that takes an integer >= ``least`` (a boolean or a float is refused)."""
-    test = lambda v: isinstance(v, int) and not isinstance(v, bool) and v >= least  # noqa: E731
-    return checked(default, test, f"an integer >= {least}")
+    return checked(default, lambda v: is_count(v, least), f"an integer >= {least}")
 
 
 def choice(default: T, allowed: tuple[str, ...]) -> T:

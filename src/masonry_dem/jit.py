@@ -51,6 +51,7 @@ _PACKAGE = Path(__file__).resolve().parent
 KERNEL_SOURCES: Final[tuple[Path, ...]] = (
     _PACKAGE / "jit.py",
     _PACKAGE / "constitutive" / "check_kernels.py",
+    _PACKAGE / "constitutive" / "energy_return.py",
     _PACKAGE / "constitutive" / "law_kernels.py",
 )
 

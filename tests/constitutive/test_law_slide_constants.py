@@ -1,7 +1,7 @@
 """The constants of a sliding row that the forces kernel reads from its interface
 (``StrengthDomain.row_constants``) give the bits the energy return gets by computing them.
 
-The energy return of a sliding row (``check_kernels._nb_energy_closest_point``) needs the
+The energy return of a sliding row (``energy_return._nb_energy_closest_point``) needs the
 switch point between the two halves of the curve (a^alpha + r^2 = 1 split at
 t^alpha = x^2 = 1/2), the shear half's bracket and the energy radius rho = sqrt(J / A): they
 depend on the interface alone (alpha, l1, l2). ``InterfaceLaw.forces`` reads them, stored once
@@ -22,7 +22,7 @@ import numpy as np
 import pytest
 from scipy import sparse
 
-from masonry_dem.constitutive.check_kernels import (
+from masonry_dem.constitutive.energy_return import (
     ROW_RHO,
     ROW_SHEAR_HI,
     ROW_T_SWITCH,

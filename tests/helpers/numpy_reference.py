@@ -9,9 +9,9 @@ import logging
 import numpy as np
 from numpy.typing import NDArray
 
-from masonry_dem.constitutive.check_kernels import PROJECTION_MAX_ITER as _PROJECTION_MAX_ITER
-from masonry_dem.constitutive.check_kernels import PROJECTION_TOL as _PROJECTION_TOL
 from masonry_dem.constitutive.check_kernels import TINY_CAPACITY as _TINY_CAPACITY
+from masonry_dem.constitutive.energy_return import PROJECTION_MAX_ITER as _PROJECTION_MAX_ITER
+from masonry_dem.constitutive.energy_return import PROJECTION_TOL as _PROJECTION_TOL
 from masonry_dem.constitutive.states import FACTORS_OF_FLAGS as _FACTORS_OF_FLAGS
 from masonry_dem.constitutive.states import SLIDE_COLUMNS as _SLIDE_COLUMNS
 from masonry_dem.constitutive.states import STATE_OF_FLAGS as _STATE_OF_FLAGS

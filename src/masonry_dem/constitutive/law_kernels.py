@@ -14,19 +14,21 @@ import numba
 import numpy as np
 
 from masonry_dem.constitutive.check_kernels import (
-    ROW_RHO,
-    ROW_SHEAR_HI,
-    ROW_T_SWITCH,
-    ROW_TA_SWITCH,
-    ROW_TORSION,
     SHEAR_TORSION_TOLERANCE,
     TINY_CAPACITY,
-    nb_energy_radius,
     nb_evaluate_row,
     nb_project_rows,
     nb_radial_factor,
     nb_reduced_side,
     nb_torsion_constant,
+)
+from masonry_dem.constitutive.energy_return import (
+    ROW_RHO,
+    ROW_SHEAR_HI,
+    ROW_T_SWITCH,
+    ROW_TA_SWITCH,
+    ROW_TORSION,
+    nb_energy_radius,
 )
 from masonry_dem.constitutive.states import (
     FLAG_DETACHED,
@@ -451,7 +453,7 @@ def forces(
     (row by row, from 0, in stored order) and of :meth:`InterfaceLaw.respond`, so the same
     bits. Rows with a plain answer skip the strength check (:func:`nb_plain_row`, the same
     bits), and sliding rows read their interface's constants from ``constants``
-    (:data:`~masonry_dem.constitutive.check_kernels.row_constants`, the same bits as
+    (:data:`~masonry_dem.constitutive.energy_return.row_constants`, the same bits as
     computing them). The index arrays are unsigned (views of scipy's): a signed index costs a
     wraparound test per gather, which doubled the time of the products. The last value is
     False, with nothing projected, if a trial action is not finite."""

@@ -49,8 +49,8 @@ from masonry_dem.constitutive.check_kernels import (
     SHEAR_TORSION_TOLERANCE,
     SNAP,
     evaluate_rows,
-    row_constants,
 )
+from masonry_dem.constitutive.energy_return import row_constants
 from masonry_dem.constitutive.states import FACTORS_OF_FLAGS, STATE_OF_FLAGS
 
 __all__ = [
@@ -473,7 +473,7 @@ class StrengthDomain:
     @cached_property
     def row_constants(self) -> NDArray:
         """(m, 5) per-row constants of the forces kernel
-        (:data:`~masonry_dem.constitutive.check_kernels.row_constants`): cT of the whole
+        (:data:`~masonry_dem.constitutive.energy_return.row_constants`): cT of the whole
         rectangles and the constants of a sliding row's energy return, computed once."""
         kernel = row_constants.for_rows(self.l1.shape[0])
         return kernel(self.l1, self.l2, self.alpha_rows, self.torsion_constant)

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, fields
-from numbers import Integral
 from typing import Literal, get_args
 
 from masonry_dem._validation import (
@@ -14,6 +13,7 @@ from masonry_dem._validation import (
     choice,
     count,
     finite,
+    is_count,
     is_number,
     positive,
 )
@@ -266,10 +266,10 @@ class DisplacementControl:
     steps: int = 50
 
     def __post_init__(self) -> None:
-        if not isinstance(self.block, Integral) or isinstance(self.block, bool) or self.block < 0:
+        if not is_count(self.block, 0):
             raise ValueError(f"block must be an integer >= 0, got {self.block!r}")
         check_choice("dof", self.dof, get_args(DofName))
         if not is_number(self.target) or not math.isfinite(self.target) or self.target == 0:
             raise ValueError(f"target must be a finite number other than 0, got {self.target!r}")
-        if not isinstance(self.steps, Integral) or isinstance(self.steps, bool) or self.steps < 1:
+        if not is_count(self.steps, 1):
             raise ValueError(f"steps must be an integer >= 1, got {self.steps!r}")
