@@ -405,6 +405,8 @@ class DiscreteProblem:
         # residual norm: moments as forces at the median block size
         length = float(np.median(model.blocks.sizes))
         self.weight = np.where(free % 6 < 3, 1.0, 1.0 / length)
+        #: a correction's norm: rotations as displacements at the median block size
+        self.displacement_weight = np.where(free % 6 < 3, 1.0, length)
         self.translation = (free % 6) < 3  # among the free DOFs
         self.moving_translations = free[self.translation]  # DOF numbers
         self.factorizations = 0
@@ -444,6 +446,12 @@ class DiscreteProblem:
         residual = F_ext - internal
         weighted = self.weight * residual
         return residual, math.sqrt(float(weighted @ weighted)) / scale, response
+
+    def correction_norm(self, dq: np.ndarray) -> float:
+        """|dq| of a correction of the free DOFs, rotations as displacements at the median
+        block size (the dual of the residual's weights)."""
+        weighted = self.displacement_weight * dq
+        return math.sqrt(float(weighted @ weighted))
 
     def _external(self, lam: float, dead_factor: float) -> tuple[np.ndarray, float]:
         """(F_ext on the free DOFs, its weighted norm) at (lambda, dead_factor), kept for

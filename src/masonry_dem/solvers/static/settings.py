@@ -25,6 +25,10 @@ from masonry_dem.solvers.load_path import LoadPathSettings
 Continuation = Literal["work", "bracket"]
 CONTINUATION: tuple[str, ...] = get_args(Continuation)
 
+#: what the corrector's line search accepts (see ``StaticSettings.line_search``)
+LineSearch = Literal["residual", "natural", "directional"]
+LINE_SEARCHES: tuple[str, ...] = get_args(LineSearch)
+
 
 @dataclass(frozen=True)
 class StaticSettings(LoadPathSettings):
@@ -202,6 +206,20 @@ class StaticSettings(LoadPathSettings):
         the displacement at the peak (both from the dead-load state).
     bound_tolerance: lambda may exceed the associative limit-analysis bound (when one is
         given) by this fraction (the bound's own discretisation and solver tolerance).
+
+    The corrector's line search (session 18, docs/solvers.md, "The line search's merit")
+    ------------------------------------------------------------------------------------
+    line_search: what a trial step of a Newton search must lower to be taken.
+        ``"residual"`` (default): the weighted residual norm plus the control's error.
+        ``"natural"``: the norm of the simplified Newton correction K^-1 R at the trial,
+        with the factors the step was solved with (Deuflhard's natural monotonicity test;
+        under control, with the correction of lambda that meets the constraint): the
+        residual measured in the tangent's own norm, which stiff normal rows do not
+        dominate. ``"directional"``: the residual norm as ``"residual"``, or else the
+        residual projected on the step, |dq . R(q + t dq)| <= ``directional_tolerance`` x
+        dq . K dq (Crisfield's line search), the step cut by regula falsi on that
+        projection. The tolerance test of a converged state is the same for all three.
+    directional_tolerance: the fraction eta of that test (0.5-0.8 in the literature).
     """
 
     easy_iterations: int = count(6, least=0)
@@ -251,6 +269,8 @@ class StaticSettings(LoadPathSettings):
     mode_stiffness: float = positive(0.05)
     mode_displacement: float = positive(0.5)
     bound_tolerance: float = positive(0.01)
+    line_search: LineSearch = choice("residual", LINE_SEARCHES)
+    directional_tolerance: float = positive(0.8)
 
 
 SETTING_NAMES = tuple(f.name for f in fields(StaticSettings))
