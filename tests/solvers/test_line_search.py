@@ -15,8 +15,10 @@ import pytest
 
 from masonry_dem.geometry.blocks import Blocks
 from masonry_dem.geometry.builders import add_base, running_bond_wall, single_block
+from masonry_dem.geometry.selectors import column
 from masonry_dem.model import InterfaceMaterial, Model, SelfWeight, Support, WeightProportional
 from masonry_dem.solvers.incremental import StaticSettings, pushover
+from masonry_dem.solvers.static.solver import StaticSolver
 
 DRY = InterfaceMaterial(kn=2.4e9, kt=1.0e9, friction=0.7)
 MERITS = ("residual", "natural", "directional")
@@ -62,3 +64,63 @@ def test_a_free_wall_tilts_at_t_over_h_with_every_merit(merit):
 def test_an_unknown_line_search_is_named():
     with pytest.raises(ValueError, match="line_search"):
         StaticSettings(line_search="energy")  # type: ignore[arg-type]
+
+
+def _panel() -> Model:
+    """A dry panel of 3 x 13 blocks on a base, its left column held in u1 and u3, tilted out
+    of plane (the panel of ``test_incremental``): its path passes folds, so work control's
+    searches fail where a step is too long for Newton's basin."""
+    wall = running_bond_wall(3, 13, 0.081, 0.21, 0.07, 20e3)
+    blocks, base = add_base(wall)
+    return Model.build(
+        blocks,
+        DRY,
+        supports=[Support([base]), Support(column(wall, "left"), ["u1", "u3"])],
+        loads=[SelfWeight(), WeightProportional((0.0, 0.0, 1.0))],
+    )
+
+
+def _failed_work_searches(model: Model) -> tuple[StaticSolver, list]:
+    """The pushover with the residual merit, and each of its work-control searches that
+    failed: (arguments, the solver's state before it)."""
+    failed = []
+    solver = StaticSolver(model, StaticSettings())
+    plain = solver.equilibrate
+
+    def recording(*args, **kw):
+        state = (solver.q.copy(), solver.plastic.copy(), solver.cracked.copy())
+        before = solver._last_increment
+        out = plain(*args, **kw)
+        if kw.get("control") is not None and not out.ok:
+            failed.append((args, kw, state, before))
+        return out
+
+    solver.equilibrate = recording  # type: ignore[method-assign]
+    assert solver.run().status == "collapse"
+    return solver, failed
+
+
+def _replay(model: Model, merit: str, failed: list) -> list[bool]:
+    """Each recorded search again, from its recorded state, with ``merit``."""
+    solver = StaticSolver(model, StaticSettings(line_search=merit))
+    assert solver.run().status == "collapse"  # the scales and limits of the path
+    converged = []
+    for args, kw, (q, plastic, cracked), before in failed:
+        solver.q, solver.plastic, solver.cracked = q.copy(), plastic.copy(), cracked.copy()
+        solver._last_increment = before
+        converged.append(solver.equilibrate(*args, **kw).ok)
+    return converged
+
+
+def test_the_natural_merit_converges_work_searches_the_residual_merit_fails():
+    """Work control asks for a step of w; with the residual merit 21 of the panel's
+    controlled searches fail (the steps folds and the stop check ask for included). From
+    the same states, with the same trust radius, the natural merit (the simplified Newton
+    correction, which the joints' stiff normal rows do not dominate) converges 5 of them
+    (measured; at least 4 asserted). Replayed with the residual merit, every one fails
+    again: the replay is faithful, so the difference is the merit's."""
+    model = _panel()
+    _, failed = _failed_work_searches(model)
+    assert len(failed) >= 10
+    assert not any(_replay(model, "residual", failed))
+    assert sum(_replay(model, "natural", failed)) >= 4
