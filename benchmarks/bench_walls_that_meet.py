@@ -1,6 +1,9 @@
 """Benchmark: a U wall (return walls as blocks) against a flat wall of the same block count.
 
-Run:  python benchmarks/bench_walls_that_meet.py [--sizes S5 big] [--repeat 3]
+Run:  python benchmarks/bench_walls_that_meet.py [--sizes S5 big] [--repeat 3] [--set k=v ...]
+
+``--set FIELD=VALUE`` (repeatable) overrides a ``StaticSettings`` field for both walls'
+pushovers (e.g. ``--set line_search=natural``).
 
 For each size it builds a U wall of Restrepo Velez's stones on a fixed base (``S5``: the
 8-block specimen with returns of 4 blocks, 326 blocks; ``big``: 14 blocks x 30 courses with
@@ -38,6 +41,7 @@ import argparse
 import platform
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 from scipy import sparse
@@ -50,8 +54,11 @@ from masonry_dem.geometry.builders import add_base, running_bond_wall
 from masonry_dem.geometry.interfaces import detect_interfaces
 from masonry_dem.geometry.plans import u_wall
 from masonry_dem.model import InterfaceMaterial, Model, SelfWeight, Support, WeightProportional
-from masonry_dem.solvers.incremental import StaticSolver
+from masonry_dem.solvers.incremental import StaticSettings, StaticSolver
 from masonry_dem.solvers.linear import solve_linear
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_validation import parse_settings  # noqa: E402
 
 A, B, S, GAMMA = 0.02824, 0.07978, 0.03968, 26.8e3  # Restrepo Velez's stones
 DRY = InterfaceMaterial(kn=2.4e9, kt=1.0e9, friction=0.7)
@@ -80,7 +87,7 @@ def build(wall, held: bool) -> tuple[Model, float]:
     return model, time.perf_counter() - t0
 
 
-def measure(wall, held: bool) -> dict:
+def measure(wall, held: bool, settings: StaticSettings | None = None) -> dict:
     model, assemble = build(wall, held)
     linear = []
     for _ in range(5):
@@ -91,7 +98,7 @@ def measure(wall, held: bool) -> dict:
     lu = splu(K)
     parts = connected_components(K, directed=False)[0]
     t0 = time.perf_counter()
-    pushed = StaticSolver(model)
+    pushed = StaticSolver(model, settings)
     h = pushed.run()
     seconds = time.perf_counter() - t0
     solver = StaticSolver(model)
@@ -134,15 +141,19 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--sizes", nargs="+", choices=sorted(SIZES), default=["S5", "big"])
     parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--set", action="append", default=[], metavar="FIELD=VALUE")
     args = parser.parse_args(argv)
+    settings = StaticSettings(**parse_settings(args.set))
+    if args.set:
+        print(f"# settings: {' '.join(args.set)}")
     print(f"# {platform.processor() or platform.machine()}, python {sys.version.split()[0]}")
     measure(*walls("S5")[:1], held=False)  # compile the kernels before timing
     for size in args.sizes:
         u, flat = walls(size)
         runs: dict[str, list[dict]] = {"U": [], "flat": []}
         for _ in range(args.repeat):  # alternate, so both see the same load of the machine
-            runs["U"].append(measure(u, held=False))
-            runs["flat"].append(measure(flat, held=True))
+            runs["U"].append(measure(u, held=False, settings=settings))
+            runs["flat"].append(measure(flat, held=True, settings=settings))
         best = {}
         for kind, rs in runs.items():
             best[kind] = {

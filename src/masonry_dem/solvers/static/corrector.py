@@ -243,40 +243,25 @@ class Corrector:
             shrink = min(1.0, radius / size) if size > 0 else 1.0
             merit = rnorm + cerr
             accepted = None
-            if s.line_search == "natural":
-                # the simplified Newton correction at a trial, measured as the full one
-                reference = self.problem.correction_norm(dq)
-            elif s.line_search == "directional":
-                along = float(dq @ residual)  # s(0) = dq . R(q)
-                curvature = along + dlam * float(dq @ self.problem.F_live)  # dq . K dq
+            natural = s.line_search == "natural"
+            if natural:  # the full correction's size: the simplified one's at t = 0
+                merit = self.problem.correction_norm(dq)
             # after a cut the full step is the last backtrack of the search before it (x 1/8)
-            trials = 3 if repeat else 4
-            step = 0.5 if repeat else 1.0
-            for _ in range(trials):
+            for step in (0.5, 0.25, 0.125) if repeat else (1.0, 0.5, 0.25, 0.125):
                 f = shrink * step
                 q_try = q.copy()
                 q_try[free] += f * dq
                 lam_try = lam + f * dlam
                 r_try, n_try, resp_try = self.residual(q_try, lam_try, dead_factor)
                 c_try = constraint_error(q_try)
-                if s.line_search == "natural":
-                    lower = (
-                        self._natural_norm(lu, r_try, q_try, control, live_solved[1])
-                        < (1.0 - 1e-4 * f) * reference
-                    )
+                if natural:
+                    assert lu is not None  # factorized above
+                    trial = self._natural_norm(lu, r_try, q_try, control, live_solved[1])
                 else:
-                    lower = n_try + c_try < (1.0 - 1e-4 * f) * merit
-                slope = 0.0
-                if s.line_search == "directional" and not lower and curvature > 0.0:
-                    slope = float(dq @ r_try)  # s(t) = dq . R(q + t dq)
-                    lower = abs(slope) <= s.directional_tolerance * curvature
-                if lower:
+                    trial = n_try + c_try
+                if trial < (1.0 - 1e-4 * f) * merit:
                     accepted = (q_try, lam_try, r_try, n_try, resp_try, c_try)
                     break
-                if slope < 0.0 < along:  # past the zero of s: regula falsi on s(0), s(t)
-                    step *= min(0.5, max(0.1, along / (along - slope)))
-                else:
-                    step *= 0.5
             if accepted is None and not here:  # a stale tangent: refactor before cutting
                 lu = None
                 continue
