@@ -29,6 +29,14 @@ the ratios of seconds (wall clock and the process's CPU), factorizations and ite
 against the rule before, in one run. Counts are exact whatever the machine's load; the
 seconds are not, so only their ratios within one run compare.
 
+``--replay name=value`` (session 18) records every Newton search of the path with the
+solver's state before it and runs each again from that state, once as it was (the count of
+outcomes that differ, ``mismatches``, should be 0) and once with the change: searches
+converged, factorizations and iterations of each corrector over the same searches, so a
+change of the corrector (``line_search=natural``) is compared without the path it would
+take (a corrector that converges one search more or less takes another path, whose folds
+and halvings then move the totals by tens of per cent either way).
+
 Four probes of the path (issue 21, session 17), each on top of a default run:
 
 * ``--events`` adds to each work search of ``--rows`` the joints whose state the tangent of
@@ -365,6 +373,69 @@ def hand_over(model, settings) -> None:
     sys.stdout.flush()
 
 
+_STATE = ("q", "plastic", "cracked", "_last_increment", "_limit_allowance", "_elastic_limit")
+
+
+def _copy(value):
+    return value.copy() if isinstance(value, np.ndarray) else value
+
+
+def replay(model, settings, other, monitor=None) -> dict:
+    """Every Newton search (``equilibrate``) of the pushover with ``settings``, recorded with
+    the solver's state before it, then run again from that state with ``settings`` (the
+    replay must give the same outcome: ``mismatches`` counts where it does not) and with
+    ``other``. The path is the first run's for both, so the counts compare the correctors
+    from the same states, searches and trust radii, whatever path each would have taken.
+    Returns, for each: searches converged, factorizations and iterations (over all
+    searches, and over those both converge), and the searches only one converges."""
+    from masonry_dem.solvers.static import StaticSolver
+
+    solver = StaticSolver(model, settings)
+    plain = solver.equilibrate
+    calls = []
+
+    def recording(*args, **kwargs):
+        state = {k: _copy(getattr(solver, k)) for k in _STATE}
+        out = plain(*args, **kwargs)
+        calls.append((args, kwargs, state, out.ok))
+        return out
+
+    solver.equilibrate = recording
+    solver.run(monitor=monitor)
+    runs = {}
+    for label, chosen in (("this", settings), ("other", other)):
+        again = StaticSolver(model, chosen)
+        again.run(monitor=monitor)  # the scales and limits of the path
+        outcomes = []
+        for args, kwargs, state, _ in calls:
+            for k, v in state.items():
+                setattr(again, k, _copy(v))
+            it, f = again.iterations, again.factorizations
+            out = again.equilibrate(*args, **kwargs)
+            outcomes.append((out.ok, again.iterations - it, again.factorizations - f))
+        runs[label] = outcomes
+    this, that = runs["this"], runs["other"]
+    both = [i for i in range(len(calls)) if this[i][0] and that[i][0]]
+    return {
+        "searches": len(calls),
+        "mismatches": sum(this[i][0] != calls[i][3] for i in range(len(calls))),
+        **{
+            f"{label}_{key}": value
+            for label, rs in runs.items()
+            for key, value in (
+                ("converged", sum(r[0] for r in rs)),
+                ("factorizations", sum(r[2] for r in rs)),
+                ("iterations", sum(r[1] for r in rs)),
+                ("factorizations_both", sum(rs[i][2] for i in both)),
+                ("failed_factorizations", sum(r[2] for r in rs if not r[0])),
+            )
+        },
+        "both": len(both),
+        "only_this": sum(a[0] and not b[0] for a, b in zip(this, that, strict=True)),
+        "only_other": sum(b[0] and not a[0] for a, b in zip(this, that, strict=True)),
+    }
+
+
 def main() -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--scale", type=int, action="append", default=[], help="scale_wall(N)")
@@ -391,6 +462,13 @@ def main() -> int:
     p.add_argument("--hand-over", action="store_true", help="the first work steps, three starts")
     p.add_argument(
         "--transients", action="store_true", help="each pseudo-transient step's residual"
+    )
+    p.add_argument(
+        "--replay",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="each search of the path again from its state, as it was and with this change",
     )
     p.add_argument("--json", default=None)
     a = p.parse_args()
@@ -430,8 +508,25 @@ def main() -> int:
             label = name if blocks is None else f"{name}/{blocks}"
             walls.append((label, case.model, case.settings, case.monitor))
     results = {}
+    replayed = parse_settings(a.replay)
+    totals: Counter = Counter()
     for label, model, settings, monitor in walls:
         settings = replace(settings, **changes) if changes else settings
+        if replayed:
+            rp = replay(model, settings, replace(settings, **replayed), monitor)
+            totals.update(rp)
+            print(
+                f"{label}: {rp['searches']} searches replayed ({rp['mismatches']} mismatches); "
+                f"converged {rp['this_converged']} -> {rp['other_converged']} (only this "
+                f"{rp['only_this']}, only {' '.join(a.replay)} {rp['only_other']}); "
+                f"factorizations {rp['this_factorizations']} -> {rp['other_factorizations']} "
+                f"(failed searches {rp['this_failed_factorizations']} -> "
+                f"{rp['other_failed_factorizations']}; the {rp['both']} both converge "
+                f"{rp['this_factorizations_both']} -> {rp['other_factorizations_both']}); "
+                f"iterations {rp['this_iterations']} -> {rp['other_iterations']}",
+                flush=True,
+            )
+            continue
         if a.hand_over:
             print(f"{label}:")
             hand_over(model, settings)
@@ -518,6 +613,8 @@ def main() -> int:
                     f"{'y' if row['ok'] else 'n'} {predicted}  {row['why']}"
                 )
         sys.stdout.flush()
+    if replayed and len(walls) > 1:
+        print("total replayed: " + ", ".join(f"{k} {v}" for k, v in totals.items()))
     mine = [r for k, r in results.items() if not k.endswith(" against")]
     if len(mine) > 1:
         total = {k: sum(r[k] for r in mine) for k in ("steps", "iterations")}
