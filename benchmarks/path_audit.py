@@ -412,7 +412,8 @@ def replay(model, settings, other, monitor=None) -> dict:
                 setattr(again, k, _copy(v))
             it, f = again.iterations, again.factorizations
             out = again.equilibrate(*args, **kwargs)
-            outcomes.append((out.ok, again.iterations - it, again.factorizations - f))
+            stop = 0.0 if out.ok else again.residual(out.q, out.load_factor)[1]
+            outcomes.append((out.ok, again.iterations - it, again.factorizations - f, stop))
         runs[label] = outcomes
     this, that = runs["this"], runs["other"]
     both = [i for i in range(len(calls)) if this[i][0] and that[i][0]]
@@ -428,6 +429,8 @@ def replay(model, settings, other, monitor=None) -> dict:
                 ("iterations", sum(r[1] for r in rs)),
                 ("factorizations_both", sum(rs[i][2] for i in both)),
                 ("failed_factorizations", sum(r[2] for r in rs if not r[0])),
+                # where the failed searches stop: far from an equilibrium, or at a kink
+                ("failed_stop_median", float(np.median([r[3] for r in rs if not r[0]] or [0]))),
             )
         },
         "both": len(both),
@@ -514,7 +517,7 @@ def main() -> int:
         settings = replace(settings, **changes) if changes else settings
         if replayed:
             rp = replay(model, settings, replace(settings, **replayed), monitor)
-            totals.update(rp)
+            totals.update({k: v for k, v in rp.items() if not k.endswith("_median")})
             print(
                 f"{label}: {rp['searches']} searches replayed ({rp['mismatches']} mismatches); "
                 f"converged {rp['this_converged']} -> {rp['other_converged']} (only this "
@@ -523,7 +526,9 @@ def main() -> int:
                 f"(failed searches {rp['this_failed_factorizations']} -> "
                 f"{rp['other_failed_factorizations']}; the {rp['both']} both converge "
                 f"{rp['this_factorizations_both']} -> {rp['other_factorizations_both']}); "
-                f"iterations {rp['this_iterations']} -> {rp['other_iterations']}",
+                f"iterations {rp['this_iterations']} -> {rp['other_iterations']}; failed "
+                f"searches stop at a residual of {rp['this_failed_stop_median']:.2g} -> "
+                f"{rp['other_failed_stop_median']:.2g} (median)",
                 flush=True,
             )
             continue
