@@ -216,12 +216,10 @@ class StaticSettings(LoadPathSettings):
         with the factors the step was solved with, against the full correction's (Deuflhard's
         natural monotonicity test; under control, with the lambda correction that meets the
         constraint, so the control's error is in it): the residual in the tangent's own
-        norm, which the joints' stiff normal rows do not dominate. It takes one more solve
-        per trial step. Measured: 20 % fewer factorizations on the U wall of issue 21, 7.5 %
-        on the Restrepo Velez specimens with return walls, 5 % on the 909-block wall, even
-        on the 18 validation cases in total but +77 % on OL2, +39 % on S6 and S23's lambda
-        -1.1 %, so not the default. The tolerance test of a converged state is the same for
-        both.
+        norm, which the joints' stiff normal rows do not dominate; one more solve per trial
+        step. It cuts the factorizations of walls with corners (the U wall of issue 21 by a
+        fifth) but costs single flat walls up to 77 % more, so it is not the default. The
+        tolerance test of a converged state is the same for both.
     """
 
     easy_iterations: int = count(6, least=0)
