@@ -218,8 +218,9 @@ class StaticSettings(LoadPathSettings):
         constraint, so the control's error is in it): the residual in the tangent's own
         norm, which the joints' stiff normal rows do not dominate; one more solve per trial
         step. It cuts the factorizations of walls with corners (the U wall of issue 21 by a
-        fifth) but costs single flat walls up to 77 % more, so it is not the default. The
-        tolerance test of a converged state is the same for both.
+        fifth) but costs single flat walls up to 77 % more, and its solves can cost more
+        than the factorizations it saves (a 14 x 30 U wall: 1.5x the CPU), so it is not the
+        default. The tolerance test of a converged state is the same for both.
     """
 
     easy_iterations: int = count(6, least=0)
