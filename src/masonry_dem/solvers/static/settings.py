@@ -24,6 +24,9 @@ from masonry_dem.solvers.load_path import LoadPathSettings
 #: what follows the first failure of load control (see ``StaticSettings.continuation``)
 Continuation = Literal["work", "bracket"]
 CONTINUATION: tuple[str, ...] = get_args(Continuation)
+#: how the corner check relaxes (see ``StaticSettings.corner_check``)
+CornerCheck = Literal["mixed", "implicit", "explicit"]
+CORNER_CHECKS: tuple[str, ...] = get_args(CornerCheck)
 
 
 @dataclass(frozen=True)
@@ -202,6 +205,31 @@ class StaticSettings(LoadPathSettings):
         the displacement at the peak (both from the dead-load state).
     bound_tolerance: lambda may exceed the associative limit-analysis bound (when one is
         given) by this fraction (the bound's own discretisation and solver tolerance).
+
+    The corner check, implicit (session 18, branch ``verdict``)
+    -----------------------------------------------------------
+    corner_check: how the check at a corner tells a fold from a peak. ``"mixed"``
+        (default): :meth:`~masonry_dem.solvers.static.corrector.Corrector.implicit_relaxation`
+        decides (linearly implicit Euler steps of the overdamped motion D dq/dt = R(q), D the
+        joints' elastic stiffness, one factorization each, to the same target lambda x (1 +
+        transient_rise) from the same state): no rest, a peak, with no time step of dynamic
+        relaxation (the U wall's peak: 74 steps, where dynamic relaxation stalled for 10 000
+        time steps); rest, a fold, and the path goes on from the rest dynamic relaxation
+        (``fold_check_time_steps``) finds, the equilibrium the explicit check took, or from
+        the implicit one's where that finds none (S13/2's fold at 0.1082). ``"implicit"``:
+        the implicit rest always (the cheapest; S23 then goes on from another equilibrium at
+        its first fold and peaks 2.5 % lower). ``"explicit"``: dynamic relaxation alone, as
+        sessions 15-17 (docs/solvers.md, "The corner check, implicit").
+    corner_check_steps: budget of implicit steps (factorizations) of that check; a check
+        that spends it finds no rest (the stop is a peak). Twice the slowest fold measured.
+    corner_check_rise: an implicit step whose residual is more than (1 + this) times the
+        last one's is too long (it crossed kinks of the law the tangent did not see): it is
+        taken again with a time step a quarter as long, down to the elastic relaxation
+        time (D = the elastic stiffness), which is always taken, the residual may rise on
+        the way (a wall snapping through is out of balance until it arrives).
+    corner_check_start: the first implicit step's D / dt in units of the joints' elastic
+        stiffness (a pseudo time step of 1 / this elastic relaxation times); halved after
+        each step taken, so the steps grow towards Newton's as the wall settles.
     """
 
     easy_iterations: int = count(6, least=0)
@@ -251,6 +279,10 @@ class StaticSettings(LoadPathSettings):
     mode_stiffness: float = positive(0.05)
     mode_displacement: float = positive(0.5)
     bound_tolerance: float = positive(0.01)
+    corner_check: CornerCheck = choice("mixed", CORNER_CHECKS)
+    corner_check_steps: int = count(200, least=1)
+    corner_check_rise: float = positive(0.5)
+    corner_check_start: float = positive(1e-2)
 
 
 SETTING_NAMES = tuple(f.name for f in fields(StaticSettings))
