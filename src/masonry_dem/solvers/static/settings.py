@@ -173,8 +173,10 @@ class StaticSettings(LoadPathSettings):
         singular although the path never ran along a mechanism: a fold of the path, or a
         peak). The check runs there whatever the tangent, with the larger of this and
         ``stop_check_time_steps``; its budget covers the settling of every fold measured
-        (docs/solvers.md, "The corner check on by default"). A corner that is a peak costs
-        half the budget (a stalled relaxation). A path whose searches run past the
+        (docs/solvers.md, "The corner check on by default"). With ``corner_check =
+        "explicit"`` a corner that is a peak costs half the budget (a stalled relaxation);
+        by default (``"mixed"``) the implicit check decides, and this relaxation runs only
+        at a fold, for the state the path goes on from. A path whose searches run past the
         displacement limit while its curve still rose is a corner too. 0: such stops are
         checked as any other, so a singular tangent skips the check
         (``stop_check_time_steps`` = 0 disables both).
