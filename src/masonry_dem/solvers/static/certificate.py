@@ -329,8 +329,9 @@ def certify(
             + (
                 "not checked (fold_check_time_steps = 0)"
                 if s.fold_check_time_steps <= 0 or s.stop_check_time_steps <= 0
-                else f"an implicit relaxation found no rest above it within "
-                f"{s.corner_check_steps} steps"
+                else f"no rest above it: an implicit relaxation ran past the displacement "
+                f"limit, or found no rest within {s.corner_check_steps} steps and dynamic "
+                f"relaxation none within {s.fold_check_time_steps} time steps"
                 if s.corner_check != "explicit"
                 else f"dynamic relaxation found no rest above it within {s.fold_check_time_steps} "
                 f"time steps"

@@ -304,10 +304,12 @@ def work_control(
 
     def rest_above(budget: int, corner: bool = False) -> bool:
         """A relaxation looks for rest a little above the last state (once from each
-        state), and the path goes on from there if it finds it: at a corner
-        :meth:`Corrector.implicit_relaxation` unless ``corner_check = "explicit"`` (with
-        ``"mixed"`` the path goes on from dynamic relaxation's rest where the implicit one
-        finds a fold), elsewhere dynamic relaxation of ``budget`` time steps."""
+        state), and the path goes on from there if it finds it. At a corner, unless
+        ``corner_check = "explicit"``, :meth:`Corrector.implicit_relaxation` first: its
+        motion running past the displacement limit is a peak; rest is a fold (with
+        ``"mixed"`` the path goes on from dynamic relaxation's rest, if it finds one); its
+        budget spent, dynamic relaxation decides. Elsewhere dynamic relaxation of
+        ``budget`` time steps."""
         nonlocal checked_from
         checked_from = len(hist.steps)
         target = lam + s.transient_rise * abs(lam)
@@ -329,6 +331,13 @@ def work_control(
                     solver._last_increment = moved_increment
                 rescued = moved if settled is None else settled
                 verdict += "; dynamic relaxation: " + ("no rest" if settled is None else "ok")
+            elif not moved.ok and not moved.past_limit:
+                # no verdict: neither rest nor a run-off within corner_check_steps (a slow
+                # fold, as on the big U wall's, or a peak that creeps): the explicit check
+                # decides, as before
+                solver._last_increment = last_increment
+                rescued = solver.dynamic_rescue(target, lam, budget)
+                verdict += "; dynamic relaxation: " + ("no rest" if rescued is None else "ok")
         else:
             rescued = solver.dynamic_rescue(target, lam, budget)
             how, verdict = "dynamic relaxation", "ok" if rescued else "no rest"

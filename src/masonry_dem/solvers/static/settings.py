@@ -212,18 +212,22 @@ class StaticSettings(LoadPathSettings):
     -----------------------------------------------------------
     corner_check: how the check at a corner tells a fold from a peak. ``"mixed"``
         (default): :meth:`~masonry_dem.solvers.static.corrector.Corrector.implicit_relaxation`
-        decides (linearly implicit Euler steps of the overdamped motion D dq/dt = R(q), D the
+        first (linearly implicit Euler steps of the overdamped motion D dq/dt = R(q), D the
         joints' elastic stiffness, one factorization each, to the same target lambda x (1 +
-        transient_rise) from the same state): no rest, a peak, with no time step of dynamic
-        relaxation (the U wall's peak: 74 steps, where dynamic relaxation stalled for 10 000
-        time steps); rest, a fold, and the path goes on from the rest dynamic relaxation
-        (``fold_check_time_steps``) finds, the equilibrium the explicit check took, or from
-        the implicit one's where that finds none (S13/2's fold at 0.1082). ``"implicit"``:
-        the implicit rest always (the cheapest; S23 then goes on from another equilibrium at
-        its first fold and peaks 2.5 % lower). ``"explicit"``: dynamic relaxation alone, as
-        sessions 15-17 (docs/solvers.md, "The corner check, implicit").
-    corner_check_steps: budget of implicit steps (factorizations) of that check; a check
-        that spends it finds no rest (the stop is a peak). Twice the slowest fold measured.
+        transient_rise) from the same state). Its motion running past the displacement
+        limit is a peak, with no time step of dynamic relaxation (the U wall's peak: 74
+        steps, where dynamic relaxation stalled for 10 000 time steps). Rest is a fold: the
+        path goes on from the rest dynamic relaxation (``fold_check_time_steps``) finds, the
+        equilibrium the explicit check took, or from the implicit one's where that finds
+        none (S13/2's fold at 0.1082). No verdict within ``corner_check_steps``: dynamic
+        relaxation decides, as before (the big U wall's fold, 341 implicit steps).
+        ``"implicit"``: the same, but the implicit rest always (the cheapest; S23 then goes
+        on from another equilibrium at its first fold and peaks 2.5 % lower).
+        ``"explicit"``: dynamic relaxation alone, as sessions 15-17 (docs/solvers.md, "The
+        corner check, implicit").
+    corner_check_steps: budget of implicit steps (factorizations) of that check, the most a
+        check without a verdict costs before dynamic relaxation decides: twice the slowest
+        rest of 13 checks measured (96), 2.7 times the U wall's run-off (74).
     corner_check_rise: an implicit step whose residual is more than (1 + this) times the
         last one's is too long (it crossed kinks of the law the tangent did not see): it is
         taken again with a time step a quarter as long, down to the elastic relaxation
