@@ -21,6 +21,9 @@ Proves, on walls whose answer is known:
   certifies its first fold at 0.0855 although dynamic relaxation finds rest above it; the
   implicit check passes that fold and every later one, the one at 0.1082 where the explicit
   check found no rest too, to a collapse under the associative bound;
+- a peak whose check runs off costs no time step and keeps its answer (the S5 U wall); a
+  check with no verdict within its budget leaves it to dynamic relaxation, so the path is
+  the explicit check's;
 - its settings are checked like every other.
 """
 
@@ -109,6 +112,39 @@ def test_the_implicit_check_passes_the_last_fold_of_s13_2():
         case.model, replace(case.settings, fold_check_time_steps=0, transient_reach=0.0)
     ).run(monitor=case.monitor)
     assert unchecked.collapse_multiplier == pytest.approx(0.08551, rel=1e-3)
+
+
+def test_a_peak_that_runs_off_costs_no_time_step_and_keeps_its_answer():
+    """S5 with 4-block return walls, a U wall of 326 blocks (the same wall, load and answer
+    as the U wall of ``benchmarks/bench_walls_that_meet.py``): its last stop is a corner
+    that is a peak. The explicit check relaxed there for 10 000 time steps (a stall) to say
+    so; the implicit check's motion runs past the displacement limit (74 steps measured),
+    so no time step is spent, and the collapse is the same to the digit."""
+    case = build_case("S5", restraint="return-walls", return_blocks=4)
+    implicit = StaticSolver(case.model, case.settings)
+    found = implicit.run(monitor=case.monitor)
+    explicit = StaticSolver(case.model, replace(case.settings, corner_check="explicit"))
+    before = explicit.run(monitor=case.monitor)
+    assert found.status == "collapse" and before.status == "collapse", found.reason
+    assert found.certificate.corner
+    assert implicit.time_steps == 0 and 0 < implicit.implicit_steps < 200
+    assert explicit.time_steps > 0
+    assert found.collapse_multiplier == pytest.approx(before.collapse_multiplier, rel=1e-9)
+
+
+def test_a_check_without_verdict_leaves_it_to_dynamic_relaxation():
+    """With a budget of one implicit step no check of S13/2 reaches rest or the displacement
+    limit: each falls back to dynamic relaxation, and the path is the explicit check's, to
+    its collapse at 0.1082 and its time steps."""
+    case = build_case("S13", restraint="return-walls", return_blocks=2)
+    fallback = StaticSolver(case.model, replace(case.settings, corner_check_steps=1))
+    found = fallback.run(monitor=case.monitor)
+    explicit = StaticSolver(case.model, replace(case.settings, corner_check="explicit"))
+    before = explicit.run(monitor=case.monitor)
+    assert found.collapse_multiplier == pytest.approx(0.10819, rel=1e-3)
+    assert found.collapse_multiplier == pytest.approx(before.collapse_multiplier, rel=1e-9)
+    assert fallback.time_steps == explicit.time_steps > 0
+    assert fallback.implicit_steps > 0
 
 
 @pytest.mark.parametrize(
