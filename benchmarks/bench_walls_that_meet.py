@@ -24,7 +24,8 @@ In one run, alternating U and flat ``--repeat`` times, best of each, it prints:
   solver's tangent at the dead-load state, as every Newton step after the first does it
   (the multifrontal LU with the ordering the solver keeps), best of 5;
 - ``pushover``: the static solver to collapse, its recorded steps, Newton iterations,
-  factorizations and the time steps of its dynamic-relaxation checks;
+  factorizations, the time steps of its dynamic-relaxation checks and the steps of its
+  implicit corner checks (each one factorization);
 - ``per iteration``, ``per factorization``: pushover seconds per Newton iteration and per
   factorization of the tangent, the cost of the solver's work on that wall whatever the
   length of its path;
@@ -130,6 +131,7 @@ def measure(wall, held: bool, settings: StaticSettings | None = None) -> dict:
         "iterations": h.iterations,
         "factorizations": h.factorizations,
         "time_steps": pushed.time_steps,
+        "implicit_steps": pushed.implicit_steps,
         "per_iteration": seconds / max(h.iterations, 1),
         "per_factorization": seconds / max(h.factorizations, 1),
         "lambda": h.collapse_multiplier,
@@ -189,6 +191,7 @@ def main(argv=None) -> int:
             ("iterations", ""),
             ("factorizations", ""),
             ("time_steps", ""),
+            ("implicit_steps", ""),
             ("per_iteration", "ms"),
             ("per_factorization", "ms"),
             ("lambda", ""),

@@ -5,9 +5,10 @@
 
 Each wall runs the default static pushover (``StaticSolver(model, settings).run()``); the
 searches the path followers ask for (``equilibrate``, ``pseudo_transient``, ``robust``,
-``dynamic_rescue``) are wrapped on the solver instance, and each call is one row: the
+``dynamic_rescue``, ``implicit_relaxation``) are wrapped on the solver instance, and each call is one row: the
 controller that asked (``load``: lambda prescribed; ``work``: the work-conjugate
-displacement prescribed; ``transient``: a pseudo-transient step; ``rescue``/``robust``),
+displacement prescribed; ``transient``: a pseudo-transient step; ``rescue``/``robust``;
+``corner``: the implicit corner check, ``implicit_relaxation``),
 lambda it ended at, the step it was asked for (d lambda, or d w in m), Newton iterations,
 factorizations, and whether it converged (and if not, why). The totals split the
 factorizations by controller and by converged/failed; what no search took (the elastic
@@ -187,6 +188,8 @@ def audit(
                     kind = "transient"
                 elif name == "dynamic_rescue":
                     kind = "rescue"
+                elif name == "implicit_relaxation":
+                    kind = "corner"
                 ok = out is not None and bool(out.ok)
                 if ok and not dead:
                     dead.append(out.q[free].copy())
@@ -214,7 +217,13 @@ def audit(
 
         setattr(solver, name, call)
 
-    for name in ("equilibrate", "pseudo_transient", "robust", "dynamic_rescue"):
+    for name in (
+        "equilibrate",
+        "pseudo_transient",
+        "robust",
+        "dynamic_rescue",
+        "implicit_relaxation",
+    ):
         wrap(name)
     t0, c0 = time.perf_counter(), time.process_time()
     hist = solver.run(monitor=monitor)
@@ -244,6 +253,8 @@ def audit(
         "steps": len(hist.steps),
         "iterations": solver.iterations,
         "factorizations": solver.factorizations,
+        "time_steps": solver.time_steps,
+        "implicit_steps": solver.implicit_steps,
         "other": solver.factorizations - sum(r["factorizations"] for r in rows),
         "seconds": seconds,
         "cpu": cpu,
@@ -548,13 +559,16 @@ def main() -> int:
         print(
             f"{label}: {r['status']} lambda={r['lambda']:.7g} steps={r['steps']} "
             f"iterations={r['iterations']} factorizations={r['factorizations']} "
-            f"(other {r['other']}) {r['seconds']:.1f} s ({r['cpu']:.1f} s of CPU)"
+            f"(other {r['other']}) time_steps={r['time_steps']} implicit={r['implicit_steps']} "
+            f"{r['seconds']:.1f} s ({r['cpu']:.1f} s of CPU)"
         )
         if other:
             print(
                 f"{label}, {' '.join(a.against)}: {b['status']} lambda={b['lambda']:.7g} "
                 f"steps={b['steps']} iterations={b['iterations']} "
-                f"factorizations={b['factorizations']} {b['seconds']:.1f} s "
+                f"factorizations={b['factorizations']} time_steps={b['time_steps']} "
+                f"implicit={b['implicit_steps']} "
+                f"{b['seconds']:.1f} s "
                 f"({b['cpu']:.1f} s of CPU)"
             )
             print(
@@ -622,12 +636,25 @@ def main() -> int:
         print("total replayed: " + ", ".join(f"{k} {v}" for k, v in totals.items()))
     mine = [r for k, r in results.items() if not k.endswith(" against")]
     if len(mine) > 1:
-        total = {k: sum(r[k] for r in mine) for k in ("steps", "iterations")}
+        total = {k: sum(r[k] for r in mine) for k in ("steps", "iterations", "time_steps")}
         f = sum(r["factorizations"] for r in mine)
         print(
             f"total: {len(mine)} walls, steps={total['steps']} "
-            f"iterations={total['iterations']} factorizations={f}"
+            f"iterations={total['iterations']} factorizations={f} "
+            f"time_steps={total['time_steps']}"
         )
+        theirs = [r for k, r in results.items() if k.endswith(" against")]
+        if theirs:
+            t = {
+                k: sum(r[k] for r in theirs)
+                for k in ("steps", "iterations", "factorizations", "time_steps", "cpu")
+            }
+            print(
+                f"total, {' '.join(a.against)}: steps={t['steps']} "
+                f"iterations={t['iterations']} factorizations={t['factorizations']} "
+                f"time_steps={t['time_steps']}; CPU this over that "
+                f"{sum(r['cpu'] for r in mine) / t['cpu']:.2f}x"
+            )
     if a.json:
         Path(a.json).write_text(json.dumps(results, indent=1))
     return 0

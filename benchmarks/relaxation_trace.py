@@ -3,8 +3,15 @@
 
     python benchmarks/relaxation_trace.py [--walls S23 U S6/2 S13/2] [--window 500]
         [--steps 30000] [--probe-every 500] [--only-last] [--keep-creep] [--line] [--probes]
+        [--implicit]
 
-Each wall is run by the static pushover with its default settings; every corner check
+With ``--implicit`` (session 18) each recorded check is run again by the implicit corner
+check instead (``Corrector.implicit_relaxation``, from the same start to the same target):
+its verdict and steps beside the explicit one's, and, at the last check's start, the cost
+of one factorization against one time step of dynamic relaxation.
+
+Each wall is run by the static pushover with its default settings but the explicit corner
+check (``corner_check = "explicit"``); every corner check
 (``Corrector.dynamic_rescue`` called by work control's ``rest_above``) is recorded: its start
 state, target and whether it found rest. Then each recorded check is relaxed again with
 kinetic damping as ``Relaxation._relax`` does it, every velocity zeroed at each
@@ -32,13 +39,14 @@ import argparse
 import math
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
 from masonry_dem.cases.paper import build_case
 from masonry_dem.solvers.dynamic_relaxation import _State
-from masonry_dem.solvers.static import StaticSolver
+from masonry_dem.solvers.static import StaticSettings, StaticSolver
 from masonry_dem.solvers.static.corrector import Corrector
 
 
@@ -60,13 +68,16 @@ def wall(name: str):
 
 
 def record(model, settings, monitor):
-    """Run the pushover; the corner checks it made: (corrector, start state, target, budget,
-    found, time steps)."""
+    """Run the pushover with the explicit corner check (``corner_check = "explicit"``: every
+    check is a dynamic relaxation); the corner checks it made: (corrector, start state,
+    target, budget, found, time steps, the corrector's trust increment at the start)."""
     checks = []
     original = Corrector.dynamic_rescue
+    settings = replace(settings or StaticSettings(), corner_check="explicit")
 
     def spy(self, target, last, budget=None, polish=True):
         free = self.problem.asm.free_index
+        increment = self._last_increment
         start = _State(
             self.q[free].copy(),
             self.plastic.copy(),
@@ -79,7 +90,16 @@ def record(model, settings, monitor):
         out = original(self, target, last, budget, polish)
         if budget is not None and polish:
             checks.append(
-                (self, start, q_saved, target, budget, out is not None, self.time_steps - before)
+                (
+                    self,
+                    start,
+                    q_saved,
+                    target,
+                    budget,
+                    out is not None,
+                    self.time_steps - before,
+                    increment,
+                )
             )
         return out
 
@@ -250,6 +270,44 @@ def trace(
     return steps
 
 
+def implicit(corrector, start, q_saved, target, increment) -> str:
+    """The implicit corner check (``Corrector.implicit_relaxation``) from a recorded check's
+    start to its target: verdict and steps (each one factorization)."""
+    corrector.q = q_saved.copy()
+    corrector.plastic = start.plastic.copy()
+    corrector.cracked = start.cracked.copy()
+    corrector._last_increment = increment
+    f0, t0 = corrector.factorizations, time.perf_counter()
+    out = corrector.implicit_relaxation(target)
+    verdict = "rest" if out.ok else out.failure.value
+    return (
+        f"{verdict} after {out.iterations} steps ({corrector.factorizations - f0} "
+        f"factorizations, {time.perf_counter() - t0:.2f} s)"
+    )
+
+
+def costs(corrector, start, q_saved, target, budget, repeat: int = 5) -> str:
+    """At a recorded check's start: one factorization and solve of the tangent, and one time
+    step of the check's dynamic relaxation (a relaxation of ``budget`` time steps at most, no
+    probes), in seconds, and their ratio."""
+    corrector.q = q_saved.copy()
+    corrector.plastic = start.plastic.copy()
+    corrector.cracked = start.cracked.copy()
+    _, _, response = corrector.residual(corrector.q, target)
+    t0 = time.perf_counter()
+    for _ in range(repeat):
+        corrector.problem.factor(response).solve(corrector.problem.F_live)
+    factor = (time.perf_counter() - t0) / repeat
+    dr = corrector.relaxation(budget)
+    t0 = time.perf_counter()
+    relaxed = dr._relax_with_cuts(start, target, None, from_start=True)
+    step = (time.perf_counter() - t0) / max(relaxed.cycles, 1)
+    return (
+        f"one factorization and solve {factor * 1e3:.2f} ms, one time step {step * 1e3:.3f} ms "
+        f"(of {relaxed.cycles}): a factorization costs {factor / step:.1f} time steps"
+    )
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     p.add_argument("--walls", nargs="*", default=["S23", "U", "S6/2", "S13/2"])
@@ -260,6 +318,12 @@ def main(argv=None) -> int:
     p.add_argument("--keep-creep", action="store_true", help="no damping along the creep")
     p.add_argument("--line", action="store_true", help="the force along the line")
     p.add_argument("--probes", action="store_true", help="each probe's Newton outcome")
+    p.add_argument(
+        "--implicit",
+        action="store_true",
+        help="instead of the trace, each check again by the implicit relaxation, and the "
+        "cost of a factorization in time steps",
+    )
     args = p.parse_args(argv)
     for name in args.walls:
         t0 = time.perf_counter()
@@ -269,11 +333,16 @@ def main(argv=None) -> int:
             f"{len(checks)} corner checks ({time.perf_counter() - t0:.1f} s)"
         )
         chosen = checks[-1:] if args.only_last else checks
-        for corrector, start, q_saved, target, budget, found, used in chosen:
+        if args.implicit and chosen:
+            print("   " + costs(*chosen[-1][:5]))
+        for corrector, start, q_saved, target, budget, found, used, increment in chosen:
             print(
                 f"-- check from lambda={start.load_factor:.6g} to {target:.6g}: "
                 f"{'rest (fold)' if found else 'no rest'} after {used} time steps"
             )
+            if args.implicit:
+                print("   implicit: " + implicit(corrector, start, q_saved, target, increment))
+                continue
             trace(
                 corrector,
                 start,

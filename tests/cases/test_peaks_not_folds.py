@@ -15,7 +15,6 @@ its first time step where the path had already moved that far: S11, S12, 10-11).
 from __future__ import annotations
 
 import numpy as np
-import pytest
 
 from masonry_dem.cases.paper import build_case
 from masonry_dem.solvers.limit_analysis.analysis import dem_upper_bound
@@ -70,34 +69,23 @@ def test_a_certified_collapse_of_s12_has_no_equilibrium_1_percent_above_it():
     assert polished is None, "an equilibrium 1 % above a certified collapse: a fold"
 
 
-@pytest.mark.xfail(
-    strict=True,
-    raises=AssertionError,
-    reason=(
-        "issue 21 (the return-wall rows; issue 18's certificate holds there: a limit point "
-        "of the path): by default the path on S13 with 2-block return walls passes four folds "
-        "(0.0855 -> 0.1082) and certifies the fifth, 0.1082; dynamic relaxation + Newton "
-        "find an equilibrium 1 % above it (after about 7 600 time steps with the creep kept "
-        "undamped, 42 000 without), where the corner check at 0.5 % finds none within its "
-        "20 000 (relaxation from the unloaded wall: 0.110)"
-    ),
-)
 def test_a_certified_collapse_of_s13_with_2_block_returns_has_no_equilibrium_above_it():
     """B = 100 000 time steps, Newton tried from the relaxation's states on the way. On
     d01d26a (the corner check off) the path certified its first fold, 0.0855, and this check
-    found rest at 1.01 x that after 41 782 time steps (polished by Newton to 1.3e-9, a
-    largest translation of 2.1 mm). By default the corner check passes the folds at 0.0855,
-    0.0938, 0.0948 and 0.1036 and the path stops at 0.1082, 1.7 % below the highest
-    equilibrium dynamic relaxation finds from the unloaded wall (0.110; the associative
-    bound is 0.1164); this check still finds rest at 1.01 x 0.1082, after 42 335 time steps
-    on faf4f27 and about 7 600 with the creep of the snap-through kept undamped
-    (``fold_creep_cos``), while the check at 1.005 x finds none within its budget.
+    found rest at 1.01 x that after 41 782 time steps. With the explicit corner check
+    (``corner_check = "explicit"``, sessions 15-17) the path passed the folds at 0.0855,
+    0.0938, 0.0948 and 0.1036 and stopped at 0.1082, where this check still found rest (after
+    42 335 time steps on faf4f27, about 7 600 with the creep kept undamped): a strict xfail
+    until session 18. The implicit corner check (the default) passes that fold too and stops
+    at 0.1107 (the highest equilibrium dynamic relaxation finds from the unloaded wall is
+    0.110, the associative bound 0.1164), above which this check finds no rest.
     The bound is left out of the run: it holds there, and costs a limit analysis."""
     case = build_case("S13", restraint="return-walls", return_blocks=2)
     solver = StaticSolver(case.model, case.settings)
     history = solver.run(monitor=case.monitor)
     peak = history.collapse_multiplier
     assert history.status == "collapse" and peak is not None, history.reason
+    assert peak > 1.01 * 0.10819  # past the fold the explicit check certified
     polished, time_steps = _relax_above(solver, peak, budget=100_000)
     assert time_steps > 100
     assert polished is None, f"equilibrium at {(1 + RISE) * peak:.4f} after {time_steps} time steps"

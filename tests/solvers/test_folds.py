@@ -38,8 +38,10 @@ from masonry_dem.solvers.static.certificate import (
 from masonry_dem.solvers.static.outcome import StopReason
 
 
-def test_the_corner_check_passes_the_folds_of_s13_2_by_default():
-    """By default (``fold_check_time_steps`` 20 000, ``fold_probe_every`` 500) the check at
+def test_the_explicit_corner_check_passes_the_folds_of_s13_2():
+    """With ``corner_check = "explicit"`` (the default until session 18; the implicit check
+    is tests/solvers/test_corner_check.py), ``fold_check_time_steps`` 20 000 and
+    ``fold_probe_every`` 500, the check at
     each corner relaxes with Newton tried from its states on the way: the path passes the
     fold at 0.0855 (Newton converges from the relaxation's state after about 2 100 time
     steps with the creep kept undamped, 6 000 without; the relaxation alone came to rest
@@ -48,7 +50,7 @@ def test_the_corner_check_passes_the_folds_of_s13_2_by_default():
     at 0.1082, near the highest equilibrium dynamic relaxation finds from the unloaded wall
     (0.110) and under the associative bound (0.1164)."""
     case = build_case("S13", restraint="return-walls", return_blocks=2)
-    solver = StaticSolver(case.model, case.settings)
+    solver = StaticSolver(case.model, replace(case.settings, corner_check="explicit"))
     history = solver.run()
     assert history.status == "collapse", history.reason
     assert history.collapse_multiplier is not None
@@ -149,7 +151,7 @@ def test_a_search_that_runs_off_at_a_rising_corner_is_measured_once_and_checked(
     hist = checked.run(monitor=case.monitor)
     assert hist.status == "collapse", hist.reason
     assert 2.0 * 0.0455 < hist.collapse_multiplier <= dem_upper_bound(case.model).load_factor
-    assert checked.time_steps > 0
+    assert checked.implicit_steps > 0
 
 
 def test_the_creep_of_a_snap_through_is_kept_undamped_and_passes_the_folds_sooner():
@@ -157,11 +159,12 @@ def test_the_creep_of_a_snap_through_is_kept_undamped_and_passes_the_folds_soone
     to a certified collapse at 0.1080. Kinetic damping zeroes every velocity at each peak
     of the kinetic energy, so the slow motion of the wall snapping through to the rest above
     a fold only creeps; with ``fold_creep_cos`` the velocity along a converged creep is kept
+    (the explicit corner check, ``corner_check = "explicit"``)
     and the check's relaxations pass the same folds in 8 877 time steps in all (faf4f27's
     damping, ``fold_creep_cos = 0``: 19 212, the same collapse). The bound, 12 000, is
     under what the damping of every velocity took, with room for rounding."""
     case = build_case("S6", restraint="return-walls", return_blocks=2)
-    solver = StaticSolver(case.model, case.settings)
+    solver = StaticSolver(case.model, replace(case.settings, corner_check="explicit"))
     hist = solver.run(monitor=case.monitor)
     assert hist.status == "collapse", hist.reason
     assert hist.collapse_multiplier == pytest.approx(0.107994, rel=2e-3)

@@ -8,6 +8,8 @@ free), and the fallbacks that take over where Newton stops.
   floor;
 * :meth:`Corrector.pseudo_transient` - backward-Euler steps of an overdamped motion, which
   go round a fold of the path where no Newton correction lowers the residual;
+* :meth:`Corrector.implicit_relaxation` - implicit steps of the same motion that let the
+  residual rise: the corner check, which tells a fold from a peak;
 * :meth:`Corrector.robust` - initial-stiffness iterations with Anderson acceleration;
 * :meth:`Corrector.dynamic_rescue` - dynamic relaxation, polished by Newton.
 
@@ -65,6 +67,7 @@ class Corrector:
         self.q = np.zeros(model.n_dofs)
         self.iterations = 0  # Newton (and pseudo-transient, robust) iterations
         self.time_steps = 0  # time steps of the dynamic relaxations the solver ran
+        self.implicit_steps = 0  # steps of the implicit relaxations (corner checks) it ran
         self._last_increment = 0.0
         #: extra room of the displacement limit (the elastic displacement under the dead load)
         self._limit_allowance = 0.0
@@ -557,6 +560,84 @@ class Corrector:
             response,
             s.transient_steps,
             f"no rest in {s.transient_steps} pseudo time steps (residual {rnorm:.2e})",
+            failure=Failure.NO_REST,
+        )
+
+    def implicit_relaxation(self, target: float, budget: int | None = None) -> Outcome:
+        """The corner check's relaxation: from the last converged state to rest at
+        ``target``, by linearly implicit Euler steps of the overdamped motion
+        D dq/dt = R(q), D the joints' elastic stiffness (the tangent's floor),
+
+            (K_t + D / dt) dq = R(q),
+
+        one factorization a step, ``budget`` steps at most (``corner_check_steps``).
+
+        What the check must resolve above a corner is the slow creep of a near-mechanism
+        (a wall snapping through to the rest of a fold, or running off above a peak) beside
+        the fast elastic modes: a stiff problem. Dynamic relaxation is explicit, its time
+        step bounded by the stiffest joint, so the snap-through takes thousands of time
+        steps; an implicit step damps the fast modes whatever its length. Unlike
+        :meth:`pseudo_transient` (a step is refused when it raises the residual tenfold, and
+        the search ends when the residual has not halved in ``transient_window`` steps),
+        the residual is let rise: the wall is out of balance all the way to the rest above
+        a fold, and a peak is told by its motion, not its residual. A step whose residual
+        exceeds (1 + ``corner_check_rise``) times the last one's crossed kinks of the law
+        its tangent did not see: it is taken again a quarter as long, down to the elastic
+        relaxation time (D / dt = the elastic stiffness), which is always taken. After
+        each step taken D / dt is halved (from ``corner_check_start``), so the steps grow
+        to Newton's as the wall settles.
+
+        Converged: the residual within ``tolerance`` at ``target`` (an equilibrium of the
+        law, the path goes on from it: a fold). Failed: past the displacement limit
+        (measured from the last converged state, as every search of the path), or no rest
+        within the budget (a peak)."""
+        s = self.settings
+        budget = s.corner_check_steps if budget is None else budget
+        free = self.problem.asm.free_index
+        q = self.q.copy()
+        residual, rnorm, response = self.residual(q, target)
+        floor = s.corner_check_start
+        for step in range(budget):
+            if rnorm <= s.tolerance:
+                self._last_increment = self.increment(q)
+                return Outcome(True, q, target, response, step)
+            self.iterations += 1
+            self.implicit_steps += 1
+            dq = self.problem.factor(response, floor).solve(residual)
+            q_new = q.copy()
+            q_new[free] += dq
+            r_new, n_new, resp_new = self.residual(q_new, target)
+            too_long = not (
+                np.all(np.isfinite(dq)) and n_new <= (1.0 + s.corner_check_rise) * rnorm
+            )
+            if too_long and floor < 1.0:
+                floor = min(4.0 * floor, 1.0)
+                continue
+            if not (np.all(np.isfinite(dq)) and math.isfinite(n_new)):
+                return Outcome(
+                    False,
+                    q,
+                    target,
+                    response,
+                    step + 1,
+                    "the shortest implicit step has no finite residual",
+                    failure=Failure.SINGULAR,
+                )
+            q, residual, rnorm, response = q_new, r_new, n_new, resp_new
+            if self.increment(q) > self.limit:
+                return self._past_limit(q, target, response, step + 1)
+            floor = max(0.5 * floor, s.residual_stiffness)
+        if rnorm <= s.tolerance:
+            self._last_increment = self.increment(q)
+            return Outcome(True, q, target, response, budget)
+        return Outcome(
+            False,
+            q,
+            target,
+            response,
+            budget,
+            f"no rest in {budget} implicit steps (residual {rnorm:.2e}, "
+            f"{self.increment(q):.2e} m from the start)",
             failure=Failure.NO_REST,
         )
 

@@ -302,19 +302,46 @@ def work_control(
             and still_rising(curve_slope(path_w, path_lam, elastic_slope), s.flat_slope)
         )
 
-    def rest_above(budget: int) -> bool:
-        """Dynamic relaxation looks for rest a little above the last state (once from each
-        state), and the path goes on from there if it finds it."""
+    def rest_above(budget: int, corner: bool = False) -> bool:
+        """A relaxation looks for rest a little above the last state (once from each
+        state), and the path goes on from there if it finds it. At a corner, unless
+        ``corner_check = "explicit"``, :meth:`Corrector.implicit_relaxation` first: its
+        motion running past the displacement limit is a peak; rest is a fold (with
+        ``"mixed"`` the path goes on from dynamic relaxation's rest, if it finds one); its
+        budget spent, dynamic relaxation decides. Elsewhere dynamic relaxation of
+        ``budget`` time steps."""
         nonlocal checked_from
         checked_from = len(hist.steps)
         target = lam + s.transient_rise * abs(lam)
-        rescued = solver.dynamic_rescue(target, lam, budget)
-        log.debug(
-            "work control stuck at lambda=%.6g; dynamic relaxation to %.6g: %s",
-            lam,
-            target,
-            "ok" if rescued else "no rest",
-        )
+        rescued: Outcome | None
+        if corner and s.corner_check != "explicit":
+            last_increment = solver._last_increment
+            moved = solver.implicit_relaxation(target)
+            rescued = moved if moved.ok else None
+            how = "implicit relaxation"
+            verdict = f"ok in {moved.iterations} steps" if moved.ok else moved.reason
+            if moved.ok and s.corner_check == "mixed":
+                # a fold: the path goes on from the rest the explicit relaxation finds (the
+                # equilibrium sessions 15-17 took; another basin than the implicit motion's
+                # may lie at the same lambda), or from the implicit one's if it finds none;
+                # its Newton probes start with the trust radius they had before the check
+                moved_increment, solver._last_increment = solver._last_increment, last_increment
+                settled = solver.dynamic_rescue(target, lam, budget)
+                if settled is None:
+                    solver._last_increment = moved_increment
+                rescued = moved if settled is None else settled
+                verdict += "; dynamic relaxation: " + ("no rest" if settled is None else "ok")
+            elif not moved.ok and not moved.past_limit:
+                # no verdict: neither rest nor a run-off within corner_check_steps (a slow
+                # fold, as on the big U wall's, or a peak that creeps): the explicit check
+                # decides, as before
+                solver._last_increment = last_increment
+                rescued = solver.dynamic_rescue(target, lam, budget)
+                verdict += "; dynamic relaxation: " + ("no rest" if rescued is None else "ok")
+        else:
+            rescued = solver.dynamic_rescue(target, lam, budget)
+            how, verdict = "dynamic relaxation", "ok" if rescued else "no rest"
+        log.debug("work control stuck at lambda=%.6g; %s to %.6g: %s", lam, how, target, verdict)
         if rescued is not None:
             accept_moved(rescued)
         return rescued is not None
@@ -360,7 +387,7 @@ def work_control(
                 if (
                     checked_from != len(hist.steps)
                     and at_corner()
-                    and rest_above(s.fold_check_time_steps)
+                    and rest_above(s.fold_check_time_steps, corner=True)
                 ):
                     transient_failed = False
                     continue
@@ -413,7 +440,7 @@ def work_control(
                 and s.stop_check_time_steps > 0
                 and checked_from != len(hist.steps)
                 and (corner or s.stop_check_singular or not _singular_along_load(solver, hist))
-                and rest_above(budget)
+                and rest_above(budget, corner)
             ):
                 transient_failed = False
                 continue

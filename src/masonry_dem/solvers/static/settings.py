@@ -24,6 +24,9 @@ from masonry_dem.solvers.load_path import LoadPathSettings
 #: what follows the first failure of load control (see ``StaticSettings.continuation``)
 Continuation = Literal["work", "bracket"]
 CONTINUATION: tuple[str, ...] = get_args(Continuation)
+#: how the corner check relaxes (see ``StaticSettings.corner_check``)
+CornerCheck = Literal["mixed", "implicit", "explicit"]
+CORNER_CHECKS: tuple[str, ...] = get_args(CornerCheck)
 
 #: what the corrector's line search accepts (see ``StaticSettings.line_search``)
 LineSearch = Literal["residual", "natural"]
@@ -174,8 +177,10 @@ class StaticSettings(LoadPathSettings):
         singular although the path never ran along a mechanism: a fold of the path, or a
         peak). The check runs there whatever the tangent, with the larger of this and
         ``stop_check_time_steps``; its budget covers the settling of every fold measured
-        (docs/solvers.md, "The corner check on by default"). A corner that is a peak costs
-        half the budget (a stalled relaxation). A path whose searches run past the
+        (docs/solvers.md, "The corner check on by default"). With ``corner_check =
+        "explicit"`` a corner that is a peak costs half the budget (a stalled relaxation);
+        by default (``"mixed"``) the implicit check decides, and this relaxation runs only
+        at a fold, for the state the path goes on from. A path whose searches run past the
         displacement limit while its curve still rose is a corner too. 0: such stops are
         checked as any other, so a singular tangent skips the check
         (``stop_check_time_steps`` = 0 disables both).
@@ -221,6 +226,35 @@ class StaticSettings(LoadPathSettings):
         fifth) but costs single flat walls up to 77 % more, and its solves can cost more
         than the factorizations it saves (a 14 x 30 U wall: 1.5x the CPU), so it is not the
         default. The tolerance test of a converged state is the same for both.
+
+    The corner check, implicit (session 18, branch ``verdict``)
+    -----------------------------------------------------------
+    corner_check: how the check at a corner tells a fold from a peak. ``"mixed"``
+        (default): :meth:`~masonry_dem.solvers.static.corrector.Corrector.implicit_relaxation`
+        first (linearly implicit Euler steps of the overdamped motion D dq/dt = R(q), D the
+        joints' elastic stiffness, one factorization each, to the same target lambda x (1 +
+        transient_rise) from the same state). Its motion running past the displacement
+        limit is a peak, with no time step of dynamic relaxation (the U wall's peak: 74
+        steps, where dynamic relaxation stalled for 10 000 time steps). Rest is a fold: the
+        path goes on from the rest dynamic relaxation (``fold_check_time_steps``) finds, the
+        equilibrium the explicit check took, or from the implicit one's where that finds
+        none (S13/2's fold at 0.1082). No verdict within ``corner_check_steps``: dynamic
+        relaxation decides, as before (the big U wall's fold, 341 implicit steps).
+        ``"implicit"``: the same, but the implicit rest always (the cheapest; S23 then goes
+        on from another equilibrium at its first fold and peaks 2.5 % lower).
+        ``"explicit"``: dynamic relaxation alone, as sessions 15-17 (docs/solvers.md, "The
+        corner check, implicit").
+    corner_check_steps: budget of implicit steps (factorizations) of that check, the most a
+        check without a verdict costs before dynamic relaxation decides: twice the slowest
+        rest of 13 checks measured (96), 2.7 times the U wall's run-off (74).
+    corner_check_rise: an implicit step whose residual is more than (1 + this) times the
+        last one's is too long (it crossed kinks of the law the tangent did not see): it is
+        taken again with a time step a quarter as long, down to the elastic relaxation
+        time (D = the elastic stiffness), which is always taken, the residual may rise on
+        the way (a wall snapping through is out of balance until it arrives).
+    corner_check_start: the first implicit step's D / dt in units of the joints' elastic
+        stiffness (a pseudo time step of 1 / this elastic relaxation times); halved after
+        each step taken, so the steps grow towards Newton's as the wall settles.
     """
 
     easy_iterations: int = count(6, least=0)
@@ -271,6 +305,10 @@ class StaticSettings(LoadPathSettings):
     mode_displacement: float = positive(0.5)
     bound_tolerance: float = positive(0.01)
     line_search: LineSearch = choice("residual", LINE_SEARCHES)
+    corner_check: CornerCheck = choice("mixed", CORNER_CHECKS)
+    corner_check_steps: int = count(200, least=1)
+    corner_check_rise: float = positive(0.5)
+    corner_check_start: float = positive(1e-2)
 
 
 SETTING_NAMES = tuple(f.name for f in fields(StaticSettings))

@@ -246,13 +246,14 @@ class StaticSolver(Corrector):
         hist.factorizations = self.factorizations
         log.info(
             "%s: %s after %d steps, %d Newton iterations, %d factorizations, %d time steps of "
-            "dynamic relaxation (%s)",
+            "dynamic relaxation, %d implicit steps of corner checks (%s)",
             self.model.name,
             hist.status,
             len(hist.steps),
             self.iterations,
             self.factorizations,
             self.time_steps,
+            self.implicit_steps,
             hist.reason,
         )
         return hist
