@@ -201,6 +201,7 @@ def _facade_with_lintels(
     plans assemble them."""
     field = "facade_openings"
     rects = [_opening(field, k, rect) for k, rect in enumerate(openings)]
+    named = [f"{field}[{k}] = {plain([round(v, 9) for v in rect])}" for k, rect in enumerate(rects)]
     front = blocks.subset(np.flatnonzero(facade))
     behind = blocks.subset(np.flatnonzero(~facade))
     course = float(np.median(front.sizes[:, 1]))
@@ -214,19 +215,18 @@ def _facade_with_lintels(
         if not across.any():
             return None
         j0, j1 = junctions[np.argmax(across)]
-        return f"x in [{plain(round(float(j0), 9))}, {plain(round(float(j1), 9))}]"
+        return f"x in [{j0:.9g}, {j1:.9g}]"
 
     for k, (x0, y0, x1, y1) in enumerate(rects):
         if x0 < x_lo - tol or x1 > x_hi + tol or y0 < y_lo - tol or y1 > y_hi + tol:
             raise ValueError(
-                f"{field}[{k}] = {plain(list(rects[k]))} reaches outside the facade: "
-                f"openings with lintels lie within x in [{plain(float(x_lo))}, "
-                f"{plain(float(x_hi))}], y in [{plain(float(y_lo))}, {plain(float(y_hi))}] m"
+                f"{named[k]} reaches outside the facade: openings with lintels lie within "
+                f"x in [{x_lo:.9g}, {x_hi:.9g}], y in [{y_lo:.9g}, {y_hi:.9g}] m"
             )
         where = junction_across(x0, x1)
         if where is not None:
             raise ValueError(
-                f"{field}[{k}] = {plain(list(rects[k]))} crosses the corner at {where}, where "
+                f"{named[k]} crosses the corner at {where}, where "
                 "another wall meets the facade: openings with lintels lie between the corners"
             )
     cut = openings_with_lintels(front, rects, course, field=field)
@@ -239,18 +239,18 @@ def _facade_with_lintels(
         if not over.any():
             continue  # the opening reaches the top of the wall: no lintel
         lx0, lx1 = float(cut.lower[over, 0].min()), float(cut.upper[over, 0].max())
-        span = f"x in [{plain(round(lx0, 9))}, {plain(round(lx1, 9))}]"
+        span = f"x in [{lx0:.9g}, {lx1:.9g}]"
         where = junction_across(lx0, lx1)
         if where is not None:
             raise ValueError(
-                f"{field}[{k}] = {plain(list(rects[k]))}: its lintel ({span}, the blocks of the "
+                f"{named[k]}: its lintel ({span}, the blocks of the "
                 f"course over it) would reach into the corner at {where}; move the opening "
                 "further from the corner"
             )
         if lx0 <= x_lo + tol or lx1 >= x_hi - tol:
             raise ValueError(
-                f"{field}[{k}] = {plain(list(rects[k]))}: its lintel ({span}) would reach the "
-                f"facade's end (x in [{plain(float(x_lo))}, {plain(float(x_hi))}]) and bear on "
+                f"{named[k]}: its lintel ({span}) would reach the "
+                f"facade's end (x in [{x_lo:.9g}, {x_hi:.9g}]) and bear on "
                 "one pier only; move the opening further from the end"
             )
     both = Blocks.concatenate(cut, behind)
