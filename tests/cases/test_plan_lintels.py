@@ -32,6 +32,9 @@ A, B, S, GAMMA = 0.081, 0.21, 0.07, 20e3  # b = 3 s: closers at the corners
 KN, KT, MU = 2.4e9, 1.0e9, 0.7
 WINDOW = (2 * B, 3 * A, 4 * B, 7 * A)  # two blocks wide, courses 3 to 6 (of 10)
 DOOR = (6 * B, 0.0, 7 * B, 6 * A)  # one block wide, courses 0 to 5
+# two windows a block apart, their tops on an even course: the course over them has a head
+# joint at each jamb, so each lintel would take in the block over the pier between them
+OVER_ONE_PIER = ((2 * B, 2 * A, 3 * B, 6 * A), (4 * B, 2 * A, 5 * B, 6 * A))
 
 
 def _boxes(blocks: Blocks, mask: np.ndarray | None = None) -> set[tuple[float, ...]]:
@@ -125,6 +128,24 @@ def test_every_plan_takes_lintels_between_its_corners(build):
     assert _lintel_over(w, rect) in sel.part(w, "facade")
     behind_w, behind_whole = w.lower[:, 2] < -1e-9, whole.lower[:, 2] < -1e-9
     assert _boxes(w, behind_w) == _boxes(whole, behind_whole)
+
+
+def test_a_lintel_may_end_at_a_free_end_of_the_facade():
+    """An opening one block from the free end of an L's facade (x from 4 b to 5 b, its top on
+    an even course): the course over it has head joints at both jambs, so its lintel takes in
+    the blocks beside them and runs to the end (x from 3 b to 6 b); it bears on both piers."""
+    rect = (4 * B, 2 * A, 5 * B, 6 * A)
+    w = l_wall(6, 10, A, B, S, GAMMA, facade_openings=[rect], lintels=True)
+    k = _lintel_over(w, rect)
+    np.testing.assert_allclose([w.lower[k, 0], w.upper[k, 0]], [3 * B, 6 * B], rtol=1e-12)
+    assert unsupported_blocks(w).size == 0
+
+
+def test_two_lintels_over_one_pier_are_refused_in_a_plain_wall_too():
+    """They overlapped: two blocks in one place, the volume counted twice."""
+    wall = running_bond_wall(8, 10, A, B, S, GAMMA)
+    with pytest.raises(ValueError, match=r"openings\[0\] and openings\[1\]: their lintels"):
+        cut_openings(wall, list(OVER_ONE_PIER), lintels=True)
 
 
 def _dead_load(blocks: Blocks):
@@ -233,13 +254,21 @@ def test_without_lintels_the_block_that_hangs_is_named(plan, caplog):
             ),
             r"facade_openings\[0\] = .* reaches outside the facade",
         ),
-        # a lintel that would reach the free end of an L's facade bears on one pier only
+        # an opening to the free end of an L's facade: no pier on that side
         (
             lambda **kw: l_wall(
-                6, 10, A, B, S, GAMMA, facade_openings=[(4 * B, 2 * A, 5 * B, 6 * A)], **kw
+                6, 10, A, B, S, GAMMA, facade_openings=[(5 * B, 2 * A, 6 * B, 6 * A)], **kw
             ),
-            r"facade_openings\[0\] = .*: its lintel \(x in \[0.63, 1.26\]\) would reach the "
-            r"facade's end",
+            r"facade_openings\[0\] = .* reaches the facade's end \(x in \[0, 1.26\]\): a "
+            r"lintel over it would bear on one pier only",
+        ),
+        # two lintels over one pier: they would overlap
+        (
+            lambda **kw: u_wall(
+                8, 10, A, B, S, GAMMA, facade_openings=[OVER_ONE_PIER[0], OVER_ONE_PIER[1]], **kw
+            ),
+            r"facade_openings\[0\] and facade_openings\[1\]: their lintels would share the "
+            r"block\(s\) at x in \[0.63, 0.84\], y in \[0.486, 0.567\]",
         ),
         (
             lambda **kw: u_wall(

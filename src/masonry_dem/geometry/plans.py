@@ -196,7 +196,7 @@ def _facade_with_lintels(
     meets the facade (a corner square, the junction of a T's cross wall: the plan extent of
     the blocks of that wall that reach the facade) the courses interlock, and a lintel cut
     there would take in blocks of the other wall's bond, so an opening that crosses such a
-    junction, or whose lintel would reach into one or past a free end of the facade, is
+    junction or reaches an end of the facade, or whose lintel would reach into a junction, is
     refused, named. The blocks come back sorted course by course, then along e1, as the
     plans assemble them."""
     field = "facade_openings"
@@ -223,6 +223,11 @@ def _facade_with_lintels(
                 f"{named[k]} reaches outside the facade: openings with lintels lie within "
                 f"x in [{x_lo:.9g}, {x_hi:.9g}], y in [{y_lo:.9g}, {y_hi:.9g}] m"
             )
+        if x0 <= x_lo + tol or x1 >= x_hi - tol:
+            raise ValueError(
+                f"{named[k]} reaches the facade's end (x in [{x_lo:.9g}, {x_hi:.9g}]): a "
+                "lintel over it would bear on one pier only"
+            )
         where = junction_across(x0, x1)
         if where is not None:
             raise ValueError(
@@ -246,12 +251,6 @@ def _facade_with_lintels(
                 f"{named[k]}: its lintel ({span}, the blocks of the "
                 f"course over it) would reach into the corner at {where}; move the opening "
                 "further from the corner"
-            )
-        if lx0 <= x_lo + tol or lx1 >= x_hi - tol:
-            raise ValueError(
-                f"{named[k]}: its lintel ({span}) would reach the "
-                f"facade's end (x in [{x_lo:.9g}, {x_hi:.9g}]) and bear on "
-                "one pier only; move the opening further from the end"
             )
     both = Blocks.concatenate(cut, behind)
     lo = both.lower
