@@ -25,7 +25,7 @@ from masonry_dem.geometry.builders import (
     unsupported_blocks,
 )
 from masonry_dem.geometry.plans import box_wall, l_wall, t_wall, u_wall
-from masonry_dem.model import InterfaceMaterial, Model, SelfWeight, Support
+from masonry_dem.model import InterfaceMaterial, Model, SelfWeight, Support, WeightProportional
 from masonry_dem.solvers.incremental import pushover
 
 A, B, S, GAMMA = 0.081, 0.21, 0.07, 20e3  # b = 3 s: closers at the corners
@@ -214,6 +214,26 @@ def test_without_lintels_the_block_that_hangs_is_named(plan, caplog):
     assert unsupported_blocks(w).size == 1
     _, _, h = _dead_load(w)
     assert h.status == "failed" and "no equilibrium under the dead load" in h.reason
+
+
+@pytest.mark.parametrize("plan", ["l", "u"])
+def test_walls_that_meet_with_a_window_and_lintels_collapse_certified_on_the_tilt_table(plan):
+    """The L and U walls of the test above on the tilt table (a weight-proportional load
+    along +e3, pulling the facade away from its returns) collapse, with a certificate that
+    holds, above the plain wall of the same window: that one overturns about its base at
+    s / H = 0.07 / 0.81 (the window's courses are centred at mid-height, so y_G stays H / 2;
+    tests/cases/test_new_user_sweep.py), and the returns, whose courses run through the
+    corners, hold the facade back (measured: an L at 0.122, a U at 0.250)."""
+    build = l_wall if plan == "l" else u_wall
+    rect = (2 * B, 3 * A, 4 * B, 7 * A)
+    w = build(6, 10, A, B, S, GAMMA, return_blocks=3, facade_openings=[rect], lintels=True)
+    blocks, base = add_base(w)
+    loads = [SelfWeight(), WeightProportional((0.0, 0.0, 1.0))]
+    material = InterfaceMaterial(kn=KN, kt=KT, friction=MU)
+    h = pushover(Model.build(blocks, material, [Support([base])], loads))
+    assert h.status == "collapse", h.reason
+    assert h.certificate is not None and h.certificate.holds
+    assert h.collapse_multiplier > (1 + 1e-6) * S / (10 * A)
 
 
 @pytest.mark.parametrize(
