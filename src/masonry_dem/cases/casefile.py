@@ -98,16 +98,27 @@ def build_blocks(
     func: Any = _BUILDERS[builder]
     allowed = set(inspect.signature(func).parameters)
     _unknown("geometry", params, allowed)
+    lintels = geometry.get("lintels", False)
+    # walls that meet build their lintels over their facade_openings, in the facade alone
+    facade = "facade_openings" in allowed
+    if lintels and facade and geometry.get("openings"):
+        raise ValueError(
+            f"lintels = true with builder {builder!r}: give the openings as facade_openings "
+            "(lintels are built in the facade alone; openings cut every wall)"
+        )
+    if lintels and not (geometry.get("openings") or (facade and params.get("facade_openings"))):
+        raise ValueError(
+            "lintels = true builds lintels over the openings, but none are given"
+            + (" (facade_openings for walls that meet)" if facade else "")
+        )
+    if facade:
+        params["lintels"] = lintels
     try:
         blocks = func(**params)
     except TypeError as exc:
         raise ValueError(f"case file [geometry] for builder {builder!r}: {exc}") from exc
     if geometry.get("openings"):
-        blocks = builders.cut_openings(
-            blocks, geometry["openings"], lintels=geometry.get("lintels", False)
-        )
-    elif geometry.get("lintels", False):
-        raise ValueError("lintels = true builds lintels over the openings, but none are given")
+        blocks = builders.cut_openings(blocks, geometry["openings"], lintels=lintels)
     wall = np.ones(blocks.count, dtype=bool)
     base = None
     if geometry.get("base", False):

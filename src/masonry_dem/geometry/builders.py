@@ -328,6 +328,7 @@ def add_lintels(
     on both piers (one exactly as wide as the opening fell in). ``course``: the course height
     [m]; an opening that reaches the top of the wall needs no lintel."""
     keep = np.ones(blocks.count, dtype=bool)
+    taken = np.full(blocks.count, -1)  # the opening whose lintel took each block
     lintels = []
     top = blocks.upper[:, 1].max()
     for k, (x0, _, x1, y1) in enumerate(rects):
@@ -336,6 +337,16 @@ def add_lintels(
             & (blocks.upper[:, 0] > x0 - 1e-9)
             & (blocks.lower[:, 0] < x1 + 1e-9)
         )
+        shared = over & (taken >= 0)
+        if shared.any():  # two lintels in one place: overlapping blocks
+            j = int(taken[shared][0])
+            x_lo, x_hi = blocks.lower[shared, 0].min(), blocks.upper[shared, 0].max()
+            raise ValueError(
+                f"{field}[{j}] and {field}[{k}]: their lintels would share the block(s) at "
+                f"x in [{x_lo:.9g}, {x_hi:.9g}], y in [{y1:.9g}, {y1 + course:.9g}] over the "
+                "pier between them; move the openings apart or give one opening over both"
+            )
+        taken[over] = k
         if not over.any():
             if y1 >= top - 1e-6 * course:
                 continue  # the opening reaches the top: nothing above it to carry

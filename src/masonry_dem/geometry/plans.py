@@ -26,6 +26,11 @@ round the plan anticlockwise seen from above: front, right, back, left) in the e
 and through the corner where it ends in the odd ones; with as many blocks along the depth as
 along the length it is then symmetric under a quarter turn about its vertical axis.
 
+``facade_openings`` are cut out of the facade alone; with ``lintels`` the jambs are
+straightened and a lintel laid over each opening, as in a plain wall, in the facade alone: a
+lintel stays between the corners (an opening too near one is refused, named). The lintels
+are part of the facade.
+
 The parts are found back by :func:`masonry_dem.geometry.selectors.part` (``facade``,
 ``return:left``, ``return:right``, ``back``, ``cross``, ``corner:left``, ...).
 """
@@ -40,15 +45,17 @@ import numpy as np
 from numpy.typing import NDArray
 
 from masonry_dem._parameters import function_of
-from masonry_dem._validation import positive_scalar
+from masonry_dem._validation import plain, positive_scalar
 from masonry_dem.geometry.blocks import Blocks
 from masonry_dem.geometry.builders import (
     _Along,
     _count,
     _Courses,
+    _opening,
     _Unit,
     _weight,
     cut_openings,
+    openings_with_lintels,
 )
 
 SHORTEST_PIECE = 0.3  # in block lengths: a shorter piece stays with its neighbour
@@ -161,32 +168,115 @@ def _returns(m: int, pitch: float, s: float, band: tuple[float, float]) -> _Run:
 
 
 def _facade_openings(
-    blocks: Blocks, openings: Sequence[Sequence[float]] | None, s: float
+    blocks: Blocks,
+    openings: Sequence[Sequence[float]] | None,
+    s: float,
+    lintels: bool = False,
 ) -> Blocks:
     """Remove the facade blocks (z within [0, s]) whose centre lies inside an opening
-    (x_min, y_min, x_max, y_max); the walls behind the facade are left whole."""
+    (x_min, y_min, x_max, y_max); the walls behind the facade are left whole. With
+    ``lintels``, the openings are built as in a plain wall (straight jambs, a lintel over
+    each: :func:`~masonry_dem.geometry.builders.openings_with_lintels`) in the facade alone
+    (:func:`_facade_with_lintels`)."""
     if openings is None or len(openings) == 0:
         return blocks
     facade = blocks.lower[:, 2] >= -1e-9 * s
+    if lintels:
+        return _facade_with_lintels(blocks, openings, facade)
     return cut_openings(blocks, openings, among=facade, field="facade_openings")
+
+
+def _facade_with_lintels(
+    blocks: Blocks, openings: Sequence[Sequence[float]], facade: NDArray[np.bool_]
+) -> Blocks:
+    """The facade's openings with straight jambs and a lintel over each, built in the facade
+    alone; the walls behind it are left whole.
+
+    A lintel bears on a pier of the facade at each side of its opening. Where another wall
+    meets the facade (a corner square, the junction of a T's cross wall: the plan extent of
+    the blocks of that wall that reach the facade) the courses interlock, and a lintel cut
+    there would take in blocks of the other wall's bond, so an opening that crosses such a
+    junction or reaches an end of the facade, or whose lintel would reach into a junction, is
+    refused, named. The blocks come back sorted course by course, then along e1, as the
+    plans assemble them."""
+    field = "facade_openings"
+    rects = [_opening(field, k, rect) for k, rect in enumerate(openings)]
+    named = [f"{field}[{k}] = {plain([round(v, 9) for v in rect])}" for k, rect in enumerate(rects)]
+    front = blocks.subset(np.flatnonzero(facade))
+    behind = blocks.subset(np.flatnonzero(~facade))
+    course = float(np.median(front.sizes[:, 1]))
+    tol = 1e-6 * course
+    (x_lo, y_lo, _), (x_hi, y_hi, _) = front.lower.min(axis=0), front.upper.max(axis=0)
+    meets = behind.upper[:, 2] >= -tol  # blocks of other walls that reach the facade
+    junctions = np.unique(np.stack([behind.lower[meets, 0], behind.upper[meets, 0]], 1), axis=0)
+
+    def junction_across(x0: float, x1: float) -> str | None:
+        across = (junctions[:, 1] > x0 + tol) & (junctions[:, 0] < x1 - tol)
+        if not across.any():
+            return None
+        j0, j1 = junctions[np.argmax(across)]
+        return f"x in [{j0:.9g}, {j1:.9g}]"
+
+    for k, (x0, y0, x1, y1) in enumerate(rects):
+        if x0 < x_lo - tol or x1 > x_hi + tol or y0 < y_lo - tol or y1 > y_hi + tol:
+            raise ValueError(
+                f"{named[k]} reaches outside the facade: openings with lintels lie within "
+                f"x in [{x_lo:.9g}, {x_hi:.9g}], y in [{y_lo:.9g}, {y_hi:.9g}] m"
+            )
+        if x0 <= x_lo + tol or x1 >= x_hi - tol:
+            raise ValueError(
+                f"{named[k]} reaches the facade's end (x in [{x_lo:.9g}, {x_hi:.9g}]): a "
+                "lintel over it would bear on one pier only"
+            )
+        where = junction_across(x0, x1)
+        if where is not None:
+            raise ValueError(
+                f"{named[k]} crosses the corner at {where}, where "
+                "another wall meets the facade: openings with lintels lie between the corners"
+            )
+    cut = openings_with_lintels(front, rects, course, field=field)
+    for k, (x0, _, x1, y1) in enumerate(rects):
+        over = (
+            (np.abs(cut.lower[:, 1] - y1) < tol)
+            & (cut.upper[:, 0] > x0 + tol)
+            & (cut.lower[:, 0] < x1 - tol)
+        )
+        if not over.any():
+            continue  # the opening reaches the top of the wall: no lintel
+        lx0, lx1 = float(cut.lower[over, 0].min()), float(cut.upper[over, 0].max())
+        span = f"x in [{lx0:.9g}, {lx1:.9g}]"
+        where = junction_across(lx0, lx1)
+        if where is not None:
+            raise ValueError(
+                f"{named[k]}: its lintel ({span}, the blocks of the "
+                f"course over it) would reach into the corner at {where}; move the opening "
+                "further from the corner"
+            )
+    both = Blocks.concatenate(cut, behind)
+    lo = both.lower
+    return both.subset(np.lexsort((lo[:, 2], lo[:, 0], lo[:, 1])))
 
 
 @dataclass(frozen=True)
 class _Plan(_Unit, _Courses, _Along):
     """The parameters every plan shares (the facade's, the unit's, ``joint`` and the
-    ``facade_openings``); a plan gives its runs of blocks."""
+    ``facade_openings`` and their ``lintels``); a plan gives its runs of blocks."""
 
     _: KW_ONLY
     joint: float = 0.0
     facade_openings: Sequence[Sequence[float]] | None = None
+    lintels: bool = False
 
     def __call__(self) -> Blocks:
+        if not isinstance(self.lintels, (bool, np.bool_)):
+            raise ValueError(f"lintels must be true or false, got {plain(self.lintels)}")
         size = self.size()
         n, nc, cp, p, s, gamma = _common(
             self.blocks_along_length, self.courses, size, self.unit_weight, self.joint
         )
         blocks = _assemble(self.runs(n * p, p, s), nc, p, cp, gamma)
-        return _facade_openings(self.arranged(blocks, n * p, gamma), self.facade_openings, s)
+        placed = self.arranged(blocks, n * p, gamma)
+        return _facade_openings(placed, self.facade_openings, s, self.lintels)
 
     def runs(self, length: float, pitch: float, s: float) -> list[_Run]:
         """The runs of the plan, its facade ``length`` long (outside to outside)."""
@@ -201,7 +291,8 @@ class _Plan(_Unit, _Courses, _Along):
 class _LWall(_Plan):
     """A facade with one return wall at its ``corner`` (``left``: x = 0, or ``right``),
     interlocked there; the other end of the facade is straight, as in a running-bond wall.
-    ``facade_openings``: (x_min, y_min, x_max, y_max) rectangles cut out of the facade."""
+    ``facade_openings``: (x_min, y_min, x_max, y_max) rectangles cut out of the facade;
+    ``lintels``: straight jambs and a lintel over each (a dry wall cannot stand without)."""
 
     return_blocks: int = 4
     corner: Corner = "left"
