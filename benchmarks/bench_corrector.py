@@ -34,7 +34,7 @@ from bench_validation import parse_settings  # noqa: E402
 
 from masonry_dem import set_thread_wait_policy  # noqa: E402
 from masonry_dem.cases.paper import build_case, case_names  # noqa: E402
-from masonry_dem.solvers.static.corrector import Corrector  # noqa: E402
+from masonry_dem.solvers.static.relaxations import Relaxations  # noqa: E402
 from masonry_dem.solvers.static.settings import StaticSettings  # noqa: E402
 from masonry_dem.solvers.static.solver import StaticSolver  # noqa: E402
 from masonry_dem.studies.runs import warm_up  # noqa: E402
@@ -44,8 +44,8 @@ _SEARCHES: dict[tuple[str, str], list[int]] = collections.defaultdict(lambda: [0
 
 
 def _counted(name: str) -> None:
-    """Count the searches of ``Corrector.<name>`` into ``_SEARCHES``."""
-    original = getattr(Corrector, name)
+    """Count the searches of ``Relaxations.<name>`` (a StaticSolver's searches) into ``_SEARCHES``."""
+    original = getattr(Relaxations, name)
 
     def counted(self, *args, **kwargs):
         f0, i0 = self.factorizations, self.iterations
@@ -61,7 +61,7 @@ def _counted(name: str) -> None:
         row[2] += self.factorizations - f0
         return out
 
-    setattr(Corrector, name, counted)
+    setattr(Relaxations, name, counted)
 
 
 def _run(name: str, changes: dict) -> tuple[float, int, int, int, float]:

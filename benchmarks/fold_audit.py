@@ -96,7 +96,7 @@ def rest_above(solver: StaticSolver, peak: float, rise: float, budget: int) -> A
     start = float(np.abs(solver.q.reshape(-1, 6)[:, :3]).max())
     before = solver.time_steps
     reasons = _Reasons()
-    logger = logging.getLogger("masonry_dem.solvers.static.corrector")
+    logger = logging.getLogger("masonry_dem.solvers.static.relaxations")
     level = logger.level
     logger.addHandler(reasons)
     logger.setLevel(logging.DEBUG)

@@ -48,8 +48,8 @@ def _parts() -> dict[str, list[tuple[object, str]]]:
     from masonry_dem.export.run_case import LazyBound
     from masonry_dem.solvers import factorization as fz
     from masonry_dem.solvers.static import solver as solver_module
-    from masonry_dem.solvers.static.corrector import Corrector
     from masonry_dem.solvers.static.problem import DiscreteProblem, TangentAssembler
+    from masonry_dem.solvers.static.relaxations import Relaxations
 
     factorizers = [fz._SuperLU, fz._Pardiso, fz._Umfpack, fz._Mumps, fz._CSCOrder]
     factors = [fz._HeldFactors, fz._SuperLUFactors, fz._UmfpackFactors, fz._Pardiso]
@@ -61,7 +61,7 @@ def _parts() -> dict[str, list[tuple[object, str]]]:
         "residual": [(DiscreteProblem, "residual")],
         "certificate": [(solver_module, "certify")],
         "bound": [(LazyBound, "__call__")],
-        "relaxation": [(Corrector, "dynamic_rescue")],
+        "relaxation": [(Relaxations, "dynamic_rescue")],
         "recording": [(solver_module.StaticSolver, "accept")],
     }
 

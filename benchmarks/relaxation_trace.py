@@ -6,13 +6,13 @@
         [--implicit]
 
 With ``--implicit`` (session 18) each recorded check is run again by the implicit corner
-check instead (``Corrector.implicit_relaxation``, from the same start to the same target):
+check instead (``Relaxations.implicit_relaxation``, from the same start to the same target):
 its verdict and steps beside the explicit one's, and, at the last check's start, the cost
 of one factorization against one time step of dynamic relaxation.
 
 Each wall is run by the static pushover with its default settings but the explicit corner
 check (``corner_check = "explicit"``); every corner check
-(``Corrector.dynamic_rescue`` called by work control's ``rest_above``) is recorded: its start
+(``Relaxations.dynamic_rescue`` called by work control's ``rest_above``) is recorded: its start
 state, target and whether it found rest. Then each recorded check is relaxed again with
 kinetic damping as ``Relaxation._relax`` does it, every velocity zeroed at each
 kinetic-energy peak (``--keep-creep``: the velocity along a converged creep kept, as
@@ -47,7 +47,7 @@ import numpy as np
 from masonry_dem.cases.paper import build_case
 from masonry_dem.solvers.dynamic_relaxation import _State
 from masonry_dem.solvers.static import StaticSettings, StaticSolver
-from masonry_dem.solvers.static.corrector import Corrector
+from masonry_dem.solvers.static.relaxations import Relaxations
 
 
 def wall(name: str):
@@ -72,12 +72,12 @@ def record(model, settings, monitor):
     check is a dynamic relaxation); the corner checks it made: (corrector, start state,
     target, budget, found, time steps, the corrector's trust increment at the start)."""
     checks = []
-    original = Corrector.dynamic_rescue
+    original = Relaxations.dynamic_rescue
     settings = replace(settings or StaticSettings(), corner_check="explicit")
 
     def spy(self, target, last, budget=None, polish=True):
         free = self.problem.asm.free_index
-        increment = self._last_increment
+        increment = self.last_increment
         start = _State(
             self.q[free].copy(),
             self.plastic.copy(),
@@ -103,12 +103,12 @@ def record(model, settings, monitor):
             )
         return out
 
-    Corrector.dynamic_rescue = spy
+    Relaxations.dynamic_rescue = spy
     try:
         solver = StaticSolver(model, settings)
         history = solver.run(monitor=monitor)
     finally:
-        Corrector.dynamic_rescue = original
+        Relaxations.dynamic_rescue = original
     return history, checks
 
 
@@ -271,12 +271,12 @@ def trace(
 
 
 def implicit(corrector, start, q_saved, target, increment) -> str:
-    """The implicit corner check (``Corrector.implicit_relaxation``) from a recorded check's
+    """The implicit corner check (``Relaxations.implicit_relaxation``) from a recorded check's
     start to its target: verdict and steps (each one factorization)."""
     corrector.q = q_saved.copy()
     corrector.plastic = start.plastic.copy()
     corrector.cracked = start.cracked.copy()
-    corrector._last_increment = increment
+    corrector.last_increment = increment
     f0, t0 = corrector.factorizations, time.perf_counter()
     out = corrector.implicit_relaxation(target)
     verdict = "rest" if out.ok else out.failure.value

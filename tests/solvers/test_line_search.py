@@ -89,7 +89,7 @@ def _failed_work_searches(model: Model) -> tuple[StaticSolver, list]:
 
     def recording(*args, **kw):
         state = (solver.q.copy(), solver.plastic.copy(), solver.cracked.copy())
-        before = solver._last_increment
+        before = solver.last_increment
         out = plain(*args, **kw)
         if kw.get("control") is not None and not out.ok:
             failed.append((args, kw, state, before))
@@ -107,7 +107,7 @@ def _replay(model: Model, merit: str, failed: list) -> list[bool]:
     converged = []
     for args, kw, (q, plastic, cracked), before in failed:
         solver.q, solver.plastic, solver.cracked = q.copy(), plastic.copy(), cracked.copy()
-        solver._last_increment = before
+        solver.last_increment = before
         converged.append(solver.equilibrate(*args, **kw).ok)
     return converged
 

@@ -224,7 +224,7 @@ def cut_openings(
     top of the wall (:func:`add_lintels`). Without lintels, blocks left with nothing under
     them are named in a warning.
     """
-    rects = [_opening(field, k, rect) for k, rect in enumerate(openings)]
+    rects = [checked_opening(field, k, rect) for k, rect in enumerate(openings)]
     if lintels:
         if among is not None:
             raise ValueError(f"{field}: lintels are built for the openings of a plain wall only")
@@ -250,7 +250,7 @@ def openings_with_lintels(
     """The openings (x_min, y_min, x_max, y_max) built as the paper's specimens were: jambs
     straightened (:func:`split_at_jambs`), the blocks inside removed, and a lintel over each
     opening (:func:`add_lintels`; ``course``: the course height [m])."""
-    checked = [_opening(field, k, rect) for k, rect in enumerate(rects)]
+    checked = [checked_opening(field, k, rect) for k, rect in enumerate(rects)]
     cut = _remove_inside(split_at_jambs(blocks, checked), checked, None, field)
     return add_lintels(cut, checked, course, field=field)
 
@@ -274,7 +274,9 @@ def _remove_inside(
     return blocks.subset(np.flatnonzero(keep))
 
 
-def _opening(field: str, k: int, rect: Sequence[float]) -> tuple[float, float, float, float]:
+def checked_opening(field: str, k: int, rect: Sequence[float]) -> tuple[float, float, float, float]:
+    """Opening ``k`` of ``field`` as (x_min, y_min, x_max, y_max), four finite numbers with
+    the max above the min (else a ValueError naming ``field[k]``)."""
     x0, y0, x1, y1 = (float(v) for v in as_finite_array(f"{field}[{k}]", rect, (4,)))
     if x1 <= x0 or y1 <= y0:
         raise ValueError(

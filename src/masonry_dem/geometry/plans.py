@@ -51,9 +51,9 @@ from masonry_dem.geometry.builders import (
     _Along,
     _count,
     _Courses,
-    _opening,
     _Unit,
     _weight,
+    checked_opening,
     cut_openings,
     openings_with_lintels,
 )
@@ -200,7 +200,7 @@ def _facade_with_lintels(
     refused, named. The blocks come back sorted course by course, then along e1, as the
     plans assemble them."""
     field = "facade_openings"
-    rects = [_opening(field, k, rect) for k, rect in enumerate(openings)]
+    rects = [checked_opening(field, k, rect) for k, rect in enumerate(openings)]
     named = [f"{field}[{k}] = {plain([round(v, 9) for v in rect])}" for k, rect in enumerate(rects)]
     front = blocks.subset(np.flatnonzero(facade))
     behind = blocks.subset(np.flatnonzero(~facade))

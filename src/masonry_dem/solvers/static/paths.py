@@ -202,7 +202,7 @@ def _hands_over(hist: History) -> bool:
 def control_radius(solver: StaticSolver, c: np.ndarray, dw: float) -> float:
     """Trust radius for a controlled step: room for the requested increment."""
     return max(
-        4.0 * solver._last_increment,
+        4.0 * solver.last_increment,
         solver.search_seed,
         4.0 * abs(dw) / max(float(np.abs(c).max()), 1e-300),
     )
@@ -305,7 +305,7 @@ def work_control(
     def rest_above(budget: int, corner: bool = False) -> bool:
         """A relaxation looks for rest a little above the last state (once from each
         state), and the path goes on from there if it finds it. At a corner, unless
-        ``corner_check = "explicit"``, :meth:`Corrector.implicit_relaxation` first: its
+        ``corner_check = "explicit"``, :meth:`Relaxations.implicit_relaxation` first: its
         motion running past the displacement limit is a peak; rest is a fold (with
         ``"mixed"`` the path goes on from dynamic relaxation's rest, if it finds one); its
         budget spent, dynamic relaxation decides. Elsewhere dynamic relaxation of
@@ -315,27 +315,26 @@ def work_control(
         target = lam + s.transient_rise * abs(lam)
         rescued: Outcome | None
         if corner and s.corner_check != "explicit":
-            last_increment = solver._last_increment
+            last_increment = solver.last_increment
             moved = solver.implicit_relaxation(target)
             rescued = moved if moved.ok else None
             how = "implicit relaxation"
             verdict = f"ok in {moved.iterations} steps" if moved.ok else moved.reason
             if moved.ok and s.corner_check == "mixed":
                 # a fold: the path goes on from the rest the explicit relaxation finds (the
-                # equilibrium sessions 15-17 took; another basin than the implicit motion's
-                # may lie at the same lambda), or from the implicit one's if it finds none;
+                # implicit motion may settle in another basin at the same lambda), or from
+                # the implicit one's if it finds none;
                 # its Newton probes start with the trust radius they had before the check
-                moved_increment, solver._last_increment = solver._last_increment, last_increment
+                moved_increment, solver.last_increment = solver.last_increment, last_increment
                 settled = solver.dynamic_rescue(target, lam, budget)
                 if settled is None:
-                    solver._last_increment = moved_increment
+                    solver.last_increment = moved_increment
                 rescued = moved if settled is None else settled
                 verdict += "; dynamic relaxation: " + ("no rest" if settled is None else "ok")
             elif not moved.ok and not moved.past_limit:
                 # no verdict: neither rest nor a run-off within corner_check_steps (a slow
-                # fold, as on the big U wall's, or a peak that creeps): the explicit check
-                # decides, as before
-                solver._last_increment = last_increment
+                # fold, or a peak that creeps): the explicit check decides
+                solver.last_increment = last_increment
                 rescued = solver.dynamic_rescue(target, lam, budget)
                 verdict += "; dynamic relaxation: " + ("no rest" if rescued is None else "ok")
         else:

@@ -222,31 +222,30 @@ class StaticSettings(LoadPathSettings):
         natural monotonicity test; under control, with the lambda correction that meets the
         constraint, so the control's error is in it): the residual in the tangent's own
         norm, which the joints' stiff normal rows do not dominate; one more solve per trial
-        step. It cuts the factorizations of walls with corners (the U wall of issue 21 by a
-        fifth) but costs single flat walls up to 77 % more, and its solves can cost more
-        than the factorizations it saves (a 14 x 30 U wall: 1.5x the CPU), so it is not the
-        default. The tolerance test of a converged state is the same for both.
+        step. It saves factorizations on walls with corners but costs some flat walls more,
+        and its extra solves can outweigh the factorizations it saves, so it is not the
+        default (the figures: docs/solvers.md, "The line search's merit"). The tolerance
+        test of a converged state is the same for both.
 
-    The corner check, implicit (session 18, branch ``verdict``)
-    -----------------------------------------------------------
+    The corner check (docs/solvers.md, "The corner check, implicit")
+    ---------------------------------------------------------------
     corner_check: how the check at a corner tells a fold from a peak. ``"mixed"``
-        (default): :meth:`~masonry_dem.solvers.static.corrector.Corrector.implicit_relaxation`
+        (default): :meth:`~masonry_dem.solvers.static.relaxations.Relaxations.implicit_relaxation`
         first (linearly implicit Euler steps of the overdamped motion D dq/dt = R(q), D the
         joints' elastic stiffness, one factorization each, to the same target lambda x (1 +
         transient_rise) from the same state). Its motion running past the displacement
-        limit is a peak, with no time step of dynamic relaxation (the U wall's peak: 74
-        steps, where dynamic relaxation stalled for 10 000 time steps). Rest is a fold: the
-        path goes on from the rest dynamic relaxation (``fold_check_time_steps``) finds, the
-        equilibrium the explicit check took, or from the implicit one's where that finds
-        none (S13/2's fold at 0.1082). No verdict within ``corner_check_steps``: dynamic
-        relaxation decides, as before (the big U wall's fold, 341 implicit steps).
-        ``"implicit"``: the same, but the implicit rest always (the cheapest; S23 then goes
-        on from another equilibrium at its first fold and peaks 2.5 % lower).
-        ``"explicit"``: dynamic relaxation alone, as sessions 15-17 (docs/solvers.md, "The
-        corner check, implicit").
+        limit is a peak, with no time step of dynamic relaxation (a peak's explicit
+        relaxation stalls for its whole budget). Rest is a fold: the path goes on from the
+        rest dynamic relaxation (``fold_check_time_steps``) finds, the equilibrium the
+        explicit check takes, or from the implicit one's where that finds none. No verdict
+        within ``corner_check_steps`` (a slow fold): dynamic relaxation decides, as with
+        ``"explicit"``. ``"implicit"``: the same, but the path always goes on from the
+        implicit rest (the cheapest; the overdamped motion may settle in another
+        equilibrium at the same lambda than the explicit motion, so answers past a fold can
+        differ). ``"explicit"``: dynamic relaxation alone.
     corner_check_steps: budget of implicit steps (factorizations) of that check, the most a
-        check without a verdict costs before dynamic relaxation decides: twice the slowest
-        rest of 13 checks measured (96), 2.7 times the U wall's run-off (74).
+        check without a verdict costs before dynamic relaxation decides: about twice the
+        slowest rest of the checks measured.
     corner_check_rise: an implicit step whose residual is more than (1 + this) times the
         last one's is too long (it crossed kinks of the law the tangent did not see): it is
         taken again with a time step a quarter as long, down to the elastic relaxation

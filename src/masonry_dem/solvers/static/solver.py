@@ -25,15 +25,15 @@ from masonry_dem.results import History, StepResult
 from masonry_dem.solvers.factorization import SingularMatrix
 from masonry_dem.solvers.static import paths
 from masonry_dem.solvers.static.certificate import Bound, certify
-from masonry_dem.solvers.static.corrector import Corrector
 from masonry_dem.solvers.static.outcome import Outcome, Status, StopReason
+from masonry_dem.solvers.static.relaxations import Relaxations
 from masonry_dem.solvers.static.settings import DisplacementControl, StaticSettings
 from masonry_dem.streamed_history import StreamedSteps, should_stream
 
 log = logging.getLogger(__name__)
 
 
-class StaticSolver(Corrector):
+class StaticSolver(Relaxations):
     """Incremental-iterative solver for one model (keeps the assembly and the state).
 
     ``bound``: an upper bound of the collapse multiplier (the associative limit-analysis
@@ -78,7 +78,7 @@ class StaticSolver(Corrector):
             self.q.copy(),
             self.plastic.copy(),
             self.cracked.copy(),
-            self._last_increment,
+            self.last_increment,
             self.load_factor,
             self.search_state,
         )
@@ -88,7 +88,7 @@ class StaticSolver(Corrector):
             self.q,
             self.plastic,
             self.cracked,
-            self._last_increment,
+            self.last_increment,
             self.load_factor,
             self.search_state,
         ) = kept
