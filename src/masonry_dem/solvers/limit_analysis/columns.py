@@ -1,0 +1,234 @@
+"""The frozen-capacity LP of the non-associative iteration by column generation
+(Dantzig-Wolfe): the same optimum as the full LP, on a master of a few hundred columns.
+
+The full LP (``backends.solve_highs`` with the capacity rows) carries, at each of the K grid
+points p of each interface, D pyramid edge multipliers ``g_pd >= 0`` with ``sum_d g_pd <=
+cap_p``: on the L wall of 29 blocks, 36 120 columns and 4 480 capacity rows. The point's
+shear lies in ``cap_p conv{0, e_1 .. e_D}``, so the friction an interface can carry is the
+Minkowski sum of these polytopes over its points, whose vertices are the *patterns*: one
+choice per point, an edge d_p or none, carrying ``sum_p cap_p E_{p d_p}``. Every point
+of that sum is a convex combination of patterns, so the LP
+
+    max lambda  s.t.  E_n c + sum_q theta_q P_q - lambda live = rhs,
+                      sum_{q of interface i} theta_q <= 1,  c, theta >= 0
+
+(``E_n`` the corner compressions, ``P_q`` the columns of the patterns) has the full LP's
+optimum once it holds every pattern; it has 168 + 70 rows on the L wall. Only a few patterns
+are needed, and the duals ``y`` of the equilibrium rows and ``w`` of the convexity rows find
+the missing ones: the best pattern of interface i under ``y`` takes at each point the edge of
+largest ``v_pd = y . E_pd`` if positive (none otherwise); its reduced cost (minimisation)
+is ``-gain_i - w_i`` with ``gain_i = sum_p cap_p max(0, max_d v_pd)``, all interfaces
+priced in one sparse product ``E_s^T y``. The restricted master's optimum is a lower bound
+of the full LP's, and since each interface's thetas sum to at most one, the Lagrangian
+bound ``lambda_full <= lambda + sum_i max(0, gain_i + w_i) / scale`` (``scale`` the
+objective's coefficient of lambda) is an upper one: the rounds stop when that gap is
+below ``rtol`` lambda, so the answer is the full LP's to that relative tolerance, certified
+by the duals, not assumed.
+
+The master is re-solved from scratch each round (scipy's HiGHS dual simplex: no warm start
+through ``linprog``), which is cheap at its size. Where the master has no equilibrium (the
+starting patterns cannot carry the dead load) or the rounds run out, the full LP is solved
+instead, so the status is always the full LP's.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import sparse
+
+from .backends import solve_highs
+from .formulation import Solution, lambda_cap, objective_scale
+
+log = logging.getLogger(__name__)
+
+#: the rounds stop when the certified gap of lambda is below this fraction of lambda. Not
+#: smaller: HiGHS's duals are accurate to its dual feasibility tolerance (1e-7 on its scaled
+#: problem), and on the L wall the gap stalled at 2-5e-9 lambda for 180 rounds, each adding
+#: some 45 patterns that differed only at points of near-zero slip
+PRICING_RTOL = 1e-7
+#: rounds of pricing before the full LP is solved instead (the L wall's LPs take 3-30)
+MAX_ROUNDS = 100
+
+
+@dataclass
+class FrozenFriction:
+    """The frozen friction of one iteration: ``E_s`` (n_eq, m K D) the equilibrium columns
+    of the pyramid edges (unit multiplier) at the K points of each of the m interfaces,
+    point-major then edge, and ``cap`` (m K,) the points' frozen compressions."""
+
+    E_s: sparse.csc_matrix
+    cap: np.ndarray
+    m: int
+    K: int
+    D: int
+
+    def columns(self, choice: np.ndarray, owner: np.ndarray) -> sparse.csc_matrix:
+        """The master's columns of the patterns ``choice`` (q, K), an edge or -1 per point,
+        of interfaces ``owner`` (q,)."""
+        q, K, D = choice.shape[0], self.K, self.D
+        points = owner[:, None] * K + np.arange(K)[None, :]
+        on = choice >= 0
+        rows = (points * D + np.where(on, choice, 0))[on]
+        cols = np.broadcast_to(np.arange(q)[:, None], (q, K))[on]
+        S = sparse.csc_matrix((self.cap[points[on]], (rows, cols)), shape=(self.E_s.shape[1], q))
+        return (self.E_s @ S).tocsc()
+
+    def best(self, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The best pattern of every interface under the duals ``y``: (m, K) edges (-1 where
+        no edge does positive work) and (m,) its gain ``sum_p cap_p max(0, max_d v_pd)``."""
+        v = (self.E_s.T @ y).reshape(self.m, self.K, self.D)
+        edge = np.argmax(v, axis=2)
+        top = np.take_along_axis(v, edge[..., None], axis=2)[..., 0]
+        gain = (np.maximum(top, 0.0) * self.cap.reshape(self.m, self.K)).sum(axis=1)
+        return np.where(top > 0, edge, -1), gain
+
+    def translations(self) -> tuple[np.ndarray, np.ndarray]:
+        """Patterns that slide each interface along each edge at every point: (m D, K), and
+        their interfaces (m D,). They carry any shear the pyramid carries, so the first
+        master has the dead load's equilibrium wherever it needs no torsion."""
+        choice = np.repeat(np.tile(np.arange(self.D), self.m)[:, None], self.K, axis=1)
+        return choice, np.repeat(np.arange(self.m), self.D)
+
+
+@dataclass
+class Patterns:
+    """A working set carried from one iteration to the next: the patterns (q, K) and their
+    interfaces (q,); re-evaluated on the next iteration's points and capacities."""
+
+    choice: np.ndarray
+    owner: np.ndarray
+
+
+@dataclass
+class ColumnStats:
+    """What the column generation did in one LP: pricing ``rounds``, ``columns`` of the
+    master at the end (patterns), and whether it fell back on the ``full`` LP."""
+
+    rounds: int = 0
+    columns: int = 0
+    full: bool = False
+
+
+def solve_frozen_columns(
+    E_n: sparse.csc_matrix,
+    friction: FrozenFriction,
+    live: np.ndarray,
+    rhs: np.ndarray,
+    start: Patterns | None,
+    duals: np.ndarray | None,
+    rtol: float = PRICING_RTOL,
+    max_rounds: int = MAX_ROUNDS,
+) -> tuple[Solution, Patterns, ColumnStats]:
+    """max lambda of the frozen-capacity LP: ``E_n`` the corner compressions' columns,
+    ``friction`` the pyramid edges at the points. The first master holds the translations,
+    the patterns ``start`` (the previous iteration's) and the best patterns under ``duals``
+    (the previous solve's). Returns the solution in the full LP's variables (corner
+    compressions, then ``g_pd``), the patterns used (for the next iteration) and the counts."""
+    from scipy.optimize import linprog
+
+    n_eq, nn = E_n.shape
+    m = friction.m
+    choice, owner = friction.translations()
+    if start is not None:
+        choice, owner = np.vstack([choice, start.choice]), np.concatenate([owner, start.owner])
+    if duals is not None and len(duals) == n_eq:
+        best, _ = friction.best(duals)
+        choice, owner = np.vstack([choice, best]), np.concatenate([owner, np.arange(m)])
+    P = friction.columns(choice, owner)
+    scale = objective_scale(live)
+    cap = lambda_cap(live, rhs)
+    stats = ColumnStats()
+    for _ in range(max_rounds):
+        q = P.shape[1]
+        A = sparse.hstack([E_n, P, sparse.csc_matrix(-live.reshape(-1, 1))], format="csc")
+        convex = sparse.csc_matrix((np.ones(q), (owner, nn + np.arange(q))), shape=(m, nn + q + 1))
+        c = np.zeros(nn + q + 1)
+        c[-1] = -scale
+        bounds = np.zeros((nn + q + 1, 2))
+        bounds[:, 1] = np.inf
+        bounds[-1, 1] = cap
+        res = linprog(c, convex, np.ones(m), A, rhs, bounds=bounds, method="highs-ds")
+        stats.columns = q
+        if res.status != 0:  # no equilibrium with these patterns, or trouble: the full LP
+            log.debug("column generation: master status %d, the full LP instead", res.status)
+            break
+        lam = float(res.x[-1])
+        if lam >= cap * (1 - 1e-3):  # a lower bound of the full LP's lambda: it is capped too
+            return (
+                Solution("unbounded", detail=f"HiGHS: lambda reached its cap {cap:.3g}"),
+                Patterns(choice, owner),
+                stats,
+            )
+        y = np.asarray(res.eqlin.marginals)
+        w = np.asarray(res.ineqlin.marginals)
+        best, gain = friction.best(y)
+        excess = np.maximum(gain + w, 0.0)
+        gap = float(excess.sum()) / scale
+        log.debug(
+            "column generation round %d: lambda %.10g, gap %.3g, %d patterns, %d priced out",
+            stats.rounds,
+            lam,
+            gap,
+            q,
+            int(np.count_nonzero(excess)),
+        )
+        if gap <= rtol * max(abs(lam), 1e-12):
+            theta = res.x[nn : nn + q]
+            x = np.concatenate([res.x[:nn], _edge_multipliers(friction, choice, owner, theta)])
+            used = theta > 0
+            return (
+                Solution(
+                    "optimal",
+                    lam,
+                    x,
+                    y,
+                    f"HiGHS: optimal, column generation ({stats.rounds} rounds, {q} patterns, "
+                    f"gap {gap:.2g})",
+                ),
+                Patterns(choice[used], owner[used]),
+                stats,
+            )
+        new = np.nonzero(excess > 0)[0]
+        choice = np.vstack([choice, best[new]])
+        owner = np.concatenate([owner, new])
+        P = sparse.hstack([P, friction.columns(best[new], new)], format="csc")
+        stats.rounds += 1
+    else:
+        log.debug("column generation: %d rounds without closing the gap", max_rounds)
+    stats.full = True
+    if start is not None:
+        choice, owner = start.choice, start.owner
+    return solve_frozen_full(E_n, friction, live, rhs), Patterns(choice, owner), stats
+
+
+def solve_frozen_full(
+    E_n: sparse.csc_matrix, friction: FrozenFriction, live: np.ndarray, rhs: np.ndarray
+) -> Solution:
+    """The full frozen-capacity LP (HiGHS's interior point): every edge of every point a
+    column, and per point ``sum_d g_pd <= cap_p``; no lambda = 0 solve first (the
+    associative start checked the dead load, and the frozen capacities are those of the
+    collapse, not of the dead load's equilibrium)."""
+    nn = E_n.shape[1]
+    k = nn + friction.E_s.shape[1]
+    E = sparse.hstack([E_n, friction.E_s], format="csc")
+    npts, D = friction.m * friction.K, friction.D
+    C = sparse.csc_matrix(
+        (np.ones(npts * D), (np.repeat(np.arange(npts), D), nn + np.arange(npts * D))),
+        shape=(npts, k),
+    )
+    return solve_highs(E, live, rhs, np.zeros(k), np.full(k, np.inf), (C, friction.cap), False)
+
+
+def _edge_multipliers(
+    friction: FrozenFriction, choice: np.ndarray, owner: np.ndarray, theta: np.ndarray
+) -> np.ndarray:
+    """``g_pd`` (m K D,) of the patterns' combination ``theta``."""
+    K, D = friction.K, friction.D
+    points = owner[:, None] * K + np.arange(K)[None, :]
+    on = choice >= 0
+    index = (points * D + np.where(on, choice, 0))[on]
+    weight = (theta[:, None] * friction.cap[points])[on]
+    return np.bincount(index, weights=weight, minlength=friction.E_s.shape[1])
