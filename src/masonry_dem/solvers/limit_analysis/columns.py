@@ -127,8 +127,6 @@ def solve_frozen_columns(
     the patterns ``start`` (the previous iteration's) and the best patterns under ``duals``
     (the previous solve's). Returns the solution in the full LP's variables (corner
     compressions, then ``g_pd``), the patterns used (for the next iteration) and the counts."""
-    from scipy.optimize import linprog
-
     n_eq, nn = E_n.shape
     m = friction.m
     choice, owner = friction.translations()
@@ -137,33 +135,25 @@ def solve_frozen_columns(
     if duals is not None and len(duals) == n_eq:
         best, _ = friction.best(duals)
         choice, owner = np.vstack([choice, best]), np.concatenate([owner, np.arange(m)])
-    P = friction.columns(choice, owner)
     scale = objective_scale(live)
     cap = lambda_cap(live, rhs)
+    master = _master(E_n, live, rhs, m, scale, cap)
+    master.add(friction.columns(choice, owner), owner)
     stats = ColumnStats()
     for _ in range(max_rounds):
-        q = P.shape[1]
-        A = sparse.hstack([E_n, P, sparse.csc_matrix(-live.reshape(-1, 1))], format="csc")
-        convex = sparse.csc_matrix((np.ones(q), (owner, nn + np.arange(q))), shape=(m, nn + q + 1))
-        c = np.zeros(nn + q + 1)
-        c[-1] = -scale
-        bounds = np.zeros((nn + q + 1, 2))
-        bounds[:, 1] = np.inf
-        bounds[-1, 1] = cap
-        res = linprog(c, convex, np.ones(m), A, rhs, bounds=bounds, method="highs-ds")
+        q = choice.shape[0]
+        solved = master.solve()
         stats.columns = q
-        if res.status != 0:  # no equilibrium with these patterns, or trouble: the full LP
-            log.debug("column generation: master status %d, the full LP instead", res.status)
+        if solved is None:  # no equilibrium with these patterns, or trouble: the full LP
+            log.debug("column generation: the master failed, the full LP instead")
             break
-        lam = float(res.x[-1])
+        x_n, lam, theta, y, w = solved
         if lam >= cap * (1 - 1e-3):  # a lower bound of the full LP's lambda: it is capped too
             return (
                 Solution("unbounded", detail=f"HiGHS: lambda reached its cap {cap:.3g}"),
                 Patterns(choice, owner),
                 stats,
             )
-        y = np.asarray(res.eqlin.marginals)
-        w = np.asarray(res.ineqlin.marginals)
         best, gain = friction.best(y)
         excess = np.maximum(gain + w, 0.0)
         gap = float(excess.sum()) / scale
@@ -176,8 +166,7 @@ def solve_frozen_columns(
             int(np.count_nonzero(excess)),
         )
         if gap <= rtol * max(abs(lam), 1e-12):
-            theta = res.x[nn : nn + q]
-            x = np.concatenate([res.x[:nn], _edge_multipliers(friction, choice, owner, theta)])
+            x = np.concatenate([x_n, _edge_multipliers(friction, choice, owner, theta)])
             used = theta > 0
             return (
                 Solution(
@@ -194,7 +183,7 @@ def solve_frozen_columns(
         new = np.nonzero(excess > 0)[0]
         choice = np.vstack([choice, best[new]])
         owner = np.concatenate([owner, new])
-        P = sparse.hstack([P, friction.columns(best[new], new)], format="csc")
+        master.add(friction.columns(best[new], new), new)
         stats.rounds += 1
     else:
         log.debug("column generation: %d rounds without closing the gap", max_rounds)
@@ -220,6 +209,116 @@ def solve_frozen_full(
         shape=(npts, k),
     )
     return solve_highs(E, live, rhs, np.zeros(k), np.full(k, np.inf), (C, friction.cap), False)
+
+
+class _HighsMaster:
+    """The master LP kept in one ``highspy.Highs``: columns added to it are priced from the
+    previous round's basis (a hot start of the simplex), where scipy's ``linprog`` starts
+    each round from scratch. Columns: the corner compressions, lambda, then the patterns;
+    rows: equilibrium, then one convexity row per interface."""
+
+    def __init__(self, E_n, live, rhs, m: int, scale: float, cap: float) -> None:
+        import highspy
+
+        # the bare binding where the package exposes it: the public class's callback layer
+        # prints HiGHS's banner on stdout once per process, before any option can be set
+        self.h = h = getattr(highspy, "_Highs", highspy.Highs)()
+        h.setOptionValue("output_flag", False)
+        h.setOptionValue("solver", "simplex")
+        self.optimal = highspy.HighsModelStatus.kOptimal
+        n_eq, nn = E_n.shape
+        self.n_eq, self.nn, self.m = n_eq, nn, m
+        inf = highspy.kHighsInf
+        lower = np.concatenate([rhs, np.full(m, -inf)])
+        upper = np.concatenate([rhs, np.ones(m)])
+        h.addRows(n_eq + m, lower, upper, 0, np.zeros(0, np.int32), np.zeros(0, np.int32), [])
+        A = sparse.vstack(
+            [
+                sparse.hstack([E_n, sparse.csc_matrix(-live.reshape(-1, 1))]),
+                sparse.csc_matrix((m, nn + 1)),
+            ],
+            format="csc",
+        )
+        cost = np.zeros(nn + 1)
+        cost[-1] = -scale
+        upper_x = np.full(nn + 1, inf)
+        upper_x[-1] = cap
+        self._add(A, cost, upper_x)
+
+    def _add(self, A: sparse.csc_matrix, cost: np.ndarray, upper: np.ndarray) -> None:
+        n = A.shape[1]
+        self.h.addCols(
+            n,
+            cost,
+            np.zeros(n),
+            upper,
+            A.nnz,
+            A.indptr[:-1].astype(np.int32),
+            A.indices.astype(np.int32),
+            A.data,
+        )
+
+    def add(self, P: sparse.csc_matrix, owner: np.ndarray) -> None:
+        q = P.shape[1]
+        convex = sparse.csc_matrix((np.ones(q), (owner, np.arange(q))), shape=(self.m, q))
+        self._add(sparse.vstack([P, convex], format="csc"), np.zeros(q), np.full(q, np.inf))
+
+    def solve(self):
+        """(corner compressions, lambda, thetas, equilibrium duals, convexity duals), or None
+        where the master has no optimum."""
+        self.h.run()
+        if self.h.getModelStatus() != self.optimal:
+            return None
+        sol = self.h.getSolution()
+        x = np.asarray(sol.col_value)
+        row = np.asarray(sol.row_dual)
+        nn = self.nn
+        return x[:nn], float(x[nn]), x[nn + 1 :], row[: self.n_eq], row[self.n_eq :]
+
+
+class _LinprogMaster:
+    """The master by scipy's ``linprog`` (HiGHS's dual simplex from scratch each round),
+    where ``highspy`` is not installed."""
+
+    def __init__(self, E_n, live, rhs, m: int, scale: float, cap: float) -> None:
+        self.E_n, self.live, self.rhs, self.m = E_n, live, rhs, m
+        self.scale, self.cap = scale, cap
+        self.P = sparse.csc_matrix((E_n.shape[0], 0))
+        self.owner = np.zeros(0, dtype=np.int64)
+
+    def add(self, P: sparse.csc_matrix, owner: np.ndarray) -> None:
+        self.P = sparse.hstack([self.P, P], format="csc")
+        self.owner = np.concatenate([self.owner, owner])
+
+    def solve(self):
+        from scipy.optimize import linprog
+
+        nn, q, m = self.E_n.shape[1], self.P.shape[1], self.m
+        live = self.live.reshape(-1, 1)
+        A = sparse.hstack([self.E_n, self.P, sparse.csc_matrix(-live)], format="csc")
+        convex = sparse.csc_matrix(
+            (np.ones(q), (self.owner, nn + np.arange(q))), shape=(m, nn + q + 1)
+        )
+        c = np.zeros(nn + q + 1)
+        c[-1] = -self.scale
+        bounds = np.zeros((nn + q + 1, 2))
+        bounds[:, 1] = np.inf
+        bounds[-1, 1] = self.cap
+        res = linprog(c, convex, np.ones(m), A, self.rhs, bounds=bounds, method="highs-ds")
+        if res.status != 0:
+            return None
+        x = np.asarray(res.x)
+        duals = np.asarray(res.eqlin.marginals), np.asarray(res.ineqlin.marginals)
+        return (x[:nn], float(x[-1]), x[nn:-1], *duals)
+
+
+def _master(E_n, live, rhs, m: int, scale: float, cap: float):
+    """The master LP: kept in highspy (hot starts) where it is installed."""
+    try:
+        import highspy  # noqa: F401
+    except ImportError:  # pragma: no cover - declared dependency
+        return _LinprogMaster(E_n, live, rhs, m, scale, cap)
+    return _HighsMaster(E_n, live, rhs, m, scale, cap)
 
 
 def _edge_multipliers(
