@@ -113,3 +113,13 @@ def test_a_master_out_of_rounds_falls_back_on_the_full_lp(l_wall_lp):
     sol, _, stats = columns.solve_frozen_columns(E_n, friction, live, rhs, None, None, max_rounds=1)
     assert stats.full
     assert sol.lam == full.lam
+
+
+def test_the_master_without_highspy_gives_the_same_lambda(l_wall_lp, monkeypatch):
+    """Where highspy is missing the master is re-solved by scipy's linprog each round (no
+    hot start): the same rounds of pricing reach the full LP's lambda."""
+    E_n, friction, live, rhs, full = l_wall_lp
+    monkeypatch.setattr(columns, "_master", columns._LinprogMaster)
+    sol, _, stats = columns.solve_frozen_columns(E_n, friction, live, rhs, None, None)
+    assert not stats.full and stats.rounds >= 2
+    assert sol.lam == pytest.approx(full.lam, rel=1e-7)

@@ -25,8 +25,9 @@ objective's coefficient of lambda) is an upper one: the rounds stop when that ga
 below ``rtol`` lambda, so the answer is the full LP's to that relative tolerance, certified
 by the duals, not assumed.
 
-The master is re-solved from scratch each round (scipy's HiGHS dual simplex: no warm start
-through ``linprog``), which is cheap at its size. Where the master has no equilibrium (the
+The master is kept in one ``highspy`` model, so each round's primal simplex starts from the
+previous round's basis (scipy's ``linprog`` has no warm start; it is the fallback where
+highspy is missing). Where the master has no equilibrium (the
 starting patterns cannot carry the dead load) or the rounds run out, the full LP is solved
 instead, so the status is always the full LP's.
 """
@@ -226,8 +227,8 @@ class _HighsMaster:
         h.setOptionValue("output_flag", False)
         h.setOptionValue("solver", "simplex")
         # the primal simplex: added columns leave the basis primal feasible, so each round
-        # goes on from the last vertex (S15: 0.9-1.2 s a frozen LP against 3.3-4.9 s with
-        # the dual simplex, which restarts its phase 1)
+        # goes on from the last vertex (S15's first frozen LPs: 0.9-1.2 s each against
+        # 3.3-4.9 s with HiGHS's default, the dual simplex)
         h.setOptionValue("simplex_strategy", 4)
         self.optimal = highspy.HighsModelStatus.kOptimal
         n_eq, nn = E_n.shape
