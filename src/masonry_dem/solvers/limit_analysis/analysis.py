@@ -64,9 +64,10 @@ def limit_analysis(
             result's ``bound`` is then "upper"; ``dem_upper_bound`` does this).
         column_generation: the non-associative iteration's LPs with "highs": True solves
             each by column generation (``columns``: the full LP's optimum to a relative
-            1e-9, certified by its duals, on a master of a few hundred columns), False the
-            full LP (the same lambda; 4-40 times slower on small walls,
-            docs/limit_analysis.md). Ignored elsewhere.
+            1e-7, or 1e-5 where HiGHS's tolerances stall it, certified by its duals, on a
+            master of a few thousand columns), False the
+            full LP (the same lambda per LP, 34-51 times slower on the 29-block L wall and
+            S15, docs/limit_analysis.md). Ignored with "clarabel" and when associative.
 
     Returns a :class:`LimitAnalysisResult`; solver trouble is a status, never an exception
     (bad arguments raise ValueError naming the argument).

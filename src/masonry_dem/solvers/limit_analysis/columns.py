@@ -1,5 +1,5 @@
 """The frozen-capacity LP of the non-associative iteration by column generation
-(Dantzig-Wolfe): the same optimum as the full LP, on a master of a few hundred columns.
+(Dantzig-Wolfe): the same optimum as the full LP, on a master of a few thousand columns.
 
 The full LP (``backends.solve_highs`` with the capacity rows) carries, at each of the K grid
 points p of each interface, D pyramid edge multipliers ``g_pd >= 0`` with ``sum_d g_pd <=
@@ -22,8 +22,8 @@ priced in one sparse product ``E_s^T y``. The restricted master's optimum is a l
 of the full LP's, and since each interface's thetas sum to at most one, the Lagrangian
 bound ``lambda_full <= lambda + sum_i max(0, gain_i + w_i) / scale`` (``scale`` the
 objective's coefficient of lambda) is an upper one: the rounds stop when that gap is
-below ``rtol`` lambda, so the answer is the full LP's to that relative tolerance, certified
-by the duals, not assumed.
+below ``rtol`` lambda (``STALL_RTOL`` where nothing new prices out), so the answer is the
+full LP's to that relative tolerance, certified by the duals, not assumed.
 
 The master is kept in one ``highspy`` model, so each round's primal simplex starts from the
 previous round's basis (scipy's ``linprog`` has no warm start; it is the fallback where

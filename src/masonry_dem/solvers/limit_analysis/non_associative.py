@@ -59,7 +59,7 @@ def non_associative(
 ) -> LimitAnalysisResult:
     """The iteration on frozen capacities from the associative start. With HiGHS (``dirs``
     the pyramid's edges), each frozen-capacity LP is solved by ``column_generation``
-    (``columns``: the same optimum on a master of a few hundred columns, warm started from
+    (``columns``: the same optimum on a master of a few thousand columns, started from
     the previous iteration's patterns) or, False, in full."""
     model = problem.model
     m = model.interfaces.count
