@@ -1,12 +1,14 @@
 """The non-associative limit analysis on a small L wall: a minute where the pushover takes
-a fraction of a second, and a multiplier 20-26 % above the pushover's certified one.
+a fraction of a second (session 17; a few seconds since its LPs are solved by column
+generation, session 18), and a multiplier 15-26 % above the pushover's certified one.
 
 Found by the new-user sweep (session 17, docs/new_user_sweep.md): ``masonry-dem limit
 --non-associative`` on an L wall of 4 x b facade, a 3-block return, 4 or 6 courses (29 or
 43 blocks, dry, mu 0.7, tilted along e3) took 74 s and 151 s (load about 3 on 2 cores) for
 lambda 0.3349 and 0.2822, where the pushover, certified against the associative bound,
 gives 0.2790 and 0.2242 in 0.1-0.4 s. The non-associative multiplier is documented as an
-estimate, not a bound (docs/limit_analysis.md, "Cost on small walls" has the diagnosis).
+estimate, not a bound (docs/limit_analysis.md, "Cost on small walls" has the diagnosis,
+"The frozen-capacity LP by column generation" the remedy).
 
     PYTHONPATH=src python benchmarks/new_user_limit_l_wall.py [--courses 4 6]
         # the pushover against the non-associative limit analysis, in one run
