@@ -1,12 +1,14 @@
 """The non-associative limit analysis on a small L wall: a minute where the pushover takes
-a fraction of a second, and a multiplier 20-26 % above the pushover's certified one.
+a fraction of a second (session 17; a few seconds since its LPs are solved by column
+generation, session 18), and a multiplier 15-26 % above the pushover's certified one.
 
 Found by the new-user sweep (session 17, docs/new_user_sweep.md): ``masonry-dem limit
 --non-associative`` on an L wall of 4 x b facade, a 3-block return, 4 or 6 courses (29 or
 43 blocks, dry, mu 0.7, tilted along e3) took 74 s and 151 s (load about 3 on 2 cores) for
 lambda 0.3349 and 0.2822, where the pushover, certified against the associative bound,
 gives 0.2790 and 0.2242 in 0.1-0.4 s. The non-associative multiplier is documented as an
-estimate, not a bound (docs/limit_analysis.md, "Cost on small walls" has the diagnosis).
+estimate, not a bound (docs/limit_analysis.md, "Cost on small walls" has the diagnosis,
+"The frozen-capacity LP by column generation" the remedy).
 
     PYTHONPATH=src python benchmarks/new_user_limit_l_wall.py [--courses 4 6]
         # the pushover against the non-associative limit analysis, in one run
@@ -15,6 +17,15 @@ estimate, not a bound (docs/limit_analysis.md, "Cost on small walls" has the dia
         # HiGHS and Clarabel on grids 4 and 8, and the DEM's own collapse actions frozen
     PYTHONPATH=src python benchmarks/new_user_limit_l_wall.py --lp
         # one frozen-capacity LP with and without the lambda = 0 LP first (ratio, one run)
+    PYTHONPATH=src python benchmarks/new_user_limit_l_wall.py --colgen [--case S15] [--whole]
+        # the frozen-capacity LPs by column generation against the full LP, in one run: the
+        # iteration by columns (lambda, iterations, pricing rounds, patterns), then its first
+        # LPs solved both ways (lambda, seconds, ratio); --whole: the iteration on the full
+        # LP too (about a minute on the L wall)
+    PYTHONPATH=src python benchmarks/new_user_limit_l_wall.py --order [--whole]
+        # the iteration's answer when the pyramid's edges are listed from another edge (the
+        # same LPs, their columns in another order): how far the degenerate LPs' choice of
+        # optimum moves the fixed point
 """
 
 from __future__ import annotations
@@ -25,7 +36,7 @@ import time
 import numpy as np
 
 import masonry_dem as md
-from masonry_dem.solvers.limit_analysis import backends, non_associative
+from masonry_dem.solvers.limit_analysis import analysis, backends, columns, non_associative
 from masonry_dem.solvers.limit_analysis.formulation import Solution
 
 
@@ -135,12 +146,109 @@ def lp_ratio(courses: int, repeat: int = 2) -> None:
     )
 
 
+def case_model(name: str) -> md.Model:
+    if name == "L":
+        return l_wall_model(4)
+    from masonry_dem.cases.paper import build_case
+
+    return build_case(name).model
+
+
+def colgen(name: str, lps: int, whole: bool) -> None:
+    """The iteration by columns, timed, with its frozen LPs captured; then the first ``lps``
+    of them solved by columns (the run's start and duals) and in full, alternately."""
+    model = case_model(name)
+    captured = []
+    real = non_associative.solve_frozen_columns
+
+    def capture(*args, **kwargs):
+        captured.append(args)
+        return real(*args, **kwargs)
+
+    non_associative.solve_frozen_columns = capture
+    try:
+        t = time.perf_counter()
+        r = md.limit_analysis(model, associative=False)
+        seconds = time.perf_counter() - t
+    finally:
+        non_associative.solve_frozen_columns = real
+    E_n, friction = captured[0][:2]
+    print(
+        f"{model.name or name} ({model.blocks.count} blocks, {friction.m} interfaces): full LP "
+        f"{E_n.shape[0]} equilibrium + {friction.m * friction.K} capacity rows, "
+        f"{E_n.shape[1] + friction.E_s.shape[1] + 1} columns; master {E_n.shape[0]} + "
+        f"{friction.m} rows, {E_n.shape[1] + 1} columns + the patterns"
+    )
+    print(
+        f"  by columns: {r.status} {r.load_factor:.6f} in {seconds:.1f} s, {r.iterations} "
+        f"iterations, {r.info['pricing_rounds']} pricing rounds in all, "
+        f"{r.info['patterns']} patterns at the end, {r.info['full_lps']} full LPs",
+        flush=True,
+    )
+    if whole:
+        t = time.perf_counter()
+        f = md.limit_analysis(model, associative=False, column_generation=False)
+        full_seconds = time.perf_counter() - t
+        print(
+            f"  full LP:    {f.status} {f.load_factor:.6f} in {full_seconds:.1f} s, "
+            f"{f.iterations} iterations ({full_seconds / seconds:.1f}x the time)"
+        )
+    total = {"columns": 0.0, "full": 0.0}
+    for i, args in enumerate(captured[:lps]):
+        t = time.perf_counter()
+        sol, _, stats = columns.solve_frozen_columns(*args)
+        t1 = time.perf_counter()
+        full = columns.solve_frozen_full(*args[:4])
+        t2 = time.perf_counter()
+        total["columns"] += t1 - t
+        total["full"] += t2 - t1
+        print(
+            f"  LP {i + 1}: by columns {sol.lam:.9f} in {t1 - t:.2f} s ({stats.rounds} rounds, "
+            f"{stats.columns} patterns{', full LP' if stats.full else ''}); full "
+            f"{full.lam:.9f} in {t2 - t1:.2f} s; {full.lam / sol.lam - 1:+.1e}, "
+            f"{(t2 - t1) / (t1 - t):.1f}x",
+            flush=True,
+        )
+    print(f"  first {min(lps, len(captured))} LPs: {total['full'] / total['columns']:.1f}x")
+
+
+def order(name: str, whole: bool) -> None:
+    """The same iteration with the pyramid's edges listed from edge 0, 1, 2 and 3."""
+    model = case_model(name)
+    real = analysis.pyramid_edges
+    ways = (True, False) if whole else (True,)
+    try:
+        for shift in range(4):
+            analysis.pyramid_edges = lambda *a, s=shift: np.roll(real(*a), s, axis=0)
+            for by_columns in ways:
+                t = time.perf_counter()
+                r = md.limit_analysis(model, associative=False, column_generation=by_columns)
+                print(
+                    f"{model.name or name}, edges from {shift}, "
+                    f"{'by columns' if by_columns else 'full LP'}: {r.status} "
+                    f"{r.load_factor:.5f}, {r.iterations} iterations, "
+                    f"{time.perf_counter() - t:.1f} s",
+                    flush=True,
+                )
+    finally:
+        analysis.pyramid_edges = real
+
+
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--courses", type=int, nargs="+", default=[4])
     parser.add_argument("--grids", action="store_true")
     parser.add_argument("--lp", action="store_true")
+    parser.add_argument("--colgen", action="store_true")
+    parser.add_argument("--order", action="store_true")
+    parser.add_argument("--case", nargs="+", default=["L"], help="L (the L wall) or a paper case")
+    parser.add_argument("--lps", type=int, default=3, help="LPs solved both ways (--colgen)")
+    parser.add_argument("--whole", action="store_true")
     args = parser.parse_args(argv)
+    if args.colgen or args.order:
+        for name in args.case:
+            colgen(name, args.lps, args.whole) if args.colgen else order(name, args.whole)
+        return
     for courses in args.courses:
         if args.grids:
             grids(courses)

@@ -29,7 +29,8 @@ The package, by role: ``interface`` (grid, pyramid, actions of point forces),
 point method on the normal equations, PARDISO, stopped at a certified bracket of lambda; the
 exact cone's solver from ``NORMAL_EQUATIONS_FROM`` velocities), ``cones`` (its second-order
 cone kernels), ``mirror`` (a mirror plane's antisymmetric DOFs: a wall loaded in its plane is
-solved on 3 velocities a block), ``dem_domain`` (kappa), ``non_associative``,
+solved on 3 velocities a block), ``dem_domain`` (kappa), ``non_associative``, ``columns``
+(its frozen-capacity LPs by column generation),
 ``result`` (the result and the mechanism check), ``analysis`` (the entry points).
 
 Why the associative answer needs only the corners is argued in ``interface``: any grid that

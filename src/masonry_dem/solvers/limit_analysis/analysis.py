@@ -38,6 +38,7 @@ def limit_analysis(
     max_iterations: int = 50,
     relaxation: float = 0.5,
     friction_scale: float = 1.0,
+    column_generation: bool = True,
 ) -> LimitAnalysisResult:
     """The collapse multiplier of ``model``'s live load over its dead load, and the mechanism.
 
@@ -61,6 +62,12 @@ def limit_analysis(
             of the model's alpha makes the LA domain contain the DEM's, so the associative
             multiplier is an upper bound of the pushover's by Radenkovic's theorem (the
             result's ``bound`` is then "upper"; ``dem_upper_bound`` does this).
+        column_generation: the non-associative iteration's LPs with "highs": True solves
+            each by column generation (``columns``: the full LP's optimum to a relative
+            1e-7, or 1e-5 where HiGHS's tolerances stall it, certified by its duals, on a
+            master of a few thousand columns), False the
+            full LP (the same lambda per LP, 34-51 times slower on the 29-block L wall and
+            S15, docs/limit_analysis.md). Ignored with "clarabel" and when associative.
 
     Returns a :class:`LimitAnalysisResult`; solver trouble is a status, never an exception
     (bad arguments raise ValueError naming the argument).
@@ -92,6 +99,8 @@ def limit_analysis(
         raise ValueError(f"relaxation must be in (0, 1], got {relaxation!r}")
     if not (isinstance(friction_scale, (int, float)) and 1 <= friction_scale < np.inf):
         raise ValueError(f"friction_scale must be a number >= 1, got {friction_scale!r}")
+    if not isinstance(column_generation, (bool, np.bool_)):
+        raise ValueError(f"column_generation must be True or False, got {column_generation!r}")
     covers = friction_scale >= model_friction_scale(model) * (1 - 1e-9)
     if friction_scale != 1:
         model = replace(model, friction=model.friction * float(friction_scale))
@@ -140,7 +149,14 @@ def limit_analysis(
                 )
         return out
     return non_associative(
-        problem, grid, dirs, tolerance, int(max_iterations), float(relaxation), result
+        problem,
+        grid,
+        dirs,
+        tolerance,
+        int(max_iterations),
+        float(relaxation),
+        result,
+        bool(column_generation),
     )
 
 

@@ -10,7 +10,8 @@ from scipy import sparse
 
 from masonry_dem.model import Model
 
-from .backends import solve_associative, solve_clarabel, solve_highs
+from .backends import solve_associative, solve_clarabel
+from .columns import FrozenFriction, Patterns, solve_frozen_columns, solve_frozen_full
 from .formulation import Problem, Solution
 from .interface import ASSOCIATIVE_GRID, grid_points, lobatto_rule, resultant_columns
 from .result import LimitAnalysisResult, finish
@@ -54,7 +55,12 @@ def non_associative(
     max_iterations: int,
     relaxation: float,
     result,
+    column_generation: bool = True,
 ) -> LimitAnalysisResult:
+    """The iteration on frozen capacities from the associative start. With HiGHS (``dirs``
+    the pyramid's edges), each frozen-capacity LP is solved by ``column_generation``
+    (``columns``: the same optimum on a master of a few thousand columns, started from
+    the previous iteration's patterns) or, False, in full."""
     model = problem.model
     m = model.interfaces.count
     start, size = solve_associative(problem, ASSOCIATIVE_GRID, dirs)
@@ -69,6 +75,9 @@ def non_associative(
     R_n = resultant_columns(corners.reshape(-1, 2), normal, iface4, m)
     lams: list[float] = []
     sol = start
+    patterns: Patterns | None = None
+    rounds = columns = full_lps = 0
+    kw: dict = {}
     for it in range(1, max_iterations + 1):
         pts, cap = frozen_layout(model, actions, grid)
         K = pts.shape[1]
@@ -96,25 +105,26 @@ def non_associative(
                 np.repeat(yk, D, axis=0), force.reshape(-1, 3), np.repeat(iface, D), m
             )
             R = sparse.hstack([R_n, R_s], format="csc")
-            E = (problem.H_T @ R).tocsc()
-            k = E.shape[1]
-            # per point, the edge multipliers share its frozen compression: sum_d g_d <= cap
-            npts = m * K
-            C = sparse.csc_matrix(
-                (np.ones(npts * D), (np.repeat(np.arange(npts), D), 4 * m + np.arange(npts * D))),
-                shape=(npts, k),
-            )
-            # no lambda = 0 solve first (half of each iteration's time): the associative
-            # start checked the dead load, and the frozen capacities are those of the
-            # collapse, not of the dead load's equilibrium
-            sol = solve_highs(
-                E, problem.live, problem.rhs, np.zeros(k), np.full(k, np.inf), (C, capk), False
-            )
+            friction = FrozenFriction((problem.H_T @ R_s).tocsc(), capk, m, K, D)
+            E = (problem.H_T @ R_n).tocsc()
+            if column_generation:
+                sol, patterns, stats = solve_frozen_columns(
+                    E, friction, problem.live, problem.rhs, patterns, sol.duals
+                )
+                rounds += stats.rounds
+                columns = stats.columns
+                full_lps += stats.full
+                kw["info"] = {"pricing_rounds": rounds, "patterns": columns, "full_lps": full_lps}
+            else:
+                sol = solve_frozen_full(E, friction, problem.live, problem.rhs)
             if sol.status == "infeasible":
                 sol = Solution("dead load", detail=f"{sol.detail} (frozen capacities)")
-        size = (E.shape[1] + 1, E.shape[0] + (m * K if dirs is not None else 0))
+        if dirs is None:
+            size = (E.shape[1] + 1, E.shape[0])
+        else:  # the full LP's, whether solved in full or by column generation
+            size = (R.shape[1] + 1, E.shape[0] + m * K)
         if sol.status != "optimal":
-            return finish(problem, sol, size, result, iterations=it, load_factors=tuple(lams))
+            return finish(problem, sol, size, result, iterations=it, load_factors=tuple(lams), **kw)
         new = (problem.a0 + R @ sol.x).reshape(-1, 6)
         sol.info_actions = new  # type: ignore[attr-defined]
         lams.append(sol.lam)
@@ -124,7 +134,7 @@ def non_associative(
         settled = len(last) == 3 and max(last) - min(last) <= tolerance * max(abs(last[-1]), 1e-12)
         log.debug("non-associative iteration %d: lambda = %.6g", it, sol.lam)
         if settled:
-            return finish(problem, sol, size, result, iterations=it, load_factors=tuple(lams))
+            return finish(problem, sol, size, result, iterations=it, load_factors=tuple(lams), **kw)
         if len(lams) > 2 and (lams[-1] - lams[-2]) * (lams[-2] - lams[-3]) < 0:
             relaxation = max(relaxation / 2, _SMALLEST_RELAXATION)  # it oscillates: damp it
         actions = actions + relaxation * (new - actions)
@@ -138,4 +148,5 @@ def non_associative(
         load_factors=tuple(lams),
         variables=size[0],
         constraints=size[1],
+        **kw,
     )
