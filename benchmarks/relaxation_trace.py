@@ -45,7 +45,6 @@ from pathlib import Path
 import numpy as np
 
 from masonry_dem.cases.paper import build_case
-from masonry_dem.solvers.dynamic_relaxation import _State
 from masonry_dem.solvers.static import StaticSettings, StaticSolver
 from masonry_dem.solvers.static.relaxations import Relaxations
 
@@ -76,15 +75,8 @@ def record(model, settings, monitor):
     settings = replace(settings or StaticSettings(), corner_check="explicit")
 
     def spy(self, target, last, budget=None, polish=True):
-        free = self.problem.asm.free_index
         increment = self.last_increment
-        start = _State(
-            self.q[free].copy(),
-            self.plastic.copy(),
-            self.cracked.copy(),
-            last,
-            np.ones((self.model.interfaces.count, 6)),
-        )
+        start = self.relaxation_start(last)
         q_saved = self.q.copy()
         before = self.time_steps
         out = original(self, target, last, budget, polish)

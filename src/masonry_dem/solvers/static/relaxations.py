@@ -25,7 +25,7 @@ from masonry_dem.solvers.static.outcome import Failure, Outcome
 from masonry_dem.solvers.static.settings import StaticSettings
 
 if TYPE_CHECKING:
-    from masonry_dem.solvers.dynamic_relaxation import DynamicRelaxation
+    from masonry_dem.solvers.dynamic_relaxation import DynamicRelaxation, _State
 
 log = logging.getLogger(__name__)
 
@@ -224,6 +224,20 @@ class Relaxations(Corrector):
             ),
         )
 
+    def relaxation_start(self, last: float) -> _State:
+        """The state a dynamic relaxation starts from: the last converged one, at the load
+        factor ``last``, at rest."""
+        from masonry_dem.solvers.dynamic_relaxation import _State
+
+        free = self.problem.asm.free_index
+        return _State(
+            self.q[free].copy(),
+            self.plastic.copy(),
+            self.cracked.copy(),
+            last,
+            np.ones((self.model.interfaces.count, 6)),
+        )
+
     def dynamic_rescue(
         self, target: float, last: float, budget: int | None = None, polish: bool = True
     ) -> Outcome | None:
@@ -238,20 +252,12 @@ class Relaxations(Corrector):
         ``fold_creep_cos`` the motion along a converged creep is not damped between them
         (:meth:`Relaxation._relax`'s ``creep_cos``), so a wall snapping through to a fold's
         rest gets there in fewer time steps."""
-        from masonry_dem.solvers.dynamic_relaxation import _State
-
         s = self.settings
         free = self.problem.asm.free_index
         budget = s.rescue_time_steps if budget is None else budget
         if self._dr is None or self._dr.settings.max_cycles != budget:
             self._dr = self.relaxation(budget)
-        start = _State(
-            self.q[free].copy(),
-            self.plastic.copy(),
-            self.cracked.copy(),
-            last,
-            np.ones((self.model.interfaces.count, 6)),
-        )
+        start = self.relaxation_start(last)
         # its displacement limit measured from the start state, as every search of the path
         # measures its step: from the unloaded wall a state already past the limit (a wall
         # whose path had moved that far) failed at the first time step
