@@ -177,7 +177,7 @@ def solve_frozen_columns(
         new = priced[~np.isin(keys, master_keys)]
         size = max(abs(lam), 1e-12)
         if gap <= rtol * size or (new.size == 0 and gap <= STALL_RTOL * size):
-            x = np.concatenate([x_n, _edge_multipliers(friction, choice, owner, theta)])
+            x = np.concatenate([x_n, edge_multipliers(friction, choice, owner, theta)])
             used = theta > 0
             return (
                 Solution(
@@ -357,7 +357,7 @@ def _keys(choice: np.ndarray, owner: np.ndarray) -> np.ndarray:
     return (choice + 1.0) @ weights[:K] + owner * weights[K]
 
 
-def _edge_multipliers(
+def edge_multipliers(
     friction: FrozenFriction, choice: np.ndarray, owner: np.ndarray, theta: np.ndarray
 ) -> np.ndarray:
     """``g_pd`` (m K D,) of the patterns' combination ``theta``."""

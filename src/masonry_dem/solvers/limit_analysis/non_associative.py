@@ -15,7 +15,7 @@ from .columns import FrozenFriction, Patterns, full_lp, solve_frozen_columns, so
 from .formulation import Problem, Solution, associative_columns
 from .interface import ASSOCIATIVE_GRID, grid_points, lobatto_rule, resultant_columns
 from .result import LimitAnalysisResult, finish
-from .selection import action_weights, nearest_optimum
+from .selection import action_weights, nearest_by_columns, nearest_optimum
 
 log = logging.getLogger(__name__)
 
@@ -71,7 +71,7 @@ def non_associative(
     if start.status != "optimal":
         return finish(problem, start, size, result, iterations=1, load_factors=())
     select_rows, select_weights = action_weights(model.interfaces.l1, model.interfaces.l2)
-    selections = 0
+    selections = selection_rounds = 0
     if nearest and dirs is not None:
         # the associative LP is as degenerate: its optimum with the least normal actions
         # (fn, m1, m2 nearest the unloaded state), so that the start is unique too
@@ -138,18 +138,26 @@ def non_associative(
             if sol.status == "infeasible":
                 sol = Solution("dead load", detail=f"{sol.detail} (frozen capacities)")
             elif sol.status == "optimal" and nearest:
-                E_full, C = full_lp(E, friction)
-                A = sparse.diags(select_weights) @ R.tocsr()[select_rows]
                 target = select_weights * (actions.ravel() - problem.a0)[select_rows]
-                chosen = nearest_optimum(
-                    E_full, problem.live, problem.rhs, (C, capk), sol.lam, A.tocsr(), target
-                )
+                if column_generation:  # the QP by columns too, from this LP's patterns
+                    A_n = (sparse.diags(select_weights) @ R_n.tocsr()[select_rows]).tocsr()
+                    chosen, more = nearest_by_columns(
+                        E, friction, problem.live, problem.rhs, sol.lam, A_n, target, patterns
+                    )
+                    selection_rounds += more
+                else:
+                    E_full, C = full_lp(E, friction)
+                    A = (sparse.diags(select_weights) @ R.tocsr()[select_rows]).tocsr()
+                    chosen = nearest_optimum(
+                        E_full, problem.live, problem.rhs, (C, capk), sol.lam, A, target
+                    )
                 if chosen.status == "optimal":
                     sol.x = chosen.x
                     selections += 1
                 else:
                     log.debug("non-associative iteration %d: %s", it, chosen.detail)
                 kw.setdefault("info", {})["nearest_optima"] = selections
+                kw["info"]["selection_rounds"] = selection_rounds
         if dirs is None:
             size = (E.shape[1] + 1, E.shape[0])
         else:  # the full LP's, whether solved in full or by column generation
