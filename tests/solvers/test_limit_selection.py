@@ -10,10 +10,25 @@ from scipy import sparse
 from masonry_dem.geometry.builders import add_base, single_block
 from masonry_dem.geometry.plans import l_wall
 from masonry_dem.model import InterfaceMaterial, Model, SelfWeight, Support, WeightProportional
-from masonry_dem.solvers.limit_analysis import analysis, backends, limit_analysis
+from masonry_dem.solvers.limit_analysis import (
+    analysis,
+    backends,
+    columns,
+    limit_analysis,
+    selection,
+)
+from masonry_dem.solvers.limit_analysis import non_associative as na
 from masonry_dem.solvers.limit_analysis.formulation import Problem, associative_columns
-from masonry_dem.solvers.limit_analysis.interface import pyramid_edges
-from masonry_dem.solvers.limit_analysis.selection import action_weights, nearest_optimum
+from masonry_dem.solvers.limit_analysis.interface import (
+    grid_points,
+    pyramid_edges,
+    resultant_columns,
+)
+from masonry_dem.solvers.limit_analysis.selection import (
+    action_weights,
+    nearest_by_columns,
+    nearest_optimum,
+)
 
 GAMMA = 2.0e4
 
@@ -91,7 +106,8 @@ def test_the_associative_start_is_unique_with_the_selection(small_l_wall):
 def test_two_edge_orders_give_the_same_lambda_with_the_selection(small_l_wall, monkeypatch):
     """The same iteration with the pyramid's edges listed from edge 0 and from edge 1: the
     solver's optima settle at lambdas more than 0.5 % apart (0.5793 and 0.5727, measured),
-    the nearest optima at the same lambda to 1e-5 (0.599707 both)."""
+    the nearest optima at the same lambda to 1e-5 (0.599708 both, by columns; 0.599707 both
+    with the full QP)."""
     real = analysis.pyramid_edges
     got: dict[bool, list[float]] = {False: [], True: []}
     for shift in (0, 1):
@@ -104,3 +120,46 @@ def test_two_edge_orders_give_the_same_lambda_with_the_selection(small_l_wall, m
             got[near].append(r.load_factor)
     assert abs(got[False][1] / got[False][0] - 1) > 5e-3
     assert got[True][1] == pytest.approx(got[True][0], rel=1e-5)
+
+
+def test_the_nearest_optimum_by_columns_is_the_full_qps(small_l_wall, monkeypatch):
+    """On the first frozen LP of the small L wall, the QP by columns (the master's patterns,
+    priced by the QP's duals) and the full QP (every edge of every point) choose the same
+    normal actions, to 1e-5 of the largest: pricing closed the master, it did not stop
+    short. The target: the least normal actions (zero)."""
+    got = []
+    real = na.solve_frozen_columns
+
+    def capture(E_n, friction, live, rhs, start, duals):
+        out = real(E_n, friction, live, rhs, start, duals)
+        got.append((E_n, friction, live, rhs, out[0], out[1]))
+        return out
+
+    monkeypatch.setattr(na, "solve_frozen_columns", capture)
+    limit_analysis(small_l_wall, associative=False, max_iterations=1)
+    E_n, friction, live, rhs, sol, patterns = got[0]
+    its = small_l_wall.interfaces
+    m = its.count
+    corners, _ = grid_points(its.l1, its.l2, 2)
+    normal = np.zeros((4 * m, 3))
+    normal[:, 2] = -1.0
+    R_n = resultant_columns(corners.reshape(-1, 2), normal, np.repeat(np.arange(m), 4), m)
+    rows, weights = action_weights(its.l1, its.l2)
+    A_n = (sparse.diags(weights) @ R_n.tocsr()[rows]).tocsr()
+    target = np.zeros(len(rows))
+    by_columns, rounds = nearest_by_columns(
+        E_n, friction, live, rhs, sol.lam, A_n, target, patterns
+    )
+    assert by_columns.status == "optimal", by_columns.detail
+    assert 0 < rounds < selection.MAX_SELECTION_ROUNDS  # priced, and closed
+    E, C = columns.full_lp(E_n, friction)
+    A = sparse.hstack([A_n, sparse.csr_matrix((len(rows), friction.E_s.shape[1]))]).tocsr()
+    full = nearest_optimum(E, live, rhs, (C, friction.cap), sol.lam, A, target)
+    assert full.status == "optimal", full.detail
+    nn = E_n.shape[1]
+    a_cols, a_full = A_n @ by_columns.x[:nn], A_n @ full.x[:nn]
+    assert np.abs(a_cols - a_full).max() <= 1e-5 * np.abs(a_full).max()
+    # both are optima of the frozen LP: equilibrium at lambda within the slack
+    for x in (by_columns.x, full.x):
+        lam_x = np.linalg.lstsq(live.reshape(-1, 1), E @ x - rhs, rcond=None)[0][0]
+        assert lam_x >= sol.lam * (1 - 2 * selection.LAMBDA_SLACK)
