@@ -22,10 +22,10 @@ estimate, not a bound (docs/limit_analysis.md, "Cost on small walls" has the dia
         # iteration by columns (lambda, iterations, pricing rounds, patterns), then its first
         # LPs solved both ways (lambda, seconds, ratio); --whole: the iteration on the full
         # LP too (about a minute on the L wall)
-    PYTHONPATH=src python benchmarks/new_user_limit_l_wall.py --order [--whole]
+    PYTHONPATH=src python benchmarks/new_user_limit_l_wall.py --order [--whole] [--nearest on]
         # the iteration's answer when the pyramid's edges are listed from another edge (the
         # same LPs, their columns in another order): how far the degenerate LPs' choice of
-        # optimum moves the fixed point
+        # optimum moves the fixed point, without and with the nearest-optimum selection
 """
 
 from __future__ import annotations
@@ -212,8 +212,9 @@ def colgen(name: str, lps: int, whole: bool) -> None:
     print(f"  first {min(lps, len(captured))} LPs: {total['full'] / total['columns']:.1f}x")
 
 
-def order(name: str, whole: bool) -> None:
-    """The same iteration with the pyramid's edges listed from edge 0, 1, 2 and 3."""
+def order(name: str, whole: bool, nearest: tuple[bool, ...]) -> None:
+    """The same iteration with the pyramid's edges listed from edge 0, 1, 2 and 3, without
+    and with the nearest-optimum selection (``nearest``), alternately in one run."""
     model = case_model(name)
     real = analysis.pyramid_edges
     ways = (True, False) if whole else (True,)
@@ -221,15 +222,22 @@ def order(name: str, whole: bool) -> None:
         for shift in range(4):
             analysis.pyramid_edges = lambda *a, s=shift: np.roll(real(*a), s, axis=0)
             for by_columns in ways:
-                t = time.perf_counter()
-                r = md.limit_analysis(model, associative=False, column_generation=by_columns)
-                print(
-                    f"{model.name or name}, edges from {shift}, "
-                    f"{'by columns' if by_columns else 'full LP'}: {r.status} "
-                    f"{r.load_factor:.5f}, {r.iterations} iterations, "
-                    f"{time.perf_counter() - t:.1f} s",
-                    flush=True,
-                )
+                for select in nearest:
+                    t = time.perf_counter()
+                    r = md.limit_analysis(
+                        model,
+                        associative=False,
+                        column_generation=by_columns,
+                        nearest_optimum=select,
+                    )
+                    print(
+                        f"{model.name or name}, edges from {shift}, "
+                        f"{'by columns' if by_columns else 'full LP'}, "
+                        f"{'nearest optimum' if select else 'solver optimum'}: {r.status} "
+                        f"{r.load_factor:.5f}, {r.iterations} iterations, "
+                        f"{time.perf_counter() - t:.1f} s",
+                        flush=True,
+                    )
     finally:
         analysis.pyramid_edges = real
 
@@ -244,10 +252,17 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--case", nargs="+", default=["L"], help="L (the L wall) or a paper case")
     parser.add_argument("--lps", type=int, default=3, help="LPs solved both ways (--colgen)")
     parser.add_argument("--whole", action="store_true")
+    parser.add_argument(
+        "--nearest",
+        choices=["both", "on", "off"],
+        default="both",
+        help="--order: without and with the nearest-optimum selection (both), or one",
+    )
     args = parser.parse_args(argv)
     if args.colgen or args.order:
         for name in args.case:
-            colgen(name, args.lps, args.whole) if args.colgen else order(name, args.whole)
+            nearest = {"both": (False, True), "on": (True,), "off": (False,)}[args.nearest]
+            colgen(name, args.lps, args.whole) if args.colgen else order(name, args.whole, nearest)
         return
     for courses in args.courses:
         if args.grids:

@@ -30,7 +30,8 @@ point method on the normal equations, PARDISO, stopped at a certified bracket of
 exact cone's solver from ``NORMAL_EQUATIONS_FROM`` velocities), ``cones`` (its second-order
 cone kernels), ``mirror`` (a mirror plane's antisymmetric DOFs: a wall loaded in its plane is
 solved on 3 velocities a block), ``dem_domain`` (kappa), ``non_associative``, ``columns``
-(its frozen-capacity LPs by column generation),
+(its frozen-capacity LPs by column generation), ``selection`` (the optimum of a degenerate
+frozen LP nearest the frozen actions, ``nearest_optimum``),
 ``result`` (the result and the mechanism check), ``analysis`` (the entry points).
 
 Why the associative answer needs only the corners is argued in ``interface``: any grid that

@@ -39,6 +39,7 @@ def limit_analysis(
     relaxation: float = 0.5,
     friction_scale: float = 1.0,
     column_generation: bool = True,
+    nearest_optimum: bool = False,
 ) -> LimitAnalysisResult:
     """The collapse multiplier of ``model``'s live load over its dead load, and the mechanism.
 
@@ -68,6 +69,12 @@ def limit_analysis(
             master of a few thousand columns), False the
             full LP (the same lambda per LP, 34-51 times slower on the 29-block L wall and
             S15, docs/limit_analysis.md). Ignored with "clarabel" and when associative.
+        nearest_optimum: the non-associative iteration with "highs": after each frozen LP,
+            among its optimal force distributions, the one whose normal actions (fn, m1,
+            m2) are nearest the frozen ones (``selection``: a convex QP by Clarabel at
+            lambda held at the LP's optimum), so that the answer does not depend on which
+            of the degenerate LP's optima the solver returns (the order of its columns).
+            Ignored with "clarabel" and when associative.
 
     Returns a :class:`LimitAnalysisResult`; solver trouble is a status, never an exception
     (bad arguments raise ValueError naming the argument).
@@ -101,6 +108,8 @@ def limit_analysis(
         raise ValueError(f"friction_scale must be a number >= 1, got {friction_scale!r}")
     if not isinstance(column_generation, (bool, np.bool_)):
         raise ValueError(f"column_generation must be True or False, got {column_generation!r}")
+    if not isinstance(nearest_optimum, (bool, np.bool_)):
+        raise ValueError(f"nearest_optimum must be True or False, got {nearest_optimum!r}")
     covers = friction_scale >= model_friction_scale(model) * (1 - 1e-9)
     if friction_scale != 1:
         model = replace(model, friction=model.friction * float(friction_scale))
@@ -157,6 +166,7 @@ def limit_analysis(
         float(relaxation),
         result,
         bool(column_generation),
+        bool(nearest_optimum),
     )
 
 

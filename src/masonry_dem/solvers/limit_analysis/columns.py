@@ -177,7 +177,7 @@ def solve_frozen_columns(
         new = priced[~np.isin(keys, master_keys)]
         size = max(abs(lam), 1e-12)
         if gap <= rtol * size or (new.size == 0 and gap <= STALL_RTOL * size):
-            x = np.concatenate([x_n, _edge_multipliers(friction, choice, owner, theta)])
+            x = np.concatenate([x_n, edge_multipliers(friction, choice, owner, theta)])
             used = theta > 0
             return (
                 Solution(
@@ -214,6 +214,16 @@ def solve_frozen_full(
     column, and per point ``sum_d g_pd <= cap_p``; no lambda = 0 solve first (the
     associative start checked the dead load, and the frozen capacities are those of the
     collapse, not of the dead load's equilibrium)."""
+    E, C = full_lp(E_n, friction)
+    k = E.shape[1]
+    return solve_highs(E, live, rhs, np.zeros(k), np.full(k, np.inf), (C, friction.cap), False)
+
+
+def full_lp(
+    E_n: sparse.csc_matrix, friction: FrozenFriction
+) -> tuple[sparse.csc_matrix, sparse.csc_matrix]:
+    """The full frozen-capacity LP's equilibrium columns (corner compressions, then every
+    edge of every point) and its capacity rows ``C`` (``C x <= friction.cap``)."""
     nn = E_n.shape[1]
     k = nn + friction.E_s.shape[1]
     E = sparse.hstack([E_n, friction.E_s], format="csc")
@@ -222,7 +232,7 @@ def solve_frozen_full(
         (np.ones(npts * D), (np.repeat(np.arange(npts), D), nn + np.arange(npts * D))),
         shape=(npts, k),
     )
-    return solve_highs(E, live, rhs, np.zeros(k), np.full(k, np.inf), (C, friction.cap), False)
+    return E, C
 
 
 class _HighsMaster:
@@ -347,7 +357,7 @@ def _keys(choice: np.ndarray, owner: np.ndarray) -> np.ndarray:
     return (choice + 1.0) @ weights[:K] + owner * weights[K]
 
 
-def _edge_multipliers(
+def edge_multipliers(
     friction: FrozenFriction, choice: np.ndarray, owner: np.ndarray, theta: np.ndarray
 ) -> np.ndarray:
     """``g_pd`` (m K D,) of the patterns' combination ``theta``."""

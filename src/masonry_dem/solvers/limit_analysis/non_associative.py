@@ -11,10 +11,11 @@ from scipy import sparse
 from masonry_dem.model import Model
 
 from .backends import solve_associative, solve_clarabel
-from .columns import FrozenFriction, Patterns, solve_frozen_columns, solve_frozen_full
-from .formulation import Problem, Solution
+from .columns import FrozenFriction, Patterns, full_lp, solve_frozen_columns, solve_frozen_full
+from .formulation import Problem, Solution, associative_columns
 from .interface import ASSOCIATIVE_GRID, grid_points, lobatto_rule, resultant_columns
 from .result import LimitAnalysisResult, finish
+from .selection import action_weights, nearest_by_columns, nearest_optimum
 
 log = logging.getLogger(__name__)
 
@@ -56,16 +57,33 @@ def non_associative(
     relaxation: float,
     result,
     column_generation: bool = True,
+    nearest: bool = False,
 ) -> LimitAnalysisResult:
     """The iteration on frozen capacities from the associative start. With HiGHS (``dirs``
     the pyramid's edges), each frozen-capacity LP is solved by ``column_generation``
     (``columns``: the same optimum on a master of a few thousand columns, started from
-    the previous iteration's patterns) or, False, in full."""
+    the previous iteration's patterns) or, False, in full; ``nearest``: then, among its
+    optimal force distributions, the one whose normal actions are nearest the frozen ones
+    (``selection``), so that the answer does not depend on the order of the columns."""
     model = problem.model
     m = model.interfaces.count
     start, size = solve_associative(problem, ASSOCIATIVE_GRID, dirs)
     if start.status != "optimal":
         return finish(problem, start, size, result, iterations=1, load_factors=())
+    select_rows, select_weights = action_weights(model.interfaces.l1, model.interfaces.l2)
+    selections = selection_rounds = 0
+    if nearest and dirs is not None:
+        # the associative LP is as degenerate: its optimum with the least normal actions
+        # (fn, m1, m2 nearest the unloaded state), so that the start is unique too
+        R0, _ = associative_columns(model, ASSOCIATIVE_GRID, dirs)
+        A0 = (sparse.diags(select_weights) @ R0.tocsr()[select_rows]).tocsr()
+        E0 = (problem.H_T @ R0).tocsc()
+        first = nearest_optimum(
+            E0, problem.live, problem.rhs, None, start.lam, A0, np.zeros(len(select_rows))
+        )
+        if first.status == "optimal":
+            start.info_actions = (problem.a0 + R0 @ first.x).reshape(-1, 6)  # type: ignore[attr-defined]
+            selections += 1
     actions = start.info_actions  # type: ignore[attr-defined]
     # the normal forces at the corners (rocking, tension) stay associative
     corners, _ = grid_points(model.interfaces.l1, model.interfaces.l2, 2)
@@ -119,6 +137,27 @@ def non_associative(
                 sol = solve_frozen_full(E, friction, problem.live, problem.rhs)
             if sol.status == "infeasible":
                 sol = Solution("dead load", detail=f"{sol.detail} (frozen capacities)")
+            elif sol.status == "optimal" and nearest:
+                target = select_weights * (actions.ravel() - problem.a0)[select_rows]
+                if column_generation:  # the QP by columns too, from this LP's patterns
+                    A_n = (sparse.diags(select_weights) @ R_n.tocsr()[select_rows]).tocsr()
+                    chosen, more = nearest_by_columns(
+                        E, friction, problem.live, problem.rhs, sol.lam, A_n, target, patterns
+                    )
+                    selection_rounds += more
+                else:
+                    E_full, C = full_lp(E, friction)
+                    A = (sparse.diags(select_weights) @ R.tocsr()[select_rows]).tocsr()
+                    chosen = nearest_optimum(
+                        E_full, problem.live, problem.rhs, (C, capk), sol.lam, A, target
+                    )
+                if chosen.status == "optimal":
+                    sol.x = chosen.x
+                    selections += 1
+                else:
+                    log.debug("non-associative iteration %d: %s", it, chosen.detail)
+                kw.setdefault("info", {})["nearest_optima"] = selections
+                kw["info"]["selection_rounds"] = selection_rounds
         if dirs is None:
             size = (E.shape[1] + 1, E.shape[0])
         else:  # the full LP's, whether solved in full or by column generation
