@@ -7,30 +7,20 @@ import numpy as np
 import pytest
 from scipy import sparse
 
-from masonry_dem.geometry.builders import add_base, single_block
+from helpers.walls import on_base
+from masonry_dem.geometry.builders import single_block
 from masonry_dem.geometry.plans import l_wall
-from masonry_dem.model import InterfaceMaterial, Model, SelfWeight, Support, WeightProportional
 from masonry_dem.solvers.limit_analysis import columns, limit_analysis
 from masonry_dem.solvers.limit_analysis import non_associative as na
 
 GAMMA = 2.0e4
 
 
-def _on_base(blocks, mu: float) -> Model:
-    blocks, base = add_base(blocks)
-    return Model.build(
-        blocks,
-        InterfaceMaterial(kn=1e9, kt=0.4e9, friction=mu),
-        [Support([base])],
-        [SelfWeight(), WeightProportional((0.0, 0.0, 1.0))],
-    )
-
-
 @pytest.mark.parametrize("column_generation", [True, False])
 def test_sliding_block_at_mu_by_columns_and_in_full(column_generation):
     """mu = 0.2 < s/a = 0.25: the block slides without dilating when lambda W = mu W, so
     lambda = 0.2 and the mechanism does not rise (u2 = 0), whichever way the LP is solved."""
-    model = _on_base(single_block(0.4, 0.3, 0.1, GAMMA), 0.2)
+    model = on_base(single_block(0.4, 0.3, 0.1, GAMMA), 0.2)
     r = limit_analysis(model, associative=False, column_generation=column_generation)
     assert r.status == "collapse", r.reason
     assert r.load_factor == pytest.approx(0.2, rel=1e-6)
@@ -43,7 +33,7 @@ def test_tilting_block_at_s_over_a_by_columns_and_in_full(column_generation):
     """mu = 0.6 > s/a = 0.25: the block turns about its front edge at lambda = s/a (moments
     about that edge: lambda W a/2 = W s/2), with no sliding to price."""
     a, s = 0.4, 0.1
-    model = _on_base(single_block(a, 0.3, s, GAMMA), 0.6)
+    model = on_base(single_block(a, 0.3, s, GAMMA), 0.6)
     r = limit_analysis(model, associative=False, column_generation=column_generation)
     assert r.status == "collapse", r.reason
     assert r.load_factor == pytest.approx(s / a, rel=1e-6)
@@ -57,7 +47,7 @@ def l_wall_lp():
     corner turns and twists, so the bed joints carry torsion, which no translation pattern
     gives."""
     wall = l_wall(3, 2, 0.081, 0.21, 0.07, GAMMA, return_blocks=2)
-    model = _on_base(wall, 0.7)
+    model = on_base(wall, 0.7)
     got = []
     real = na.solve_frozen_columns
 

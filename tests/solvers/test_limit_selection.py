@@ -7,9 +7,10 @@ import numpy as np
 import pytest
 from scipy import sparse
 
-from masonry_dem.geometry.builders import add_base, single_block
+from helpers.walls import on_base
+from masonry_dem.geometry.builders import single_block
 from masonry_dem.geometry.plans import l_wall
-from masonry_dem.model import InterfaceMaterial, Model, SelfWeight, Support, WeightProportional
+from masonry_dem.model import Model
 from masonry_dem.solvers.limit_analysis import (
     analysis,
     backends,
@@ -33,21 +34,11 @@ from masonry_dem.solvers.limit_analysis.selection import (
 GAMMA = 2.0e4
 
 
-def _on_base(blocks, mu: float) -> Model:
-    blocks, base = add_base(blocks)
-    return Model.build(
-        blocks,
-        InterfaceMaterial(kn=1e9, kt=0.4e9, friction=mu),
-        [Support([base])],
-        [SelfWeight(), WeightProportional((0.0, 0.0, 1.0))],
-    )
-
-
 def test_sliding_block_at_mu_with_the_nearest_optimum():
     """mu = 0.2 < s/a = 0.25: the block slides without dilating at lambda = mu; the
     selection holds lambda at the LP's optimum, so it is unchanged, and it ran (the start and
     every iteration counted)."""
-    model = _on_base(single_block(0.4, 0.3, 0.1, GAMMA), 0.2)
+    model = on_base(single_block(0.4, 0.3, 0.1, GAMMA), 0.2)
     r = limit_analysis(model, associative=False, nearest_optimum=True)
     assert r.status == "collapse", r.reason
     assert r.load_factor == pytest.approx(0.2, rel=1e-6)
@@ -59,7 +50,7 @@ def test_tilting_block_at_s_over_a_with_the_nearest_optimum():
     about that edge: lambda W a/2 = W s/2); the frozen normal force of the bed joint is W at
     the front edge (m2 = W a/2 about the centre, the whole weight at the toe)."""
     a, s = 0.4, 0.1
-    model = _on_base(single_block(a, 0.3, s, GAMMA), 0.6)
+    model = on_base(single_block(a, 0.3, s, GAMMA), 0.6)
     r = limit_analysis(model, associative=False, nearest_optimum=True)
     assert r.status == "collapse", r.reason
     assert r.load_factor == pytest.approx(s / a, rel=1e-6)
@@ -69,7 +60,7 @@ def test_tilting_block_at_s_over_a_with_the_nearest_optimum():
 
 
 def test_bad_nearest_optimum_is_named():
-    model = _on_base(single_block(0.4, 0.3, 0.1, GAMMA), 0.6)
+    model = on_base(single_block(0.4, 0.3, 0.1, GAMMA), 0.6)
     with pytest.raises(ValueError, match="nearest_optimum"):
         limit_analysis(model, associative=False, nearest_optimum="yes")
 
@@ -77,7 +68,7 @@ def test_bad_nearest_optimum_is_named():
 @pytest.fixture(scope="module")
 def small_l_wall() -> Model:
     """A 2-block facade, a 1-block return, 2 courses, tilted out of plane."""
-    return _on_base(l_wall(2, 2, 0.081, 0.21, 0.07, GAMMA, return_blocks=1), 0.7)
+    return on_base(l_wall(2, 2, 0.081, 0.21, 0.07, GAMMA, return_blocks=1), 0.7)
 
 
 def test_the_associative_start_is_unique_with_the_selection(small_l_wall):

@@ -67,8 +67,8 @@ def limit_analysis(
             each by column generation (``columns``: the full LP's optimum to a relative
             1e-7, or 1e-5 where HiGHS's tolerances stall it, certified by its duals, on a
             master of a few thousand columns), False the
-            full LP (the same lambda per LP, 34-51 times slower on the 29-block L wall and
-            S15, docs/limit_analysis.md). Ignored with "clarabel" and when associative.
+            full LP (the same lambda per LP, tens of times slower: docs/limit_analysis.md).
+            Ignored with "clarabel" and when associative.
         nearest_optimum: the non-associative iteration with "highs": after each frozen LP,
             among its optimal force distributions, the one whose normal actions (fn, m1,
             m2) are nearest the frozen ones (``selection``: a convex QP by Clarabel at

@@ -3,7 +3,7 @@
 
 The full LP (``backends.solve_highs`` with the capacity rows) carries, at each of the K grid
 points p of each interface, D pyramid edge multipliers ``g_pd >= 0`` with ``sum_d g_pd <=
-cap_p``: on the L wall of 29 blocks, 36 120 columns and 4 480 capacity rows. The point's
+cap_p``: K x D columns and K capacity rows an interface. The point's
 shear lies in ``cap_p conv{0, e_1 .. e_D}``, so the friction an interface can carry is the
 Minkowski sum of these polytopes over its points, whose vertices are the *patterns*: one
 choice per point, an edge d_p or none, carrying ``sum_p cap_p E_{p d_p}``. Every point
@@ -13,7 +13,7 @@ of that sum is a convex combination of patterns, so the LP
                       sum_{q of interface i} theta_q <= 1,  c, theta >= 0
 
 (``E_n`` the corner compressions, ``P_q`` the columns of the patterns) has the full LP's
-optimum once it holds every pattern; it has 168 + 70 rows on the L wall. Only a few patterns
+optimum once it holds every pattern; it has one row an interface besides equilibrium. Only a few patterns
 are needed, and the duals ``y`` of the equilibrium rows and ``w`` of the convexity rows find
 the missing ones: the best pattern of interface i under ``y`` takes at each point the edge of
 largest ``v_pd = y . E_pd`` if positive (none otherwise); its reduced cost (minimisation)
@@ -47,15 +47,16 @@ log = logging.getLogger(__name__)
 
 #: the rounds stop when the certified gap of lambda is below this fraction of lambda. Not
 #: smaller: HiGHS's duals are accurate to its dual feasibility tolerance (1e-7 on its scaled
-#: problem), and on the L wall the gap stalled at 2-5e-9 lambda for 180 rounds, each adding
-#: some 45 patterns that differed only at points of near-zero slip
+#: problem), and below it the gap stalls while each round adds patterns that differ only at
+#: points of near-zero slip (docs/limit_analysis.md)
 PRICING_RTOL = 1e-7
-#: rounds of pricing before the full LP is solved instead (the L wall's LPs take 3-30)
+#: rounds of pricing before the full LP is solved instead (several times the rounds the
+#: LPs measured took)
 MAX_ROUNDS = 100
 #: the gap accepted when every pattern that prices out is in the master already: HiGHS
 #: then holds its basis optimal to its own tolerances, and more rounds add the same
-#: patterns again (S15: a gap of 2.1e-7 lambda for 95 rounds, 133 patterns each). 100x
-#: below the non-associative iteration's own tolerance (1e-3); larger, the full LP
+#: patterns again. 100x below the non-associative iteration's own tolerance (1e-3);
+#: larger, the full LP
 STALL_RTOL = 1e-5
 
 
@@ -250,8 +251,8 @@ class _HighsMaster:
         h.setOptionValue("output_flag", False)
         h.setOptionValue("solver", "simplex")
         # the primal simplex: added columns leave the basis primal feasible, so each round
-        # goes on from the last vertex (S15's first frozen LPs: 0.9-1.2 s each against
-        # 3.3-4.9 s with HiGHS's default, the dual simplex)
+        # goes on from the last vertex (3-5x faster than HiGHS's default, the dual
+        # simplex, on the walls measured in docs/limit_analysis.md)
         h.setOptionValue("simplex_strategy", 4)
         self.optimal = highspy.HighsModelStatus.kOptimal
         n_eq, nn = E_n.shape
