@@ -315,28 +315,20 @@ def work_control(
         target = lam + s.transient_rise * abs(lam)
         rescued: Outcome | None
         if corner and s.corner_check != "explicit":
-            last_increment = solver.last_increment
             moved = solver.implicit_relaxation(target)
-            rescued = moved if moved.ok else None
             how = "implicit relaxation"
             verdict = f"ok in {moved.iterations} steps" if moved.ok else moved.reason
-            if moved.ok and s.corner_check == "mixed":
-                # a fold: the path goes on from the rest the explicit relaxation finds (the
-                # implicit motion may settle in another basin at the same lambda), or from
-                # the implicit one's if it finds none;
-                # its Newton probes start with the trust radius they had before the check
-                moved_increment, solver.last_increment = solver.last_increment, last_increment
+            settled: Outcome | None = None
+            # dynamic relaxation runs at a fold with "mixed" (the path goes on from its rest:
+            # the implicit motion may settle in another basin at the same lambda) and where
+            # the implicit check gave no verdict (neither rest nor a run-off within
+            # corner_check_steps: a slow fold, or a peak that creeps)
+            if (moved.ok and s.corner_check == "mixed") or not (moved.ok or moved.past_limit):
                 settled = solver.dynamic_rescue(target, lam, budget)
-                if settled is None:
-                    solver.last_increment = moved_increment
-                rescued = moved if settled is None else settled
                 verdict += "; dynamic relaxation: " + ("no rest" if settled is None else "ok")
-            elif not moved.ok and not moved.past_limit:
-                # no verdict: neither rest nor a run-off within corner_check_steps (a slow
-                # fold, or a peak that creeps): the explicit check decides
-                solver.last_increment = last_increment
-                rescued = solver.dynamic_rescue(target, lam, budget)
-                verdict += "; dynamic relaxation: " + ("no rest" if rescued is None else "ok")
+            if settled is None and moved.ok:  # the path goes on from the implicit rest
+                solver.last_increment = solver.increment(moved.q)
+            rescued = settled if settled is not None else (moved if moved.ok else None)
         else:
             rescued = solver.dynamic_rescue(target, lam, budget)
             how, verdict = "dynamic relaxation", "ok" if rescued else "no rest"

@@ -154,7 +154,8 @@ class Relaxations(Corrector):
         Converged: the residual within ``tolerance`` at ``target`` (an equilibrium of the
         law, the path goes on from it: a fold). Failed: past the displacement limit
         (measured from the last converged state, as every search of the path), or no rest
-        within the budget (a peak)."""
+        within the budget (a peak). A check: the trust radius of the path's searches is left
+        as it was; the caller that goes on from its rest sets it."""
         s = self.settings
         budget = s.corner_check_steps if budget is None else budget
         free = self.problem.asm.free_index
@@ -163,7 +164,6 @@ class Relaxations(Corrector):
         floor = s.corner_check_start
         for step in range(budget):
             if rnorm <= s.tolerance:
-                self.last_increment = self.increment(q)
                 return Outcome(True, q, target, response, step)
             self.iterations += 1
             self.implicit_steps += 1
@@ -192,7 +192,6 @@ class Relaxations(Corrector):
                 return self._past_limit(q, target, response, step + 1)
             floor = max(0.5 * floor, s.residual_stiffness)
         if rnorm <= s.tolerance:
-            self.last_increment = self.increment(q)
             return Outcome(True, q, target, response, budget)
         return Outcome(
             False,
