@@ -292,7 +292,7 @@ def costs(corrector, start, q_saved, target, budget, repeat: int = 5) -> str:
     factor = (time.perf_counter() - t0) / repeat
     dr = corrector.relaxation(budget)
     t0 = time.perf_counter()
-    relaxed = dr._relax_with_cuts(start, target, None, from_start=True)
+    relaxed = dr.relax_with_cuts(start, target, None, from_start=True)
     step = (time.perf_counter() - t0) / max(relaxed.cycles, 1)
     return (
         f"one factorization and solve {factor * 1e3:.2f} ms, one time step {step * 1e3:.3f} ms "

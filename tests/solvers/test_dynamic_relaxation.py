@@ -182,12 +182,14 @@ def test_a_probe_ends_a_relaxation_only_where_it_says_so(small_wall):
     leaves the relaxation exactly as it was (the same time steps, the same state); one that
     says yes ends it as converged at the first peak it is asked at, long before the motion
     dies out."""
-    from masonry_dem.solvers.dynamic_relaxation import _State
+    from masonry_dem.solvers.dynamic_relaxation import RelaxationStart
 
     dr = DynamicRelaxation(small_wall, DRSettings(tolerance=1e-6, max_cycles=50_000))
     nf, m = dr.Hf.shape[1], dr.m
-    start = _State(np.zeros(nf), np.zeros((m, 6)), np.zeros(m, dtype=bool), 0.0, np.ones((m, 6)))
-    plain = dr._relax_with_cuts(start, 0.1, None)
+    start = RelaxationStart(
+        np.zeros(nf), np.zeros((m, 6)), np.zeros(m, dtype=bool), 0.0, np.ones((m, 6))
+    )
+    plain = dr.relax_with_cuts(start, 0.1)
     assert plain.ok
     asked: list[int] = []
 
@@ -195,10 +197,10 @@ def test_a_probe_ends_a_relaxation_only_where_it_says_so(small_wall):
         asked.append(dr.stats.time_steps)
         return False
 
-    again = dr._relax_with_cuts(start, 0.1, None, probe=no, probe_every=50)
+    again = dr.relax_with_cuts(start, 0.1, probe=no, probe_every=50)
     assert again.ok and again.cycles == plain.cycles
     assert np.array_equal(again.x, plain.x)
     assert len(asked) >= 2 and np.all(np.diff(asked) >= 50)
-    short = dr._relax_with_cuts(start, 0.1, None, probe=lambda x: True, probe_every=50)
+    short = dr.relax_with_cuts(start, 0.1, probe=lambda x: True, probe_every=50)
     assert short.ok and short.kind == "converged"
     assert 50 <= short.cycles < plain.cycles

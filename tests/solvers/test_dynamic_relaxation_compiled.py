@@ -18,7 +18,7 @@ import pytest
 from helpers.walls import on_base
 from masonry_dem.cases.paper import build_case
 from masonry_dem.geometry import builders
-from masonry_dem.solvers.dynamic_relaxation import DRSettings, DynamicRelaxation, _State
+from masonry_dem.solvers.dynamic_relaxation import DRSettings, DynamicRelaxation, RelaxationStart
 from masonry_dem.solvers.dynamic_relaxation.integrator import Relaxation
 from masonry_dem.solvers.static import StaticSolver
 
@@ -82,7 +82,7 @@ def test_compiled_steps_end_where_the_python_loop_does_on_a_small_wall(target, k
             model, DRSettings(tolerance=1e-6, max_cycles=50_000, compiled_steps=compiled)
         )
         nf, m = dr.Hf.shape[1], dr.m
-        start = _State(
+        start = RelaxationStart(
             np.zeros(nf), np.zeros((m, 6)), np.zeros(m, dtype=bool), 0.0, np.ones((m, 6))
         )
         asked: list[bytes] = []
@@ -91,7 +91,7 @@ def test_compiled_steps_end_where_the_python_loop_does_on_a_small_wall(target, k
             asked.append(x.tobytes())
             return False
 
-        r = dr._relax_with_cuts(start, target, None, probe=no, probe_every=40, creep_cos=0.5)
+        r = dr.relax_with_cuts(start, target, probe=no, probe_every=40, creep_cos=0.5)
         out[compiled] = (r.kind, r.cycles, r.x.tobytes(), r.reason, asked, dr.stats.time_steps,
                          dr.stats.kinetic_resets, dr.stats.law_evaluations)  # fmt: skip
     assert out[False][0] == kind

@@ -51,7 +51,7 @@ def _forces_group(lazy: bool = False) -> None:
     forward difference and the relaxation's time steps (compiled on their first call
     otherwise: many analyses never call them)."""
     from masonry_dem.constitutive.law import fd_tangent
-    from masonry_dem.solvers.dynamic_relaxation.integrator import Relaxation, _State
+    from masonry_dem.solvers.dynamic_relaxation.integrator import Relaxation, RelaxationStart
 
     problem = _tiny_problem()
     m = problem.model.interfaces.count
@@ -74,8 +74,10 @@ def _forces_group(lazy: bool = False) -> None:
     )
     relaxation = Relaxation(problem.model)
     nf = relaxation.Hf.shape[1]
-    at_rest = _State(np.zeros(nf), np.zeros((m, 6)), np.zeros(m, dtype=bool), 0.0, np.ones((m, 6)))
-    relaxation._relax(at_rest, 0.0, relaxation.dt)
+    at_rest = RelaxationStart(
+        np.zeros(nf), np.zeros((m, 6)), np.zeros(m, dtype=bool), 0.0, np.ones((m, 6))
+    )
+    relaxation.relax_with_cuts(at_rest, 0.0)
 
 
 def _tangent_group() -> None:

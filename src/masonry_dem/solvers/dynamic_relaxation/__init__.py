@@ -14,9 +14,8 @@ displacement limit), so both must find the same collapse multiplier.
 
 from __future__ import annotations
 
-# _State: the start of one relaxation, for the static solver's dynamic rescue (corrector.py)
-from masonry_dem.solvers.dynamic_relaxation.integrator import _State as _State
+from masonry_dem.solvers.dynamic_relaxation.integrator import RelaxationStart
 from masonry_dem.solvers.dynamic_relaxation.settings import DRSettings, DRStats
 from masonry_dem.solvers.dynamic_relaxation.solver import DynamicRelaxation, relax
 
-__all__ = ["DRSettings", "DRStats", "DynamicRelaxation", "relax"]
+__all__ = ["DRSettings", "DRStats", "DynamicRelaxation", "RelaxationStart", "relax"]

@@ -87,7 +87,7 @@ Probe = Callable[[NDArray[np.float64]], bool]
 
 
 @dataclass
-class _Relaxed:
+class Relaxed:
     """Outcome of one relaxation: converged, mechanism, stalled or blown up."""
 
     ok: bool
@@ -101,7 +101,7 @@ class _Relaxed:
 
 
 @dataclass
-class _State:
+class RelaxationStart:
     """A converged state to restart from: free DOFs (nf,), plastic part (m, 6), cracked
     joints (m,), its lambda and stiffness factors (m, 6)."""
 
@@ -251,7 +251,7 @@ class Relaxation:
     # ------------------------------------------------------------------ one relaxation
     def _relax(
         self,
-        start: _State,
+        start: RelaxationStart,
         target: float,
         dt: float,
         ramp_to: float | None = None,
@@ -260,7 +260,7 @@ class Relaxation:
         probe: Probe | None = None,
         probe_every: int = 0,
         creep_cos: float = 0.0,
-    ) -> _Relaxed:
+    ) -> Relaxed:
         """Integrate from ``start`` at rest until equilibrium under lambda = ``target``.
 
         With ``ramp_to`` lambda grows from ``start.load_factor`` at ``ramp_rate`` (capped at
@@ -347,11 +347,11 @@ class Relaxation:
                 and rnorm <= s.tolerance
                 and ke <= s.energy_tolerance * max(ke_peak, 1e-300)
             ):
-                return _Relaxed(True, "converged", x, lam, resp, cycle - 1)
+                return Relaxed(True, "converged", x, lam, resp, cycle - 1)
             if ramp and cycle % s.check_every == 0 and rnorm <= s.ramp_tolerance and on_checkpoint:
                 on_checkpoint(x, lam, resp, plastic, cracked)
             if ramp and lam >= top and rnorm <= s.tolerance:
-                return _Relaxed(True, "limit", x, lam, resp, cycle - 1)
+                return Relaxed(True, "limit", x, lam, resp, cycle - 1)
             a = R / M
             if s.damping == "kinetic":
                 v_old = v
@@ -383,7 +383,7 @@ class Relaxation:
                                 peak_sum[:] = 0.0
                                 peak_count = 0
                             if probe is not None and probe(x):
-                                return _Relaxed(True, "converged", x, lam, resp, cycle)
+                                return Relaxed(True, "converged", x, lam, resp, cycle)
                     continue
                 ke_prev = ke_new
             else:
@@ -429,14 +429,14 @@ class Relaxation:
 
     def _relax_compiled(
         self,
-        start: _State,
+        start: RelaxationStart,
         target: float,
         dt: float,
         from_start: bool,
         probe: Probe | None,
         probe_every: int,
         creep_cos: float,
-    ) -> _Relaxed:
+    ) -> Relaxed:
         """:meth:`_relax` with kinetic damping at a fixed load, its time steps in
         :data:`~masonry_dem.solvers.dynamic_relaxation.kinetic.kinetic_steps` (the same
         operations in the same order, so the same bits); this side asks the probe and
@@ -497,12 +497,12 @@ class Relaxation:
             if probe is not None:
                 here = x.copy()  # the loop goes on in x: the probe keeps its own
                 if probe(here):
-                    return _Relaxed(True, "converged", here, lam, resp, cycle)
+                    return Relaxed(True, "converged", here, lam, resp, cycle)
         if code == kin.NOT_FINITE:
             self._forces(x, plastic, cracked)  # says which action is not finite
             raise FloatingPointError("non-finite interface actions in a relaxation")
         if code == kin.CONVERGED:
-            return _Relaxed(True, "converged", x, lam, resp, cycle)
+            return Relaxed(True, "converged", x, lam, resp, cycle)
         if code == kin.STALLED:
             return self._stalled(x, lam, resp, cycle, float(fs[kin.BEST_NOW]), window)
         if code == kin.BUDGET:
@@ -515,22 +515,22 @@ class Relaxation:
         return self._no_rest(x, lam, resp, float(fs[kin.RNORM]))
 
     # ------------------------------------------------------------------ endings (both loops)
-    def _spent(self, start: _State, lam: float, resp: LawResponse, cycle: int) -> _Relaxed:
+    def _spent(self, start: RelaxationStart, lam: float, resp: LawResponse, cycle: int) -> Relaxed:
         budget = self.settings.max_time_steps
         why = f"time-step budget max_time_steps={budget} spent at lambda={lam:.6g}"
-        return _Relaxed(False, "budget", start.x, lam, resp, cycle, why)
+        return Relaxed(False, "budget", start.x, lam, resp, cycle, why)
 
     def _stalled(
         self, x: NDArray[np.float64], lam: float, resp: LawResponse, cycle: int,
         best: float, window: int,
-    ) -> _Relaxed:  # fmt: skip
+    ) -> Relaxed:  # fmt: skip
         why = f"residual stalled at {best:.2e} over {window} time steps"
-        return _Relaxed(False, "stalled", x, lam, resp, cycle, why)
+        return Relaxed(False, "stalled", x, lam, resp, cycle, why)
 
     def _blown_up(
-        self, start: _State, lam: float, resp: LawResponse, cycle: int, dt: float,
+        self, start: RelaxationStart, lam: float, resp: LawResponse, cycle: int, dt: float,
         rabs: float, over: int,
-    ) -> _Relaxed:  # fmt: skip
+    ) -> Relaxed:  # fmt: skip
         what = (
             "non-finite forces"
             if not math.isfinite(rabs)
@@ -542,20 +542,20 @@ class Relaxation:
             f"blow-up at lambda={lam:.6g} after {cycle} time steps with dt={dt:.4g} "
             f"({what}; estimated stable limit {self.dt_limit:.4g})"
         )
-        return _Relaxed(False, "blowup", start.x, lam, resp, cycle, why)
+        return Relaxed(False, "blowup", start.x, lam, resp, cycle, why)
 
     def _mechanism(
         self, x: NDArray[np.float64], lam: float, resp: LawResponse, cycle: int
-    ) -> _Relaxed:
+    ) -> Relaxed:
         why = f"displacements exceed the limit {self.limit:.3g} m (a mechanism has formed)"
-        return _Relaxed(False, "mechanism", x, lam, resp, cycle, why)
+        return Relaxed(False, "mechanism", x, lam, resp, cycle, why)
 
     def _no_rest(
         self, x: NDArray[np.float64], lam: float, resp: LawResponse, rnorm: float
-    ) -> _Relaxed:
+    ) -> Relaxed:
         cycles = self.settings.max_cycles
         why = f"no rest within max_cycles={cycles} (residual {rnorm:.2e})"
-        return _Relaxed(False, "stalled", x, lam, resp, cycles, why)
+        return Relaxed(False, "stalled", x, lam, resp, cycles, why)
 
     def _stall_window(self) -> int:
         """Time steps a relaxation may take without halving its residual: ``stall_factor``
@@ -564,7 +564,7 @@ class Relaxation:
         s = self.settings
         return int(max(s.min_stall_window, s.stall_factor * self._slowest))
 
-    def _step_for(self, state: _State) -> float:
+    def _step_for(self, state: RelaxationStart) -> float:
         """The time step for a relaxation from ``state``."""
         s = self.settings
         if s.dt is not None or s.stability == "elastic":
@@ -573,11 +573,10 @@ class Relaxation:
         dt_limit, _ = self._stability_limit(self.asm.stiffness(f).tocsr())
         return s.dt_fraction * dt_limit
 
-    def _relax_with_cuts(
+    def relax_with_cuts(
         self,
-        start: _State,
+        start: RelaxationStart,
         target: float,
-        _history: None = None,
         *,
         ramp_to: float | None = None,
         on_checkpoint: Checkpoint | None = None,
@@ -585,10 +584,9 @@ class Relaxation:
         probe: Probe | None = None,
         probe_every: int = 0,
         creep_cos: float = 0.0,
-    ) -> _Relaxed:
+    ) -> Relaxed:
         """One relaxation from ``start``, its time step halved after a blow-up (``on_blowup``
-        "cut"). The third argument is unused (the static solver's rescue passes None);
-        ``from_start``, ``probe``, ``probe_every``, ``creep_cos``: see :meth:`_relax`."""
+        "cut"). ``from_start``, ``probe``, ``probe_every``, ``creep_cos``: see :meth:`_relax`."""
         s = self.settings
         dt = self._step_for(start)
         for _ in range(s.max_cuts + 1):
@@ -607,7 +605,7 @@ class Relaxation:
             self.stats.courant = max(self.stats.courant, self._courant)
             if not out.ok and out.kind in ("mechanism", "stalled") and out.courant > 4.0:
                 # a failure met with the step above the limit is not evidence of collapse
-                out = _Relaxed(
+                out = Relaxed(
                     False,
                     "blowup",
                     start.x,

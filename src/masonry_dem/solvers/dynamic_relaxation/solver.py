@@ -37,7 +37,12 @@ from masonry_dem._threads import kernel_threads_for
 from masonry_dem.constitutive.law import LawResponse
 from masonry_dem.model import DofName, Model, Monitor
 from masonry_dem.results import History, StepResult
-from masonry_dem.solvers.dynamic_relaxation.integrator import FATAL, Relaxation, _Relaxed, _State
+from masonry_dem.solvers.dynamic_relaxation.integrator import (
+    FATAL,
+    Relaxation,
+    RelaxationStart,
+    Relaxed,
+)
 from masonry_dem.solvers.dynamic_relaxation.settings import DRSettings
 from masonry_dem.solvers.static.outcome import Status
 
@@ -83,12 +88,17 @@ class DynamicRelaxation(Relaxation):
             callback(sr)
 
     def _converged_state(
-        self, x: NDArray[np.float64], lam: float, start: _State, resp: LawResponse, ramp: bool
-    ) -> _State:
+        self,
+        x: NDArray[np.float64],
+        lam: float,
+        start: RelaxationStart,
+        resp: LawResponse,
+        ramp: bool,
+    ) -> RelaxationStart:
         rel = (self.Hf @ x).reshape(-1, 6)
         plastic = self.law.plastic_part(rel, resp.actions)
         cracked = self.law.cracked_after(start.cracked, resp)
-        return _State(x.copy(), plastic, cracked, lam, resp.tangent.copy())
+        return RelaxationStart(x.copy(), plastic, cracked, lam, resp.tangent.copy())
 
     # ------------------------------------------------------------------ analyses
     def run(
@@ -110,7 +120,7 @@ class DynamicRelaxation(Relaxation):
         hist = History()
         monitor_dof = self._global_dof(*monitor) if monitor is not None else None
         nf = self.asm.n_free
-        zero = _State(
+        zero = RelaxationStart(
             np.zeros(nf),
             np.zeros((self.m, 6)),
             np.zeros(self.m, dtype=bool),
@@ -121,7 +131,7 @@ class DynamicRelaxation(Relaxation):
             return self._fail_empty(
                 hist, zero, "the fictitious masses are not positive", t0, callback
             )
-        dead = self._relax_with_cuts(zero, 0.0)
+        dead = self.relax_with_cuts(zero, 0.0)
         if not dead.ok:
             return self._fail_empty(
                 hist, zero, f"no equilibrium under the dead load: {dead.reason}", t0, callback
@@ -145,10 +155,10 @@ class DynamicRelaxation(Relaxation):
     def _ramp(
         self,
         hist: History,
-        state: _State,
+        state: RelaxationStart,
         monitor_dof: int | None,
         callback: StepCallback | None,
-    ) -> _State:
+    ) -> RelaxationStart:
         """Raise lambda continuously, then verify the quasi-static states passed on the way.
 
         A state passed during the ramp has a residual below ``ramp_tolerance`` only: it is a
@@ -158,7 +168,7 @@ class DynamicRelaxation(Relaxation):
         the History. Returns the verified state (the dead-load state if none settles).
         """
         s = self.settings
-        candidates: list[tuple[_State, LawResponse]] = []
+        candidates: list[tuple[RelaxationStart, LawResponse]] = []
 
         def checkpoint(
             x: NDArray[np.float64],
@@ -169,11 +179,11 @@ class DynamicRelaxation(Relaxation):
         ) -> None:
             if candidates and lam <= candidates[-1][0].load_factor * (1 + s.bracket_tolerance):
                 return
-            st = _State(x.copy(), plastic.copy(), cracked.copy(), lam, resp.tangent.copy())
+            st = RelaxationStart(x.copy(), plastic.copy(), cracked.copy(), lam, resp.tangent.copy())
             candidates.append((st, resp))
 
         top = s.max_load_factor if math.isfinite(s.max_load_factor) else 1e6 * self.load_scale
-        out = self._relax_with_cuts(state, top, ramp_to=top, on_checkpoint=checkpoint)
+        out = self.relax_with_cuts(state, top, ramp_to=top, on_checkpoint=checkpoint)
         if out.kind in FATAL:
             hist.status, hist.reason = Status.FAILED, out.reason
             return state
@@ -181,18 +191,18 @@ class DynamicRelaxation(Relaxation):
             plastic, cracked = self._plastic_of(out, state)
             candidates.append(
                 (
-                    _State(out.x, plastic, cracked, out.load_factor, out.response.tangent),
+                    RelaxationStart(out.x, plastic, cracked, out.load_factor, out.response.tangent),
                     out.response,
                 )
             )
         lam_fail = math.inf if out.ok else float(out.load_factor)
         # bisection for the highest candidate that settles at its own lambda
         lo, hi = -1, len(candidates)
-        verified: tuple[_State, _Relaxed] | None = None
+        verified: tuple[RelaxationStart, Relaxed] | None = None
         while hi - lo > 1:
             mid = (lo + hi) // 2
             cand, _ = candidates[mid]
-            probe = self._relax_with_cuts(cand, cand.load_factor)
+            probe = self.relax_with_cuts(cand, cand.load_factor)
             if probe.kind in FATAL:
                 hist.status, hist.reason = Status.FAILED, probe.reason
                 return state
@@ -227,7 +237,7 @@ class DynamicRelaxation(Relaxation):
         return state
 
     def _plastic_of(
-        self, out: _Relaxed, state: _State
+        self, out: Relaxed, state: RelaxationStart
     ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
         rel = (self.Hf @ out.x).reshape(-1, 6)
         return self.law.plastic_part(rel, out.response.actions), self.law.cracked_after(
@@ -237,7 +247,7 @@ class DynamicRelaxation(Relaxation):
     def _load_control(
         self,
         hist: History,
-        state: _State,
+        state: RelaxationStart,
         monitor_dof: int | None,
         callback: StepCallback | None,
     ) -> None:
@@ -258,7 +268,7 @@ class DynamicRelaxation(Relaxation):
                 break
             target = min(lam + dlam, s.max_load_factor)
             window = self._stall_window()
-            out = self._relax_with_cuts(state, target)
+            out = self.relax_with_cuts(state, target)
             if out.kind in FATAL:
                 hist.status, hist.reason = Status.FAILED, out.reason
                 hist.collapse_bracket = None
@@ -315,7 +325,12 @@ class DynamicRelaxation(Relaxation):
         hist.reason = f"no equilibrium beyond lambda={lam:.6g} (first failure at {lam_fail:.6g}: {last_reason})"
 
     def _fail_empty(
-        self, hist: History, zero: _State, reason: str, t0: float, callback: StepCallback | None
+        self,
+        hist: History,
+        zero: RelaxationStart,
+        reason: str,
+        t0: float,
+        callback: StepCallback | None,
     ) -> History:
         resp = self.law.respond(np.zeros((self.m, 6)), zero.plastic, zero.cracked)
         self._record(hist, zero.x, 0.0, resp, 0, None, callback)

@@ -25,7 +25,7 @@ from masonry_dem.solvers.static.outcome import Failure, Outcome
 from masonry_dem.solvers.static.settings import StaticSettings
 
 if TYPE_CHECKING:
-    from masonry_dem.solvers.dynamic_relaxation import DynamicRelaxation, _State
+    from masonry_dem.solvers.dynamic_relaxation import DynamicRelaxation, RelaxationStart
 
 log = logging.getLogger(__name__)
 
@@ -223,13 +223,13 @@ class Relaxations(Corrector):
             ),
         )
 
-    def relaxation_start(self, last: float) -> _State:
+    def relaxation_start(self, last: float) -> RelaxationStart:
         """The state a dynamic relaxation starts from: the last converged one, at the load
         factor ``last``, at rest."""
-        from masonry_dem.solvers.dynamic_relaxation import _State
+        from masonry_dem.solvers.dynamic_relaxation import RelaxationStart
 
         free = self.problem.asm.free_index
-        return _State(
+        return RelaxationStart(
             self.q[free].copy(),
             self.plastic.copy(),
             self.cracked.copy(),
@@ -271,10 +271,9 @@ class Relaxations(Corrector):
             return out.ok
 
         every = s.fold_probe_every if polish else 0
-        relaxed = self._dr._relax_with_cuts(
+        relaxed = self._dr.relax_with_cuts(
             start,
             target,
-            None,
             from_start=True,
             probe=probe if every else None,
             probe_every=every,
