@@ -148,6 +148,24 @@ def test_two_lintels_over_one_pier_are_refused_in_a_plain_wall_too():
         cut_openings(wall, list(OVER_ONE_PIER), lintels=True)
 
 
+@pytest.mark.parametrize("rect", [(0.0, 2 * A, B, 6 * A), (7 * B, 2 * A, 8 * B, 6 * A)])
+def test_an_opening_at_an_end_of_a_plain_wall_is_refused_below_its_top(rect):
+    """A lintel over an opening at an end of the wall would bear on one pier only: a
+    cantilever that dry joints cannot hold. Reaching the top, the opening needs no lintel and
+    leaves a shorter stretch of wall: it is cut, its volume b x 8 a x s."""
+    wall = running_bond_wall(8, 10, A, B, S, GAMMA)
+    with pytest.raises(
+        ValueError, match=r"openings\[0\] = .* reaches an end of the wall .* one pier"
+    ):
+        cut_openings(wall, [rect], lintels=True)
+    notch = (rect[0], rect[1], rect[2], 10 * A)
+    cut = cut_openings(wall, [notch], lintels=True)
+    # the jamb straightened, exactly the notch's volume goes
+    removed = wall.volumes.sum() - cut.volumes.sum()
+    np.testing.assert_allclose(removed, B * 8 * A * S, rtol=1e-12)
+    assert unsupported_blocks(cut).size == 0
+
+
 def _dead_load(blocks: Blocks):
     with_base, base = add_base(blocks)
     model = Model.build(

@@ -249,8 +249,19 @@ def openings_with_lintels(
 ) -> Blocks:
     """The openings (x_min, y_min, x_max, y_max) built as the paper's specimens were: jambs
     straightened (:func:`split_at_jambs`), the blocks inside removed, and a lintel over each
-    opening (:func:`add_lintels`; ``course``: the course height [m])."""
+    opening (:func:`add_lintels`; ``course``: the course height [m]). An opening that reaches
+    an end of the wall below its top is refused, named: the lintel over it would bear on one
+    pier only, a cantilever that dry joints cannot hold."""
     checked = [checked_opening(field, k, rect) for k, rect in enumerate(rects)]
+    tol = 1e-6 * course
+    (x_lo, _, _), (x_hi, y_top, _) = blocks.lower.min(axis=0), blocks.upper.max(axis=0)
+    for k, (x0, _, x1, y1) in enumerate(checked):
+        if (x0 <= x_lo + tol or x1 >= x_hi - tol) and y1 < y_top - tol:
+            raise ValueError(
+                f"{field}[{k}] = {plain([round(v, 9) for v in checked[k]])} reaches an end of "
+                f"the wall (x in [{x_lo:.9g}, {x_hi:.9g}]) below its top: a lintel over it "
+                "would bear on one pier only"
+            )
     cut = _remove_inside(split_at_jambs(blocks, checked), checked, None, field)
     return add_lintels(cut, checked, course, field=field)
 
