@@ -236,8 +236,8 @@ def work_control(
     path_w = [float(c @ (st.q.reshape(-1)[free] - q0)) for st in hist.steps]
     path_lam = [float(st.load_factor) for st in hist.steps]
     w = path_w[-1]
-    line = SecantPredictor(s.secant_predictor, [])
-    for st, stw in zip(hist.steps[-2:], path_w[-2:], strict=False):
+    line = SecantPredictor(s.secant_predictor, [], s.predictor_order)
+    for st, stw in zip(hist.steps[-3:], path_w[-3:], strict=False):
         line.add(stw, st.q.reshape(-1), float(st.load_factor))
     if len(path_w) > 1:
         # the first live-load step is elastic for walls that stand: its secant is the scale
@@ -255,6 +255,12 @@ def work_control(
         max(first, 1e-3 * abs(w), s.radius_floor * solver.problem.displacement_scale),
         s.growth,
         easy_iterations=s.easy_iterations,
+        rule=s.step_rule,
+        target_iterations=s.target_iterations,
+        exponent=s.step_exponent,
+        shrink=s.step_shrink,
+        target_miss=s.target_miss,
+        order=s.predictor_order if s.secant_predictor else 1,
     )
     lam = path_lam[-1]
     first_lambda = hist.collapse_bracket[1] if hist.collapse_bracket else lam
@@ -446,6 +452,10 @@ def work_control(
             capped = solver.equilibrate(s.max_load_factor)
             if capped.ok:
                 out = capped
+        # how far the search's start (the predictor) was from where it converged, relative
+        # to the step (1: a start at the last state), for the predictor step rule
+        taken = float(np.linalg.norm(out.q - solver.q))
+        miss = float(np.linalg.norm(out.q - q_start)) / taken if q_start is not None else 1.0
         record(out)
         w, lam = goal, float(out.load_factor)
         line.add(w, out.q, lam)
@@ -489,7 +499,7 @@ def work_control(
             stop = StopReason.CREEPING if tiny else StopReason.STIFFNESS_LOST
             break
         if step.cuts == 0:
-            step.grow(out.iterations)
+            step.grow(out.iterations, miss if taken > 0 else None)
         step.cuts = 0
     else:
         hist.end(

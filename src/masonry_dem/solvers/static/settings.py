@@ -10,6 +10,7 @@ from typing import Literal, get_args
 from masonry_dem._validation import (
     at_least,
     check_choice,
+    checked,
     choice,
     count,
     finite,
@@ -31,6 +32,10 @@ CORNER_CHECKS: tuple[str, ...] = get_args(CornerCheck)
 #: what the corrector's line search accepts (see ``StaticSettings.line_search``)
 LineSearch = Literal["residual", "natural"]
 LINE_SEARCHES: tuple[str, ...] = get_args(LineSearch)
+
+#: how long the next work step is (see ``StaticSettings.step_rule``)
+StepRule = Literal["easy", "iterations", "predictor"]
+STEP_RULES: tuple[str, ...] = get_args(StepRule)
 
 
 @dataclass(frozen=True)
@@ -254,6 +259,27 @@ class StaticSettings(LoadPathSettings):
     corner_check_start: the first implicit step's D / dt in units of the joints' elastic
         stiffness (a pseudo time step of 1 / this elastic relaxation times); halved after
         each step taken, so the steps grow towards Newton's as the wall settles.
+
+    The reach of a work step (docs/solvers.md, "The reach of a work step")
+    ---------------------------------------------------------------------
+    predictor_order: the start of each search of work control (with ``secant_predictor``):
+        1, the line through the last two converged states; 2, the parabola through the
+        last three (in w), which falls back to the line where its second-order term over
+        the step exceeds the first-order one (a kink of the law within the last steps).
+    step_rule: how long the next work step is after a converged one (clamped to
+        [``step_shrink``, ``growth``] times the last). ``"easy"``: ``growth`` times after a
+        step of at most ``easy_iterations`` Newton iterations, else the same.
+        ``"iterations"``: times (``target_iterations`` / I) ** ``step_exponent`` after a
+        step of I iterations (Crisfield, Ramm). ``"predictor"``: times (``target_miss`` /
+        miss) ** (1 / ``predictor_order``), the miss being the distance from the predictor
+        to the converged state over the step's (1 without a predictor): a predictor of
+        order p misses by O(h ** p) of a step h.
+    target_iterations: the iterations a work step should take (``"iterations"``).
+    step_exponent: the exponent of the iteration rule (1/2: Crisfield's).
+    step_shrink: the least factor of the iteration and predictor rules (a hard step
+        shortens the next one by at most this).
+    target_miss: the predictor's miss, relative to the step, that the ``"predictor"`` rule
+        aims at.
     """
 
     easy_iterations: int = count(6, least=0)
@@ -308,6 +334,13 @@ class StaticSettings(LoadPathSettings):
     corner_check_steps: int = count(200, least=1)
     corner_check_rise: float = positive(0.5)
     corner_check_start: float = positive(1e-2)
+    # the reach of a work step (session 19)
+    predictor_order: int = checked(1, lambda v: is_count(v, 1) and v <= 2, "1 or 2")
+    step_rule: StepRule = choice("easy", STEP_RULES)
+    target_iterations: int = count(6, least=1)
+    step_exponent: float = positive(0.5)
+    step_shrink: float = checked(0.5, lambda v: is_number(v) and 0 < v <= 1, "in (0, 1]")
+    target_miss: float = positive(0.1)
 
 
 SETTING_NAMES = tuple(f.name for f in fields(StaticSettings))
