@@ -12,7 +12,7 @@ Proves:
   third order), where the line misses by the second-order term; at a kink (the states on
   two straight pieces) its second-order term is larger than its first and it falls back to
   the line;
-- each rule and predictor finds the closed-form collapses: a block on its base tilts at
+- each rule, predictor and first work step finds the closed-form collapses: a block on its base tilts at
   s/a and slides at mu, a free-standing wall tilts at t/H (the weight's moment about the
   toe, W t / 2, against the live load's, lambda W H / 2), within 1e-6 with a bracket
   tolerance of 1e-7;
@@ -144,8 +144,9 @@ RULES = [
     {"step_rule": "predictor"},
     {"predictor_order": 2},
     {"step_rule": "predictor", "predictor_order": 2},
+    {"hand_over_step": "half_failed"},
 ]
-RULE_IDS = ["iterations", "predictor", "parabola", "predictor+parabola"]
+RULE_IDS = ["iterations", "predictor", "parabola", "predictor+parabola", "half the failed"]
 
 
 def _block(a: float, s: float, friction: float):
@@ -179,6 +180,7 @@ def test_each_rule_finds_the_closed_form_collapses(rule, model, closed_form):
         ("step_shrink", 1.5, "in (0, 1]"),
         ("step_shrink", 0, "in (0, 1]"),
         ("target_miss", -0.1, "a positive number"),
+        ("hand_over_step", "first", "one of ('last', 'half_failed')"),
     ],
 )
 def test_bad_step_settings_are_named(name, value, words):

@@ -239,11 +239,20 @@ def work_control(
     line = SecantPredictor(s.secant_predictor, [], s.predictor_order)
     for st, stw in zip(hist.steps[-3:], path_w[-3:], strict=False):
         line.add(stw, st.q.reshape(-1), float(st.load_factor))
+    hand_over: float | None = None  # the first work step, when not the last load step's
     if len(path_w) > 1:
         # the first live-load step is elastic for walls that stand: its secant is the scale
         elastic_slope = (path_lam[1] - path_lam[0]) / max(path_w[1] - path_w[0], 1e-300)
         first = w - path_w[-2]
         first_w = path_w[1] - path_w[0]
+        rose = path_lam[-1] - path_lam[-2]
+        if s.hand_over_step == "half_failed" and hist.collapse_bracket and rose > 0:
+            # the failed load step's extent in w along the secant of the last two load
+            # steps, halved as load control halves a failed step (and as below, where the
+            # first live step failed): Newton did not reach across it from this state
+            failed_w = (hist.collapse_bracket[1] - path_lam[-1]) * first / rose
+            if 0 < failed_w < math.inf:
+                hand_over = min(first, 0.5 * failed_w)
     else:
         # the very first live-load step failed (a block that slides or lifts at once): the
         # scale is the tangent of the dead-load state, the first step half the failed one
@@ -251,8 +260,9 @@ def work_control(
         failed = hist.collapse_bracket[1] - path_lam[-1] if hist.collapse_bracket else 0.0
         first = 0.5 * failed / elastic_slope if elastic_slope > 0 else 0.0
         first_w = first
+    floor = max(1e-3 * abs(w), s.radius_floor * solver.problem.displacement_scale)
     step = StepController(
-        max(first, 1e-3 * abs(w), s.radius_floor * solver.problem.displacement_scale),
+        max(first, floor),
         s.growth,
         easy_iterations=s.easy_iterations,
         rule=s.step_rule,
@@ -266,7 +276,9 @@ def work_control(
     first_lambda = hist.collapse_bracket[1] if hist.collapse_bracket else lam
     peak = max(path_lam)
     flat_steps = 0
-    first_dw = step.size
+    first_dw = step.size  # the scale of the steps after a fold (resume_step)
+    if hand_over is not None:
+        step.size = max(hand_over, floor)
     uncut = step.size  # the step before the present run of halvings
     transient_from = -1  # the step from which the last pseudo-transient step started
     transient_failed = False

@@ -36,6 +36,9 @@ LINE_SEARCHES: tuple[str, ...] = get_args(LineSearch)
 #: how long the next work step is (see ``StaticSettings.step_rule``)
 StepRule = Literal["easy", "iterations", "predictor"]
 STEP_RULES: tuple[str, ...] = get_args(StepRule)
+#: the first step of work control (see ``StaticSettings.hand_over_step``)
+HandOverStep = Literal["last", "half_failed"]
+HAND_OVER_STEPS: tuple[str, ...] = get_args(HandOverStep)
 
 
 @dataclass(frozen=True)
@@ -280,6 +283,11 @@ class StaticSettings(LoadPathSettings):
         shortens the next one by at most this).
     target_miss: the predictor's miss, relative to the step, that the ``"predictor"`` rule
         aims at.
+    hand_over_step: the first step of work control, where load control hands over.
+        ``"last"``: the last load step's increment of w. ``"half_failed"``: no longer than
+        half the w the failed load step asked for (along the secant of the last two load
+        steps), as load control halves a failed step and as work control starts where the
+        very first live step failed.
     """
 
     easy_iterations: int = count(6, least=0)
@@ -341,6 +349,7 @@ class StaticSettings(LoadPathSettings):
     step_exponent: float = positive(0.5)
     step_shrink: float = checked(0.5, lambda v: is_number(v) and 0 < v <= 1, "in (0, 1]")
     target_miss: float = positive(0.1)
+    hand_over_step: HandOverStep = choice("last", HAND_OVER_STEPS)
 
 
 SETTING_NAMES = tuple(f.name for f in fields(StaticSettings))
