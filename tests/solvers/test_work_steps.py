@@ -1,21 +1,23 @@
 """The reach of a work step (solvers/static/steps.py; docs/solvers.md, "The reach of a work
 step"): the step rules of work control (``StaticSettings.step_rule``), the predictor of
-order 1 or 2 (``predictor_order``), and the closed-form collapses each keeps.
+order 1 or 2 (``predictor_order``), the first work step (``hand_over_step``), and the
+closed-form collapses each keeps.
 
 Proves:
 
 - the arithmetic of each rule: after a step of I Newton iterations the iteration rule
   multiplies the step by (I_d / I) ** p, the predictor rule by (m_d / miss) ** (1 / order),
-  both clamped to [step_shrink, growth] and to the cap; the easy rule grows by ``growth``
-  after at most ``easy_iterations`` and keeps the step otherwise (the rule before session 19);
+  both clamped to [step_shrink, growth] and to the cap; the easy rule (and ``"tangents"``)
+  grows by ``growth`` after at most ``easy_iterations`` and keeps the step otherwise (the
+  rule before session 19);
 - the parabola through three states reproduces a path quadratic in w exactly (its error is
-  third order), where the line misses by the second-order term; at a kink (the states on
-  two straight pieces) its second-order term is larger than its first and it falls back to
-  the line;
-- each rule, predictor and first work step finds the closed-form collapses: a block on its base tilts at
-  s/a and slides at mu, a free-standing wall tilts at t/H (the weight's moment about the
-  toe, W t / 2, against the live load's, lambda W H / 2), within 1e-6 with a bracket
-  tolerance of 1e-7;
+  third order), where the line misses by the second-order term; past a turn of the path
+  (the states on two straight pieces of opposite slope) its second-order term is larger
+  than its first and it falls back to the line, past a milder kink it is kept;
+- each rule, predictor and first work step finds the closed-form collapses: a block on its
+  base tilts at s/a and slides at mu, a free-standing wall tilts at t/H (the weight's moment
+  about the toe, W t / 2, against the live load's, lambda W H / 2), within 1e-6 with a
+  bracket tolerance of 1e-7;
 - bad values are refused with the field, the value and the allowed range.
 """
 
@@ -79,11 +81,14 @@ def test_the_predictor_rule_without_a_miss_is_the_iteration_rule():
 
 
 def test_the_easy_rule_grows_after_easy_steps_only_and_every_rule_keeps_the_cap():
-    step = StepController(1.0, 1.5, easy_iterations=6)
-    step.grow(6)
-    assert step.size == 1.5
-    step.grow(7)
-    assert step.size == 1.5
+    """The easy rule (and ``"tangents"``, which counts factorizations in its place) grows by
+    1.5 after at most 6 and keeps the step after 7."""
+    for rule in ("easy", "tangents"):
+        step = StepController(1.0, 1.5, easy_iterations=6, rule=rule)
+        step.grow(6)
+        assert step.size == 1.5
+        step.grow(7)
+        assert step.size == 1.5
     capped = _controller("iterations", cap=1.2)
     capped.grow(1)
     assert capped.size == 1.2
@@ -140,13 +145,21 @@ def test_the_parabola_falls_back_to_the_line_past_a_turn_of_the_path():
 
 
 RULES = [
+    {"step_rule": "tangents"},
     {"step_rule": "iterations"},
     {"step_rule": "predictor"},
     {"predictor_order": 2},
     {"step_rule": "predictor", "predictor_order": 2},
     {"hand_over_step": "half_failed"},
 ]
-RULE_IDS = ["iterations", "predictor", "parabola", "predictor+parabola", "half the failed"]
+RULE_IDS = [
+    "tangents",
+    "iterations",
+    "predictor",
+    "parabola",
+    "predictor+parabola",
+    "half the failed",
+]
 
 
 def _block(a: float, s: float, friction: float):
@@ -174,7 +187,7 @@ def test_each_rule_finds_the_closed_form_collapses(rule, model, closed_form):
     [
         ("predictor_order", 3, "1 or 2"),
         ("predictor_order", 1.0, "1 or 2"),
-        ("step_rule", "crisfield", "one of ('easy', 'iterations', 'predictor')"),
+        ("step_rule", "crisfield", "one of ('easy', 'tangents', 'iterations', 'predictor')"),
         ("target_iterations", 0, "an integer >= 1"),
         ("step_exponent", 0.0, "a positive number"),
         ("step_shrink", 1.5, "in (0, 1]"),

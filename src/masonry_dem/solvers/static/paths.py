@@ -373,6 +373,7 @@ def work_control(
     while len(hist.steps) < s.max_steps:
         goal = w + step.size
         q_start, lam_start = line.start(goal)
+        factorized = solver.factorizations
         out = solver.equilibrate(
             lam if lam_start is None else lam_start,
             control=(c, goal + float(c @ q0), step.size),
@@ -511,7 +512,10 @@ def work_control(
             stop = StopReason.CREEPING if tiny else StopReason.STIFFNESS_LOST
             break
         if step.cuts == 0:
-            step.grow(out.iterations, miss if taken > 0 else None)
+            # "tangents" counts the search's factorizations, not its chord iterations
+            tangents = solver.factorizations - factorized
+            effort = tangents if s.step_rule == "tangents" else out.iterations
+            step.grow(effort, miss if taken > 0 else None)
         step.cuts = 0
     else:
         hist.end(

@@ -41,6 +41,8 @@ class StepController:
 
     * ``"easy"``: ``growth`` times longer after an easy step (at most ``easy_iterations``
       corrector iterations; None: after every converged step), else kept;
+    * ``"tangents"``: the same, ``iterations`` being the factorizations of the search's
+      tangent (its chord iterations reuse one) rather than all its iterations;
     * ``"iterations"``: times (``target_iterations`` / I) ** ``exponent`` for a step of I
       iterations (Crisfield's and Ramm's rule), clamped to [``shrink``, ``growth``];
     * ``"predictor"``: times (``target_miss`` / miss) ** (1 / ``order``), clamped alike, where
@@ -66,7 +68,7 @@ class StepController:
     def factor(self, iterations: int, miss: float | None = None) -> float:
         """How much longer the next step is than the one that converged in ``iterations``
         with the predictor's ``miss``."""
-        if self.rule == "easy":
+        if self.rule in ("easy", "tangents"):
             easy = self.easy_iterations is None or iterations <= self.easy_iterations
             return self.growth if easy else 1.0
         if self.rule == "predictor" and miss is not None and math.isfinite(miss):
