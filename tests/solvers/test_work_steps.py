@@ -199,3 +199,52 @@ def test_each_rule_finds_the_closed_form_collapses(rule, model, closed_form):
 def test_bad_step_settings_are_named(name, value, words):
     with pytest.raises(ValueError, match=re.escape(f"{name} must be {words}, got {value!r}")):
         StaticSettings(**{name: value})
+
+
+def _first_work_step(settings: StaticSettings) -> tuple[float, float, float]:
+    """(the first step of w work control asks for, the last load step's increment of w, the
+    w the failed load step asked for along the secant of the last two load steps) on a
+    free-standing 4 x 9 wall, recorded from the searches the path followers ask for."""
+    from masonry_dem.solvers.static.solver import StaticSolver
+
+    solver = StaticSolver(
+        on_base(running_bond_wall(4, 9, 0.081, 0.21, 0.07, 20e3), kn=2.4e9), settings
+    )
+    calls: list[tuple[float, object, bool, int]] = []
+    accepted: list[tuple[float, np.ndarray]] = []  # (lambda, q) of each recorded state
+    plain, accept = solver.equilibrate, solver.accept
+
+    def recording(load_factor, *args, **kwargs):
+        out = plain(load_factor, *args, **kwargs)
+        calls.append((float(load_factor), kwargs.get("control"), bool(out.ok), len(accepted)))
+        return out
+
+    def keeping(out, step, value):
+        accepted.append((float(out.load_factor), out.q.reshape(-1).copy()))
+        return accept(out, step, value)
+
+    solver.equilibrate = recording  # type: ignore[method-assign]
+    solver.accept = keeping  # type: ignore[method-assign]
+    hist = solver.run()
+    assert hist.status == "collapse", hist.reason
+    first = next(i for i, call in enumerate(calls) if call[1] is not None)
+    failed = calls[first - 1]
+    assert failed[1] is None and not failed[2]  # the load step that failed hands over
+    free = solver.problem.asm.free_index
+    c = solver.problem.F_live / np.linalg.norm(solver.problem.F_live)
+    # the last two states load control recorded before it handed over
+    (lam0, q0), (lam1, q1) = accepted[calls[first][3] - 2 : calls[first][3]]
+    last = float(c @ (q1[free] - q0[free]))
+    return calls[first][1][2], last, (failed[0] - lam1) * last / (lam1 - lam0)
+
+
+def test_the_first_work_step_is_the_last_load_step_or_half_the_failed_one():
+    """Exact: with ``hand_over_step = "last"`` work control's first step is the last load
+    step's increment of w; with ``"half_failed"``, the shorter of that and half the w the
+    failed load step asked for along the secant of the last two load steps (on this wall
+    the failed load step was as long as the last one, so half of it)."""
+    asked, last, failed = _first_work_step(StaticSettings())
+    assert asked == pytest.approx(last, rel=1e-9)
+    asked, last, failed = _first_work_step(StaticSettings(hand_over_step="half_failed"))
+    assert 0.5 * failed < 0.9 * last  # the wall's last load step was as long as the failed one
+    assert asked == pytest.approx(0.5 * failed, rel=1e-9)
