@@ -9,7 +9,8 @@ Proves:
   multiplies the step by (I_d / I) ** p, the predictor rule by (m_d / miss) ** (1 / order),
   both clamped to [step_shrink, growth] and to the cap; the easy rule (and ``"tangents"``)
   grows by ``growth`` after at most ``easy_iterations`` and keeps the step otherwise (the
-  rule before session 19);
+  rule before session 19); the trend rule also grows after a step of no more iterations than
+  the one before;
 - the parabola through three states reproduces a path quadratic in w exactly (its error is
   third order), where the line misses by the second-order term; past a turn of the path
   (the states on two straight pieces of opposite slope) its second-order term is larger
@@ -96,6 +97,23 @@ def test_the_easy_rule_grows_after_easy_steps_only_and_every_rule_keeps_the_cap(
     assert (step.size, step.cuts) == (0.75, 1)
 
 
+def test_the_trend_rule_also_grows_when_newton_works_no_harder_than_the_step_before():
+    """Exact: 10 iterations with no step before keep the step; 9 after 10 grow it (1.5); 12
+    after 9 keep it; 12 after 12 grow it (2.25); a halving forgets the last count (1.125),
+    so 7 after it keeps the step; 4 is easy and grows it."""
+    step = StepController(1.0, 1.5, easy_iterations=6, rule="trend")
+    sizes = []
+    for iterations in (10, 9, 12, 12):
+        step.grow(iterations)
+        sizes.append(step.size)
+    assert sizes == pytest.approx([1.0, 1.5, 1.5, 2.25], rel=1e-15)
+    step.cut()
+    step.grow(7)
+    assert step.size == pytest.approx(1.125, rel=1e-15)
+    step.grow(4)
+    assert step.size == pytest.approx(1.6875, rel=1e-15)
+
+
 def _path(t: float) -> tuple[np.ndarray, float]:
     """A path quadratic in t: q = a + b t + c t^2, lambda = 0.1 + 0.3 t - 0.2 t^2."""
     a, b, c = np.array([1.0, -2.0, 0.5]), np.array([0.3, 0.1, -1.0]), np.array([0.2, -0.4, 0.05])
@@ -145,6 +163,7 @@ def test_the_parabola_falls_back_to_the_line_past_a_turn_of_the_path():
 
 
 RULES = [
+    {"step_rule": "trend"},
     {"step_rule": "tangents"},
     {"step_rule": "iterations"},
     {"step_rule": "predictor"},
@@ -153,6 +172,7 @@ RULES = [
     {"hand_over_step": "half_failed"},
 ]
 RULE_IDS = [
+    "trend",
     "tangents",
     "iterations",
     "predictor",
@@ -187,7 +207,11 @@ def test_each_rule_finds_the_closed_form_collapses(rule, model, closed_form):
     [
         ("predictor_order", 3, "1 or 2"),
         ("predictor_order", 1.0, "1 or 2"),
-        ("step_rule", "crisfield", "one of ('easy', 'tangents', 'iterations', 'predictor')"),
+        (
+            "step_rule",
+            "crisfield",
+            "one of ('easy', 'tangents', 'trend', 'iterations', 'predictor')",
+        ),
         ("target_iterations", 0, "an integer >= 1"),
         ("step_exponent", 0.0, "a positive number"),
         ("step_shrink", 1.5, "in (0, 1]"),

@@ -34,7 +34,7 @@ LineSearch = Literal["residual", "natural"]
 LINE_SEARCHES: tuple[str, ...] = get_args(LineSearch)
 
 #: how long the next work step is (see ``StaticSettings.step_rule``)
-StepRule = Literal["easy", "tangents", "iterations", "predictor"]
+StepRule = Literal["easy", "tangents", "trend", "iterations", "predictor"]
 STEP_RULES: tuple[str, ...] = get_args(StepRule)
 #: the first step of work control (see ``StaticSettings.hand_over_step``)
 HandOverStep = Literal["last", "half_failed"]
@@ -275,6 +275,8 @@ class StaticSettings(LoadPathSettings):
         ``"tangents"``: the same, counting the factorizations of the step's tangent instead
         of its iterations (a chord iteration reuses the last factorization: the quadratic
         convergence that makes a step easy is that of the tangent's updates).
+        ``"trend"``: the easy rule, also growing after a step that took no more iterations
+        than the converged step before it (none since a halving).
         ``"iterations"``: times (``target_iterations`` / I) ** ``step_exponent`` after a
         step of I iterations (Crisfield, Ramm). ``"predictor"``: times (``target_miss`` /
         miss) ** (1 / ``predictor_order``), the miss being the distance from the predictor
