@@ -29,8 +29,8 @@ import re
 
 import numpy as np
 import pytest
-from tests.helpers.walls import on_base
 
+from helpers.walls import on_base
 from masonry_dem.geometry.builders import running_bond_wall, single_block
 from masonry_dem.solvers.incremental import pushover
 from masonry_dem.solvers.static import StaticSettings
