@@ -53,6 +53,10 @@ Four probes of the path (issue 21, session 17), each on top of a default run:
 * ``--transients`` prints, for each pseudo-transient step, whether it came to rest, its
   time steps, the longest run of them over which its residual did not halve (what
   ``transient_window`` bounds) and its largest residual over the start's.
+* ``--misses`` (session 19) prints, per wall, the work searches converged and failed and
+  the quartiles of the predictor's miss over the converged ones: the distance from the
+  search's start to the state it converged to, over the distance from the last state (1:
+  a start at the last state; ``StaticSettings.predictor_order``, ``step_rule``).
 * ``--hand-over`` stops at the state where load control hands over to work control and
   tries from it the first work step and its halvings, from the three starts a search can
   take (the secant through the last two load steps, the state itself, the state moved along
@@ -169,6 +173,7 @@ def audit(
                     return r
 
                 solver.residual = residual
+            before = solver.q.copy() if depth[0] == 0 else None
             depth[0] += 1
             f0, i0, t0 = solver.factorizations, solver.iterations, time.perf_counter()
             try:
@@ -207,6 +212,13 @@ def audit(
                         "seconds": time.perf_counter() - t0,
                     }
                 )
+                if kind == "work" and ok and before is not None:
+                    # the predictor's miss: from the search's start to where it converged,
+                    # over the step (1: a start at the last state)
+                    start = kwargs.get("start")
+                    taken = float(np.linalg.norm(out.q - before))
+                    gap = taken if start is None else float(np.linalg.norm(out.q - start))
+                    rows[-1]["miss"] = gap / taken if taken > 0 else float("nan")
                 if predicted is not None:
                     rows[-1].update(zip(("events", "crossed", "next"), predicted, strict=True))
                 if residuals:
@@ -247,6 +259,7 @@ def audit(
         by[(r["kind"], r["ok"], "f")] += r["factorizations"]
         by[(r["kind"], r["ok"], "i")] += r["iterations"]
     kept_states = {"solver": solver, "hist": hist, "snapshots": snapshots} if keep else {}
+    misses = [r["miss"] for r in rows if "miss" in r and math.isfinite(r["miss"])]
     return kept_states | {
         "status": str(hist.status),
         "lambda": float(lam if lam is not None else hist.final_load_factor),
@@ -260,6 +273,10 @@ def audit(
         "cpu": cpu,
         "rows": rows,
         "states": states,
+        "work_ok": sum(r["kind"] == "work" and r["ok"] for r in rows),
+        "work_failed": sum(r["kind"] == "work" and not r["ok"] for r in rows),
+        # quartiles of the predictor's miss over the converged work searches
+        "miss": [float(x) for x in np.quantile(misses, (0.25, 0.5, 0.75))] if misses else [],
         "by": {f"{k[0]}/{'ok' if k[1] else 'failed'}/{k[2]}": v for k, v in by.items()},
     }
 
@@ -450,6 +467,15 @@ def replay(model, settings, other, monitor=None) -> dict:
     }
 
 
+def _misses(r: dict) -> str:
+    """The work searches of a run and how far their starts were from where they converged."""
+    quart = "/".join(f"{x:.3g}" for x in r["miss"]) or "-"
+    return (
+        f"work searches {r['work_ok']} converged, {r['work_failed']} failed; the predictor's "
+        f"miss over the step (quartiles) {quart}"
+    )
+
+
 def main() -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--scale", type=int, action="append", default=[], help="scale_wall(N)")
@@ -483,6 +509,11 @@ def main() -> int:
         default=[],
         metavar="NAME=VALUE",
         help="each search of the path again from its state, as it was and with this change",
+    )
+    p.add_argument(
+        "--misses",
+        action="store_true",
+        help="work searches converged/failed and the quartiles of the predictor's miss",
     )
     p.add_argument("--json", default=None)
     a = p.parse_args()
@@ -562,6 +593,8 @@ def main() -> int:
             f"(other {r['other']}) time_steps={r['time_steps']} implicit={r['implicit_steps']} "
             f"{r['seconds']:.1f} s ({r['cpu']:.1f} s of CPU)"
         )
+        if a.misses:
+            print(f"{label}: " + _misses(r))
         if other:
             print(
                 f"{label}, {' '.join(a.against)}: {b['status']} lambda={b['lambda']:.7g} "
@@ -571,6 +604,8 @@ def main() -> int:
                 f"{b['seconds']:.1f} s "
                 f"({b['cpu']:.1f} s of CPU)"
             )
+            if a.misses:
+                print(f"{label}, {' '.join(a.against)}: " + _misses(b))
             print(
                 f"{label}, this over that: seconds {r['seconds'] / b['seconds']:.2f}x "
                 f"(CPU {r['cpu'] / b['cpu']:.2f}x), "
