@@ -1,21 +1,20 @@
 """The reach of a work step (solvers/static/steps.py; docs/solvers.md, "The reach of a work
 step"): the step rules of work control (``StaticSettings.step_rule``), the predictor of
-order 1 or 2 (``predictor_order``), the first work step (``hand_over_step``), and the
-closed-form collapses each keeps.
+order 1 or 2 (``predictor_order``), the first work step, and the closed-form collapses
+each keeps.
 
 Proves:
 
 - the arithmetic of each rule: after a step of I Newton iterations the iteration rule
-  multiplies the step by (I_d / I) ** p, the predictor rule by (m_d / miss) ** (1 / order),
-  both clamped to [step_shrink, growth] and to the cap; the easy rule (and ``"tangents"``)
-  grows by ``growth`` after at most ``easy_iterations`` and keeps the step otherwise (the
-  rule before session 19); the trend rule also grows after a step of no more iterations than
-  the one before;
+  multiplies the step by (I_d / I) ** p, clamped to [step_shrink, growth] and to the cap;
+  the easy rule grows by ``growth`` after at most ``easy_iterations`` and keeps the step
+  otherwise;
 - the parabola through three states reproduces a path quadratic in w exactly (its error is
   third order), where the line misses by the second-order term; past a turn of the path
   (the states on two straight pieces of opposite slope) its second-order term is larger
   than its first and it falls back to the line, past a milder kink it is kept;
-- each rule, predictor and first work step finds the closed-form collapses: a block on its
+- work control's first step is the last load step's increment of w;
+- each rule and predictor finds the closed-form collapses: a block on its
   base tilts at s/a and slides at mu, a free-standing wall tilts at t/H (the weight's moment
   about the toe, W t / 2, against the live load's, lambda W H / 2), within 1e-6 with a
   bracket tolerance of 1e-7;
@@ -55,63 +54,18 @@ def test_the_iteration_rule_scales_the_step_by_the_ratio_of_iterations(iteration
     assert step.size == pytest.approx(expected, rel=1e-14)
 
 
-@pytest.mark.parametrize(
-    "order, miss, expected",
-    [
-        (1, 0.1, 1.0),
-        (1, 0.2, 0.5),
-        (1, 0.08, 1.25),
-        (1, 0.01, 1.5),
-        (2, 0.4, 0.5),
-        (2, 0.16, math.sqrt(0.625)),
-    ],
-    ids=["on target", "twice", "0.8x", "clamped", "order 2 quartered", "order 2"],
-)
-def test_the_predictor_rule_scales_the_step_by_the_miss(order, miss, expected):
-    """Exact: (0.1 / miss) ** (1 / order), clamped to [0.5, 1.5]: the miss of a predictor of
-    order p is O(h ** p), so the step at which it would have been the target."""
-    step = _controller("predictor", shrink=0.5, target_miss=0.1, order=order)
-    step.grow(30, miss)  # the iterations do not count where a miss is known
-    assert step.size == pytest.approx(expected, rel=1e-14)
-
-
-def test_the_predictor_rule_without_a_miss_is_the_iteration_rule():
-    step = _controller("predictor", shrink=0.5)
-    step.grow(24, None)
-    assert step.size == pytest.approx(0.5, rel=1e-14)
-
-
 def test_the_easy_rule_grows_after_easy_steps_only_and_every_rule_keeps_the_cap():
-    """The easy rule (and ``"tangents"``, which counts factorizations in its place) grows by
-    1.5 after at most 6 and keeps the step after 7."""
-    for rule in ("easy", "tangents"):
-        step = StepController(1.0, 1.5, easy_iterations=6, rule=rule)
-        step.grow(6)
-        assert step.size == 1.5
-        step.grow(7)
-        assert step.size == 1.5
+    """The easy rule grows by 1.5 after at most 6 and keeps the step after 7."""
+    step = StepController(1.0, 1.5, easy_iterations=6, rule="easy")
+    step.grow(6)
+    assert step.size == 1.5
+    step.grow(7)
+    assert step.size == 1.5
     capped = _controller("iterations", cap=1.2)
     capped.grow(1)
     assert capped.size == 1.2
     step.cut()
     assert (step.size, step.cuts) == (0.75, 1)
-
-
-def test_the_trend_rule_also_grows_when_newton_works_no_harder_than_the_step_before():
-    """Exact: 10 iterations with no step before keep the step; 9 after 10 grow it (1.5); 12
-    after 9 keep it; 12 after 12 grow it (2.25); a halving forgets the last count (1.125),
-    so 7 after it keeps the step; 4 is easy and grows it."""
-    step = StepController(1.0, 1.5, easy_iterations=6, rule="trend")
-    sizes = []
-    for iterations in (10, 9, 12, 12):
-        step.grow(iterations)
-        sizes.append(step.size)
-    assert sizes == pytest.approx([1.0, 1.5, 1.5, 2.25], rel=1e-15)
-    step.cut()
-    step.grow(7)
-    assert step.size == pytest.approx(1.125, rel=1e-15)
-    step.grow(4)
-    assert step.size == pytest.approx(1.6875, rel=1e-15)
 
 
 def _path(t: float) -> tuple[np.ndarray, float]:
@@ -163,23 +117,11 @@ def test_the_parabola_falls_back_to_the_line_past_a_turn_of_the_path():
 
 
 RULES = [
-    {"step_rule": "trend"},
-    {"step_rule": "tangents"},
     {"step_rule": "iterations"},
-    {"step_rule": "predictor"},
     {"predictor_order": 2},
-    {"step_rule": "predictor", "predictor_order": 2},
-    {"hand_over_step": "half_failed"},
+    {"step_rule": "iterations", "predictor_order": 2},
 ]
-RULE_IDS = [
-    "trend",
-    "tangents",
-    "iterations",
-    "predictor",
-    "parabola",
-    "predictor+parabola",
-    "half the failed",
-]
+RULE_IDS = ["iterations", "parabola", "iterations+parabola"]
 
 
 def _block(a: float, s: float, friction: float):
@@ -207,17 +149,11 @@ def test_each_rule_finds_the_closed_form_collapses(rule, model, closed_form):
     [
         ("predictor_order", 3, "1 or 2"),
         ("predictor_order", 1.0, "1 or 2"),
-        (
-            "step_rule",
-            "crisfield",
-            "one of ('easy', 'tangents', 'trend', 'iterations', 'predictor')",
-        ),
+        ("step_rule", "crisfield", "one of ('easy', 'iterations')"),
         ("target_iterations", 0, "an integer >= 1"),
         ("step_exponent", 0.0, "a positive number"),
         ("step_shrink", 1.5, "in (0, 1]"),
         ("step_shrink", 0, "in (0, 1]"),
-        ("target_miss", -0.1, "a positive number"),
-        ("hand_over_step", "first", "one of ('last', 'half_failed')"),
     ],
 )
 def test_bad_step_settings_are_named(name, value, words):
@@ -225,9 +161,8 @@ def test_bad_step_settings_are_named(name, value, words):
         StaticSettings(**{name: value})
 
 
-def _first_work_step(settings: StaticSettings) -> tuple[float, float, float]:
-    """(the first step of w work control asks for, the last load step's increment of w, the
-    w the failed load step asked for along the secant of the last two load steps) on a
+def _first_work_step(settings: StaticSettings) -> tuple[float, float]:
+    """(the first step of w work control asks for, the last load step's increment of w) on a
     free-standing 4 x 9 wall, recorded from the searches the path followers ask for."""
     from masonry_dem.solvers.static.solver import StaticSolver
 
@@ -257,18 +192,12 @@ def _first_work_step(settings: StaticSettings) -> tuple[float, float, float]:
     free = solver.problem.asm.free_index
     c = solver.problem.F_live / np.linalg.norm(solver.problem.F_live)
     # the last two states load control recorded before it handed over
-    (lam0, q0), (lam1, q1) = accepted[calls[first][3] - 2 : calls[first][3]]
+    (_, q0), (_, q1) = accepted[calls[first][3] - 2 : calls[first][3]]
     last = float(c @ (q1[free] - q0[free]))
-    return calls[first][1][2], last, (failed[0] - lam1) * last / (lam1 - lam0)
+    return calls[first][1][2], last
 
 
-def test_the_first_work_step_is_the_last_load_step_or_half_the_failed_one():
-    """Exact: with ``hand_over_step = "last"`` work control's first step is the last load
-    step's increment of w; with ``"half_failed"``, the shorter of that and half the w the
-    failed load step asked for along the secant of the last two load steps (on this wall
-    the failed load step was as long as the last one, so half of it)."""
-    asked, last, failed = _first_work_step(StaticSettings())
+def test_the_first_work_step_is_the_last_load_step():
+    """Exact: work control's first step is the last load step's increment of w."""
+    asked, last = _first_work_step(StaticSettings())
     assert asked == pytest.approx(last, rel=1e-9)
-    asked, last, failed = _first_work_step(StaticSettings(hand_over_step="half_failed"))
-    assert 0.5 * failed < 0.9 * last  # the wall's last load step was as long as the failed one
-    assert asked == pytest.approx(0.5 * failed, rel=1e-9)

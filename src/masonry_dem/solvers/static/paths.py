@@ -239,20 +239,11 @@ def work_control(
     line = SecantPredictor(s.secant_predictor, [], s.predictor_order)
     for st, stw in zip(hist.steps[-3:], path_w[-3:], strict=False):
         line.add(stw, st.q.reshape(-1), float(st.load_factor))
-    hand_over: float | None = None  # the first work step, when not the last load step's
     if len(path_w) > 1:
         # the first live-load step is elastic for walls that stand: its secant is the scale
         elastic_slope = (path_lam[1] - path_lam[0]) / max(path_w[1] - path_w[0], 1e-300)
         first = w - path_w[-2]
         first_w = path_w[1] - path_w[0]
-        rose = path_lam[-1] - path_lam[-2]
-        if s.hand_over_step == "half_failed" and hist.collapse_bracket and rose > 0:
-            # the failed load step's extent in w along the secant of the last two load
-            # steps, halved as load control halves a failed step (and as below, where the
-            # first live step failed): Newton did not reach across it from this state
-            failed_w = (hist.collapse_bracket[1] - path_lam[-1]) * first / rose
-            if 0 < failed_w < math.inf:
-                hand_over = min(first, 0.5 * failed_w)
     else:
         # the very first live-load step failed (a block that slides or lifts at once): the
         # scale is the tangent of the dead-load state, the first step half the failed one
@@ -260,25 +251,20 @@ def work_control(
         failed = hist.collapse_bracket[1] - path_lam[-1] if hist.collapse_bracket else 0.0
         first = 0.5 * failed / elastic_slope if elastic_slope > 0 else 0.0
         first_w = first
-    floor = max(1e-3 * abs(w), s.radius_floor * solver.problem.displacement_scale)
     step = StepController(
-        max(first, floor),
+        max(first, 1e-3 * abs(w), s.radius_floor * solver.problem.displacement_scale),
         s.growth,
         easy_iterations=s.easy_iterations,
         rule=s.step_rule,
         target_iterations=s.target_iterations,
         exponent=s.step_exponent,
         shrink=s.step_shrink,
-        target_miss=s.target_miss,
-        order=s.predictor_order if s.secant_predictor else 1,
     )
     lam = path_lam[-1]
     first_lambda = hist.collapse_bracket[1] if hist.collapse_bracket else lam
     peak = max(path_lam)
     flat_steps = 0
     first_dw = step.size  # the scale of the steps after a fold (resume_step)
-    if hand_over is not None:
-        step.size = max(hand_over, floor)
     uncut = step.size  # the step before the present run of halvings
     transient_from = -1  # the step from which the last pseudo-transient step started
     transient_failed = False
@@ -373,7 +359,6 @@ def work_control(
     while len(hist.steps) < s.max_steps:
         goal = w + step.size
         q_start, lam_start = line.start(goal)
-        factorized = solver.factorizations
         out = solver.equilibrate(
             lam if lam_start is None else lam_start,
             control=(c, goal + float(c @ q0), step.size),
@@ -465,10 +450,6 @@ def work_control(
             capped = solver.equilibrate(s.max_load_factor)
             if capped.ok:
                 out = capped
-        # how far the search's start (the predictor) was from where it converged, relative
-        # to the step (1: a start at the last state), for the predictor step rule
-        taken = float(np.linalg.norm(out.q - solver.q))
-        miss = float(np.linalg.norm(out.q - q_start)) / taken if q_start is not None else 1.0
         record(out)
         w, lam = goal, float(out.load_factor)
         line.add(w, out.q, lam)
@@ -512,10 +493,7 @@ def work_control(
             stop = StopReason.CREEPING if tiny else StopReason.STIFFNESS_LOST
             break
         if step.cuts == 0:
-            # "tangents" counts the search's factorizations, not its chord iterations
-            tangents = solver.factorizations - factorized
-            effort = tangents if s.step_rule == "tangents" else out.iterations
-            step.grow(effort, miss if taken > 0 else None)
+            step.grow(out.iterations)
         step.cuts = 0
     else:
         hist.end(

@@ -34,11 +34,8 @@ LineSearch = Literal["residual", "natural"]
 LINE_SEARCHES: tuple[str, ...] = get_args(LineSearch)
 
 #: how long the next work step is (see ``StaticSettings.step_rule``)
-StepRule = Literal["easy", "tangents", "trend", "iterations", "predictor"]
+StepRule = Literal["easy", "iterations"]
 STEP_RULES: tuple[str, ...] = get_args(StepRule)
-#: the first step of work control (see ``StaticSettings.hand_over_step``)
-HandOverStep = Literal["last", "half_failed"]
-HAND_OVER_STEPS: tuple[str, ...] = get_args(HandOverStep)
 
 
 @dataclass(frozen=True)
@@ -275,29 +272,13 @@ class StaticSettings(LoadPathSettings):
         doubled, at a kink of the law within the last steps).
     step_rule: how long the next work step is after a converged one. ``"easy"``:
         ``growth`` times after a step of at most ``easy_iterations`` Newton iterations, else
-        the same.
-        ``"tangents"``: the same, counting the factorizations of the step's tangent instead
-        of its iterations (a chord iteration reuses the last factorization: the quadratic
-        convergence that makes a step easy is that of the tangent's updates).
-        ``"trend"``: the easy rule, also growing after a step that took no more iterations
-        than the converged step before it (none since a halving).
-        ``"iterations"``: times (``target_iterations`` / I) ** ``step_exponent`` after a
-        step of I iterations (Crisfield, Ramm). ``"predictor"``: times (``target_miss`` /
-        miss) ** (1 / ``predictor_order``), the miss being the distance from the predictor
-        to the converged state over the step's (1 without a predictor): a predictor of
-        order p misses by O(h ** p) of a step h. These two are clamped to
-        [``step_shrink``, ``growth``] times the last step.
+        the same. ``"iterations"``: times (``target_iterations`` / I) ** ``step_exponent``
+        after a step of I iterations (Crisfield, Ramm), clamped to [``step_shrink``,
+        ``growth``] times the last step.
     target_iterations: the iterations a work step should take (``"iterations"``).
     step_exponent: the exponent of the iteration rule (1/2: Crisfield's).
-    step_shrink: the least factor of the iteration and predictor rules (a hard step
-        shortens the next one by at most this).
-    target_miss: the predictor's miss, relative to the step, that the ``"predictor"`` rule
-        aims at.
-    hand_over_step: the first step of work control, where load control hands over.
-        ``"last"``: the last load step's increment of w. ``"half_failed"``: no longer than
-        half the w the failed load step asked for (along the secant of the last two load
-        steps), as load control halves a failed step and as work control starts where the
-        very first live step failed.
+    step_shrink: the least factor of the iteration rule (a hard step shortens the next one
+        by at most this).
     """
 
     easy_iterations: int = count(6, least=0)
@@ -358,8 +339,6 @@ class StaticSettings(LoadPathSettings):
     target_iterations: int = count(6, least=1)
     step_exponent: float = positive(0.5)
     step_shrink: float = checked(0.5, lambda v: is_number(v) and 0 < v <= 1, "in (0, 1]")
-    target_miss: float = positive(0.1)
-    hand_over_step: HandOverStep = choice("last", HAND_OVER_STEPS)
 
 
 SETTING_NAMES = tuple(f.name for f in fields(StaticSettings))

@@ -41,18 +41,8 @@ class StepController:
 
     * ``"easy"``: ``growth`` times longer after an easy step (at most ``easy_iterations``
       corrector iterations; None: after every converged step), else kept;
-    * ``"tangents"``: the same, ``iterations`` being the factorizations of the search's
-      tangent (its chord iterations reuse one) rather than all its iterations;
-    * ``"trend"``: the easy rule, also growing after a step that took no more iterations
-      than the converged step before it (Newton working no harder at this length);
     * ``"iterations"``: times (``target_iterations`` / I) ** ``exponent`` for a step of I
-      iterations (Crisfield's and Ramm's rule), clamped to [``shrink``, ``growth``];
-    * ``"predictor"``: times (``target_miss`` / miss) ** (1 / ``order``), clamped alike, where
-      ``miss`` is the distance from the search's start (the predictor) to the state it
-      converged to, relative to the step (1: a start at the last state). The error of a
-      predictor of order p through the last states is O(h ** (p + 1)) and the step O(h),
-      so the miss is O(h ** p): this rule sets the next step to the length at which the
-      miss would have been ``target_miss``. Without a miss the iteration rule decides.
+      iterations (Crisfield's and Ramm's rule), clamped to [``shrink``, ``growth``].
     """
 
     size: float
@@ -64,32 +54,21 @@ class StepController:
     target_iterations: int = 6
     exponent: float = 0.5
     shrink: float = 0.5
-    target_miss: float = 0.1
-    order: int = 1
-    last_iterations: int | None = None  # of the last converged step, none after a cut
 
-    def factor(self, iterations: int, miss: float | None = None) -> float:
-        """How much longer the next step is than the one that converged in ``iterations``
-        with the predictor's ``miss``."""
-        if self.rule in ("easy", "tangents", "trend"):
+    def factor(self, iterations: int) -> float:
+        """How much longer the next step is than the one that converged in ``iterations``."""
+        if self.rule == "easy":
             easy = self.easy_iterations is None or iterations <= self.easy_iterations
-            if self.rule == "trend" and self.last_iterations is not None:
-                easy = easy or iterations <= self.last_iterations
             return self.growth if easy else 1.0
-        if self.rule == "predictor" and miss is not None and math.isfinite(miss):
-            raw = (self.target_miss / max(miss, 1e-12)) ** (1.0 / self.order)
-        else:
-            raw = (self.target_iterations / max(iterations, 1)) ** self.exponent
+        raw = (self.target_iterations / max(iterations, 1)) ** self.exponent
         return min(max(raw, self.shrink), self.growth)
 
-    def grow(self, iterations: int, miss: float | None = None) -> None:
-        self.size = min(self.size * self.factor(iterations, miss), self.cap)
-        self.last_iterations = iterations
+    def grow(self, iterations: int) -> None:
+        self.size = min(self.size * self.factor(iterations), self.cap)
 
     def cut(self) -> None:
         self.size /= 2
         self.cuts += 1
-        self.last_iterations = None
 
 
 @dataclass
