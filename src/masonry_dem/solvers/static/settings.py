@@ -28,6 +28,10 @@ CONTINUATION: tuple[str, ...] = get_args(Continuation)
 CornerCheck = Literal["mixed", "implicit", "explicit"]
 CORNER_CHECKS: tuple[str, ...] = get_args(CornerCheck)
 
+#: what a motion past the displacement limit tells the path (see ``StaticSettings.run_off``)
+RunOff = Literal["carry", "stop", "ignore"]
+RUN_OFFS: tuple[str, ...] = get_args(RunOff)
+
 #: what the corrector's line search accepts (see ``StaticSettings.line_search``)
 LineSearch = Literal["residual", "natural"]
 LINE_SEARCHES: tuple[str, ...] = get_args(LineSearch)
@@ -254,6 +258,25 @@ class StaticSettings(LoadPathSettings):
     corner_check_start: the first implicit step's D / dt in units of the joints' elastic
         stiffness (a pseudo time step of 1 / this elastic relaxation times); halved after
         each step taken, so the steps grow towards Newton's as the wall settles.
+
+    The endgame at the peak (docs/solvers.md, "The endgame at the peak")
+    ---------------------------------------------------------------------
+    run_off: what a pseudo-transient step whose motion runs past the displacement limit
+        toward lambda T tells the path. It is the overdamped motion the corner check runs
+        (the same equation, from a state of the path), so its run-off is the check's verdict
+        at T: no rest there, nor higher, while the path stays on that branch.
+        ``"carry"`` (default): every later pseudo-transient step or check of the same
+        branch whose target is T or more is answered by it (no rest) and not run; the path
+        still closes in on the peak below T by halved steps. The verdict lapses where the
+        path moves to another branch (a relaxation's rest) or finds equilibria at T.
+        ``"stop"``: the path ends at the run-off where its curve still rose (a corner),
+        without the halvings (the peak then lies within T, a ``transient_rise`` above the
+        last state, which the halvings would have closed in on). ``"ignore"``: the run-off
+        is one failed step among others (session 18).
+    corner_transient: where work control is stuck at a corner, try a pseudo-transient step
+        before the corner check (True, as before). False: the check alone, which relaxes
+        from the same state to the same lambda and finds the rest of every fold measured
+        where the pseudo-transient step found none.
     """
 
     easy_iterations: int = count(6, least=0)
@@ -308,6 +331,9 @@ class StaticSettings(LoadPathSettings):
     corner_check_steps: int = count(200, least=1)
     corner_check_rise: float = positive(0.5)
     corner_check_start: float = positive(1e-2)
+    # the endgame at the peak (session 19)
+    run_off: RunOff = choice("carry", RUN_OFFS)
+    corner_transient: bool = True
 
 
 SETTING_NAMES = tuple(f.name for f in fields(StaticSettings))
