@@ -10,6 +10,7 @@ from typing import Literal, get_args
 from masonry_dem._validation import (
     at_least,
     check_choice,
+    checked,
     choice,
     count,
     finite,
@@ -333,7 +334,7 @@ class StaticSettings(LoadPathSettings):
     corner_check_start: float = positive(1e-2)
     # the endgame at the peak (session 19)
     run_off: RunOff = choice("carry", RUN_OFFS)
-    corner_transient: bool = True
+    corner_transient: bool = checked(True, lambda v: isinstance(v, bool), "true or false")
 
 
 SETTING_NAMES = tuple(f.name for f in fields(StaticSettings))
