@@ -118,6 +118,7 @@ def test_a_run_off_answers_the_later_checks_of_its_branch(caplog):
     assert carried.implicit_steps == 0 < ignored.implicit_steps
     assert carried.factorizations < ignored.factorizations
     assert found.certificate is not None and found.certificate.corner
+    assert "pseudo-transient step of the same branch" in found.certificate.reason
     assert "ran past the displacement limit toward" in caplog.text
     stopped, early = _u_wall(run_off="stop")
     assert early.collapse_multiplier <= found.collapse_multiplier
