@@ -31,7 +31,7 @@ from masonry_dem.solvers.static.certificate import (
     moved_from_dead_load,
     still_rising,
 )
-from masonry_dem.solvers.static.outcome import Failure, Outcome, Status, StopReason
+from masonry_dem.solvers.static.outcome import Outcome, Status, StopReason
 from masonry_dem.solvers.static.settings import DisplacementControl
 from masonry_dem.solvers.static.steps import (
     SecantPredictor,
@@ -272,17 +272,13 @@ def work_control(
     # the lowest lambda toward which a motion from this branch of the path ran past the
     # displacement limit (``run_off``): no rest there or higher while the path stays on it
     ran_off = math.inf
-    # where the last pseudo-transient step from the present state stopped without rest, and
-    # its target (``check_continues``: the corner check goes on with that motion)
-    motion: tuple[float, np.ndarray] | None = None
 
     def transient(why: str, stopped: float, above: float | None = None) -> bool:
         """A pseudo-transient step to a lambda a little higher (or up to where the failed
         search ``stopped``, on a straight path: ``transient_target``; and past ``above``),
         once from each state."""
-        nonlocal transient_from, ran_off, motion
+        nonlocal transient_from, ran_off
         transient_from = len(hist.steps)
-        motion = None
         on_line = straight(path_w, path_lam, elastic_slope)
         target = transient_target(lam, stopped, s.transient_rise, s.transient_reach, on_line)
         if above is not None:  # just past a fold known to within s.fold_match
@@ -292,8 +288,6 @@ def work_control(
         moved = solver.pseudo_transient(target)
         if moved.past_limit and s.run_off != "ignore":
             ran_off = min(ran_off, target)
-        elif moved.failure is Failure.NO_REST:
-            motion = (target, moved.q)
         log.debug(
             "work control stuck at lambda=%.6g (%s); pseudo-transient step to %.6g: %s",
             lam,
@@ -346,17 +340,7 @@ def work_control(
             return False
         rescued: Outcome | None
         if corner and s.corner_check != "explicit":
-            # the pseudo-transient step from this state to this lambda is the same motion
-            # stopped by its own rule: the check may go on from where it stopped
-            go_on = (
-                s.check_continues
-                and motion is not None
-                and transient_from == len(hist.steps)
-                and motion[0] == target
-            )
-            moved = solver.implicit_relaxation(
-                target, start=motion[1] if go_on and motion is not None else None
-            )
+            moved = solver.implicit_relaxation(target)
             how = "implicit relaxation"
             verdict = f"ok in {moved.iterations} steps" if moved.ok else moved.reason
             settled: Outcome | None = None

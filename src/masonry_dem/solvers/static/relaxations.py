@@ -127,12 +127,8 @@ class Relaxations(Corrector):
             failure=Failure.NO_REST,
         )
 
-    def implicit_relaxation(
-        self, target: float, budget: int | None = None, start: np.ndarray | None = None
-    ) -> Outcome:
-        """The corner check's relaxation: from the last converged state (or from ``start``,
-        a state of the same motion, e.g. where a pseudo-transient step to ``target`` stopped;
-        displacements are still measured from the last converged state) to rest at
+    def implicit_relaxation(self, target: float, budget: int | None = None) -> Outcome:
+        """The corner check's relaxation: from the last converged state to rest at
         ``target``, by linearly implicit Euler steps of the overdamped motion
         D dq/dt = R(q), D the joints' elastic stiffness (the tangent's floor),
 
@@ -163,7 +159,7 @@ class Relaxations(Corrector):
         s = self.settings
         budget = s.corner_check_steps if budget is None else budget
         free = self.problem.asm.free_index
-        q = (self.q if start is None else start).copy()
+        q = self.q.copy()
         residual, rnorm, response = self.residual(q, target)
         floor = s.corner_check_start
         for step in range(budget):

@@ -278,11 +278,6 @@ class StaticSettings(LoadPathSettings):
         before the corner check (True, as before). False: the check alone, which relaxes
         from the same state to the same lambda and finds the rest of every fold measured
         where the pseudo-transient step found none.
-    check_continues: where a pseudo-transient step from the stuck state to the corner
-        check's lambda stopped without rest, the check's implicit relaxation goes on from
-        the state it stopped in (the same motion, stopped by the pseudo-transient rule: a
-        residual that does not halve) instead of starting again from the stuck state.
-        False (default): from the stuck state, as before.
     """
 
     easy_iterations: int = count(6, least=0)
@@ -340,7 +335,6 @@ class StaticSettings(LoadPathSettings):
     # the endgame at the peak (session 19)
     run_off: RunOff = choice("carry", RUN_OFFS)
     corner_transient: bool = checked(True, lambda v: isinstance(v, bool), "true or false")
-    check_continues: bool = checked(False, lambda v: isinstance(v, bool), "true or false")
 
 
 SETTING_NAMES = tuple(f.name for f in fields(StaticSettings))
