@@ -120,6 +120,7 @@ def test_a_run_off_answers_the_later_checks_of_its_branch(caplog):
     assert found.certificate is not None and found.certificate.corner
     assert "pseudo-transient step of the same branch" in found.certificate.reason
     assert "ran past the displacement limit toward" in caplog.text
+    assert "a pseudo-transient motion from this branch ran past" in found.reason
     stopped, early = _u_wall(run_off="stop")
     assert early.collapse_multiplier <= found.collapse_multiplier
     assert early.collapse_multiplier == pytest.approx(

@@ -476,6 +476,11 @@ def work_control(
                 continue
             if stuck:
                 reason = f"no equilibrium beyond lambda={lam:.6g} under work control ({out.reason})"
+                if math.isfinite(ran_off):
+                    reason += (
+                        f"; no rest above it: a pseudo-transient motion from this branch ran "
+                        f"past the displacement limit toward lambda={ran_off:.6g}"
+                    )
                 stop = StopReason.PATH_STUCK
                 break
             continue
