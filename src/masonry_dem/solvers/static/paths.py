@@ -272,17 +272,19 @@ def work_control(
     # the lowest lambda toward which a motion from this branch of the path ran past the
     # displacement limit (``run_off``): no rest there or higher while the path stays on it
     ran_off = math.inf
+    asked = -math.inf  # the lambda the last pseudo-transient step relaxed to
 
     def transient(why: str, stopped: float, above: float | None = None) -> bool:
         """A pseudo-transient step to a lambda a little higher (or up to where the failed
         search ``stopped``, on a straight path: ``transient_target``; and past ``above``),
         once from each state."""
-        nonlocal transient_from, ran_off
+        nonlocal transient_from, ran_off, asked
         transient_from = len(hist.steps)
         on_line = straight(path_w, path_lam, elastic_slope)
         target = transient_target(lam, stopped, s.transient_rise, s.transient_reach, on_line)
         if above is not None:  # just past a fold known to within s.fold_match
             target = max(target, above + s.fold_match * abs(above))
+        asked = target
         if answered(target, "pseudo-transient step"):
             return False
         moved = solver.pseudo_transient(target)
@@ -450,7 +452,7 @@ def work_control(
                     fold_failed = True
                 else:
                     transient_failed = True
-                if s.run_off == "stop" and math.isfinite(ran_off) and at_corner():
+                if s.run_off == "stop" and asked >= ran_off and at_corner():
                     # the motion past the limit is the corner check's verdict: a peak
                     reason = (
                         f"no equilibrium beyond lambda={lam:.6g} under work control: a "
