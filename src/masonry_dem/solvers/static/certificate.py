@@ -323,13 +323,19 @@ def certify(
         else "; ".join(why)
     )
     if holds and corner:
+        # a pseudo-transient motion past the limit answers the check (``run_off``)
+        motion = "an implicit relaxation" + (
+            ""
+            if s.run_off == "ignore"
+            else " (or a pseudo-transient step of the same branch, to no higher a lambda)"
+        )
         reason += (
             f"; the path stopped at a corner (its curve still rose at {slope:.2g} of "
             f"its elastic slope), where a fold of the path has a singular tangent too: "
             + (
                 "not checked (fold_check_time_steps = 0)"
                 if s.fold_check_time_steps <= 0 or s.stop_check_time_steps <= 0
-                else f"no rest above it: an implicit relaxation ran past the displacement "
+                else f"no rest above it: {motion} ran past the displacement "
                 f"limit, or found no rest within {s.corner_check_steps} steps and dynamic "
                 f"relaxation none within {s.fold_check_time_steps} time steps"
                 if s.corner_check != "explicit"

@@ -273,18 +273,27 @@ def work_control(
     checked_from = -1  # the step from which the last dynamic-relaxation check started
     last_fold: float | None = None  # lambda where the last failed search stopped
     fold_failed = False  # a pseudo-transient step past a fold found no rest
+    # the lowest lambda toward which a motion from this branch of the path ran past the
+    # displacement limit (``run_off``): no rest there or higher while the path stays on it
+    ran_off = math.inf
+    asked = -math.inf  # the lambda the last pseudo-transient step relaxed to
 
     def transient(why: str, stopped: float, above: float | None = None) -> bool:
         """A pseudo-transient step to a lambda a little higher (or up to where the failed
         search ``stopped``, on a straight path: ``transient_target``; and past ``above``),
         once from each state."""
-        nonlocal transient_from
+        nonlocal transient_from, ran_off, asked
         transient_from = len(hist.steps)
         on_line = straight(path_w, path_lam, elastic_slope)
         target = transient_target(lam, stopped, s.transient_rise, s.transient_reach, on_line)
         if above is not None:  # just past a fold known to within s.fold_match
             target = max(target, above + s.fold_match * abs(above))
+        asked = target
+        if answered(target, "pseudo-transient step"):
+            return False
         moved = solver.pseudo_transient(target)
+        if moved.past_limit and s.run_off != "ignore":
+            ran_off = min(ran_off, target)
         log.debug(
             "work control stuck at lambda=%.6g (%s); pseudo-transient step to %.6g: %s",
             lam,
@@ -306,6 +315,22 @@ def work_control(
             and still_rising(curve_slope(path_w, path_lam, elastic_slope), s.flat_slope)
         )
 
+    def answered(target: float, what: str) -> bool:
+        """Has a motion from this branch already run past the displacement limit toward
+        ``target`` or a lower lambda (``run_off = "carry"``)? Then the relaxation to
+        ``target`` would be asked what that motion answered: no rest."""
+        if target < ran_off:
+            return False
+        log.debug(
+            "work control at lambda=%.6g: no %s to %.6g, a motion from this branch ran "
+            "past the displacement limit toward %.6g",
+            lam,
+            what,
+            target,
+            ran_off,
+        )
+        return True
+
     def rest_above(budget: int, corner: bool = False) -> bool:
         """A relaxation looks for rest a little above the last state (once from each
         state), and the path goes on from there if it finds it. At a corner, unless
@@ -317,6 +342,8 @@ def work_control(
         nonlocal checked_from
         checked_from = len(hist.steps)
         target = lam + s.transient_rise * abs(lam)
+        if answered(target, "check"):
+            return False
         rescued: Outcome | None
         if corner and s.corner_check != "explicit":
             moved = solver.implicit_relaxation(target)
@@ -343,8 +370,9 @@ def work_control(
 
     def accept_moved(moved: Outcome) -> None:
         """Go on from a state found at a higher lambda (not by a work step)."""
-        nonlocal lam, w, peak, flat_steps
+        nonlocal lam, w, peak, flat_steps, ran_off
         record(moved)
+        ran_off = math.inf  # another branch: what ran off from the last one says nothing here
         lam = float(moved.load_factor)
         w = float(c @ (moved.q[free] - q0))
         path_w.append(w)
@@ -412,10 +440,14 @@ def work_control(
                 and not fold_failed
             )
             last_fold = fold
+            # where the path is stuck at a corner the check below relaxes to the same
+            # lambda from the same state (``corner_transient``)
+            checked_next = stuck and not s.corner_transient and at_corner()
             if (
                 (stuck or refold or (step.cuts == s.transient_after and not transient_failed))
                 and s.transient_steps > 0
                 and transient_from != len(hist.steps)
+                and not checked_next
             ):
                 # Newton stops at a fold of the path
                 if transient(out.reason, fold, above=fold if refold else None):
@@ -424,6 +456,15 @@ def work_control(
                     fold_failed = True
                 else:
                     transient_failed = True
+                if s.run_off == "stop" and asked >= ran_off and at_corner():
+                    # the motion past the limit is the corner check's verdict: a peak
+                    reason = (
+                        f"no equilibrium beyond lambda={lam:.6g} under work control: a "
+                        f"pseudo-transient motion toward {ran_off:.6g} ran past the "
+                        f"displacement limit ({out.reason})"
+                    )
+                    stop = StopReason.PATH_STUCK
+                    break
             # neither Newton nor the pseudo-transient step passes: before calling this a
             # collapse, let dynamic relaxation look for rest a little higher (where the
             # tangent is singular along the load only at a corner, or when asked: a fold of
@@ -441,6 +482,11 @@ def work_control(
                 continue
             if stuck:
                 reason = f"no equilibrium beyond lambda={lam:.6g} under work control ({out.reason})"
+                if math.isfinite(ran_off):
+                    reason += (
+                        f"; no rest above it: a pseudo-transient motion from this branch ran "
+                        f"past the displacement limit toward lambda={ran_off:.6g}"
+                    )
                 stop = StopReason.PATH_STUCK
                 break
             continue
@@ -452,6 +498,8 @@ def work_control(
                 out = capped
         record(out)
         w, lam = goal, float(out.load_factor)
+        if lam >= ran_off:  # the path found rest where the motion ran off: no verdict
+            ran_off = math.inf
         line.add(w, out.q, lam)
         path_w.append(w)
         path_lam.append(lam)
