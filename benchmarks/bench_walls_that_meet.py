@@ -196,7 +196,8 @@ def main(argv=None) -> int:
             ("per_factorization", "ms"),
             ("lambda", ""),
         ):
-            uu, ff = best["U"][key], best["flat"][key]
+            # a run that stops without a certified collapse has no lambda (None): nan
+            uu, ff = (float("nan") if v is None else v for v in (best["U"][key], best["flat"][key]))
             scale = 1e3 if unit == "ms" else 1.0
             ratio = uu / ff if ff else float("nan")
             names = {
