@@ -254,6 +254,16 @@ class StaticSettings(LoadPathSettings):
     corner_check_start: the first implicit step's D / dt in units of the joints' elastic
         stiffness (a pseudo time step of 1 / this elastic relaxation times); halved after
         each step taken, so the steps grow towards Newton's as the wall settles.
+
+    Newton's tangent at a kink of the law (docs/solvers.md, "Newton's basin on walls that meet")
+    ----------------------------------------------------------------------------------------
+    kink_rounds: before cutting its trust radius (and before ``secant_rounds``), a search
+        that finds no decrease along the direction of a tangent factorized at its present
+        state gives the joints on the nearest kink of the law along that direction (within
+        the shortest step tried: the shortest of 8^-k of it, k = 10 .. 0, at which a joint's
+        flags change) the law's tangent of the side the direction takes them to, and solves
+        again; at most this many times a search (0: off; never in the damped search of the
+        dead load). Converged states are exact equilibria of the law either way.
     """
 
     easy_iterations: int = count(6, least=0)
@@ -308,6 +318,8 @@ class StaticSettings(LoadPathSettings):
     corner_check_steps: int = count(200, least=1)
     corner_check_rise: float = positive(0.5)
     corner_check_start: float = positive(1e-2)
+    # basin (session 19): the tangent at a kink of the law
+    kink_rounds: int = count(0, least=0)
 
 
 SETTING_NAMES = tuple(f.name for f in fields(StaticSettings))
