@@ -85,8 +85,8 @@ def joint_places(model, u_wall: bool) -> tuple[np.ndarray, np.ndarray]:
         place,
     )
     vertical = 1  # the wall's courses stack along e2
-    kind = np.where(its.axis == vertical, "bed", np.where(its.axis == 0, "head", "cross"))
-    return place.astype(str), kind.astype(str)
+    kind = np.where(its.axis == vertical, "bed", np.where(its.axis == 0, "head:e1", "head:e3"))
+    return place.astype(str), kind.astype(str), label.astype(str)
 
 
 def flag_change(before: np.ndarray, after: np.ndarray) -> np.ndarray:
@@ -147,7 +147,17 @@ def take_apart(solver, out, control, lam0: float) -> dict:
         scan.append((t, trial / merit, int(changed.size)))
         if trial >= (1.0 - 1e-4 * t) * merit:
             smallest_rise = (t, rt, changed)
-    out_d = {"merit": merit, "scan": scan, "dlam": dlam}
+    # the full correction against the step asked for, and the blocks that carry it
+    move = np.zeros_like(q)
+    move[free] = dq
+    per_block = np.abs(move.reshape(-1, 6)[:, :3]).max(axis=1)
+    out_d = {
+        "merit": merit,
+        "scan": scan,
+        "dlam": dlam,
+        "size": float(per_block.max()) / max(size, 1e-300),
+        "movers": np.flatnonzero(per_block >= 0.1 * per_block.max()),
+    }
     at_kink = np.flatnonzero(rt.flags != response.flags)  # rt: at the smallest step
     out_d["at_kink"] = at_kink
     out_d["kink_change"] = flag_change(response.flags[at_kink], rt.flags[at_kink])
@@ -210,7 +220,7 @@ def diagnose(model, settings, monitor, u_wall: bool, verbose: bool) -> dict:
 
     solver.equilibrate = recording
     hist = solver.run(monitor=monitor)
-    place, kind = joint_places(model, u_wall)
+    place, kind, block_label = joint_places(model, u_wall)
     again = StaticSolver(model, settings)
     again.run(monitor=monitor)  # the scales and limits of the path
     flags_seen: list[np.ndarray] = []
@@ -226,6 +236,9 @@ def diagnose(model, settings, monitor, u_wall: bool, verbose: bool) -> dict:
         "culprit": Counter(),
         "cycling": Counter(),
         "why": Counter(),
+        "size": Counter(),
+        "movers": Counter(),
+        "top": Counter(),
     }
     searches = {"work": 0, "failed": 0, "mismatches": 0}
     scans = []
@@ -259,6 +272,18 @@ def diagnose(model, settings, monitor, u_wall: bool, verbose: bool) -> dict:
             for i, ch, nc in zip(rows, change, normal, strict=True):
                 counts[key][(place[i], kind[i], ch, nc)] += 1
         scans.append(d["scan"])
+        counts["size"][f"1e{int(np.floor(np.log10(max(d['size'], 1e-300))))}"] += 1
+        for b in d["movers"]:
+            counts["movers"][block_label[b]] += 1
+        for i, ch, sh in zip(
+            d.get("culprits", [])[:3],
+            d.get("culprit_change", [])[:3],
+            d.get("share", []),
+            strict=False,
+        ):
+            if sh >= 0.25:
+                nc = normal_class(out.response.trial, np.array([i]), bed)[0]
+                counts["top"][(place[i], kind[i], ch, nc)] += 1
         if verbose and d.get("culprits") is not None and len(d["culprits"]):
             util = again.law.utilisation(out.response)
             fn = out.response.trial[:, 2]
@@ -278,7 +303,8 @@ def diagnose(model, settings, monitor, u_wall: bool, verbose: bool) -> dict:
                 f"ratio at t=1 {d['scan'][0][1]:.3g}, at 8^-10 {d['scan'][-1][1]:.6f}, "
                 f"first t that lowers it {first}; joints at a kink {len(d['at_kink'])}, "
                 f"culprits {len(d.get('culprits', []))} (t={d.get('t_rise')}), "
-                f"cycling {int(cyc.sum())}, factorizations {len(seen)}",
+                f"cycling {int(cyc.sum())}, factorizations {len(seen)}, correction over the "
+                f"step {d['size']:.3g}, moving blocks {len(d['movers'])}",
                 flush=True,
             )
     return {
@@ -305,7 +331,17 @@ def show(label: str, r: dict) -> None:
         "  first step along the stop's Newton direction that lowers the merit: "
         + ", ".join(f"{k} {v}" for k, v in sorted(lowers.items()))
     )
+    print(
+        "  the stop's full Newton correction over the step asked for (largest translation "
+        "over the control's step): "
+        + ", ".join(f"{k} {v}" for k, v in sorted(r["counts"]["size"].items()))
+    )
+    print(
+        "  blocks that carry it (translation at least 0.1 of the largest), by part: "
+        + ", ".join(f"{k} {v}" for k, v in r["counts"]["movers"].most_common())
+    )
     for key, title in (
+        ("top", "top culprits (a share of the miss of 0.25 or more)"),
         ("at_kink", "joints at a kink (flags change at 8^-10 of the step)"),
         ("culprit", "culprits (90 % of the miss at the smallest step that does not lower it)"),
     ):
