@@ -151,11 +151,14 @@ def take_apart(solver, out, control, lam0: float) -> dict:
     move = np.zeros_like(q)
     move[free] = dq
     per_block = np.abs(move.reshape(-1, 6)[:, :3]).max(axis=1)
+    length = float(np.median(p.model.blocks.sizes))
+    turned = float(np.abs(move.reshape(-1, 6)[:, 3:]).max()) * length
     out_d = {
         "merit": merit,
         "scan": scan,
         "dlam": dlam,
         "size": float(per_block.max()) / max(size, 1e-300),
+        "turn": turned / max(float(per_block.max()), 1e-300),
         "movers": np.flatnonzero(per_block >= 0.1 * per_block.max()),
     }
     at_kink = np.flatnonzero(rt.flags != response.flags)  # rt: at the smallest step
@@ -296,6 +299,19 @@ def diagnose(model, settings, monitor, u_wall: bool, verbose: bool) -> dict:
                     f"share {sh:.2f} fn/median {fn[i] / med:+.3g} utilisation {util[i]:.9f}"
                     f" trial {np.array2string(out.response.trial[i], precision=3)}"
                 )
+        if verbose and len(d["movers"]) <= 6:
+            blocks = model.blocks
+            levels = np.unique(np.round(blocks.centres[:, 1], 9))
+            for b in d["movers"]:
+                course = int(np.searchsorted(levels, round(blocks.centres[b, 1], 9)))
+                joints = np.flatnonzero(
+                    (model.interfaces.block_i == b) | (model.interfaces.block_j == b)
+                )
+                print(
+                    f"    moving block {b} {block_label[b]} course {course} of "
+                    f"{levels.size - 1} centre {np.round(blocks.centres[b], 3)}; its joints' "
+                    "flags " + " ".join(f"{kind[j]}:{out.response.flags[j]}" for j in joints)
+                )
         if verbose:
             first = next((t for t, r, _ in d["scan"] if r < 1.0), None)
             print(
@@ -304,7 +320,8 @@ def diagnose(model, settings, monitor, u_wall: bool, verbose: bool) -> dict:
                 f"first t that lowers it {first}; joints at a kink {len(d['at_kink'])}, "
                 f"culprits {len(d.get('culprits', []))} (t={d.get('t_rise')}), "
                 f"cycling {int(cyc.sum())}, factorizations {len(seen)}, correction over the "
-                f"step {d['size']:.3g}, moving blocks {len(d['movers'])}",
+                f"step {d['size']:.3g}, moving blocks {len(d['movers'])}, its largest rotation x "
+                f"the median block size over its largest translation {d['turn']:.3g}",
                 flush=True,
             )
     return {
