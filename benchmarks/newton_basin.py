@@ -17,21 +17,30 @@ at each factorized iterate), and taken apart at the state where it stopped:
 * **Which joints keep the merit from falling.** At the smallest t whose merit does not
   fall, each joint's miss, a(q + t dq) - a(q) - T t du (its actions against the tangent's
   prediction), pushed to the DOFs of its two blocks and measured in the residual's norm.
-  The joints that make up 90 % of the summed miss are the culprits (``culprits``).
+  The joints that make up 90 % of the summed miss are the culprits (``culprits``; at the
+  shortest steps this takes in round-off of joints that change no flag), those with a
+  quarter of it or more the top culprits (``top``).
+* **The correction at the stop.** Its largest translation over the step asked for (the
+  control's), the blocks that move at least a tenth of it, and its largest rotation x the
+  median block size over its largest translation.
 * **Cycling of the active set.** Joints whose flags at factorized iterates k and k + 2 agree
   and differ from those at k + 1 (an A -> B -> A flip).
 
 Each joint at a kink or among the culprits is classed by the kink it sits on (the flag bits
 that change over the smallest step: ``open`` the detachment bit, ``rock`` a rocking bit,
 ``slide`` the shear-torsion bit; ``enter`` from elastic into a yielded state, ``leave``
-back), by whether its trial normal force is zero within the law's contact band, or small
-(under 1e-3 of the median compression of the bed joints), by where it is (``facade``,
-``return:left``/``right``, ``corner:left``/``right``, ``base`` for the joints on the base
-slab; ``flat`` for a flat wall) and by its kind (``bed``: a horizontal joint, ``head``: a
-vertical joint in the wall's plane, ``cross``: a vertical joint across a return's plane,
-where the facade meets a return). The counts of each class over all failed searches are
-printed, for the U and the flat wall side by side; ``--searches`` also prints one line per
-failed search.
+back, ``swap`` as many bits either way; ``none:same`` no bit), by whether its trial normal
+force is zero within the law's contact band (``band``), or small (under 1e-3 of the median
+compression of the bed joints), by where it is (``facade``, ``return:left``/``right``,
+``corner:left``/``right`` of :func:`masonry_dem.geometry.selectors.part`, ``base:...`` for
+the joints on the base slab; ``flat`` for a wall that has no such parts) and by its kind
+(``bed``: normal along e2; ``head:e1``: a vertical joint with its normal along e1, the
+facade's head joints; ``head:e3``: normal along e3, the returns' head joints and the joints
+where the facade's end blocks meet the returns). The counts of each class over all failed
+searches are printed for each wall; ``--searches`` also prints one line per failed search,
+its top culprits and, where 6 blocks or fewer carry its correction, those blocks (part,
+course, the flags of their joints). Used in docs/solvers.md, "Newton's basin on walls that
+meet (session 19)".
 """
 
 from __future__ import annotations
