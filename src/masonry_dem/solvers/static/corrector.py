@@ -142,7 +142,10 @@ class Corrector:
         corrected tangent carries what that joint did over the step. A joint that the step
         carried through its elastic range to yield the other way (:func:`reversed_flow`)
         gets its elastic stiffness instead of that chord, which would pick the equilibrium
-        where it yields the other way (another branch of the path).
+        where it yields the other way (another branch of the path). A search about to give
+        up for want of descent sits next to a kink of the law along its direction: up to
+        ``kink_rounds`` times, the joints on that kink take the tangent of the side beyond
+        (:meth:`_kink_tangents`) and the search goes on with its first trust radius.
         """
         s = self.settings
         free = self.problem.asm.free_index
@@ -266,15 +269,6 @@ class Corrector:
             if accepted is None and not here:  # a stale tangent: refactor before cutting
                 lu = None
                 continue
-            if accepted is None and not repeat and not damped and kinks < s.kink_rounds:
-                # the joints on the nearest kink of the law along this direction (within the
-                # shortest step tried) take the tangent of the side the direction takes them
-                # to, and the direction is solved again
-                sided = self._kink_tangents(q, lam, dead_factor, f * dq, response, floor, secant)
-                kinks += 1
-                if sided is not None:
-                    secant, lu = sided, None
-                    continue
             if accepted is None and not repeat and not damped and rounds < s.secant_rounds:
                 # the tangent mispredicts the joints over every step tried: correct each
                 # joint's tangent by what it did over the shortest one, and solve again (not
@@ -310,6 +304,18 @@ class Corrector:
                 if exhausted and regularise():
                     radius = max(4.0 * self.last_increment, self.search_seed)
                     continue
+                if exhausted and not damped and kinks < s.kink_rounds:
+                    # the search stops next to a kink of the law along its direction: the
+                    # joints on it take the tangent of the side the direction takes them to,
+                    # and the search goes on from here with a fresh radius
+                    sided = self._kink_tangents(
+                        q, lam, dead_factor, f * dq, response, floor, secant
+                    )
+                    kinks += 1
+                    if sided is not None:
+                        secant, lu, cuts = sided, None, 0
+                        radius = max(4.0 * self.last_increment, self.search_seed)
+                        continue
                 if exhausted:
                     return Outcome(
                         False,

@@ -257,13 +257,17 @@ class StaticSettings(LoadPathSettings):
 
     Newton's tangent at a kink of the law (docs/solvers.md, "Newton's basin on walls that meet")
     ----------------------------------------------------------------------------------------
-    kink_rounds: before cutting its trust radius (and before ``secant_rounds``), a search
-        that finds no decrease along the direction of a tangent factorized at its present
-        state gives the joints on the nearest kink of the law along that direction (within
-        the shortest step tried: the shortest of 8^-k of it, k = 10 .. 0, at which a joint's
-        flags change) the law's tangent of the side the direction takes them to, and solves
-        again; at most this many times a search (0: off; never in the damped search of the
-        dead load). Converged states are exact equilibria of the law either way.
+    kink_rounds: a search about to give up because no correction lowers the residual (its
+        trust radius cut ``search_cuts`` times or below ``radius_floor``) gives the joints
+        on the nearest kink of the law along its direction (within the shortest step
+        tried: the shortest of 8^-k of it, k = 10 .. 0, at which a joint's flags change)
+        the law's tangent of the side the direction takes them to, and goes on from there
+        with its first trust radius; at most this many times a search (0: off; never in
+        the damped search of the dead load). Such searches stop next to a kink (docs/
+        solvers.md, "Newton's basin on walls that meet"); replayed from the same states
+        it converges every search the default converges and a few more, but the paths
+        it then takes cost more factorizations on the validation set, so it is off.
+        Converged states are exact equilibria of the law either way.
     """
 
     easy_iterations: int = count(6, least=0)
