@@ -142,7 +142,10 @@ class Corrector:
         corrected tangent carries what that joint did over the step. A joint that the step
         carried through its elastic range to yield the other way (:func:`reversed_flow`)
         gets its elastic stiffness instead of that chord, which would pick the equilibrium
-        where it yields the other way (another branch of the path).
+        where it yields the other way (another branch of the path). A search about to give
+        up for want of descent sits next to a kink of the law along its direction: up to
+        ``kink_rounds`` times, the joints on that kink take the tangent of the side beyond
+        (:meth:`_kink_tangents`) and the search goes on with its first trust radius.
         """
         s = self.settings
         free = self.problem.asm.free_index
@@ -155,6 +158,7 @@ class Corrector:
         lu = None  # the factorized tangent, kept while it converges fast (chord steps)
         secant: np.ndarray | None = None  # joint tangents corrected at this state, if any
         rounds = 0  # secant corrections in this search
+        kinks = 0  # one-sided tangents at kinks tried in this search
         here = False  # lu was factorized at the current state
         history: list[tuple[float, float]]  # (merit, trust radius) of the iterates; set below
         budget: int
@@ -300,6 +304,18 @@ class Corrector:
                 if exhausted and regularise():
                     radius = max(4.0 * self.last_increment, self.search_seed)
                     continue
+                if exhausted and not damped and kinks < s.kink_rounds:
+                    # the search stops next to a kink of the law along its direction: the
+                    # joints on it take the tangent of the side the direction takes them to,
+                    # and the search goes on from here with a fresh radius
+                    sided = self._kink_tangents(
+                        q, lam, dead_factor, f * dq, response, floor, secant
+                    )
+                    kinks += 1
+                    if sided is not None:
+                        secant, lu, cuts = sided, None, 0
+                        radius = max(4.0 * self.last_increment, self.search_seed)
+                        continue
                 if exhausted:
                     return Outcome(
                         False,
@@ -361,6 +377,51 @@ class Corrector:
             f"no convergence in {it} iterations (residual {rnorm:.2e})",
             failure=Failure.NO_CONVERGENCE,
         )
+
+    def _kink_tangents(
+        self,
+        q: np.ndarray,
+        lam: float,
+        dead_factor: float,
+        step: np.ndarray,
+        response: LawResponse,
+        floor: float,
+        tangents: np.ndarray | None,
+    ) -> np.ndarray | None:
+        """The joints' tangents (``tangents``, or those of ``response``) with the joints on
+        the nearest kink of the law along ``step`` given the law's tangent of the side the
+        step takes them to; None when no joint changes state within the step.
+
+        The nearest kink: the shortest of the probes q + 8^-k ``step`` (k = 10 .. 0, the
+        shortest first) at which some joint's flags differ from those at q; its joints are
+        the ones that change there, their tangent the law's at that probe.
+
+        At a kink the law has two derivatives, and the consistent tangent is the one of the
+        side the joint is flagged on. Where Newton's iterates close in on a kink (a joint at
+        the edge of rocking or sliding that the direction turns back into its elastic range,
+        or an elastic joint pushed over its surface), the direction solved with that side's
+        tangent takes the joint to the other side, where its actions follow the other
+        derivative, and the residual rises along the whole direction however short the step
+        (docs/solvers.md, "Newton's basin on walls that meet"). The other side's tangent is
+        the generalised derivative along that direction."""
+        free = self.problem.asm.free_index
+        for k in range(10, -1, -1):
+            probe = q.copy()
+            probe[free] += 8.0**-k * step
+            _, _, beyond = self.residual(probe, lam, dead_factor)
+            at_kink = beyond.flags != response.flags
+            if at_kink.any():
+                break
+        else:
+            return None
+        T = (
+            tangents.copy()
+            if tangents is not None
+            else self.problem.joint_tangents(response, floor)
+        )
+        T[at_kink] = self.problem.joint_tangents(beyond, floor)[at_kink]
+        log.debug("%d joints on a kink take the tangent of the side beyond", int(at_kink.sum()))
+        return T
 
     def _natural_norm(
         self,

@@ -304,6 +304,20 @@ class StaticSettings(LoadPathSettings):
         where the pseudo-transient step found none. Not the default: a pseudo-transient step
         there also passes folds in a few steps, and without it the return-wall rows take
         more factorizations and one of them (S15/4) ends 0.5 % higher.
+
+    Newton's tangent at a kink of the law (docs/solvers.md, "Newton's basin on walls that meet")
+    ----------------------------------------------------------------------------------------
+    kink_rounds: a search about to give up because no correction lowers the residual (its
+        trust radius cut ``search_cuts`` times or below ``radius_floor``) gives the joints
+        on the nearest kink of the law along its direction (within the shortest step
+        tried: the shortest of 8^-k of it, k = 10 .. 0, at which a joint's flags change)
+        the law's tangent of the side the direction takes them to, and goes on from there
+        with its first trust radius; at most this many times a search (0: off; never in
+        the damped search of the dead load). Such searches stop next to a kink (docs/
+        solvers.md, "Newton's basin on walls that meet"); replayed from the same states
+        it converges every search the default converges and a few more, but the paths
+        it then takes cost more factorizations on the validation set, so it is off.
+        Converged states are exact equilibria of the law either way.
     """
 
     easy_iterations: int = count(6, least=0)
@@ -367,6 +381,8 @@ class StaticSettings(LoadPathSettings):
     # the endgame at the peak (session 19)
     run_off: RunOff = choice("carry", RUN_OFFS)
     corner_transient: bool = checked(True, lambda v: isinstance(v, bool), "true or false")
+    # basin (session 19): the tangent at a kink of the law
+    kink_rounds: int = count(0, least=0)
 
 
 SETTING_NAMES = tuple(f.name for f in fields(StaticSettings))
