@@ -1,20 +1,25 @@
 """The endgame rule on walls that meet of other sizes than the benchmark's (session 19).
 
-    NUMBA_NUM_THREADS=1 python benchmarks/endgame_walls.py
+    NUMBA_NUM_THREADS=1 python benchmarks/endgame_walls.py [--set NAME=VALUE ...] [--against NAME=VALUE ...]
 
 Six U walls (facade blocks x courses, returns of m blocks), an L and a T wall, in
 Restrepo Velez's stones, tilted with the base fixed as ``bench_walls_that_meet`` pushes its
 U wall; each pushed over with ``run_off = "carry"`` (the default) and ``"ignore"`` (session
 18): status, collapse multiplier, factorizations, implicit steps, time steps, and whether
-the two answers are the same (docs/solvers.md, "The endgame at the peak").
+the two answers are the same (docs/solvers.md, "The endgame at the peak"). With ``--set``
+and ``--against`` (StaticSettings fields), the two runs are the defaults changed by each
+instead (``--set corner_check_steps=500 --against corner_check_steps=200``: docs/solvers.md,
+"A motion that creeps").
 """
 
 from __future__ import annotations
 
+import argparse
 import sys
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_validation import parse_settings  # noqa: E402
 from bench_walls_that_meet import GAMMA, A, B, S, build  # noqa: E402
 
 from masonry_dem.geometry import plans  # noqa: E402
@@ -23,7 +28,16 @@ from masonry_dem.solvers.static import StaticSettings, StaticSolver  # noqa: E40
 U_SIZES = [(6, 12, 3), (10, 15, 2), (8, 21, 3), (8, 21, 5), (12, 18, 4), (6, 24, 4)]
 
 
-def main() -> int:
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(description=__doc__)
+    p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE")
+    p.add_argument("--against", action="append", default=[], metavar="NAME=VALUE")
+    a = p.parse_args(argv)
+    if a.set or a.against:
+        runs = {" ".join(a.set) or "default": parse_settings(a.set)}
+        runs[" ".join(a.against) or "default"] = parse_settings(a.against)
+    else:
+        runs = {"carry": {"run_off": "carry"}, "ignore": {"run_off": "ignore"}}
     walls = {
         f"U {n}x{c} r{m}": plans.u_wall(n, c, A, B, S, GAMMA, return_blocks=m)
         for n, c, m in U_SIZES
@@ -33,8 +47,8 @@ def main() -> int:
     for label, wall in walls.items():
         model, _ = build(wall, held=False)
         out = []
-        for run_off in ("carry", "ignore"):
-            solver = StaticSolver(model, StaticSettings(run_off=run_off))
+        for changes in runs.values():
+            solver = StaticSolver(model, StaticSettings(**changes))
             h = solver.run()
             out.append(
                 (
@@ -50,7 +64,7 @@ def main() -> int:
             f"{label} ({wall.count} blocks): "
             + "; ".join(
                 f"{r}: {st} lambda={lam:.7g} factorizations={f} implicit={i} time_steps={ts}"
-                for r, (st, lam, f, i, ts) in zip(("carry", "ignore"), out, strict=True)
+                for r, (st, lam, f, i, ts) in zip(runs, out, strict=True)
             )
             + ("; the same" if same else "; DIFFERENT"),
             flush=True,

@@ -37,6 +37,9 @@ class Relaxations(Corrector):
     def __init__(self, model: Model, settings: StaticSettings | None = None) -> None:
         super().__init__(model, settings)
         self._dr: DynamicRelaxation | None = None  # kept while its budget is the same
+        #: the last implicit check's motion, one row a step taken: (factorizations so far,
+        #: largest translation from the start [m], residual), for benchmarks/creep_trace.py
+        self.check_motion: list[tuple[int, float, float]] = []
 
     def pseudo_transient(self, target: float, start: np.ndarray | None = None) -> Outcome:
         """Pseudo-transient continuation to equilibrium at ``target`` from the last converged
@@ -162,6 +165,7 @@ class Relaxations(Corrector):
         q = self.q.copy()
         residual, rnorm, response = self.residual(q, target)
         floor = s.corner_check_start
+        self.check_motion = []
         for step in range(budget):
             if rnorm <= s.tolerance:
                 return Outcome(True, q, target, response, step)
@@ -188,7 +192,8 @@ class Relaxations(Corrector):
                     failure=Failure.SINGULAR,
                 )
             q, residual, rnorm, response = q_new, r_new, n_new, resp_new
-            if self.increment(q) > self.limit:
+            self.check_motion.append((step + 1, self.increment(q), rnorm))
+            if self.check_motion[-1][1] > self.limit:
                 return self._past_limit(q, target, response, step + 1)
             floor = max(0.5 * floor, s.residual_stiffness)
         if rnorm <= s.tolerance:

@@ -254,7 +254,10 @@ class StaticSettings(LoadPathSettings):
         differ). ``"explicit"``: dynamic relaxation alone.
     corner_check_steps: budget of implicit steps (factorizations) of that check, the most a
         check without a verdict costs before dynamic relaxation decides: about twice the
-        slowest rest of the checks measured.
+        slowest rest of the checks measured. A check that creeps is given no verdict from
+        its pace (docs/solvers.md, "A motion that creeps"): 500, about what the fallback's
+        10 000 time steps cost, passes two slow folds this budget stops at (a U 6 x 24 wall
+        +0.50 %, S15/4 +0.98 %) for more factorizations; an option, not the default.
     corner_check_rise: an implicit step whose residual is more than (1 + this) times the
         last one's is too long (it crossed kinks of the law the tangent did not see): it is
         taken again with a time step a quarter as long, down to the elastic relaxation
