@@ -253,11 +253,12 @@ class StaticSettings(LoadPathSettings):
         equilibrium at the same lambda than the explicit motion, so answers past a fold can
         differ). ``"explicit"``: dynamic relaxation alone.
     corner_check_steps: budget of implicit steps (factorizations) of that check, the most a
-        check without a verdict costs before dynamic relaxation decides: about twice the
-        slowest rest of the checks measured. A check that creeps is given no verdict from
-        its pace (docs/solvers.md, "A motion that creeps"): 500, about what the fallback's
-        10 000 time steps cost, passes two slow folds this budget stops at (a U 6 x 24 wall
-        +0.50 %, S15/4 +0.98 %) for more factorizations; an option, not the default.
+        check without a verdict costs before dynamic relaxation decides. 500: about what the
+        fallback's budget costs (``fold_check_time_steps`` of dynamic relaxation at the
+        13-29 time steps a factorization costs), so a slow fold is given the same effort by
+        the check that decides it best; a smaller budget hands slow folds to dynamic
+        relaxation, which may find no rest and call them peaks. A check that creeps is given
+        no verdict from its pace (docs/solvers.md, "A motion that creeps").
     corner_check_rise: an implicit step whose residual is more than (1 + this) times the
         last one's is too long (it crossed kinks of the law the tangent did not see): it is
         taken again with a time step a quarter as long, down to the elastic relaxation
@@ -372,7 +373,7 @@ class StaticSettings(LoadPathSettings):
     bound_tolerance: float = positive(0.01)
     line_search: LineSearch = choice("residual", LINE_SEARCHES)
     corner_check: CornerCheck = choice("mixed", CORNER_CHECKS)
-    corner_check_steps: int = count(200, least=1)
+    corner_check_steps: int = count(500, least=1)
     corner_check_rise: float = positive(0.5)
     corner_check_start: float = positive(1e-2)
     # the reach of a work step (session 19)
