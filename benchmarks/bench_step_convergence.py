@@ -216,6 +216,8 @@ def main() -> int:
     else:
         from masonry_dem.cases.paper import build_case
 
+        if a.json:
+            Path(a.json).parent.mkdir(parents=True, exist_ok=True)
         names = a.case or PRESSURE + TILT
         one_run(build_case(names[0]), "default")  # compiles the kernels: not timed
         results = {}
