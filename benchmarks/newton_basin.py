@@ -57,12 +57,9 @@ from scipy import sparse
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-_STATE = ("q", "plastic", "cracked", "last_increment", "_limit_allowance", "_elastic_limit")
+from path_audit import recorded_searches, restore_state  # noqa: E402
+
 STEPS = [8.0**-k for k in range(11)]
-
-
-def _copy(value):
-    return value.copy() if isinstance(value, np.ndarray) else value
 
 
 def joint_places(model, u_wall: bool) -> tuple[np.ndarray, np.ndarray]:
@@ -220,18 +217,7 @@ def normal_class(trial: np.ndarray, rows: np.ndarray, bed: np.ndarray) -> np.nda
 def diagnose(model, settings, monitor, u_wall: bool, verbose: bool) -> dict:
     from masonry_dem.solvers.static import StaticSolver
 
-    solver = StaticSolver(model, settings)
-    plain = solver.equilibrate
-    calls = []
-
-    def recording(*args, **kwargs):
-        state = {k: _copy(getattr(solver, k)) for k in _STATE}
-        out = plain(*args, **kwargs)
-        calls.append((args, kwargs, state, out.ok))
-        return out
-
-    solver.equilibrate = recording
-    hist = solver.run(monitor=monitor)
+    hist, calls = recorded_searches(model, settings, monitor)
     place, kind, block_label = joint_places(model, u_wall)
     again = StaticSolver(model, settings)
     again.run(monitor=monitor)  # the scales and limits of the path
@@ -261,8 +247,7 @@ def diagnose(model, settings, monitor, u_wall: bool, verbose: bool) -> dict:
         searches["work"] += 1
         if ok:
             continue
-        for k, v in state.items():
-            setattr(again, k, _copy(v))
+        restore_state(again, state)
         flags_seen.clear()
         out = again.equilibrate(*args, **kwargs)
         searches["mismatches"] += int(out.ok != ok)

@@ -408,14 +408,9 @@ def _copy(value):
     return value.copy() if isinstance(value, np.ndarray) else value
 
 
-def replay(model, settings, other, monitor=None) -> dict:
-    """Every Newton search (``equilibrate``) of the pushover with ``settings``, recorded with
-    the solver's state before it, then run again from that state with ``settings`` (the
-    replay must give the same outcome: ``mismatches`` counts where it does not) and with
-    ``other``. The path is the first run's for both, so the counts compare the correctors
-    from the same states, searches and trust radii, whatever path each would have taken.
-    Returns, for each: searches converged, factorizations and iterations (over all
-    searches, and over those both converge), and the searches only one converges."""
+def recorded_searches(model, settings, monitor=None) -> tuple[object, list]:
+    """The pushover with ``settings`` and every Newton search (``equilibrate``) of it: (the
+    history, [(args, kwargs, the solver's state before the search, converged?)])."""
     from masonry_dem.solvers.static import StaticSolver
 
     solver = StaticSolver(model, settings)
@@ -429,15 +424,34 @@ def replay(model, settings, other, monitor=None) -> dict:
         return out
 
     solver.equilibrate = recording
-    solver.run(monitor=monitor)
+    hist = solver.run(monitor=monitor)
+    return hist, calls
+
+
+def restore_state(solver, state: dict) -> None:
+    """Put ``solver`` back in a state :func:`recorded_searches` recorded."""
+    for k, v in state.items():
+        setattr(solver, k, _copy(v))
+
+
+def replay(model, settings, other, monitor=None) -> dict:
+    """Every Newton search (``equilibrate``) of the pushover with ``settings``, recorded with
+    the solver's state before it, then run again from that state with ``settings`` (the
+    replay must give the same outcome: ``mismatches`` counts where it does not) and with
+    ``other``. The path is the first run's for both, so the counts compare the correctors
+    from the same states, searches and trust radii, whatever path each would have taken.
+    Returns, for each: searches converged, factorizations and iterations (over all
+    searches, and over those both converge), and the searches only one converges."""
+    from masonry_dem.solvers.static import StaticSolver
+
+    _, calls = recorded_searches(model, settings, monitor)
     runs = {}
     for label, chosen in (("this", settings), ("other", other)):
         again = StaticSolver(model, chosen)
         again.run(monitor=monitor)  # the scales and limits of the path
         outcomes = []
         for args, kwargs, state, _ in calls:
-            for k, v in state.items():
-                setattr(again, k, _copy(v))
+            restore_state(again, state)
             it, f = again.iterations, again.factorizations
             out = again.equilibrate(*args, **kwargs)
             stop = 0.0 if out.ok else again.residual(out.q, out.load_factor)[1]

@@ -37,3 +37,46 @@ def on_base(
         [SelfWeight(), WeightProportional(direction)],
         name=name,
     )
+
+
+#: dry joints of the tilt-table checks of the static solver's corner and endgame tests
+DRY = InterfaceMaterial(kn=2.4e9, kt=1.0e9, friction=0.7)
+
+
+def tilted(blocks: Blocks, base: int, material: InterfaceMaterial = DRY) -> Model:
+    """``blocks`` with joints of ``material`` (dry by default) on ``base`` (held), under self
+    weight and lambda x the weight out of plane (a tilt table)."""
+    return Model.build(
+        blocks,
+        material,
+        supports=[Support([base])],
+        loads=[SelfWeight(), WeightProportional((0.0, 0.0, 1.0))],
+    )
+
+
+def tilted_block() -> tuple[Model, float]:
+    """A block a = 0.2 high, s = 0.1 thick on a base, and its tilting load factor s / a."""
+    a, s = 0.2, 0.1
+    return tilted(*builders.add_base(builders.single_block(a, 0.25, s, 20e3))), s / a
+
+
+def tilted_wall() -> tuple[Model, float]:
+    """A free-standing 4 x 9 running-bond wall on a base, and its tilting load factor t / H
+    (the weight's moment about the toe, W t / 2, against the live load's, lambda W H / 2)."""
+    a, s, courses = 0.081, 0.07, 9
+    wall = builders.running_bond_wall(4, courses, a, 0.21, s, 20e3)
+    return tilted(*builders.add_base(wall)), s / (courses * a)
+
+
+def tilted_panel() -> Model:
+    """A dry panel of 3 x 13 blocks on a base, its left column held in u1 and u3 and its
+    right edge free, tilted out of plane: its path passes folds, and many of its work
+    searches fail where no correction lowers the residual."""
+    wall = builders.running_bond_wall(3, 13, 0.081, 0.21, 0.07, 20e3)
+    blocks, base = builders.add_base(wall)
+    return Model.build(
+        blocks,
+        DRY,
+        supports=[Support([base]), Support(sel.column(wall, "left"), ["u1", "u3"])],
+        loads=[SelfWeight(), WeightProportional((0.0, 0.0, 1.0))],
+    )

@@ -33,36 +33,14 @@ from dataclasses import replace
 
 import pytest
 
+from helpers.walls import tilted_block, tilted_wall
 from masonry_dem.cases.paper import build_case
-from masonry_dem.geometry.builders import add_base, running_bond_wall, single_block
-from masonry_dem.model import InterfaceMaterial, Model, SelfWeight, Support, WeightProportional
 from masonry_dem.solvers.limit_analysis.analysis import dem_upper_bound
 from masonry_dem.solvers.static import StaticSettings, StaticSolver
 from masonry_dem.solvers.static.outcome import Failure
 
-DRY = InterfaceMaterial(kn=2.4e9, kt=1.0e9, friction=0.7)
 
-
-def _tilted(blocks, base) -> Model:
-    return Model.build(
-        blocks,
-        DRY,
-        supports=[Support([base])],
-        loads=[SelfWeight(), WeightProportional((0.0, 0.0, 1.0))],
-    )
-
-
-def _block():
-    a, s = 0.2, 0.1
-    return _tilted(*add_base(single_block(a, 0.25, s, 20e3))), s / a
-
-
-def _wall():
-    a, s, courses = 0.081, 0.07, 9
-    return _tilted(*add_base(running_bond_wall(4, courses, a, 0.21, s, 20e3))), s / (courses * a)
-
-
-@pytest.mark.parametrize("build", [_block, _wall], ids=["block s/a", "wall t/H"])
+@pytest.mark.parametrize("build", [tilted_block, tilted_wall], ids=["block s/a", "wall t/H"])
 def test_the_implicit_check_finds_no_rest_above_a_peak_and_rest_below_it(build):
     model, closed_form = build()
     solver = StaticSolver(model, StaticSettings())
@@ -82,7 +60,7 @@ def test_the_implicit_check_finds_no_rest_above_a_peak_and_rest_below_it(build):
     assert below.iterations < solver.settings.corner_check_steps
 
 
-@pytest.mark.parametrize("build", [_block, _wall], ids=["block s/a", "wall t/H"])
+@pytest.mark.parametrize("build", [tilted_block, tilted_wall], ids=["block s/a", "wall t/H"])
 def test_the_corner_check_leaves_the_closed_forms_as_they_were(build):
     """Implicit or explicit, the same collapse multiplier to the bracket tolerance."""
     model, closed_form = build()

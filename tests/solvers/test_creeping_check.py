@@ -31,37 +31,17 @@ from dataclasses import replace
 
 import pytest
 
+from helpers.walls import tilted, tilted_block, tilted_wall
 from masonry_dem.cases.paper import build_case
-from masonry_dem.geometry.builders import add_base, running_bond_wall, single_block
+from masonry_dem.geometry.builders import add_base
 from masonry_dem.geometry.plans import u_wall
-from masonry_dem.model import InterfaceMaterial, Model, SelfWeight, Support, WeightProportional
 from masonry_dem.solvers.static import StaticSettings, StaticSolver
 
-DRY = InterfaceMaterial(kn=2.4e9, kt=1.0e9, friction=0.7)
 BUDGETS = [200, 500]
 
 
-def _tilted(blocks, base) -> Model:
-    return Model.build(
-        blocks,
-        DRY,
-        supports=[Support([base])],
-        loads=[SelfWeight(), WeightProportional((0.0, 0.0, 1.0))],
-    )
-
-
-def _block():
-    a, s = 0.2, 0.1
-    return _tilted(*add_base(single_block(a, 0.25, s, 20e3))), s / a
-
-
-def _wall():
-    a, s, courses = 0.081, 0.07, 9
-    return _tilted(*add_base(running_bond_wall(4, courses, a, 0.21, s, 20e3))), s / (courses * a)
-
-
 @pytest.mark.parametrize("budget", BUDGETS)
-@pytest.mark.parametrize("build", [_block, _wall], ids=["block s/a", "wall t/H"])
+@pytest.mark.parametrize("build", [tilted_block, tilted_wall], ids=["block s/a", "wall t/H"])
 def test_either_budget_finds_the_closed_forms(build, budget):
     model, closed_form = build()
     hist = StaticSolver(model, StaticSettings(corner_check_steps=budget)).run()
@@ -72,7 +52,7 @@ def test_either_budget_finds_the_closed_forms(build, budget):
 def test_the_check_records_its_motion_on_each_side_of_a_peak():
     """From the block's collapse state: above s/a the motion's last row lies past the
     displacement limit, below it the motion rests within the limit."""
-    model, closed_form = _block()
+    model, closed_form = tilted_block()
     solver = StaticSolver(model, StaticSettings())
     assert solver.run().collapse_multiplier == pytest.approx(closed_form, rel=1e-6)
     start = (solver.q.copy(), solver.cracked.copy())
@@ -112,7 +92,7 @@ def test_a_slow_fold_of_a_u_wall_is_passed_with_the_default_budget():
     the path stopped there. With 500 (the default) the check's motion comes to rest (450
     factorizations measured): a fold."""
     a, b, s, gamma = 0.02824, 0.07978, 0.03968, 26.8e3
-    model = _tilted(*add_base(u_wall(6, 24, a, b, s, gamma, return_blocks=4)))
+    model = tilted(*add_base(u_wall(6, 24, a, b, s, gamma, return_blocks=4)))
     assert StaticSettings().corner_check_steps == 500
     solver = StaticSolver(model, StaticSettings())
     hist = solver.run()

@@ -33,14 +33,11 @@ from dataclasses import replace
 
 import pytest
 
+from helpers.walls import tilted_block, tilted_wall
 from masonry_dem.cases.paper import build_case
-from masonry_dem.geometry.builders import add_base, running_bond_wall, single_block
-from masonry_dem.model import InterfaceMaterial, Model, SelfWeight, Support, WeightProportional
 from masonry_dem.solvers.limit_analysis.analysis import dem_upper_bound
 from masonry_dem.solvers.static import StaticSettings, StaticSolver
 from masonry_dem.solvers.static.outcome import Failure
-
-DRY = InterfaceMaterial(kn=2.4e9, kt=1.0e9, friction=0.7)
 
 ENDGAMES = [
     {"run_off": "carry"},
@@ -50,27 +47,8 @@ ENDGAMES = [
 ]
 
 
-def _tilted(blocks, base) -> Model:
-    return Model.build(
-        blocks,
-        DRY,
-        supports=[Support([base])],
-        loads=[SelfWeight(), WeightProportional((0.0, 0.0, 1.0))],
-    )
-
-
-def _block():
-    a, s = 0.2, 0.1
-    return _tilted(*add_base(single_block(a, 0.25, s, 20e3))), s / a
-
-
-def _wall():
-    a, s, courses = 0.081, 0.07, 9
-    return _tilted(*add_base(running_bond_wall(4, courses, a, 0.21, s, 20e3))), s / (courses * a)
-
-
 @pytest.mark.parametrize("endgame", ENDGAMES, ids=lambda e: "-".join(map(str, e.values())))
-@pytest.mark.parametrize("build", [_block, _wall], ids=["block s/a", "wall t/H"])
+@pytest.mark.parametrize("build", [tilted_block, tilted_wall], ids=["block s/a", "wall t/H"])
 def test_every_endgame_finds_the_closed_forms(build, endgame):
     model, closed_form = build()
     hist = StaticSolver(model, StaticSettings(**endgame)).run()
@@ -81,7 +59,7 @@ def test_every_endgame_finds_the_closed_forms(build, endgame):
 def test_the_pseudo_transient_motion_and_the_check_agree_on_each_side_of_a_peak():
     """The block at s/a: above the peak both overdamped motions run past the displacement
     limit (the run-off the path takes as a verdict), below it both come to rest."""
-    model, closed_form = _block()
+    model, closed_form = tilted_block()
     solver = StaticSolver(model, StaticSettings())
     hist = solver.run()
     assert hist.collapse_multiplier == pytest.approx(closed_form, rel=1e-6)

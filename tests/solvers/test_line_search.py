@@ -13,24 +13,13 @@ from __future__ import annotations
 
 import pytest
 
-from masonry_dem.geometry.blocks import Blocks
+from helpers.walls import tilted, tilted_panel
 from masonry_dem.geometry.builders import add_base, running_bond_wall, single_block
-from masonry_dem.geometry.selectors import column
-from masonry_dem.model import InterfaceMaterial, Model, SelfWeight, Support, WeightProportional
+from masonry_dem.model import InterfaceMaterial, Model
 from masonry_dem.solvers.incremental import StaticSettings, pushover
 from masonry_dem.solvers.static.solver import StaticSolver
 
-DRY = InterfaceMaterial(kn=2.4e9, kt=1.0e9, friction=0.7)
 MERITS = ("residual", "natural")
-
-
-def _tilt(blocks: Blocks, base: int, material=DRY) -> Model:
-    return Model.build(
-        blocks,
-        material,
-        supports=[Support([base])],
-        loads=[SelfWeight(), WeightProportional((0.0, 0.0, 1.0))],
-    )
 
 
 def _collapse(model: Model, merit: str) -> float:
@@ -43,41 +32,27 @@ def _collapse(model: Model, merit: str) -> float:
 def test_a_block_tilts_at_s_over_a_with_every_merit(merit):
     a, s = 0.2, 0.1
     blocks, base = add_base(single_block(a, 0.25, s, 20e3))
-    assert _collapse(_tilt(blocks, base), merit) == pytest.approx(s / a, rel=1e-6)
+    assert _collapse(tilted(blocks, base), merit) == pytest.approx(s / a, rel=1e-6)
 
 
 @pytest.mark.parametrize("merit", MERITS)
 def test_a_squat_block_slides_at_mu_with_every_merit(merit):
     blocks, base = add_base(single_block(0.05, 0.25, 0.2, 20e3))  # s / a = 4 > mu
     material = InterfaceMaterial(kn=2.4e9, kt=1e9, friction=0.45)
-    assert _collapse(_tilt(blocks, base, material), merit) == pytest.approx(0.45, rel=1e-6)
+    assert _collapse(tilted(blocks, base, material), merit) == pytest.approx(0.45, rel=1e-6)
 
 
 @pytest.mark.parametrize("merit", MERITS)
 def test_a_free_wall_tilts_at_t_over_h_with_every_merit(merit):
     a, s, courses = 0.081, 0.07, 9
     blocks, base = add_base(running_bond_wall(4, courses, a, 0.21, s, 20e3))
-    lam = _collapse(_tilt(blocks, base), merit)
+    lam = _collapse(tilted(blocks, base), merit)
     assert lam == pytest.approx(s / (courses * a), rel=1e-6)
 
 
 def test_an_unknown_line_search_is_named():
     with pytest.raises(ValueError, match="line_search"):
         StaticSettings(line_search="directional")  # type: ignore[arg-type]
-
-
-def _panel() -> Model:
-    """A dry panel of 3 x 13 blocks on a base, its left column held in u1 and u3, tilted out
-    of plane (the panel of ``test_incremental``): its path passes folds, so work control's
-    searches fail where a step is too long for Newton's basin."""
-    wall = running_bond_wall(3, 13, 0.081, 0.21, 0.07, 20e3)
-    blocks, base = add_base(wall)
-    return Model.build(
-        blocks,
-        DRY,
-        supports=[Support([base]), Support(column(wall, "left"), ["u1", "u3"])],
-        loads=[SelfWeight(), WeightProportional((0.0, 0.0, 1.0))],
-    )
 
 
 def _failed_work_searches(model: Model) -> tuple[StaticSolver, list]:
@@ -119,7 +94,7 @@ def test_the_natural_merit_converges_work_searches_the_residual_merit_fails():
     correction, which the joints' stiff normal rows do not dominate) converges 5 of them
     (measured; at least 4 asserted). Replayed with the residual merit, every one fails
     again: the replay is faithful, so the difference is the merit's."""
-    model = _panel()
+    model = tilted_panel()
     _, failed = _failed_work_searches(model)
     assert len(failed) >= 10
     assert not any(_replay(model, "residual", failed))
@@ -131,7 +106,7 @@ def test_the_natural_merit_at_the_start_is_the_newton_correction():
     control and under control of a displacement (its lambda correction included): the
     trial's merit and the reference it is compared with measure the same thing, so a step
     is taken when the linear model's (1 - t) reduction is approached."""
-    model = _panel()
+    model = tilted_panel()
     solver = StaticSolver(model, StaticSettings(line_search="natural"))
     problem = solver.problem
     q = solver.q

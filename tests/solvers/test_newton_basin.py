@@ -24,27 +24,16 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from helpers.walls import tilted, tilted_panel
 from masonry_dem.constitutive.states import FLAG_ROCKING_2
-from masonry_dem.geometry.blocks import Blocks
 from masonry_dem.geometry.builders import add_base, running_bond_wall, single_block
-from masonry_dem.geometry.selectors import column
-from masonry_dem.model import InterfaceMaterial, Model, SelfWeight, Support, WeightProportional
+from masonry_dem.model import InterfaceMaterial, Model
 from masonry_dem.solvers.incremental import StaticSettings, pushover
 from masonry_dem.solvers.static.corrector import Corrector
 from masonry_dem.solvers.static.outcome import Failure
 from masonry_dem.solvers.static.solver import StaticSolver
 
-DRY = InterfaceMaterial(kn=2.4e9, kt=1.0e9, friction=0.7)
 M2 = 4  # bending about y2 among the local actions [f1, f2, fn, m1, m2, m3]
-
-
-def _tilt(blocks: Blocks, base: int, material=DRY) -> Model:
-    return Model.build(
-        blocks,
-        material,
-        supports=[Support([base])],
-        loads=[SelfWeight(), WeightProportional((0.0, 0.0, 1.0))],
-    )
 
 
 def _block_at(over: float) -> tuple[Corrector, np.ndarray, float]:
@@ -52,7 +41,7 @@ def _block_at(over: float) -> tuple[Corrector, np.ndarray, float]:
     bending about y2 at ``over`` times its rocking capacity under a compression of the
     block's weight, and that joint's rotation at the capacity."""
     blocks, base = add_base(single_block(0.2, 0.25, 0.1, 20e3))
-    corrector = Corrector(_tilt(blocks, base))
+    corrector = Corrector(tilted(blocks, base))
     p = corrector.problem
     kbar = p.law.kbar[0]
     weight = 20e3 * 0.2 * 0.25 * 0.1
@@ -143,19 +132,19 @@ def _collapse(model: Model) -> float:
 def test_a_block_tilts_at_s_over_a_with_kink_tangents():
     a, s = 0.2, 0.1
     blocks, base = add_base(single_block(a, 0.25, s, 20e3))
-    assert _collapse(_tilt(blocks, base)) == pytest.approx(s / a, rel=1e-6)
+    assert _collapse(tilted(blocks, base)) == pytest.approx(s / a, rel=1e-6)
 
 
 def test_a_squat_block_slides_at_mu_with_kink_tangents():
     blocks, base = add_base(single_block(0.05, 0.25, 0.2, 20e3))  # s / a = 4 > mu
     material = InterfaceMaterial(kn=2.4e9, kt=1e9, friction=0.45)
-    assert _collapse(_tilt(blocks, base, material)) == pytest.approx(0.45, rel=1e-6)
+    assert _collapse(tilted(blocks, base, material)) == pytest.approx(0.45, rel=1e-6)
 
 
 def test_a_free_wall_tilts_at_t_over_h_with_kink_tangents():
     a, s, courses = 0.081, 0.07, 9
     blocks, base = add_base(running_bond_wall(4, courses, a, 0.21, s, 20e3))
-    lam = _collapse(_tilt(blocks, base))
+    lam = _collapse(tilted(blocks, base))
     assert lam == pytest.approx(s / (courses * a), rel=1e-6)
 
 
@@ -163,20 +152,6 @@ def test_a_bad_kink_rounds_is_named():
     with pytest.raises(ValueError, match="kink_rounds"):
         StaticSettings(kink_rounds=-1)
     assert StaticSettings().kink_rounds == 0  # off by default
-
-
-def _panel() -> Model:
-    """A dry panel of 3 x 13 blocks on a base, its left column held in u1 and u3 and its
-    right edge free, tilted out of plane (the panel of ``test_line_search``): 20 of its work
-    searches fail with no correction that lowers the residual."""
-    wall = running_bond_wall(3, 13, 0.081, 0.21, 0.07, 20e3)
-    blocks, base = add_base(wall)
-    return Model.build(
-        blocks,
-        DRY,
-        supports=[Support([base]), Support(column(wall, "left"), ["u1", "u3"])],
-        loads=[SelfWeight(), WeightProportional((0.0, 0.0, 1.0))],
-    )
 
 
 def test_a_search_with_no_descent_stops_on_a_kink():
@@ -189,7 +164,7 @@ def test_a_search_with_no_descent_stops_on_a_kink():
     changed: the search stopped next to a kink of the law that the direction crosses. (On
     the 19th the merit rises at 8^-2 and 8^-3 with no change of state: the curved return
     of a sliding joint.)"""
-    model = _panel()
+    model = tilted_panel()
     solver = StaticSolver(model, StaticSettings())
     plain = solver.equilibrate
     failed = []
