@@ -3,7 +3,7 @@
 
 Proves:
 
-* the tangent :meth:`Corrector._kink_tangents` gives a joint on a kink is the derivative of
+* the tangent :meth:`Corrector.kink_tangents` gives a joint on a kink is the derivative of
   the law on the side the step takes it to: on a single block on its base, with the bed
   joint's bending about y2 at its rocking capacity |m2| = |fn| l1 / 2 (1 + 1e-7), a step that
   turns it back (by a tenth of the rotation at capacity) gets the elastic bending stiffness, which a finite difference of the
@@ -21,10 +21,13 @@ Proves:
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 import pytest
 
 from helpers.walls import tilted, tilted_panel
+from masonry_dem.constitutive.law import LawResponse
 from masonry_dem.constitutive.states import FLAG_ROCKING_2
 from masonry_dem.geometry.builders import add_base, running_bond_wall, single_block
 from masonry_dem.model import InterfaceMaterial, Model
@@ -72,55 +75,69 @@ def _difference(corrector: Corrector, q: np.ndarray, step: np.ndarray) -> np.nda
     return after - before
 
 
-def test_a_joint_turned_back_from_rocking_gets_its_elastic_tangent():
-    corrector, q, at_capacity = _block_at(1.0 + 1e-7)
+class _Across(NamedTuple):
+    """The bed joint at ``over`` x its rocking capacity and a step that turns it by
+    ``turn`` x its rotation at the capacity: the response there, the tangent
+    :meth:`Corrector.kink_tangents` gives (None: no kink within the step), the joint's
+    relative displacement over the step, the change of its actions (the law's own), its
+    elastic stiffnesses and the corrector with its floor."""
+
+    response: LawResponse
+    sided: np.ndarray | None
+    du: np.ndarray
+    change: np.ndarray
+    kbar: np.ndarray
+    floor: float
+    corrector: Corrector
+
+
+def _across(over: float, turn: float) -> _Across:
+    corrector, q, at_capacity = _block_at(over)
     response = corrector.residual(q, 0.0)[2]
-    assert response.flags[0] == FLAG_ROCKING_2
-    step = _step(corrector, -0.1 * at_capacity)  # back into the elastic range
+    step = _step(corrector, turn * at_capacity)
     floor = corrector.settings.residual_stiffness
-    T = corrector._kink_tangents(q, 0.0, 1.0, step, response, floor, None)
-    assert T is not None
-    du = corrector.problem.relative(step)[0]
-    change = _difference(corrector, q, step)
-    kbar = corrector.problem.law.kbar[0]
-    assert T[0] == pytest.approx(np.diag(kbar * (1.0 + floor)), rel=1e-12)
+    return _Across(
+        response,
+        corrector.kink_tangents(q, 0.0, 1.0, step, response, floor, None),
+        corrector.problem.relative(step)[0],
+        _difference(corrector, q, step),
+        corrector.problem.law.kbar[0],
+        floor,
+        corrector,
+    )
+
+
+def test_a_joint_turned_back_from_rocking_gets_its_elastic_tangent():
+    x = _across(1.0 + 1e-7, -0.1)  # back into the elastic range
+    assert x.response.flags[0] == FLAG_ROCKING_2
+    assert x.sided is not None
+    assert x.sided[0] == pytest.approx(np.diag(x.kbar * (1.0 + x.floor)), rel=1e-12)
     # the first 1e-6 of the step is on the rocking side
-    assert (T[0] @ du)[M2] == pytest.approx(change[M2], rel=2e-6)
-    rocking = corrector.problem.joint_tangents(response, floor)[0]
-    assert abs((rocking @ du)[M2] - change[M2]) > 0.99 * abs(change[M2])
+    assert (x.sided[0] @ x.du)[M2] == pytest.approx(x.change[M2], rel=2e-6)
+    rocking = x.corrector.problem.joint_tangents(x.response, x.floor)[0]
+    assert abs((rocking @ x.du)[M2] - x.change[M2]) > 0.99 * abs(x.change[M2])
 
 
 def test_a_joint_pushed_further_into_rocking_keeps_the_law_tangent():
-    corrector, q, at_capacity = _block_at(1.0 + 1e-7)
-    response = corrector.residual(q, 0.0)[2]
-    step = _step(corrector, 0.1 * at_capacity)  # further into rocking: no kink on the way
-    floor = corrector.settings.residual_stiffness
-    assert corrector._kink_tangents(q, 0.0, 1.0, step, response, floor, None) is None
-    du = corrector.problem.relative(step)[0]
-    change = _difference(corrector, q, step)
-    rocking = corrector.problem.joint_tangents(response, floor)[0]
-    kbar = corrector.problem.law.kbar[0]
+    x = _across(1.0 + 1e-7, 0.1)  # further into rocking: no kink on the way
+    assert x.sided is None
+    rocking = x.corrector.problem.joint_tangents(x.response, x.floor)[0]
+    scale = x.kbar[M2] * abs(x.du[M2])
     # no moment change but the floor's: the rocking tangent is the derivative on this side
-    assert change[M2] == pytest.approx(0.0, abs=1e-9 * kbar[M2] * abs(du[M2]))
-    assert (rocking @ du)[M2] == pytest.approx(change[M2], abs=2e-9 * kbar[M2] * abs(du[M2]))
+    assert x.change[M2] == pytest.approx(0.0, abs=1e-9 * scale)
+    assert (rocking @ x.du)[M2] == pytest.approx(x.change[M2], abs=2e-9 * scale)
 
 
 def test_an_elastic_joint_pushed_over_its_kink_gets_the_rocking_tangent():
-    corrector, q, at_capacity = _block_at(1.0 - 1e-7)
-    response = corrector.residual(q, 0.0)[2]
-    assert response.flags[0] == 0
-    step = _step(corrector, 0.1 * at_capacity)
-    floor = corrector.settings.residual_stiffness
-    T = corrector._kink_tangents(q, 0.0, 1.0, step, response, floor, None)
-    assert T is not None
-    du = corrector.problem.relative(step)[0]
-    change = _difference(corrector, q, step)
-    kbar = corrector.problem.law.kbar[0]
+    x = _across(1.0 - 1e-7, 0.1)
+    assert x.response.flags[0] == 0
+    assert x.sided is not None
+    scale = x.kbar[M2] * abs(x.du[M2])
     # the moment rises over the first 1e-6 of the step, then stays at capacity
-    assert abs(change[M2]) < 2e-6 * kbar[M2] * abs(du[M2])
-    assert (T[0] @ du)[M2] == pytest.approx(change[M2], abs=2e-6 * kbar[M2] * abs(du[M2]))
-    elastic = corrector.problem.joint_tangents(response, floor)[0]
-    assert (elastic @ du)[M2] == pytest.approx(kbar[M2] * du[M2], rel=1e-6)
+    assert abs(x.change[M2]) < 2e-6 * scale
+    assert (x.sided[0] @ x.du)[M2] == pytest.approx(x.change[M2], abs=2e-6 * scale)
+    elastic = x.corrector.problem.joint_tangents(x.response, x.floor)[0]
+    assert (elastic @ x.du)[M2] == pytest.approx(x.kbar[M2] * x.du[M2], rel=1e-6)
 
 
 def _collapse(model: Model) -> float:
@@ -129,19 +146,19 @@ def _collapse(model: Model) -> float:
     return h.collapse_multiplier
 
 
-def test_a_block_tilts_at_s_over_a_with_kink_tangents():
+def test_a_block_tilts_at_s_over_a_withkink_tangents():
     a, s = 0.2, 0.1
     blocks, base = add_base(single_block(a, 0.25, s, 20e3))
     assert _collapse(tilted(blocks, base)) == pytest.approx(s / a, rel=1e-6)
 
 
-def test_a_squat_block_slides_at_mu_with_kink_tangents():
+def test_a_squat_block_slides_at_mu_withkink_tangents():
     blocks, base = add_base(single_block(0.05, 0.25, 0.2, 20e3))  # s / a = 4 > mu
     material = InterfaceMaterial(kn=2.4e9, kt=1e9, friction=0.45)
     assert _collapse(tilted(blocks, base, material)) == pytest.approx(0.45, rel=1e-6)
 
 
-def test_a_free_wall_tilts_at_t_over_h_with_kink_tangents():
+def test_a_free_wall_tilts_at_t_over_h_withkink_tangents():
     a, s, courses = 0.081, 0.07, 9
     blocks, base = add_base(running_bond_wall(4, courses, a, 0.21, s, 20e3))
     lam = _collapse(tilted(blocks, base))

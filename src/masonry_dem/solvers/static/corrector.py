@@ -145,7 +145,7 @@ class Corrector:
         where it yields the other way (another branch of the path). A search about to give
         up for want of descent sits next to a kink of the law along its direction: up to
         ``kink_rounds`` times, the joints on that kink take the tangent of the side beyond
-        (:meth:`_kink_tangents`) and the search goes on with its first trust radius.
+        (:meth:`kink_tangents`) and the search goes on with its first trust radius.
         """
         s = self.settings
         free = self.problem.asm.free_index
@@ -308,9 +308,7 @@ class Corrector:
                     # the search stops next to a kink of the law along its direction: the
                     # joints on it take the tangent of the side the direction takes them to,
                     # and the search goes on from here with a fresh radius
-                    sided = self._kink_tangents(
-                        q, lam, dead_factor, f * dq, response, floor, secant
-                    )
+                    sided = self.kink_tangents(q, lam, dead_factor, f * dq, response, floor, secant)
                     kinks += 1
                     if sided is not None:
                         secant, lu, cuts = sided, None, 0
@@ -378,7 +376,7 @@ class Corrector:
             failure=Failure.NO_CONVERGENCE,
         )
 
-    def _kink_tangents(
+    def kink_tangents(
         self,
         q: np.ndarray,
         lam: float,

@@ -6,7 +6,8 @@ step rule (:class:`StepController`):
 * :func:`work_control` - the work-conjugate displacement w = c.q of the live load
   prescribed (c = F_L / |F_L|, lambda free), past limit points and plastic plateaus, with
   a pseudo-transient step where the path folds at a kink of the law;
-* :func:`displacement_control` - one DOF driven to a target, lambda free.
+* displacement control (one DOF driven to a target, lambda free) lives in
+  :mod:`.displacement_control`.
 
 The step rule, the secant start and the elastic first step live in :mod:`.steps`.
 
@@ -32,7 +33,6 @@ from masonry_dem.solvers.static.certificate import (
     still_rising,
 )
 from masonry_dem.solvers.static.outcome import Outcome, Status, StopReason
-from masonry_dem.solvers.static.settings import DisplacementControl
 from masonry_dem.solvers.static.steps import (
     SecantPredictor,
     StepController,
@@ -47,11 +47,6 @@ if TYPE_CHECKING:
 log = logging.getLogger(__name__)
 
 Record = Callable[[Outcome], None]
-
-#: d u / d lambda of a controlled DOF below this fraction of its rate on the first live-load
-#: step (or negative) at the state where displacement control is stuck: a limit point of the
-#: controlled DOF (docs/solvers.md, "Load against displacement control")
-TURN_RATE = 0.1
 
 
 def load_control(solver: StaticSolver, hist: History, record: Record) -> None:
@@ -583,140 +578,3 @@ def _tangent_slope(solver: StaticSolver) -> float:
     _, _, response = solver.residual(solver.q, solver.load_factor)
     compliance = float(F @ solver.problem.factor(response).solve(F))
     return float(np.linalg.norm(F)) / compliance if compliance > 0 else 0.0
-
-
-def control_rate(solver: StaticSolver, c: np.ndarray) -> float:
-    """d(c.q)/d lambda along the tangent of the last converged state: c.K_t^-1 F_L, how fast
-    the controlled displacement grows with the load there."""
-    _, _, response = solver.residual(solver.q, solver.load_factor)
-    return float(c @ solver.problem.factor(response).solve(solver.problem.F_live))
-
-
-def _control_turn(solver: StaticSolver, hist: History, c: np.ndarray) -> str:
-    """Why displacement control cannot go on: the controlled displacement's rate of growth
-    with the load at the last state, against the first live-load step's (a limit point of
-    the controlled DOF, where it stops growing or turns back while the load still rises,
-    cannot be passed by prescribing that DOF)."""
-    free = solver.problem.asm.free_index
-    rate = control_rate(solver, c)
-    first = 0.0
-    if len(hist.steps) > 1:
-        du = float(c @ (hist.steps[1].q.reshape(-1)[free] - hist.steps[0].q.reshape(-1)[free]))
-        dlam = float(hist.steps[1].load_factor - hist.steps[0].load_factor)
-        first = du / dlam if dlam != 0 else 0.0
-    relative = rate / first if first != 0 else math.nan
-    if math.isfinite(relative) and relative < TURN_RATE:
-        return (
-            f"the controlled displacement grows with the load at {relative:.2g} of its rate on "
-            f"the first step (d u / d lambda {rate:.3g}): a limit point of the controlled DOF "
-            f"(it stops growing or turns back while lambda can still rise), which prescribing "
-            f"that DOF cannot pass; load or work control follows the path on"
-        )
-    return (
-        f"the controlled displacement still grows with the load ({relative:.2g} of its rate on "
-        f"the first step): no equilibrium with a larger controlled displacement near this state"
-    )
-
-
-def displacement_control(
-    solver: StaticSolver, hist: History, record: Record, control: DisplacementControl, dof: int
-) -> None:
-    s = solver.settings
-    position = np.flatnonzero(solver.problem.asm.free_index == dof)
-    if position.size == 0:
-        raise ValueError(f"control dof {control.dof} of block {control.block} is fixed")
-    k = int(position[0])
-    if control.steps < 1:
-        raise ValueError(f"control steps must be at least 1, got {control.steps!r}")
-    unit = np.zeros(solver.problem.asm.n_free)
-    unit[k] = 1.0
-    du_nominal = control.target / control.steps
-    direction = float(np.sign(du_nominal))
-    step = StepController(abs(du_nominal), s.growth, cap=abs(du_nominal))
-    lam = 0.0
-    u = float(solver.q[dof])
-    transient_from = -1  # the step from which the last pseudo-transient step started
-    turned = []  # (lambda, u before, u after) of the pseudo-transient steps past folds
-
-    def reached() -> bool:
-        return abs(u - control.target) <= 1e-12 * abs(control.target)
-
-    while not reached() and len(hist.steps) < s.max_steps:
-        goal = u + step.size * direction
-        if (goal - control.target) * np.sign(du_nominal) > 0:
-            goal = control.target
-        out = solver.equilibrate(
-            lam,
-            control=(unit, goal, abs(goal - u)),
-            radius=control_radius(solver, unit, goal - u),
-        )
-        if out.ok:
-            record(out)
-            lam, u = out.load_factor, goal
-            step.grow(out.iterations)
-            step.cuts = 0
-        else:
-            step.cut()
-            if (
-                step.cuts == s.transient_after
-                and s.transient_steps > 0
-                and transient_from != len(hist.steps)
-                and lam != 0.0
-            ):
-                # the controlled path folds at a kink of the law (a joint that starts to
-                # slide or rock): halved steps only close in on it, as under work control,
-                # so a pseudo-transient step to a slightly higher lambda goes round it, and
-                # displacement control goes on from the state it comes to rest in
-                transient_from = len(hist.steps)
-                moved = solver.pseudo_transient(lam + s.transient_rise * abs(lam))
-                log.debug(
-                    "displacement control stuck at u=%.6g, lambda=%.6g; pseudo-transient: %s",
-                    u,
-                    lam,
-                    f"ok in {moved.iterations}" if moved.ok else moved.reason,
-                )
-                if moved.ok:
-                    record(moved)
-                    before = u
-                    lam, u = float(moved.load_factor), float(moved.q[dof])
-                    turned.append((lam, before, u))
-                    step.size = max(step.size, abs(du_nominal) * s.resume_step)
-                    step.cuts = 0
-                    continue
-            if step.cuts > s.max_control_cuts:
-                hist.end(
-                    Status.FAILED,
-                    StopReason.CONTROL_STUCK,
-                    f"displacement control stuck at {u:.4g} (lambda {lam:.6g}): {out.reason}; "
-                    + _control_turn(solver, hist, unit),
-                )
-                break
-    else:
-        # the loop ends on its condition: the target reached, or the step budget spent
-        if reached():
-            hist.end(
-                Status.COMPLETED,
-                StopReason.CONTROL_REACHED,
-                f"control displacement reached {u:.6g}",
-            )
-        else:
-            hist.end(
-                Status.FAILED,
-                StopReason.CONTROL_BUDGET,
-                f"max_steps={s.max_steps} spent at {u:.6g} of the target "
-                f"{control.target:.6g} ({u / control.target:.1%})",
-            )
-    if turned:
-        back = [t for t in turned if (t[2] - t[1]) * direction < 0]
-        hist.reason += (
-            f"; {len(turned)} pseudo-transient step(s) past folds of the controlled path "
-            f"(first at lambda {turned[0][0]:.6g})"
-        )
-        if back:
-            hist.reason += (
-                f", {len(back)} of them with the controlled displacement turning back "
-                f"(first at lambda {back[0][0]:.6g}: {back[0][1]:.4g} -> {back[0][2]:.4g})"
-            )
-    lams = hist.load_factors
-    peak = int(np.argmax(lams))
-    hist.collapse_bracket = (float(lams[peak]), float(lams[peak]))

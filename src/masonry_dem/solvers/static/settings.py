@@ -306,8 +306,9 @@ class StaticSettings(LoadPathSettings):
         before the corner check (True, as before). False: the check alone, which relaxes
         from the same state to the same lambda and finds the rest of every fold measured
         where the pseudo-transient step found none. Not the default: a pseudo-transient step
-        there also passes folds in a few steps, and without it the return-wall rows take
-        more factorizations and one of them (S15/4) ends 0.5 % higher.
+        there also passes folds in a few steps, and without it the walls that meet measured
+        took more factorizations and one answer moved (docs/solvers.md, "The endgame at the
+        peak").
 
     Newton's tangent at a kink of the law (docs/solvers.md, "Newton's basin on walls that meet")
     ----------------------------------------------------------------------------------------
@@ -385,7 +386,7 @@ class StaticSettings(LoadPathSettings):
     # the endgame at the peak (session 19)
     run_off: RunOff = choice("carry", RUN_OFFS)
     corner_transient: bool = checked(True, lambda v: isinstance(v, bool), "true or false")
-    # basin (session 19): the tangent at a kink of the law
+    # the tangent at a kink of the law (session 19)
     kink_rounds: int = count(0, least=0)
 
 

@@ -25,6 +25,7 @@ from masonry_dem.results import History, StepResult
 from masonry_dem.solvers.factorization import SingularMatrix
 from masonry_dem.solvers.static import paths
 from masonry_dem.solvers.static.certificate import Bound, certify
+from masonry_dem.solvers.static.displacement_control import displacement_control
 from masonry_dem.solvers.static.outcome import Outcome, Status, StopReason
 from masonry_dem.solvers.static.relaxations import Relaxations
 from masonry_dem.solvers.static.settings import DisplacementControl, StaticSettings
@@ -173,7 +174,7 @@ class StaticSolver(Relaxations):
             paths.load_control(self, hist, record)
         else:
             assert monitor_dof is not None  # the control DOF, set above
-            paths.displacement_control(self, hist, record, control, monitor_dof)
+            displacement_control(self, hist, record, control, monitor_dof)
         return self._finish(hist, t0)
 
     def dead_load(self) -> Outcome:
