@@ -29,6 +29,10 @@ CONTINUATION: tuple[str, ...] = get_args(Continuation)
 CornerCheck = Literal["mixed", "implicit", "explicit"]
 CORNER_CHECKS: tuple[str, ...] = get_args(CornerCheck)
 
+#: how long dynamic relaxation looks for its rest at a fold (see ``StaticSettings.corner_rest``)
+CornerRest = Literal["dynamic", "bounded"]
+CORNER_RESTS: tuple[str, ...] = get_args(CornerRest)
+
 #: what a motion past the displacement limit tells the path (see ``StaticSettings.run_off``)
 RunOff = Literal["carry", "stop", "ignore"]
 RUN_OFFS: tuple[str, ...] = get_args(RunOff)
@@ -310,6 +314,15 @@ class StaticSettings(LoadPathSettings):
         took more factorizations and one answer moved (docs/solvers.md, "The endgame at the
         peak").
 
+    The cost of passing a fold (docs/solvers.md, "The cost of passing a fold")
+    ---------------------------------------------------------------------------
+    corner_rest: with ``corner_check = "mixed"``, how long dynamic relaxation looks for its
+        own rest where the implicit check came to rest at a fold. ``"dynamic"`` (default):
+        its whole budget (``fold_check_time_steps``). ``"bounded"``: the check's own effort
+        at the rate the two budgets are set by, ``fold_check_time_steps`` x (implicit steps
+        taken / ``corner_check_steps``); where it finds no rest within that, the path goes
+        on from the implicit rest.
+
     Newton's tangent at a kink of the law (docs/solvers.md, "Newton's basin on walls that meet")
     ----------------------------------------------------------------------------------------
     kink_rounds: a search about to give up because no correction lowers the residual (its
@@ -386,6 +399,8 @@ class StaticSettings(LoadPathSettings):
     # the endgame at the peak (session 19)
     run_off: RunOff = choice("carry", RUN_OFFS)
     corner_transient: bool = checked(True, lambda v: isinstance(v, bool), "true or false")
+    # the cost of passing a fold (session 20)
+    corner_rest: CornerRest = choice("dynamic", CORNER_RESTS)
     # the tangent at a kink of the law (session 19)
     kink_rounds: int = count(0, least=0)
 
