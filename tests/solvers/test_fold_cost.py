@@ -4,10 +4,11 @@
 With ``corner_check = "mixed"`` (the default), where the implicit check comes to rest at a
 fold, dynamic relaxation still looks for its own rest at the same lambda, and the path goes
 on from it (the overdamped motion may settle in another equilibrium than the damped
-dynamic one: S23's first fold). ``corner_rest = "bounded"`` gives that relaxation the
-check's own effort at the rate the two budgets are set by, ``fold_check_time_steps`` time
-steps for ``corner_check_steps`` implicit steps; where it finds no rest within that, the
-path goes on from the implicit rest.
+dynamic one: S23's first fold). ``corner_rest = "bounded"`` (the default) gives that
+relaxation the check's own effort at the rate the two budgets are set by,
+``fold_check_time_steps`` time steps for ``corner_check_steps`` implicit steps; where it
+finds no rest within that, the path goes on from the implicit rest. ``"dynamic"`` gives it
+its whole budget (session 19).
 
 Proves:
 
@@ -17,6 +18,8 @@ Proves:
   ``"bounded"`` at the collapse multiplier of ``"dynamic"``, with fewer time steps and
   factorizations; its time steps stay within the bound, fold_check_time_steps x implicit
   steps / corner_check_steps;
+- S23, whose first fold's two rests lead to peaks 1.4 % apart, keeps dynamic relaxation's
+  rest (the higher peak) and every count with ``"bounded"``;
 - a bad setting is named.
 """
 
@@ -62,6 +65,23 @@ def test_a_bounded_rest_passes_the_folds_of_s13_2_for_less():
     s = bounded.settings
     per_step = s.fold_check_time_steps / s.corner_check_steps
     assert 0 < bounded.time_steps <= per_step * bounded.implicit_steps
+
+
+def test_s23_keeps_the_rests_of_dynamic_relaxation():
+    """S23: the implicit rest at its first fold leads to a lower peak (0.1098) than dynamic
+    relaxation's (0.1114); the bounded relaxation still finds that rest, so the collapse
+    multiplier and every count are those of ``"dynamic"``."""
+    case = build_case("S23")
+    runs = []
+    for rest in RESTS:
+        solver = StaticSolver(case.model, replace(case.settings, corner_rest=rest))
+        runs.append((solver, solver.run(monitor=case.monitor)))
+    (full, dynamic), (bounded, found) = runs
+    assert found.status == dynamic.status == "collapse", found.reason
+    assert found.collapse_multiplier == pytest.approx(dynamic.collapse_multiplier, rel=1e-12)
+    assert found.collapse_multiplier > 0.111
+    assert bounded.time_steps == full.time_steps > 0
+    assert found.factorizations == dynamic.factorizations
 
 
 def test_a_bad_corner_rest_is_named():

@@ -346,7 +346,8 @@ def work_control(
             verdict = f"ok in {moved.iterations} steps" if moved.ok else moved.reason
             settled: Outcome | None = None
             # dynamic relaxation runs at a fold with "mixed" (the path goes on from its rest:
-            # the implicit motion may settle in another basin at the same lambda) and where
+            # the implicit motion may settle in another basin at the same lambda; for at most
+            # the check's own effort with corner_rest "bounded") and where
             # the implicit check gave no verdict (neither rest nor a run-off within
             # corner_check_steps: a slow fold, or a peak that creeps)
             if (moved.ok and s.corner_check == "mixed") or not (moved.ok or moved.past_limit):
