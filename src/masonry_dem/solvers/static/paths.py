@@ -346,11 +346,12 @@ def work_control(
             verdict = f"ok in {moved.iterations} steps" if moved.ok else moved.reason
             settled: Outcome | None = None
             # dynamic relaxation runs at a fold with "mixed" (the path goes on from its rest:
-            # the implicit motion may settle in another basin at the same lambda) and where
+            # the implicit motion may settle in another basin at the same lambda; for at most
+            # the check's own effort with corner_rest "bounded") and where
             # the implicit check gave no verdict (neither rest nor a run-off within
             # corner_check_steps: a slow fold, or a peak that creeps)
             if (moved.ok and s.corner_check == "mixed") or not (moved.ok or moved.past_limit):
-                settled = solver.dynamic_rescue(target, lam, budget)
+                settled = solver.dynamic_rescue(target, lam, rest_budget(budget, moved))
                 verdict += "; dynamic relaxation: " + ("no rest" if settled is None else "ok")
             if settled is None and moved.ok:  # the path goes on from the implicit rest
                 solver.last_increment = solver.increment(moved.q)
@@ -362,6 +363,15 @@ def work_control(
         if rescued is not None:
             accept_moved(rescued)
         return rescued is not None
+
+    def rest_budget(budget: int, moved: Outcome) -> int:
+        """The time steps dynamic relaxation may take to find its own rest where the
+        implicit check already came to rest (``corner_rest``): all of ``budget``, or with
+        ``"bounded"`` the check's own effort at the rate the two budgets are set by
+        (``budget`` time steps for ``corner_check_steps`` implicit steps)."""
+        if not moved.ok or s.corner_rest != "bounded":
+            return budget
+        return max(1, min(budget, budget * moved.iterations // s.corner_check_steps))
 
     def accept_moved(moved: Outcome) -> None:
         """Go on from a state found at a higher lambda (not by a work step)."""

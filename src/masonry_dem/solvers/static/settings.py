@@ -29,6 +29,10 @@ CONTINUATION: tuple[str, ...] = get_args(Continuation)
 CornerCheck = Literal["mixed", "implicit", "explicit"]
 CORNER_CHECKS: tuple[str, ...] = get_args(CornerCheck)
 
+#: how long dynamic relaxation looks for its rest at a fold (``StaticSettings.corner_rest``)
+CornerRest = Literal["dynamic", "bounded"]
+CORNER_RESTS: tuple[str, ...] = get_args(CornerRest)
+
 #: what a motion past the displacement limit tells the path (see ``StaticSettings.run_off``)
 RunOff = Literal["carry", "stop", "ignore"]
 RUN_OFFS: tuple[str, ...] = get_args(RunOff)
@@ -245,8 +249,9 @@ class StaticSettings(LoadPathSettings):
         transient_rise) from the same state). Its motion running past the displacement
         limit is a peak, with no time step of dynamic relaxation (a peak's explicit
         relaxation stalls for its whole budget). Rest is a fold: the path goes on from the
-        rest dynamic relaxation (``fold_check_time_steps``) finds, the equilibrium the
-        explicit check takes, or from the implicit one's where that finds none. No verdict
+        rest dynamic relaxation (``fold_check_time_steps``, bounded by ``corner_rest``)
+        finds, the equilibrium the explicit check takes, or from the implicit one's where
+        that finds none. No verdict
         within ``corner_check_steps`` (a slow fold): dynamic relaxation decides, as with
         ``"explicit"``. ``"implicit"``: the same, but the path always goes on from the
         implicit rest (the cheapest; the overdamped motion may settle in another
@@ -309,6 +314,17 @@ class StaticSettings(LoadPathSettings):
         there also passes folds in a few steps, and without it the walls that meet measured
         took more factorizations and one answer moved (docs/solvers.md, "The endgame at the
         peak").
+
+    The cost of passing a fold (docs/solvers.md, "The cost of passing a fold")
+    ---------------------------------------------------------------------------
+    corner_rest: with ``corner_check = "mixed"``, how long dynamic relaxation looks for its
+        own rest where the implicit check came to rest at a fold. ``"bounded"`` (default):
+        the check's own effort at the rate the two budgets are set by,
+        ``fold_check_time_steps`` x (implicit steps taken / ``corner_check_steps``); where
+        it finds no rest within that, the path goes on from the implicit rest (a rest the
+        damped dynamic motion needs more effort to reach than the overdamped one needed is
+        not sought). ``"dynamic"``: its whole budget, ``fold_check_time_steps`` (session
+        19). The measurements behind the default are in that section of docs/solvers.md.
 
     Newton's tangent at a kink of the law (docs/solvers.md, "Newton's basin on walls that meet")
     ----------------------------------------------------------------------------------------
@@ -386,6 +402,8 @@ class StaticSettings(LoadPathSettings):
     # the endgame at the peak (session 19)
     run_off: RunOff = choice("carry", RUN_OFFS)
     corner_transient: bool = checked(True, lambda v: isinstance(v, bool), "true or false")
+    # the cost of passing a fold (session 20)
+    corner_rest: CornerRest = choice("bounded", CORNER_RESTS)
     # the tangent at a kink of the law (session 19)
     kink_rounds: int = count(0, least=0)
 
