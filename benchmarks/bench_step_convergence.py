@@ -1,7 +1,12 @@
 """Benchmark: does the collapse multiplier converge as the steps of the path shorten?
 
     NUMBA_NUM_THREADS=1 python benchmarks/bench_step_convergence.py [--case 2-3 ...]
-        [--variants default growth=1.2 ...] [--json FILE] [--png FILE] [--from-json FILE]
+        [--variants default growth=1.2 ...] [--set NAME=VALUE ...] [--json FILE] [--png FILE]
+        [--from-json FILE]
+
+``--set`` changes a setting in every variant (the default's included), e.g. ``--set
+tail_resolution=1e-3 --set collapse_at=onset``; a variant may name any setting too
+(``growth=1.025,tail_resolution=1.25e-4``).
 
 Each validation case runs the default static pushover (``StaticSolver(model,
 settings).run()``, the case's own settings) once per variant of the step length:
@@ -70,14 +75,22 @@ def changes_of(variant: str, base) -> dict:
             out["max_step"] = base.max_step / k
         else:
             name, value = part.split("=")
-            out[name] = float(value)
+            out[name] = _value(value)
     return out
 
 
-def one_run(case, variant: str) -> dict:
+def _value(text: str) -> float | str:
+    try:
+        return float(text)
+    except ValueError:
+        return text
+
+
+def one_run(case, variant: str, common: dict | None = None) -> dict:
     from masonry_dem.solvers.static import StaticSolver
 
-    settings = replace(case.settings, **changes_of(variant, case.settings))
+    base = replace(case.settings, **(common or {}))
+    settings = replace(base, **changes_of(variant, base))
     solver = StaticSolver(case.model, settings)
     c0 = time.process_time()
     hist = solver.run(monitor=case.monitor)
@@ -210,7 +223,11 @@ def main() -> int:
     p.add_argument("--json", default=None, help="write the runs here (after each run)")
     p.add_argument("--from-json", default=None, help="report and chart runs written before")
     p.add_argument("--png", default=None, help="the chart")
+    p.add_argument(
+        "--set", action="append", default=[], metavar="NAME=VALUE", help="in every variant"
+    )
     a = p.parse_args()
+    common = {k: _value(v) for k, v in (kv.split("=", 1) for kv in a.set)}
     if a.from_json:
         results = json.loads(Path(a.from_json).read_text())
     else:
@@ -219,13 +236,13 @@ def main() -> int:
         if a.json:
             Path(a.json).parent.mkdir(parents=True, exist_ok=True)
         names = a.case or PRESSURE + TILT
-        one_run(build_case(names[0]), "default")  # compiles the kernels: not timed
+        one_run(build_case(names[0]), "default", common)  # compiles the kernels: not timed
         results = {}
         for name in names:
             case = build_case(name)
             results[name] = {}
             for v in a.variants:
-                r = one_run(case, v)
+                r = one_run(case, v, common)
                 results[name][v] = r
                 print(
                     f"{name} {v}: lambda={r['lambda']:.6g} steps={r['steps']} "
