@@ -26,6 +26,11 @@ per step has an error linear in the step) and gives the default's error against 
 joints whose damage state differs at the peak between the default and the finest path
 (growth 1.025).
 
+Then, against ``--reference`` (a variant, by default the finest growth): each run's largest
+difference of lambda from the reference path at the same w, and where its path stopped
+(the w of its highest lambda and the stop's reason). The paths coincide to a few 1e-4 and
+their stops differ (docs/solvers.md, "The step near the peak").
+
 The chart (``--png``): factorizations over the default's against |lambda - lambda_0| /
 lambda_0, one line per case through the growth variants (the default starred), the shorter
 load steps as crosses. CPU seconds compare only within one run; the factorizations are exact.
@@ -98,9 +103,15 @@ def one_run(case, variant: str, common: dict | None = None) -> dict:
     lam = hist.collapse_multiplier
     lam = float(lam if lam is not None else hist.final_load_factor)
     peak = max(hist.steps, key=lambda st: float(st.load_factor))
+    problem = solver.problem
+    c = problem.F_live / float(np.linalg.norm(problem.F_live))
+    q0 = hist.steps[0].q.reshape(-1)[problem.free]
     return {
         "variant": variant,
         "status": str(hist.status),
+        "stop": str(hist.stop),
+        "path_w": [float(c @ (st.q.reshape(-1)[problem.free] - q0)) for st in hist.steps],
+        "path_lambda": [float(st.load_factor) for st in hist.steps],
         "lambda": lam,
         "steps": len(hist.steps),
         "factorizations": int(solver.factorizations),
@@ -175,6 +186,40 @@ def report(results: dict) -> None:
             print(f"  {name:7s} {s['differ']} of {s['joints']}: {pairs}")
 
 
+def same_w(run: dict, ref: dict) -> tuple[float, int]:
+    """The largest |lambda / lambda_ref - 1| of a run's states against the reference path at
+    the same w (interpolated), over the states in the second half of the reference's range
+    of w (its tail, where the stop is decided; the first half holds the hand-over, whose
+    load steps ``growth`` also sets), and how many states were compared. Small where the
+    paths coincide and only their stops differ."""
+    w, lam = np.asarray(run["path_w"]), np.asarray(run["path_lambda"])
+    rw, rlam = np.asarray(ref["path_w"]), np.asarray(ref["path_lambda"])
+    order = np.argsort(rw)
+    inside = (w >= 0.5 * rw.max()) & (w <= rw.max())
+    if not inside.any():
+        return math.nan, 0
+    there = np.interp(w[inside], rw[order], rlam[order])
+    return float(np.max(np.abs(lam[inside] / there - 1))), int(inside.sum())
+
+
+def stops(results: dict, reference: str) -> None:
+    """Per run: where its path stopped (w, why) and how far its states lie from the
+    reference path at the same w."""
+    print()
+    print(f"the paths against {reference} at the same w, and where each stopped:")
+    for name, runs in results.items():
+        ref = runs.get(reference)
+        if ref is None or "path_w" not in ref:
+            continue
+        for v, r in runs.items():
+            dev, n = same_w(r, ref)
+            stop_w = r["path_w"][int(np.argmax(r["path_lambda"]))]
+            print(
+                f"  {name:7s} {v:24s} lambda {r['lambda'] / ref['lambda'] - 1:+8.3%}  "
+                f"at the same w {dev:8.4%} ({n:3d} states)  peak at w={stop_w:.4g}  {r['stop']}"
+            )
+
+
 def chart(results: dict, png: Path) -> None:
     import matplotlib
 
@@ -226,6 +271,7 @@ def main() -> int:
     p.add_argument(
         "--set", action="append", default=[], metavar="NAME=VALUE", help="in every variant"
     )
+    p.add_argument("--reference", default=FINEST, help="the variant the paths are compared with")
     a = p.parse_args()
     common = {k: _value(v) for k, v in (kv.split("=", 1) for kv in a.set)}
     if a.from_json:
@@ -252,6 +298,7 @@ def main() -> int:
                 if a.json:
                     Path(a.json).write_text(json.dumps(results))
     report(results)
+    stops(results, a.reference)
     if a.png:
         chart(results, Path(a.png))
     return 0
