@@ -15,6 +15,8 @@ Proves:
 - on the 4-5 pressure wall the option's lambda with the default growth (1.5) lies within
   0.1 % of its own with growth 1.025, and within 0.1 % of the finest path (growth 1.025,
   tail_resolution 1.25e-4, measured 9 149), where the default's lies 0.6 % above it;
+- the reported lambda is a converged state of the path; with the onset, the highest before
+  the three flat steps, below the last;
 - bad values are refused.
 """
 
@@ -30,6 +32,7 @@ from masonry_dem.cases.paper import build_case
 from masonry_dem.geometry.builders import running_bond_wall, single_block
 from masonry_dem.solvers.incremental import pushover
 from masonry_dem.solvers.static import StaticSettings, StaticSolver
+from masonry_dem.solvers.static.outcome import StopReason
 from masonry_dem.solvers.static.steps import tail_cap
 
 OPTION = {"tail_resolution": 1e-3, "collapse_at": "onset"}
@@ -89,7 +92,13 @@ def _lambda(case, **changes) -> float:
     settings = replace(case.settings, **changes)
     hist = StaticSolver(case.model, settings).run(monitor=case.monitor)
     assert hist.status == "collapse", hist.reason
-    return float(hist.collapse_multiplier)
+    lam = float(hist.collapse_multiplier)
+    # the report is a converged state of the path; with the onset, one below its last three
+    assert lam in hist.load_factors.tolist()
+    if changes.get("collapse_at") == "onset":
+        assert hist.stop is StopReason.STIFFNESS_LOST
+        assert lam == max(hist.load_factors[:-3]) < max(hist.load_factors)
+    return lam
 
 
 def test_pressure_wall_lambda_no_longer_moves_with_growth() -> None:

@@ -224,7 +224,9 @@ def work_control(
     (one is tried as soon as the step has been halved ``transient_after`` times in a
     row: a fold of the path, which no shorter step passes); the displacements pass the
     limit. The collapse multiplier is the highest lambda on the
-    path."""
+    path (``collapse_at = "onset"``: after three flat steps, the highest before them). With
+    ``tail_resolution`` each step is bounded by the load it can gain where the path may stop
+    (:func:`.steps.tail_cap`)."""
     s = solver.settings
     free = solver.problem.asm.free_index
     c = solver.problem.F_live / float(np.linalg.norm(solver.problem.F_live))
