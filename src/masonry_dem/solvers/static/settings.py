@@ -342,7 +342,9 @@ class StaticSettings(LoadPathSettings):
     collapse_at: what a path stopped by lost stiffness (three flat steps) reports:
         ``"peak"``, the highest lambda on the path; ``"onset"``, the highest lambda up to
         the state where the flat steps began (a converged state of the path; the two agree
-        as the steps shorten).
+        as the steps shorten). Not the default: on a curve that approaches its limit from
+        below (a rigid wedge tipping on elastic joints) the flat steps gain load toward
+        it, and the onset lies further from it than the highest state.
     """
 
     easy_iterations: int = count(6, least=0)
