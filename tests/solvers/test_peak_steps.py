@@ -10,8 +10,11 @@ Proves:
   at lambda); before the displacement limit a step goes no further than the limit or no
   longer than its gain at the last step's slope allows; off, or without an elastic slope,
   there is no cap;
-- with the cap and ``collapse_at = "onset"`` the closed-form collapses hold to 1e-6: a block
-  on its base tilts at s/a and slides at mu, a free-standing wall tilts at t/H;
+- with the cap, alone or with ``collapse_at = "onset"``, the closed-form collapses hold to
+  1e-6: a block on its base tilts at s/a and slides at mu, a free-standing wall tilts at
+  t/H;
+- with the cap alone, 4-5's lambda at growth 1.5 lies within 0.1 % of its own at 1.025,
+  and above the finest path by less than the three flat steps' bound (3e-3);
 - on the 4-5 pressure wall the option's lambda with the default growth (1.5) lies within
   0.1 % of its own with growth 1.025, and within 0.1 % of the finest path (growth 1.025,
   tail_resolution 1.25e-4, measured 9 149), where the default's lies 0.6 % above it;
@@ -36,6 +39,7 @@ from masonry_dem.solvers.static.outcome import StopReason
 from masonry_dem.solvers.static.steps import tail_cap
 
 OPTION = {"tail_resolution": 1e-3, "collapse_at": "onset"}
+CAP = {"tail_resolution": 1e-3}
 
 
 def test_the_cap_bounds_the_gain_of_a_step_at_the_stop_slope() -> None:
@@ -73,6 +77,7 @@ def _block(a: float, s: float, friction: float):
     return on_base(single_block(a, 0.25, s, 20e3), friction=friction, kn=2.4e9)
 
 
+@pytest.mark.parametrize("option", [CAP, OPTION], ids=["cap", "cap and onset"])
 @pytest.mark.parametrize(
     "model, closed_form",
     [
@@ -82,8 +87,8 @@ def _block(a: float, s: float, friction: float):
     ],
     ids=["block tilts at s/a", "block slides at mu", "wall tilts at t/H"],
 )
-def test_the_option_keeps_the_closed_form_collapses(model, closed_form):
-    hist = pushover(model(), StaticSettings(bracket_tolerance=1e-7, **OPTION))
+def test_the_option_keeps_the_closed_form_collapses(option, model, closed_form):
+    hist = pushover(model(), StaticSettings(bracket_tolerance=1e-7, **option))
     assert hist.status == "collapse", hist.reason
     assert hist.collapse_multiplier == pytest.approx(closed_form, rel=1e-6)
 
@@ -118,3 +123,14 @@ def test_pressure_wall_lambda_no_longer_moves_with_growth() -> None:
 def test_bad_values_are_refused(name, value):
     with pytest.raises(ValueError, match=name):
         StaticSettings(**{name: value})
+
+
+def test_with_the_cap_alone_lambda_no_longer_moves_with_growth() -> None:
+    """4-5 (measured): with the cap, 9 172.1 (growth 1.5) and 9 166.1 (1.025), 0.065 %
+    apart, where the default's 9 208 lies 0.45 % above its growth-1.025 run; the cap's three
+    flat steps gain at most 3 x 1e-3 of lambda, so it stays above the finest path (9 149)
+    by less than that."""
+    case = build_case("4-5")
+    coarse, fine = (_lambda(case, growth=g, **CAP) for g in (1.5, 1.025))
+    assert abs(coarse / fine - 1) < 1e-3
+    assert 0 < coarse / 9149.1 - 1 < 3e-3
