@@ -1,7 +1,12 @@
 """Benchmark: does the collapse multiplier converge as the steps of the path shorten?
 
     NUMBA_NUM_THREADS=1 python benchmarks/bench_step_convergence.py [--case 2-3 ...]
-        [--variants default growth=1.2 ...] [--json FILE] [--png FILE] [--from-json FILE]
+        [--variants default growth=1.2 ...] [--set NAME=VALUE ...] [--json FILE] [--png FILE]
+        [--from-json FILE]
+
+``--set`` changes a setting in every variant (the default's included), e.g. ``--set
+tail_resolution=1e-3 --set collapse_at=onset``; a variant may name any setting too
+(``growth=1.025,tail_resolution=1.25e-4``).
 
 Each validation case runs the default static pushover (``StaticSolver(model,
 settings).run()``, the case's own settings) once per variant of the step length:
@@ -20,6 +25,11 @@ over growth 1.2 to 1.025 at the case's max_step; a first-order (backward-Euler) 
 per step has an error linear in the step) and gives the default's error against it, and the
 joints whose damage state differs at the peak between the default and the finest path
 (growth 1.025).
+
+Then, against ``--reference`` (a variant, by default the finest growth): each run's largest
+difference of lambda from the reference path at the same w, and where its path stopped
+(the w of its highest lambda and the stop's reason). The paths coincide to a few 1e-4 and
+their stops differ (docs/solvers.md, "The step near the peak").
 
 The chart (``--png``): factorizations over the default's against |lambda - lambda_0| /
 lambda_0, one line per case through the growth variants (the default starred), the shorter
@@ -70,14 +80,22 @@ def changes_of(variant: str, base) -> dict:
             out["max_step"] = base.max_step / k
         else:
             name, value = part.split("=")
-            out[name] = float(value)
+            out[name] = _value(value)
     return out
 
 
-def one_run(case, variant: str) -> dict:
+def _value(text: str) -> float | str:
+    try:
+        return float(text)
+    except ValueError:
+        return text
+
+
+def one_run(case, variant: str, common: dict | None = None) -> dict:
     from masonry_dem.solvers.static import StaticSolver
 
-    settings = replace(case.settings, **changes_of(variant, case.settings))
+    base = replace(case.settings, **(common or {}))
+    settings = replace(base, **changes_of(variant, base))
     solver = StaticSolver(case.model, settings)
     c0 = time.process_time()
     hist = solver.run(monitor=case.monitor)
@@ -85,9 +103,15 @@ def one_run(case, variant: str) -> dict:
     lam = hist.collapse_multiplier
     lam = float(lam if lam is not None else hist.final_load_factor)
     peak = max(hist.steps, key=lambda st: float(st.load_factor))
+    problem = solver.problem
+    c = problem.F_live / float(np.linalg.norm(problem.F_live))
+    q0 = hist.steps[0].q.reshape(-1)[problem.free]
     return {
         "variant": variant,
         "status": str(hist.status),
+        "stop": str(hist.stop),
+        "path_w": [float(c @ (st.q.reshape(-1)[problem.free] - q0)) for st in hist.steps],
+        "path_lambda": [float(st.load_factor) for st in hist.steps],
         "lambda": lam,
         "steps": len(hist.steps),
         "factorizations": int(solver.factorizations),
@@ -162,6 +186,40 @@ def report(results: dict) -> None:
             print(f"  {name:7s} {s['differ']} of {s['joints']}: {pairs}")
 
 
+def same_w(run: dict, ref: dict) -> tuple[float, int]:
+    """The largest |lambda / lambda_ref - 1| of a run's states against the reference path at
+    the same w (interpolated), over the states in the second half of the reference's range
+    of w (its tail, where the stop is decided; the first half holds the hand-over, whose
+    load steps ``growth`` also sets), and how many states were compared. Small where the
+    paths coincide and only their stops differ."""
+    w, lam = np.asarray(run["path_w"]), np.asarray(run["path_lambda"])
+    rw, rlam = np.asarray(ref["path_w"]), np.asarray(ref["path_lambda"])
+    order = np.argsort(rw)
+    inside = (w >= 0.5 * rw.max()) & (w <= rw.max())
+    if not inside.any():
+        return math.nan, 0
+    there = np.interp(w[inside], rw[order], rlam[order])
+    return float(np.max(np.abs(lam[inside] / there - 1))), int(inside.sum())
+
+
+def stops(results: dict, reference: str) -> None:
+    """Per run: where its path stopped (w, why) and how far its states lie from the
+    reference path at the same w."""
+    print()
+    print(f"the paths against {reference} at the same w, and where each stopped:")
+    for name, runs in results.items():
+        ref = runs.get(reference)
+        if ref is None or "path_w" not in ref:
+            continue
+        for v, r in runs.items():
+            dev, n = same_w(r, ref)
+            stop_w = r["path_w"][int(np.argmax(r["path_lambda"]))]
+            print(
+                f"  {name:7s} {v:24s} lambda {r['lambda'] / ref['lambda'] - 1:+8.3%}  "
+                f"at the same w {dev:8.4%} ({n:3d} states)  peak at w={stop_w:.4g}  {r['stop']}"
+            )
+
+
 def chart(results: dict, png: Path) -> None:
     import matplotlib
 
@@ -210,7 +268,12 @@ def main() -> int:
     p.add_argument("--json", default=None, help="write the runs here (after each run)")
     p.add_argument("--from-json", default=None, help="report and chart runs written before")
     p.add_argument("--png", default=None, help="the chart")
+    p.add_argument(
+        "--set", action="append", default=[], metavar="NAME=VALUE", help="in every variant"
+    )
+    p.add_argument("--reference", default=FINEST, help="the variant the paths are compared with")
     a = p.parse_args()
+    common = {k: _value(v) for k, v in (kv.split("=", 1) for kv in a.set)}
     if a.from_json:
         results = json.loads(Path(a.from_json).read_text())
     else:
@@ -219,13 +282,13 @@ def main() -> int:
         if a.json:
             Path(a.json).parent.mkdir(parents=True, exist_ok=True)
         names = a.case or PRESSURE + TILT
-        one_run(build_case(names[0]), "default")  # compiles the kernels: not timed
+        one_run(build_case(names[0]), "default", common)  # compiles the kernels: not timed
         results = {}
         for name in names:
             case = build_case(name)
             results[name] = {}
             for v in a.variants:
-                r = one_run(case, v)
+                r = one_run(case, v, common)
                 results[name][v] = r
                 print(
                     f"{name} {v}: lambda={r['lambda']:.6g} steps={r['steps']} "
@@ -235,6 +298,7 @@ def main() -> int:
                 if a.json:
                     Path(a.json).write_text(json.dumps(results))
     report(results)
+    stops(results, a.reference)
     if a.png:
         chart(results, Path(a.png))
     return 0

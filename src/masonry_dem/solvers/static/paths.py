@@ -38,6 +38,7 @@ from masonry_dem.solvers.static.steps import (
     StepController,
     elastic_range,
     straight,
+    tail_cap,
     transient_target,
 )
 
@@ -223,7 +224,9 @@ def work_control(
     (one is tried as soon as the step has been halved ``transient_after`` times in a
     row: a fold of the path, which no shorter step passes); the displacements pass the
     limit. The collapse multiplier is the highest lambda on the
-    path."""
+    path (``collapse_at = "onset"``: after three flat steps, the highest before them). With
+    ``tail_resolution`` each step is bounded by the load it can gain where the path may stop
+    (:func:`.steps.tail_cap`)."""
     s = solver.settings
     free = solver.problem.asm.free_index
     c = solver.problem.F_live / float(np.linalg.norm(solver.problem.F_live))
@@ -272,6 +275,7 @@ def work_control(
     # displacement limit (``run_off``): no rest there or higher while the path stays on it
     ran_off = math.inf
     asked = -math.inf  # the lambda the last pseudo-transient step relaxed to
+    onset: float | None = None  # the highest lambda before the flat steps (collapse_at)
 
     def transient(why: str, stopped: float, above: float | None = None) -> bool:
         """A pseudo-transient step to a lambda a little higher (or up to where the failed
@@ -390,6 +394,16 @@ def work_control(
         step.size, step.cuts, flat_steps = max(step.size, resume), 0, 0
 
     while len(hist.steps) < s.max_steps:
+        if s.tail_resolution > 0:
+            step.cap = tail_cap(
+                lam,
+                elastic_slope,
+                s.flat_slope,
+                s.tail_resolution,
+                curve_slope(path_w, path_lam, elastic_slope),
+                _to_limit(solver, hist, path_w),
+            )
+            step.size = min(step.size, step.cap)
         goal = w + step.size
         q_start, lam_start = line.start(goal)
         out = solver.equilibrate(
@@ -544,6 +558,10 @@ def work_control(
                 f"elastic stiffness per unit displacement over 3 steps (peak {peak:.6g})"
             )
             stop = StopReason.CREEPING if tiny else StopReason.STIFFNESS_LOST
+            if not tiny and s.collapse_at == "onset":
+                # the flat steps are the evidence of the mechanism, not part of its load
+                onset = max(path_lam[: len(path_lam) - flat_steps])
+                reason += f"; the flat steps began at lambda={path_lam[-1 - flat_steps]:.6g}"
             break
         if step.cuts == 0:
             step.grow(out.iterations)
@@ -558,13 +576,26 @@ def work_control(
     assert hist.collapse_bracket is not None  # set by the caller
     if peak <= hist.collapse_bracket[0]:
         return reason, stop
-    hist.collapse_bracket = (peak, peak)
+    reported = peak if onset is None else onset
+    hist.collapse_bracket = (reported, reported)
     hist.end(
         Status.COLLAPSE,
         stop,
         f"{reason}; load control first failed at {first_lambda:.6g} ({first_failure})",
     )
     return None
+
+
+def _to_limit(solver: StaticSolver, hist: History, path_w: list[float]) -> float:
+    """How far in w the displacement limit lies ahead, by the secant of the largest
+    translation over the last two states (inf where it did not grow)."""
+    if len(hist.steps) < 2 or path_w[-1] <= path_w[-2]:
+        return math.inf
+    last = moved_from_dead_load(solver.problem, hist, hist.steps[-1].q)
+    rate = (last - moved_from_dead_load(solver.problem, hist, hist.steps[-2].q)) / (
+        path_w[-1] - path_w[-2]
+    )
+    return (solver.limit - last) / rate if rate > 0 else math.inf
 
 
 def _singular_along_load(solver: StaticSolver, hist: History) -> bool:

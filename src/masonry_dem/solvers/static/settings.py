@@ -41,6 +41,10 @@ RUN_OFFS: tuple[str, ...] = get_args(RunOff)
 LineSearch = Literal["residual", "natural"]
 LINE_SEARCHES: tuple[str, ...] = get_args(LineSearch)
 
+#: which lambda a path that lost its stiffness reports (see ``StaticSettings.collapse_at``)
+CollapseAt = Literal["peak", "onset"]
+COLLAPSE_AT: tuple[str, ...] = get_args(CollapseAt)
+
 #: how long the next work step is (see ``StaticSettings.step_rule``)
 StepRule = Literal["easy", "iterations"]
 STEP_RULES: tuple[str, ...] = get_args(StepRule)
@@ -339,6 +343,24 @@ class StaticSettings(LoadPathSettings):
         it converges every search the default converges and a few more, but the paths
         it then takes cost more factorizations on the validation set, so it is off.
         Converged states are exact equilibria of the law either way.
+
+    The step near the peak (docs/solvers.md, "The step near the peak")
+    ------------------------------------------------------------------
+    On a curve whose slope fades (a mechanism that forms joint by joint) the path stops three
+    steps after the slope fell below ``flat_slope`` and reports the highest lambda reached;
+    the paths of all step lengths coincide, and the answer moves with the steps only
+    because the steps that prove the stop also gain load.
+    tail_resolution: the most a work step may gain, as a fraction of lambda, at the slope
+        of the stop (``flat_slope`` of the elastic slope), and at the displacement limit at
+        the last step's slope: each step is at most ``tail_resolution`` / ``flat_slope``
+        times the elastic displacement at lambda (``steps.tail_cap``). 0: off (steps grow
+        by ``growth`` without a bound).
+    collapse_at: what a path stopped by lost stiffness (three flat steps) reports:
+        ``"peak"``, the highest lambda on the path; ``"onset"``, the highest lambda up to
+        the state where the flat steps began (a converged state of the path; the two agree
+        as the steps shorten). Not the default: on a curve that approaches its limit from
+        below (a rigid wedge tipping on elastic joints) the flat steps gain load toward
+        it, and the onset lies further from it than the highest state.
     """
 
     easy_iterations: int = count(6, least=0)
@@ -406,6 +428,9 @@ class StaticSettings(LoadPathSettings):
     corner_rest: CornerRest = choice("bounded", CORNER_RESTS)
     # the tangent at a kink of the law (session 19)
     kink_rounds: int = count(0, least=0)
+    # the step near the peak (session 20)
+    tail_resolution: float = at_least(0.0, 0.0, " (0: off)")
+    collapse_at: CollapseAt = choice("peak", COLLAPSE_AT)
 
 
 SETTING_NAMES = tuple(f.name for f in fields(StaticSettings))

@@ -25,6 +25,7 @@ __all__ = [
     "StepController",
     "elastic_range",
     "straight",
+    "tail_cap",
     "transient_target",
 ]
 
@@ -189,6 +190,40 @@ def straight(path_w: list[float], path_lam: list[float], elastic_slope: float) -
     elastic slope d lambda / d w? (The certificate's measure of the curve's slope; a step
     back in w, a snap-back included, is not straight.)"""
     return STRAIGHT <= curve_slope(path_w, path_lam, elastic_slope) < math.inf
+
+
+def tail_cap(
+    lam: float,
+    elastic_slope: float,
+    flat_slope: float,
+    resolution: float,
+    slope: float = math.nan,
+    to_limit: float = math.inf,
+) -> float:
+    """The longest work step that gains at most ``resolution`` x |lambda| where it may end
+    the path: inf when off (``resolution`` or ``flat_slope`` 0) or without an elastic slope.
+
+    * At the slope of the stop (``flat_slope`` of the elastic slope d lambda / d w): on a
+      curve whose slope fades (a mechanism forming joint by joint) the path stops three
+      steps after its slope fell below ``flat_slope`` and reports the highest lambda it
+      reached. Those steps are ``growth`` - 1 times the distance travelled, so the answer
+      carries their gain, an error of first order in the step and always upward. Bounded
+      by the gain they can make at the stop's slope, the stop is located to within a few
+      ``resolution`` of lambda whatever ``growth``. The bound is (``resolution`` /
+      ``flat_slope``) x lambda / elastic slope: for equal fractions, the elastic
+      displacement at lambda, which the steps of the rising path rarely reach.
+    * At the displacement limit, ``to_limit`` ahead in w (by the secant of the last two
+      states): a step that may pass it goes no further than it, or no longer than its gain
+      at the last step's ``slope`` (relative to the elastic one) allows, whichever is longer.
+      The state past the limit is the last of the path, and its lambda counts.
+    """
+    if resolution <= 0 or flat_slope <= 0 or not elastic_slope > 0:
+        return math.inf
+    cap = resolution * abs(lam) / (flat_slope * elastic_slope)
+    if to_limit < cap:
+        steep = max(slope, flat_slope) if math.isfinite(slope) else flat_slope
+        cap = max(to_limit, resolution * abs(lam) / (steep * elastic_slope))
+    return cap
 
 
 def transient_target(lam: float, stopped: float, rise: float, reach: float, on_line: bool) -> float:
