@@ -88,17 +88,18 @@ def _replay(model: Model, merit: str, failed: list) -> list[bool]:
 
 
 def test_the_natural_merit_converges_work_searches_the_residual_merit_fails():
-    """Work control asks for a step of w; with the residual merit 21 of the panel's
+    """Work control asks for a step of w; with the residual merit 17 of the panel's
     controlled searches fail (the steps folds and the stop check ask for included). From
     the same states, with the same trust radius, the natural merit (the simplified Newton
-    correction, which the joints' stiff normal rows do not dominate) converges 5 of them
-    (measured; at least 4 asserted). Replayed with the residual merit, every one fails
-    again: the replay is faithful, so the difference is the merit's."""
+    correction, which the joints' stiff normal rows do not dominate) converges 3 of them
+    (measured; 21 and 5 before the work steps near the stop were bounded, session 20).
+    Replayed with the residual merit, every one fails again: the replay is faithful, so the
+    difference is the merit's."""
     model = tilted_panel()
     _, failed = _failed_work_searches(model)
     assert len(failed) >= 10
     assert not any(_replay(model, "residual", failed))
-    assert sum(_replay(model, "natural", failed)) >= 4
+    assert sum(_replay(model, "natural", failed)) >= 3
 
 
 def test_the_natural_merit_at_the_start_is_the_newton_correction():
@@ -114,7 +115,7 @@ def test_the_natural_merit_at_the_start_is_the_newton_correction():
     lu = problem.factor(response)
     dq = lu.solve(residual)
     live = lu.solve(problem.F_live)
-    assert solver._natural_norm(lu, residual, q, None, live) == pytest.approx(
+    assert solver.natural_norm(lu, residual, q, None, live) == pytest.approx(
         problem.correction_norm(dq), rel=1e-12
     )
     c = problem.F_live / float(problem.F_live @ problem.F_live)  # w, work-conjugate
@@ -122,6 +123,6 @@ def test_the_natural_merit_at_the_start_is_the_newton_correction():
     dlam = (control[1] - float(c @ q[problem.free]) - float(c @ dq)) / float(c @ live)
     controlled = dq + dlam * live
     assert abs(float(c @ controlled) - control[1]) < 1e-12 * control[1]
-    assert solver._natural_norm(lu, residual, q, control, live) == pytest.approx(
+    assert solver.natural_norm(lu, residual, q, control, live) == pytest.approx(
         problem.correction_norm(controlled), rel=1e-12
     )

@@ -260,7 +260,7 @@ class Corrector:
                 c_try = constraint_error(q_try)
                 if natural:
                     assert lu is not None  # factorized above
-                    trial = self._natural_norm(lu, r_try, q_try, control, live_solved[1])
+                    trial = self.natural_norm(lu, r_try, q_try, control, live_solved[1])
                 else:
                     trial = n_try + c_try
                 if trial < (1.0 - 1e-4 * f) * merit:
@@ -421,7 +421,7 @@ class Corrector:
         log.debug("%d joints on a kink take the tangent of the side beyond", int(at_kink.sum()))
         return T
 
-    def _natural_norm(
+    def natural_norm(
         self,
         lu: Factors,
         residual: np.ndarray,

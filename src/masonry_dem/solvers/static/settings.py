@@ -353,8 +353,11 @@ class StaticSettings(LoadPathSettings):
     tail_resolution: the most a work step may gain, as a fraction of lambda, at the slope
         of the stop (``flat_slope`` of the elastic slope), and at the displacement limit at
         the last step's slope: each step is at most ``tail_resolution`` / ``flat_slope``
-        times the elastic displacement at lambda (``steps.tail_cap``). 0: off (steps grow
-        by ``growth`` without a bound).
+        times the elastic displacement at lambda (``steps.tail_cap``). The default 1e-3,
+        equal to ``flat_slope``'s, makes the cap the elastic displacement at lambda itself,
+        which the steps of a rising path do not reach: it binds only in the tail, and the
+        answer no longer moves with ``growth``. 0: off (steps grow by ``growth`` without a
+        bound).
     collapse_at: what a path stopped by lost stiffness (three flat steps) reports:
         ``"peak"``, the highest lambda on the path; ``"onset"``, the highest lambda up to
         the state where the flat steps began (a converged state of the path; the two agree
@@ -429,7 +432,7 @@ class StaticSettings(LoadPathSettings):
     # the tangent at a kink of the law (session 19)
     kink_rounds: int = count(0, least=0)
     # the step near the peak (session 20)
-    tail_resolution: float = at_least(0.0, 0.0, " (0: off)")
+    tail_resolution: float = at_least(1e-3, 0.0, " (0: off)")
     collapse_at: CollapseAt = choice("peak", COLLAPSE_AT)
 
 
