@@ -41,6 +41,10 @@ LINE_SEARCHES: tuple[str, ...] = get_args(LineSearch)
 StepRule = Literal["easy", "iterations"]
 STEP_RULES: tuple[str, ...] = get_args(StepRule)
 
+#: where the corrector solves loose blocks apart (see ``StaticSettings.loose_blocks``)
+LooseBlocksMode = Literal["off", "rescue", "iterate"]
+LOOSE_BLOCKS_MODES: tuple[str, ...] = get_args(LooseBlocksMode)
+
 
 @dataclass(frozen=True)
 class StaticSettings(LoadPathSettings):
@@ -323,6 +327,22 @@ class StaticSettings(LoadPathSettings):
         it converges every search the default converges and a few more, but the paths
         it then takes cost more factorizations on the validation set, so it is off.
         Converged states are exact equilibria of the law either way.
+
+    Loose blocks solved apart (docs/solvers.md, "Loose blocks solved apart")
+    ------------------------------------------------------------------------
+    loose_blocks: where a Newton search solves the equilibrium of its loose blocks apart
+        (nonlinear elimination: every other DOF and lambda held, Newton on those blocks'
+        DOFs alone). ``"off"``; ``"rescue"``: where a search is about to give up because no
+        correction lowers the residual, and the search goes on from there with its first
+        trust radius if that lowered its merit; ``"iterate"``: also before each factorized
+        iteration, the wall's correction then measured by the trust region without the
+        loose blocks and each trial step followed by their local solve. The residual is the
+        law's either way: converged states are exact equilibria of the law.
+    loose_stiffness: a block is loose when its own tangent block (every other block held,
+        the floor excluded) keeps less than this fraction of its elastic block's stiffness
+        in some direction (the smallest generalised eigenvalue); a yielded component's
+        factor is 0, so any small number separates them.
+    loose_iterations: Newton iterations of a local solve (each one small factorization).
     """
 
     easy_iterations: int = count(6, least=0)
@@ -388,6 +408,10 @@ class StaticSettings(LoadPathSettings):
     corner_transient: bool = checked(True, lambda v: isinstance(v, bool), "true or false")
     # the tangent at a kink of the law (session 19)
     kink_rounds: int = count(0, least=0)
+    # loose blocks solved apart (session 20)
+    loose_blocks: LooseBlocksMode = choice("off", LOOSE_BLOCKS_MODES)
+    loose_stiffness: float = checked(1e-6, lambda v: is_number(v) and 0 < v < 1, "in (0, 1)")
+    loose_iterations: int = count(10, least=1)
 
 
 SETTING_NAMES = tuple(f.name for f in fields(StaticSettings))
