@@ -14,8 +14,8 @@ Proves:
 * with either mode on, a converged state is still an exact equilibrium of the law, so the
   closed forms hold within 1e-6 (a block tilts at s / a, a squat block slides at mu, a free
   wall tilts at t / H);
-* replayed from the same states, the rescue converges every search of a 3 x 13 panel with
-  a free edge that the default converges, and one that it does not;
+* replayed from the same states, the rescue and the fallback converge every search of a
+  3 x 13 panel with a free edge that the default converges, and more;
 * a bad value is named, and the option is off by default.
 """
 
@@ -110,20 +110,20 @@ def _collapse(model, mode: str) -> float:
     return h.collapse_multiplier
 
 
-@pytest.mark.parametrize("mode", ["rescue", "iterate"])
+@pytest.mark.parametrize("mode", ["rescue", "iterate", "fallback"])
 def test_a_block_tilts_at_s_over_a_with_loose_blocks_solved_apart(mode):
     blocks, base = add_base(single_block(A, 0.25, S, 20e3))
     assert _collapse(tilted(blocks, base), mode) == pytest.approx(S / A, rel=1e-6)
 
 
-@pytest.mark.parametrize("mode", ["rescue", "iterate"])
+@pytest.mark.parametrize("mode", ["rescue", "iterate", "fallback"])
 def test_a_squat_block_slides_at_mu_with_loose_blocks_solved_apart(mode):
     blocks, base = add_base(single_block(0.05, 0.25, 0.2, 20e3))  # s / a = 4 > mu
     material = InterfaceMaterial(kn=2.4e9, kt=1e9, friction=0.45)
     assert _collapse(tilted(blocks, base, material), mode) == pytest.approx(0.45, rel=1e-6)
 
 
-@pytest.mark.parametrize("mode", ["rescue", "iterate"])
+@pytest.mark.parametrize("mode", ["rescue", "iterate", "fallback"])
 def test_a_free_wall_tilts_at_t_over_h_with_loose_blocks_solved_apart(mode):
     a, s, courses = 0.081, 0.07, 9
     blocks, base = add_base(running_bond_wall(4, courses, a, 0.21, s, 20e3))
@@ -162,8 +162,9 @@ def _recorded(model, settings: StaticSettings) -> list:
 
 def _replayed(model, settings: StaticSettings, calls: list) -> list[bool]:
     """Each recorded search run again from its state with ``settings``: converged?"""
-    solver = StaticSolver(model, settings)
+    solver = StaticSolver(model, StaticSettings())
     solver.run()  # the path's scales and limits, as the recorded run set them
+    solver.settings = settings
     done = []
     for args, kw, (q, plastic, cracked, last), _ in calls:
         solver.q, solver.plastic, solver.cracked = q.copy(), plastic.copy(), cracked.copy()
@@ -175,14 +176,15 @@ def _replayed(model, settings: StaticSettings, calls: list) -> list[bool]:
     return done
 
 
-def test_the_rescue_converges_a_search_that_fails_by_default():
+def test_the_rescue_converges_searches_that_fail_by_default():
     """The 3 x 13 panel with a free edge (46 searches, 22 failed by default): replayed from
-    the same states, the default converges the same ones as on its path, and the rescue
-    converges each of them and one more (measured: 24 -> 25)."""
+    the same states, the rescue and the fallback converge each search the default
+    converged, and more (measured: 24 -> 25 with the rescue, 27 with the fallback)."""
     model = tilted_panel()
     calls = _recorded(model, StaticSettings())
-    default = _replayed(model, StaticSettings(), calls)
-    assert default == [ok for *_, ok in calls]  # the replay is exact
-    rescued = _replayed(model, StaticSettings(loose_blocks="rescue"), calls)
-    assert all(r for r, d in zip(rescued, default, strict=True) if d)
-    assert sum(rescued) > sum(default)
+    default = [ok for *_, ok in calls]
+    assert not all(default)
+    for mode in ("rescue", "fallback"):
+        rescued = _replayed(model, StaticSettings(loose_blocks=mode), calls)
+        assert all(r for r, d in zip(rescued, default, strict=True) if d)
+        assert sum(rescued) > sum(default)

@@ -6,7 +6,9 @@ displacement (lambda free).
   tangent, safeguarded by a trust region on the translations, a backtracking line search,
   chord steps while they converge fast and (under the dead load) a Levenberg-Marquardt
   floor;
-* :meth:`Corrector.robust` - initial-stiffness iterations with Anderson acceleration.
+* :meth:`Corrector.robust` - initial-stiffness iterations with Anderson acceleration;
+* :meth:`Corrector.eliminate` - the loose blocks solved apart, every other DOF held
+  (:mod:`~masonry_dem.solvers.static.loose`).
 
 The searches that follow a motion of the wall where Newton stops (pseudo-transient and
 implicit relaxations, dynamic relaxation) are :mod:`~masonry_dem.solvers.static.relaxations`'.
@@ -185,7 +187,11 @@ class Corrector:
         where it yields the other way (another branch of the path). A search about to give
         up for want of descent sits next to a kink of the law along its direction: up to
         ``kink_rounds`` times, the joints on that kink take the tangent of the side beyond
-        (:meth:`kink_tangents`) and the search goes on with its first trust radius.
+        (:meth:`kink_tangents`) and the search goes on with its first trust radius. With
+        ``loose_blocks`` on, the loose blocks are solved apart (:meth:`eliminate`): where a
+        search is about to give up (``"rescue"``), and before each factorized iteration and
+        after each trial step, the wall's correction then held off them (``"iterate"``, or
+        ``"fallback"``: so for the rest of a search about to give up).
         """
         s = self.settings
         free = self.problem.asm.free_index
@@ -369,7 +375,14 @@ class Corrector:
                 if exhausted and regularise():
                     radius = max(4.0 * self.last_increment, self.search_seed)
                     continue
-                if exhausted and eliminating and it < budget:
+                if exhausted and s.loose_blocks == "fallback" and eliminating and not iterate:
+                    # the rest of the search with the loose blocks solved apart
+                    iterate = True
+                    it += 1
+                    lu, secant, cuts = None, None, 0
+                    radius = max(4.0 * self.last_increment, self.search_seed)
+                    continue
+                if exhausted and s.loose_blocks == "rescue" and eliminating and it < budget:
                     # a search about to give up: the loose blocks solved apart, and the
                     # search goes on from there if that lowered its merit
                     rescued = self.eliminate(q, lam, dead_factor, response, floor)

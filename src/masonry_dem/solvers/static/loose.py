@@ -205,13 +205,12 @@ class LooseBlocks:
             t = np.where(active, 1.0, 0.0)
             base = q[problem.free[dofs]].copy()
             pending = active.copy()
-            best = (r, rnorm, response, g)
+            before = g
             for _ in range(CUTS):
                 q_try = q.copy()
                 q_try[problem.free[dofs]] = base + t[dof_group] * dy
-                r_try, n_try, resp_try = residual(q_try)
-                g_try = norms(r_try, scale)
-                lower = pending & (g_try < (1.0 - 1e-4 * t) * best[3])
+                g_try = norms(residual(q_try)[0], scale)
+                lower = pending & (g_try < (1.0 - 1e-4 * t) * before)
                 pending &= ~lower
                 if not pending.any():
                     break
@@ -241,7 +240,7 @@ class LooseBlocks:
                 r, rnorm, response = residual(q)
                 g = norms(r, scale)
             active &= g > tolerance
-        solved = int((g <= tolerance).sum())
+        solved = int((~failed & (g <= tolerance)).sum())
         left = int(failed.sum())
         log.debug(
             "%d loose blocks in %d groups: %d solved, %d left (no local equilibrium)",

@@ -42,7 +42,7 @@ StepRule = Literal["easy", "iterations"]
 STEP_RULES: tuple[str, ...] = get_args(StepRule)
 
 #: where the corrector solves loose blocks apart (see ``StaticSettings.loose_blocks``)
-LooseBlocksMode = Literal["off", "rescue", "iterate"]
+LooseBlocksMode = Literal["off", "rescue", "iterate", "fallback"]
 LOOSE_BLOCKS_MODES: tuple[str, ...] = get_args(LooseBlocksMode)
 
 
@@ -336,7 +336,8 @@ class StaticSettings(LoadPathSettings):
         correction lowers the residual, and the search goes on from there with its first
         trust radius if that lowered its merit; ``"iterate"``: also before each factorized
         iteration, the wall's correction then measured by the trust region without the
-        loose blocks and each trial step followed by their local solve. The residual is the
+        loose blocks and each trial step followed by their local solve; ``"fallback"``: the
+        ``"iterate"`` form for the rest of a search about to give up. The residual is the
         law's either way: converged states are exact equilibria of the law.
     loose_stiffness: a block is loose when its own tangent block (every other block held,
         the floor excluded) keeps less than this fraction of its elastic block's stiffness
