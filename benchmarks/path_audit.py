@@ -266,8 +266,6 @@ def audit(
         "steps": len(hist.steps),
         "iterations": solver.iterations,
         "factorizations": solver.factorizations,
-        # the loose blocks' local solves (loose_blocks), small systems counted apart
-        "local_factorizations": solver.local_factorizations,
         "time_steps": solver.time_steps,
         "implicit_steps": solver.implicit_steps,
         "other": solver.factorizations - sum(r["factorizations"] for r in rows),
@@ -617,8 +615,7 @@ def main() -> int:
                 f"steps={b['steps']} iterations={b['iterations']} "
                 f"factorizations={b['factorizations']} time_steps={b['time_steps']} "
                 f"implicit={b['implicit_steps']} "
-                + (f"local={b['local_factorizations']} " if b["local_factorizations"] else "")
-                + f"{b['seconds']:.1f} s "
+                f"{b['seconds']:.1f} s "
                 f"({b['cpu']:.1f} s of CPU)"
             )
             if a.misses:

@@ -6,9 +6,7 @@ displacement (lambda free).
   tangent, safeguarded by a trust region on the translations, a backtracking line search,
   chord steps while they converge fast and (under the dead load) a Levenberg-Marquardt
   floor;
-* :meth:`Corrector.robust` - initial-stiffness iterations with Anderson acceleration;
-* :meth:`Corrector.eliminate` - the loose blocks solved apart, every other DOF held
-  (:mod:`~masonry_dem.solvers.static.loose`).
+* :meth:`Corrector.robust` - initial-stiffness iterations with Anderson acceleration.
 
 The searches that follow a motion of the wall where Newton stops (pseudo-transient and
 implicit relaxations, dynamic relaxation) are :mod:`~masonry_dem.solvers.static.relaxations`'.
@@ -27,7 +25,6 @@ import numpy as np
 
 from masonry_dem.model import Model
 from masonry_dem.solvers.factorization import Factors
-from masonry_dem.solvers.static.loose import LocalSolve, LooseBlocks
 from masonry_dem.solvers.static.outcome import Failure, Outcome
 from masonry_dem.solvers.static.problem import DiscreteProblem, reversed_flow, secant_tangents
 from masonry_dem.solvers.static.settings import StaticSettings
@@ -74,45 +71,6 @@ class Corrector:
         self._limit_allowance = 0.0
         #: the limit in units of the wall's own elastic scale (set once the dead load stands)
         self._elastic_limit = 0.0
-        self._loose: LooseBlocks | None = None
-
-    @property
-    def loose(self) -> LooseBlocks:
-        """The loose blocks' detector and local solver (built on first use)."""
-        if self._loose is None:
-            self._loose = LooseBlocks(self.problem, self.settings.loose_stiffness)
-        return self._loose
-
-    @property
-    def local_factorizations(self) -> int:
-        """Factorizations of the loose blocks' local tangents (small: their DOFs alone)."""
-        return 0 if self._loose is None else self._loose.factorizations
-
-    def eliminate(
-        self,
-        q: np.ndarray,
-        lam: float,
-        dead_factor: float,
-        response: LawResponse,
-        floor: float,
-        blocks: np.ndarray | None = None,
-    ) -> LocalSolve | None:
-        """The loose blocks at (q, ``response``) (or ``blocks``) solved apart, with lambda
-        and every other DOF held (:meth:`LooseBlocks.solve`); None when there are none."""
-        if blocks is None:
-            blocks = self.loose.detect(response)
-        if blocks.size == 0:
-            return None
-        return self.loose.solve(
-            q,
-            blocks,
-            lambda qq: self.residual(qq, lam, dead_factor),
-            floor,
-            self.settings.tolerance,
-            self.settings.loose_iterations,
-            self.limit,
-            self.q,
-        )
 
     @property
     def factorizations(self) -> int:
@@ -187,11 +145,7 @@ class Corrector:
         where it yields the other way (another branch of the path). A search about to give
         up for want of descent sits next to a kink of the law along its direction: up to
         ``kink_rounds`` times, the joints on that kink take the tangent of the side beyond
-        (:meth:`kink_tangents`) and the search goes on with its first trust radius. With
-        ``loose_blocks`` on, the loose blocks are solved apart (:meth:`eliminate`): where a
-        search is about to give up (``"rescue"``), and before each factorized iteration and
-        after each trial step, the wall's correction then held off them (``"iterate"``, or
-        ``"fallback"``: so for the rest of a search about to give up).
+        (:meth:`kink_tangents`) and the search goes on with its first trust radius.
         """
         s = self.settings
         free = self.problem.asm.free_index
@@ -205,10 +159,6 @@ class Corrector:
         secant: np.ndarray | None = None  # joint tangents corrected at this state, if any
         rounds = 0  # secant corrections in this search
         kinks = 0  # one-sided tangents at kinks tried in this search
-        eliminating = s.loose_blocks != "off" and not damped
-        iterate = eliminating and s.loose_blocks == "iterate"
-        held: np.ndarray = np.zeros(0, dtype=np.int64)  # loose blocks solved apart
-        held_dofs: np.ndarray = np.zeros(0, dtype=np.int64)  # their free positions
         here = False  # lu was factorized at the current state
         history: list[tuple[float, float]]  # (merit, trust radius) of the iterates; set below
         budget: int
@@ -255,15 +205,6 @@ class Corrector:
                 return Outcome(True, q, lam, response, it - 1)
             self.iterations += 1
             fresh = lu is None
-            if lu is None and iterate:
-                # nonlinear elimination: the loose blocks in their own equilibrium first;
-                # the wall's correction is then Newton's on the rest
-                done = self.eliminate(q, lam, dead_factor, response, floor)
-                held = np.zeros(0, dtype=np.int64) if done is None else done.blocks
-                held_dofs = self.loose.position[held].reshape(-1)
-                if done is not None:
-                    q, residual, rnorm, response = done.q, done.residual, done.rnorm, done.response
-                    cerr = constraint_error(q)
             if lu is None:
                 lu = self.problem.factor(response, floor, secant)
                 here = True  # the tangent of this state (False once a step is taken with it)
@@ -302,9 +243,6 @@ class Corrector:
                     "singular tangent stiffness",
                     failure=Failure.SINGULAR,
                 )
-            if held_dofs.size:  # the loose blocks follow the rest by their local solves
-                dq = dq.copy()
-                dq[held_dofs] = 0.0
             size = float(np.abs(dq[self.problem.translation]).max(initial=0.0))
             shrink = min(1.0, radius / size) if size > 0 else 1.0
             merit = rnorm + cerr
@@ -319,15 +257,6 @@ class Corrector:
                 q_try[free] += f * dq
                 lam_try = lam + f * dlam
                 r_try, n_try, resp_try = self.residual(q_try, lam_try, dead_factor)
-                if held.size:
-                    inner = self.eliminate(q_try, lam_try, dead_factor, resp_try, floor, held)
-                    assert inner is not None  # held is not empty
-                    q_try, r_try, n_try, resp_try = (
-                        inner.q,
-                        inner.residual,
-                        inner.rnorm,
-                        inner.response,
-                    )
                 c_try = constraint_error(q_try)
                 if natural:
                     assert lu is not None  # factorized above
@@ -375,31 +304,6 @@ class Corrector:
                 if exhausted and regularise():
                     radius = max(4.0 * self.last_increment, self.search_seed)
                     continue
-                if exhausted and s.loose_blocks == "fallback" and eliminating and not iterate:
-                    # the rest of the search with the loose blocks solved apart
-                    iterate = True
-                    it += 1
-                    lu, secant, cuts = None, None, 0
-                    radius = max(4.0 * self.last_increment, self.search_seed)
-                    continue
-                if exhausted and s.loose_blocks == "rescue" and eliminating and it < budget:
-                    # a search about to give up: the loose blocks solved apart, and the
-                    # search goes on from there if that lowered its merit
-                    rescued = self.eliminate(q, lam, dead_factor, response, floor)
-                    if rescued is not None and rescued.rnorm + constraint_error(rescued.q) < (
-                        1.0 - 1e-4
-                    ) * (rnorm + cerr):
-                        q, residual, rnorm, response = (
-                            rescued.q,
-                            rescued.residual,
-                            rescued.rnorm,
-                            rescued.response,
-                        )
-                        cerr = constraint_error(q)
-                        it += 1
-                        lu, secant, cuts = None, None, 0
-                        radius = max(4.0 * self.last_increment, self.search_seed)
-                        continue
                 if exhausted and not damped and kinks < s.kink_rounds:
                     # the search stops next to a kink of the law along its direction: the
                     # joints on it take the tangent of the side the direction takes them to,

@@ -49,10 +49,6 @@ COLLAPSE_AT: tuple[str, ...] = get_args(CollapseAt)
 StepRule = Literal["easy", "iterations"]
 STEP_RULES: tuple[str, ...] = get_args(StepRule)
 
-#: where the corrector solves loose blocks apart (see ``StaticSettings.loose_blocks``)
-LooseBlocksMode = Literal["off", "rescue", "iterate", "fallback"]
-LOOSE_BLOCKS_MODES: tuple[str, ...] = get_args(LooseBlocksMode)
-
 
 @dataclass(frozen=True)
 class StaticSettings(LoadPathSettings):
@@ -368,22 +364,6 @@ class StaticSettings(LoadPathSettings):
         as the steps shorten). Not the default: on a curve that approaches its limit from
         below (a rigid wedge tipping on elastic joints) the flat steps gain load toward
         it, and the onset lies further from it than the highest state.
-    Loose blocks solved apart (docs/solvers.md, "Loose blocks solved apart")
-    ------------------------------------------------------------------------
-    loose_blocks: where a Newton search solves the equilibrium of its loose blocks apart
-        (nonlinear elimination: every other DOF and lambda held, Newton on those blocks'
-        DOFs alone). ``"off"``; ``"rescue"``: where a search is about to give up because no
-        correction lowers the residual, and the search goes on from there with its first
-        trust radius if that lowered its merit; ``"iterate"``: also before each factorized
-        iteration, the wall's correction then measured by the trust region without the
-        loose blocks and each trial step followed by their local solve; ``"fallback"``: the
-        ``"iterate"`` form for the rest of a search about to give up. The residual is the
-        law's either way: converged states are exact equilibria of the law.
-    loose_stiffness: a block is loose when its own tangent block (every other block held,
-        the floor excluded) keeps less than this fraction of its elastic block's stiffness
-        in some direction (the smallest generalised eigenvalue); a yielded component's
-        factor is 0, so any small number separates them.
-    loose_iterations: Newton iterations of a local solve (each one small factorization).
     """
 
     easy_iterations: int = count(6, least=0)
@@ -454,10 +434,6 @@ class StaticSettings(LoadPathSettings):
     # the step near the peak (session 20)
     tail_resolution: float = at_least(1e-3, 0.0, " (0: off)")
     collapse_at: CollapseAt = choice("peak", COLLAPSE_AT)
-    # loose blocks solved apart (session 20)
-    loose_blocks: LooseBlocksMode = choice("off", LOOSE_BLOCKS_MODES)
-    loose_stiffness: float = checked(1e-6, lambda v: is_number(v) and 0 < v < 1, "in (0, 1)")
-    loose_iterations: int = count(10, least=1)
 
 
 SETTING_NAMES = tuple(f.name for f in fields(StaticSettings))
