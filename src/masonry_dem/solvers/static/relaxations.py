@@ -342,8 +342,10 @@ class Relaxations(Corrector):
         dynamic rest). At a fold both motions have spent about the same effort, so the
         rest taken is the one :meth:`implicit_relaxation` followed by a bounded dynamic
         relaxation (``corner_rest = "bounded"``) takes, for at most twice the cheaper
-        motion's effort. Where dynamic relaxation ends without rest (a stall, its own run
-        past the limit) the implicit motion goes on alone to its verdict or its budget.
+        motion's effort. Dynamic relaxation's own motion past the displacement limit is a
+        peak too (a motion that accelerates has no kinetic-energy peak, so no probe, and
+        the implicit motion waits); where it stalls, the implicit motion goes on alone to
+        its verdict or its budget.
         Needs ``fold_probe_every`` > 0 (the probes are where the implicit steps run)."""
         s = self.settings
         free = self.problem.asm.free_index
@@ -390,6 +392,14 @@ class Relaxations(Corrector):
             log.debug("race to lambda=%.6g: a probe's rest after %d time steps and %d "
                       "implicit steps", target, relaxed.cycles, taken)
             return found[-1]
+        if relaxed.kind == "mechanism" and ended is None:
+            # its own motion past the displacement limit (measured from the same state) is
+            # the peak's verdict too; a motion that accelerates has no kinetic-energy peak,
+            # so no probe advanced the implicit one
+            log.debug("race to lambda=%.6g: dynamic relaxation ran past the displacement "
+                      "limit after %d time steps, %d implicit steps", target, relaxed.cycles,
+                      taken)
+            return None
         if relaxed.ok and ended is None:  # the relaxation's own rest, polished
             q = self.q.copy()
             q[free] = relaxed.x
