@@ -50,7 +50,9 @@ def test_the_race_tells_the_block_s_peak_from_rest_below_it():
     rate = s.fold_check_time_steps / s.corner_check_steps
     solver.time_steps = solver.implicit_steps = 0
     solver.restore(*start)
-    above = solver.race((1.0 + s.transient_rise) * closed_form, closed_form, s.fold_check_time_steps)
+    above = solver.race(
+        (1.0 + s.transient_rise) * closed_form, closed_form, s.fold_check_time_steps
+    )
     assert above is None
     # the falling block's kinetic energy never peaks, so no probe asks the implicit motion:
     # dynamic relaxation's own run-off decides

@@ -389,16 +389,24 @@ class Relaxations(Corrector):
         self.time_steps += relaxed.cycles
         ended = implicit[0] if implicit else None
         if found and not (ended is not None and (ended.ok or ended.past_limit)):
-            log.debug("race to lambda=%.6g: a probe's rest after %d time steps and %d "
-                      "implicit steps", target, relaxed.cycles, taken)
+            log.debug(
+                "race to lambda=%.6g: a probe's rest after %d time steps and %d implicit steps",
+                target,
+                relaxed.cycles,
+                taken,
+            )
             return found[-1]
         if relaxed.kind == "mechanism" and ended is None:
             # its own motion past the displacement limit (measured from the same state) is
             # the peak's verdict too; a motion that accelerates has no kinetic-energy peak,
             # so no probe advanced the implicit one
-            log.debug("race to lambda=%.6g: dynamic relaxation ran past the displacement "
-                      "limit after %d time steps, %d implicit steps", target, relaxed.cycles,
-                      taken)
+            log.debug(
+                "race to lambda=%.6g: dynamic relaxation ran past the displacement "
+                "limit after %d time steps, %d implicit steps",
+                target,
+                relaxed.cycles,
+                taken,
+            )
             return None
         if relaxed.ok and ended is None:  # the relaxation's own rest, polished
             q = self.q.copy()
