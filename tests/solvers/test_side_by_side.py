@@ -92,3 +92,14 @@ def test_the_last_fold_of_s13_2_is_passed_at_the_same_lambda():
     assert found.collapse_multiplier > 1.01 * 0.10819, found.reason
     assert found.collapse_multiplier == pytest.approx(before.collapse_multiplier, rel=1e-9)
     assert 0 < race.implicit_steps < mixed.implicit_steps
+
+
+@pytest.mark.parametrize("value", [-1, 2.5, "fast"])
+def test_a_bad_race_rate_is_named(value):
+    with pytest.raises(ValueError, match="corner_race_rate"):
+        StaticSettings(corner_race_rate=value)
+
+
+def test_race_is_a_corner_check():
+    with pytest.raises(ValueError, match="corner_check"):
+        StaticSettings(corner_check="sprint")

@@ -336,7 +336,8 @@ class Relaxations(Corrector):
         state (at ``last``) to ``target``: dynamic relaxation of ``budget`` time steps with
         its Newton probes (:meth:`dynamic_rescue`), and :meth:`implicit_motion` advanced at
         each probe to the steps the two budgets' rate grants the time steps taken so far
-        (``budget`` time steps for ``corner_check_steps`` implicit steps). The first verdict
+        (``budget`` time steps for ``corner_check_steps`` implicit steps, or
+        ``corner_race_rate`` time steps for one). The first verdict
         decides: the implicit motion at rest (a fold, the path goes on from it), past the
         displacement limit (a peak: None), or a probe's Newton converged (a fold, from the
         dynamic rest). At a fold both motions have spent about the same effort, so the
@@ -350,7 +351,8 @@ class Relaxations(Corrector):
         s = self.settings
         free = self.problem.asm.free_index
         dr = self._kept_relaxation(budget)
-        rate = budget / s.corner_check_steps  # time steps an implicit step is worth
+        # time steps an implicit step is worth
+        rate = s.corner_race_rate or budget / s.corner_check_steps
         motion = self.implicit_motion(target)
         taken = 0
         implicit: list[Outcome] = []  # the implicit motion's end, once it has one

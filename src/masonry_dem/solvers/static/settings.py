@@ -331,6 +331,12 @@ class StaticSettings(LoadPathSettings):
         not sought). ``"dynamic"``: its whole budget, ``fold_check_time_steps`` (session
         19). The measurements behind the default are in that section of docs/solvers.md.
 
+    Both relaxations side by side (docs/solvers.md, "Both relaxations side by side")
+    --------------------------------------------------------------------------------
+    corner_race_rate: with ``corner_check = "race"``, the time steps of dynamic relaxation
+        run for each implicit step. 0 (default): the rate the two budgets are set by,
+        ``fold_check_time_steps`` / ``corner_check_steps`` (40).
+
     Newton's tangent at a kink of the law (docs/solvers.md, "Newton's basin on walls that meet")
     ----------------------------------------------------------------------------------------
     kink_rounds: a search about to give up because no correction lowers the residual (its
@@ -409,6 +415,8 @@ class StaticSettings(LoadPathSettings):
     corner_transient: bool = checked(True, lambda v: isinstance(v, bool), "true or false")
     # the cost of passing a fold (session 20)
     corner_rest: CornerRest = choice("bounded", CORNER_RESTS)
+    # both relaxations side by side (session 20)
+    corner_race_rate: int = count(0, least=0)
     # the tangent at a kink of the law (session 19)
     kink_rounds: int = count(0, least=0)
 
