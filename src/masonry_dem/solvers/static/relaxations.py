@@ -337,17 +337,17 @@ class Relaxations(Corrector):
         its Newton probes (:meth:`dynamic_rescue`), and :meth:`implicit_motion` advanced at
         each probe to the steps the two budgets' rate grants the time steps taken so far
         (``budget`` time steps for ``corner_check_steps`` implicit steps, or
-        ``corner_race_rate`` time steps for one). The first verdict
-        decides: the implicit motion at rest (a fold, the path goes on from it), past the
-        displacement limit (a peak: None), or a probe's Newton converged (a fold, from the
-        dynamic rest). At a fold both motions have spent about the same effort, so the
-        rest taken is the one :meth:`implicit_relaxation` followed by a bounded dynamic
-        relaxation (``corner_rest = "bounded"``) takes, for at most twice the cheaper
+        ``corner_race_rate`` time steps for one). The first verdict decides: the implicit
+        motion at rest (a fold, the path goes on from it), past the displacement limit (a
+        peak: None), or a probe's Newton converged (a fold, from the dynamic rest). At a
+        fold both motions have spent about the same effort, so the rest taken is, up to the
+        probes' spacing, the one :meth:`implicit_relaxation` followed by a bounded dynamic
+        relaxation (``corner_rest = "bounded"``) takes, for at most about twice the cheaper
         motion's effort. Dynamic relaxation's own motion past the displacement limit is a
         peak too (a motion that accelerates has no kinetic-energy peak, so no probe, and
         the implicit motion waits); where it stalls, the implicit motion goes on alone to
-        its verdict or its budget.
-        Needs ``fold_probe_every`` > 0 (the probes are where the implicit steps run)."""
+        its verdict or its budget. Needs ``fold_probe_every`` > 0 (the probes are where
+        the implicit steps run)."""
         s = self.settings
         free = self.problem.asm.free_index
         dr = self._kept_relaxation(budget)
@@ -414,14 +414,21 @@ class Relaxations(Corrector):
             q = self.q.copy()
             q[free] = relaxed.x
             polished = self.equilibrate(target, start=q)
+            log.debug(
+                "race to lambda=%.6g: dynamic relaxation's own rest after %d time steps, Newton %s",
+                target,
+                relaxed.cycles,
+                "ok" if polished.ok else polished.reason,
+            )
             if polished.ok:
                 return polished
+        stopped = ended is not None  # the implicit verdict ended the relaxation
         ended = advance(math.inf)
         log.debug(
             "race to lambda=%.6g: %d time steps (%s), %d implicit steps (%s)",
             target,
             relaxed.cycles,
-            relaxed.kind,
+            "stopped" if stopped else relaxed.kind,
             taken,
             "rest" if ended is not None and ended.ok else getattr(ended, "reason", ""),
         )
