@@ -336,15 +336,18 @@ def work_control(
         ``corner_check = "explicit"``, :meth:`Relaxations.implicit_relaxation` first: its
         motion running past the displacement limit is a peak; rest is a fold (with
         ``"mixed"`` the path goes on from dynamic relaxation's rest, if it finds one); its
-        budget spent, dynamic relaxation decides. Elsewhere dynamic relaxation of
-        ``budget`` time steps."""
+        budget spent, dynamic relaxation decides. With ``"race"`` both side by side
+        (:meth:`Relaxations.race`). Elsewhere dynamic relaxation of ``budget`` time steps."""
         nonlocal checked_from
         checked_from = len(hist.steps)
         target = lam + s.transient_rise * abs(lam)
         if answered(target, "check"):
             return False
         rescued: Outcome | None
-        if corner and s.corner_check != "explicit":
+        if corner and s.corner_check == "race" and s.fold_probe_every > 0:
+            rescued = solver.race(target, lam, budget)
+            how, verdict = "both relaxations", "ok" if rescued else "no rest"
+        elif corner and s.corner_check != "explicit":
             moved = solver.implicit_relaxation(target)
             how = "implicit relaxation"
             verdict = f"ok in {moved.iterations} steps" if moved.ok else moved.reason
@@ -354,7 +357,7 @@ def work_control(
             # the check's own effort with corner_rest "bounded") and where
             # the implicit check gave no verdict (neither rest nor a run-off within
             # corner_check_steps: a slow fold, or a peak that creeps)
-            if (moved.ok and s.corner_check == "mixed") or not (moved.ok or moved.past_limit):
+            if (moved.ok and s.corner_check != "implicit") or not (moved.ok or moved.past_limit):
                 settled = solver.dynamic_rescue(target, lam, rest_budget(budget, moved))
                 verdict += "; dynamic relaxation: " + ("no rest" if settled is None else "ok")
             if settled is None and moved.ok:  # the path goes on from the implicit rest

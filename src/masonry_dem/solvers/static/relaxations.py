@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import logging
 import math
+from collections.abc import Generator
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -159,6 +160,19 @@ class Relaxations(Corrector):
         (measured from the last converged state, as every search of the path), or no rest
         within the budget (a peak). A check: the trust radius of the path's searches is left
         as it was; the caller that goes on from its rest sets it."""
+        motion = self.implicit_motion(target, budget)
+        while True:
+            try:
+                next(motion)
+            except StopIteration as done:
+                return done.value
+
+    def implicit_motion(
+        self, target: float, budget: int | None = None
+    ) -> Generator[None, None, Outcome]:
+        """:meth:`implicit_relaxation` as a resumable motion: yields after each
+        factorization and returns its :class:`Outcome`, so that another relaxation can run
+        beside it (:meth:`race`)."""
         s = self.settings
         budget = s.corner_check_steps if budget is None else budget
         free = self.problem.asm.free_index
@@ -172,6 +186,7 @@ class Relaxations(Corrector):
             self.iterations += 1
             self.implicit_steps += 1
             dq = self.problem.factor(response, floor).solve(residual)
+            yield
             q_new = q.copy()
             q_new[free] += dq
             r_new, n_new, resp_new = self.residual(q_new, target)
@@ -228,6 +243,12 @@ class Relaxations(Corrector):
             ),
         )
 
+    def _kept_relaxation(self, budget: int) -> DynamicRelaxation:
+        """:meth:`relaxation` of ``budget`` time steps, kept while the budget is the same."""
+        if self._dr is None or self._dr.settings.max_cycles != budget:
+            self._dr = self.relaxation(budget)
+        return self._dr
+
     def relaxation_start(self, last: float) -> RelaxationStart:
         """The state a dynamic relaxation starts from: the last converged one, at the load
         factor ``last``, at rest."""
@@ -259,8 +280,7 @@ class Relaxations(Corrector):
         s = self.settings
         free = self.problem.asm.free_index
         budget = s.rescue_time_steps if budget is None else budget
-        if self._dr is None or self._dr.settings.max_cycles != budget:
-            self._dr = self.relaxation(budget)
+        dr = self._kept_relaxation(budget)
         start = self.relaxation_start(last)
         # its displacement limit measured from the start state, as every search of the path
         # measures its step: from the unloaded wall a state already past the limit (a wall
@@ -276,7 +296,7 @@ class Relaxations(Corrector):
             return out.ok
 
         every = s.fold_probe_every if polish else 0
-        relaxed = self._dr.relax_with_cuts(
+        relaxed = dr.relax_with_cuts(
             start,
             target,
             from_start=True,
@@ -310,3 +330,109 @@ class Relaxations(Corrector):
             "ok" if polished.ok else polished.reason,
         )
         return polished if polished.ok else None
+
+    def race(self, target: float, last: float, budget: int) -> Outcome | None:
+        """The corner check with both relaxations side by side, from the last converged
+        state (at ``last``) to ``target``: dynamic relaxation of ``budget`` time steps with
+        its Newton probes (:meth:`dynamic_rescue`), and :meth:`implicit_motion` advanced at
+        each probe to the steps the two budgets' rate grants the time steps taken so far
+        (``budget`` time steps for ``corner_check_steps`` implicit steps, or
+        ``corner_race_rate`` time steps for one). The first verdict decides: the implicit
+        motion at rest (a fold, the path goes on from it), past the displacement limit (a
+        peak: None), or a probe's Newton converged (a fold, from the dynamic rest). At a
+        fold both motions have spent about the same effort, so the rest taken is, up to the
+        probes' spacing, the one :meth:`implicit_relaxation` followed by a bounded dynamic
+        relaxation (``corner_rest = "bounded"``) takes, for at most about twice the cheaper
+        motion's effort. Dynamic relaxation's own motion past the displacement limit is a
+        peak too (a motion that accelerates has no kinetic-energy peak, so no probe, and
+        the implicit motion waits); where it stalls, the implicit motion goes on alone to
+        its verdict or its budget. Needs ``fold_probe_every`` > 0 (the probes are where
+        the implicit steps run)."""
+        s = self.settings
+        free = self.problem.asm.free_index
+        dr = self._kept_relaxation(budget)
+        # time steps an implicit step is worth
+        rate = s.corner_race_rate or budget / s.corner_check_steps
+        motion = self.implicit_motion(target)
+        taken = 0
+        implicit: list[Outcome] = []  # the implicit motion's end, once it has one
+        found: list[Outcome] = []  # a probe's converged Newton search
+        spent = dr.stats.time_steps
+
+        def advance(until: float) -> Outcome | None:
+            nonlocal taken
+            while not implicit and taken < until:
+                try:
+                    next(motion)
+                except StopIteration as done:
+                    implicit.append(done.value)
+                taken += 1
+            return implicit[0] if implicit else None
+
+        def probe(x: np.ndarray) -> bool:
+            ended = advance((dr.stats.time_steps - spent) / rate)
+            if ended is not None and (ended.ok or ended.past_limit):
+                return True  # the implicit verdict came first: the relaxation stops
+            q = self.q.copy()
+            q[free] = x
+            out = self.equilibrate(target, start=q)
+            if out.ok:
+                found.append(out)
+            return out.ok
+
+        relaxed = dr.relax_with_cuts(
+            self.relaxation_start(last),
+            target,
+            from_start=True,
+            probe=probe,
+            probe_every=s.fold_probe_every,
+            creep_cos=s.fold_creep_cos,
+        )
+        self.time_steps += relaxed.cycles
+        ended = implicit[0] if implicit else None
+        if found and not (ended is not None and (ended.ok or ended.past_limit)):
+            log.debug(
+                "race to lambda=%.6g: a probe's rest after %d time steps and %d implicit steps",
+                target,
+                relaxed.cycles,
+                taken,
+            )
+            return found[-1]
+        if relaxed.kind == "mechanism" and ended is None:
+            # its own motion past the displacement limit (measured from the same state) is
+            # the peak's verdict too; a motion that accelerates has no kinetic-energy peak,
+            # so no probe advanced the implicit one
+            log.debug(
+                "race to lambda=%.6g: dynamic relaxation ran past the displacement "
+                "limit after %d time steps, %d implicit steps",
+                target,
+                relaxed.cycles,
+                taken,
+            )
+            return None
+        if relaxed.ok and ended is None:  # the relaxation's own rest, polished
+            q = self.q.copy()
+            q[free] = relaxed.x
+            polished = self.equilibrate(target, start=q)
+            log.debug(
+                "race to lambda=%.6g: dynamic relaxation's own rest after %d time steps, Newton %s",
+                target,
+                relaxed.cycles,
+                "ok" if polished.ok else polished.reason,
+            )
+            if polished.ok:
+                return polished
+        stopped = ended is not None  # the implicit verdict ended the relaxation
+        ended = advance(math.inf)
+        log.debug(
+            "race to lambda=%.6g: %d time steps (%s), %d implicit steps (%s)",
+            target,
+            relaxed.cycles,
+            "stopped" if stopped else relaxed.kind,
+            taken,
+            "rest" if ended is not None and ended.ok else getattr(ended, "reason", ""),
+        )
+        if ended is not None and ended.ok:
+            self.last_increment = self.increment(ended.q)
+            return ended
+        return None

@@ -26,7 +26,7 @@ from masonry_dem.solvers.load_path import LoadPathSettings
 Continuation = Literal["work", "bracket"]
 CONTINUATION: tuple[str, ...] = get_args(Continuation)
 #: how the corner check relaxes (see ``StaticSettings.corner_check``)
-CornerCheck = Literal["mixed", "implicit", "explicit"]
+CornerCheck = Literal["mixed", "implicit", "explicit", "race"]
 CORNER_CHECKS: tuple[str, ...] = get_args(CornerCheck)
 
 #: how long dynamic relaxation looks for its rest at a fold (``StaticSettings.corner_rest``)
@@ -260,7 +260,12 @@ class StaticSettings(LoadPathSettings):
         ``"explicit"``. ``"implicit"``: the same, but the path always goes on from the
         implicit rest (the cheapest; the overdamped motion may settle in another
         equilibrium at the same lambda than the explicit motion, so answers past a fold can
-        differ). ``"explicit"``: dynamic relaxation alone.
+        differ). ``"explicit"``: dynamic relaxation alone. ``"race"``: both side by side
+        (:meth:`~masonry_dem.solvers.static.relaxations.Relaxations.race`: an implicit step
+        for each ``fold_check_time_steps`` / ``corner_check_steps`` time steps, driven from
+        dynamic relaxation's probes), the first verdict deciding, so that a slow fold costs
+        at most about twice the cheaper relaxation (docs/solvers.md, "Both relaxations side
+        by side"); with ``fold_probe_every`` = 0 it is ``"mixed"``.
     corner_check_steps: budget of implicit steps (factorizations) of that check, the most a
         check without a verdict costs before dynamic relaxation decides. 500: about what the
         fallback's budget costs (``fold_check_time_steps`` of dynamic relaxation at the
@@ -329,6 +334,12 @@ class StaticSettings(LoadPathSettings):
         damped dynamic motion needs more effort to reach than the overdamped one needed is
         not sought). ``"dynamic"``: its whole budget, ``fold_check_time_steps`` (session
         19). The measurements behind the default are in that section of docs/solvers.md.
+
+    Both relaxations side by side (docs/solvers.md, "Both relaxations side by side")
+    --------------------------------------------------------------------------------
+    corner_race_rate: with ``corner_check = "race"``, the time steps of dynamic relaxation
+        run for each implicit step. 0 (default): the rate the two budgets are set by,
+        ``fold_check_time_steps`` / ``corner_check_steps`` (40).
 
     Newton's tangent at a kink of the law (docs/solvers.md, "Newton's basin on walls that meet")
     ----------------------------------------------------------------------------------------
@@ -429,6 +440,8 @@ class StaticSettings(LoadPathSettings):
     corner_transient: bool = checked(True, lambda v: isinstance(v, bool), "true or false")
     # the cost of passing a fold (session 20)
     corner_rest: CornerRest = choice("bounded", CORNER_RESTS)
+    # both relaxations side by side (session 20)
+    corner_race_rate: int = count(0, least=0)
     # the tangent at a kink of the law (session 19)
     kink_rounds: int = count(0, least=0)
     # the step near the peak (session 20)
