@@ -38,12 +38,33 @@ def tilted_wall(
     )
 
 
+def zero_capacity_reduced(T, response, kbar, floor: float) -> np.ndarray:
+    """``T`` (m, 6, 6) with the joints of no strength at zero compression whose normal force
+    is round-off (within the law's contact band of the largest: the head joints of a dry
+    wall under its weight, or beside a course that tilts) reduced to their normal stiffness,
+    ``floor`` x kbar on the other diagonal terms. The law's flags there, and so its raw
+    tangent, are set by the sign of the round-off: read as sliding, such a joint couples its
+    shear to its gap by friction x kn, though it carries nothing. Written here from the
+    rule, not taken from the solver, so that the recheck stays independent of it."""
+    T = T.copy()
+    fn = response.trial[:, 2]
+    band = CONTACT_BAND * np.abs(fn).max(initial=0.0)
+    if band == 0.0:  # the undeformed start: no joint is decided by round-off
+        return T
+    zero = (response.tensile_force <= 0) & (np.abs(fn) <= band)
+    normal = T[zero, 2, 2].copy()
+    T[zero] = np.einsum("mi,ij->mij", floor * kbar[zero], np.eye(6))
+    T[zero, 2, 2] = normal
+    return T
+
+
 def recheck(model: Model, hist: History, settings: StaticSettings) -> None:
     """Re-check a certified collapse without the solver's code paths: (a) a fresh law and
     assembly give a residual within the tolerance at the state the certificate names, its
     actions inside the strength domain; (b) a dense solve of the tangent assembled here
-    gives rho = F_L.v / v.K_0 v <= mode_stiffness (K_0: the dead-load state's tangent) (or the curve past its peak is as long
-    as stated), with positive work of the live load along the mode; (c) lambda is the
+    gives rho = F_L.v / v.K_0 v <= mode_stiffness (K_0: the dead-load state's tangent; both
+    tangents with the joints of :func:`zero_capacity_reduced` reduced) (or the curve past its
+    peak is as long as stated), with positive work of the live load along the mode; (c) lambda is the
     peak of the recorded curve."""
     cert = hist.certificate
     assert hist.status == "collapse" and cert is not None and cert.holds
@@ -69,22 +90,24 @@ def recheck(model: Model, hist: History, settings: StaticSettings) -> None:
     F_live = model.live.reshape(-1)[free]
 
     def dense(response):
-        T = law.tangent(response, settings.residual_stiffness)
+        T = zero_capacity_reduced(
+            law.tangent(response, settings.residual_stiffness),
+            response,
+            asm.kbar,
+            settings.residual_stiffness,
+        )
         return (asm.H_free.T @ sparse.block_diag(list(T)) @ asm.H_free).toarray()
 
     # the metric: the tangent of the dead-load state, joint by joint, each joint's energy
     # counted where it is positive (a semi-norm even where a joint slides under the dead load)
-    # joints with no strength at zero compression whose normal force is round-off (the head
-    # joints of a dry wall under its weight) count with their normal stiffness alone: the
-    # law's flags there, and so its raw tangent, are set by round-off
     first = hist.steps[0].q.reshape(-1)
     dead = law.respond(asm.relative_displacements(first), np.zeros_like(asm.kbar), cracked & False)
-    T0 = law.tangent(dead, settings.residual_stiffness)
-    fn = dead.trial[:, 2]
-    zero = (dead.tensile_force <= 0) & (np.abs(fn) <= CONTACT_BAND * np.abs(fn).max())
-    normal = T0[zero, 2, 2].copy()
-    T0[zero] = np.einsum("mi,ij->mij", settings.residual_stiffness * asm.kbar[zero], np.eye(6))
-    T0[zero, 2, 2] = normal
+    T0 = zero_capacity_reduced(
+        law.tangent(dead, settings.residual_stiffness),
+        dead,
+        asm.kbar,
+        settings.residual_stiffness,
+    )
 
     def metric(v):
         relative = (asm.H_free @ v).reshape(-1, 6)

@@ -379,3 +379,23 @@ def test_the_certificate_of_a_wall_does_not_move_with_its_joint_stiffness():
         statuses.append(hist.status)
     assert rhos == pytest.approx([rhos[0]] * 3, rel=1e-9)
     assert statuses == ["failed"] * 3
+
+
+@pytest.mark.parametrize("tail_resolution", [0.0, 1e-3], ids=["tail off", "tail 1e-3"])
+def test_a_head_joint_at_round_off_does_not_move_the_rechecked_rayleigh_quotient(
+    tail_resolution,
+):
+    """One block by two courses tilted in plane, free, friction 2.0, kn 1e8: the wall tilts
+    about its toe at B/H = 0.21/0.162. The head joint of the top course carries nothing at
+    the peak (normal force 1e-9 N), so the law reads it as sliding (shear coupled to the gap
+    by friction x kn) or detached by the sign of round-off; the dense recheck of rho must
+    reduce it to its normal stiffness, as the tangent Newton factors does (it got -5e-11
+    against the certificate's 1.06e-9 from the raw tangent)."""
+    material = InterfaceMaterial(kn=1e8, kt=0.4e8, friction=2.0)
+    model = tilted_wall(1, 2, material, direction=(1.0, 0.0, 0.0), held=False)
+    settings = StaticSettings(tail_resolution=tail_resolution)
+    hist = pushover(model, settings)
+    assert hist.status == "collapse", hist.reason
+    assert hist.collapse_multiplier == pytest.approx(0.21 / (2 * 0.081), rel=1e-6)
+    assert hist.certificate.mode.startswith("singular tangent")
+    recheck(model, hist, settings)
