@@ -316,9 +316,7 @@ def work_control(
         return (
             s.stop_check_time_steps > 0
             and s.fold_check_time_steps > 0
-            and still_rising(
-                curve_slope(path_w[span], path_lam[span], elastic_slope), s.flat_slope
-            )
+            and still_rising(curve_slope(path_w[span], path_lam[span], elastic_slope), s.flat_slope)
         )
 
     def answered(target: float, what: str) -> bool:
