@@ -18,8 +18,8 @@ Proves:
   ``"bounded"`` at the collapse multiplier of ``"dynamic"``, with fewer time steps and
   factorizations; its time steps stay within the bound, fold_check_time_steps x implicit
   steps / corner_check_steps;
-- S23, whose first fold's two rests lead to peaks 1.4 % apart, keeps dynamic relaxation's
-  rest (the higher peak) and every count with ``"bounded"``;
+- S23, whose first fold's two rests lead to peaks 2.5 % apart, keeps dynamic relaxation's
+  rest (the higher peak) with ``"bounded"``, for fewer time steps;
 - a bad setting is named.
 """
 
@@ -69,8 +69,8 @@ def test_a_bounded_rest_passes_the_folds_of_s13_2_for_less():
 
 def test_s23_keeps_the_rests_of_dynamic_relaxation():
     """S23: the implicit rest at its first fold leads to a lower peak (0.1098) than dynamic
-    relaxation's (0.1114); the bounded relaxation still finds that rest, so the collapse
-    multiplier and every count are those of ``"dynamic"``."""
+    relaxation's (0.1126); the bounded relaxation still finds that rest, so the collapse
+    multiplier is that of ``"dynamic"``."""
     case = build_case("S23")
     runs = []
     for rest in RESTS:
@@ -79,9 +79,11 @@ def test_s23_keeps_the_rests_of_dynamic_relaxation():
     (full, dynamic), (bounded, found) = runs
     assert found.status == dynamic.status == "collapse", found.reason
     assert found.collapse_multiplier == pytest.approx(dynamic.collapse_multiplier, rel=1e-12)
-    assert found.collapse_multiplier > 0.111
-    assert bounded.time_steps == full.time_steps > 0
-    assert found.factorizations == dynamic.factorizations
+    assert found.collapse_multiplier > 0.112
+    # at its last fold neither relaxation finds its own rest (the path goes on from the
+    # implicit one): the bounded one gives up sooner
+    assert 0 < bounded.time_steps < full.time_steps
+    assert found.factorizations <= dynamic.factorizations
 
 
 def test_a_bad_corner_rest_is_named():

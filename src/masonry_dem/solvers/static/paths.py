@@ -307,11 +307,16 @@ def work_control(
     def at_corner() -> bool:
         """Did the path's curve still rise into its last state (the corner check is on)? A
         path stuck there, or whose searches ran off from there, never ran along the
-        mechanism its tangent, taken past the kink, may show: a fold or a peak."""
+        mechanism its tangent, taken past the kink, may show: a fold or a peak. The slope
+        is the secant of the last three steps, the span over which work control calls a
+        curve flat: the halved steps that close in on a fold are as short as the control
+        can tell, and one of them may lose a trace of load on the way (a joint that
+        unloads) without the curve having turned."""
+        span = slice(-4, None, 3) if len(path_w) >= 4 else slice(None)
         return (
             s.stop_check_time_steps > 0
             and s.fold_check_time_steps > 0
-            and still_rising(curve_slope(path_w, path_lam, elastic_slope), s.flat_slope)
+            and still_rising(curve_slope(path_w[span], path_lam[span], elastic_slope), s.flat_slope)
         )
 
     def answered(target: float, what: str) -> bool:
