@@ -20,7 +20,8 @@ Proves:
   default's collapse multiplier to 1e-9, with fewer implicit steps;
 - with ``corner_race_window = "effort"`` (its relaxation stalled against the implicit
   motion's effort so far) S13/2 collapses at ``"mixed"``'s multiplier to 1e-9 with fewer
-  time steps and factorizations and no more implicit steps.
+  time steps and factorizations and no more implicit steps, and S23 (whose rests the
+  first probe's Newton finds) at ``"mixed"``'s multiplier to 1e-9.
 """
 
 from __future__ import annotations
@@ -129,3 +130,17 @@ def test_a_relaxation_that_stalls_against_the_effort_leaves_the_fold_to_the_impl
 def test_a_bad_race_window_is_named(value):
     with pytest.raises(ValueError, match="corner_race_window"):
         StaticSettings(corner_race_window=value)
+
+
+def test_the_probe_is_asked_before_the_stall_is_judged():
+    # S23's rests are found by the first probe's Newton, at a state whose residual has not
+    # halved: judged stalled first, the race would lose them and S23's higher peak
+    case = build_case("S23")
+    peaks = {}
+    for check, window in (("mixed", "budget"), ("race", "effort")):
+        settings = replace(case.settings, corner_check=check, corner_race_window=window)
+        peaks[check] = StaticSolver(case.model, settings).run(monitor=case.monitor)
+    assert peaks["race"].status == "collapse", peaks["race"].reason
+    assert peaks["race"].collapse_multiplier == pytest.approx(
+        peaks["mixed"].collapse_multiplier, rel=1e-9
+    )

@@ -388,16 +388,17 @@ class Relaxations(Corrector):
                 return True  # the implicit verdict came first: the relaxation stops
             q = self.q.copy()
             q[free] = x
-            if seen:
+            out = self.equilibrate(target, start=q)
+            if out.ok:
+                found.append(out)
+                return True
+            if seen:  # judged after the probe: its converged Newton is the relaxation's rest
                 now = dr.stats.time_steps - spent
                 seen.append((now, self.residual(q, target)[1]))
                 if stalled(now):
                     gave_up.append(now)
                     return True  # ends the relaxation; the implicit motion goes on alone
-            out = self.equilibrate(target, start=q)
-            if out.ok:
-                found.append(out)
-            return out.ok
+            return False
 
         relaxed = dr.relax_with_cuts(
             self.relaxation_start(last),

@@ -347,9 +347,10 @@ class StaticSettings(LoadPathSettings):
     corner_race_window: with ``corner_check = "race"``, when its dynamic relaxation has
         stalled (the implicit motion then goes on alone). ``"budget"`` (default): its
         residual has not halved in a quarter of ``fold_check_time_steps``. ``"effort"``:
-        at a probe, the residual of the probes' states has not halved over the last
-        quarter of the time steps taken, the window ``corner_rest = "bounded"`` gives a
-        relaxation worth the implicit motion's effort so far.
+        at a probe whose Newton search did not converge, the residual of the probes'
+        states has not halved over the last quarter of the time steps taken, the window
+        ``corner_rest = "bounded"`` gives a relaxation worth the implicit motion's effort
+        so far.
 
     Newton's tangent at a kink of the law (docs/solvers.md, "Newton's basin on walls that meet")
     ----------------------------------------------------------------------------------------
