@@ -17,7 +17,11 @@ Proves:
   check asked (``run_off = "ignore"``), collapses at the default's multiplier to 1e-9 and
   pays time steps for its run-off, at most one probe window beyond the budgets' rate;
 - S13 with 2-block return walls passes its last fold (above 1.01 x 0.10819) at the
-  default's collapse multiplier to 1e-9, with fewer implicit steps.
+  default's collapse multiplier to 1e-9, with fewer implicit steps;
+- with ``corner_race_window = "effort"`` (its relaxation stalled against the implicit
+  motion's effort so far) S13/2 collapses at ``"mixed"``'s multiplier to 1e-9 with fewer
+  time steps and factorizations and no more implicit steps, and S23 (whose rests the
+  first probe's Newton finds) at ``"mixed"``'s multiplier to 1e-9.
 """
 
 from __future__ import annotations
@@ -103,3 +107,40 @@ def test_a_bad_race_rate_is_named(value):
 def test_race_is_a_corner_check():
     with pytest.raises(ValueError, match="corner_check"):
         StaticSettings(corner_check="sprint")
+
+
+def test_a_relaxation_that_stalls_against_the_effort_leaves_the_fold_to_the_implicit_motion():
+    # S13/2's folds: where the implicit motion rests first, its relaxation gives up within
+    # the window "bounded" gives it, so the race costs no more than "mixed"
+    case = build_case("S13", restraint="return-walls", return_blocks=2)
+    runs = {}
+    for check, window in (("mixed", "budget"), ("race", "effort")):
+        settings = replace(case.settings, corner_check=check, corner_race_window=window)
+        solver = StaticSolver(case.model, settings)
+        runs[check] = (solver, solver.run(monitor=case.monitor))
+    (mixed, before), (race, found) = runs["mixed"], runs["race"]
+    assert found.status == "collapse", found.reason
+    assert found.collapse_multiplier == pytest.approx(before.collapse_multiplier, rel=1e-9)
+    assert race.time_steps < mixed.time_steps
+    assert race.factorizations < mixed.factorizations
+    assert race.implicit_steps <= mixed.implicit_steps
+
+
+@pytest.mark.parametrize("value", ["quarter", 4, None])
+def test_a_bad_race_window_is_named(value):
+    with pytest.raises(ValueError, match="corner_race_window"):
+        StaticSettings(corner_race_window=value)
+
+
+def test_the_probe_is_asked_before_the_stall_is_judged():
+    # S23's rests are found by the first probe's Newton, at a state whose residual has not
+    # halved: judged stalled first, the race would lose them and S23's higher peak
+    case = build_case("S23")
+    peaks = {}
+    for check, window in (("mixed", "budget"), ("race", "effort")):
+        settings = replace(case.settings, corner_check=check, corner_race_window=window)
+        peaks[check] = StaticSolver(case.model, settings).run(monitor=case.monitor)
+    assert peaks["race"].status == "collapse", peaks["race"].reason
+    assert peaks["race"].collapse_multiplier == pytest.approx(
+        peaks["mixed"].collapse_multiplier, rel=1e-9
+    )

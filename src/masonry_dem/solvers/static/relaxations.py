@@ -369,6 +369,19 @@ class Relaxations(Corrector):
                 taken += 1
             return implicit[0] if implicit else None
 
+        # with corner_race_window "effort": the probes' residuals, (time steps, residual)
+        seen = [(0, self.residual(self.q, target)[1])] if s.corner_race_window == "effort" else []
+        gave_up: list[int] = []  # the time steps at which the relaxation was judged stalled
+
+        def stalled(taken_steps: int) -> bool:
+            """Has the residual not halved over the last quarter of the time steps taken?
+            The stall window ``corner_rest = "bounded"`` gives a relaxation worth the
+            implicit motion's effort so far (a quarter of its budget)."""
+            split = 0.75 * taken_steps
+            before = min(r for t, r in seen if t <= split)
+            recent = min((r for t, r in seen if t > split), default=math.inf)
+            return recent > 0.5 * before
+
         def probe(x: np.ndarray) -> bool:
             ended = advance((dr.stats.time_steps - spent) / rate)
             if ended is not None and (ended.ok or ended.past_limit):
@@ -378,7 +391,14 @@ class Relaxations(Corrector):
             out = self.equilibrate(target, start=q)
             if out.ok:
                 found.append(out)
-            return out.ok
+                return True
+            if seen:  # judged after the probe: its converged Newton is the relaxation's rest
+                now = dr.stats.time_steps - spent
+                seen.append((now, self.residual(q, target)[1]))
+                if stalled(now):
+                    gave_up.append(now)
+                    return True  # ends the relaxation; the implicit motion goes on alone
+            return False
 
         relaxed = dr.relax_with_cuts(
             self.relaxation_start(last),
@@ -398,7 +418,15 @@ class Relaxations(Corrector):
                 taken,
             )
             return found[-1]
-        if relaxed.kind == "mechanism" and ended is None:
+        if gave_up:
+            log.debug(
+                "race to lambda=%.6g: dynamic relaxation stalled after %d time steps, "
+                "%d implicit steps",
+                target,
+                gave_up[0],
+                taken,
+            )
+        elif relaxed.kind == "mechanism" and ended is None:
             # its own motion past the displacement limit (measured from the same state) is
             # the peak's verdict too; a motion that accelerates has no kinetic-energy peak,
             # so no probe advanced the implicit one
@@ -410,7 +438,7 @@ class Relaxations(Corrector):
                 taken,
             )
             return None
-        if relaxed.ok and ended is None:  # the relaxation's own rest, polished
+        if relaxed.ok and ended is None and not gave_up:  # its own rest, polished
             q = self.q.copy()
             q[free] = relaxed.x
             polished = self.equilibrate(target, start=q)

@@ -33,6 +33,10 @@ CORNER_CHECKS: tuple[str, ...] = get_args(CornerCheck)
 CornerRest = Literal["dynamic", "bounded"]
 CORNER_RESTS: tuple[str, ...] = get_args(CornerRest)
 
+#: when the race's dynamic relaxation stalls (``StaticSettings.corner_race_window``)
+CornerRaceWindow = Literal["budget", "effort"]
+CORNER_RACE_WINDOWS: tuple[str, ...] = get_args(CornerRaceWindow)
+
 #: what a motion past the displacement limit tells the path (see ``StaticSettings.run_off``)
 RunOff = Literal["carry", "stop", "ignore"]
 RUN_OFFS: tuple[str, ...] = get_args(RunOff)
@@ -340,6 +344,13 @@ class StaticSettings(LoadPathSettings):
     corner_race_rate: with ``corner_check = "race"``, the time steps of dynamic relaxation
         run for each implicit step. 0 (default): the rate the two budgets are set by,
         ``fold_check_time_steps`` / ``corner_check_steps`` (40).
+    corner_race_window: with ``corner_check = "race"``, when its dynamic relaxation has
+        stalled (the implicit motion then goes on alone). ``"budget"`` (default): its
+        residual has not halved in a quarter of ``fold_check_time_steps``. ``"effort"``:
+        at a probe whose Newton search did not converge, the residual of the probes'
+        states has not halved over the last quarter of the time steps taken, the window
+        ``corner_rest = "bounded"`` gives a relaxation worth the implicit motion's effort
+        so far.
 
     Newton's tangent at a kink of the law (docs/solvers.md, "Newton's basin on walls that meet")
     ----------------------------------------------------------------------------------------
@@ -442,6 +453,7 @@ class StaticSettings(LoadPathSettings):
     corner_rest: CornerRest = choice("bounded", CORNER_RESTS)
     # both relaxations side by side (session 20)
     corner_race_rate: int = count(0, least=0)
+    corner_race_window: CornerRaceWindow = choice("budget", CORNER_RACE_WINDOWS)
     # the tangent at a kink of the law (session 19)
     kink_rounds: int = count(0, least=0)
     # the step near the peak (session 20)
