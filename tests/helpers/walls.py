@@ -80,3 +80,20 @@ def tilted_panel() -> Model:
         supports=[Support([base]), Support(sel.column(wall, "left"), ["u1", "u3"])],
         loads=[SelfWeight(), WeightProportional((0.0, 0.0, 1.0))],
     )
+
+
+def tilt_table_block(a: float, s: float, friction: float) -> Model:
+    """A block a high and s thick (0.25 wide) on its base, kn 2.4e9: it tilts at s / a or,
+    squat with s / a above ``friction``, slides at ``friction``."""
+    return on_base(builders.single_block(a, 0.25, s, 20e3), friction=friction, kn=2.4e9)
+
+
+#: closed-form collapses on the tilt table, by name: (the model's builder, lambda)
+CLOSED_FORMS = {
+    "block tilts at s/a": (lambda: tilt_table_block(0.2, 0.1, 0.7), 0.5),
+    "block slides at mu": (lambda: tilt_table_block(0.05, 0.2, 0.45), 0.45),
+    "wall tilts at t/H": (
+        lambda: on_base(builders.running_bond_wall(4, 9, 0.081, 0.21, 0.07, 20e3), kn=2.4e9),
+        0.07 / 0.729,
+    ),
+}

@@ -30,9 +30,8 @@ from dataclasses import replace
 
 import pytest
 
-from helpers.walls import on_base
+from helpers.walls import CLOSED_FORMS
 from masonry_dem.cases.paper import build_case
-from masonry_dem.geometry.builders import running_bond_wall, single_block
 from masonry_dem.solvers.incremental import pushover
 from masonry_dem.solvers.static import StaticSettings, StaticSolver
 from masonry_dem.solvers.static.outcome import StopReason
@@ -73,20 +72,8 @@ def test_no_cap_when_off_or_without_an_elastic_slope() -> None:
     assert tail_cap(2.0, math.nan, 1e-3, 1e-3) == math.inf
 
 
-def _block(a: float, s: float, friction: float):
-    return on_base(single_block(a, 0.25, s, 20e3), friction=friction, kn=2.4e9)
-
-
 @pytest.mark.parametrize("option", [CAP, OPTION], ids=["cap", "cap and onset"])
-@pytest.mark.parametrize(
-    "model, closed_form",
-    [
-        (lambda: _block(0.2, 0.1, 0.7), 0.5),
-        (lambda: _block(0.05, 0.2, 0.45), 0.45),
-        (lambda: on_base(running_bond_wall(4, 9, 0.081, 0.21, 0.07, 20e3), kn=2.4e9), 0.07 / 0.729),
-    ],
-    ids=["block tilts at s/a", "block slides at mu", "wall tilts at t/H"],
-)
+@pytest.mark.parametrize("model, closed_form", CLOSED_FORMS.values(), ids=CLOSED_FORMS.keys())
 def test_the_option_keeps_the_closed_form_collapses(option, model, closed_form):
     hist = pushover(model(), StaticSettings(bracket_tolerance=1e-7, **option))
     assert hist.status == "collapse", hist.reason

@@ -29,8 +29,8 @@ import re
 import numpy as np
 import pytest
 
-from helpers.walls import on_base
-from masonry_dem.geometry.builders import running_bond_wall, single_block
+from helpers.walls import CLOSED_FORMS, on_base
+from masonry_dem.geometry.builders import running_bond_wall
 from masonry_dem.solvers.incremental import pushover
 from masonry_dem.solvers.static import StaticSettings
 from masonry_dem.solvers.static.steps import SecantPredictor, StepController
@@ -124,20 +124,8 @@ RULES = [
 RULE_IDS = ["iterations", "parabola", "iterations+parabola"]
 
 
-def _block(a: float, s: float, friction: float):
-    return on_base(single_block(a, 0.25, s, 20e3), friction=friction, kn=2.4e9)
-
-
 @pytest.mark.parametrize("rule", RULES, ids=RULE_IDS)
-@pytest.mark.parametrize(
-    "model, closed_form",
-    [
-        (lambda: _block(0.2, 0.1, 0.7), 0.5),
-        (lambda: _block(0.05, 0.2, 0.45), 0.45),
-        (lambda: on_base(running_bond_wall(4, 9, 0.081, 0.21, 0.07, 20e3), kn=2.4e9), 0.07 / 0.729),
-    ],
-    ids=["block tilts at s/a", "block slides at mu", "wall tilts at t/H"],
-)
+@pytest.mark.parametrize("model, closed_form", CLOSED_FORMS.values(), ids=CLOSED_FORMS.keys())
 def test_each_rule_finds_the_closed_form_collapses(rule, model, closed_form):
     hist = pushover(model(), StaticSettings(bracket_tolerance=1e-7, **rule))
     assert hist.status == "collapse", hist.reason
