@@ -6,11 +6,13 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
+import pytest
 
 from masonry_dem.geometry import builders
 from masonry_dem.geometry import selectors as sel
 from masonry_dem.geometry.blocks import Blocks
 from masonry_dem.model import InterfaceMaterial, Model, SelfWeight, Support, WeightProportional
+from masonry_dem.solvers.static import StaticSettings, StaticSolver
 
 A, B, S = 0.2, 0.3, 0.1  # block height, width, thickness [m]
 
@@ -97,3 +99,18 @@ CLOSED_FORMS = {
         0.07 / 0.729,
     ),
 }
+
+
+#: the two tilt-table scenes with a closed form that the solver's options are checked on
+TILTED = pytest.mark.parametrize(
+    "build", [tilted_block, tilted_wall], ids=["block s/a", "wall t/H"]
+)
+
+
+def assert_closed_form(build, settings: StaticSettings | None = None) -> None:
+    """``build()`` (a model and its closed-form collapse multiplier) pushed over with
+    ``settings``: a collapse at that multiplier within 1e-6."""
+    model, closed_form = build()
+    hist = StaticSolver(model, settings or StaticSettings()).run()
+    assert hist.status == "collapse", hist.reason
+    assert hist.collapse_multiplier == pytest.approx(closed_form, rel=1e-6)

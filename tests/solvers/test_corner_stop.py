@@ -22,21 +22,18 @@ from __future__ import annotations
 
 import pytest
 
-from helpers.walls import tilted_block, tilted_wall
+from helpers.walls import TILTED, assert_closed_form
 from masonry_dem.cases.paper import build_case
-from masonry_dem.solvers.static import StaticSettings, StaticSolver
+from masonry_dem.solvers.static import StaticSolver
 
 # S23's collapse multiplier on its finest path (growth 1.025, tail_resolution 1.25e-4,
 # collapse_at "onset"; docs/solvers.md, "The step near the peak (session 20)")
 S23_FINEST = 0.11260
 
 
-@pytest.mark.parametrize("build", [tilted_block, tilted_wall], ids=["block s/a", "wall t/H"])
+@TILTED
 def test_the_closed_forms_stand(build):
-    model, closed_form = build()
-    hist = StaticSolver(model, StaticSettings()).run()
-    assert hist.status == "collapse", hist.reason
-    assert hist.collapse_multiplier == pytest.approx(closed_form, rel=1e-6)
+    assert_closed_form(build)
 
 
 def test_s23_passes_the_fold_a_halved_step_dipped_at():

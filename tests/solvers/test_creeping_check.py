@@ -31,7 +31,7 @@ from dataclasses import replace
 
 import pytest
 
-from helpers.walls import tilted, tilted_block, tilted_wall
+from helpers.walls import TILTED, assert_closed_form, tilted, tilted_block
 from masonry_dem.cases.paper import build_case
 from masonry_dem.geometry.builders import add_base
 from masonry_dem.geometry.plans import u_wall
@@ -41,12 +41,9 @@ BUDGETS = [200, 500]
 
 
 @pytest.mark.parametrize("budget", BUDGETS)
-@pytest.mark.parametrize("build", [tilted_block, tilted_wall], ids=["block s/a", "wall t/H"])
+@TILTED
 def test_either_budget_finds_the_closed_forms(build, budget):
-    model, closed_form = build()
-    hist = StaticSolver(model, StaticSettings(corner_check_steps=budget)).run()
-    assert hist.status == "collapse", hist.reason
-    assert hist.collapse_multiplier == pytest.approx(closed_form, rel=1e-6)
+    assert_closed_form(build, StaticSettings(corner_check_steps=budget))
 
 
 def test_the_check_records_its_motion_on_each_side_of_a_peak():

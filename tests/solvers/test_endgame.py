@@ -33,7 +33,7 @@ from dataclasses import replace
 
 import pytest
 
-from helpers.walls import tilted_block, tilted_wall
+from helpers.walls import TILTED, assert_closed_form, tilted_block
 from masonry_dem.cases.paper import build_case
 from masonry_dem.solvers.limit_analysis.analysis import dem_upper_bound
 from masonry_dem.solvers.static import StaticSettings, StaticSolver
@@ -48,12 +48,9 @@ ENDGAMES = [
 
 
 @pytest.mark.parametrize("endgame", ENDGAMES, ids=lambda e: "-".join(map(str, e.values())))
-@pytest.mark.parametrize("build", [tilted_block, tilted_wall], ids=["block s/a", "wall t/H"])
+@TILTED
 def test_every_endgame_finds_the_closed_forms(build, endgame):
-    model, closed_form = build()
-    hist = StaticSolver(model, StaticSettings(**endgame)).run()
-    assert hist.status == "collapse", hist.reason
-    assert hist.collapse_multiplier == pytest.approx(closed_form, rel=1e-6)
+    assert_closed_form(build, StaticSettings(**endgame))
 
 
 def test_the_pseudo_transient_motion_and_the_check_agree_on_each_side_of_a_peak():

@@ -29,7 +29,7 @@ from dataclasses import replace
 
 import pytest
 
-from helpers.walls import tilted_block, tilted_wall
+from helpers.walls import TILTED, assert_closed_form
 from masonry_dem.cases.paper import build_case
 from masonry_dem.solvers.static import StaticSettings, StaticSolver
 
@@ -37,12 +37,9 @@ RESTS = ["dynamic", "bounded"]
 
 
 @pytest.mark.parametrize("rest", RESTS)
-@pytest.mark.parametrize("build", [tilted_block, tilted_wall], ids=["block s/a", "wall t/H"])
+@TILTED
 def test_either_rest_finds_the_closed_forms(build, rest):
-    model, closed_form = build()
-    hist = StaticSolver(model, StaticSettings(corner_rest=rest)).run()
-    assert hist.status == "collapse", hist.reason
-    assert hist.collapse_multiplier == pytest.approx(closed_form, rel=1e-6)
+    assert_closed_form(build, StaticSettings(corner_rest=rest))
 
 
 def test_a_bounded_rest_passes_the_folds_of_s13_2_for_less():

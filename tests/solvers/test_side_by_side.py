@@ -30,19 +30,16 @@ from dataclasses import replace
 
 import pytest
 
-from helpers.walls import tilted_block, tilted_wall
+from helpers.walls import TILTED, assert_closed_form, tilted_block
 from masonry_dem.cases.paper import build_case
 from masonry_dem.solvers.static import StaticSettings, StaticSolver
 
 RACE = StaticSettings(corner_check="race")
 
 
-@pytest.mark.parametrize("build", [tilted_block, tilted_wall], ids=["block s/a", "wall t/H"])
+@TILTED
 def test_the_race_finds_the_closed_forms(build):
-    model, closed_form = build()
-    hist = StaticSolver(model, RACE).run()
-    assert hist.status == "collapse", hist.reason
-    assert hist.collapse_multiplier == pytest.approx(closed_form, rel=1e-6)
+    assert_closed_form(build, RACE)
 
 
 def test_the_race_tells_the_block_s_peak_from_rest_below_it():

@@ -108,6 +108,12 @@ class Corrector:
             failure=Failure.DISPLACEMENT_LIMIT,
         )
 
+    def state_of(self, x: np.ndarray) -> np.ndarray:
+        """The displacements of the last converged state with its free DOFs set to ``x``."""
+        q = self.q.copy()
+        q[self.problem.asm.free_index] = x
+        return q
+
     def increment(self, q: np.ndarray) -> float:
         """Largest translation of ``q`` away from the last converged state."""
         idx = self.problem.moving_translations
@@ -495,8 +501,7 @@ class Corrector:
                 fs.pop(0)
             if rnorm < best[0]:
                 best = (rnorm, x.copy(), response)
-            q_now = self.q.copy()
-            q_now[free] = x
+            q_now = self.state_of(x)
             umax = self.increment(q_now)
             if rnorm <= s.tolerance:
                 self.last_increment = umax
@@ -518,8 +523,7 @@ class Corrector:
                         f"{rnorm:.2e}, correction {step:.2e} m not shrinking)",
                         failure=Failure.DRIFT,
                     )
-        q_best = self.q.copy()
-        q_best[free] = best[1]
+        q_best = self.state_of(best[1])
         return Outcome(
             False,
             q_best,

@@ -161,11 +161,9 @@ class Relaxations(Corrector):
         within the budget (a peak). A check: the trust radius of the path's searches is left
         as it was; the caller that goes on from its rest sets it."""
         motion = self.implicit_motion(target, budget)
-        while True:
-            try:
-                next(motion)
-            except StopIteration as done:
-                return done.value
+        while (ended := _step(motion)) is None:
+            pass
+        return ended
 
     def implicit_motion(
         self, target: float, budget: int | None = None
@@ -263,6 +261,10 @@ class Relaxations(Corrector):
             np.ones((self.model.interfaces.count, 6)),
         )
 
+    def newton_from(self, x: np.ndarray, target: float) -> Outcome:
+        """Newton at ``target`` from a relaxation's state ``x``."""
+        return self.equilibrate(target, start=self.state_of(x))
+
     def dynamic_rescue(
         self, target: float, last: float, budget: int | None = None, polish: bool = True
     ) -> Outcome | None:
@@ -278,7 +280,6 @@ class Relaxations(Corrector):
         (:meth:`Relaxation._relax`'s ``creep_cos``), so a wall snapping through to a fold's
         rest gets there in fewer time steps."""
         s = self.settings
-        free = self.problem.asm.free_index
         budget = s.rescue_time_steps if budget is None else budget
         dr = self._kept_relaxation(budget)
         start = self.relaxation_start(last)
@@ -288,9 +289,7 @@ class Relaxations(Corrector):
         found: list[Outcome] = []
 
         def probe(x: np.ndarray) -> bool:
-            q = self.q.copy()
-            q[free] = x
-            out = self.equilibrate(target, start=q)
+            out = self.newton_from(x, target)
             if out.ok:
                 found.append(out)
             return out.ok
@@ -320,9 +319,7 @@ class Relaxations(Corrector):
                 relaxed.cycles,
             )
             return found[-1]
-        q = self.q.copy()
-        q[free] = relaxed.x
-        polished = self.equilibrate(target, start=q)
+        polished = self.newton_from(relaxed.x, target)
         log.debug(
             "dynamic rescue at lambda=%.6g: %d time steps, Newton %s",
             target,
@@ -349,7 +346,6 @@ class Relaxations(Corrector):
         its verdict or its budget. Needs ``fold_probe_every`` > 0 (the probes are where
         the implicit steps run)."""
         s = self.settings
-        free = self.problem.asm.free_index
         dr = self._kept_relaxation(budget)
         # time steps an implicit step is worth
         rate = s.corner_race_rate or budget / s.corner_check_steps
@@ -362,10 +358,8 @@ class Relaxations(Corrector):
         def advance(until: float) -> Outcome | None:
             nonlocal taken
             while not implicit and taken < until:
-                try:
-                    next(motion)
-                except StopIteration as done:
-                    implicit.append(done.value)
+                if (ended := _step(motion)) is not None:
+                    implicit.append(ended)
                 taken += 1
             return implicit[0] if implicit else None
 
@@ -384,17 +378,15 @@ class Relaxations(Corrector):
 
         def probe(x: np.ndarray) -> bool:
             ended = advance((dr.stats.time_steps - spent) / rate)
-            if ended is not None and (ended.ok or ended.past_limit):
+            if _verdict(ended):
                 return True  # the implicit verdict came first: the relaxation stops
-            q = self.q.copy()
-            q[free] = x
-            out = self.equilibrate(target, start=q)
+            out = self.newton_from(x, target)
             if out.ok:
                 found.append(out)
                 return True
             if seen:  # judged after the probe: its converged Newton is the relaxation's rest
                 now = dr.stats.time_steps - spent
-                seen.append((now, self.residual(q, target)[1]))
+                seen.append((now, self.residual(self.state_of(x), target)[1]))
                 if stalled(now):
                     gave_up.append(now)
                     return True  # ends the relaxation; the implicit motion goes on alone
@@ -410,7 +402,7 @@ class Relaxations(Corrector):
         )
         self.time_steps += relaxed.cycles
         ended = implicit[0] if implicit else None
-        if found and not (ended is not None and (ended.ok or ended.past_limit)):
+        if found and not _verdict(ended):
             log.debug(
                 "race to lambda=%.6g: a probe's rest after %d time steps and %d implicit steps",
                 target,
@@ -439,9 +431,7 @@ class Relaxations(Corrector):
             )
             return None
         if relaxed.ok and ended is None and not gave_up:  # its own rest, polished
-            q = self.q.copy()
-            q[free] = relaxed.x
-            polished = self.equilibrate(target, start=q)
+            polished = self.newton_from(relaxed.x, target)
             log.debug(
                 "race to lambda=%.6g: dynamic relaxation's own rest after %d time steps, Newton %s",
                 target,
@@ -464,3 +454,17 @@ class Relaxations(Corrector):
             self.last_increment = self.increment(ended.q)
             return ended
         return None
+
+
+def _step(motion: Generator[None, None, Outcome]) -> Outcome | None:
+    """One step of an implicit motion: None, or its outcome once it has ended."""
+    try:
+        next(motion)
+    except StopIteration as done:
+        return done.value
+    return None
+
+
+def _verdict(ended: Outcome | None) -> bool:
+    """Has the implicit motion reached a verdict: rest (a fold) or a run past the limit?"""
+    return ended is not None and (ended.ok or ended.past_limit)
