@@ -49,6 +49,7 @@ if TYPE_CHECKING:
     from masonry_dem.mechanism import collapse_mode
     from masonry_dem.solvers.dynamic_relaxation import DRSettings, relax
     from masonry_dem.solvers.limit_analysis import LimitAnalysisResult, limit_analysis
+    from masonry_dem.solvers.quasi_static import QuasiStaticSettings, quasi_static
     from masonry_dem.studies.sweep import sweep
 
 __version__ = "0.1.0"
@@ -62,6 +63,8 @@ _LAZY = {
     "relax": "masonry_dem.solvers.dynamic_relaxation",
     "LimitAnalysisResult": "masonry_dem.solvers.limit_analysis",
     "limit_analysis": "masonry_dem.solvers.limit_analysis",
+    "QuasiStaticSettings": "masonry_dem.solvers.quasi_static",
+    "quasi_static": "masonry_dem.solvers.quasi_static",
     "sweep": "masonry_dem.studies.sweep",
 }
 __getattr__ = lazy_names(__name__, _LAZY)
@@ -77,6 +80,7 @@ __all__ = [
     "Model",
     "PointLoad",
     "Pressure",
+    "QuasiStaticSettings",
     "SelfWeight",
     "StaticSettings",
     "Status",
@@ -94,6 +98,7 @@ __all__ = [
     "limit_analysis",
     "load_case",
     "pushover",
+    "quasi_static",
     "relax",
     "running_bond_wall",
     "running_bond_wall_of_size",

@@ -57,6 +57,7 @@ class StopReason(_Text):
     CONTROL_STUCK = "displacement control stuck"
     CONTROL_BUDGET = "displacement control: max_steps spent short of the target"
     SINGULAR_TANGENT = "singular tangent"  # no factorization, even with a stiffened floor
+    NO_REST = "no rest"  # the reference analysis: the damped wall found no rest above lambda
 
 
 class Failure(Enum):
