@@ -118,7 +118,7 @@ class Motion:
     time_steps: int
     reason: str = ""
     past_limit: bool = False
-    undecided: bool = False  # the budget ran out: neither a rest nor a run past the limit
+    undecided: bool = False  # neither a rest nor a run past the limit: no verdict
 
 
 class QuasiStatic:
@@ -232,7 +232,9 @@ class QuasiStatic:
             if stepped is None:
                 dt *= 0.25
                 if dt < 1e-12:
-                    return Motion(False, taken, "no time step converges (dt < 1e-12)")
+                    return Motion(
+                        False, taken, "no time step converges (dt < 1e-12)", undecided=True
+                    )
                 continue
             q_new, response, rnorm = stepped
             new_velocity = (q_new - q) / dt
@@ -333,8 +335,10 @@ class QuasiStatic:
             )
             return hist
 
+        unloaded = self.snapshot()
         dead = self.move_to_rest(0.0)
         if not dead.rest:
+            self.restore(unloaded)  # the History keeps rests only: the unloaded wall
             record(0.0)
             return finish(
                 Status.FAILED,
@@ -364,8 +368,6 @@ class QuasiStatic:
                     cap = max(s.load_increment * lam, s.first_increment * scale)
                     grown = increment * (s.growth if motion.time_steps <= 3 else 1.0)
                     increment = min(grown, cap)
-                else:
-                    increment = min(increment, failed[0] - lam)
             else:
                 self.restore(kept)
                 if motion.undecided:

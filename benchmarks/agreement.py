@@ -1,0 +1,140 @@
+"""The agreement benchmark: the default static solver (``md.pushover``) against the reference
+quasi-static analysis (``md.quasi_static``) on the corpus of
+:mod:`masonry_dem.studies.corpus`, one row per wall: both multipliers, their ratio, both
+statuses and seconds. A row is ``ok`` when the default agrees with the reference within
+``--within`` (2 %), or ends ``failed``; ``LOW`` when the default certifies a collapse more
+than that below a load at which the reference rests; ``HIGH`` when it reports a collapse
+above the reference's. With ``--refined`` the reference runs again with its increments and
+motion tolerance halved, to show its own discretisation error on each wall.
+
+    NUMBA_NUM_THREADS=1 python benchmarks/agreement.py                  # everything
+    python benchmarks/agreement.py --groups issue                       # issue 36's walls
+    python benchmarks/agreement.py --groups generated --count 30 --out rows.jsonl
+
+Rows are appended to ``--out`` (JSON lines) as they finish, so a long run keeps them.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import math
+import sys
+import time
+from dataclasses import replace
+from pathlib import Path
+
+import masonry_dem as md
+from masonry_dem.studies.corpus import CorpusWall, corpus
+
+
+def verdict(default: md.History, reference: md.History, within: float) -> str:
+    """How the default answer stands against the reference."""
+    ours = default.collapse_multiplier
+    theirs = reference.collapse_multiplier
+    if default.status == "failed":
+        return "ok (failed)"
+    if reference.status != "collapse" or theirs is None:
+        # the reference found no collapse (completed) or no verdict: a collapse of the
+        # default is unjudged, a completed default agrees with a completed reference
+        if reference.status == default.status:
+            return "ok"
+        return f"unjudged (reference {reference.status})"
+    if ours is None:
+        return f"MISSED (default {default.status})"
+    ratio = ours / theirs
+    if ratio < 1.0 - within:
+        return "LOW"
+    if ratio > 1.0 + within:
+        return "HIGH"
+    return "ok"
+
+
+def run_wall(wall: CorpusWall, within: float, refined: bool) -> dict:
+    model = wall.build()
+    t0 = time.perf_counter()
+    default = md.pushover(model)
+    t_default = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    reference = md.quasi_static(model)
+    t_reference = time.perf_counter() - t0
+    row = {
+        "wall": wall.name,
+        "group": wall.group,
+        "blocks": model.blocks.count - 1,
+        "default": default.collapse_multiplier,
+        "default_status": str(default.status),
+        "default_reason": default.reason,
+        "default_seconds": round(t_default, 2),
+        "default_factorizations": default.factorizations,
+        "reference": reference.collapse_multiplier,
+        "reference_status": str(reference.status),
+        "reference_reason": reference.reason,
+        "reference_seconds": round(t_reference, 2),
+        "reference_factorizations": reference.factorizations,
+        **wall.describe,
+    }
+    ours, theirs = default.collapse_multiplier, reference.collapse_multiplier
+    row["ratio"] = ours / theirs if ours is not None and theirs else None
+    row["verdict"] = verdict(default, reference, within)
+    if refined:
+        base = md.QuasiStaticSettings()
+        finer = replace(
+            base,
+            first_increment=base.first_increment / 2,
+            load_increment=base.load_increment / 2,
+            motion_tolerance=base.motion_tolerance / 2,
+        )
+        again = md.quasi_static(model, finer)
+        row["refined"] = again.collapse_multiplier
+        row["refined_status"] = str(again.status)
+    return row
+
+
+def number(value: float | None, digits: int = 5) -> str:
+    return "-" if value is None or not math.isfinite(value) else f"{value:.{digits}g}"
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument(
+        "--groups", nargs="+", default=["validation", "issue", "generated"], help="corpus groups"
+    )
+    parser.add_argument("--count", type=int, default=200, help="generated walls")
+    parser.add_argument("--first", type=int, default=0, help="first wall of the list to run")
+    parser.add_argument("--within", type=float, default=0.02, help="agreement tolerance")
+    parser.add_argument("--refined", action="store_true", help="the reference refined too")
+    parser.add_argument("--out", type=Path, help="append rows as JSON lines")
+    args = parser.parse_args(argv)
+    logging.basicConfig(level=logging.ERROR)
+    md.set_thread_wait_policy()
+    walls = list(corpus(tuple(args.groups), args.count))[args.first :]
+    header = (
+        f"{'wall':42s} {'blocks':>6s} {'default':>9s} {'status':>9s} {'reference':>9s} "
+        f"{'status':>9s} {'ratio':>7s} {'s def':>6s} {'s ref':>6s}  verdict"
+    )
+    print(header, flush=True)
+    counts: dict[str, int] = {}
+    for wall in walls:
+        row = run_wall(wall, args.within, args.refined)
+        key = row["verdict"].split(" ")[0]
+        counts[key] = counts.get(key, 0) + 1
+        line = (
+            f"{wall.name[:42]:42s} {row['blocks']:6d} {number(row['default']):>9s} "
+            f"{row['default_status']:>9s} {number(row['reference']):>9s} "
+            f"{row['reference_status']:>9s} {number(row['ratio'], 4):>7s} "
+            f"{row['default_seconds']:6.1f} {row['reference_seconds']:6.1f}  {row['verdict']}"
+        )
+        if args.refined:
+            line += f"  refined {number(row['refined'])}"
+        print(line, flush=True)
+        if args.out is not None:
+            with args.out.open("a") as fh:
+                fh.write(json.dumps(row) + "\n")
+    print(", ".join(f"{k}: {v}" for k, v in sorted(counts.items())), flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
