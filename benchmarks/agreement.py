@@ -28,6 +28,12 @@ from pathlib import Path
 import masonry_dem as md
 from masonry_dem.studies.corpus import CorpusWall, corpus
 
+#: the candidate path follower: Newton at each load step, the reference's damped motion
+#: where Newton fails (the instability rule), the pushover's bracket
+CANDIDATE = md.QuasiStaticSettings(
+    newton_steps=True, bracket_tolerance=5e-3, motion_tolerance=0.05, max_newton=10
+)
+
 
 def verdict(default: md.History, reference: md.History, within: float) -> str:
     """How the default answer stands against the reference."""
@@ -51,7 +57,7 @@ def verdict(default: md.History, reference: md.History, within: float) -> str:
     return "ok"
 
 
-def run_wall(wall: CorpusWall, within: float, refined: bool) -> dict:
+def run_wall(wall: CorpusWall, within: float, refined: bool, candidate: bool) -> dict:
     model = wall.build()
     t0 = time.perf_counter()
     default = md.pushover(model)
@@ -78,6 +84,14 @@ def run_wall(wall: CorpusWall, within: float, refined: bool) -> dict:
     ours, theirs = default.collapse_multiplier, reference.collapse_multiplier
     row["ratio"] = ours / theirs if ours is not None and theirs else None
     row["verdict"] = verdict(default, reference, within)
+    if candidate:
+        t0 = time.perf_counter()
+        fast = md.quasi_static(model, CANDIDATE)
+        row["candidate"] = fast.collapse_multiplier
+        row["candidate_status"] = str(fast.status)
+        row["candidate_seconds"] = round(time.perf_counter() - t0, 2)
+        row["candidate_factorizations"] = fast.factorizations
+        row["candidate_verdict"] = verdict(fast, reference, within)
     if refined:
         base = md.QuasiStaticSettings()
         finer = replace(
@@ -105,6 +119,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--first", type=int, default=0, help="first wall of the list to run")
     parser.add_argument("--within", type=float, default=0.02, help="agreement tolerance")
     parser.add_argument("--refined", action="store_true", help="the reference refined too")
+    parser.add_argument("--candidate", action="store_true", help="the candidate path follower too")
     parser.add_argument("--out", type=Path, help="append rows as JSON lines")
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.ERROR)
@@ -117,7 +132,7 @@ def main(argv: list[str] | None = None) -> int:
     print(header, flush=True)
     counts: dict[str, int] = {}
     for wall in walls:
-        row = run_wall(wall, args.within, args.refined)
+        row = run_wall(wall, args.within, args.refined, args.candidate)
         key = row["verdict"].split(" ")[0]
         counts[key] = counts.get(key, 0) + 1
         line = (
@@ -126,6 +141,11 @@ def main(argv: list[str] | None = None) -> int:
             f"{row['reference_status']:>9s} {number(row['ratio'], 4):>7s} "
             f"{row['default_seconds']:6.1f} {row['reference_seconds']:6.1f}  {row['verdict']}"
         )
+        if args.candidate:
+            line += (
+                f"  candidate {number(row['candidate'])} {row['candidate_status']} "
+                f"{row['candidate_seconds']:.1f} s {row['candidate_verdict']}"
+            )
         if args.refined:
             line += f"  refined {number(row['refined'])}"
         print(line, flush=True)

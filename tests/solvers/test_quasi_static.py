@@ -17,6 +17,7 @@ Proves:
 - the judge's lambda is at most the associative limit-analysis multiplier (x (1 + 1e-3));
 - without a live load the analysis ends ``completed`` (``NO_LIVE_LOAD``); with
   ``max_load_factor`` below the collapse it ends ``completed`` at exactly that load;
+- with ``newton_steps`` the closed forms are bracketed as well;
 - bad settings are refused by name, and settings of another type by a TypeError.
 """
 
@@ -65,6 +66,19 @@ def test_the_bracket_holds_the_closed_form_collapse(build, exact):
     assert lo <= exact * (1 + SLACK)
     assert exact <= hi * (1 + SLACK)
     assert hi / lo - 1 <= DEFAULT.bracket_tolerance + SLACK
+
+
+@pytest.mark.parametrize("build, exact", CLOSED_FORMS.values(), ids=CLOSED_FORMS.keys())
+def test_newton_steps_keep_the_closed_form_collapse(build, exact):
+    """With ``newton_steps`` (Newton at each load step, the damped motion only where it
+    fails) the bracket still holds the closed form, within the same tolerances."""
+    settings = md.QuasiStaticSettings(newton_steps=True)
+    hist = md.quasi_static(build(), settings)
+    assert hist.status == "collapse", hist.reason
+    lo, hi = hist.collapse_bracket
+    assert lo <= exact * (1 + SLACK)
+    assert exact <= hi * (1 + SLACK)
+    assert hi / lo - 1 <= settings.bracket_tolerance + SLACK
 
 
 @SCENES

@@ -68,6 +68,10 @@ from masonry_dem.solvers.static.problem import DiscreteProblem
 
 log = logging.getLogger(__name__)
 
+#: a factorized matrix is reused (a chord step) while each step divides the residual of the
+#: time step by at least 1 / CHORD_RATIO (modified Newton, Kelley 1995, 5.3)
+CHORD_RATIO = 0.25
+
 
 @dataclass(frozen=True)
 class QuasiStaticSettings:
@@ -87,10 +91,21 @@ class QuasiStaticSettings:
         since the last rest.
     max_time_steps: time steps at one load before the analysis gives up without a verdict.
     max_newton: Newton iterations of one time step before it is taken again half as long.
-    displacement_limit: the largest translation from the last rest still in the
+    displacement_limit: the largest translation from the dead-load rest still in the
         small-displacement range [m] (None: half the smallest dimension of the moving
-        blocks, as the static solver).
+        blocks, as the static solver); under the dead load, from the unloaded wall, with
+        the elastic displacement of the bonded wall under its weight added. A rest past it
+        is none: the model is geometrically linear.
     max_load_factor: the analysis ends ``completed`` when lambda reaches it.
+    newton_steps: each increment is first tried by Newton's method from the last rest (a
+        time step of infinite length, with the same line search), the damped motion
+        running only where Newton does not converge, and the increments follow the
+        iteration rule of Crisfield (1981): times (``target_iterations`` / I) ** 1/2 after
+        a step of I iterations, within [1/2, ``growth``], up to ``max_step`` load scales and
+        never below ``bracket_tolerance`` x lambda. False (the reference): every increment
+        by the damped motion, at the loading rate ``load_increment``.
+    target_iterations, max_step: the iteration rule's target and its largest increment
+        (load scales), with ``newton_steps``.
     """
 
     first_increment: float = positive(0.01)
@@ -105,6 +120,10 @@ class QuasiStaticSettings:
     max_load_factor: float = checked(
         math.inf, lambda v: is_number(v) and v > 0, "a number > 0 (inf: no cap)"
     )
+
+    newton_steps: bool = False
+    target_iterations: int = count(4, least=1)
+    max_step: float = positive(1.0)
 
     def __post_init__(self) -> None:
         check_fields(self)
@@ -147,6 +166,8 @@ class QuasiStatic:
         self.iterations = 0
         #: (lambda, dt, error, residual, distance from the last rest) of each time step taken
         self.trace: list[tuple[float, float, float, float, float]] = []
+        #: the dead-load rest, from which the displacement limit is measured (None before)
+        self.origin: np.ndarray | None = None
         self._dt = 1.0  # the last time step taken, in units of the dashpots' relaxation time
 
     @property
@@ -181,11 +202,15 @@ class QuasiStatic:
             return g, self._norm(g, lam, dead), response, rnorm
 
         g, gnorm, response, rnorm = balance(q)
+        factors = None  # the matrix factorized at an earlier iterate, kept while it converges
         for _ in range(s.max_newton):
             if gnorm <= s.tolerance:
                 return q, response, rnorm
             self.iterations += 1
-            dq = self.problem.factor(response, rate).solve(g)
+            fresh = factors is None
+            if factors is None:
+                factors = self.problem.factor(response, rate)
+            dq = factors.solve(g)
             if not np.all(np.isfinite(dq)):
                 return None
             length = 1.0
@@ -193,11 +218,18 @@ class QuasiStatic:
                 trial = q.copy()
                 trial[free] += length * dq
                 g_t, n_t, resp_t, r_t = balance(trial)
-                if n_t < gnorm or n_t <= s.tolerance:
+                if n_t <= CHORD_RATIO * gnorm or n_t <= s.tolerance or (fresh and n_t < gnorm):
+                    break
+                if not fresh:  # a kept matrix that no longer converges fast: factor anew
                     break
                 length *= 0.5
             else:
                 return None
+            if not fresh and n_t > CHORD_RATIO * gnorm and n_t > s.tolerance:
+                factors = None
+                continue
+            if n_t > CHORD_RATIO * gnorm:
+                factors = None  # Newton's own step converged slowly: the next one factors
             q, g, gnorm, response, rnorm = trial, g_t, n_t, resp_t, r_t
         return (q, response, rnorm) if gnorm <= s.tolerance else None
 
@@ -213,7 +245,8 @@ class QuasiStatic:
         weight = self.problem.displacement_weight
         # under the dead load, elastic shortening is no mechanism (a tall column shortens
         # by more than half a block under its own weight)
-        limit = self.problem.limit + (unit if lam == 0.0 else 0.0)
+        limit = self.problem.limit + (unit if self.origin is None else 0.0)
+        origin = self.q if self.origin is None else self.origin
         rest_q = self.q.copy()
         residual, rnorm, response = self.problem.residual(
             self.q, lam, self.plastic, self.cracked, dead
@@ -242,7 +275,7 @@ class QuasiStatic:
             # (rotations as displacements at the median block size)
             change = 0.5 * dt * float(np.abs(weight * (new_velocity - velocity)[free]).max())
             moved = float(np.abs(weight * (q_new - rest_q)[free]).max())
-            travelled = float(np.abs(q_new[moving] - rest_q[moving]).max(initial=0.0))
+            travelled = float(np.abs(q_new[moving] - origin[moving]).max(initial=0.0))
             allowed = s.motion_tolerance * (unit + moved)
             error = change / allowed
             if error > 1.0 and taken > 0:
@@ -252,16 +285,14 @@ class QuasiStatic:
             self.time_steps += 1
             self.trace.append((lam, dt, error, rnorm, moved))
             # the law's state moves with the wall: an incremental law, one time step at a time
-            relative = np.asarray(self.problem.asm.H @ q_new).reshape(-1, 6)
-            self.plastic = self.law.plastic_part(relative, response.actions)
-            self.cracked = self.law.cracked_after(self.cracked, response)
+            self._carry(q_new, response)
             q, velocity = q_new, new_velocity
             if travelled > limit:
                 self.q = q
                 return Motion(
                     False,
                     taken,
-                    f"the wall ran {travelled:.3g} m from its last rest, past the "
+                    f"the wall moved {travelled:.3g} m from its dead-load rest, past the "
                     f"displacement limit {limit:.3g} m",
                     past_limit=True,
                 )
@@ -280,6 +311,26 @@ class QuasiStatic:
             f"(residual {rnorm:.2e}, {float(np.abs(q[moving] - rest_q[moving]).max()):.3g} m "
             f"from the last rest)",
         )
+
+    def newton(self, lam: float) -> int | None:
+        """Newton's method from the last rest to an equilibrium at ``lam`` (a time step of
+        infinite length: the tangent's floor is the static solver's residual stiffness):
+        the iterations it took, the wall's state moved there; None where it does not
+        converge within ``max_newton`` iterations (the state is then undefined)."""
+        before = self.iterations
+        stepped = self._time_step(self.q, lam, 1.0, 1e9, self.q)
+        if stepped is None or stepped[2] > self.settings.tolerance:
+            return None
+        self._carry(stepped[0], stepped[1])
+        return self.iterations - before
+
+    def _carry(self, q: np.ndarray, response: LawResponse) -> None:
+        """Make ``q`` the wall's state, the law's state (plastic slip, cracked joints)
+        carried to it from the last one."""
+        relative = np.asarray(self.problem.asm.H @ q).reshape(-1, 6)
+        self.plastic = self.law.plastic_part(relative, response.actions)
+        self.cracked = self.law.cracked_after(self.cracked, response)
+        self.q = q
 
     def snapshot(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         return self.q.copy(), self.plastic.copy(), self.cracked.copy()
@@ -346,6 +397,7 @@ class QuasiStatic:
                 f"the wall finds no rest under its dead load: {dead.reason}",
             )
         record(0.0)
+        self.origin = self.q.copy()
         if not np.any(self.problem.F_live):
             return finish(Status.COMPLETED, StopReason.NO_LIVE_LOAD, "no live load")
         scale = self.problem.load_scale
@@ -355,7 +407,12 @@ class QuasiStatic:
         failed: tuple[float, Motion] | None = None  # the lowest load with no rest
         while True:
             target = min(lam + increment, s.max_load_factor)
-            motion = self.move_to_rest(target)
+            newton = self.newton(target) if s.newton_steps else None
+            if newton is None:
+                self.restore(kept)
+                motion = self.move_to_rest(target)
+            else:
+                motion = Motion(True, 0)
             if motion.rest:
                 lam = target
                 kept = self.snapshot()
@@ -364,7 +421,12 @@ class QuasiStatic:
                     return finish(
                         Status.COMPLETED, StopReason.MAX_LOAD_FACTOR, "max_load_factor reached"
                     )
-                if failed is None:
+                if failed is None and s.newton_steps:
+                    if newton is not None:  # Crisfield's rule
+                        factor = math.sqrt(s.target_iterations / max(newton, 1))
+                        increment *= min(max(factor, 0.5), s.growth)
+                    increment = min(max(increment, s.bracket_tolerance * lam), s.max_step * scale)
+                elif failed is None:
                     cap = max(s.load_increment * lam, s.first_increment * scale)
                     grown = increment * (s.growth if motion.time_steps <= 3 else 1.0)
                     increment = min(grown, cap)
