@@ -8,6 +8,7 @@ above the reference's. With ``--refined`` the reference runs again with its incr
 motion tolerance halved, to show its own discretisation error on each wall.
 
     NUMBA_NUM_THREADS=1 python benchmarks/agreement.py                  # everything
+    python benchmarks/agreement.py --memory slip                        # the incremental law
     python benchmarks/agreement.py --groups issue                       # issue 36's walls
     python benchmarks/agreement.py --groups generated --count 30 --out rows.jsonl
 
@@ -57,8 +58,12 @@ def verdict(default: md.History, reference: md.History, within: float) -> str:
     return "ok"
 
 
-def run_wall(wall: CorpusWall, within: float, refined: bool, candidate: bool) -> dict:
+def run_wall(
+    wall: CorpusWall, within: float, refined: bool, candidate: bool, memory: str | None = None
+) -> dict:
     model = wall.build()
+    if memory is not None:  # the interface law of every wall: holonomic or incremental
+        model = replace(model, memory=memory)
     t0 = time.perf_counter()
     default = md.pushover(model)
     t_default = time.perf_counter() - t0
@@ -106,6 +111,56 @@ def run_wall(wall: CorpusWall, within: float, refined: bool, candidate: bool) ->
     return row
 
 
+def summarise(rows: list[dict]) -> str:
+    """The totals of a run: verdicts, the worst ratios, seconds and factorizations of each
+    solver, and how far the refined reference moved."""
+    lines = [f"{len(rows)} walls"]
+    for who in ("default", "candidate"):
+        if who == "candidate" and not any("candidate" in r for r in rows):
+            continue
+        key = "verdict" if who == "default" else "candidate_verdict"
+        verdicts: dict[str, int] = {}
+        for r in rows:
+            name = r[key].split(" ")[0] + (" (failed)" if "(failed)" in r[key] else "")
+            verdicts[name] = verdicts.get(name, 0) + 1
+        ratios = [
+            r[who] / r["reference"]
+            for r in rows
+            if r.get(who) is not None and r.get("reference") and r["reference_status"] == "collapse"
+        ]
+        worst = (min(ratios), max(ratios)) if ratios else (math.nan, math.nan)
+        seconds = sum(r[f"{who}_seconds"] for r in rows)
+        factorizations = sum(r[f"{who}_factorizations"] for r in rows)
+        lines.append(
+            f"{who}: {', '.join(f'{k} {v}' for k, v in sorted(verdicts.items()))}; ratio to the "
+            f"reference {worst[0]:.4f} .. {worst[1]:.4f}; {seconds:.0f} s, "
+            f"{factorizations} factorizations"
+        )
+    statuses: dict[str, int] = {}
+    for r in rows:
+        statuses[r["reference_status"]] = statuses.get(r["reference_status"], 0) + 1
+    lines.append(
+        f"reference: {', '.join(f'{k} {v}' for k, v in sorted(statuses.items()))}; "
+        f"{sum(r['reference_seconds'] for r in rows):.0f} s, "
+        f"{sum(r['reference_factorizations'] for r in rows)} factorizations"
+    )
+    moved = [
+        abs(r["refined"] / r["reference"] - 1)
+        for r in rows
+        if r.get("refined") is not None and r.get("reference")
+    ]
+    if any("refined" in r for r in rows):
+        unsettled = sum(
+            1 for r in rows if "refined" in r and r["refined_status"] != r["reference_status"]
+        )
+        lines.append(
+            f"refined reference: moved more than 0.5 % on {sum(m > 0.005 for m in moved)} "
+            f"walls, more than 2 % on {sum(m > 0.02 for m in moved)} (largest "
+            f"{max(moved, default=0.0):.2%}); another status on {unsettled}"
+        )
+    return "\n".join(lines)
+
+
 def number(value: float | None, digits: int = 5) -> str:
     return "-" if value is None or not math.isfinite(value) else f"{value:.{digits}g}"
 
@@ -120,8 +175,20 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--within", type=float, default=0.02, help="agreement tolerance")
     parser.add_argument("--refined", action="store_true", help="the reference refined too")
     parser.add_argument("--candidate", action="store_true", help="the candidate path follower too")
+    parser.add_argument(
+        "--memory",
+        choices=["none", "slip"],
+        help="the interface law of every wall: none (holonomic), slip (incremental)",
+    )
     parser.add_argument("--out", type=Path, help="append rows as JSON lines")
+    parser.add_argument(
+        "--summarise", type=Path, metavar="ROWS", help="print the totals of a run's JSON lines"
+    )
     args = parser.parse_args(argv)
+    if args.summarise is not None:
+        rows = [json.loads(line) for line in args.summarise.read_text().splitlines() if line]
+        print(summarise(rows))
+        return 0
     logging.basicConfig(level=logging.ERROR)
     md.set_thread_wait_policy()
     walls = list(corpus(tuple(args.groups), args.count))[args.first :]
@@ -130,11 +197,10 @@ def main(argv: list[str] | None = None) -> int:
         f"{'status':>9s} {'ratio':>7s} {'s def':>6s} {'s ref':>6s}  verdict"
     )
     print(header, flush=True)
-    counts: dict[str, int] = {}
+    rows = []
     for wall in walls:
-        row = run_wall(wall, args.within, args.refined, args.candidate)
-        key = row["verdict"].split(" ")[0]
-        counts[key] = counts.get(key, 0) + 1
+        row = run_wall(wall, args.within, args.refined, args.candidate, args.memory)
+        rows.append(row)
         line = (
             f"{wall.name[:42]:42s} {row['blocks']:6d} {number(row['default']):>9s} "
             f"{row['default_status']:>9s} {number(row['reference']):>9s} "
@@ -152,7 +218,7 @@ def main(argv: list[str] | None = None) -> int:
         if args.out is not None:
             with args.out.open("a") as fh:
                 fh.write(json.dumps(row) + "\n")
-    print(", ".join(f"{k}: {v}" for k, v in sorted(counts.items())), flush=True)
+    print(summarise(rows), flush=True)
     return 0
 
 
