@@ -118,17 +118,6 @@ class StaticSettings(LoadPathSettings):
     creep: a step shorter than this fraction of the Newton correction, with no joint changing
         state, leaves the tangent as it was (its factorization is kept).
     search_cuts: a search gives up after this many cuts (by 8) of its trust radius.
-    secant_rounds: before cutting its trust radius, a search that finds no decrease along the
-        direction of a tangent factorized at its present state corrects each joint's tangent
-        by a Broyden update along the shortest step tried (the change of the joint's actions
-        over it) and solves again, at most this many times a search (0: off, the default;
-        never in the damped search of the dead load). It passes the kinks where a yielded
-        joint's consistent tangent sends it back through its elastic range. A joint that
-        the step carried through its elastic range, to yield the other way, gets its
-        elastic stiffness instead: its chord would let Newton land on the equilibrium where
-        it yields the other way, which a path of shorter steps does not reach. Off because
-        it saves CPU on large walls but costs it on the validation set (docs/solvers.md, "A
-        secant correction of the joints' tangents").
     trust_seed: the trust radius of a search with no previous increment to go by (the dead
         load's first live step, a controlled step), in elastic units of the wall
         (``DiscreteProblem.displacement_scale``: the bonded assembly's largest translation
@@ -352,20 +341,6 @@ class StaticSettings(LoadPathSettings):
         ``corner_rest = "bounded"`` gives a relaxation worth the implicit motion's effort
         so far.
 
-    Newton's tangent at a kink of the law (docs/solvers.md, "Newton's basin on walls that meet")
-    ----------------------------------------------------------------------------------------
-    kink_rounds: a search about to give up because no correction lowers the residual (its
-        trust radius cut ``search_cuts`` times or below ``radius_floor``) gives the joints
-        on the nearest kink of the law along its direction (within the shortest step
-        tried: the shortest of 8^-k of it, k = 10 .. 0, at which a joint's flags change)
-        the law's tangent of the side the direction takes them to, and goes on from there
-        with its first trust radius; at most this many times a search (0: off; never in
-        the damped search of the dead load). Such searches stop next to a kink (docs/
-        solvers.md, "Newton's basin on walls that meet"); replayed from the same states
-        it converges every search the default converges and a few more, but the paths
-        it then takes cost more factorizations on the validation set, so it is off.
-        Converged states are exact equilibria of the law either way.
-
     The step near the peak (docs/solvers.md, "The step near the peak")
     ------------------------------------------------------------------
     On a curve whose slope fades (a mechanism that forms joint by joint) the path stops three
@@ -405,7 +380,6 @@ class StaticSettings(LoadPathSettings):
     creep: float = finite(1e-3)
     search_cuts: int = count(7, least=1)
     trust_seed: float = positive(0.05)
-    secant_rounds: int = count(0, least=0)
     radius_floor: float = positive(1e-9)
     max_cuts: int = count(10, least=0)
     limit_cuts: int = count(2, least=0)
@@ -454,8 +428,6 @@ class StaticSettings(LoadPathSettings):
     # both relaxations side by side (session 20)
     corner_race_rate: int = count(0, least=0)
     corner_race_window: CornerRaceWindow = choice("budget", CORNER_RACE_WINDOWS)
-    # the tangent at a kink of the law (session 19)
-    kink_rounds: int = count(0, least=0)
     # the step near the peak (session 20)
     tail_resolution: float = at_least(1e-3, 0.0, " (0: off)")
     collapse_at: CollapseAt = choice("peak", COLLAPSE_AT)
