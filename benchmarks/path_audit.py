@@ -401,7 +401,7 @@ def hand_over(model, settings) -> None:
     sys.stdout.flush()
 
 
-_STATE = ("q", "plastic", "cracked", "last_increment", "_limit_allowance", "_elastic_limit")
+_STATE = ("q", "plastic", "cracked", "last_increment", "_limit_allowance")
 
 
 def _copy(value):

@@ -283,16 +283,10 @@ def test_robust_strategy_finds_the_equilibrium_newton_finds():
     from masonry_dem.solvers.incremental import StaticSolver
 
     newton = StaticSolver(_panel()).equilibrate(0.0, radius=None, damped=True)
-    solver = StaticSolver(_panel(), StaticSettings(robust_iterations=2000))
-    robust = solver.robust(0.0)
+    robust = StaticSolver(_panel()).robust(0.0, budget=2000)
     assert newton.ok and robust.ok, robust.reason
     scale = np.abs(newton.q).max()
     assert np.abs(robust.q - newton.q).max() <= 1e-4 * scale
-
-
-def test_robust_iterations_must_not_be_negative():
-    with pytest.raises(ValueError, match="robust_iterations"):
-        StaticSettings(robust_iterations=-1)
 
 
 def test_free_standing_wall_tilts_at_s_over_h_with_slip_memory():

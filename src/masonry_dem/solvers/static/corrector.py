@@ -69,8 +69,6 @@ class Corrector:
         self.last_increment = 0.0
         #: extra room of the displacement limit (the elastic displacement under the dead load)
         self._limit_allowance = 0.0
-        #: the limit in units of the wall's own elastic scale (set once the dead load stands)
-        self._elastic_limit = 0.0
 
     @property
     def factorizations(self) -> int:
@@ -79,7 +77,7 @@ class Corrector:
     @property
     def limit(self) -> float:
         """The displacement limit of the searches [m]."""
-        return max(self.problem.limit, self._elastic_limit) + self._limit_allowance
+        return self.problem.limit + self._limit_allowance
 
     @property
     def search_seed(self) -> float:
@@ -364,7 +362,8 @@ class Corrector:
     ) -> Outcome:
         """Second strategy for a load step Newton could not solve: initial-stiffness
         iterations (the elastic matrix of the assembly, factorized once per analysis) with
-        Anderson acceleration over the last ``anderson`` corrections, no line search.
+        Anderson acceleration over the last ``anderson`` corrections, no line search, at most
+        ``budget`` of them (None: ``zero_load_robust_iterations``).
 
         Newton stalls where the yielded tangent is nearly singular or flips between contact
         states of zero-gap joints; the fixed point of q <- q + K0^-1 R(q) does not depend on
@@ -392,7 +391,7 @@ class Corrector:
         xs, fs = [x.copy()], [f.copy()]
         best = (rnorm, x.copy(), response)
         hist: list[tuple[float, float]] = []
-        budget = s.robust_iterations if budget is None else budget
+        budget = s.zero_load_robust_iterations if budget is None else budget
         for it in range(1, budget + 1):
             self.iterations += 1
             if len(xs) > 1:

@@ -85,15 +85,11 @@ def load_control(solver: StaticSolver, hist: History, record: Record) -> None:
         out = solver.equilibrate(target, start=start)
         start = None
         robust_ok = False
-        if not out.ok and s.rescue_time_steps > 0 and not out.past_limit:
-            rescued = solver.dynamic_rescue(target, lam)
-            if rescued is not None:
-                out, robust_ok = rescued, True
-        # the robust re-try: when asked for, or as the last resort of a bracket refined down
-        # to what the residual cannot tell from zero load (where Newton stalls from the
-        # dead-load state: in-plane walls held on one edge)
+        # the robust re-try: the last resort of a bracket refined down to what the residual
+        # cannot tell from zero load (where Newton stalls from the dead-load state: in-plane
+        # walls held on one edge)
         near_zero = target <= ZERO_LOAD * s.tolerance * solver.problem.load_scale
-        budget = s.robust_iterations or (s.zero_load_robust_iterations if near_zero else 0)
+        budget = s.zero_load_robust_iterations if near_zero else 0
         if not out.ok and budget > 0 and not out.past_limit:
             second = solver.robust(target, budget=budget)  # logs its outcome
             if second.ok:
@@ -494,15 +490,15 @@ def work_control(
                     break
             # neither Newton nor the pseudo-transient step passes: before calling this a
             # collapse, let dynamic relaxation look for rest a little higher (where the
-            # tangent is singular along the load only at a corner, or when asked: a fold of
-            # the path has that too, but so has a flat peak, and the check is dear)
+            # tangent is singular along the load only at a corner: a fold of the path has
+            # that too, but so has a flat peak, and the check is dear)
             corner = stuck and at_corner()
             budget = max(s.stop_check_time_steps, s.fold_check_time_steps if corner else 0)
             if (
                 stuck
                 and s.stop_check_time_steps > 0
                 and checked_from != len(hist.steps)
-                and (corner or s.stop_check_singular or not _singular_along_load(solver, hist))
+                and (corner or not _singular_along_load(solver, hist))
                 and rest_above(budget, corner)
             ):
                 transient_failed = False
@@ -609,7 +605,7 @@ def _to_limit(solver: StaticSolver, hist: History, path_w: list[float]) -> float
 def _singular_along_load(solver: StaticSolver, hist: History) -> bool:
     """Is the tangent of the last converged state singular along the motion the live load
     drives (the certificate's rho at most ``mode_stiffness``)? A peak or a fold of the path:
-    the dynamic-relaxation check is skipped there unless ``stop_check_singular``."""
+    the dynamic-relaxation check is skipped there."""
     from masonry_dem.solvers.static.certificate import _dead_load_tangent, _rayleigh
 
     F = solver.problem.F_live

@@ -266,9 +266,9 @@ class Relaxations(Corrector):
         return self.equilibrate(target, start=self.state_of(x))
 
     def dynamic_rescue(
-        self, target: float, last: float, budget: int | None = None, polish: bool = True
+        self, target: float, last: float, budget: int, polish: bool = True
     ) -> Outcome | None:
-        """Dynamic relaxation of a load step Newton could not solve, from the last converged
+        """Dynamic relaxation of ``budget`` time steps to ``target`` from the last converged
         state, then Newton from where it came to rest (so an accepted state meets the static
         tolerance). Newton stops at kinks of the projection (joints on the edge between two
         states) where no correction lowers the residual; the damped motion goes round them.
@@ -280,7 +280,6 @@ class Relaxations(Corrector):
         (:meth:`Relaxation._relax`'s ``creep_cos``), so a wall snapping through to a fold's
         rest gets there in fewer time steps."""
         s = self.settings
-        budget = s.rescue_time_steps if budget is None else budget
         dr = self._kept_relaxation(budget)
         start = self.relaxation_start(last)
         # its displacement limit measured from the start state, as every search of the path

@@ -99,11 +99,6 @@ class StaticSettings(LoadPathSettings):
         dead-load state along a path) still in the small-displacement range (None: half the
         smallest dimension of the blocks that can move). Under the dead load the elastic
         displacement of the bonded assembly is added to it: elastic shortening is no mechanism.
-    limit_elastic_multiple: along the path the limit is at least this multiple of the
-        largest displacement under the dead load (0: off, the default). Off, because a limit
-        that grows with 1 / kn lets a soft wall go past half a block, which is neither the
-        model's small-displacement range nor invariant with kn (docs/solvers.md,
-        "Invariance"); a path that leaves that range on a rising curve fails with that reason.
     residual_stiffness: fraction of the elastic stiffness kept on the diagonal of the tangent.
     tangent: ``"analytic"`` (closed-form derivative of the return) or ``"difference"``.
     tension, memory: deprecated (None: the material's). They are the interface law's, set on
@@ -161,26 +156,17 @@ class StaticSettings(LoadPathSettings):
 
     Other strategies (off by default, or checks)
     --------------------------------------------
-    robust_iterations: budget of initial-stiffness iterations with Anderson acceleration
-        that re-try a failed load step; 0 disables it.
     anderson, divergence_window: the robust iterations mix the last ``anderson``
         corrections and stop when the residual has not fallen x10 in ``divergence_window``
         iterations with corrections that do not shrink.
     zero_load_robust_iterations: the robust re-try's budget where load control has halved
         its step down to what the residual cannot tell from zero load (100 x ``tolerance``
-        load scales) and ``robust_iterations`` is 0: Newton stalls from the dead-load state
-        of in-plane walls held on one edge (a held 9 x 3 wall: 1e-8 -> 0.93).
-    rescue_time_steps: budget of a dynamic relaxation of a failed load step; 0 disables it.
+        load scales): Newton stalls from the dead-load state of in-plane walls held on one
+        edge (a held 9 x 3 wall: 1e-8 -> 0.93).
     stop_check_time_steps: budget of the dynamic relaxation that checks a stop of work
         control (to lambda x (1 + transient_rise)) before the path is given up; 0 disables it.
         The relaxation ends sooner when the wall runs past the displacement limit or its
         residual has not halved in a quarter of the budget.
-    stop_check_singular: run that check also where the tangent of the stuck state is
-        singular along the load. A fold of the path has such a tangent as well as a peak,
-        and only the check tells them apart; with a budget that covers a fold's settling
-        the path passes folds the default certifies as collapses, at the price of a
-        relaxation of the whole wall at every such stop (measured in docs/solvers.md, "The
-        stop check: folds and peaks"). Off by default for that price.
     fold_check_time_steps: budget of that check where the path got stuck while its curve
         still rose: the last step gained at least ``flat_slope`` of the elastic d lambda / d w
         (a corner of the curve, where the tangent of the state, taken past the kink, may be
@@ -370,7 +356,6 @@ class StaticSettings(LoadPathSettings):
     tolerance: float = positive(1e-8)
     control_tolerance: float = positive(1e-6)
     max_iterations: int = count(40, least=1)
-    limit_elastic_multiple: float = at_least(0.0, 0.0, " (0: off)")
     residual_stiffness: float = positive(1e-9)
     tangent: TangentMethod = choice("analytic", TANGENT_METHODS)
     stall_window: int = count(8, least=1)
@@ -393,13 +378,10 @@ class StaticSettings(LoadPathSettings):
     transient_start: float = positive(1e-3)
     transient_shrink: float = positive(0.25)
     transient_window: int = count(30, least=1)
-    robust_iterations: int = count(0, least=0)
     zero_load_robust_iterations: int = count(2000, least=0)
     anderson: int = count(5, least=1)
     divergence_window: int = count(30, least=1)
-    rescue_time_steps: int = count(0, least=0)
     stop_check_time_steps: int = count(4000, least=0)
-    stop_check_singular: bool = False
     fold_check_time_steps: int = count(20_000, least=0)
     fold_probe_every: int = count(500, least=0)
     fold_creep_cos: float = at_least(0.95, 0.0, " (0: off)")
