@@ -48,8 +48,8 @@ Reported beside them, not a condition: ``curve_slope``, the d lambda / d w of th
 the state over the elastic slope, and ``corner``, a stuck path that still rose there (at
 least ``flat_slope``): its branch ended at a kink, where a fold of the path has a singular
 tangent as well as a peak. Such a stop is a peak only if no rest is found above it, which
-the path checks (``corner_check``: an implicit relaxation by default, or dynamic relaxation
-of ``fold_check_time_steps``; the reason says whether it did).
+the path checks (an implicit relaxation, then dynamic relaxation of at most
+``fold_check_time_steps``; the reason says whether it did).
 """
 
 from __future__ import annotations
@@ -338,9 +338,6 @@ def certify(
                 else f"no rest above it: {motion} ran past the displacement "
                 f"limit, or found no rest within {s.corner_check_steps} steps and dynamic "
                 f"relaxation none within {s.fold_check_time_steps} time steps"
-                if s.corner_check != "explicit"
-                else f"dynamic relaxation found no rest above it within {s.fold_check_time_steps} "
-                f"time steps"
             )
         )
     return Certificate(

@@ -333,32 +333,27 @@ def work_control(
 
     def rest_above(budget: int, corner: bool = False) -> bool:
         """A relaxation looks for rest a little above the last state (once from each
-        state), and the path goes on from there if it finds it. At a corner, unless
-        ``corner_check = "explicit"``, :meth:`Relaxations.implicit_relaxation` first: its
-        motion running past the displacement limit is a peak; rest is a fold (with
-        ``"mixed"`` the path goes on from dynamic relaxation's rest, if it finds one); its
-        budget spent, dynamic relaxation decides. With ``"race"`` both side by side
-        (:meth:`Relaxations.race`). Elsewhere dynamic relaxation of ``budget`` time steps."""
+        state), and the path goes on from there if it finds it. At a corner
+        :meth:`Relaxations.implicit_relaxation` first: its motion running past the
+        displacement limit is a peak; rest is a fold (the path goes on from dynamic
+        relaxation's rest, if it finds one); its budget spent, dynamic relaxation decides.
+        Elsewhere dynamic relaxation of ``budget`` time steps."""
         nonlocal checked_from
         checked_from = len(hist.steps)
         target = lam + s.transient_rise * abs(lam)
         if answered(target, "check"):
             return False
         rescued: Outcome | None
-        if corner and s.corner_check == "race" and s.fold_probe_every > 0:
-            rescued = solver.race(target, lam, budget)
-            how, verdict = "both relaxations", "ok" if rescued else "no rest"
-        elif corner and s.corner_check != "explicit":
+        if corner:
             moved = solver.implicit_relaxation(target)
             how = "implicit relaxation"
             verdict = f"ok in {moved.iterations} steps" if moved.ok else moved.reason
             settled: Outcome | None = None
-            # dynamic relaxation runs at a fold with "mixed" (the path goes on from its rest:
-            # the implicit motion may settle in another basin at the same lambda; for at most
-            # the check's own effort with corner_rest "bounded") and where
-            # the implicit check gave no verdict (neither rest nor a run-off within
-            # corner_check_steps: a slow fold, or a peak that creeps)
-            if (moved.ok and s.corner_check != "implicit") or not (moved.ok or moved.past_limit):
+            # dynamic relaxation runs at a fold (the path goes on from its rest: the implicit
+            # motion may settle in another basin at the same lambda; for at most the check's
+            # own effort) and where the implicit check gave no verdict (neither rest nor a
+            # run-off within corner_check_steps: a slow fold, or a peak that creeps)
+            if not moved.past_limit:
                 settled = solver.dynamic_rescue(target, lam, rest_budget(budget, moved))
                 verdict += "; dynamic relaxation: " + ("no rest" if settled is None else "ok")
             if settled is None and moved.ok:  # the path goes on from the implicit rest
@@ -374,10 +369,10 @@ def work_control(
 
     def rest_budget(budget: int, moved: Outcome) -> int:
         """The time steps dynamic relaxation may take to find its own rest where the
-        implicit check already came to rest (``corner_rest``): all of ``budget``, or with
-        ``"bounded"`` the check's own effort at the rate the two budgets are set by
-        (``budget`` time steps for ``corner_check_steps`` implicit steps)."""
-        if not moved.ok or s.corner_rest != "bounded":
+        implicit check already came to rest: the check's own effort at the rate the two
+        budgets are set by (``budget`` time steps for ``corner_check_steps`` implicit steps);
+        all of ``budget`` where it gave no verdict."""
+        if not moved.ok:
             return budget
         return max(1, min(budget, budget * moved.iterations // s.corner_check_steps))
 

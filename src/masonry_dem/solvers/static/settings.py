@@ -25,18 +25,6 @@ from masonry_dem.solvers.load_path import LoadPathSettings
 #: what follows the first failure of load control (see ``StaticSettings.continuation``)
 Continuation = Literal["work", "bracket"]
 CONTINUATION: tuple[str, ...] = get_args(Continuation)
-#: how the corner check relaxes (see ``StaticSettings.corner_check``)
-CornerCheck = Literal["mixed", "implicit", "explicit", "race"]
-CORNER_CHECKS: tuple[str, ...] = get_args(CornerCheck)
-
-#: how long dynamic relaxation looks for its rest at a fold (``StaticSettings.corner_rest``)
-CornerRest = Literal["dynamic", "bounded"]
-CORNER_RESTS: tuple[str, ...] = get_args(CornerRest)
-
-#: when the race's dynamic relaxation stalls (``StaticSettings.corner_race_window``)
-CornerRaceWindow = Literal["budget", "effort"]
-CORNER_RACE_WINDOWS: tuple[str, ...] = get_args(CornerRaceWindow)
-
 #: what a motion past the displacement limit tells the path (see ``StaticSettings.run_off``)
 RunOff = Literal["carry", "stop", "ignore"]
 RUN_OFFS: tuple[str, ...] = get_args(RunOff)
@@ -173,10 +161,9 @@ class StaticSettings(LoadPathSettings):
         singular although the path never ran along a mechanism: a fold of the path, or a
         peak). The check runs there whatever the tangent, with the larger of this and
         ``stop_check_time_steps``; its budget covers the settling of every fold measured
-        (docs/solvers.md, "The corner check on by default"). With ``corner_check =
-        "explicit"`` a corner that is a peak costs half the budget (a stalled relaxation);
-        by default (``"mixed"``) the implicit check decides, and this relaxation runs only
-        at a fold, for the state the path goes on from. A path whose searches run past the
+        (docs/solvers.md, "The corner check on by default"). The implicit check (below)
+        decides, and this relaxation runs only at a fold, for the state the path goes on
+        from, or where that check gives no verdict. A path whose searches run past the
         displacement limit while its curve still rose is a corner too. 0: such stops are
         checked as any other, so a singular tangent skips the check
         (``stop_check_time_steps`` = 0 disables both).
@@ -225,26 +212,18 @@ class StaticSettings(LoadPathSettings):
 
     The corner check (docs/solvers.md, "The corner check, implicit")
     ---------------------------------------------------------------
-    corner_check: how the check at a corner tells a fold from a peak. ``"mixed"``
-        (default): :meth:`~masonry_dem.solvers.static.relaxations.Relaxations.implicit_relaxation`
-        first (linearly implicit Euler steps of the overdamped motion D dq/dt = R(q), D the
-        joints' elastic stiffness, one factorization each, to the same target lambda x (1 +
-        transient_rise) from the same state). Its motion running past the displacement
-        limit is a peak, with no time step of dynamic relaxation (a peak's explicit
-        relaxation stalls for its whole budget). Rest is a fold: the path goes on from the
-        rest dynamic relaxation (``fold_check_time_steps``, bounded by ``corner_rest``)
-        finds, the equilibrium the explicit check takes, or from the implicit one's where
-        that finds none. No verdict
-        within ``corner_check_steps`` (a slow fold): dynamic relaxation decides, as with
-        ``"explicit"``. ``"implicit"``: the same, but the path always goes on from the
-        implicit rest (the cheapest; the overdamped motion may settle in another
-        equilibrium at the same lambda than the explicit motion, so answers past a fold can
-        differ). ``"explicit"``: dynamic relaxation alone. ``"race"``: both side by side
-        (:meth:`~masonry_dem.solvers.static.relaxations.Relaxations.race`: an implicit step
-        for each ``fold_check_time_steps`` / ``corner_check_steps`` time steps, driven from
-        dynamic relaxation's probes), the first verdict deciding, so that a slow fold costs
-        at most about twice the cheaper relaxation (docs/solvers.md, "Both relaxations side
-        by side"); with ``fold_probe_every`` = 0 it is ``"mixed"``.
+    The check at a corner tells a fold from a peak:
+    :meth:`~masonry_dem.solvers.static.relaxations.Relaxations.implicit_relaxation` first
+    (linearly implicit Euler steps of the overdamped motion D dq/dt = R(q), D the joints'
+    elastic stiffness, one factorization each, to the same target lambda x (1 +
+    transient_rise) from the same state). Its motion running past the displacement limit is
+    a peak, with no time step of dynamic relaxation (a peak's explicit relaxation stalls for
+    its whole budget). Rest is a fold: the path goes on from the rest dynamic relaxation
+    finds, or from the implicit one's where that finds none. That relaxation is given the check's own effort at the rate the two budgets
+    are set by, ``fold_check_time_steps`` x (implicit steps taken / ``corner_check_steps``)
+    (docs/solvers.md, "The cost of passing a fold"). No verdict within
+    ``corner_check_steps`` (a slow fold): dynamic relaxation of ``fold_check_time_steps``
+    decides.
     corner_check_steps: budget of implicit steps (factorizations) of that check, the most a
         check without a verdict costs before dynamic relaxation decides. 500: about what the
         fallback's budget costs (``fold_check_time_steps`` of dynamic relaxation at the
@@ -302,30 +281,6 @@ class StaticSettings(LoadPathSettings):
         there also passes folds in a few steps, and without it the walls that meet measured
         took more factorizations and one answer moved (docs/solvers.md, "The endgame at the
         peak").
-
-    The cost of passing a fold (docs/solvers.md, "The cost of passing a fold")
-    ---------------------------------------------------------------------------
-    corner_rest: with ``corner_check = "mixed"``, how long dynamic relaxation looks for its
-        own rest where the implicit check came to rest at a fold. ``"bounded"`` (default):
-        the check's own effort at the rate the two budgets are set by,
-        ``fold_check_time_steps`` x (implicit steps taken / ``corner_check_steps``); where
-        it finds no rest within that, the path goes on from the implicit rest (a rest the
-        damped dynamic motion needs more effort to reach than the overdamped one needed is
-        not sought). ``"dynamic"``: its whole budget, ``fold_check_time_steps`` (session
-        19). The measurements behind the default are in that section of docs/solvers.md.
-
-    Both relaxations side by side (docs/solvers.md, "Both relaxations side by side")
-    --------------------------------------------------------------------------------
-    corner_race_rate: with ``corner_check = "race"``, the time steps of dynamic relaxation
-        run for each implicit step. 0 (default): the rate the two budgets are set by,
-        ``fold_check_time_steps`` / ``corner_check_steps`` (40).
-    corner_race_window: with ``corner_check = "race"``, when its dynamic relaxation has
-        stalled (the implicit motion then goes on alone). ``"budget"`` (default): its
-        residual has not halved in a quarter of ``fold_check_time_steps``. ``"effort"``:
-        at a probe whose Newton search did not converge, the residual of the probes'
-        states has not halved over the last quarter of the time steps taken, the window
-        ``corner_rest = "bounded"`` gives a relaxation worth the implicit motion's effort
-        so far.
 
     The step near the peak (docs/solvers.md, "The step near the peak")
     ------------------------------------------------------------------
@@ -392,7 +347,6 @@ class StaticSettings(LoadPathSettings):
     mode_displacement: float = positive(0.5)
     bound_tolerance: float = positive(0.01)
     line_search: LineSearch = choice("residual", LINE_SEARCHES)
-    corner_check: CornerCheck = choice("mixed", CORNER_CHECKS)
     corner_check_steps: int = count(500, least=1)
     corner_check_rise: float = positive(0.5)
     corner_check_start: float = positive(1e-2)
@@ -405,11 +359,6 @@ class StaticSettings(LoadPathSettings):
     # the endgame at the peak (session 19)
     run_off: RunOff = choice("carry", RUN_OFFS)
     corner_transient: bool = checked(True, lambda v: isinstance(v, bool), "true or false")
-    # the cost of passing a fold (session 20)
-    corner_rest: CornerRest = choice("bounded", CORNER_RESTS)
-    # both relaxations side by side (session 20)
-    corner_race_rate: int = count(0, least=0)
-    corner_race_window: CornerRaceWindow = choice("budget", CORNER_RACE_WINDOWS)
     # the step near the peak (session 20)
     tail_resolution: float = at_least(1e-3, 0.0, " (0: off)")
     collapse_at: CollapseAt = choice("peak", COLLAPSE_AT)
