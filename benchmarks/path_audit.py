@@ -34,7 +34,7 @@ seconds are not, so only their ratios within one run compare.
 solver's state before it and runs each again from that state, once as it was (the count of
 outcomes that differ, ``mismatches``, should be 0) and once with the change: searches
 converged, factorizations and iterations of each corrector over the same searches, so a
-change of the corrector (``line_search=natural``) is compared without the path it would
+change of the corrector is compared without the path it would
 take (a corrector that converges one search more or less takes another path, whose folds
 and halvings then move the totals by tens of per cent either way).
 

@@ -237,9 +237,6 @@ class Corrector:
             shrink = min(1.0, radius / size) if size > 0 else 1.0
             merit = rnorm + cerr
             accepted = None
-            natural = s.line_search == "natural"
-            if natural:  # the full correction's size: the simplified one's at t = 0
-                merit = self.problem.correction_norm(dq)
             # after a cut the full step is the last backtrack of the search before it (x 1/8)
             for step in (0.5, 0.25, 0.125) if repeat else (1.0, 0.5, 0.25, 0.125):
                 f = shrink * step
@@ -248,12 +245,7 @@ class Corrector:
                 lam_try = lam + f * dlam
                 r_try, n_try, resp_try = self.residual(q_try, lam_try, dead_factor)
                 c_try = constraint_error(q_try)
-                if natural:
-                    assert lu is not None  # factorized above
-                    trial = self.natural_norm(lu, r_try, q_try, control, live_solved[1])
-                else:
-                    trial = n_try + c_try
-                if trial < (1.0 - 1e-4 * f) * merit:
+                if n_try + c_try < (1.0 - 1e-4 * f) * merit:
                     accepted = (q_try, lam_try, r_try, n_try, resp_try, c_try)
                     break
             if accepted is None and not here:  # a stale tangent: refactor before cutting
@@ -337,25 +329,6 @@ class Corrector:
             f"no convergence in {it} iterations (residual {rnorm:.2e})",
             failure=Failure.NO_CONVERGENCE,
         )
-
-    def natural_norm(
-        self,
-        lu: Factors,
-        residual: np.ndarray,
-        q: np.ndarray,
-        control: tuple[np.ndarray, float, float] | None,
-        live: np.ndarray,
-    ) -> float:
-        """The size of the simplified Newton correction K^-1 R at ``q`` with the factors
-        ``lu`` of the step (under control, with the lambda correction that meets the
-        constraint, ``live`` = K^-1 F_live): the residual in the tangent's own norm, the
-        merit of ``line_search = "natural"``."""
-        x = lu.solve(residual)
-        if control is not None:
-            c = control[0]
-            ca = float(c @ live)
-            x = x + (control[1] - float(c @ q[self.problem.free]) - float(c @ x)) / ca * live
-        return self.problem.correction_norm(x)
 
     def robust(
         self, load_factor: float, start: np.ndarray | None = None, budget: int | None = None

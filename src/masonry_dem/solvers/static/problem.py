@@ -402,12 +402,6 @@ class DiscreteProblem:
         weighted = self.weight * residual
         return residual, math.sqrt(float(weighted @ weighted)) / scale, response
 
-    def correction_norm(self, dq: np.ndarray) -> float:
-        """|dq| of a correction of the free DOFs, rotations as displacements at the median
-        block size (the dual of the residual's weights)."""
-        weighted = self.displacement_weight * dq
-        return math.sqrt(float(weighted @ weighted))
-
     def _external(self, lam: float, dead_factor: float) -> tuple[np.ndarray, float]:
         """(F_ext on the free DOFs, its weighted norm) at (lambda, dead_factor), kept for
         the last pair: a search evaluates many residuals at one lambda."""

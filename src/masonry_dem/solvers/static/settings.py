@@ -29,10 +29,6 @@ CONTINUATION: tuple[str, ...] = get_args(Continuation)
 RunOff = Literal["carry", "stop", "ignore"]
 RUN_OFFS: tuple[str, ...] = get_args(RunOff)
 
-#: what the corrector's line search accepts (see ``StaticSettings.line_search``)
-LineSearch = Literal["residual", "natural"]
-LINE_SEARCHES: tuple[str, ...] = get_args(LineSearch)
-
 #: which lambda a path that lost its stiffness reports (see ``StaticSettings.collapse_at``)
 CollapseAt = Literal["peak", "onset"]
 COLLAPSE_AT: tuple[str, ...] = get_args(CollapseAt)
@@ -195,21 +191,6 @@ class StaticSettings(LoadPathSettings):
     bound_tolerance: lambda may exceed the associative limit-analysis bound (when one is
         given) by this fraction (the bound's own discretisation and solver tolerance).
 
-    The corrector's line search (docs/solvers.md, "The line search's merit")
-    -------------------------------------------------------------------------
-    line_search: what a trial step of a Newton search must lower to be taken (by a
-        fraction 1e-4 of the step; backtracking 1, 1/2, 1/4, 1/8, then a cut of the trust
-        radius). ``"residual"`` (default): the weighted residual norm plus the control's
-        error. ``"natural"``: the size of the simplified Newton correction K^-1 R(q + t dq)
-        with the factors the step was solved with, against the full correction's (Deuflhard's
-        natural monotonicity test; under control, with the lambda correction that meets the
-        constraint, so the control's error is in it): the residual in the tangent's own
-        norm, which the joints' stiff normal rows do not dominate; one more solve per trial
-        step. It saves factorizations on walls with corners but costs some flat walls more,
-        and its extra solves can outweigh the factorizations it saves, so it is not the
-        default (the figures: docs/solvers.md, "The line search's merit"). The tolerance
-        test of a converged state is the same for both.
-
     The corner check (docs/solvers.md, "The corner check, implicit")
     ---------------------------------------------------------------
     The check at a corner tells a fold from a peak:
@@ -346,7 +327,6 @@ class StaticSettings(LoadPathSettings):
     mode_stiffness: float = positive(0.05)
     mode_displacement: float = positive(0.5)
     bound_tolerance: float = positive(0.01)
-    line_search: LineSearch = choice("residual", LINE_SEARCHES)
     corner_check_steps: int = count(500, least=1)
     corner_check_rise: float = positive(0.5)
     corner_check_start: float = positive(1e-2)
