@@ -56,7 +56,7 @@ Four probes of the path (issue 21, session 17), each on top of a default run:
 * ``--misses`` (session 19) prints, per wall, the work searches converged and failed and
   the quartiles of the predictor's miss over the converged ones: the distance from the
   search's start to the state it converged to, over the distance from the last state (1:
-  a start at the last state; ``StaticSettings.predictor_order``, ``step_rule``).
+  a start at the last state).
 * ``--hand-over`` stops at the state where load control hands over to work control and
   tries from it the first work step and its halvings, from the three starts a search can
   take (the secant through the last two load steps, the state itself, the state moved along

@@ -230,8 +230,8 @@ def work_control(
     path_w = [float(c @ (st.q.reshape(-1)[free] - q0)) for st in hist.steps]
     path_lam = [float(st.load_factor) for st in hist.steps]
     w = path_w[-1]
-    line = SecantPredictor(s.secant_predictor, [], s.predictor_order)
-    for st, stw in zip(hist.steps[-3:], path_w[-3:], strict=False):
+    line = SecantPredictor(s.secant_predictor, [])
+    for st, stw in zip(hist.steps[-2:], path_w[-2:], strict=False):
         line.add(stw, st.q.reshape(-1), float(st.load_factor))
     if len(path_w) > 1:
         # the first live-load step is elastic for walls that stand: its secant is the scale
@@ -249,10 +249,6 @@ def work_control(
         max(first, 1e-3 * abs(w), s.radius_floor * solver.problem.displacement_scale),
         s.growth,
         easy_iterations=s.easy_iterations,
-        rule=s.step_rule,
-        target_iterations=s.target_iterations,
-        exponent=s.step_exponent,
-        shrink=s.step_shrink,
     )
     lam = path_lam[-1]
     first_lambda = hist.collapse_bracket[1] if hist.collapse_bracket else lam

@@ -33,10 +33,6 @@ RUN_OFFS: tuple[str, ...] = get_args(RunOff)
 CollapseAt = Literal["peak", "onset"]
 COLLAPSE_AT: tuple[str, ...] = get_args(CollapseAt)
 
-#: how long the next work step is (see ``StaticSettings.step_rule``)
-StepRule = Literal["easy", "iterations"]
-STEP_RULES: tuple[str, ...] = get_args(StepRule)
-
 
 @dataclass(frozen=True)
 class StaticSettings(LoadPathSettings):
@@ -221,26 +217,6 @@ class StaticSettings(LoadPathSettings):
         stiffness (a pseudo time step of 1 / this elastic relaxation times); halved after
         each step taken, so the steps grow towards Newton's as the wall settles.
 
-    The reach of a work step (docs/solvers.md, "The reach of a work step")
-    ---------------------------------------------------------------------
-    The defaults are the rules of sessions 1-18; the other choices below were measured on
-    the U and flat walls, the validation cases, the return-wall rows and a 909-block wall,
-    and neither won the totals.
-    predictor_order: the start of each search of work control (with ``secant_predictor``):
-        1, the line through the last two converged states; 2, the parabola through the
-        last three (in w), which falls back to the line where its second-order term over
-        the step exceeds the first-order one (the path turned back, or its slope more than
-        doubled, at a kink of the law within the last steps).
-    step_rule: how long the next work step is after a converged one. ``"easy"``:
-        ``growth`` times after a step of at most ``easy_iterations`` Newton iterations, else
-        the same. ``"iterations"``: times (``target_iterations`` / I) ** ``step_exponent``
-        after a step of I iterations (Crisfield, Ramm), clamped to [``step_shrink``,
-        ``growth``] times the last step.
-    target_iterations: the iterations a work step should take (``"iterations"``).
-    step_exponent: the exponent of the iteration rule (1/2: Crisfield's).
-    step_shrink: the least factor of the iteration rule (a hard step shortens the next one
-        by at most this).
-
     The endgame at the peak (docs/solvers.md, "The endgame at the peak")
     ---------------------------------------------------------------------
     run_off: what a pseudo-transient step whose motion runs past the displacement limit
@@ -330,12 +306,6 @@ class StaticSettings(LoadPathSettings):
     corner_check_steps: int = count(500, least=1)
     corner_check_rise: float = positive(0.5)
     corner_check_start: float = positive(1e-2)
-    # the reach of a work step (session 19)
-    predictor_order: int = checked(1, lambda v: is_count(v, 1) and v <= 2, "1 or 2")
-    step_rule: StepRule = choice("easy", STEP_RULES)
-    target_iterations: int = count(6, least=1)
-    step_exponent: float = positive(0.5)
-    step_shrink: float = checked(0.5, lambda v: is_number(v) and 0 < v <= 1, "in (0, 1]")
     # the endgame at the peak (session 19)
     run_off: RunOff = choice("carry", RUN_OFFS)
     corner_transient: bool = checked(True, lambda v: isinstance(v, bool), "true or false")
