@@ -323,11 +323,10 @@ def certify(
         else "; ".join(why)
     )
     if holds and corner:
-        # a pseudo-transient motion past the limit answers the check (``run_off``)
-        motion = "an implicit relaxation" + (
-            ""
-            if s.run_off == "ignore"
-            else " (or a pseudo-transient step of the same branch, to no higher a lambda)"
+        # a pseudo-transient motion past the limit answers the check
+        motion = (
+            "an implicit relaxation (or a pseudo-transient step of the same branch, to no "
+            "higher a lambda)"
         )
         reason += (
             f"; the path stopped at a corner (its curve still rose at {slope:.2g} of "

@@ -219,8 +219,7 @@ def work_control(
     pseudo-transient step to lambda x (1 + transient_rise) finds no rest either
     (one is tried as soon as the step has been halved ``transient_after`` times in a
     row: a fold of the path, which no shorter step passes); the displacements pass the
-    limit. The collapse multiplier is the highest lambda on the
-    path (``collapse_at = "onset"``: after three flat steps, the highest before them). With
+    limit. The collapse multiplier is the highest lambda on the path. With
     ``tail_resolution`` each step is bounded by the load it can gain where the path may stop
     (:func:`.steps.tail_cap`)."""
     s = solver.settings
@@ -264,26 +263,23 @@ def work_control(
     last_fold: float | None = None  # lambda where the last failed search stopped
     fold_failed = False  # a pseudo-transient step past a fold found no rest
     # the lowest lambda toward which a motion from this branch of the path ran past the
-    # displacement limit (``run_off``): no rest there or higher while the path stays on it
+    # displacement limit: no rest there or higher while the path stays on it
     ran_off = math.inf
-    asked = -math.inf  # the lambda the last pseudo-transient step relaxed to
-    onset: float | None = None  # the highest lambda before the flat steps (collapse_at)
 
     def transient(why: str, stopped: float, above: float | None = None) -> bool:
         """A pseudo-transient step to a lambda a little higher (or up to where the failed
         search ``stopped``, on a straight path: ``transient_target``; and past ``above``),
         once from each state."""
-        nonlocal transient_from, ran_off, asked
+        nonlocal transient_from, ran_off
         transient_from = len(hist.steps)
         on_line = straight(path_w, path_lam, elastic_slope)
         target = transient_target(lam, stopped, s.transient_rise, s.transient_reach, on_line)
         if above is not None:  # just past a fold known to within s.fold_match
             target = max(target, above + s.fold_match * abs(above))
-        asked = target
         if answered(target, "pseudo-transient step"):
             return False
         moved = solver.pseudo_transient(target)
-        if moved.past_limit and s.run_off != "ignore":
+        if moved.past_limit:
             ran_off = min(ran_off, target)
         log.debug(
             "work control stuck at lambda=%.6g (%s); pseudo-transient step to %.6g: %s",
@@ -313,7 +309,7 @@ def work_control(
 
     def answered(target: float, what: str) -> bool:
         """Has a motion from this branch already run past the displacement limit toward
-        ``target`` or a lower lambda (``run_off = "carry"``)? Then the relaxation to
+        ``target`` or a lower lambda? Then the relaxation to
         ``target`` would be asked what that motion answered: no rest."""
         if target < ran_off:
             return False
@@ -454,14 +450,10 @@ def work_control(
                 and not fold_failed
             )
             last_fold = fold
-            # where the path is stuck at a corner the check below relaxes to the same
-            # lambda from the same state (``corner_transient``)
-            checked_next = stuck and not s.corner_transient and at_corner()
             if (
                 (stuck or refold or (step.cuts == s.transient_after and not transient_failed))
                 and s.transient_steps > 0
                 and transient_from != len(hist.steps)
-                and not checked_next
             ):
                 # Newton stops at a fold of the path
                 if transient(out.reason, fold, above=fold if refold else None):
@@ -470,15 +462,6 @@ def work_control(
                     fold_failed = True
                 else:
                     transient_failed = True
-                if s.run_off == "stop" and asked >= ran_off and at_corner():
-                    # the motion past the limit is the corner check's verdict: a peak
-                    reason = (
-                        f"no equilibrium beyond lambda={lam:.6g} under work control: a "
-                        f"pseudo-transient motion toward {ran_off:.6g} ran past the "
-                        f"displacement limit ({out.reason})"
-                    )
-                    stop = StopReason.PATH_STUCK
-                    break
             # neither Newton nor the pseudo-transient step passes: before calling this a
             # collapse, let dynamic relaxation look for rest a little higher (where the
             # tangent is singular along the load only at a corner: a fold of the path has
@@ -553,10 +536,6 @@ def work_control(
                 f"elastic stiffness per unit displacement over 3 steps (peak {peak:.6g})"
             )
             stop = StopReason.CREEPING if tiny else StopReason.STIFFNESS_LOST
-            if not tiny and s.collapse_at == "onset":
-                # the flat steps are the evidence of the mechanism, not part of its load
-                onset = max(path_lam[: len(path_lam) - flat_steps])
-                reason += f"; the flat steps began at lambda={path_lam[-1 - flat_steps]:.6g}"
             break
         if step.cuts == 0:
             step.grow(out.iterations)
@@ -571,8 +550,7 @@ def work_control(
     assert hist.collapse_bracket is not None  # set by the caller
     if peak <= hist.collapse_bracket[0]:
         return reason, stop
-    reported = peak if onset is None else onset
-    hist.collapse_bracket = (reported, reported)
+    hist.collapse_bracket = (peak, peak)
     hist.end(
         Status.COLLAPSE,
         stop,

@@ -10,7 +10,6 @@ from typing import Literal, get_args
 from masonry_dem._validation import (
     at_least,
     check_choice,
-    checked,
     choice,
     count,
     finite,
@@ -25,13 +24,6 @@ from masonry_dem.solvers.load_path import LoadPathSettings
 #: what follows the first failure of load control (see ``StaticSettings.continuation``)
 Continuation = Literal["work", "bracket"]
 CONTINUATION: tuple[str, ...] = get_args(Continuation)
-#: what a motion past the displacement limit tells the path (see ``StaticSettings.run_off``)
-RunOff = Literal["carry", "stop", "ignore"]
-RUN_OFFS: tuple[str, ...] = get_args(RunOff)
-
-#: which lambda a path that lost its stiffness reports (see ``StaticSettings.collapse_at``)
-CollapseAt = Literal["peak", "onset"]
-COLLAPSE_AT: tuple[str, ...] = get_args(CollapseAt)
 
 
 @dataclass(frozen=True)
@@ -196,11 +188,14 @@ class StaticSettings(LoadPathSettings):
     transient_rise) from the same state). Its motion running past the displacement limit is
     a peak, with no time step of dynamic relaxation (a peak's explicit relaxation stalls for
     its whole budget). Rest is a fold: the path goes on from the rest dynamic relaxation
-    finds, or from the implicit one's where that finds none. That relaxation is given the check's own effort at the rate the two budgets
-    are set by, ``fold_check_time_steps`` x (implicit steps taken / ``corner_check_steps``)
-    (docs/solvers.md, "The cost of passing a fold"). No verdict within
-    ``corner_check_steps`` (a slow fold): dynamic relaxation of ``fold_check_time_steps``
-    decides.
+    finds, or from the implicit one's where that finds none. That relaxation is given the
+    check's own effort at the rate the two budgets are set by, ``fold_check_time_steps`` x
+    (implicit steps taken / ``corner_check_steps``) (docs/solvers.md, "The cost of passing a
+    fold"). No verdict within ``corner_check_steps`` (a slow fold): dynamic relaxation of
+    ``fold_check_time_steps`` decides. A pseudo-transient step (the same overdamped motion)
+    whose motion ran past the displacement limit toward lambda T answers every later check
+    or pseudo-transient step of the same branch whose target is T or more: no rest
+    (docs/solvers.md, "The endgame at the peak").
     corner_check_steps: budget of implicit steps (factorizations) of that check, the most a
         check without a verdict costs before dynamic relaxation decides. 500: about what the
         fallback's budget costs (``fold_check_time_steps`` of dynamic relaxation at the
@@ -217,28 +212,6 @@ class StaticSettings(LoadPathSettings):
         stiffness (a pseudo time step of 1 / this elastic relaxation times); halved after
         each step taken, so the steps grow towards Newton's as the wall settles.
 
-    The endgame at the peak (docs/solvers.md, "The endgame at the peak")
-    ---------------------------------------------------------------------
-    run_off: what a pseudo-transient step whose motion runs past the displacement limit
-        toward lambda T tells the path. It is the overdamped motion the corner check runs
-        (the same equation, from a state of the path), so its run-off is the check's verdict
-        at T: no rest there, nor higher, while the path stays on that branch.
-        ``"carry"`` (default): every later pseudo-transient step or check of the same
-        branch whose target is T or more is answered by it (no rest) and not run; the path
-        still closes in on the peak below T by halved steps. The verdict lapses where the
-        path moves to another branch (a relaxation's rest) or finds equilibria at T.
-        ``"stop"``: the path ends at the run-off where its curve still rose (a corner),
-        without the halvings (the peak then lies within T, a ``transient_rise`` above the
-        last state, which the halvings would have closed in on). ``"ignore"``: the run-off
-        is one failed step among others (session 18).
-    corner_transient: where work control is stuck at a corner, try a pseudo-transient step
-        before the corner check (True, as before). False: the check alone, which relaxes
-        from the same state to the same lambda and finds the rest of every fold measured
-        where the pseudo-transient step found none. Not the default: a pseudo-transient step
-        there also passes folds in a few steps, and without it the walls that meet measured
-        took more factorizations and one answer moved (docs/solvers.md, "The endgame at the
-        peak").
-
     The step near the peak (docs/solvers.md, "The step near the peak")
     ------------------------------------------------------------------
     On a curve whose slope fades (a mechanism that forms joint by joint) the path stops three
@@ -253,12 +226,6 @@ class StaticSettings(LoadPathSettings):
         which the steps of a rising path do not reach: it binds only in the tail, and the
         answer no longer moves with ``growth``. 0: off (steps grow by ``growth`` without a
         bound).
-    collapse_at: what a path stopped by lost stiffness (three flat steps) reports:
-        ``"peak"``, the highest lambda on the path; ``"onset"``, the highest lambda up to
-        the state where the flat steps began (a converged state of the path; the two agree
-        as the steps shorten). Not the default: on a curve that approaches its limit from
-        below (a rigid wedge tipping on elastic joints) the flat steps gain load toward
-        it, and the onset lies further from it than the highest state.
     """
 
     easy_iterations: int = count(6, least=0)
@@ -306,12 +273,8 @@ class StaticSettings(LoadPathSettings):
     corner_check_steps: int = count(500, least=1)
     corner_check_rise: float = positive(0.5)
     corner_check_start: float = positive(1e-2)
-    # the endgame at the peak (session 19)
-    run_off: RunOff = choice("carry", RUN_OFFS)
-    corner_transient: bool = checked(True, lambda v: isinstance(v, bool), "true or false")
     # the step near the peak (session 20)
     tail_resolution: float = at_least(1e-3, 0.0, " (0: off)")
-    collapse_at: CollapseAt = choice("peak", COLLAPSE_AT)
 
 
 SETTING_NAMES = tuple(f.name for f in fields(StaticSettings))
