@@ -5,7 +5,7 @@
         [--from-json FILE]
 
 ``--set`` changes a setting in every variant (the default's included), e.g. ``--set
-tail_resolution=1e-3 --set collapse_at=onset``; a variant may name any setting too
+tail_resolution=1e-3``; a variant may name any setting too
 (``growth=1.025,tail_resolution=1.25e-4``).
 
 Each validation case runs the default static pushover (``StaticSolver(model,

@@ -4,7 +4,7 @@ Run:  python benchmarks/bench_walls_that_meet.py [--sizes S5 big] [--repeat 3] [
       [--stiffness F]
 
 ``--set FIELD=VALUE`` (repeatable) overrides a ``StaticSettings`` field for both walls'
-pushovers (e.g. ``--set line_search=natural``). ``--stiffness F`` makes the joints of both
+pushovers. ``--stiffness F`` makes the joints of both
 walls F times stiffer (kt / kn kept): with the dry joints of the default (F = 1) the big flat
 wall leaves the small-displacement range (half a block) on a still rising curve, and so does
 every flat wall of its block count held as it is (docs/solvers.md, "The cost of passing a

@@ -224,9 +224,9 @@ def diagnose(model, settings, monitor, u_wall: bool, verbose: bool) -> dict:
     flags_seen: list[np.ndarray] = []
     factor = again.problem.factor
 
-    def recording_factor(response, floor=None, tangents=None):
+    def recording_factor(response, floor=None):
         flags_seen.append(response.flags.copy())
-        return factor(response, floor, tangents)
+        return factor(response, floor)
 
     again.problem.factor = recording_factor
     counts: dict[str, Counter] = {

@@ -34,7 +34,7 @@ seconds are not, so only their ratios within one run compare.
 solver's state before it and runs each again from that state, once as it was (the count of
 outcomes that differ, ``mismatches``, should be 0) and once with the change: searches
 converged, factorizations and iterations of each corrector over the same searches, so a
-change of the corrector (``line_search=natural``) is compared without the path it would
+change of the corrector is compared without the path it would
 take (a corrector that converges one search more or less takes another path, whose folds
 and halvings then move the totals by tens of per cent either way).
 
@@ -56,7 +56,7 @@ Four probes of the path (issue 21, session 17), each on top of a default run:
 * ``--misses`` (session 19) prints, per wall, the work searches converged and failed and
   the quartiles of the predictor's miss over the converged ones: the distance from the
   search's start to the state it converged to, over the distance from the last state (1:
-  a start at the last state; ``StaticSettings.predictor_order``, ``step_rule``).
+  a start at the last state).
 * ``--hand-over`` stops at the state where load control hands over to work control and
   tries from it the first work step and its halvings, from the three starts a search can
   take (the secant through the last two load steps, the state itself, the state moved along
@@ -401,7 +401,7 @@ def hand_over(model, settings) -> None:
     sys.stdout.flush()
 
 
-_STATE = ("q", "plastic", "cracked", "last_increment", "_limit_allowance", "_elastic_limit")
+_STATE = ("q", "plastic", "cracked", "last_increment", "_limit_allowance")
 
 
 def _copy(value):

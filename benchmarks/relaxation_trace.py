@@ -10,9 +10,9 @@ check instead (``Relaxations.implicit_relaxation``, from the same start to the s
 its verdict and steps beside the explicit one's, and, at the last check's start, the cost
 of one factorization against one time step of dynamic relaxation.
 
-Each wall is run by the static pushover with its default settings but the explicit corner
-check (``corner_check = "explicit"``); every corner check
-(``Relaxations.dynamic_rescue`` called by work control's ``rest_above``) is recorded: its start
+Each wall is run by the static pushover with its default settings; every dynamic relaxation
+of a corner check (``Relaxations.dynamic_rescue`` called by work control's ``rest_above``: at
+a fold after the implicit check's rest, or where that check gives no verdict) is recorded: its start
 state, target and whether it found rest. Then each recorded check is relaxed again with
 kinetic damping as ``Relaxation._relax`` does it, every velocity zeroed at each
 kinetic-energy peak (``--keep-creep``: the velocity along a converged creep kept, as
@@ -39,7 +39,6 @@ import argparse
 import math
 import sys
 import time
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -67,12 +66,12 @@ def wall(name: str):
 
 
 def record(model, settings, monitor):
-    """Run the pushover with the explicit corner check (``corner_check = "explicit"``: every
-    check is a dynamic relaxation); the corner checks it made: (corrector, start state,
-    target, budget, found, time steps, the corrector's trust increment at the start)."""
+    """Run the pushover; the dynamic relaxations of the corner checks it made: (corrector,
+    start state, target, budget, found, time steps, the corrector's trust increment at the
+    start)."""
     checks = []
     original = Relaxations.dynamic_rescue
-    settings = replace(settings or StaticSettings(), corner_check="explicit")
+    settings = settings or StaticSettings()
 
     def spy(self, target, last, budget=None, polish=True):
         increment = self.last_increment

@@ -38,31 +38,6 @@ from masonry_dem.solvers.static.certificate import (
 from masonry_dem.solvers.static.outcome import StopReason
 
 
-def test_the_explicit_corner_check_passes_the_folds_of_s13_2():
-    """With ``corner_check = "explicit"`` (the default until session 18; the implicit check
-    is tests/solvers/test_corner_check.py), ``fold_check_time_steps`` 20 000 and
-    ``fold_probe_every`` 500, the check at
-    each corner relaxes with Newton tried from its states on the way: the path passes the
-    fold at 0.0855 (Newton converges from the relaxation's state after about 2 100 time
-    steps with the creep kept undamped, 6 000 without; the relaxation alone came to rest
-    after about 50 000) and the one at 0.0938 (2 500 time steps, 13 800 without; the
-    relaxation alone found no rest there within 100 000), and stops
-    at 0.1082, near the highest equilibrium dynamic relaxation finds from the unloaded wall
-    (0.110) and under the associative bound (0.1164)."""
-    case = build_case("S13", restraint="return-walls", return_blocks=2)
-    solver = StaticSolver(case.model, replace(case.settings, corner_check="explicit"))
-    history = solver.run()
-    assert history.status == "collapse", history.reason
-    assert history.collapse_multiplier is not None
-    assert history.collapse_multiplier > 1.2 * 0.08551, history.reason
-    assert solver.time_steps > 0  # the folds were passed by the check, not by Newton
-    # no more than an equilibrium of the wall can carry (the bound is 0.1164)
-    assert history.collapse_multiplier <= dem_upper_bound(case.model).load_factor
-    # the last stop is a corner too, checked: the certificate says so
-    cert = history.certificate
-    assert cert.corner and "dynamic relaxation found no rest above it" in cert.reason
-
-
 def test_without_the_corner_check_the_first_fold_of_s13_2_is_certified():
     """The trade-off of ``fold_check_time_steps = 0`` (fast, and the fold taken for the
     peak), as on d01d26a: pinned, and the certificate says where the path stopped: at a
@@ -152,23 +127,6 @@ def test_a_search_that_runs_off_at_a_rising_corner_is_measured_once_and_checked(
     assert hist.status == "collapse", hist.reason
     assert 2.0 * 0.0455 < hist.collapse_multiplier <= dem_upper_bound(case.model).load_factor
     assert checked.implicit_steps > 0
-
-
-def test_the_creep_of_a_snap_through_is_kept_undamped_and_passes_the_folds_sooner():
-    """S6 with 2-block return walls passes three folds (0.0889, 0.0921, 0.1027) on its way
-    to a certified collapse at 0.1080. Kinetic damping zeroes every velocity at each peak
-    of the kinetic energy, so the slow motion of the wall snapping through to the rest above
-    a fold only creeps; with ``fold_creep_cos`` the velocity along a converged creep is kept
-    (the explicit corner check, ``corner_check = "explicit"``)
-    and the check's relaxations pass the same folds in 8 877 time steps in all (faf4f27's
-    damping, ``fold_creep_cos = 0``: 19 212, the same collapse). The bound, 12 000, is
-    under what the damping of every velocity took, with room for rounding."""
-    case = build_case("S6", restraint="return-walls", return_blocks=2)
-    solver = StaticSolver(case.model, replace(case.settings, corner_check="explicit"))
-    hist = solver.run(monitor=case.monitor)
-    assert hist.status == "collapse", hist.reason
-    assert hist.collapse_multiplier == pytest.approx(0.107994, rel=2e-3)
-    assert 0 < solver.time_steps < 12_000
 
 
 def test_a_creep_is_kept_only_where_its_direction_has_converged():

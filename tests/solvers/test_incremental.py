@@ -114,7 +114,6 @@ def panel_lambda() -> float:
         # control's pseudo-transient step goes round them and both reach the peak, 0.2824
         {"initial_step": 0.05, "max_step": 0.3},
         {"tangent": "difference"},  # the forward-difference tangent of the yielded joints
-        {"secant_rounds": 2},  # the joints' tangents corrected where a search finds no descent
     ],
 )
 def test_collapse_multiplier_does_not_depend_on_solver_knobs(panel_lambda, settings):
@@ -216,10 +215,8 @@ def test_work_control_resumes_with_half_a_step_after_a_fold(panel_lambda, monkey
     """After a pseudo-transient step has moved the state past a fold, the full step from
     before the fold's halvings fails again more often than half of it, which finds the same
     peak (within the bracket tolerance) with fewer Newton iterations on this panel (481
-    against 527, with the secant start of work control). Measured with the secant correction
-    of the joints' tangents off (``secant_rounds=0``, the default): with one round of it,
-    the full step takes the fewer iterations here (315 against 370), at the same peak."""
-    measured_on = StaticSettings(secant_rounds=0)
+    against 527, with the secant start of work control)."""
+    measured_on = StaticSettings()
     half = pushover(_panel(), measured_on)
     full = pushover(_panel(), replace(measured_on, resume_step=1.0))
     assert half.collapse_multiplier == pytest.approx(full.collapse_multiplier, rel=TOL)
@@ -286,16 +283,10 @@ def test_robust_strategy_finds_the_equilibrium_newton_finds():
     from masonry_dem.solvers.incremental import StaticSolver
 
     newton = StaticSolver(_panel()).equilibrate(0.0, radius=None, damped=True)
-    solver = StaticSolver(_panel(), StaticSettings(robust_iterations=2000))
-    robust = solver.robust(0.0)
+    robust = StaticSolver(_panel()).robust(0.0, budget=2000)
     assert newton.ok and robust.ok, robust.reason
     scale = np.abs(newton.q).max()
     assert np.abs(robust.q - newton.q).max() <= 1e-4 * scale
-
-
-def test_robust_iterations_must_not_be_negative():
-    with pytest.raises(ValueError, match="robust_iterations"):
-        StaticSettings(robust_iterations=-1)
 
 
 def test_free_standing_wall_tilts_at_s_over_h_with_slip_memory():

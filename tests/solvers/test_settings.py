@@ -60,7 +60,7 @@ def test_every_checked_field_refuses_nan_by_its_name(settings):
 def test_every_documented_setting_is_a_field_and_every_field_is_documented(settings_class):
     """The class docstring lists each setting as ``    name: what it does`` (or ``    a, b:``).
     A documented name that is not a field means a declaration went missing (a line put inside
-    the docstring once dropped ``secant_rounds``, and only a fuzz test saw it); a field that
+    the docstring once dropped a field, and only a fuzz test saw it); a field that
     is not documented has no stated meaning. The static settings document only their own
     fields: the shared ones are the base's, and so do dynamic relaxation's."""
     import dataclasses

@@ -178,8 +178,6 @@ RANGES: dict[str, Range] = {
     "residual_stiffness": Range(
         0.0, 1.0, "", "fraction of the elastic stiffness kept in the tangent", open_lo=True
     ),
-    "robust_iterations": _BUDGET,
-    "rescue_time_steps": _BUDGET,
     "transient_steps": _BUDGET,
     "stop_check_time_steps": _BUDGET,
     # [analysis] control and monitor

@@ -58,8 +58,6 @@ GRIDS: dict[Method, Grid] = {
         ("tolerance 1e-5", {"tolerance": 1e-5}),
         ("load control only", {"continuation": "bracket"}),
         ("no pseudo-transient", {"transient_steps": 0}),
-        ("DR rescue 4000", {"rescue_time_steps": 4000}),
-        ("DR rescue 16000", {"rescue_time_steps": 16_000}),
         ("difference tangent", {"tangent": "difference"}),
     ),
     Method.DYNAMIC_RELAXATION: (

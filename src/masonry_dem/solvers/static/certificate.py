@@ -48,8 +48,8 @@ Reported beside them, not a condition: ``curve_slope``, the d lambda / d w of th
 the state over the elastic slope, and ``corner``, a stuck path that still rose there (at
 least ``flat_slope``): its branch ended at a kink, where a fold of the path has a singular
 tangent as well as a peak. Such a stop is a peak only if no rest is found above it, which
-the path checks (``corner_check``: an implicit relaxation by default, or dynamic relaxation
-of ``fold_check_time_steps``; the reason says whether it did).
+the path checks (an implicit relaxation, then dynamic relaxation of at most
+``fold_check_time_steps``; the reason says whether it did).
 """
 
 from __future__ import annotations
@@ -323,11 +323,10 @@ def certify(
         else "; ".join(why)
     )
     if holds and corner:
-        # a pseudo-transient motion past the limit answers the check (``run_off``)
-        motion = "an implicit relaxation" + (
-            ""
-            if s.run_off == "ignore"
-            else " (or a pseudo-transient step of the same branch, to no higher a lambda)"
+        # a pseudo-transient motion past the limit answers the check
+        motion = (
+            "an implicit relaxation (or a pseudo-transient step of the same branch, to no "
+            "higher a lambda)"
         )
         reason += (
             f"; the path stopped at a corner (its curve still rose at {slope:.2g} of "
@@ -338,9 +337,6 @@ def certify(
                 else f"no rest above it: {motion} ran past the displacement "
                 f"limit, or found no rest within {s.corner_check_steps} steps and dynamic "
                 f"relaxation none within {s.fold_check_time_steps} time steps"
-                if s.corner_check != "explicit"
-                else f"dynamic relaxation found no rest above it within {s.fold_check_time_steps} "
-                f"time steps"
             )
         )
     return Certificate(

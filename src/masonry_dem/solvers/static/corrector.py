@@ -26,7 +26,7 @@ import numpy as np
 from masonry_dem.model import Model
 from masonry_dem.solvers.factorization import Factors
 from masonry_dem.solvers.static.outcome import Failure, Outcome
-from masonry_dem.solvers.static.problem import DiscreteProblem, reversed_flow, secant_tangents
+from masonry_dem.solvers.static.problem import DiscreteProblem
 from masonry_dem.solvers.static.settings import StaticSettings
 
 if TYPE_CHECKING:
@@ -69,8 +69,6 @@ class Corrector:
         self.last_increment = 0.0
         #: extra room of the displacement limit (the elastic displacement under the dead load)
         self._limit_allowance = 0.0
-        #: the limit in units of the wall's own elastic scale (set once the dead load stands)
-        self._elastic_limit = 0.0
 
     @property
     def factorizations(self) -> int:
@@ -79,7 +77,7 @@ class Corrector:
     @property
     def limit(self) -> float:
         """The displacement limit of the searches [m]."""
-        return max(self.problem.limit, self._elastic_limit) + self._limit_allowance
+        return self.problem.limit + self._limit_allowance
 
     @property
     def search_seed(self) -> float:
@@ -140,18 +138,7 @@ class Corrector:
 
         Safeguards: the translation part of each correction is held within a trust radius
         (grown after full steps, cut by 8 when no step along the direction lowers the
-        residual), and the step is backtracked until the residual decreases. Before a cut,
-        up to ``secant_rounds`` times a search, the joints' tangents are corrected along the
-        shortest step tried (:func:`secant_tangents`) and the direction solved again: where
-        the consistent tangent of a yielded joint sends it back through its elastic range
-        (a rocking joint turned the other way), no step length lowers the residual, and the
-        corrected tangent carries what that joint did over the step. A joint that the step
-        carried through its elastic range to yield the other way (:func:`reversed_flow`)
-        gets its elastic stiffness instead of that chord, which would pick the equilibrium
-        where it yields the other way (another branch of the path). A search about to give
-        up for want of descent sits next to a kink of the law along its direction: up to
-        ``kink_rounds`` times, the joints on that kink take the tangent of the side beyond
-        (:meth:`kink_tangents`) and the search goes on with its first trust radius.
+        residual), and the step is backtracked until the residual decreases.
         """
         s = self.settings
         free = self.problem.asm.free_index
@@ -162,9 +149,6 @@ class Corrector:
         residual, rnorm, response = self.residual(q, lam, dead_factor)
         floor = s.residual_stiffness
         lu = None  # the factorized tangent, kept while it converges fast (chord steps)
-        secant: np.ndarray | None = None  # joint tangents corrected at this state, if any
-        rounds = 0  # secant corrections in this search
-        kinks = 0  # one-sided tangents at kinks tried in this search
         here = False  # lu was factorized at the current state
         history: list[tuple[float, float]]  # (merit, trust radius) of the iterates; set below
         budget: int
@@ -178,12 +162,12 @@ class Corrector:
             it to nothing and the search stalls far from an equilibrium that exists. The
             floor changes only the search direction, never the residual, so a converged
             state is still an exact equilibrium of the law."""
-            nonlocal floor, history, budget, lu, cuts, secant
+            nonlocal floor, history, budget, lu, cuts
             if not damped or floor >= s.max_floor:
                 return False
             assert radius is not None  # set above when not given
             floor = min(floor * 1e3, s.max_floor)
-            lu, secant = None, None
+            lu = None
             cuts = 0
             history = [(rnorm + constraint_error(q), radius)]
             budget = it + s.max_iterations  # a fresh budget for the damped search
@@ -212,7 +196,7 @@ class Corrector:
             self.iterations += 1
             fresh = lu is None
             if lu is None:
-                lu = self.problem.factor(response, floor, secant)
+                lu = self.problem.factor(response, floor)
                 here = True  # the tangent of this state (False once a step is taken with it)
             repeat = cut and not fresh  # same state, same tangent: the same direction
             cut = False
@@ -253,9 +237,6 @@ class Corrector:
             shrink = min(1.0, radius / size) if size > 0 else 1.0
             merit = rnorm + cerr
             accepted = None
-            natural = s.line_search == "natural"
-            if natural:  # the full correction's size: the simplified one's at t = 0
-                merit = self.problem.correction_norm(dq)
             # after a cut the full step is the last backtrack of the search before it (x 1/8)
             for step in (0.5, 0.25, 0.125) if repeat else (1.0, 0.5, 0.25, 0.125):
                 f = shrink * step
@@ -264,33 +245,11 @@ class Corrector:
                 lam_try = lam + f * dlam
                 r_try, n_try, resp_try = self.residual(q_try, lam_try, dead_factor)
                 c_try = constraint_error(q_try)
-                if natural:
-                    assert lu is not None  # factorized above
-                    trial = self.natural_norm(lu, r_try, q_try, control, live_solved[1])
-                else:
-                    trial = n_try + c_try
-                if trial < (1.0 - 1e-4 * f) * merit:
+                if n_try + c_try < (1.0 - 1e-4 * f) * merit:
                     accepted = (q_try, lam_try, r_try, n_try, resp_try, c_try)
                     break
             if accepted is None and not here:  # a stale tangent: refactor before cutting
                 lu = None
-                continue
-            if accepted is None and not repeat and not damped and rounds < s.secant_rounds:
-                # the tangent mispredicts the joints over every step tried: correct each
-                # joint's tangent by what it did over the shortest one, and solve again (not
-                # in the damped search of the dead load: it starts from the unloaded wall, no
-                # joint has yielded on a path, and its fallback is the floor)
-                base = (
-                    secant if secant is not None else self.problem.joint_tangents(response, floor)
-                )
-                secant = secant_tangents(
-                    base,
-                    self.problem.relative(f * dq),
-                    resp_try.actions - response.actions,
-                    self.law.kbar,
-                    reversed_flow(response, resp_try, self.law.kbar),
-                )
-                lu, rounds = None, rounds + 1
                 continue
             if accepted is None:
                 if not fresh:
@@ -310,16 +269,6 @@ class Corrector:
                 if exhausted and regularise():
                     radius = max(4.0 * self.last_increment, self.search_seed)
                     continue
-                if exhausted and not damped and kinks < s.kink_rounds:
-                    # the search stops next to a kink of the law along its direction: the
-                    # joints on it take the tangent of the side the direction takes them to,
-                    # and the search goes on from here with a fresh radius
-                    sided = self.kink_tangents(q, lam, dead_factor, f * dq, response, floor, secant)
-                    kinks += 1
-                    if sided is not None:
-                        secant, lu, cuts = sided, None, 0
-                        radius = max(4.0 * self.last_increment, self.search_seed)
-                        continue
                 if exhausted:
                     return Outcome(
                         False,
@@ -346,7 +295,6 @@ class Corrector:
             ):
                 lu = None
             q, lam, residual, rnorm, response, cerr = accepted
-            secant = None  # the correction belonged to the state left behind
             here = here and crept
             umax = self.increment(q)
             if not math.isfinite(umax) or umax > self.limit:
@@ -382,76 +330,13 @@ class Corrector:
             failure=Failure.NO_CONVERGENCE,
         )
 
-    def kink_tangents(
-        self,
-        q: np.ndarray,
-        lam: float,
-        dead_factor: float,
-        step: np.ndarray,
-        response: LawResponse,
-        floor: float,
-        tangents: np.ndarray | None,
-    ) -> np.ndarray | None:
-        """The joints' tangents (``tangents``, or those of ``response``) with the joints on
-        the nearest kink of the law along ``step`` given the law's tangent of the side the
-        step takes them to; None when no joint changes state within the step.
-
-        The nearest kink: the shortest of the probes q + 8^-k ``step`` (k = 10 .. 0, the
-        shortest first) at which some joint's flags differ from those at q; its joints are
-        the ones that change there, their tangent the law's at that probe.
-
-        At a kink the law has two derivatives, and the consistent tangent is the one of the
-        side the joint is flagged on. Where Newton's iterates close in on a kink (a joint at
-        the edge of rocking or sliding that the direction turns back into its elastic range,
-        or an elastic joint pushed over its surface), the direction solved with that side's
-        tangent takes the joint to the other side, where its actions follow the other
-        derivative, and the residual rises along the whole direction however short the step
-        (docs/solvers.md, "Newton's basin on walls that meet"). The other side's tangent is
-        the generalised derivative along that direction."""
-        free = self.problem.asm.free_index
-        for k in range(10, -1, -1):
-            probe = q.copy()
-            probe[free] += 8.0**-k * step
-            _, _, beyond = self.residual(probe, lam, dead_factor)
-            at_kink = beyond.flags != response.flags
-            if at_kink.any():
-                break
-        else:
-            return None
-        T = (
-            tangents.copy()
-            if tangents is not None
-            else self.problem.joint_tangents(response, floor)
-        )
-        T[at_kink] = self.problem.joint_tangents(beyond, floor)[at_kink]
-        log.debug("%d joints on a kink take the tangent of the side beyond", int(at_kink.sum()))
-        return T
-
-    def natural_norm(
-        self,
-        lu: Factors,
-        residual: np.ndarray,
-        q: np.ndarray,
-        control: tuple[np.ndarray, float, float] | None,
-        live: np.ndarray,
-    ) -> float:
-        """The size of the simplified Newton correction K^-1 R at ``q`` with the factors
-        ``lu`` of the step (under control, with the lambda correction that meets the
-        constraint, ``live`` = K^-1 F_live): the residual in the tangent's own norm, the
-        merit of ``line_search = "natural"``."""
-        x = lu.solve(residual)
-        if control is not None:
-            c = control[0]
-            ca = float(c @ live)
-            x = x + (control[1] - float(c @ q[self.problem.free]) - float(c @ x)) / ca * live
-        return self.problem.correction_norm(x)
-
     def robust(
         self, load_factor: float, start: np.ndarray | None = None, budget: int | None = None
     ) -> Outcome:
         """Second strategy for a load step Newton could not solve: initial-stiffness
         iterations (the elastic matrix of the assembly, factorized once per analysis) with
-        Anderson acceleration over the last ``anderson`` corrections, no line search.
+        Anderson acceleration over the last ``anderson`` corrections, no line search, at most
+        ``budget`` of them (None: ``zero_load_robust_iterations``).
 
         Newton stalls where the yielded tangent is nearly singular or flips between contact
         states of zero-gap joints; the fixed point of q <- q + K0^-1 R(q) does not depend on
@@ -479,7 +364,7 @@ class Corrector:
         xs, fs = [x.copy()], [f.copy()]
         best = (rnorm, x.copy(), response)
         hist: list[tuple[float, float]] = []
-        budget = s.robust_iterations if budget is None else budget
+        budget = s.zero_load_robust_iterations if budget is None else budget
         for it in range(1, budget + 1):
             self.iterations += 1
             if len(xs) > 1:

@@ -85,15 +85,11 @@ def load_control(solver: StaticSolver, hist: History, record: Record) -> None:
         out = solver.equilibrate(target, start=start)
         start = None
         robust_ok = False
-        if not out.ok and s.rescue_time_steps > 0 and not out.past_limit:
-            rescued = solver.dynamic_rescue(target, lam)
-            if rescued is not None:
-                out, robust_ok = rescued, True
-        # the robust re-try: when asked for, or as the last resort of a bracket refined down
-        # to what the residual cannot tell from zero load (where Newton stalls from the
-        # dead-load state: in-plane walls held on one edge)
+        # the robust re-try: the last resort of a bracket refined down to what the residual
+        # cannot tell from zero load (where Newton stalls from the dead-load state: in-plane
+        # walls held on one edge)
         near_zero = target <= ZERO_LOAD * s.tolerance * solver.problem.load_scale
-        budget = s.robust_iterations or (s.zero_load_robust_iterations if near_zero else 0)
+        budget = s.zero_load_robust_iterations if near_zero else 0
         if not out.ok and budget > 0 and not out.past_limit:
             second = solver.robust(target, budget=budget)  # logs its outcome
             if second.ok:
@@ -223,8 +219,7 @@ def work_control(
     pseudo-transient step to lambda x (1 + transient_rise) finds no rest either
     (one is tried as soon as the step has been halved ``transient_after`` times in a
     row: a fold of the path, which no shorter step passes); the displacements pass the
-    limit. The collapse multiplier is the highest lambda on the
-    path (``collapse_at = "onset"``: after three flat steps, the highest before them). With
+    limit. The collapse multiplier is the highest lambda on the path. With
     ``tail_resolution`` each step is bounded by the load it can gain where the path may stop
     (:func:`.steps.tail_cap`)."""
     s = solver.settings
@@ -234,8 +229,8 @@ def work_control(
     path_w = [float(c @ (st.q.reshape(-1)[free] - q0)) for st in hist.steps]
     path_lam = [float(st.load_factor) for st in hist.steps]
     w = path_w[-1]
-    line = SecantPredictor(s.secant_predictor, [], s.predictor_order)
-    for st, stw in zip(hist.steps[-3:], path_w[-3:], strict=False):
+    line = SecantPredictor(s.secant_predictor, [])
+    for st, stw in zip(hist.steps[-2:], path_w[-2:], strict=False):
         line.add(stw, st.q.reshape(-1), float(st.load_factor))
     if len(path_w) > 1:
         # the first live-load step is elastic for walls that stand: its secant is the scale
@@ -253,10 +248,6 @@ def work_control(
         max(first, 1e-3 * abs(w), s.radius_floor * solver.problem.displacement_scale),
         s.growth,
         easy_iterations=s.easy_iterations,
-        rule=s.step_rule,
-        target_iterations=s.target_iterations,
-        exponent=s.step_exponent,
-        shrink=s.step_shrink,
     )
     lam = path_lam[-1]
     first_lambda = hist.collapse_bracket[1] if hist.collapse_bracket else lam
@@ -272,26 +263,23 @@ def work_control(
     last_fold: float | None = None  # lambda where the last failed search stopped
     fold_failed = False  # a pseudo-transient step past a fold found no rest
     # the lowest lambda toward which a motion from this branch of the path ran past the
-    # displacement limit (``run_off``): no rest there or higher while the path stays on it
+    # displacement limit: no rest there or higher while the path stays on it
     ran_off = math.inf
-    asked = -math.inf  # the lambda the last pseudo-transient step relaxed to
-    onset: float | None = None  # the highest lambda before the flat steps (collapse_at)
 
     def transient(why: str, stopped: float, above: float | None = None) -> bool:
         """A pseudo-transient step to a lambda a little higher (or up to where the failed
         search ``stopped``, on a straight path: ``transient_target``; and past ``above``),
         once from each state."""
-        nonlocal transient_from, ran_off, asked
+        nonlocal transient_from, ran_off
         transient_from = len(hist.steps)
         on_line = straight(path_w, path_lam, elastic_slope)
         target = transient_target(lam, stopped, s.transient_rise, s.transient_reach, on_line)
         if above is not None:  # just past a fold known to within s.fold_match
             target = max(target, above + s.fold_match * abs(above))
-        asked = target
         if answered(target, "pseudo-transient step"):
             return False
         moved = solver.pseudo_transient(target)
-        if moved.past_limit and s.run_off != "ignore":
+        if moved.past_limit:
             ran_off = min(ran_off, target)
         log.debug(
             "work control stuck at lambda=%.6g (%s); pseudo-transient step to %.6g: %s",
@@ -321,7 +309,7 @@ def work_control(
 
     def answered(target: float, what: str) -> bool:
         """Has a motion from this branch already run past the displacement limit toward
-        ``target`` or a lower lambda (``run_off = "carry"``)? Then the relaxation to
+        ``target`` or a lower lambda? Then the relaxation to
         ``target`` would be asked what that motion answered: no rest."""
         if target < ran_off:
             return False
@@ -337,32 +325,27 @@ def work_control(
 
     def rest_above(budget: int, corner: bool = False) -> bool:
         """A relaxation looks for rest a little above the last state (once from each
-        state), and the path goes on from there if it finds it. At a corner, unless
-        ``corner_check = "explicit"``, :meth:`Relaxations.implicit_relaxation` first: its
-        motion running past the displacement limit is a peak; rest is a fold (with
-        ``"mixed"`` the path goes on from dynamic relaxation's rest, if it finds one); its
-        budget spent, dynamic relaxation decides. With ``"race"`` both side by side
-        (:meth:`Relaxations.race`). Elsewhere dynamic relaxation of ``budget`` time steps."""
+        state), and the path goes on from there if it finds it. At a corner
+        :meth:`Relaxations.implicit_relaxation` first: its motion running past the
+        displacement limit is a peak; rest is a fold (the path goes on from dynamic
+        relaxation's rest, if it finds one); its budget spent, dynamic relaxation decides.
+        Elsewhere dynamic relaxation of ``budget`` time steps."""
         nonlocal checked_from
         checked_from = len(hist.steps)
         target = lam + s.transient_rise * abs(lam)
         if answered(target, "check"):
             return False
         rescued: Outcome | None
-        if corner and s.corner_check == "race" and s.fold_probe_every > 0:
-            rescued = solver.race(target, lam, budget)
-            how, verdict = "both relaxations", "ok" if rescued else "no rest"
-        elif corner and s.corner_check != "explicit":
+        if corner:
             moved = solver.implicit_relaxation(target)
             how = "implicit relaxation"
             verdict = f"ok in {moved.iterations} steps" if moved.ok else moved.reason
             settled: Outcome | None = None
-            # dynamic relaxation runs at a fold with "mixed" (the path goes on from its rest:
-            # the implicit motion may settle in another basin at the same lambda; for at most
-            # the check's own effort with corner_rest "bounded") and where
-            # the implicit check gave no verdict (neither rest nor a run-off within
-            # corner_check_steps: a slow fold, or a peak that creeps)
-            if (moved.ok and s.corner_check != "implicit") or not (moved.ok or moved.past_limit):
+            # dynamic relaxation runs at a fold (the path goes on from its rest: the implicit
+            # motion may settle in another basin at the same lambda; for at most the check's
+            # own effort) and where the implicit check gave no verdict (neither rest nor a
+            # run-off within corner_check_steps: a slow fold, or a peak that creeps)
+            if not moved.past_limit:
                 settled = solver.dynamic_rescue(target, lam, rest_budget(budget, moved))
                 verdict += "; dynamic relaxation: " + ("no rest" if settled is None else "ok")
             if settled is None and moved.ok:  # the path goes on from the implicit rest
@@ -378,10 +361,10 @@ def work_control(
 
     def rest_budget(budget: int, moved: Outcome) -> int:
         """The time steps dynamic relaxation may take to find its own rest where the
-        implicit check already came to rest (``corner_rest``): all of ``budget``, or with
-        ``"bounded"`` the check's own effort at the rate the two budgets are set by
-        (``budget`` time steps for ``corner_check_steps`` implicit steps)."""
-        if not moved.ok or s.corner_rest != "bounded":
+        implicit check already came to rest: the check's own effort at the rate the two
+        budgets are set by (``budget`` time steps for ``corner_check_steps`` implicit steps);
+        all of ``budget`` where it gave no verdict."""
+        if not moved.ok:
             return budget
         return max(1, min(budget, budget * moved.iterations // s.corner_check_steps))
 
@@ -467,14 +450,10 @@ def work_control(
                 and not fold_failed
             )
             last_fold = fold
-            # where the path is stuck at a corner the check below relaxes to the same
-            # lambda from the same state (``corner_transient``)
-            checked_next = stuck and not s.corner_transient and at_corner()
             if (
                 (stuck or refold or (step.cuts == s.transient_after and not transient_failed))
                 and s.transient_steps > 0
                 and transient_from != len(hist.steps)
-                and not checked_next
             ):
                 # Newton stops at a fold of the path
                 if transient(out.reason, fold, above=fold if refold else None):
@@ -483,26 +462,17 @@ def work_control(
                     fold_failed = True
                 else:
                     transient_failed = True
-                if s.run_off == "stop" and asked >= ran_off and at_corner():
-                    # the motion past the limit is the corner check's verdict: a peak
-                    reason = (
-                        f"no equilibrium beyond lambda={lam:.6g} under work control: a "
-                        f"pseudo-transient motion toward {ran_off:.6g} ran past the "
-                        f"displacement limit ({out.reason})"
-                    )
-                    stop = StopReason.PATH_STUCK
-                    break
             # neither Newton nor the pseudo-transient step passes: before calling this a
             # collapse, let dynamic relaxation look for rest a little higher (where the
-            # tangent is singular along the load only at a corner, or when asked: a fold of
-            # the path has that too, but so has a flat peak, and the check is dear)
+            # tangent is singular along the load only at a corner: a fold of the path has
+            # that too, but so has a flat peak, and the check is dear)
             corner = stuck and at_corner()
             budget = max(s.stop_check_time_steps, s.fold_check_time_steps if corner else 0)
             if (
                 stuck
                 and s.stop_check_time_steps > 0
                 and checked_from != len(hist.steps)
-                and (corner or s.stop_check_singular or not _singular_along_load(solver, hist))
+                and (corner or not _singular_along_load(solver, hist))
                 and rest_above(budget, corner)
             ):
                 transient_failed = False
@@ -566,10 +536,6 @@ def work_control(
                 f"elastic stiffness per unit displacement over 3 steps (peak {peak:.6g})"
             )
             stop = StopReason.CREEPING if tiny else StopReason.STIFFNESS_LOST
-            if not tiny and s.collapse_at == "onset":
-                # the flat steps are the evidence of the mechanism, not part of its load
-                onset = max(path_lam[: len(path_lam) - flat_steps])
-                reason += f"; the flat steps began at lambda={path_lam[-1 - flat_steps]:.6g}"
             break
         if step.cuts == 0:
             step.grow(out.iterations)
@@ -584,8 +550,7 @@ def work_control(
     assert hist.collapse_bracket is not None  # set by the caller
     if peak <= hist.collapse_bracket[0]:
         return reason, stop
-    reported = peak if onset is None else onset
-    hist.collapse_bracket = (reported, reported)
+    hist.collapse_bracket = (peak, peak)
     hist.end(
         Status.COLLAPSE,
         stop,
@@ -609,7 +574,7 @@ def _to_limit(solver: StaticSolver, hist: History, path_w: list[float]) -> float
 def _singular_along_load(solver: StaticSolver, hist: History) -> bool:
     """Is the tangent of the last converged state singular along the motion the live load
     drives (the certificate's rho at most ``mode_stiffness``)? A peak or a fold of the path:
-    the dynamic-relaxation check is skipped there unless ``stop_check_singular``."""
+    the dynamic-relaxation check is skipped there."""
     from masonry_dem.solvers.static.certificate import _dead_load_tangent, _rayleigh
 
     F = solver.problem.F_live

@@ -164,51 +164,6 @@ def _reduce_zero_capacity(T, trial, tensile_force, kbar, floor, contact_band):
             T[i, 2, 2] = normal
 
 
-def reversed_flow(before: LawResponse, after: LawResponse, kbar: np.ndarray) -> np.ndarray:
-    """(m,) the joints yielded at both ends of a step whose plastic flow turned the other
-    way over it: their returns (trial - actions, the plastic correction, along the normal
-    of the face they yield on) point apart in the elastic metric, r0 . K^-1 r1 < 0. Such a
-    joint went from one face of its strength domain, through its whole elastic range, to
-    the opposite face (a rocking joint turned back from -M to +M)."""
-    r0 = before.trial - before.actions
-    r1 = after.trial - after.actions
-    return np.einsum("ij,ij->i", r0, r1 / kbar) < 0.0
-
-
-def secant_tangents(
-    T: np.ndarray,
-    du: np.ndarray,
-    da: np.ndarray,
-    kbar: np.ndarray,
-    unloading: np.ndarray | None = None,
-) -> np.ndarray:
-    """The joints' tangents T (m, 6, 6) corrected by one Broyden update each, so that each
-    reproduces the change of its actions ``da`` (m, 6) over the relative displacement ``du``
-    (m, 6) actually taken: T' = T + (da - T du) (K du)^T / (du . K du), with K = diag(kbar)
-    the joint's elastic stiffness (the metric that makes translations and rotations
-    commensurate). T' du = da exactly; T' v = T v for every v K-orthogonal to du; a joint
-    that did not move, or whose actions changed as T predicted, keeps T.
-
-    The joints ``unloading`` (m,) (:func:`reversed_flow` over the step) get K instead: the
-    step carried them through their elastic range to yield the other way, and the chord
-    over both faces (2 M over the rotation, for a rocking joint) is a stiffness they have
-    nowhere on the path. Along the path such a joint first unloads, elastically; the chord
-    lets Newton land on the equilibrium where it yields the other way, which a path of
-    shorter steps does not reach (docs/solvers.md, "A secant correction of the joints'
-    tangents")."""
-    Kdu = kbar * du
-    norm = np.einsum("ij,ij->i", du, Kdu)
-    miss = da - np.einsum("ijk,ik->ij", T, du)
-    moved = norm > 0.0
-    out = T.copy()
-    out[moved] += miss[moved][:, :, None] * (Kdu[moved] / norm[moved, None])[:, None, :]
-    if unloading is not None and unloading.any():
-        rows = np.flatnonzero(unloading)
-        out[rows] = 0.0
-        out[rows[:, None], np.arange(6), np.arange(6)] = kbar[rows]
-    return out
-
-
 @dataclass
 class _Kept:
     """What :meth:`TangentAssembler.update` keeps from the last matrix it assembled."""
@@ -447,12 +402,6 @@ class DiscreteProblem:
         weighted = self.weight * residual
         return residual, math.sqrt(float(weighted @ weighted)) / scale, response
 
-    def correction_norm(self, dq: np.ndarray) -> float:
-        """|dq| of a correction of the free DOFs, rotations as displacements at the median
-        block size (the dual of the residual's weights)."""
-        weighted = self.displacement_weight * dq
-        return math.sqrt(float(weighted @ weighted))
-
     def _external(self, lam: float, dead_factor: float) -> tuple[np.ndarray, float]:
         """(F_ext on the free DOFs, its weighted norm) at (lambda, dead_factor), kept for
         the last pair: a search evaluates many residuals at one lambda."""
@@ -479,22 +428,16 @@ class DiscreteProblem:
         """The fixed-pattern assembler of the tangent (its pattern: ``indptr``, ``indices``)."""
         return self._tangents
 
-    def factor(
-        self,
-        response: LawResponse,
-        floor: float | None = None,
-        tangents: np.ndarray | None = None,
-    ) -> Factors:
+    def factor(self, response: LawResponse, floor: float | None = None) -> Factors:
         """LU of the consistent tangent at ``response`` (with ``floor`` x the elastic
-        stiffness kept on the diagonal of every joint), or of the joints' ``tangents`` (m, 6,
-        6) given instead (:func:`secant_tangents`). The tangent is structurally symmetric
+        stiffness kept on the diagonal of every joint). The tangent is structurally symmetric
         with a regular diagonal (the residual stiffness); its pattern never changes, so it is
         analysed once (:func:`masonry_dem.solvers.factorization.analyse`: the ordering and
         symbolic factorization of the backend chosen for its size) and each tangent's
         entries go straight to a numeric factorization."""
         if floor is None:
             floor = self.residual_stiffness
-        T = self.joint_tangents(response, floor) if tangents is None else tangents.copy()
+        T = self.joint_tangents(response, floor)
         fronts = self._factorizer()
         values = self._tangents.update(T, fronts.layout)  # in the backend's own order
         self.factorizations += 1

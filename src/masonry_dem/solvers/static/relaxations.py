@@ -169,8 +169,7 @@ class Relaxations(Corrector):
         self, target: float, budget: int | None = None
     ) -> Generator[None, None, Outcome]:
         """:meth:`implicit_relaxation` as a resumable motion: yields after each
-        factorization and returns its :class:`Outcome`, so that another relaxation can run
-        beside it (:meth:`race`)."""
+        factorization and returns its :class:`Outcome`."""
         s = self.settings
         budget = s.corner_check_steps if budget is None else budget
         free = self.problem.asm.free_index
@@ -266,9 +265,9 @@ class Relaxations(Corrector):
         return self.equilibrate(target, start=self.state_of(x))
 
     def dynamic_rescue(
-        self, target: float, last: float, budget: int | None = None, polish: bool = True
+        self, target: float, last: float, budget: int, polish: bool = True
     ) -> Outcome | None:
-        """Dynamic relaxation of a load step Newton could not solve, from the last converged
+        """Dynamic relaxation of ``budget`` time steps to ``target`` from the last converged
         state, then Newton from where it came to rest (so an accepted state meets the static
         tolerance). Newton stops at kinks of the projection (joints on the edge between two
         states) where no correction lowers the residual; the damped motion goes round them.
@@ -280,7 +279,6 @@ class Relaxations(Corrector):
         (:meth:`Relaxation._relax`'s ``creep_cos``), so a wall snapping through to a fold's
         rest gets there in fewer time steps."""
         s = self.settings
-        budget = s.rescue_time_steps if budget is None else budget
         dr = self._kept_relaxation(budget)
         start = self.relaxation_start(last)
         # its displacement limit measured from the start state, as every search of the path
@@ -328,133 +326,6 @@ class Relaxations(Corrector):
         )
         return polished if polished.ok else None
 
-    def race(self, target: float, last: float, budget: int) -> Outcome | None:
-        """The corner check with both relaxations side by side, from the last converged
-        state (at ``last``) to ``target``: dynamic relaxation of ``budget`` time steps with
-        its Newton probes (:meth:`dynamic_rescue`), and :meth:`implicit_motion` advanced at
-        each probe to the steps the two budgets' rate grants the time steps taken so far
-        (``budget`` time steps for ``corner_check_steps`` implicit steps, or
-        ``corner_race_rate`` time steps for one). The first verdict decides: the implicit
-        motion at rest (a fold, the path goes on from it), past the displacement limit (a
-        peak: None), or a probe's Newton converged (a fold, from the dynamic rest). At a
-        fold both motions have spent about the same effort, so the rest taken is, up to the
-        probes' spacing, the one :meth:`implicit_relaxation` followed by a bounded dynamic
-        relaxation (``corner_rest = "bounded"``) takes, for at most about twice the cheaper
-        motion's effort. Dynamic relaxation's own motion past the displacement limit is a
-        peak too (a motion that accelerates has no kinetic-energy peak, so no probe, and
-        the implicit motion waits); where it stalls, the implicit motion goes on alone to
-        its verdict or its budget. Needs ``fold_probe_every`` > 0 (the probes are where
-        the implicit steps run)."""
-        s = self.settings
-        dr = self._kept_relaxation(budget)
-        # time steps an implicit step is worth
-        rate = s.corner_race_rate or budget / s.corner_check_steps
-        motion = self.implicit_motion(target)
-        taken = 0
-        implicit: list[Outcome] = []  # the implicit motion's end, once it has one
-        found: list[Outcome] = []  # a probe's converged Newton search
-        spent = dr.stats.time_steps
-
-        def advance(until: float) -> Outcome | None:
-            nonlocal taken
-            while not implicit and taken < until:
-                if (ended := _step(motion)) is not None:
-                    implicit.append(ended)
-                taken += 1
-            return implicit[0] if implicit else None
-
-        # with corner_race_window "effort": the probes' residuals, (time steps, residual)
-        seen = [(0, self.residual(self.q, target)[1])] if s.corner_race_window == "effort" else []
-        gave_up: list[int] = []  # the time steps at which the relaxation was judged stalled
-
-        def stalled(taken_steps: int) -> bool:
-            """Has the residual not halved over the last quarter of the time steps taken?
-            The stall window ``corner_rest = "bounded"`` gives a relaxation worth the
-            implicit motion's effort so far (a quarter of its budget)."""
-            split = 0.75 * taken_steps
-            before = min(r for t, r in seen if t <= split)
-            recent = min((r for t, r in seen if t > split), default=math.inf)
-            return recent > 0.5 * before
-
-        def probe(x: np.ndarray) -> bool:
-            ended = advance((dr.stats.time_steps - spent) / rate)
-            if _verdict(ended):
-                return True  # the implicit verdict came first: the relaxation stops
-            out = self.newton_from(x, target)
-            if out.ok:
-                found.append(out)
-                return True
-            if seen:  # judged after the probe: its converged Newton is the relaxation's rest
-                now = dr.stats.time_steps - spent
-                seen.append((now, self.residual(self.state_of(x), target)[1]))
-                if stalled(now):
-                    gave_up.append(now)
-                    return True  # ends the relaxation; the implicit motion goes on alone
-            return False
-
-        relaxed = dr.relax_with_cuts(
-            self.relaxation_start(last),
-            target,
-            from_start=True,
-            probe=probe,
-            probe_every=s.fold_probe_every,
-            creep_cos=s.fold_creep_cos,
-        )
-        self.time_steps += relaxed.cycles
-        ended = implicit[0] if implicit else None
-        if found and not _verdict(ended):
-            log.debug(
-                "race to lambda=%.6g: a probe's rest after %d time steps and %d implicit steps",
-                target,
-                relaxed.cycles,
-                taken,
-            )
-            return found[-1]
-        if gave_up:
-            log.debug(
-                "race to lambda=%.6g: dynamic relaxation stalled after %d time steps, "
-                "%d implicit steps",
-                target,
-                gave_up[0],
-                taken,
-            )
-        elif relaxed.kind == "mechanism" and ended is None:
-            # its own motion past the displacement limit (measured from the same state) is
-            # the peak's verdict too; a motion that accelerates has no kinetic-energy peak,
-            # so no probe advanced the implicit one
-            log.debug(
-                "race to lambda=%.6g: dynamic relaxation ran past the displacement "
-                "limit after %d time steps, %d implicit steps",
-                target,
-                relaxed.cycles,
-                taken,
-            )
-            return None
-        if relaxed.ok and ended is None and not gave_up:  # its own rest, polished
-            polished = self.newton_from(relaxed.x, target)
-            log.debug(
-                "race to lambda=%.6g: dynamic relaxation's own rest after %d time steps, Newton %s",
-                target,
-                relaxed.cycles,
-                "ok" if polished.ok else polished.reason,
-            )
-            if polished.ok:
-                return polished
-        stopped = ended is not None  # the implicit verdict ended the relaxation
-        ended = advance(math.inf)
-        log.debug(
-            "race to lambda=%.6g: %d time steps (%s), %d implicit steps (%s)",
-            target,
-            relaxed.cycles,
-            "stopped" if stopped else relaxed.kind,
-            taken,
-            "rest" if ended is not None and ended.ok else getattr(ended, "reason", ""),
-        )
-        if ended is not None and ended.ok:
-            self.last_increment = self.increment(ended.q)
-            return ended
-        return None
-
 
 def _step(motion: Generator[None, None, Outcome]) -> Outcome | None:
     """One step of an implicit motion: None, or its outcome once it has ended."""
@@ -463,8 +334,3 @@ def _step(motion: Generator[None, None, Outcome]) -> Outcome | None:
     except StopIteration as done:
         return done.value
     return None
-
-
-def _verdict(ended: Outcome | None) -> bool:
-    """Has the implicit motion reached a verdict: rest (a fold) or a run past the limit?"""
-    return ended is not None and (ended.ok or ended.past_limit)

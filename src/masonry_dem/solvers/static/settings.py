@@ -10,7 +10,6 @@ from typing import Literal, get_args
 from masonry_dem._validation import (
     at_least,
     check_choice,
-    checked,
     choice,
     count,
     finite,
@@ -25,33 +24,6 @@ from masonry_dem.solvers.load_path import LoadPathSettings
 #: what follows the first failure of load control (see ``StaticSettings.continuation``)
 Continuation = Literal["work", "bracket"]
 CONTINUATION: tuple[str, ...] = get_args(Continuation)
-#: how the corner check relaxes (see ``StaticSettings.corner_check``)
-CornerCheck = Literal["mixed", "implicit", "explicit", "race"]
-CORNER_CHECKS: tuple[str, ...] = get_args(CornerCheck)
-
-#: how long dynamic relaxation looks for its rest at a fold (``StaticSettings.corner_rest``)
-CornerRest = Literal["dynamic", "bounded"]
-CORNER_RESTS: tuple[str, ...] = get_args(CornerRest)
-
-#: when the race's dynamic relaxation stalls (``StaticSettings.corner_race_window``)
-CornerRaceWindow = Literal["budget", "effort"]
-CORNER_RACE_WINDOWS: tuple[str, ...] = get_args(CornerRaceWindow)
-
-#: what a motion past the displacement limit tells the path (see ``StaticSettings.run_off``)
-RunOff = Literal["carry", "stop", "ignore"]
-RUN_OFFS: tuple[str, ...] = get_args(RunOff)
-
-#: what the corrector's line search accepts (see ``StaticSettings.line_search``)
-LineSearch = Literal["residual", "natural"]
-LINE_SEARCHES: tuple[str, ...] = get_args(LineSearch)
-
-#: which lambda a path that lost its stiffness reports (see ``StaticSettings.collapse_at``)
-CollapseAt = Literal["peak", "onset"]
-COLLAPSE_AT: tuple[str, ...] = get_args(CollapseAt)
-
-#: how long the next work step is (see ``StaticSettings.step_rule``)
-StepRule = Literal["easy", "iterations"]
-STEP_RULES: tuple[str, ...] = get_args(StepRule)
 
 
 @dataclass(frozen=True)
@@ -99,11 +71,6 @@ class StaticSettings(LoadPathSettings):
         dead-load state along a path) still in the small-displacement range (None: half the
         smallest dimension of the blocks that can move). Under the dead load the elastic
         displacement of the bonded assembly is added to it: elastic shortening is no mechanism.
-    limit_elastic_multiple: along the path the limit is at least this multiple of the
-        largest displacement under the dead load (0: off, the default). Off, because a limit
-        that grows with 1 / kn lets a soft wall go past half a block, which is neither the
-        model's small-displacement range nor invariant with kn (docs/solvers.md,
-        "Invariance"); a path that leaves that range on a rising curve fails with that reason.
     residual_stiffness: fraction of the elastic stiffness kept on the diagonal of the tangent.
     tangent: ``"analytic"`` (closed-form derivative of the return) or ``"difference"``.
     tension, memory: deprecated (None: the material's). They are the interface law's, set on
@@ -118,17 +85,6 @@ class StaticSettings(LoadPathSettings):
     creep: a step shorter than this fraction of the Newton correction, with no joint changing
         state, leaves the tangent as it was (its factorization is kept).
     search_cuts: a search gives up after this many cuts (by 8) of its trust radius.
-    secant_rounds: before cutting its trust radius, a search that finds no decrease along the
-        direction of a tangent factorized at its present state corrects each joint's tangent
-        by a Broyden update along the shortest step tried (the change of the joint's actions
-        over it) and solves again, at most this many times a search (0: off, the default;
-        never in the damped search of the dead load). It passes the kinks where a yielded
-        joint's consistent tangent sends it back through its elastic range. A joint that
-        the step carried through its elastic range, to yield the other way, gets its
-        elastic stiffness instead: its chord would let Newton land on the equilibrium where
-        it yields the other way, which a path of shorter steps does not reach. Off because
-        it saves CPU on large walls but costs it on the validation set (docs/solvers.md, "A
-        secant correction of the joints' tangents").
     trust_seed: the trust radius of a search with no previous increment to go by (the dead
         load's first live step, a controlled step), in elastic units of the wall
         (``DiscreteProblem.displacement_scale``: the bonded assembly's largest translation
@@ -172,36 +128,26 @@ class StaticSettings(LoadPathSettings):
 
     Other strategies (off by default, or checks)
     --------------------------------------------
-    robust_iterations: budget of initial-stiffness iterations with Anderson acceleration
-        that re-try a failed load step; 0 disables it.
     anderson, divergence_window: the robust iterations mix the last ``anderson``
         corrections and stop when the residual has not fallen x10 in ``divergence_window``
         iterations with corrections that do not shrink.
     zero_load_robust_iterations: the robust re-try's budget where load control has halved
         its step down to what the residual cannot tell from zero load (100 x ``tolerance``
-        load scales) and ``robust_iterations`` is 0: Newton stalls from the dead-load state
-        of in-plane walls held on one edge (a held 9 x 3 wall: 1e-8 -> 0.93).
-    rescue_time_steps: budget of a dynamic relaxation of a failed load step; 0 disables it.
+        load scales): Newton stalls from the dead-load state of in-plane walls held on one
+        edge (a held 9 x 3 wall: 1e-8 -> 0.93).
     stop_check_time_steps: budget of the dynamic relaxation that checks a stop of work
         control (to lambda x (1 + transient_rise)) before the path is given up; 0 disables it.
         The relaxation ends sooner when the wall runs past the displacement limit or its
         residual has not halved in a quarter of the budget.
-    stop_check_singular: run that check also where the tangent of the stuck state is
-        singular along the load. A fold of the path has such a tangent as well as a peak,
-        and only the check tells them apart; with a budget that covers a fold's settling
-        the path passes folds the default certifies as collapses, at the price of a
-        relaxation of the whole wall at every such stop (measured in docs/solvers.md, "The
-        stop check: folds and peaks"). Off by default for that price.
     fold_check_time_steps: budget of that check where the path got stuck while its curve
         still rose: the last step gained at least ``flat_slope`` of the elastic d lambda / d w
         (a corner of the curve, where the tangent of the state, taken past the kink, may be
         singular although the path never ran along a mechanism: a fold of the path, or a
         peak). The check runs there whatever the tangent, with the larger of this and
         ``stop_check_time_steps``; its budget covers the settling of every fold measured
-        (docs/solvers.md, "The corner check on by default"). With ``corner_check =
-        "explicit"`` a corner that is a peak costs half the budget (a stalled relaxation);
-        by default (``"mixed"``) the implicit check decides, and this relaxation runs only
-        at a fold, for the state the path goes on from. A path whose searches run past the
+        (docs/solvers.md, "The corner check on by default"). The implicit check (below)
+        decides, and this relaxation runs only at a fold, for the state the path goes on
+        from, or where that check gives no verdict. A path whose searches run past the
         displacement limit while its curve still rose is a corner too. 0: such stops are
         checked as any other, so a singular tangent skips the check
         (``stop_check_time_steps`` = 0 disables both).
@@ -233,43 +179,23 @@ class StaticSettings(LoadPathSettings):
     bound_tolerance: lambda may exceed the associative limit-analysis bound (when one is
         given) by this fraction (the bound's own discretisation and solver tolerance).
 
-    The corrector's line search (docs/solvers.md, "The line search's merit")
-    -------------------------------------------------------------------------
-    line_search: what a trial step of a Newton search must lower to be taken (by a
-        fraction 1e-4 of the step; backtracking 1, 1/2, 1/4, 1/8, then a cut of the trust
-        radius). ``"residual"`` (default): the weighted residual norm plus the control's
-        error. ``"natural"``: the size of the simplified Newton correction K^-1 R(q + t dq)
-        with the factors the step was solved with, against the full correction's (Deuflhard's
-        natural monotonicity test; under control, with the lambda correction that meets the
-        constraint, so the control's error is in it): the residual in the tangent's own
-        norm, which the joints' stiff normal rows do not dominate; one more solve per trial
-        step. It saves factorizations on walls with corners but costs some flat walls more,
-        and its extra solves can outweigh the factorizations it saves, so it is not the
-        default (the figures: docs/solvers.md, "The line search's merit"). The tolerance
-        test of a converged state is the same for both.
-
     The corner check (docs/solvers.md, "The corner check, implicit")
     ---------------------------------------------------------------
-    corner_check: how the check at a corner tells a fold from a peak. ``"mixed"``
-        (default): :meth:`~masonry_dem.solvers.static.relaxations.Relaxations.implicit_relaxation`
-        first (linearly implicit Euler steps of the overdamped motion D dq/dt = R(q), D the
-        joints' elastic stiffness, one factorization each, to the same target lambda x (1 +
-        transient_rise) from the same state). Its motion running past the displacement
-        limit is a peak, with no time step of dynamic relaxation (a peak's explicit
-        relaxation stalls for its whole budget). Rest is a fold: the path goes on from the
-        rest dynamic relaxation (``fold_check_time_steps``, bounded by ``corner_rest``)
-        finds, the equilibrium the explicit check takes, or from the implicit one's where
-        that finds none. No verdict
-        within ``corner_check_steps`` (a slow fold): dynamic relaxation decides, as with
-        ``"explicit"``. ``"implicit"``: the same, but the path always goes on from the
-        implicit rest (the cheapest; the overdamped motion may settle in another
-        equilibrium at the same lambda than the explicit motion, so answers past a fold can
-        differ). ``"explicit"``: dynamic relaxation alone. ``"race"``: both side by side
-        (:meth:`~masonry_dem.solvers.static.relaxations.Relaxations.race`: an implicit step
-        for each ``fold_check_time_steps`` / ``corner_check_steps`` time steps, driven from
-        dynamic relaxation's probes), the first verdict deciding, so that a slow fold costs
-        at most about twice the cheaper relaxation (docs/solvers.md, "Both relaxations side
-        by side"); with ``fold_probe_every`` = 0 it is ``"mixed"``.
+    The check at a corner tells a fold from a peak:
+    :meth:`~masonry_dem.solvers.static.relaxations.Relaxations.implicit_relaxation` first
+    (linearly implicit Euler steps of the overdamped motion D dq/dt = R(q), D the joints'
+    elastic stiffness, one factorization each, to the same target lambda x (1 +
+    transient_rise) from the same state). Its motion running past the displacement limit is
+    a peak, with no time step of dynamic relaxation (a peak's explicit relaxation stalls for
+    its whole budget). Rest is a fold: the path goes on from the rest dynamic relaxation
+    finds, or from the implicit one's where that finds none. That relaxation is given the
+    check's own effort at the rate the two budgets are set by, ``fold_check_time_steps`` x
+    (implicit steps taken / ``corner_check_steps``) (docs/solvers.md, "The cost of passing a
+    fold"). No verdict within ``corner_check_steps`` (a slow fold): dynamic relaxation of
+    ``fold_check_time_steps`` decides. A pseudo-transient step (the same overdamped motion)
+    whose motion ran past the displacement limit toward lambda T answers every later check
+    or pseudo-transient step of the same branch whose target is T or more: no rest
+    (docs/solvers.md, "The endgame at the peak").
     corner_check_steps: budget of implicit steps (factorizations) of that check, the most a
         check without a verdict costs before dynamic relaxation decides. 500: about what the
         fallback's budget costs (``fold_check_time_steps`` of dynamic relaxation at the
@@ -286,86 +212,6 @@ class StaticSettings(LoadPathSettings):
         stiffness (a pseudo time step of 1 / this elastic relaxation times); halved after
         each step taken, so the steps grow towards Newton's as the wall settles.
 
-    The reach of a work step (docs/solvers.md, "The reach of a work step")
-    ---------------------------------------------------------------------
-    The defaults are the rules of sessions 1-18; the other choices below were measured on
-    the U and flat walls, the validation cases, the return-wall rows and a 909-block wall,
-    and neither won the totals.
-    predictor_order: the start of each search of work control (with ``secant_predictor``):
-        1, the line through the last two converged states; 2, the parabola through the
-        last three (in w), which falls back to the line where its second-order term over
-        the step exceeds the first-order one (the path turned back, or its slope more than
-        doubled, at a kink of the law within the last steps).
-    step_rule: how long the next work step is after a converged one. ``"easy"``:
-        ``growth`` times after a step of at most ``easy_iterations`` Newton iterations, else
-        the same. ``"iterations"``: times (``target_iterations`` / I) ** ``step_exponent``
-        after a step of I iterations (Crisfield, Ramm), clamped to [``step_shrink``,
-        ``growth``] times the last step.
-    target_iterations: the iterations a work step should take (``"iterations"``).
-    step_exponent: the exponent of the iteration rule (1/2: Crisfield's).
-    step_shrink: the least factor of the iteration rule (a hard step shortens the next one
-        by at most this).
-
-    The endgame at the peak (docs/solvers.md, "The endgame at the peak")
-    ---------------------------------------------------------------------
-    run_off: what a pseudo-transient step whose motion runs past the displacement limit
-        toward lambda T tells the path. It is the overdamped motion the corner check runs
-        (the same equation, from a state of the path), so its run-off is the check's verdict
-        at T: no rest there, nor higher, while the path stays on that branch.
-        ``"carry"`` (default): every later pseudo-transient step or check of the same
-        branch whose target is T or more is answered by it (no rest) and not run; the path
-        still closes in on the peak below T by halved steps. The verdict lapses where the
-        path moves to another branch (a relaxation's rest) or finds equilibria at T.
-        ``"stop"``: the path ends at the run-off where its curve still rose (a corner),
-        without the halvings (the peak then lies within T, a ``transient_rise`` above the
-        last state, which the halvings would have closed in on). ``"ignore"``: the run-off
-        is one failed step among others (session 18).
-    corner_transient: where work control is stuck at a corner, try a pseudo-transient step
-        before the corner check (True, as before). False: the check alone, which relaxes
-        from the same state to the same lambda and finds the rest of every fold measured
-        where the pseudo-transient step found none. Not the default: a pseudo-transient step
-        there also passes folds in a few steps, and without it the walls that meet measured
-        took more factorizations and one answer moved (docs/solvers.md, "The endgame at the
-        peak").
-
-    The cost of passing a fold (docs/solvers.md, "The cost of passing a fold")
-    ---------------------------------------------------------------------------
-    corner_rest: with ``corner_check = "mixed"``, how long dynamic relaxation looks for its
-        own rest where the implicit check came to rest at a fold. ``"bounded"`` (default):
-        the check's own effort at the rate the two budgets are set by,
-        ``fold_check_time_steps`` x (implicit steps taken / ``corner_check_steps``); where
-        it finds no rest within that, the path goes on from the implicit rest (a rest the
-        damped dynamic motion needs more effort to reach than the overdamped one needed is
-        not sought). ``"dynamic"``: its whole budget, ``fold_check_time_steps`` (session
-        19). The measurements behind the default are in that section of docs/solvers.md.
-
-    Both relaxations side by side (docs/solvers.md, "Both relaxations side by side")
-    --------------------------------------------------------------------------------
-    corner_race_rate: with ``corner_check = "race"``, the time steps of dynamic relaxation
-        run for each implicit step. 0 (default): the rate the two budgets are set by,
-        ``fold_check_time_steps`` / ``corner_check_steps`` (40).
-    corner_race_window: with ``corner_check = "race"``, when its dynamic relaxation has
-        stalled (the implicit motion then goes on alone). ``"budget"`` (default): its
-        residual has not halved in a quarter of ``fold_check_time_steps``. ``"effort"``:
-        at a probe whose Newton search did not converge, the residual of the probes'
-        states has not halved over the last quarter of the time steps taken, the window
-        ``corner_rest = "bounded"`` gives a relaxation worth the implicit motion's effort
-        so far.
-
-    Newton's tangent at a kink of the law (docs/solvers.md, "Newton's basin on walls that meet")
-    ----------------------------------------------------------------------------------------
-    kink_rounds: a search about to give up because no correction lowers the residual (its
-        trust radius cut ``search_cuts`` times or below ``radius_floor``) gives the joints
-        on the nearest kink of the law along its direction (within the shortest step
-        tried: the shortest of 8^-k of it, k = 10 .. 0, at which a joint's flags change)
-        the law's tangent of the side the direction takes them to, and goes on from there
-        with its first trust radius; at most this many times a search (0: off; never in
-        the damped search of the dead load). Such searches stop next to a kink (docs/
-        solvers.md, "Newton's basin on walls that meet"); replayed from the same states
-        it converges every search the default converges and a few more, but the paths
-        it then takes cost more factorizations on the validation set, so it is off.
-        Converged states are exact equilibria of the law either way.
-
     The step near the peak (docs/solvers.md, "The step near the peak")
     ------------------------------------------------------------------
     On a curve whose slope fades (a mechanism that forms joint by joint) the path stops three
@@ -380,12 +226,6 @@ class StaticSettings(LoadPathSettings):
         which the steps of a rising path do not reach: it binds only in the tail, and the
         answer no longer moves with ``growth``. 0: off (steps grow by ``growth`` without a
         bound).
-    collapse_at: what a path stopped by lost stiffness (three flat steps) reports:
-        ``"peak"``, the highest lambda on the path; ``"onset"``, the highest lambda up to
-        the state where the flat steps began (a converged state of the path; the two agree
-        as the steps shorten). Not the default: on a curve that approaches its limit from
-        below (a rigid wedge tipping on elastic joints) the flat steps gain load toward
-        it, and the onset lies further from it than the highest state.
     """
 
     easy_iterations: int = count(6, least=0)
@@ -395,7 +235,6 @@ class StaticSettings(LoadPathSettings):
     tolerance: float = positive(1e-8)
     control_tolerance: float = positive(1e-6)
     max_iterations: int = count(40, least=1)
-    limit_elastic_multiple: float = at_least(0.0, 0.0, " (0: off)")
     residual_stiffness: float = positive(1e-9)
     tangent: TangentMethod = choice("analytic", TANGENT_METHODS)
     stall_window: int = count(8, least=1)
@@ -405,7 +244,6 @@ class StaticSettings(LoadPathSettings):
     creep: float = finite(1e-3)
     search_cuts: int = count(7, least=1)
     trust_seed: float = positive(0.05)
-    secant_rounds: int = count(0, least=0)
     radius_floor: float = positive(1e-9)
     max_cuts: int = count(10, least=0)
     limit_cuts: int = count(2, least=0)
@@ -419,13 +257,10 @@ class StaticSettings(LoadPathSettings):
     transient_start: float = positive(1e-3)
     transient_shrink: float = positive(0.25)
     transient_window: int = count(30, least=1)
-    robust_iterations: int = count(0, least=0)
     zero_load_robust_iterations: int = count(2000, least=0)
     anderson: int = count(5, least=1)
     divergence_window: int = count(30, least=1)
-    rescue_time_steps: int = count(0, least=0)
     stop_check_time_steps: int = count(4000, least=0)
-    stop_check_singular: bool = False
     fold_check_time_steps: int = count(20_000, least=0)
     fold_probe_every: int = count(500, least=0)
     fold_creep_cos: float = at_least(0.95, 0.0, " (0: off)")
@@ -435,30 +270,11 @@ class StaticSettings(LoadPathSettings):
     mode_stiffness: float = positive(0.05)
     mode_displacement: float = positive(0.5)
     bound_tolerance: float = positive(0.01)
-    line_search: LineSearch = choice("residual", LINE_SEARCHES)
-    corner_check: CornerCheck = choice("mixed", CORNER_CHECKS)
     corner_check_steps: int = count(500, least=1)
     corner_check_rise: float = positive(0.5)
     corner_check_start: float = positive(1e-2)
-    # the reach of a work step (session 19)
-    predictor_order: int = checked(1, lambda v: is_count(v, 1) and v <= 2, "1 or 2")
-    step_rule: StepRule = choice("easy", STEP_RULES)
-    target_iterations: int = count(6, least=1)
-    step_exponent: float = positive(0.5)
-    step_shrink: float = checked(0.5, lambda v: is_number(v) and 0 < v <= 1, "in (0, 1]")
-    # the endgame at the peak (session 19)
-    run_off: RunOff = choice("carry", RUN_OFFS)
-    corner_transient: bool = checked(True, lambda v: isinstance(v, bool), "true or false")
-    # the cost of passing a fold (session 20)
-    corner_rest: CornerRest = choice("bounded", CORNER_RESTS)
-    # both relaxations side by side (session 20)
-    corner_race_rate: int = count(0, least=0)
-    corner_race_window: CornerRaceWindow = choice("budget", CORNER_RACE_WINDOWS)
-    # the tangent at a kink of the law (session 19)
-    kink_rounds: int = count(0, least=0)
     # the step near the peak (session 20)
     tail_resolution: float = at_least(1e-3, 0.0, " (0: off)")
-    collapse_at: CollapseAt = choice("peak", COLLAPSE_AT)
 
 
 SETTING_NAMES = tuple(f.name for f in fields(StaticSettings))

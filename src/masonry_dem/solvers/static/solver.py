@@ -210,13 +210,6 @@ class StaticSolver(Relaxations):
                 else replace(dead, reason=f"{dead.reason}; pseudo-transient: {settled.reason}")
             )
         self._limit_allowance = 0.0  # from here displacements are measured from this state
-        if dead.ok:
-            # the model is geometrically linear: at a given load every displacement scales
-            # with 1 / kn, so a mechanism is told from a soft wall only against the wall's
-            # own elastic scale, the displacement under its weight
-            idx = self.problem.moving_translations
-            elastic = float(np.abs(dead.q[idx]).max(initial=0.0))
-            self._elastic_limit = self.settings.limit_elastic_multiple * elastic
         return dead
 
     def _dead_radius(self) -> float:

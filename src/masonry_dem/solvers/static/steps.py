@@ -38,12 +38,9 @@ STRAIGHT = 0.5
 @dataclass
 class StepController:
     """The step length of a path follower, at most ``cap``; halved after a failure, counting
-    the halvings in a row (``cuts``). After a converged step (:meth:`grow`), by ``rule``:
-
-    * ``"easy"``: ``growth`` times longer after an easy step (at most ``easy_iterations``
-      corrector iterations; None: after every converged step), else kept;
-    * ``"iterations"``: times (``target_iterations`` / I) ** ``exponent`` for a step of I
-      iterations (Crisfield's and Ramm's rule), clamped to [``shrink``, ``growth``].
+    the halvings in a row (``cuts``). After a converged step (:meth:`grow`) ``growth`` times
+    longer after an easy step (at most ``easy_iterations`` corrector iterations; None: after
+    every converged step), else kept.
     """
 
     size: float
@@ -51,18 +48,11 @@ class StepController:
     cap: float = math.inf
     easy_iterations: int | None = None
     cuts: int = 0
-    rule: str = "easy"
-    target_iterations: int = 6
-    exponent: float = 0.5
-    shrink: float = 0.5
 
     def factor(self, iterations: int) -> float:
         """How much longer the next step is than the one that converged in ``iterations``."""
-        if self.rule == "easy":
-            easy = self.easy_iterations is None or iterations <= self.easy_iterations
-            return self.growth if easy else 1.0
-        raw = (self.target_iterations / max(iterations, 1)) ** self.exponent
-        return min(max(raw, self.shrink), self.growth)
+        easy = self.easy_iterations is None or iterations <= self.easy_iterations
+        return self.growth if easy else 1.0
 
     def grow(self, iterations: int) -> None:
         self.size = min(self.size * self.factor(iterations), self.cap)
@@ -75,54 +65,30 @@ class StepController:
 @dataclass
 class SecantPredictor:
     """The start of the next search of work control: the line through the last two converged
-    states of the path (``order`` 1), or the parabola through the last three (``order`` 2),
-    extended by the next step (``secant_predictor``). Along a smooth stretch of the path
-    Newton then starts within a fraction of the step of the answer instead of a whole step
-    away; a state reached by a jump (a pseudo-transient or dynamic-relaxation step past a
-    fold) starts a new line. The parameter ``t`` is what the follower prescribes (lambda
-    under load control, w under work control).
-
-    At a kink of the path (a joint that started to slide or rock within the last steps)
-    the states do not lie on one smooth curve, and no extrapolation through them is right.
-    Where the parabola's second-order term over the next step exceeds its first-order one
-    (the series is outside its range: the path turned back, or its slope more than
-    doubled) the start falls back to the line through the last two states; a milder kink
-    is extrapolated as if smooth (docs/solvers.md, "The reach of a work step")."""
+    states of the path, extended by the next step (``secant_predictor``). Along a smooth
+    stretch of the path Newton then starts within a fraction of the step of the answer
+    instead of a whole step away; a state reached by a jump (a pseudo-transient or
+    dynamic-relaxation step past a fold) starts a new line. The parameter ``t`` is what the
+    follower prescribes (lambda under load control, w under work control)."""
 
     on: bool
-    states: list[tuple[float, np.ndarray, float]]  # (t, q, lambda), at most order + 1
-    order: int = 1
+    states: list[tuple[float, np.ndarray, float]]  # (t, q, lambda), at most two
 
     def add(self, t: float, q: np.ndarray, lam: float) -> None:
-        self.states = [*self.states[-self.order :], (t, q, lam)]
+        self.states = [*self.states[-1:], (t, q, lam)]
 
     def restart(self, t: float, q: np.ndarray, lam: float) -> None:
         self.states = [(t, q, lam)]
 
     def start(self, t: float) -> tuple[np.ndarray | None, float | None]:
-        """(q, lambda) on the line (or parabola) at ``t``; (None, None) without two states
-        on it."""
+        """(q, lambda) on the line at ``t``; (None, None) without two states on it."""
         if not self.on or len(self.states) < 2:
             return None, None
         (t0, q0, lam0), (t1, q1, lam1) = self.states[-2:]
         if t1 == t0:
             return None, None
         f = (t - t1) / (t1 - t0)
-        q, lam = q1 + f * (q1 - q0), lam1 + f * (lam1 - lam0)
-        if self.order < 2 or len(self.states) < 3:
-            return q, lam
-        tm, qm, lamm = self.states[-3]
-        if tm in (t0, t1):
-            return q, lam
-        # Newton's form: the line through the last two plus the divided difference of
-        # second order times (t - t0)(t - t1)
-        g = (t - t0) * (t - t1) / (t1 - tm)
-        d2q = ((q1 - q0) / (t1 - t0) - (q0 - qm) / (t0 - tm)) * g
-        linear = float(np.linalg.norm(q - q1))
-        if float(np.linalg.norm(d2q)) > linear:  # a kink within the last steps
-            return q, lam
-        d2lam = ((lam1 - lam0) / (t1 - t0) - (lam0 - lamm) / (t0 - tm)) * g
-        return q + d2q, lam + d2lam
+        return q1 + f * (q1 - q0), lam1 + f * (lam1 - lam0)
 
 
 @dataclass(frozen=True)
