@@ -102,8 +102,8 @@ class QuasiStaticSettings:
         running only where Newton does not converge, and the increments follow the
         iteration rule of Crisfield (1981): times (``target_iterations`` / I) ** 1/2 after
         a step of I iterations, within [1/2, ``growth``], up to ``max_step`` load scales and
-        never below ``bracket_tolerance`` x lambda. False (the reference): every increment
-        by the damped motion, at the loading rate ``load_increment``.
+        the loading rate of ``load_increment``, and never below ``bracket_tolerance`` x
+        lambda. False (the reference): every increment by the damped motion.
     target_iterations, max_step: the iteration rule's target and its largest increment
         (load scales), with ``newton_steps``.
     """
@@ -425,7 +425,11 @@ class QuasiStatic:
                     if newton is not None:  # Crisfield's rule
                         factor = math.sqrt(s.target_iterations / max(newton, 1))
                         increment *= min(max(factor, 0.5), s.growth)
-                    increment = min(max(increment, s.bracket_tolerance * lam), s.max_step * scale)
+                    # Newton is only a faster way to the next rest: the loading rate is the
+                    # reference's, so that the two are told apart by the rest reached alone
+                    rate = max(s.load_increment * lam, s.first_increment * scale)
+                    least = s.bracket_tolerance * lam
+                    increment = min(max(increment, least), s.max_step * scale, rate)
                 elif failed is None:
                     cap = max(s.load_increment * lam, s.first_increment * scale)
                     grown = increment * (s.growth if motion.time_steps <= 3 else 1.0)
