@@ -321,6 +321,10 @@ class QuasiStatic:
         stepped = self._time_step(self.q, lam, 1.0, 1e9, self.q)
         if stepped is None or stepped[2] > self.settings.tolerance:
             return None
+        if self.origin is not None:  # a rest past the displacement limit is none
+            moving = self.problem.moving_translations
+            if np.abs(stepped[0][moving] - self.origin[moving]).max() > self.problem.limit:
+                return None
         self._carry(stepped[0], stepped[1])
         return self.iterations - before
 
