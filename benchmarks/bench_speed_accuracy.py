@@ -4,7 +4,7 @@ analysis (issues 6 and 19).
 Run:  python benchmarks/bench_speed_accuracy.py [--cases S15 OL1 14-15] [--quick]
                                                 [--out results/study] [--skip-sweeps]
 
-One command for every figure of docs/solvers.md:
+One command for every figure of docs/history/solvers_record.md:
 
 1. the speed-accuracy study (``masonry-dem study speed-accuracy``): every setting of each
    method (``--methods``) on each case, the table, ``speed_accuracy.json`` and the chart with

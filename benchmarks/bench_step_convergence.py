@@ -29,7 +29,7 @@ joints whose damage state differs at the peak between the default and the finest
 Then, against ``--reference`` (a variant, by default the finest growth): each run's largest
 difference of lambda from the reference path at the same w, and where its path stopped
 (the w of its highest lambda and the stop's reason). The paths coincide to a few 1e-4 and
-their stops differ (docs/solvers.md, "The step near the peak").
+their stops differ (docs/history/solvers_record.md, "The step near the peak").
 
 The chart (``--png``): factorizations over the default's against |lambda - lambda_0| /
 lambda_0, one line per case through the growth variants (the default starred), the shorter

@@ -7,8 +7,8 @@ Run:  python benchmarks/bench_walls_that_meet.py [--sizes S5 big] [--repeat 3] [
 pushovers. ``--stiffness F`` makes the joints of both
 walls F times stiffer (kt / kn kept): with the dry joints of the default (F = 1) the big flat
 wall leaves the small-displacement range (half a block) on a still rising curve, and so does
-every flat wall of its block count held as it is (docs/solvers.md, "The cost of passing a
-fold"); with F = 10 it peaks, so ``--sizes big --stiffness 10`` compares two collapses.
+every flat wall of its block count held as it is (docs/history/solvers_record.md, "The cost of
+passing a fold"); with F = 10 it peaks, so ``--sizes big --stiffness 10`` compares two collapses.
 
 For each size it builds a U wall of Restrepo Velez's stones on a fixed base (``S5``: the
 8-block specimen with returns of 4 blocks, 326 blocks; ``big``: 14 blocks x 30 courses with

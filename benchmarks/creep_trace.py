@@ -9,7 +9,7 @@ Each U wall (facade blocks x courses, returns of m blocks; ``14x30r6`` is the bi
 verdict and, every ``--every`` steps taken, the factorizations so far, the largest
 translation from the check's start (against the displacement limit), the pace of the motion
 over the last ``--every`` steps taken and the residual: what a verdict read from the
-motion's speed and its trend would see (docs/solvers.md, "A motion that creeps").
+motion's speed and its trend would see (docs/history/solvers_record.md, "A motion that creeps").
 """
 
 from __future__ import annotations

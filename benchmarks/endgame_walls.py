@@ -7,8 +7,8 @@ Restrepo Velez's stones, tilted with the base fixed as ``bench_walls_that_meet``
 U wall; each pushed over twice, with the defaults changed by ``--set`` and by ``--against``
 (StaticSettings fields; at least one of them): status, collapse multiplier,
 factorizations, implicit steps, time steps, and whether the two answers are the same
-(``--set corner_check_steps=500 --against corner_check_steps=200``: docs/solvers.md, "A
-motion that creeps").
+(``--set corner_check_steps=500 --against corner_check_steps=200``: docs/history/solvers_record.md,
+"A motion that creeps").
 """
 
 from __future__ import annotations

@@ -1,5 +1,5 @@
-"""Is a certified collapse a peak or a fold? (issue 18, item 2; docs/solvers.md, "Peaks and
-folds: the audit").
+"""Is a certified collapse a peak or a fold? (issue 18, item 2; docs/history/solvers_record.md,
+"Peaks and folds: the audit").
 
     python benchmarks/fold_audit.py [--cases S13 OL1 ...] [--rows S15 ...] [--return-blocks 4]
         [--walls 6] [--seed 18] [--budget 50000] [--rise 0.01]

@@ -1,5 +1,5 @@
 """The corner check's budget against its cost and the folds it passes (issue 18, task
-`verdict`; docs/solvers.md, "Above a peak and above a fold").
+`verdict`; docs/history/solvers_record.md, "Above a peak and above a fold").
 
     python benchmarks/fold_budget.py [--walls U S23 S6/2 S13/2]
         [--variants fold_creep_cos=0 "" fold_check_time_steps=20000 ...]

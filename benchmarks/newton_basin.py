@@ -39,8 +39,8 @@ facade's head joints; ``head:e3``: normal along e3, the returns' head joints and
 where the facade's end blocks meet the returns). The counts of each class over all failed
 searches are printed for each wall; ``--searches`` also prints one line per failed search,
 its top culprits and, where 6 blocks or fewer carry its correction, those blocks (part,
-course, the flags of their joints). Used in docs/solvers.md, "Newton's basin on walls that
-meet (session 19)".
+course, the flags of their joints). Used in docs/history/solvers_record.md, "Newton's basin on
+walls that meet".
 """
 
 from __future__ import annotations

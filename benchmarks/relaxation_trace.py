@@ -1,5 +1,5 @@
 """How a corner check's relaxation moves above a peak and above a fold (issue 18, task
-`verdict`; docs/solvers.md, "Above a peak and above a fold").
+`verdict`; docs/history/solvers_record.md, "Above a peak and above a fold").
 
     python benchmarks/relaxation_trace.py [--walls S23 U S6/2 S13/2] [--window 500]
         [--steps 30000] [--probe-every 500] [--only-last] [--keep-creep] [--line] [--probes]

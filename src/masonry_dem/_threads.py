@@ -5,8 +5,8 @@
 The kernels (interface law, tangent assembly) share their loops among the cores, and so does
 PARDISO (solvers/factorization.py gives MKL numba's thread count). On a small wall a parallel
 loop does too little to pay for waking the threads, so below ``SERIAL_BELOW`` interfaces an
-analysis runs them on one thread (the measurements: docs/solvers.md, "Compiled kernels and threads"). The answers
-are the same bits on any number of threads.
+analysis runs them on one thread (the measurements: docs/history/solvers_record.md, "Compiled
+kernels and threads"). The answers are the same bits on any number of threads.
 """
 
 from __future__ import annotations
@@ -32,10 +32,10 @@ def set_thread_wait_policy(policy: WaitPolicy = "PASSIVE") -> str:
 
     Threads that spin while they wait (``ACTIVE``) take a core from the serial work between
     the loops and from any other process: passive waiting is the safe default for long runs
-    and busy machines (docs/solvers.md, "Compiled kernels and threads"). OpenMP reads ``OMP_WAIT_POLICY`` once,
-    when it starts, so call this before the first analysis of the process; the command line
-    calls it first thing. A value already set in the environment is kept. Returns the policy
-    in force.
+    and busy machines (docs/history/solvers_record.md, "Compiled kernels and threads"). OpenMP reads
+    ``OMP_WAIT_POLICY`` once, when it starts, so call this before the first analysis of the process;
+    the command line calls it first thing. A value already set in the environment is kept. Returns
+    the policy in force.
     """
     if policy not in ("PASSIVE", "ACTIVE"):
         raise ValueError(f"policy must be 'PASSIVE' or 'ACTIVE', got {policy!r}")

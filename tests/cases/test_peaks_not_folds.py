@@ -1,5 +1,5 @@
 """A certified collapse is a peak of the wall, not a fold of the path (issue 18, item 2;
-docs/solvers.md, "Peaks and folds: the audit").
+docs/history/solvers_record.md, "Peaks and folds: the audit").
 
 The invariant: from the state of a certified collapse at lambda_c (its plastic part and
 cracks held, the same step problem the path solves), dynamic relaxation to 1.01 lambda_c

@@ -1,5 +1,5 @@
-"""The corner check, implicit (``Relaxations.implicit_relaxation``; docs/solvers.md, "The
-corner check, implicit").
+"""The corner check, implicit (``Relaxations.implicit_relaxation``; docs/history/solvers_record.md,
+"The corner check, implicit").
 
 Where work control gets stuck at a corner (its curve still rising into the last state), the
 check looks for rest a little above it, at lambda x (1 + transient_rise): rest found, the

@@ -1,4 +1,4 @@
-"""Where a stuck path is at a corner (docs/solvers.md, "S23's stop (session 20)").
+"""Where a stuck path is at a corner (docs/history/solvers_record.md, "S23's stop").
 
 Work control, stuck at a kink of the law, asks whether the curve still rose into its last
 state: then the path is at a corner (a fold or a peak) and the implicit check relaxes a
@@ -27,7 +27,7 @@ from masonry_dem.cases.paper import build_case
 from masonry_dem.solvers.static import StaticSolver
 
 # S23's collapse multiplier on its finest path (growth 1.025, tail_resolution 1.25e-4,
-# collapse_at "onset"; docs/solvers.md, "The step near the peak (session 20)")
+# collapse_at "onset"; docs/history/solvers_record.md, "The step near the peak")
 S23_FINEST = 0.11260
 
 

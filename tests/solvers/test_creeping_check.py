@@ -1,4 +1,4 @@
-"""A corner check whose motion creeps (docs/solvers.md, "A motion that creeps (session 19)").
+"""A corner check whose motion creeps (docs/history/solvers_record.md, "A motion that creeps").
 
 The implicit corner check (``Relaxations.implicit_relaxation``) gives a verdict only from
 its motion: rest (a fold) or past the displacement limit (a peak). A check whose budget

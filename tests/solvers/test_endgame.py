@@ -1,4 +1,4 @@
-"""The endgame at the peak (docs/solvers.md, "The endgame at the peak (session 19)").
+"""The endgame at the peak (docs/history/solvers_record.md, "The endgame at the peak").
 
 A pseudo-transient step is the overdamped motion D dq/dt = R(q) that the corner check runs
 (backward-Euler steps of the same equation, from a converged state of the path, to a lambda

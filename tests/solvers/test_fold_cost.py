@@ -1,4 +1,4 @@
-"""The cost of passing a fold (docs/solvers.md, "The cost of passing a fold (session 20)").
+"""The cost of passing a fold (docs/history/solvers_record.md, "The cost of passing a fold").
 
 Where the implicit check comes to rest at a fold, dynamic relaxation still looks for its own
 rest at the same lambda, and the path goes on from it (the overdamped motion may settle in

@@ -15,7 +15,7 @@ at a corner is checked whatever its tangent; with Newton tried from the relaxati
 on the way (``fold_probe_every``) the check passes a fold in 500-14 000 time steps where the
 relaxation alone needed 50 000 or more, so it is on by default (20 000 since the creep of a
 snap-through is kept undamped, ``fold_creep_cos``; 30 000 before) and the path passes
-the folds of S13/2 up to 0.108 (docs/solvers.md, "A corner is checked").
+the folds of S13/2 up to 0.108 (docs/history/solvers_record.md, "A corner is checked").
 """
 
 from __future__ import annotations

@@ -1,5 +1,5 @@
-"""Newton's basin on walls that meet (docs/solvers.md, "Newton's basin on walls that meet
-(session 19)").
+"""Newton's basin on walls that meet (docs/history/solvers_record.md, "Newton's basin on walls
+that meet").
 
 Proves: on a 3 x 13 panel with a free edge, the work searches that find no descent stop next
 to a kink of the law along their Newton direction (the merit falls up to it and not beyond).

@@ -1,6 +1,6 @@
-"""The step near the peak (solvers/static/steps.py, ``tail_cap``; docs/solvers.md, "The step
-near the peak"): on a curve whose slope fades, the path stops three steps after its slope fell
-below ``flat_slope`` of the elastic one; the paths of every step length coincide, so the
+"""The step near the peak (solvers/static/steps.py, ``tail_cap``; docs/history/solvers_record.md,
+"The step near the peak"): on a curve whose slope fades, the path stops three steps after its slope
+fell below ``flat_slope`` of the elastic one; the paths of every step length coincide, so the
 answer moves with the steps only through the load those steps gain.
 
 Proves:

@@ -1,6 +1,5 @@
-"""lambda of a pressure wall and the length of the work steps (docs/solvers.md, "Step
-convergence of the collapse multiplier (session 19)" and "The step near the peak (session
-20)").
+"""lambda of a pressure wall and the length of the work steps (docs/history/solvers_record.md,
+"Step convergence of the collapse multiplier" and "The step near the peak").
 
 The paths of every step length coincide at the same w (to 3e-5 on 4-5): what moves with the
 steps is where the path stops. On a curve whose slope fades it stops three steps after its

@@ -1,5 +1,5 @@
-"""The reach of a work step (solvers/static/steps.py; docs/solvers.md, "The reach of a work
-step"): the step rule of work control and its first step.
+"""The reach of a work step (solvers/static/steps.py; docs/history/solvers_record.md, "The reach of
+a work step"): the step rule of work control and its first step.
 
 Proves:
 

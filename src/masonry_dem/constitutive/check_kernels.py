@@ -285,8 +285,8 @@ def nb_check_row(
     energy_failed)``: the projection, its flags, the utilisation (0 with
     ``projection_only``) and whether the radial factor and the energy projection did not
     converge (0 or 1 each). Scalars, not the arrays: every array a compiled row function
-    takes adds the cost of its reference to each call (docs/solvers.md, "One evaluation of
-    the interface law")."""
+    takes adds the cost of its reference to each call (docs/history/solvers_record.md, "One
+    evaluation of the interface law")."""
     n_radial = 0
     n_energy = 0
     (

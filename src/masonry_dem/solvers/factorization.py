@@ -23,9 +23,9 @@ Backends (``BACKENDS``), each an ordinary library:
   matrix.
 
 :func:`choose` picks the backend for a size from those installed, by the rule measured with
-``python benchmarks/bench_scale.py`` (see ``docs/solvers.md``, "Scale"). The environment
-variable ``MASONRY_DEM_FACTORIZER`` (one of ``BACKENDS``) overrides the choice, so that a whole
-analysis or benchmark can be run with one backend.
+``python benchmarks/bench_scale.py`` (see ``docs/history/solvers_record.md``, "Scale"). The
+environment variable ``MASONRY_DEM_FACTORIZER`` (one of ``BACKENDS``) overrides the choice, so that
+a whole analysis or benchmark can be run with one backend.
 
 Only the newest :class:`Factors` of a :class:`Factorizer` solves (PARDISO and MUMPS keep one
 factorization per handle); an older one raises :class:`StaleFactors` rather than solving with
@@ -60,7 +60,7 @@ ENVIRONMENT = "MASONRY_DEM_FACTORIZER"
 #: from about 100 DOFs PARDISO is the fastest: 0.92x at 102 DOFs, 0.65-0.70x at 216, 0.53-0.72x
 #: at 2 460, on 1 and 2 threads (factorization and solve, medians of 100 in one process:
 #: ``python benchmarks/bench_scale.py --small``), and at 6 000 and 60 000 DOFs
-#: (docs/solvers.md "Scale"). The validation walls (244-6 000 DOFs) all take PARDISO.
+#: (docs/history/solvers_record.md "Scale"). The validation walls (244-6 000 DOFs) all take PARDISO.
 SMALL = 100
 #: the order of preference from ``SMALL`` unknowns, fastest first (bench_scale.py: MUMPS
 #: before UMFPACK at 6 000 and 60 000 DOFs)
@@ -68,7 +68,7 @@ _PREFERENCE = ("pardiso", "mumps", "umfpack", "superlu")
 #: PARDISO factorizes on one thread below this many unknowns, on ``numba.get_num_threads()``
 #: from it: a front this small gives the threads too little work between their
 #: synchronisations (measured by ``python benchmarks/bench_factorization.py``;
-#: docs/solvers.md, "Scale")
+#: docs/history/solvers_record.md, "Scale")
 PARALLEL_FROM = 2_000
 
 
@@ -420,7 +420,7 @@ class _Pardiso:
         # 1e-13, no scaling, no matching, 1-based indices. The tangent is structurally
         # symmetric with a regular diagonal (the residual stiffness), so its diagonal pivots
         # serve, as in SuperLU's symmetric mode; minimum degree fills less than METIS on
-        # these tangents (docs/solvers.md, "Cheaper linear solves").
+        # these tangents (docs/history/solvers_record.md, "Cheaper linear solves").
         options = {2: 0, 8: 0, 10: 13, 11: 0, 13: 0, 35: 0}
         self.handle = PardisoHandle(ia, ja, n, 11, options, self.threads)
         self.solver = self.handle.solver  # its iparm: options set and counts read by benchmarks

@@ -2,8 +2,8 @@
 the wall alone, and the check that refuses a run the machine cannot hold.
 
 The estimate is a sum of parts, each proportional to what it stores, with constants measured
-by ``python benchmarks/bench_scale.py`` (walls of 10^2 to 10^5 blocks; docs/solvers.md,
-"Scale"):
+by ``python benchmarks/bench_scale.py`` (walls of 10^2 to 10^5 blocks;
+docs/history/solvers_record.md, "Scale"):
 
 * ``runtime``: the interpreter with numpy, scipy, numba and the compiled kernels;
 * ``model``: blocks, interfaces, the compatibility matrix H and the interface law's arrays;
@@ -53,7 +53,7 @@ STEPS = 70
 #: Newton iterations and factorizations of a pushover to collapse, and how they grow with
 #: the blocks. On the benchmark walls (``bench_scale.py``, Eurocode-6 slenderness, mortar
 #: joints) they do not grow: 645 / 300 at 909 blocks, 449 / 198 at 10 017, 465 / 208 at
-#: 99 878 (docs/solvers.md, "Scale")
+#: 99 878 (docs/history/solvers_record.md, "Scale")
 ITERATIONS = 500
 FACTORIZATIONS = 230
 GROWTH = 0.0

@@ -273,8 +273,8 @@ class Relaxation:
         True ends the relaxation as converged at x (the probe found the equilibrium from
         there). At a peak of the kinetic energy the state is momentarily at rest, the
         nearest the motion comes to an equilibrium, which is where Newton is likeliest to
-        converge from (docs/solvers.md, "The corner check on by default", compares it with
-        asking at a new lowest residual).
+        converge from (docs/history/solvers_record.md, "The corner check on by default", compares it
+        with asking at a new lowest residual).
 
         ``creep_cos`` > 0 (kinetic damping at a fixed load): the motion along a converged
         creep is not damped. Kinetic damping zeroes every velocity at each peak of the

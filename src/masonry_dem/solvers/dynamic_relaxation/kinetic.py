@@ -6,8 +6,8 @@ the relaxation ends.
 
 It performs the operations of the Python loop in the same order (the dot products through
 the same BLAS ``ddot`` numpy calls, elementwise operations one by one), so the same bits:
-the same time steps, states and endings. Measured in docs/solvers.md ("One compiled time
-step"); ``DRSettings.compiled_steps=False`` selects the Python loop.
+the same time steps, states and endings. Measured in docs/history/solvers_record.md ("One compiled
+time step"); ``DRSettings.compiled_steps=False`` selects the Python loop.
 """
 
 from __future__ import annotations

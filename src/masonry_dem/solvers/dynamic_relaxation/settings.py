@@ -1,6 +1,7 @@
 """Settings and statistics of dynamic relaxation: every knob that steers a run
 (:class:`DRSettings`, with the choices as ``Literal`` types) and what a run cost
-(:class:`DRStats`). Why each default has its value: docs/solvers.md."""
+(:class:`DRStats`). Why each default has its value: docs/history/solvers_record.md, "Dynamic
+relaxation: what it does and its defaults"."""
 
 from __future__ import annotations
 
@@ -20,7 +21,8 @@ Stability = Literal["elastic", "current"]
 
 @dataclass(frozen=True)
 class DRSettings(LoadPathSettings):
-    """Knobs of dynamic relaxation (why each default has its value: docs/solvers.md).
+    """Knobs of dynamic relaxation (why each default has its value:
+    docs/history/solvers_record.md, "Dynamic relaxation: what it does and its defaults").
 
     The load path's fields (steps, bracket, caps) are those of
     :class:`~masonry_dem.solvers.load_path.LoadPathSettings`, as in
@@ -59,8 +61,8 @@ class DRSettings(LoadPathSettings):
     blowup_patience: steps above the stability limit that end a relaxation.
     power_iterations: iterations of ``dt_rule="power"``.
     compiled_steps: the time steps of kinetic damping at a fixed load run in one compiled
-        function (the same bits as the Python loop, which False selects; docs/solvers.md,
-        "One compiled time step").
+        function (the same bits as the Python loop, which False selects;
+        docs/history/solvers_record.md, "One compiled time step").
     """
 
     max_step: float = positive(0.2)

@@ -116,7 +116,8 @@ class Certificate:
     reason: str
     # d lambda / d w of the step into the state checked, over the elastic slope; a stuck
     # path that still rose there (at least flat_slope) stopped at a corner, where a fold of
-    # the path and a peak share a singular tangent (docs/solvers.md, "A corner is checked")
+    # the path and a peak share a singular tangent (docs/history/solvers_record.md, "A corner is
+    # checked")
     curve_slope: float = math.nan
     corner: bool = False
     mode_vector: np.ndarray | None = field(default=None, repr=False)

@@ -1,7 +1,8 @@
 """Displacement control, the path follower that drives one DOF to a target with lambda
 free (``StaticSolver.run(control=...)``): its steps, its pseudo-transient steps past folds
 of the controlled path, and why it stops where the controlled DOF has a limit point
-(docs/solvers.md, "Load against displacement control"). It shares the step rule
+(docs/solvers.md, "Displacement control"; the measurements: docs/history/solvers_record.md,
+"Invariance", its paragraph "Load against displacement control"). It shares the step rule
 (:class:`StepController`) and the trust radius of a controlled step
 (:func:`~masonry_dem.solvers.static.paths.control_radius`) with the other followers.
 """
@@ -27,7 +28,8 @@ log = logging.getLogger(__name__)
 
 #: d u / d lambda of a controlled DOF below this fraction of its rate on the first live-load
 #: step (or negative) at the state where displacement control is stuck: a limit point of the
-#: controlled DOF (docs/solvers.md, "Load against displacement control")
+#: controlled DOF (docs/history/solvers_record.md, "Invariance", its paragraph "Load against
+#: displacement control")
 TURN_RATE = 0.1
 
 

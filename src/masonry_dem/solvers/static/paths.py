@@ -60,8 +60,8 @@ def load_control(solver: StaticSolver, hist: History, record: Record) -> None:
         # the first step is the longer of initial_step and the elastic range: inside the
         # range the elastic predictor is the equilibrium, so a shorter step only creeps; a
         # range shorter than initial_step (a few joints yield first) says nothing of how far
-        # Newton goes from there (docs/solvers.md, "Steps of the path: the elastic first
-        # step"). It ends a bracket tolerance short of the range: at its very end a joint
+        # Newton goes from there (docs/history/solvers_record.md, "Steps of the path: the elastic
+        # first step"). It ends a bracket tolerance short of the range: at its very end a joint
         # sits on the edge of its domain (a joint of no tension at zero force), whose state
         # round-off decides, the worst start for the next search
         cap = min(max_dlam, s.max_load_factor)
@@ -185,7 +185,7 @@ def _hands_over(hist: History) -> bool:
     """Work control takes over at the first failure of load control once the path has two
     live-load steps (the first is its elastic scale). An earlier failure is halved first:
     there it is far more often a step too long than a limit (the measurements are in
-    docs/solvers.md, "Settings and their evidence"). A wall whose very first
+    docs/history/solvers_record.md, "Settings and their evidence"). A wall whose very first
     step finds its limit (a block that slides or lifts at once) ends in the refined
     bracket, which the certificate checks across its tolerance."""
     return len(hist.steps) > 2

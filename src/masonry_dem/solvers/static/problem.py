@@ -259,9 +259,10 @@ class TangentAssembler:
         matrix :meth:`update` assembled in the same ``layout``: only the joints whose tangent
         changed since, and the entries they add to. Between two factorized tangents of a
         path most joints (the elastic ones) keep theirs, so their products and the sums of
-        the entries they alone add to are not worked out again (measured in docs/solvers.md,
-        "Where the 909-block pushover's seconds go"). It keeps the joints' tangents and 12 x 12 blocks
-        and the entries (``resources.KEPT_BYTES_PER_INTERFACE``)."""
+        the entries they alone add to are not worked out again (measured in
+        docs/history/solvers_record.md, "Where the 909-block pushover's seconds go"). It keeps the
+        joints' tangents and 12 x 12 blocks and the entries
+        (``resources.KEPT_BYTES_PER_INTERFACE``)."""
         kept = self._kept
         everything = kept is None or kept.layout is not layout
         if kept is None or kept.layout is not layout:
@@ -378,8 +379,8 @@ class DiscreteProblem:
         there is no dead load). The model is geometrically linear, so with kn and kt scaled
         together by f every displacement of the path scales by 1 / f, and so does this:
         search lengths measured in it make the solver's iterates the same on both walls
-        (docs/solvers.md, "Invariance"). Falls back to 1e-3 x the displacement limit when
-        the bonded assembly is itself a mechanism."""
+        (docs/history/solvers_record.md, "Invariance"). Falls back to 1e-3 x the displacement limit
+        when the bonded assembly is itself a mechanism."""
         if self._scale is None:
             load = self.F_dead if np.any(self.F_dead) else self.load_scale * self.F_live
             size = self.elastic_displacement(load) if np.any(load) else 0.0
@@ -472,7 +473,7 @@ class DiscreteProblem:
         terms. Their trial actions are round-off, so the law's flags (elastic, sliding,
         rocking or detached) are set by it, and an elastic shear or bending stiffness tells
         Newton they carry what they cannot: along that direction hundreds of such joints
-        change state at any step length and the residual rises (docs/solvers.md, "Why
+        change state at any step length and the residual rises (docs/history/solvers_record.md, "Why
         Newton stalls from the dead-load state"). The residual is unchanged, so a
         converged state is still an exact equilibrium of the law."""
         _reduce_zero_capacity(

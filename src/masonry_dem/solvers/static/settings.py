@@ -1,5 +1,6 @@
 """Settings of the static solver: every number that steers it, with why it has its value
-(the measurements behind each are in docs/solvers.md, "Settings and their evidence")."""
+(the measurements behind each are in docs/history/solvers_record.md, "Settings and their
+evidence")."""
 
 from __future__ import annotations
 
@@ -52,8 +53,8 @@ class StaticSettings(LoadPathSettings):
         converged states of the path, extended by the step (False: from the last state).
         Newton then starts a fraction of a step from the answer on smooth stretches. Not
         under load control, where the start picks among the equilibria of a non-associative
-        law at one lambda (a wall with openings: 0.085 -> 0.111; docs/solvers.md, "Steps
-        of the path").
+        law at one lambda (a wall with openings: 0.085 -> 0.111; docs/history/solvers_record.md,
+        "Steps of the path").
     elastic_first_step: where the elastic range is longer than ``initial_step``, the first
         live step goes to ``bracket_tolerance`` short of its end (the load factor at which
         the first joint that carries load reaches its strength domain along the tangent
@@ -145,8 +146,8 @@ class StaticSettings(LoadPathSettings):
         singular although the path never ran along a mechanism: a fold of the path, or a
         peak). The check runs there whatever the tangent, with the larger of this and
         ``stop_check_time_steps``; its budget covers the settling of every fold measured
-        (docs/solvers.md, "The corner check on by default"). The implicit check (below)
-        decides, and this relaxation runs only at a fold, for the state the path goes on
+        (docs/history/solvers_record.md, "The corner check on by default"). The implicit check
+        (below) decides, and this relaxation runs only at a fold, for the state the path goes on
         from, or where that check gives no verdict. A path whose searches run past the
         displacement limit while its curve still rose is a corner too. 0: such stops are
         checked as any other, so a singular tangent skips the check
@@ -179,7 +180,7 @@ class StaticSettings(LoadPathSettings):
     bound_tolerance: lambda may exceed the associative limit-analysis bound (when one is
         given) by this fraction (the bound's own discretisation and solver tolerance).
 
-    The corner check (docs/solvers.md, "The corner check, implicit")
+    The corner check (docs/history/solvers_record.md, "The corner check, implicit")
     ---------------------------------------------------------------
     The check at a corner tells a fold from a peak:
     :meth:`~masonry_dem.solvers.static.relaxations.Relaxations.implicit_relaxation` first
@@ -190,19 +191,19 @@ class StaticSettings(LoadPathSettings):
     its whole budget). Rest is a fold: the path goes on from the rest dynamic relaxation
     finds, or from the implicit one's where that finds none. That relaxation is given the
     check's own effort at the rate the two budgets are set by, ``fold_check_time_steps`` x
-    (implicit steps taken / ``corner_check_steps``) (docs/solvers.md, "The cost of passing a
-    fold"). No verdict within ``corner_check_steps`` (a slow fold): dynamic relaxation of
+    (implicit steps taken / ``corner_check_steps``) (docs/history/solvers_record.md, "The cost of
+    passing a fold"). No verdict within ``corner_check_steps`` (a slow fold): dynamic relaxation of
     ``fold_check_time_steps`` decides. A pseudo-transient step (the same overdamped motion)
     whose motion ran past the displacement limit toward lambda T answers every later check
     or pseudo-transient step of the same branch whose target is T or more: no rest
-    (docs/solvers.md, "The endgame at the peak").
+    (docs/history/solvers_record.md, "The endgame at the peak").
     corner_check_steps: budget of implicit steps (factorizations) of that check, the most a
         check without a verdict costs before dynamic relaxation decides. 500: about what the
         fallback's budget costs (``fold_check_time_steps`` of dynamic relaxation at the
         13-29 time steps a factorization costs), so a slow fold is given the same effort by
         the check that decides it best; a smaller budget hands slow folds to dynamic
         relaxation, which may find no rest and call them peaks. A check that creeps is given
-        no verdict from its pace (docs/solvers.md, "A motion that creeps").
+        no verdict from its pace (docs/history/solvers_record.md, "A motion that creeps").
     corner_check_rise: an implicit step whose residual is more than (1 + this) times the
         last one's is too long (it crossed kinks of the law the tangent did not see): it is
         taken again with a time step a quarter as long, down to the elastic relaxation
@@ -212,7 +213,7 @@ class StaticSettings(LoadPathSettings):
         stiffness (a pseudo time step of 1 / this elastic relaxation times); halved after
         each step taken, so the steps grow towards Newton's as the wall settles.
 
-    The step near the peak (docs/solvers.md, "The step near the peak")
+    The step near the peak (docs/history/solvers_record.md, "The step near the peak")
     ------------------------------------------------------------------
     On a curve whose slope fades (a mechanism that forms joint by joint) the path stops three
     steps after the slope fell below ``flat_slope`` and reports the highest lambda reached;
