@@ -31,7 +31,7 @@ def add_parser(subparsers: Any) -> None:
         "study",
         help="speed against accuracy of the solvers, a size ladder, the in-plane reduction, "
         "the kn sweep",
-        description="Measurements of the solvers: see docs/solvers.md.",
+        description="The solvers: docs/solvers.md; their measurements: docs/history/solvers_record.md.",
     )
     sub = p.add_subparsers(dest="study", metavar="STUDY")
     sa = sub.add_parser("speed-accuracy", help="every setting of each method; time vs error")

@@ -274,7 +274,7 @@ class StaticSettings(LoadPathSettings):
     corner_check_steps: int = count(500, least=1)
     corner_check_rise: float = positive(0.5)
     corner_check_start: float = positive(1e-2)
-    # the step near the peak (session 20)
+    # the step near the peak
     tail_resolution: float = at_least(1e-3, 0.0, " (0: off)")
 
 
