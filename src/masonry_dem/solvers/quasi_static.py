@@ -91,11 +91,12 @@ class QuasiStaticSettings:
         since the last rest.
     max_time_steps: time steps at one load before the analysis gives up without a verdict.
     max_newton: Newton iterations of one time step before it is taken again half as long.
-    displacement_limit: the largest translation from the dead-load rest still in the
-        small-displacement range [m] (None: half the smallest dimension of the moving
-        blocks, as the static solver); under the dead load, from the unloaded wall, with
-        the elastic displacement of the bonded wall under its weight added. A rest past it
-        is none: the model is geometrically linear.
+    displacement_limit: a motion at one load that runs this far from the last rest [m]
+        is a mechanism: no rest (None: half the smallest dimension of the moving blocks, as
+        the static solver); under the dead load, from the unloaded wall, with the elastic
+        displacement of the bonded wall under its weight added. The model is geometrically
+        linear: an elastic deflection that grows with the load is no mechanism, however
+        large (the collapse's reason says when the last rest lies past the limit).
     max_load_factor: the analysis ends ``completed`` when lambda reaches it.
     newton_steps: each increment is first tried by Newton's method from the last rest (a
         time step of infinite length, with the same line search), the damped motion
@@ -166,7 +167,7 @@ class QuasiStatic:
         self.iterations = 0
         #: (lambda, dt, error, residual, distance from the last rest) of each time step taken
         self.trace: list[tuple[float, float, float, float, float]] = []
-        #: the dead-load rest, from which the displacement limit is measured (None before)
+        #: the dead-load rest (None before it is found)
         self.origin: np.ndarray | None = None
         self._dt = 1.0  # the last time step taken, in units of the dashpots' relaxation time
 
@@ -246,7 +247,6 @@ class QuasiStatic:
         # under the dead load, elastic shortening is no mechanism (a tall column shortens
         # by more than half a block under its own weight)
         limit = self.problem.limit + (unit if self.origin is None else 0.0)
-        origin = self.q if self.origin is None else self.origin
         rest_q = self.q.copy()
         residual, rnorm, response = self.problem.residual(
             self.q, lam, self.plastic, self.cracked, dead
@@ -275,7 +275,7 @@ class QuasiStatic:
             # (rotations as displacements at the median block size)
             change = 0.5 * dt * float(np.abs(weight * (new_velocity - velocity)[free]).max())
             moved = float(np.abs(weight * (q_new - rest_q)[free]).max())
-            travelled = float(np.abs(q_new[moving] - origin[moving]).max(initial=0.0))
+            travelled = float(np.abs(q_new[moving] - rest_q[moving]).max(initial=0.0))
             allowed = s.motion_tolerance * (unit + moved)
             error = change / allowed
             if error > 1.0 and taken > 0:
@@ -292,8 +292,8 @@ class QuasiStatic:
                 return Motion(
                     False,
                     taken,
-                    f"the wall moved {travelled:.3g} m from its dead-load rest, past the "
-                    f"displacement limit {limit:.3g} m",
+                    f"the wall ran {travelled:.3g} m from its last rest at this load, past "
+                    f"the displacement limit {limit:.3g} m (a mechanism)",
                     past_limit=True,
                 )
             if rnorm <= s.tolerance:
@@ -321,10 +321,9 @@ class QuasiStatic:
         stepped = self._time_step(self.q, lam, 1.0, 1e9, self.q)
         if stepped is None or stepped[2] > self.settings.tolerance:
             return None
-        if self.origin is not None:  # a rest past the displacement limit is none
-            moving = self.problem.moving_translations
-            if np.abs(stepped[0][moving] - self.origin[moving]).max() > self.problem.limit:
-                return None
+        moving = self.problem.moving_translations
+        if np.abs(stepped[0][moving] - self.q[moving]).max() > self.problem.limit:
+            return None  # as far as a mechanism runs: the motion decides
         self._carry(stepped[0], stepped[1])
         return self.iterations - before
 
@@ -335,6 +334,21 @@ class QuasiStatic:
         self.plastic = self.law.plastic_part(relative, response.actions)
         self.cracked = self.law.cracked_after(self.cracked, response)
         self.q = q
+
+    def _range_note(self) -> str:
+        """A note when the last rest lies past the displacement limit from the dead-load
+        rest: an equilibrium of the geometrically linear model, outside its range."""
+        if self.origin is None:
+            return ""
+        moving = self.problem.moving_translations
+        total = float(np.abs(self.q[moving] - self.origin[moving]).max(initial=0.0))
+        if total <= self.problem.limit:
+            return ""
+        return (
+            f", {total:.3g} m from the dead-load rest, past the small-displacement range "
+            f"({self.problem.limit:.3g} m): joints this soft deflect beyond it before the wall "
+            f"collapses"
+        )
 
     def snapshot(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         return self.q.copy(), self.plastic.copy(), self.cracked.copy()
@@ -451,7 +465,7 @@ class QuasiStatic:
                         Status.COLLAPSE,
                         StopReason.NO_REST,
                         f"no rest at lambda {failed[0]:.6g} ({failed[1].reason}); at rest at "
-                        f"{lam:.6g}",
+                        f"{lam:.6g}{self._range_note()}",
                     )
                 increment = 0.5 * (failed[0] - lam)
 
