@@ -158,15 +158,10 @@ class QuasiStatic:
         self.q = np.zeros(model.n_dofs)
         self.plastic = np.zeros((m, 6))
         self.cracked = np.zeros(m, dtype=bool)
-        kbar = self.law.kbar
-        elastic = np.zeros((m, 6, 6))
-        elastic[:, np.arange(6), np.arange(6)] = kbar
         #: K_e: the dashpots' viscosity per unit of time (the bonded assembly's stiffness)
-        self.viscosity = self.problem.tangent_assembler.matrix(elastic)
+        self.viscosity = self.problem.tangent_assembler.matrix(self.problem.elastic_tangents())
         self.time_steps = 0
         self.iterations = 0
-        #: (lambda, dt, error, residual, distance from the last rest) of each time step taken
-        self.trace: list[tuple[float, float, float, float, float]] = []
         #: the dead-load rest (None before it is found)
         self.origin: np.ndarray | None = None
         self._dt = 1.0  # the last time step taken, in units of the dashpots' relaxation time
@@ -176,14 +171,6 @@ class QuasiStatic:
         return self.problem.factorizations
 
     # ------------------------------------------------------------------ one time step
-    def _norm(self, vector: np.ndarray, lam: float, dead: float) -> float:
-        """|vector| / |F_ext| in the weighted norm of the static solver's residual."""
-        weighted = self.problem.weight * vector
-        external = self.problem.weight * (dead * self.problem.F_dead + lam * self.problem.F_live)
-        return math.sqrt(float(weighted @ weighted)) / max(
-            math.sqrt(float(external @ external)), 1e-30
-        )
-
     def _time_step(
         self, q_n: np.ndarray, lam: float, dead: float, dt: float, start: np.ndarray
     ) -> tuple[np.ndarray, LawResponse, float] | None:
@@ -200,7 +187,7 @@ class QuasiStatic:
                 qq, lam, self.plastic, self.cracked, dead
             )
             g = residual - rate * (self.viscosity @ (qq[free] - q_n[free]))
-            return g, self._norm(g, lam, dead), response, rnorm
+            return g, self.problem.relative_norm(g, lam, dead), response, rnorm
 
         g, gnorm, response, rnorm = balance(q)
         factors = None  # the matrix factorized at an earlier iterate, kept while it converges
@@ -208,29 +195,32 @@ class QuasiStatic:
             if gnorm <= s.tolerance:
                 return q, response, rnorm
             self.iterations += 1
-            fresh = factors is None
+            chord = factors is not None
             if factors is None:
                 factors = self.problem.factor(response, rate)
             dq = factors.solve(g)
             if not np.all(np.isfinite(dq)):
                 return None
-            length = 1.0
-            for _cut in range(12):
+            if chord:  # a kept matrix: its step is taken only while it converges fast
                 trial = q.copy()
-                trial[free] += length * dq
+                trial[free] += dq
                 g_t, n_t, resp_t, r_t = balance(trial)
-                if n_t <= CHORD_RATIO * gnorm or n_t <= s.tolerance or (fresh and n_t < gnorm):
-                    break
-                if not fresh:  # a kept matrix that no longer converges fast: factor anew
-                    break
-                length *= 0.5
-            else:
-                return None
-            if not fresh and n_t > CHORD_RATIO * gnorm and n_t > s.tolerance:
-                factors = None
-                continue
+                if n_t > CHORD_RATIO * gnorm and n_t > s.tolerance:
+                    factors = None  # factor anew at q
+                    continue
+            else:  # Newton's step, backtracked until |G| falls
+                length = 1.0
+                for _cut in range(12):
+                    trial = q.copy()
+                    trial[free] += length * dq
+                    g_t, n_t, resp_t, r_t = balance(trial)
+                    if n_t < gnorm or n_t <= s.tolerance:
+                        break
+                    length *= 0.5
+                else:
+                    return None
             if n_t > CHORD_RATIO * gnorm:
-                factors = None  # Newton's own step converged slowly: the next one factors
+                factors = None  # slow convergence: the next iteration factors
             q, g, gnorm, response, rnorm = trial, g_t, n_t, resp_t, r_t
         return (q, response, rnorm) if gnorm <= s.tolerance else None
 
@@ -248,9 +238,7 @@ class QuasiStatic:
         # by more than half a block under its own weight)
         limit = self.problem.limit + (unit if self.origin is None else 0.0)
         rest_q = self.q.copy()
-        residual, rnorm, response = self.problem.residual(
-            self.q, lam, self.plastic, self.cracked, dead
-        )
+        rnorm = self.problem.residual(self.q, lam, self.plastic, self.cracked, dead)[1]
         if rnorm <= s.tolerance:
             return Motion(True, 0)
         q = self.q.copy()
@@ -283,12 +271,10 @@ class QuasiStatic:
                 continue
             taken += 1
             self.time_steps += 1
-            self.trace.append((lam, dt, error, rnorm, moved))
             # the law's state moves with the wall: an incremental law, one time step at a time
             self._carry(q_new, response)
             q, velocity = q_new, new_velocity
             if travelled > limit:
-                self.q = q
                 return Motion(
                     False,
                     taken,
@@ -297,12 +283,10 @@ class QuasiStatic:
                     past_limit=True,
                 )
             if rnorm <= s.tolerance:
-                self.q = q
                 self._dt = min(dt, 1.0)
                 return Motion(True, taken)
             dt *= min(4.0, 0.9 / math.sqrt(max(error, 1e-12)))
             dt = min(dt, 1e15)
-        self.q = q
         return Motion(
             False,
             taken,
@@ -316,7 +300,7 @@ class QuasiStatic:
         """Newton's method from the last rest to an equilibrium at ``lam`` (a time step of
         infinite length: the tangent's floor is the static solver's residual stiffness):
         the iterations it took, the wall's state moved there; None where it does not
-        converge within ``max_newton`` iterations (the state is then undefined)."""
+        converge within ``max_newton`` iterations (the state is then left as it was)."""
         before = self.iterations
         stepped = self._time_step(self.q, lam, 1.0, 1e9, self.q)
         if stepped is None or stepped[2] > self.settings.tolerance:
@@ -357,8 +341,7 @@ class QuasiStatic:
         self.q, self.plastic, self.cracked = (a.copy() for a in kept)
 
     def _step_result(self, step: int, lam: float) -> StepResult:
-        residual, _, response = self.problem.residual(self.q, lam, self.plastic, self.cracked)
-        del residual
+        response = self.problem.residual(self.q, lam, self.plastic, self.cracked)[2]
         util = self.law.utilisation(response)
         return StepResult(
             step=step,
@@ -426,8 +409,7 @@ class QuasiStatic:
         while True:
             target = min(lam + increment, s.max_load_factor)
             newton = self.newton(target) if s.newton_steps else None
-            if newton is None:
-                self.restore(kept)
+            if newton is None:  # (a failed Newton search leaves the last rest as it was)
                 motion = self.move_to_rest(target)
             else:
                 motion = Motion(True, 0)
@@ -439,19 +421,18 @@ class QuasiStatic:
                     return finish(
                         Status.COMPLETED, StopReason.MAX_LOAD_FACTOR, "max_load_factor reached"
                     )
+                # the loading rate; with newton_steps too, where Newton is only a faster way
+                # to the next rest, so that the two are told apart by the rest reached alone
+                rate = max(s.load_increment * lam, s.first_increment * scale)
                 if failed is None and s.newton_steps:
                     if newton is not None:  # Crisfield's rule
                         factor = math.sqrt(s.target_iterations / max(newton, 1))
                         increment *= min(max(factor, 0.5), s.growth)
-                    # Newton is only a faster way to the next rest: the loading rate is the
-                    # reference's, so that the two are told apart by the rest reached alone
-                    rate = max(s.load_increment * lam, s.first_increment * scale)
                     least = s.bracket_tolerance * lam
                     increment = min(max(increment, least), s.max_step * scale, rate)
                 elif failed is None:
-                    cap = max(s.load_increment * lam, s.first_increment * scale)
                     grown = increment * (s.growth if motion.time_steps <= 3 else 1.0)
-                    increment = min(grown, cap)
+                    increment = min(grown, rate)
             else:
                 self.restore(kept)
                 if motion.undecided:

@@ -398,10 +398,13 @@ class DiscreteProblem:
     ) -> tuple[np.ndarray, float, LawResponse]:
         """(R on the free DOFs, |R| / |F| in the weighted norm, the law's response)."""
         _, response, internal = self.law.forces(self.asm.H, q, plastic, cracked, self.asm.H_free_T)
-        F_ext, scale = self._external(lam, dead_factor)
-        residual = F_ext - internal
-        weighted = self.weight * residual
-        return residual, math.sqrt(float(weighted @ weighted)) / scale, response
+        residual = self._external(lam, dead_factor)[0] - internal
+        return residual, self.relative_norm(residual, lam, dead_factor), response
+
+    def relative_norm(self, force: np.ndarray, lam: float, dead_factor: float = 1.0) -> float:
+        """|force| / |F_D + lambda F_L| (free DOFs), in the residual's weighted norm."""
+        weighted = self.weight * force
+        return math.sqrt(float(weighted @ weighted)) / self._external(lam, dead_factor)[1]
 
     def _external(self, lam: float, dead_factor: float) -> tuple[np.ndarray, float]:
         """(F_ext on the free DOFs, its weighted norm) at (lambda, dead_factor), kept for
@@ -491,12 +494,16 @@ class DiscreteProblem:
         own: a backend keeps one numeric factorization per handle (PARDISO, MUMPS), so
         factors shared with the tangent's handle would go stale at the next tangent."""
         if self._elastic is None:
-            idx = np.arange(6)
-            T = np.zeros((self.model.interfaces.count, 6, 6))
-            T[:, idx, idx] = self.law.kbar
+            T = self.elastic_tangents()
             self.factorizations += 1
             self._elastic = self._tangents.symbolic().factor(self._tangents.data(T))
         return self._elastic
+
+    def elastic_tangents(self) -> np.ndarray:
+        """(m, 6, 6) the joints' elastic stiffness, in tension too (the bonded assembly)."""
+        T = np.zeros((self.model.interfaces.count, 6, 6))
+        T[:, np.arange(6), np.arange(6)] = self.law.kbar
+        return T
 
     def elastic_displacement(self, load: np.ndarray) -> float:
         """Largest translation of the bonded assembly under ``load`` (free DOFs); inf when
