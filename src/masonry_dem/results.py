@@ -14,7 +14,7 @@ from numpy.typing import NDArray
 # re-exported: the names of the codes of StepResult.state (docs/rendering.md)
 from masonry_dem._arrays import FloatArray
 from masonry_dem.constitutive.states import STATE_NAMES as STATE_NAMES
-from masonry_dem.export.results_folder import save_pushover_rows
+from masonry_dem.export.results_folder import recorded_dof_of, save_pushover_rows
 from masonry_dem.solvers.static.outcome import Status, StopReason
 
 if TYPE_CHECKING:
@@ -132,10 +132,9 @@ class History:
 
 def write_pushover_csv(path: Path, history: History) -> None:
     """pushover.csv: step, lambda and the control displacement of every step."""
-    rows = np.column_stack(
-        [np.arange(len(history.steps)), history.load_factors, history.control_displacements]
-    )
-    save_pushover_rows(path, rows)
+    displacements = history.control_displacements
+    rows = np.column_stack([np.arange(len(history.steps)), history.load_factors, displacements])
+    save_pushover_rows(path, rows, recorded_dof_of(history.steps, displacements))
 
 
 def read_summary(folder: Path) -> dict[str, Any]:

@@ -186,24 +186,119 @@ def _plain_json(value: Any) -> Any:
     raise TypeError(f"summary.json: {type(value).__name__} is not JSON")
 
 
-def write_pushover(folder: Path | str, steps, load_factors, control_displacements) -> None:
-    """``pushover.csv``: one row per step (step, lambda, control_displacement)."""
+#: the first columns of ``pushover.csv``; the third's name goes on with what it records
+PUSHOVER_COLUMNS = ("step", "lambda", "control_displacement")
+DOF_NAMES = ("u1", "u2", "u3", "w1", "w2", "w3")
+#: what the third column records when no one block DOF equals it at every step
+LARGEST_TRANSLATION = "largest block translation (any block, u1-u3)"
+#: steps whose motion is compared with the recorded displacement to name it
+STEPS_CHECKED = 4
+#: relative agreement for a block DOF to be the recorded one
+_MATCH = 1e-6
+
+#: what ``pushover.csv``'s third column records: (block, DOF name), a description, or None
+Recorded = tuple[int, str] | str | None
+
+
+def recorded_dof(motions: list[tuple[float, np.ndarray]]) -> Recorded:
+    """Which displacement a pushover recorded, from ``(recorded value, (nb, 6) block motion)``
+    of its steps with the largest values: ``(block, DOF name)`` when one block DOF equals it
+    at every step given (a displacement control, a monitor, or the largest translation
+    staying on one DOF), else :data:`LARGEST_TRANSLATION` (followed by the block and DOF
+    where it is largest at the first step given) when it is that, else None (no motion, or
+    a displacement of no block DOF)."""
+    motions = [(v, q) for v, q in motions if v != 0][:STEPS_CHECKED]
+    if not motions:
+        return None
+    scale = max(abs(v) for v, _ in motions)
+    tol = _MATCH * scale
+    hit = np.ones(motions[0][1].shape, dtype=bool)
+    for v, q in motions:
+        hit &= np.abs(q - v) <= tol
+    found = np.argwhere(hit)
+    if not found.size:  # no one DOF: the largest translation, wherever it is
+        if all(abs(np.abs(q[:, :3]).max() - v) <= tol for v, q in motions):
+            block, dof = divmod(int(np.argmax(np.abs(motions[0][1][:, :3]))), 3)
+            return f"{LARGEST_TRANSLATION}; at its largest block {block} {DOF_NAMES[dof]}"
+        return None
+    block, dof = (int(x) for x in found[0])
+    return block, DOF_NAMES[dof]
+
+
+def recorded_dof_of(steps: Any, displacements: np.ndarray) -> Recorded:
+    """:func:`recorded_dof` of a run's steps (each with its ``q``) and their recorded
+    displacements, checked at the steps where these are largest."""
+    order = [int(k) for k in np.argsort(-np.abs(displacements)) if displacements[k] != 0]
+    return recorded_dof(
+        [(float(displacements[k]), np.asarray(steps[k].q)) for k in order[:STEPS_CHECKED]]
+    )
+
+
+def displacement_column(recorded: Recorded) -> str:
+    """The header of ``pushover.csv``'s third column: ``control_displacement``, its unit and
+    what it records, e.g. ``control_displacement [m] block 125 u3``."""
+    name = PUSHOVER_COLUMNS[2]
+    if isinstance(recorded, tuple):
+        block, dof = recorded
+        return f"{name} [{'rad' if dof.startswith('w') else 'm'}] block {block} {dof}"
+    if isinstance(recorded, str):  # a CSV header holds no comma
+        return f"{name} [m] largest block translation"
+    return f"{name} [m]"
+
+
+def write_pushover(
+    folder: Path | str, steps, load_factors, control_displacements, recorded: Recorded = None
+) -> None:
+    """``pushover.csv``: one row per step (step, lambda, control_displacement), the third
+    column's header naming what it records (:func:`displacement_column`)."""
     rows = np.column_stack(
         [np.asarray(steps, dtype=float), np.asarray(load_factors), control_displacements]
     ).reshape(-1, 3)
-    write_atomic(Path(folder) / PUSHOVER, lambda tmp: save_pushover_rows(tmp, rows))
+    write_atomic(Path(folder) / PUSHOVER, lambda tmp: save_pushover_rows(tmp, rows, recorded))
 
 
-def save_pushover_rows(path: Path, rows: np.ndarray) -> None:
-    """The one layout of ``pushover.csv``: rows of (step, lambda, control_displacement)."""
+def write_history_pushover(folder: Path | str, history: Any) -> None:
+    """``pushover.csv`` of a :class:`~masonry_dem.results.History`: every step's lambda and
+    recorded displacement, named by :func:`recorded_dof_of` its steps."""
+    displacements = history.control_displacements
+    write_pushover(
+        folder,
+        np.arange(len(history.steps)),
+        history.load_factors,
+        displacements,
+        recorded_dof_of(history.steps, displacements),
+    )
+
+
+def save_pushover_rows(path: Path, rows: np.ndarray, recorded: Recorded = None) -> None:
+    """The one layout of ``pushover.csv``: one header line, then rows of (step, lambda,
+    control_displacement)."""
     np.savetxt(
         path,
         rows,
         delimiter=",",
-        header="step,lambda,control_displacement",
+        header=",".join([*PUSHOVER_COLUMNS[:2], displacement_column(recorded)]),
         comments="",
         fmt=["%d", "%.10g", "%.10g"],
     )
+
+
+def pushover_column(header: str) -> str:
+    """The column a header of ``pushover.csv`` names: ``control_displacement [m] block 3 u3``
+    -> ``control_displacement`` (older files name it bare)."""
+    return header.strip().split(" [")[0]
+
+
+def recorded_of_header(header: str) -> Recorded:
+    """What a third-column header of :func:`displacement_column` says it records (None for
+    a bare or unknown one)."""
+    parts = header.split("] ", 1)
+    if len(parts) != 2:
+        return None
+    words = parts[1].split()
+    if len(words) == 3 and words[0] == "block" and words[2] in DOF_NAMES and words[1].isdigit():
+        return int(words[1]), words[2]
+    return None
 
 
 # ------------------------------------------------------------------------------ reading

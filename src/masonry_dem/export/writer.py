@@ -208,12 +208,7 @@ class ResultsWriter:
         except OSError as exc:
             self.abort(exc)
             raise
-        rf.write_pushover(
-            self.folder,
-            np.arange(len(history.steps)),
-            history.load_factors,
-            history.control_displacements,
-        )
+        rf.write_history_pushover(self.folder, history)
         if history.status == "collapse" and history.steps:
             self._write_mechanism(history)
         summary = self.write_summary(
