@@ -166,6 +166,12 @@ def test_a_folder_in_use_is_refused(tmp_path, capsys):
     finally:
         held.release()
     assert rf.state(out).kind == "unfinished"  # summary 'running', nobody holds the lock
+    assert not (out / rf.LOCK).exists()  # released: no empty lock file left behind
+    again = rf.claim(out, overwrite=True, start={"name": "third"})
+    try:
+        assert rf.state(out).kind == "running"
+    finally:
+        again.release()
 
 
 def test_out_naming_a_file_is_one_line(tmp_path, capsys):

@@ -111,5 +111,7 @@ def run_command(args: argparse.Namespace) -> int:
     keys = ("status", "lambda", "steps", "seconds", "blocks", "interfaces")
     print(json.dumps({k: summary[k] for k in keys}))
     print(f"{summary['status']}: {summary['reason']}")
-    print(f"results in {out}/ (blocks.pvd, interfaces.pvd, summary.json, pushover.csv)")
+    files = ["blocks.pvd", "interfaces.pvd", "summary.json", "pushover.csv"]
+    files += [summary[k] for k in ("png", "mechanism_png") if summary.get(k)]
+    print(f"results in {out}/ ({', '.join(files)})")
     return 0 if summary["status"] in ("collapse", "completed") else 1

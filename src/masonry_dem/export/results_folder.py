@@ -403,7 +403,11 @@ class RunFolder:
         self._lock_fd = lock_fd
 
     def release(self) -> None:
+        """Remove the lock file, then drop the lock: a finished folder keeps no empty lock
+        file (a process waiting on the removed file finds it gone, :func:`_lock`)."""
         if self._lock_fd is not None:
+            with _quiet():
+                (self.folder / LOCK).unlink(missing_ok=True)
             with _quiet():
                 os.close(self._lock_fd)  # closing the descriptor drops the flock
             self._lock_fd = None
@@ -446,7 +450,20 @@ def _lock(folder: Path) -> int | None:
             f"results folder {folder} is in use by another run (process {holder}); "
             "choose another --out or wait for it to end",
         ) from None
+    if not _same_file(fd, path):  # the run holding it removed it on release: lock anew
+        os.close(fd)
+        return _lock(folder)
     return fd
+
+
+def _same_file(fd: int, path: Path) -> bool:
+    """Whether ``path`` is still the file open as ``fd``."""
+    try:
+        here = os.stat(path)
+    except FileNotFoundError:
+        return False
+    held = os.fstat(fd)
+    return (here.st_dev, here.st_ino) == (held.st_dev, held.st_ino)
 
 
 def remove_own_files(folder: Path) -> int:
