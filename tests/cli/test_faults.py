@@ -106,6 +106,7 @@ def test_signal_mid_run_ends_interrupted_with_every_step(tmp_path, signum, code)
     assert rf.state(out).kind == "interrupted"
 
 
+@pytest.mark.slow
 def test_sigkill_leaves_a_folder_the_next_commands_name_unfinished(tmp_path, caplog, capsys):
     out = tmp_path / "out"
     case = _slow_case(tmp_path)
