@@ -270,6 +270,30 @@ def test_copy_state_fills_in_the_folder(results_copy):
     assert scales == [12.5, 12.5]
 
 
+@pytest.mark.parametrize("name", STEP_STATES)
+def test_copy_state_names_the_case_and_its_method(results_copy, name):
+    """The copy's titles start with the case's name and the method (the shipped states hold a
+    placeholder there), wrapped to lines a Text source shows whole."""
+    summary = json.loads((results_copy / "summary.json").read_text())
+    summary["name"] = "a wall" + " with a long name" * 10
+    (results_copy / "summary.json").write_text(json.dumps(summary))
+    root = ET.parse(paraview_state.copy_state(name, results_copy)).getroot()
+    titles = [
+        el.get("value", "")
+        for proxy in root.iter("Proxy")
+        if proxy.get("type") == "TextSource"
+        for prop in proxy.findall("Property")
+        if prop.get("name") == "Text"
+        for el in prop.findall("Element")
+    ]
+    assert titles
+    for title in titles:
+        assert paraview_state.CASE_PLACEHOLDER not in title
+        flat = " ".join(title.split("\n")[:-1])
+        assert flat == f"{summary['name']}: static pushover (Newton, load/displacement control)"
+        assert max(len(line) for line in title.split("\n")) <= paraview_state.TITLE_WIDTH
+
+
 def test_copy_state_mechanism(mech_copy):
     out = paraview_state.copy_state("mechanism", mech_copy)
     assert out == mech_copy / "mechanism.pvsm"
@@ -454,6 +478,35 @@ def test_state_loads_against_a_results_folder(screenshots, state_folders, name, 
     assert info["end_time"] == pytest.approx(times[-1])
     assert info["time"] == pytest.approx(times[-1])
     assert_not_blank(img)
+
+
+@pytest.mark.paraview
+@pytest.mark.parametrize("how", ["search", "copy"])
+@pytest.mark.parametrize("name", paraview_state.STATES)
+def test_labels_name_the_case_its_method_lambda_and_the_step(screenshots, state_folders, name, how):
+    """Every state, loaded by the README's recipe or as a copy, shows lambda and the step as
+    two named quantities (not "lambda (or step) = 38" once lambda stops rising), and a title
+    naming the case and the method; the damage map draws a length scale (axes in metres)."""
+    info, _ = screenshots[name, how]
+    summary = json.loads((state_folders[name] / "summary.json").read_text())
+    labels = info["labels"]
+    titles = [text for key, text in labels.items() if key.startswith("title: ")]
+    assert titles and all(t.startswith(f"{summary['name']}: static pushover") for t in titles), (
+        titles
+    )
+    lambdas = sorted(text for key, text in labels.items() if key.endswith("lambda"))
+    steps = sorted(text for key, text in labels.items() if key.endswith("step"))
+    if name == "mechanism":  # the collapse step's
+        last = summary["steps"] - 1
+        lam = float(
+            np.loadtxt(state_folders[name] / "pushover.csv", delimiter=",", skiprows=1)[-1, 1]
+        )
+    else:
+        last, lam = 4, 0.5  # write_results: 5 steps up to lambda 0.5
+    assert lambdas and set(lambdas) == {f"lambda = {lam:.4g}"}, labels
+    assert steps and set(steps) == {f"step {last}"}, labels
+    if name == "damage_map":
+        assert info["axes_grids"] == [1]
 
 
 @pytest.mark.paraview

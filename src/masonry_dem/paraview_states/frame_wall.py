@@ -1,5 +1,6 @@
 """Frame a masonry_dem ParaView state to the wall it shows: every Warp By Vector scaled from the
-data, every render view's camera reset to the data.
+data, every render view's camera reset to the data, the title naming the case and its method
+(from the folder's summary.json).
 
 The shipped states (``*.pvsm``) were made from a sample wall. Each holds this file's
 :func:`frame` in a Python animation cue: the first time the animation moves
@@ -18,8 +19,11 @@ The warp scale is the one of the package's own pictures (``masonry_dem.export.sc
 displacement of the last time step about 6.5 % of the wall's largest dimension.
 """
 
+import json
 import math
+import os
 import sys
+import textwrap
 
 import paraview.simple as pvs
 
@@ -66,6 +70,7 @@ def frame(time=None, set_time=True):
     scale = auto_scale(dmax, size)
     for warp in warps:
         warp.ScaleFactor = scale
+    name_case()
     for view in pvs.GetViews():
         if view.GetXMLName() != "RenderView":
             continue
@@ -74,6 +79,56 @@ def frame(time=None, set_time=True):
         view.ResetCamera(False)
         pvs.Render(view)
     return [scale] * len(warps)
+
+
+def _results_folder():
+    """The folder of the data the state reads (its first reader's file), or None."""
+    for src in pvs.GetSources().values():
+        name = getattr(src, "FileName", None)
+        if name is None:
+            continue
+        name = name if isinstance(name, str) else (list(name) or [""])[0]
+        if name:
+            return os.path.dirname(str(name))
+    return None
+
+
+def case_title():
+    """The title's first line: the case's name and the method that made the results, from
+    the folder's summary.json (as the package's own pictures name them); None without one."""
+    folder = _results_folder()
+    try:
+        with open(os.path.join(folder or "", "summary.json")) as fh:
+            summary = json.load(fh)
+    except (OSError, ValueError):
+        return None
+    name = str(summary.get("name") or os.path.basename(folder or ""))
+    method = summary.get("method")
+    # the names of masonry_dem.export.figure_text.method_of (ParaView's Python may not
+    # import the package)
+    if summary.get("analysis") == "limit":
+        made = (
+            f"limit analysis ({method}, rigid blocks)"
+            if method
+            else "limit analysis (rigid blocks)"
+        )
+    elif method == "dynamic_relaxation":
+        made = "pushover by dynamic relaxation"
+    else:
+        made = "static pushover (Newton, load/displacement control)"
+    # wrapped as masonry_dem.export.paraview_state.TITLE_WIDTH: a Text source does not wrap
+    return textwrap.fill(f"{name}: {made}", 100)
+
+
+def name_case():
+    """Put :func:`case_title` on the first line of every title (the states' Text sources)."""
+    title = case_title()
+    if title is None:
+        return
+    for (name, _), src in pvs.GetSources().items():
+        if name.startswith("title: "):
+            what = src.Text.split("\n")[-1]
+            src.Text = f"{title}\n{what}"
 
 
 def load(state, results_folder):
