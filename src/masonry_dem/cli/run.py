@@ -9,7 +9,7 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from masonry_dem.cli.options import add_case, add_output, add_overwrite
+from masonry_dem.cli.options import add_case, add_output, add_overwrite, results_line
 from masonry_dem.export.run_case import Progress, estimate_run, run_case
 
 if TYPE_CHECKING:
@@ -99,6 +99,7 @@ def run_command(args: argparse.Namespace) -> int:
         )
         print(json.dumps({k: summary[k] for k in ("status", "lambda", "method", "bound")}))
         print(f"{summary['status']}: {summary['reason']}")
+        print(results_line(out))
         return 0 if summary["status"] == "collapse" else 1
     summary = run_case(
         case,
@@ -111,7 +112,5 @@ def run_command(args: argparse.Namespace) -> int:
     keys = ("status", "lambda", "steps", "seconds", "blocks", "interfaces")
     print(json.dumps({k: summary[k] for k in keys}))
     print(f"{summary['status']}: {summary['reason']}")
-    files = ["blocks.pvd", "interfaces.pvd", "summary.json", "pushover.csv"]
-    files += [summary[k] for k in ("png", "mechanism_png") if summary.get(k)]
-    print(f"results in {out}/ ({', '.join(files)})")
+    print(results_line(out))
     return 0 if summary["status"] in ("collapse", "completed") else 1
