@@ -13,7 +13,8 @@ pvbatch pvbatch_check.py frame FRAME_WALL.py JOBS.json
     (LoadState with data_directory, then the last time step: the state's own cue frames it;
     how = "recipe") or by paraview_states/frame_wall.py (how = "macro"), hide the 2D overlays (titles, time, scalar
     bars, orientation axes: they do not move with the camera), save one screenshot per
-    render view (out_prefix_<k>.png); prints a JSON list of {scales, images}.
+    render view (out_prefix_<k>.png); prints a JSON list of {scales, images, directions} (each
+    view's unit vector from its focal point to the camera).
 pvbatch pvbatch_check.py pvd FILE.pvd [FILE.pvd ...]
     open each PVD and print a JSON line {file: {timesteps, cells, arrays}}.
 """
@@ -119,7 +120,12 @@ def frame(frame_wall_py, jobs_file):
             out = f"{prefix}_{k}.png"
             pvs.SaveScreenshot(out, view)
             images.append(out)
-        results.append({"scales": scales, "images": images})
+        directions = []
+        for view in views:
+            d = [p - f for p, f in zip(view.CameraPosition, view.CameraFocalPoint, strict=True)]
+            norm = sum(x * x for x in d) ** 0.5 or 1.0
+            directions.append([x / norm for x in d])
+        results.append({"scales": scales, "images": images, "directions": directions})
     print("RESULT " + json.dumps(results))
 
 

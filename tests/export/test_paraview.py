@@ -675,6 +675,36 @@ def test_state_frames_any_wall(framed, name, factor, how):
         assert scales == pytest.approx([want, want])
 
 
+@pytest.mark.paraview
+def test_a_front_view_of_walls_that_meet_turns_oblique(pvbatch, tmp_path):
+    """S5 with return walls (a U wall, 0.32 m deep for 1.4 m wide): the damage map's and the
+    force view's front elevations would hide the returns behind the facade, so the framing
+    turns them to the oblique view; the flat default wall keeps its front elevation."""
+    import imageio.v3 as iio
+
+    from masonry_dem.cases.paper import build_case
+
+    folders = {"u": tmp_path / "u", "flat": tmp_path / "flat"}
+    write_with_mechanism(folders["u"], build_case("S5", restraint="return-walls").model)
+    write_with_mechanism(folders["flat"], default_wall_model(1.0))
+    jobs = [
+        [str(paraview_state.state_path(name)), str(folder), str(tmp_path / f"{key}_{name}"), how]
+        for key, folder in folders.items()
+        for name in ("damage_map", "force_view")
+        for how in ("recipe", "macro")
+    ]
+    (tmp_path / "jobs.json").write_text(json.dumps(jobs))
+    infos = run_pvbatch(pvbatch, "frame", FRAME_WALL, tmp_path / "jobs.json")
+    for (_, folder, _, _), info in zip(jobs, infos, strict=True):
+        for direction, image in zip(info["directions"], info["images"], strict=True):
+            if folder.endswith("flat"):
+                assert direction == pytest.approx([0.0, 0.0, 1.0], abs=1e-9)
+            else:
+                assert abs(direction[0]) > 0.3 and abs(direction[2]) < 0.9, direction
+                wall = np.any(iio.imread(image)[..., :3] < 245, axis=-1)
+                assert not wall[:EDGE].any() and not wall[-EDGE:].any()
+
+
 @pytest.mark.parametrize("name", paraview_state.STATES)
 def test_every_state_frames_itself_with_frame_wall(name):
     """Each shipped state holds frame_wall.py (up to its main block) as a Python animation
