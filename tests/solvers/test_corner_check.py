@@ -61,7 +61,7 @@ def test_the_implicit_check_finds_no_rest_above_a_peak_and_rest_below_it(build):
 
 @pytest.mark.slow
 def test_the_implicit_check_passes_the_last_fold_of_s13_2():
-    """Without the check the path certifies S13/2's first fold, 0.0855; the explicit check
+    """Without the check the path follower stops at S13/2's first fold, 0.0855; the explicit check
     passes four folds and stops at 0.1082, where a relaxation to 1.01 x still finds rest
     (tests/cases/test_peaks_not_folds.py). The implicit check (it
     decides, and the path goes on from dynamic relaxation's rest where that finds one) finds
@@ -76,21 +76,26 @@ def test_the_implicit_check_passes_the_last_fold_of_s13_2():
     assert hist.collapse_multiplier > 1.01 * 0.10819, hist.reason
     assert hist.collapse_multiplier <= dem_upper_bound(case.model).load_factor
     assert solver.implicit_steps > 0
+    # without the check the path follower stops at the first fold, 0.0855, and the
+    # instability rule sends the load on from there
     unchecked = StaticSolver(
         case.model, replace(case.settings, fold_check_time_steps=0, transient_reach=0.0)
     ).run(monitor=case.monitor)
-    assert unchecked.collapse_multiplier == pytest.approx(0.08551, rel=1e-3)
+    assert "the path follower stopped at lambda 0.0855" in unchecked.reason
+    assert unchecked.collapse_multiplier == pytest.approx(hist.collapse_multiplier, rel=0.01)
 
 
 @pytest.mark.slow
 def test_a_check_without_verdict_leaves_it_to_dynamic_relaxation():
     """With a budget of one implicit step no check of S13/2 reaches rest or the displacement
     limit: each falls back to dynamic relaxation, and the path is the explicit check's, to
-    its collapse at 0.1082."""
+    its stop at 0.1082, which the instability rule passes (0.1104, the default's 0.1107
+    within 0.5 %)."""
     case = build_case("S13", restraint="return-walls", return_blocks=2)
     fallback = StaticSolver(case.model, replace(case.settings, corner_check_steps=1))
     found = fallback.run(monitor=case.monitor)
-    assert found.collapse_multiplier == pytest.approx(0.10819, rel=1e-3)
+    assert "the path follower stopped at lambda 0.1081" in found.reason
+    assert found.collapse_multiplier == pytest.approx(0.1107, rel=5e-3)
     assert fallback.time_steps > 0
     assert fallback.implicit_steps > 0
 

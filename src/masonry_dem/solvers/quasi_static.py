@@ -63,8 +63,10 @@ from masonry_dem._validation import (
 from masonry_dem.constitutive.law import LawResponse
 from masonry_dem.model import Model
 from masonry_dem.results import History, StepResult
+from masonry_dem.solvers.static.corrector import Corrector
 from masonry_dem.solvers.static.outcome import Status, StopReason
 from masonry_dem.solvers.static.problem import DiscreteProblem
+from masonry_dem.solvers.static.settings import StaticSettings
 
 log = logging.getLogger(__name__)
 
@@ -98,8 +100,8 @@ class QuasiStaticSettings:
         linear: an elastic deflection that grows with the load is no mechanism, however
         large (the collapse's reason says when the last rest lies past the limit).
     max_load_factor: the analysis ends ``completed`` when lambda reaches it.
-    newton_steps: each increment is first tried by Newton's method from the last rest (a
-        time step of infinite length, with the same line search), the damped motion
+    newton_steps: each increment is first tried by the static solver's safeguarded Newton
+        corrector from the last rest (:meth:`QuasiStatic.newton`), the damped motion
         running only where Newton does not converge, and the increments follow the
         iteration rule of Crisfield (1981): times (``target_iterations`` / I) ** 1/2 after
         a step of I iterations, within [1/2, ``growth``], up to ``max_step`` load scales and
@@ -139,6 +141,8 @@ class Motion:
     reason: str = ""
     past_limit: bool = False
     undecided: bool = False  # neither a rest nor a run past the limit: no verdict
+    #: where a motion past the displacement limit ended (its direction is the mechanism)
+    end: np.ndarray | None = None
 
 
 class QuasiStatic:
@@ -158,10 +162,25 @@ class QuasiStatic:
         self.q = np.zeros(model.n_dofs)
         self.plastic = np.zeros((m, 6))
         self.cracked = np.zeros(m, dtype=bool)
+        self._corrector = Corrector(
+            model,
+            StaticSettings(
+                tolerance=self.settings.tolerance,
+                displacement_limit=self.settings.displacement_limit,
+            ),
+            problem=self.problem,
+        )
         #: K_e: the dashpots' viscosity per unit of time (the bonded assembly's stiffness)
         self.viscosity = self.problem.tangent_assembler.matrix(self.problem.elastic_tangents())
         self.time_steps = 0
+        #: factorizations of the whole analysis after which a motion gives no verdict (None:
+        #: no budget but ``max_time_steps`` a motion)
+        self.budget: int | None = None
         self.iterations = 0
+        #: the law's response at the wall's state (None before the first rest)
+        self.response: LawResponse | None = None
+        #: the lowest load with no rest and its motion, once the analysis has found it
+        self.no_rest: tuple[float, Motion] | None = None
         #: the dead-load rest (None before it is found)
         self.origin: np.ndarray | None = None
         self._dt = 1.0  # the last time step taken, in units of the dashpots' relaxation time
@@ -238,14 +257,22 @@ class QuasiStatic:
         # by more than half a block under its own weight)
         limit = self.problem.limit + (unit if self.origin is None else 0.0)
         rest_q = self.q.copy()
-        rnorm = self.problem.residual(self.q, lam, self.plastic, self.cracked, dead)[1]
+        _, rnorm, response = self.problem.residual(self.q, lam, self.plastic, self.cracked, dead)
         if rnorm <= s.tolerance:
+            self.response = response
             return Motion(True, 0)
         q = self.q.copy()
         velocity = np.zeros_like(q)  # over the last step taken
         dt = self._dt
         taken = 0
         for _ in range(s.max_time_steps):
+            if self.budget is not None and self.factorizations >= self.budget:
+                return Motion(
+                    False,
+                    taken,
+                    f"the budget of {self.budget} factorizations is spent",
+                    undecided=True,
+                )
             predicted = q + velocity * dt
             stepped = self._time_step(q, lam, dead, dt, predicted)
             if stepped is None and np.any(velocity):
@@ -281,6 +308,7 @@ class QuasiStatic:
                     f"the wall ran {travelled:.3g} m from its last rest at this load, past "
                     f"the displacement limit {limit:.3g} m (a mechanism)",
                     past_limit=True,
+                    end=q_new,
                 )
             if rnorm <= s.tolerance:
                 self._dt = min(dt, 1.0)
@@ -297,19 +325,21 @@ class QuasiStatic:
         )
 
     def newton(self, lam: float) -> int | None:
-        """Newton's method from the last rest to an equilibrium at ``lam`` (a time step of
-        infinite length: the tangent's floor is the static solver's residual stiffness):
-        the iterations it took, the wall's state moved there; None where it does not
-        converge within ``max_newton`` iterations (the state is then left as it was)."""
-        before = self.iterations
-        stepped = self._time_step(self.q, lam, 1.0, 1e9, self.q)
-        if stepped is None or stepped[2] > self.settings.tolerance:
+        """The static solver's safeguarded Newton corrector (a trust region on the
+        translations, a line search, chord steps) from the last rest to an equilibrium at
+        ``lam``: the iterations it took, the wall's state moved there; None where it finds
+        none (the state is then left as it was)."""
+        corrector = self._corrector
+        corrector.q, corrector.plastic, corrector.cracked = self.q, self.plastic, self.cracked
+        out = corrector.equilibrate(lam)
+        self.iterations += out.iterations
+        if not out.ok:
             return None
         moving = self.problem.moving_translations
-        if np.abs(stepped[0][moving] - self.q[moving]).max() > self.problem.limit:
+        if np.abs(out.q[moving] - self.q[moving]).max(initial=0.0) > self.problem.limit:
             return None  # as far as a mechanism runs: the motion decides
-        self._carry(stepped[0], stepped[1])
-        return self.iterations - before
+        self._carry(out.q, out.response)
+        return max(out.iterations, 1)
 
     def _carry(self, q: np.ndarray, response: LawResponse) -> None:
         """Make ``q`` the wall's state, the law's state (plastic slip, cracked joints)
@@ -318,6 +348,7 @@ class QuasiStatic:
         self.plastic = self.law.plastic_part(relative, response.actions)
         self.cracked = self.law.cracked_after(self.cracked, response)
         self.q = q
+        self.response = response
 
     def _range_note(self) -> str:
         """A note when the last rest lies past the displacement limit from the dead-load
@@ -401,9 +432,33 @@ class QuasiStatic:
         self.origin = self.q.copy()
         if not np.any(self.problem.F_live):
             return finish(Status.COMPLETED, StopReason.NO_LIVE_LOAD, "no live load")
+        return self.raise_load(
+            0.0, s.first_increment * self.problem.load_scale, hist, record, finish
+        )
+
+    def start_from(
+        self, q: np.ndarray, plastic: np.ndarray, cracked: np.ndarray, origin: np.ndarray
+    ) -> None:
+        """Make a rest found by another method (a state of a pushover, its law state, and
+        its dead-load rest ``origin``) the wall's state, to move or load it from there."""
+        self.q = np.asarray(q, dtype=float).reshape(-1).copy()
+        self.plastic = np.asarray(plastic, dtype=float).copy()
+        self.cracked = np.asarray(cracked, dtype=bool).copy()
+        self.origin = np.asarray(origin, dtype=float).reshape(-1).copy()
+
+    def raise_load(
+        self,
+        lam: float,
+        increment: float,
+        hist: History,
+        record: Callable[[float], None],
+        finish: Callable[[Status, StopReason, str], History],
+    ) -> History:
+        """Raise the load from a rest at ``lam`` (the wall's state), the first increment
+        ``increment``, recording each rest, up to the first load with no rest (bracketed
+        by halving), ``max_load_factor``, or a motion with no verdict."""
+        s = self.settings
         scale = self.problem.load_scale
-        lam = 0.0
-        increment = s.first_increment * scale
         kept = self.snapshot()
         failed: tuple[float, Motion] | None = None  # the lowest load with no rest
         while True:
@@ -442,6 +497,7 @@ class QuasiStatic:
             if failed is not None:
                 if failed[0] - lam <= s.bracket_tolerance * max(lam, 1e-300):
                     hist.collapse_bracket = (lam, failed[0])
+                    self.no_rest = failed
                     return finish(
                         Status.COLLAPSE,
                         StopReason.NO_REST,

@@ -120,6 +120,8 @@ class Certificate:
     # checked")
     curve_slope: float = math.nan
     corner: bool = False
+    # the instability rule: the damped motion from the last rest at (1 + bracket) lambda
+    instability: str = NOT_CHECKED
     mode_vector: np.ndarray | None = field(default=None, repr=False)
 
     def as_dict(self) -> dict:
@@ -145,6 +147,8 @@ def certify(
     settings: StaticSettings,
     bound: Bound = None,
     rests_at: Callable[[float], bool] | None = None,
+    run_off: tuple[float, np.ndarray, np.ndarray | None] | None = None,
+    instability: str = NOT_CHECKED,
 ) -> Certificate:
     """Check the stop of ``hist`` at its last recorded state (see the module). Only the
     model's discrete problem and the History are used: the law state of the last step (the
@@ -262,6 +266,17 @@ def certify(
             mode_found = live_work > 0
         else:
             mode_found, mode, mode_vector, live_work = False, "none", None, 0.0
+    # the instability rule decides where it ran: the damped motion from the last rest at
+    # (1 + bracket_tolerance) lambda ran past the displacement limit, along the mechanism
+    # (where the tangent and the curve show no mode, the motion's direction is the mode)
+    if not mode_found and run_off is not None and run_off[2] is not None:
+        moved = (run_off[2] - run_off[1])[free]
+        size = float(np.abs(moved[problem.translation]).max(initial=0.0))
+        if size > 0:
+            mode, mode_vector = "motion past the displacement limit", moved / size
+            live_work = float(F @ mode_vector)
+            mode_found = live_work > 0
+    ran_off = not instability.startswith("refuted")
     # (c) the bound
     value = _bound_value(bound, problem.model)
     if value is None:
@@ -269,7 +284,7 @@ def certify(
     else:
         within = bool(lam <= value * (1.0 + s.bound_tolerance) + 1e-12 * abs(value))
         bound_status = "within" if within else "exceeded"
-    holds = equilibrium and admissible and mode_found and within is not False
+    holds = equilibrium and admissible and mode_found and ran_off and within is not False
     why = []
     if not equilibrium:
         why.append(f"the last state is not an equilibrium (residual {rnorm:.2e} > {s.tolerance:g})")
@@ -283,6 +298,8 @@ def certify(
             f"elastic stiffness, limit {ZERO_MODE:g} x the floor {s.residual_stiffness:g}; "
             f"dynamic relaxation at lambda {lam_end:.3g}: {zero_check})"
         )
+    elif not mode_found and mode == "motion past the displacement limit":
+        why.append("the motion past the displacement limit does no work of the live load")
     elif not mode_found and hist.stop is StopReason.DISPLACEMENT_LIMIT:
         # equilibria were still being found: the wall left the small-displacement range of
         # the geometrically linear model before its curve stopped rising (joints so soft
@@ -315,6 +332,8 @@ def certify(
             f"the motion the load drives (> {tolerance:g}) and the curve goes "
             f"{past:.3g} of its peak displacement past the peak (< {s.mode_displacement:g})"
         )
+    if not ran_off:
+        why.append(f"the instability rule: {instability}")
     if within is False:
         why.append(f"lambda {lam:.6g} exceeds the limit-analysis bound {value:.6g}")
     reason = (
@@ -323,6 +342,8 @@ def certify(
         if holds
         else "; ".join(why)
     )
+    if holds and instability != NOT_CHECKED:
+        reason += f"; instability rule: {instability}"
     if holds and corner:
         # a pseudo-transient motion past the limit answers the check
         motion = (
@@ -366,6 +387,7 @@ def certify(
         reason=reason,
         curve_slope=slope,
         corner=corner,
+        instability=instability,
         mode_vector=None if mode_vector is None else _full(problem, mode_vector),
     )
 

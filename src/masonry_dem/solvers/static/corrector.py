@@ -39,7 +39,12 @@ class Corrector:
     """The state of a path (q, plastic part, cracked joints) and the searches that move it
     to the next equilibrium of the :class:`DiscreteProblem`."""
 
-    def __init__(self, model: Model, settings: StaticSettings | None = None) -> None:
+    def __init__(
+        self,
+        model: Model,
+        settings: StaticSettings | None = None,
+        problem: DiscreteProblem | None = None,
+    ) -> None:
         if settings is not None and not isinstance(settings, StaticSettings):
             raise TypeError(
                 f"settings must be a StaticSettings (e.g. StaticSettings(max_steps=5)) or None, "
@@ -48,7 +53,8 @@ class Corrector:
         self.model = model
         self.settings = settings or StaticSettings()
         s = self.settings
-        self.problem = DiscreteProblem(
+        # (``problem``: another solver's, whose state this one moves by the same law)
+        self.problem = problem or DiscreteProblem(
             model,
             tension=s.tension,
             memory=s.memory,

@@ -167,8 +167,10 @@ class StaticSettings(LoadPathSettings):
 
     Certificate of a collapse (see :mod:`masonry_dem.solvers.static.certificate`)
     ----------------------------------------------------------------------------
-    certify: check a collapse before reporting it (False: the stop of the path is reported
-        as a collapse, unchecked, as before the certificate existed).
+    certify: check a collapse before reporting it: the instability rule (the reference's
+        damped motion at (1 + ``bracket_tolerance``) lambda from the last state, which sends
+        the load on where it finds rest; not with ``refine`` False) and the certificate
+        (False: the stop of the path is reported as a collapse, unchecked).
     admissible_tolerance: the last state's actions may exceed the strength domain by this
         fraction of the capacity (round-off of the return).
     mode_stiffness: the tangent of the last state is singular along the live load's mode

@@ -24,7 +24,7 @@ from masonry_dem.model import Model, Monitor
 from masonry_dem.results import History, StepResult
 from masonry_dem.solvers.factorization import SingularMatrix
 from masonry_dem.solvers.static import paths
-from masonry_dem.solvers.static.certificate import Bound, certify
+from masonry_dem.solvers.static.certificate import NOT_CHECKED, ZERO_LOAD, Bound, certify
 from masonry_dem.solvers.static.displacement_control import displacement_control
 from masonry_dem.solvers.static.outcome import Outcome, Status, StopReason
 from masonry_dem.solvers.static.relaxations import Relaxations
@@ -32,6 +32,19 @@ from masonry_dem.solvers.static.settings import DisplacementControl, StaticSetti
 from masonry_dem.streamed_history import StreamedSteps, should_stream
 
 log = logging.getLogger(__name__)
+
+#: the instability rule's damped motion: its local error in elastic units of the wall, and
+#: Newton iterations of one of its time steps (the reference's are 0.01 and 25; these, with
+#: the pushover's bracket, agree with it on the corpus of benchmarks/agreement.py)
+JUDGE_MOTION_TOLERANCE = 0.05
+JUDGE_NEWTON = 10
+#: time steps of one motion, and factorizations of the whole rule, before it gives no
+#: verdict (a motion that neither settles nor runs off: under the holonomic law, with no
+#: potential, the damped flow need not settle). The rule's decisive motions on the corpus
+#: of benchmarks/agreement.py took at most a few hundred time steps each, and the whole
+#: rule at most 18 000 factorizations on a wall.
+JUDGE_TIME_STEPS = 2000
+JUDGE_FACTORIZATIONS = 20_000
 
 
 class StaticSolver(Relaxations):
@@ -50,6 +63,11 @@ class StaticSolver(Relaxations):
         self.load_factor = 0.0  # lambda of the last converged state
         # the law state (plastic part, cracked joints) the last converged state was found with
         self.search_state = (self.plastic.copy(), self.cracked.copy())
+        #: the instability rule's verdict on the collapse, and where its motion ran off
+        #: (lambda, the rest it started from, where it passed the displacement limit)
+        self.instability = NOT_CHECKED
+        self.run_off: tuple[float, np.ndarray, np.ndarray | None] | None = None
+        self.judge_cost = (0, 0)  # (iterations, factorizations) of the instability rule
 
     # ------------------------------------------------------------------ states of the path
     def accept(self, out: Outcome, step: int, control_value: float) -> StepResult:
@@ -172,10 +190,82 @@ class StaticSolver(Relaxations):
             return self._finish(hist, t0)
         if control is None:
             paths.load_control(self, hist, record)
+            if hist.status is Status.COLLAPSE and self.settings.certify and self.settings.refine:
+                self._instability_rule(hist, record)
         else:
             assert monitor_dof is not None  # the control DOF, set above
             displacement_control(self, hist, record, control, monitor_dof)
         return self._finish(hist, t0)
+
+    def _instability_rule(self, hist: History, record: Callable[[Outcome], None]) -> None:
+        """The instability rule at the collapse the path reports (lambda_c): the damped
+        motion of the reference analysis (:mod:`masonry_dem.solvers.quasi_static`) from the
+        last converged state at lambda_c (1 + ``bracket_tolerance``). Running past the
+        displacement limit, it confirms the collapse, and its direction is the mechanism.
+        Coming to rest, it refutes it: the wall carries more than the path follower found,
+        and the reference's load steps (Newton from each rest, the damped motion where
+        Newton fails) go on from that rest to the first load with no rest."""
+        from masonry_dem.solvers.quasi_static import QuasiStatic, QuasiStaticSettings
+
+        s = self.settings
+        lam_c = hist.collapse_multiplier
+        assert lam_c is not None  # a collapse has its bracket
+        judge = QuasiStatic(
+            self.model,
+            QuasiStaticSettings(
+                newton_steps=True,
+                motion_tolerance=JUDGE_MOTION_TOLERANCE,
+                max_newton=JUDGE_NEWTON,
+                max_time_steps=JUDGE_TIME_STEPS,
+                tolerance=s.tolerance,
+                bracket_tolerance=s.bracket_tolerance,
+                displacement_limit=s.displacement_limit,
+                max_load_factor=s.max_load_factor,
+            ),
+        )
+        judge.budget = JUDGE_FACTORIZATIONS
+        judge.start_from(self.q, self.plastic, self.cracked, hist.steps[0].q)
+        # (at least the smallest load the residual tells from zero: at a lower one, the
+        # state the path stopped at is a rest to the tolerance)
+        resolvable = ZERO_LOAD * s.tolerance * self.problem.load_scale
+        target = max(lam_c * (1.0 + s.bracket_tolerance), lam_c + resolvable)
+        motion = judge.move_to_rest(target)
+        if motion.past_limit:
+            self.run_off = (target, self.q.copy(), motion.end)
+            self.instability = f"no rest at lambda {target:.6g}: {motion.reason}"
+        elif motion.undecided:  # the certificate decides without it, and says so
+            self.instability = f"no verdict at lambda {target:.6g}: {motion.reason}"
+        else:
+            log.info(
+                "%s: the wall rests at lambda %.6g, above the collapse %.6g the path reported "
+                "(%d factorizations): the reference's load steps go on",
+                self.model.name,
+                target,
+                lam_c,
+                judge.factorizations,
+            )
+            refuted = (
+                f"the path follower stopped at lambda {lam_c:.6g} ({hist.stop}), but the "
+                f"wall rests at {target:.6g}, where the reference's load steps went on"
+            )
+
+            def rest(lam: float) -> None:
+                assert judge.response is not None  # set at each rest
+                record(Outcome(True, judge.q.copy(), lam, judge.response, 0))
+
+            def finish(status: Status, stop: StopReason, reason: str) -> History:
+                hist.end(status, stop, f"{reason}; {refuted}")
+                if status is Status.COLLAPSE and judge.no_rest is not None:
+                    lam_off, motion_off = judge.no_rest
+                    self.run_off = (lam_off, judge.q.copy(), motion_off.end)
+                    self.instability = f"no rest at lambda {lam_off:.6g}: {motion_off.reason}"
+                else:
+                    self.instability = f"refuted: {refuted}"
+                return hist
+
+            rest(target)
+            judge.raise_load(target, s.bracket_tolerance * target, hist, rest, finish)
+        self.judge_cost = (judge.iterations, judge.factorizations)
 
     def dead_load(self) -> Outcome:
         """The equilibrium under the dead load (the specimens stood: the damped fallback
@@ -226,7 +316,15 @@ class StaticSolver(Relaxations):
 
     def _finish(self, hist: History, t0: float) -> History:
         if hist.status is Status.COLLAPSE and self.settings.certify:
-            cert = certify(self.problem, hist, self.settings, self.bound, self._rests_at)
+            cert = certify(
+                self.problem,
+                hist,
+                self.settings,
+                self.bound,
+                self._rests_at,
+                run_off=self.run_off,
+                instability=self.instability,
+            )
             hist.certificate = cert
             if not cert.holds:
                 hist.status = Status.FAILED
@@ -236,8 +334,8 @@ class StaticSolver(Relaxations):
                     "%s: the stop is not a certified collapse: %s", self.model.name, cert.reason
                 )
         hist.seconds = time.perf_counter() - t0
-        hist.iterations = self.iterations
-        hist.factorizations = self.factorizations
+        hist.iterations = self.iterations + self.judge_cost[0]
+        hist.factorizations = self.factorizations + self.judge_cost[1]
         log.info(
             "%s: %s after %d steps, %d Newton iterations, %d factorizations, %d time steps of "
             "dynamic relaxation, %d implicit steps of corner checks (%s)",
