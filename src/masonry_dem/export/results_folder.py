@@ -263,8 +263,17 @@ def _lock_is_held(folder: Path) -> bool:
     return False
 
 
+def _own_paths(folder: Path, pattern: str) -> Iterator[Path]:
+    """The paths of ``folder`` matching ``pattern``, never through a symbolic link: a
+    ``steps`` that links elsewhere holds another folder's files, not this run's."""
+    parent = folder / pattern.rpartition("/")[0]
+    if parent.is_symlink() or not parent.is_dir():
+        return iter(())
+    return folder.glob(pattern)
+
+
 def _holds_run(folder: Path) -> bool:
-    return any(any(folder.glob(pattern)) for pattern in RUN_FILES)
+    return any(any(_own_paths(folder, pattern)) for pattern in RUN_FILES)
 
 
 def state(folder: Path | str, _locked_here: bool = False) -> FolderState:
@@ -359,17 +368,43 @@ def remove_own_files(folder: Path) -> int:
     ``steps`` folder too when that leaves it empty. Returns how many were removed."""
     removed = 0
     for pattern in OWN_FILES:
-        for path in folder.glob(pattern):
-            if path.is_file():
+        for path in _own_paths(folder, pattern):
+            if path.is_symlink() or path.is_file():  # a link goes, never what it names
                 try:
                     path.unlink()
                 except OSError as exc:
                     raise _os_error(path, exc) from exc
                 removed += 1
     steps = folder / STEPS
-    if steps.is_dir() and not any(steps.iterdir()):
+    if steps.is_dir() and not steps.is_symlink() and not any(steps.iterdir()):
         steps.rmdir()
     return removed
+
+
+def _refuse_foreign_steps(folder: Path, overwrite: bool) -> None:
+    """A ``steps`` that is a symbolic link would take this run's VTUs (and ``--overwrite``'s
+    removals) into the folder it names: it is refused, or with ``overwrite`` removed as a
+    link. A ``steps`` that is a file is refused: it is not the package's."""
+    steps = folder / STEPS
+    if steps.is_symlink():
+        if not overwrite:
+            raise ResultsFolderError(
+                errno.EEXIST,
+                f"results folder {folder}: {steps} is a symbolic link to {os.readlink(steps)}; "
+                "a run writes only inside its folder: pass --overwrite (overwrite=True) to "
+                "remove the link (not what it names), or choose another --out",
+            )
+        try:
+            steps.unlink()
+        except OSError as exc:
+            raise _os_error(steps, exc) from exc
+        log.info("removed the symbolic link %s", steps)
+    elif steps.exists() and not steps.is_dir():
+        raise ResultsFolderError(
+            errno.ENOTDIR,
+            f"results folder {folder}: {steps} is a file, not the package's steps folder; "
+            "move it or choose another --out",
+        )
 
 
 def claim(folder: Path | str, overwrite: bool, start: Mapping[str, Any]) -> RunFolder:
@@ -387,6 +422,7 @@ def claim(folder: Path | str, overwrite: bool, start: Mapping[str, Any]) -> RunF
         # a Ctrl-C while the old run is removed would leave part of it and no summary:
         # it waits until the folder is this run's (summary.json running), then stops it
         with deferred_signals():
+            _refuse_foreign_steps(folder, overwrite)
             if previous.kind != "empty":
                 if not overwrite:
                     raise ResultsFolderError(
