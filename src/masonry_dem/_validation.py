@@ -52,7 +52,25 @@ def positive_scalar(name: str, value: Any, strict: bool = True) -> float:
     if arr.ndim != 0:
         raise ValueError(f"{name} must be a scalar, got shape {arr.shape}")
     require_positive(name, arr, strict)
-    return float(arr)
+    return float(arr) + 0.0  # -0.0 -> 0.0 (see frozen)
+
+
+def frozen(value: Any, dtype: Any = None) -> NDArray[Any]:
+    """A read-only copy of ``value``, a float array's signed zeros made +0.0: a -0.0 reaches
+    copysign, 1/x and the sign tests of the kernels (friction -0.0 ended a pushover failed
+    where 0.0 collapses), and a model changed after it was built answers another question."""
+    arr = np.array(value, dtype=dtype)
+    if arr.dtype.kind == "f":
+        arr += 0.0
+    arr.flags.writeable = False
+    return arr
+
+
+def read_only(arr: NDArray[Any]) -> NDArray[Any]:
+    """A read-only view of ``arr`` (the array itself stays writable for its owner)."""
+    view = arr.view()
+    view.flags.writeable = False
+    return view
 
 
 def is_number(value: Any) -> bool:

@@ -20,6 +20,7 @@ from masonry_dem._validation import (
     as_finite_array,
     block_indices,
     check_choice,
+    frozen,
     plain,
     positive_scalar,
 )
@@ -73,12 +74,11 @@ class InterfaceMaterial:
     projection: str = "energy"
 
     def __post_init__(self) -> None:
-        positive_scalar("kn", self.kn)
-        positive_scalar("kt", self.kt)
-        positive_scalar("friction", self.friction, strict=False)
-        positive_scalar("tensile_strength", self.tensile_strength, strict=False)
-        if self.alpha is not None:
-            positive_scalar("alpha", self.alpha)
+        for name in ("kn", "kt", "friction", "tensile_strength", "alpha"):
+            value = getattr(self, name)
+            if value is not None or name != "alpha":
+                strict = name in ("kn", "kt", "alpha")
+                object.__setattr__(self, name, positive_scalar(name, value, strict=strict))
         for name, allowed in LAW_OPTIONS.items():
             check_choice(name, getattr(self, name), allowed)
 
@@ -322,6 +322,11 @@ class Model:
     tension: Tension = "brittle"
     memory: Memory = "none"
     projection: str = "energy"
+
+    def __post_init__(self) -> None:
+        for name in ("kn", "kt", "friction", "tensile_strength", "alpha", "dead", "live"):
+            object.__setattr__(self, name, frozen(getattr(self, name), float))
+        object.__setattr__(self, "fixed", frozen(self.fixed, bool))
 
     @classmethod
     def build(

@@ -1,0 +1,55 @@
+"""Issue 39: the Python API is as strict as the case files. A built model cannot be changed
+behind its back, signed zeros are one zero, and what the schema refuses the API refuses
+with the field, the value and the allowed range."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from helpers.case_files import SINGLE_BLOCK
+from masonry_dem.cases.casefile import case_from_dict
+from masonry_dem.geometry.builders import add_base, running_bond_wall
+from masonry_dem.model import InterfaceMaterial, Model, SelfWeight, Support, WeightProportional
+from masonry_dem.results import StepResult
+
+MAT = InterfaceMaterial(kn=2.4e9, kt=1.0e9, friction=0.7)
+
+
+@pytest.fixture(scope="module")
+def wall():
+    return add_base(running_bond_wall(3, 2, 0.1, 0.25, 0.12, 18_000.0))[0]
+
+
+def _build(blocks, material=MAT, **kwargs):
+    kwargs.setdefault("supports", [Support([blocks.count - 1])])
+    kwargs.setdefault("loads", [SelfWeight(), WeightProportional()])
+    return Model.build(blocks, material, **kwargs)
+
+
+def test_signed_zeros_are_one_zero_in_the_api_and_the_case_files(wall):
+    material = InterfaceMaterial(kn=2.4e9, kt=1e9, friction=-0.0, tensile_strength=-0.0)
+    assert not np.signbit(material.friction) and not np.signbit(material.tensile_strength)
+    model = _build(wall, material, loads=[SelfWeight(), WeightProportional((-0.0, 0.0, 1.0))])
+    for name in ("friction", "tensile_strength", "live", "dead"):
+        values = getattr(model, name)
+        assert not np.signbit(values[values == 0]).any(), name
+    data = {**SINGLE_BLOCK, "material": {**SINGLE_BLOCK["material"], "friction": -0.0}}
+    assert not np.signbit(case_from_dict(data).model.friction).any()
+
+
+def test_a_built_model_and_its_steps_are_read_only(wall):
+    model = _build(wall)
+    for name in ("kn", "kt", "friction", "tensile_strength", "alpha", "fixed", "dead", "live"):
+        with pytest.raises(ValueError, match="read-only"):
+            getattr(model, name)[...] = 0
+    for name in ("block_i", "centre", "l1"):
+        with pytest.raises(ValueError, match="read-only"):
+            getattr(model.interfaces, name)[0] = 0
+    with pytest.raises(ValueError, match="read-only"):
+        model.blocks.centres[0, 0] = 1.0
+    q = np.zeros((wall.count, 6))
+    step = StepResult(0, 0.0, q, q[:0], np.zeros(0, np.int32), np.zeros(0))
+    with pytest.raises(ValueError, match="read-only"):
+        step.q[0, 0] = 1.0
+    q[0, 0] = 1.0  # the solver's own array stays its own
