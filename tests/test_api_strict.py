@@ -53,3 +53,27 @@ def test_a_built_model_and_its_steps_are_read_only(wall):
     with pytest.raises(ValueError, match="read-only"):
         step.q[0, 0] = 1.0
     q[0, 0] = 1.0  # the solver's own array stays its own
+
+
+@pytest.mark.parametrize("tiny", [1e-170, 1e-300, 5e-324])
+def test_a_direction_whose_norm_underflows_is_still_a_direction(wall, tiny):
+    model = _build(wall, loads=[SelfWeight(), WeightProportional((tiny, 0.0, tiny))])
+    pushed = model.live[:, :3][model.live[:, :3].any(axis=1)]
+    np.testing.assert_allclose(pushed[:, 0], pushed[:, 2])
+    weights = wall.weights[model.live[:, :3].any(axis=1)]
+    np.testing.assert_allclose(np.linalg.norm(pushed, axis=1), weights, rtol=1e-12)
+    huge = _build(wall, loads=[SelfWeight(), WeightProportional((1e300, 0.0, 1e300))])
+    np.testing.assert_allclose(huge.live, model.live, rtol=1e-12)
+
+
+def test_a_case_file_direction_whose_norm_underflows_is_accepted():
+    data = {
+        **SINGLE_BLOCK,
+        "loads": [
+            {"type": "self_weight"},
+            {"type": "weight_proportional", "direction": [1e-170, 0.0, 1e-170]},
+        ],
+    }
+    live = case_from_dict(data).model.live
+    np.testing.assert_allclose(live[0, 0], live[0, 2])
+    assert live[0, 0] > 0

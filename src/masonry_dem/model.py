@@ -222,9 +222,13 @@ class WeightProportional:
     def vector(self, blocks: Blocks) -> FloatArray:
         """(n, 6) generalised forces at the block centres."""
         d = as_finite_array("direction", self.direction, (3,))
+        largest = float(np.abs(d).max())
+        if largest == 0:
+            raise ValueError(f"direction must be a non-zero vector, got {plain(d.tolist())}")
         norm = np.linalg.norm(d)
-        if norm == 0:
-            raise ValueError("direction must be a non-zero vector, got (0, 0, 0)")
+        if not 1e-100 < norm < 1e100:  # its squares under- or overflow: scaled first
+            d = d / largest
+            norm = np.linalg.norm(d)
         out = np.zeros((blocks.count, 6))
         sel = (
             slice(None)

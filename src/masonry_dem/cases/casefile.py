@@ -224,6 +224,7 @@ def case_from_dict(data: dict[str, Any], source: str = "<dict>") -> Case:
     for k, spec in enumerate(data.get("loads", [{"type": "self_weight"}])):
         with _at(source, f"[loads][{k}]"):
             loads.append(_load(spec, blocks, wall, base, k))
+            loads[-1].vector(blocks)  # what it refuses is named here, not as a support
     analysis = dict(data.get("analysis", {}))
     control_spec = analysis.pop("control", None)
     monitor_spec = analysis.pop("monitor", None)
