@@ -77,3 +77,42 @@ def test_a_case_file_direction_whose_norm_underflows_is_accepted():
     live = case_from_dict(data).model.live
     np.testing.assert_allclose(live[0, 0], live[0, 2])
     assert live[0, 0] > 0
+
+
+def test_every_whole_number_of_the_case_files_has_a_range():
+    from typing import get_args
+
+    from masonry_dem.cases import schema
+    from masonry_dem.cases.casefile import _BUILDERS
+    from masonry_dem.solvers.incremental import StaticSettings
+
+    tables = [schema._analysis_table(StaticSettings)]
+    tables += [schema._geometry_table(name, func) for name, func in _BUILDERS.items()]
+    unbounded = []
+    for table in tables:
+        for key, info in table.model_fields.items():
+            kinds = [info.annotation, *get_args(info.annotation)]
+            if int not in kinds and not any(int in get_args(k) for k in kinds):
+                continue
+            checks = [m for m in info.metadata if hasattr(m, "func")]
+            checks += [m for k in kinds for m in getattr(k, "__metadata__", ())]
+            ranged = key in schema.RANGES or any(
+                "Range.check" in getattr(getattr(c, "func", None), "__qualname__", "")
+                for c in checks
+            )
+            if not ranged:
+                unbounded.append(f"{table.__name__}.{key}")
+    assert not unbounded
+
+
+def test_api_counts_have_the_case_files_ranges():
+    from masonry_dem import StaticSettings, u_wall
+
+    with pytest.raises(ValueError, match=r"return_blocks must be a whole number from 1 to 10000"):
+        u_wall(6, 3, 0.1, 0.25, 0.12, 18e3, return_blocks=100_000_000)
+    with pytest.raises(ValueError, match=r"max_cuts must be an integer from 0 to 1e8"):
+        StaticSettings(max_cuts=10**9)
+    from masonry_dem.solvers.limit_analysis.interface import lobatto_rule
+
+    with pytest.raises(ValueError, match=r"grid must be a whole number from 2 to 32"):
+        lobatto_rule(100_000)

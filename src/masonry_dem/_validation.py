@@ -136,9 +136,28 @@ def is_count(value: Any, least: int) -> bool:
     return isinstance(value, Integral) and not isinstance(value, bool) and int(value) >= least
 
 
-def count(default: int, least: int) -> int:
-    """A field that takes an integer >= ``least`` (a boolean or a float is refused)."""
-    return checked(default, lambda v: is_count(v, least), f"an integer >= {least}")
+#: the largest value of a count field (an iteration budget, a window, a number of steps):
+#: 10^8 iterations of the smallest wall take days, and a window or a history of that many
+#: entries would not fit in memory
+MOST_COUNT = 10**8
+#: the finest grid of contact points of the limit analysis (grid x grid points on each
+#: interface, each a column per friction direction): 8 is the non-associative default, and
+#: 100 000 asked for 74.5 GiB before anything named it
+GRID_MOST = 32
+
+
+def count(default: int, least: int, most: int = MOST_COUNT) -> int:
+    """A field that takes an integer from ``least`` to ``most`` (a boolean or a float is
+    refused)."""
+    return field(
+        default=default,
+        metadata={
+            "test": lambda v: is_count(v, least) and int(v) <= most,
+            "what": f"an integer from {least} to {most:.0e}".replace("e+0", "e"),
+            "least": least,
+            "most": most,
+        },
+    )
 
 
 def choice(default: T, allowed: tuple[str, ...]) -> T:

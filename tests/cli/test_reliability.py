@@ -48,3 +48,58 @@ def test_overwrite_never_reaches_through_a_linked_steps_folder(tmp_path):
     assert done.returncode == 0, done.stderr
     assert _vtus(other / "steps") == kept  # the other run's steps are whole
     assert not (out / "steps").is_symlink() and _vtus(out / "steps")
+
+
+U_WALL = {
+    "name": "u",
+    "geometry": {
+        "builder": "u_wall",
+        "blocks_along_length": 6,
+        "courses": 3,
+        "return_blocks": 4,
+        "block_height": 0.1,
+        "block_length": 0.25,
+        "thickness": 0.12,
+        "unit_weight": 18e3,
+        "base": True,
+    },
+    "material": {"kn": 2.4e9, "kt": 1e9, "friction": 0.7},
+    "supports": [{"select": "base"}],
+    "loads": [{"type": "self_weight"}, {"type": "weight_proportional", "direction": [0, 0, 1]}],
+}
+
+
+def _u_wall(tmp_path: Path, analysis: dict | None = None, **geometry: object) -> Path:
+    data = {**U_WALL, "geometry": {**U_WALL["geometry"], **geometry}}
+    if analysis:
+        data["analysis"] = analysis
+    return write_case(tmp_path, data)
+
+
+def _one_line(done: subprocess.CompletedProcess, *named: str) -> None:
+    assert done.returncode == 2, done.stderr
+    assert "Traceback" not in done.stderr and "unable to allocate" not in done.stderr
+    for word in named:
+        assert word in done.stderr, done.stderr
+
+
+def test_a_count_without_its_range_is_refused_before_anything_is_allocated(tmp_path):
+    case = _u_wall(tmp_path, return_blocks=100_000_000)
+    done = _cli("run", str(case), "--out", str(tmp_path / "out"), "--quiet", "--no-render")
+    _one_line(done, "return_blocks", "10000", "100000000")
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_plan_too_large_for_the_memory_is_refused_by_the_estimate(tmp_path):
+    case = _u_wall(tmp_path, blocks_along_length=10_000, courses=10_000, return_blocks=10_000)
+    done = _cli("run", str(case), "--out", str(tmp_path / "out"), "--quiet", "--no-render")
+    _one_line(done, "refused", "would need")
+
+
+def test_a_limit_analysis_grid_has_a_range(tmp_path):
+    case = _u_wall(tmp_path)
+    done = _cli("limit", str(case), "--grid", "100000", "--out", str(tmp_path / "a"))
+    _one_line(done, "grid", "100000", "32")
+    in_file = _u_wall(tmp_path, analysis={"method": "limit", "grid": 100_000})
+    done = _cli("run", str(in_file), "--out", str(tmp_path / "b"), "--quiet", "--no-render")
+    _one_line(done, "grid", "100000")

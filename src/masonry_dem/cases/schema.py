@@ -26,7 +26,7 @@ from typing import Annotated, Any
 from pydantic import AfterValidator, BaseModel, ConfigDict, ValidationError, create_model
 from pydantic_core import PydanticCustomError
 
-from masonry_dem._validation import plain
+from masonry_dem._validation import GRID_MOST, plain
 from masonry_dem.model import LAW_OPTIONS, InterfaceMaterial
 
 log = logging.getLogger(__name__)
@@ -184,6 +184,17 @@ RANGES: dict[str, Range] = {
     "block": Range(0, 10**9, "", "a block index, counted from 0", integer=True),
     "target": Range(-1e3, 1e3, "m or rad", "a displacement to reach; not 0"),
     "steps": Range(1, 10**6, "", "steps to the target", integer=True),
+    # plans (walls that meet)
+    "return_blocks": _COUNT,
+    "blocks_along_depth": _COUNT,
+    # [analysis] of the limit analysis
+    "grid": Range(
+        2,
+        GRID_MOST,
+        "",
+        "contact points along each side of an interface, grid x grid per interface",
+        integer=True,
+    ),
 }
 
 DOF_NAMES = ("u1", "u2", "u3", "w1", "w2", "w3")
@@ -401,7 +412,7 @@ ANALYSIS_EXTRA: dict[str, tuple[Any, Any]] = {
     # limit analysis instead of a pushover (``masonry-dem limit``): the method and its options
     "method": (_choice(("pushover", "limit")), "pushover"),
     "associative": (bool | None, None),
-    "grid": (int | None, None),
+    "grid": (_number("grid") | None, None),
     "backend": (_choice(("highs", "clarabel")) | None, None),
 }
 
@@ -420,7 +431,13 @@ def _analysis_table(settings_type: type) -> type[BaseModel]:
         pass
     spec: dict[str, Any] = {}
     for f in fields(settings_type):
-        kind = _choice(choices[f.name]) if f.name in choices else _by_annotation(f.name, f.type)
+        if f.name in choices:
+            kind = _choice(choices[f.name])
+        elif f.name not in RANGES and "most" in f.metadata:  # a count() field: its own range
+            rng = Range(f.metadata["least"], f.metadata["most"], "", "a count", integer=True)
+            kind = Annotated[int, AfterValidator(rng.check)]
+        else:
+            kind = _by_annotation(f.name, f.type)
         default = None if f.default is MISSING else f.default
         spec[f.name] = (kind | None if default is None and kind is not Any else kind, default)
     spec.update(ANALYSIS_EXTRA)

@@ -176,6 +176,10 @@ def parse_memory(text: str) -> float:
     return value
 
 
+#: the return (or cross) walls of the plans behind their facade (the box: its own count)
+_RETURNS = {"l_wall": 1, "u_wall": 2, "t_wall": 1, "box_wall": 0}
+
+
 def blocks_of_geometry(geometry: dict) -> int | None:
     """Blocks of a case file's ``[geometry]`` counted from the builder's parameters without
     building them (a wall of 10^6 blocks takes seconds to build), openings not subtracted;
@@ -204,6 +208,14 @@ def blocks_of_geometry(geometry: dict) -> int | None:
             return 1 + base
         if builder == "boxes":
             return len(geometry["lower"]) + base
+        if builder in _RETURNS:
+            # an upper bound: whole blocks along each run and a few cut pieces at its ends
+            n, courses = int(geometry["blocks_along_length"]), int(geometry["courses"])
+            if builder == "box_wall":
+                m = int(geometry.get("blocks_along_depth") or n)
+                return courses * (2 * (n + m) + 8) + base
+            m = int(geometry.get("return_blocks", 4))
+            return courses * (n + 3 + _RETURNS[builder] * (m + 2)) + base
     except (KeyError, TypeError, ValueError):
         return None
     return None
