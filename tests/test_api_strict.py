@@ -10,7 +10,15 @@ import pytest
 from helpers.case_files import SINGLE_BLOCK
 from masonry_dem.cases.casefile import case_from_dict
 from masonry_dem.geometry.builders import add_base, running_bond_wall
-from masonry_dem.model import InterfaceMaterial, Model, SelfWeight, Support, WeightProportional
+from masonry_dem.model import (
+    InterfaceMaterial,
+    Model,
+    PointLoad,
+    Pressure,
+    SelfWeight,
+    Support,
+    WeightProportional,
+)
 from masonry_dem.results import StepResult
 
 MAT = InterfaceMaterial(kn=2.4e9, kt=1.0e9, friction=0.7)
@@ -116,3 +124,70 @@ def test_api_counts_have_the_case_files_ranges():
 
     with pytest.raises(ValueError, match=r"grid must be a whole number from 2 to 32"):
         lobatto_rule(100_000)
+
+
+@pytest.mark.parametrize(
+    "load, field",
+    [
+        (lambda: SelfWeight(live="no"), "SelfWeight.live"),
+        (lambda: WeightProportional(live="false"), "WeightProportional.live"),
+        (lambda: Pressure("1000"), "pressure"),
+        (lambda: Pressure(1000.0, axis=2.0), "pressure axis"),
+        (lambda: Pressure(1000.0, sign=True), "pressure sign"),
+        (lambda: PointLoad([0], (1.0, 0.0, 0.0), live=1), "PointLoad.live"),
+    ],
+)
+def test_loads_refuse_what_the_case_files_refuse(load, field):
+    with pytest.raises(ValueError, match=rf"^{field} must be"):
+        load()
+
+
+def test_build_names_what_it_was_given_wrong(wall):
+    base = [Support([wall.count - 1])]
+    probes = {
+        "blocks must be a Blocks": lambda: Model.build(None, MAT, base),
+        "material must be an InterfaceMaterial": lambda: Model.build(
+            wall, {"kn": 1e9, "kt": 1e9, "friction": 0.6}, base
+        ),
+        r"supports\[0\] must be a Support": lambda: Model.build(wall, MAT, ["base"]),
+        r"loads\[1\] must be a": lambda: Model.build(wall, MAT, base, [SelfWeight(), "wind"]),
+        r"material_overrides\[0\] blocks: block index 999 is out of range": lambda: _build(
+            wall, material_overrides=[([999], MAT)]
+        ),
+        r"material_overrides\[0\] blocks: block index -1 is out of range": lambda: _build(
+            wall, material_overrides=[([-1], MAT)]
+        ),
+        r"material_overrides\[0\] must be a pair": lambda: _build(
+            wall, material_overrides=[[0, 1]]
+        ),
+    }
+    for message, probe in probes.items():
+        with pytest.raises(ValueError, match=message):
+            probe()
+
+
+def test_the_solvers_name_a_model_that_is_none_and_a_bound_that_is_no_number(wall, tmp_path):
+    import masonry_dem as md
+
+    with pytest.raises(ValueError, match="pushover: model must be a Model"):
+        md.pushover(wall)
+    with pytest.raises(ValueError, match="relax: model must be a Model"):
+        md.relax(wall)
+    with pytest.raises(ValueError, match="limit_analysis: model must be a Model"):
+        md.limit_analysis(wall)
+    model = _build(wall)
+    with pytest.raises(ValueError, match='bound must be a number.*"maybe"'):
+        md.pushover(model, bound="maybe")
+    for every in (0, -1, 1.5, True):
+        with pytest.raises(ValueError, match="write_every must be a whole number >= 1"):
+            md.pushover(model, out=tmp_path / "a", write_every=every)
+
+
+@pytest.mark.parametrize("out", ["", "   "])
+def test_an_empty_out_is_refused_and_nothing_is_written(wall, tmp_path, monkeypatch, out):
+    import masonry_dem as md
+
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(OSError, match="a results folder must be named by a path"):
+        md.pushover(_build(wall), out=out)
+    assert not list(tmp_path.iterdir())

@@ -43,7 +43,9 @@ def require_positive(name: str, arr: NDArray[np.float64], strict: bool = True) -
         raise ValueError(f"{name} must be {sign}, got {plain(value)}{where}")
 
 
-def positive_scalar(name: str, value: Any, strict: bool = True) -> float:
+def finite_scalar(name: str, value: Any) -> float:
+    """``value`` as a finite float (-0.0 made 0.0, see :func:`frozen`); a boolean, text or
+    an array is refused by name."""
     if isinstance(value, (bool, np.bool_)):  # True would be read as 1.0
         raise ValueError(f"{name} must be a number, got the boolean {plain(value)}")
     if isinstance(value, (str, bytes)):  # numpy reads "1e9" as 1e9, but the caller keeps text
@@ -51,8 +53,33 @@ def positive_scalar(name: str, value: Any, strict: bool = True) -> float:
     arr = as_finite_array(name, value)
     if arr.ndim != 0:
         raise ValueError(f"{name} must be a scalar, got shape {arr.shape}")
-    require_positive(name, arr, strict)
-    return float(arr) + 0.0  # -0.0 -> 0.0 (see frozen)
+    return float(arr) + 0.0
+
+
+def positive_scalar(name: str, value: Any, strict: bool = True) -> float:
+    number = finite_scalar(name, value)
+    require_positive(name, np.asarray(number), strict)
+    return number
+
+
+def boolean(name: str, value: Any) -> bool:
+    """``value`` as a boolean; text ("no", "false": both true in Python) and numbers are
+    refused as the case files refuse them."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise ValueError(
+            f"{name} must be true or false (a boolean, without quotes), got {plain(value)}"
+        )
+    return bool(value)
+
+
+def whole_number(name: str, value: Any, allowed: tuple[int, ...]) -> int:
+    """``value`` as one of the integers ``allowed`` (a float, a boolean or text is refused)."""
+    if not is_count(value, min(allowed)) or int(value) not in allowed:
+        raise ValueError(
+            f"{name} must be one of {', '.join(map(str, allowed))} (a whole number), "
+            f"got {plain(value)}"
+        )
+    return int(value)
 
 
 def frozen(value: Any, dtype: Any = None) -> NDArray[Any]:

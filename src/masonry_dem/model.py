@@ -19,10 +19,13 @@ from masonry_dem._arrays import BoolArray, FloatArray
 from masonry_dem._validation import (
     as_finite_array,
     block_indices,
+    boolean,
     check_choice,
+    finite_scalar,
     frozen,
     plain,
     positive_scalar,
+    whole_number,
 )
 from masonry_dem.constitutive.strength import PROJECTIONS
 from masonry_dem.geometry.blocks import Blocks
@@ -203,6 +206,9 @@ class SelfWeight:
 
     live: bool = False
 
+    def __post_init__(self) -> None:
+        boolean("SelfWeight.live", self.live)
+
     def vector(self, blocks: Blocks) -> FloatArray:
         """(n, 6) generalised forces at the block centres."""
         out = np.zeros((blocks.count, 6))
@@ -218,6 +224,9 @@ class WeightProportional:
     direction: Sequence[float] = (0.0, 0.0, 1.0)
     live: bool = True
     blocks: ArrayLike | None = None
+
+    def __post_init__(self) -> None:
+        boolean("WeightProportional.live", self.live)
 
     def vector(self, blocks: Blocks) -> FloatArray:
         """(n, 6) generalised forces at the block centres."""
@@ -250,13 +259,15 @@ class Pressure:
     live: bool = True
     blocks: ArrayLike | None = None
 
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "value", finite_scalar("pressure", self.value))
+        whole_number("pressure axis", self.axis, (0, 1, 2))
+        whole_number("pressure sign", self.sign, (-1, 1))
+        boolean("Pressure.live", self.live)
+
     def vector(self, blocks: Blocks) -> FloatArray:
         """(n, 6) generalised forces at the block centres."""
-        p = float(as_finite_array("pressure", self.value))
-        if self.axis not in (0, 1, 2):
-            raise ValueError(f"pressure axis must be 0, 1 or 2, got {plain(self.axis)}")
-        if self.sign not in (-1, 1):
-            raise ValueError(f"pressure sign must be +1 or -1, got {plain(self.sign)}")
+        p = self.value
         others = [k for k in range(3) if k != self.axis]
         area = blocks.sizes[:, others[0]] * blocks.sizes[:, others[1]]
         out = np.zeros((blocks.count, 6))
@@ -279,6 +290,9 @@ class PointLoad:
     offset: Sequence[float] = (0.0, 0.0, 0.0)
     live: bool = False
 
+    def __post_init__(self) -> None:
+        boolean("PointLoad.live", self.live)
+
     def vector(self, blocks: Blocks) -> FloatArray:
         """(n, 6) generalised forces at the block centres."""
         idx = block_indices("PointLoad.blocks", self.blocks, blocks.count)
@@ -299,6 +313,61 @@ LOAD_TYPES: dict[str, type[Load]] = {
     "pressure": Pressure,
     "point": PointLoad,
 }
+
+
+def _kind(value: object) -> str:
+    return f"{type(value).__name__} {plain(value)}"
+
+
+def _check_build(
+    blocks: object,
+    material: object,
+    supports: object,
+    loads: object,
+    interfaces: object,
+    overrides: object,
+) -> None:
+    """What :meth:`Model.build` is given, checked by name before anything uses it (the
+    attribute or index errors it would otherwise raise name none of it)."""
+    if not isinstance(blocks, Blocks):
+        raise ValueError(
+            f"Model.build: blocks must be a Blocks (from a builder such as running_bond_wall, "
+            f"or Blocks.from_boxes), got {_kind(blocks)}"
+        )
+    if not isinstance(material, InterfaceMaterial):
+        raise ValueError(
+            f"Model.build: material must be an InterfaceMaterial (a table of kn, kt, friction "
+            f"... is InterfaceMaterial(**table)), got {_kind(material)}"
+        )
+    if interfaces is not None and not isinstance(interfaces, Interfaces):
+        raise ValueError(
+            f"Model.build: interfaces must be an Interfaces (detect_interfaces(blocks)) or "
+            f"None, got {_kind(interfaces)}"
+        )
+    for name, items, kinds, hint in (
+        ("supports", supports, (Support,), "Support(select.base(blocks))"),
+        ("loads", loads, tuple(LOAD_TYPES.values()), "SelfWeight(), WeightProportional()"),
+    ):
+        if isinstance(items, (str, bytes)) or not isinstance(items, Sequence):
+            raise ValueError(f"Model.build: {name} must be a list, got {_kind(items)}")
+        for k, item in enumerate(items):
+            if not isinstance(item, kinds):
+                allowed = " or ".join(t.__name__ for t in kinds)
+                raise ValueError(
+                    f"Model.build: {name}[{k}] must be a {allowed} (e.g. {hint}), got {_kind(item)}"
+                )
+    if isinstance(overrides, (str, bytes)) or not isinstance(overrides, Sequence):
+        raise ValueError(f"Model.build: material_overrides must be a list, got {_kind(overrides)}")
+    for k, pair in enumerate(overrides):
+        if (
+            not isinstance(pair, Sequence)
+            or len(pair) != 2
+            or not isinstance(pair[1], InterfaceMaterial)
+        ):
+            raise ValueError(
+                f"Model.build: material_overrides[{k}] must be a pair (block indices, "
+                f"InterfaceMaterial), got {_kind(pair)}"
+            )
 
 
 # --------------------------------------------------------------------------- model
@@ -350,6 +419,7 @@ class Model:
         ``material_overrides`` assigns other materials to interfaces touching given blocks
         (e.g. the joint with a rigid base).
         """
+        _check_build(blocks, material, supports, loads, interfaces, material_overrides)
         n = blocks.count
         fixed = np.zeros((n, 6), dtype=bool)
         for sup in supports:
@@ -365,7 +435,8 @@ class Model:
             return np.array([mat.kn, mat.kt, mat.friction, mat.tensile_strength, alpha])
 
         props = np.tile(per_interface(material), (m, 1))
-        for blk, mat in material_overrides:
+        for k, (blk, mat) in enumerate(material_overrides):
+            blk = block_indices(f"material_overrides[{k}] blocks", blk, n)
             touch = np.isin(its.block_i, blk) | np.isin(its.block_j, blk)
             props[touch] = per_interface(mat)
         props[:, 4] = np.where(np.isnan(props[:, 4]), 1.5, props[:, 4])
@@ -505,3 +576,29 @@ class Model:
                 f"centroid); "
                 "the assembly is a mechanism: fix more DOFs"
             )
+
+
+def require_model(who: str, value: object) -> Model:
+    """``value`` if it is a built :class:`Model`, else a ValueError saying how to make one
+    (``who``: the function that was given it)."""
+    if not isinstance(value, Model):
+        raise ValueError(
+            f"{who}: model must be a Model (Model.build(blocks, material, supports, loads) or "
+            f"load_case(path).model), got {_kind(value)}"
+        )
+    return value
+
+
+def check_bound(bound: object) -> None:
+    """An upper bound of the collapse multiplier is a finite number, a function of the model
+    or None."""
+    if bound is None or callable(bound):
+        return
+    if isinstance(bound, (bool, np.bool_, str, bytes)) or not isinstance(
+        bound, (int, float, np.integer, np.floating)
+    ):
+        raise ValueError(
+            "bound must be a number (an upper bound of lambda), a function of the model or "
+            f"None, got {_kind(bound)}"
+        )
+    finite_scalar("bound", bound)

@@ -94,6 +94,17 @@ class ResultsFolderError(OSError):
     """A results folder that cannot be used or written: the message names the path and why."""
 
 
+def folder_path(folder: object) -> Path:
+    """``folder`` as the path of a results folder: an empty or blank name (which would be
+    the current directory) or something that is no path is refused."""
+    if not isinstance(folder, (str, os.PathLike)) or not str(folder).strip():
+        raise ResultsFolderError(
+            errno.EINVAL,
+            f"a results folder must be named by a path (e.g. results/wall), got {folder!r}",
+        )
+    return Path(folder)
+
+
 # ------------------------------------------------------------------------------ writing
 def _tmp_name(path: Path) -> Path:
     """A name beside ``path`` that no other process or thread uses (hidden, .tmp)."""
@@ -414,7 +425,7 @@ def claim(folder: Path | str, overwrite: bool, start: Mapping[str, Any]) -> RunF
 
     Raises :class:`ResultsFolderError` (an OSError) naming the folder: a file, not
     writable, in use by a live run, or holding another run without ``overwrite``."""
-    folder = Path(folder)
+    folder = folder_path(folder)
     _refuse_path(folder)
     fd = _lock(folder)
     try:

@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from masonry_dem._signals import interruption
+from masonry_dem._validation import is_count, plain
 from masonry_dem.export import results_folder as rf
 from masonry_dem.export.pvd import write_pvd
 from masonry_dem.export.vtu import write_mechanism_vtu, write_step_vtu
@@ -87,9 +88,11 @@ class ResultsWriter:
         overwrite: bool = True,
         start: dict[str, Any] | None = None,
     ) -> None:
-        self.folder = Path(folder)
+        self.folder = rf.folder_path(folder)
         self.model = model
-        self.every = max(1, int(every))
+        if not is_count(every, 1):
+            raise ValueError(f"write_every must be a whole number >= 1, got {plain(every)}")
+        self.every = int(every)
         self._start = {
             "name": model.name,
             "blocks": model.blocks.count,

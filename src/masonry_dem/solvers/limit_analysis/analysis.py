@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from masonry_dem.model import Model
+from masonry_dem.model import Model, require_model
 
 from .backends import solve_associative
 from .dem_domain import model_friction_scale
@@ -80,6 +80,7 @@ def limit_analysis(
     (bad arguments raise ValueError naming the argument).
     """
     t0 = time.perf_counter()
+    require_model("limit_analysis", model)
     if backend not in BACKENDS:
         raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
     if backend == "clarabel":
