@@ -103,3 +103,19 @@ def test_a_limit_analysis_grid_has_a_range(tmp_path):
     in_file = _u_wall(tmp_path, analysis={"method": "limit", "grid": 100_000})
     done = _cli("run", str(in_file), "--out", str(tmp_path / "b"), "--quiet", "--no-render")
     _one_line(done, "grid", "100000")
+
+
+def test_limit_with_no_live_load_is_an_answer_as_the_pushover_says(tmp_path):
+    data = {**SINGLE_BLOCK, "loads": [{"type": "self_weight"}]}
+    case = write_case(tmp_path, data)
+    limit = _cli("limit", str(case), "--out", str(tmp_path / "la"), "--no-render")
+    pushover = _cli("run", str(case), "--out", str(tmp_path / "po"), "--no-render", "--quiet")
+    assert limit.returncode == pushover.returncode == 0, limit.stdout + limit.stderr
+    assert "no live load" in limit.stdout and "no live load" in pushover.stdout
+    assert "-0" not in limit.stdout
+
+
+def test_a_caption_never_says_minus_zero():
+    from masonry_dem.export.render import caption
+
+    assert "lambda = 0 " in caption("wall", "step 3", -0.0, "completed", "x1")

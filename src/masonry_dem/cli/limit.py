@@ -100,4 +100,10 @@ def limit_command(args: argparse.Namespace) -> int:
     )
     print(f"{summary['status']}: {summary['reason']}")
     print(f"results in {out}/ (summary.json, mechanism_blocks.vtu, mechanism_interfaces.vtu)")
-    return 0 if summary["status"] == "collapse" else 1
+    return exit_code(summary["status"])
+
+
+def exit_code(status: str) -> int:
+    """0 for an answer (a collapse, or none possible: the pushover's ``completed``), 1 for a
+    limit analysis that failed."""
+    return 0 if status in ("collapse", "no collapse") else 1

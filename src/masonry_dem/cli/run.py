@@ -92,14 +92,14 @@ def run_command(args: argparse.Namespace) -> int:
         return 2
     out = Path(args.out)
     if case.method == "limit":  # [analysis] method = "limit"
-        from masonry_dem.cli.limit import run_limit
+        from masonry_dem.cli.limit import exit_code, run_limit
 
         summary = run_limit(
             case, out, dict(case.limit_options or {}), not args.no_render, args.overwrite
         )
         print(json.dumps({k: summary[k] for k in ("status", "lambda", "method", "bound")}))
         print(f"{summary['status']}: {summary['reason']}")
-        return 0 if summary["status"] == "collapse" else 1
+        return exit_code(summary["status"])
     summary = run_case(
         case,
         out,

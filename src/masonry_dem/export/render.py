@@ -109,7 +109,7 @@ def _save_and_close(scene: Scene, path: Path) -> None:
 def caption(name: str, what: str, lam: float | None, status: str | None, amplification: str) -> str:
     """The picture's title: the case, then what is drawn, lambda, the run's status and the
     displacement amplification."""
-    lam_txt = "n/a" if lam is None or not np.isfinite(lam) else f"{lam:.4g}"
+    lam_txt = "n/a" if lam is None or not np.isfinite(lam) else f"{lam + 0.0:.4g}"  # no "-0"
     parts = [what, f"lambda = {lam_txt}"]
     if status:
         parts.append(str(status))

@@ -122,7 +122,7 @@ def limit_analysis(
         kw.setdefault("interface_actions", np.zeros((m, 6)))
         out = LimitAnalysisResult(
             status,
-            lam if status == "collapse" else float("nan"),
+            lam + 0.0 if status == "collapse" else float("nan"),  # never "-0"
             reason,
             method=method,
             grid=grid,
@@ -139,7 +139,12 @@ def limit_analysis(
 
     problem = Problem.of(model)
     if not np.any(problem.live):
-        return result("failed", float("nan"), "no live load: there is no multiplier to find")
+        # the pushover's answer too (completed at the dead load): nothing pushes the wall
+        return result(
+            "no collapse",
+            float("nan"),
+            "no live load: nothing pushes the wall, there is no multiplier to find",
+        )
     if associative:
         sol, size = solve_associative(problem, grid, dirs)
         out = finish(problem, sol, size, result, iterations=1, load_factors=(sol.lam,))
