@@ -119,3 +119,30 @@ def test_a_caption_never_says_minus_zero():
     from masonry_dem.export.render import caption
 
     assert "lambda = 0 " in caption("wall", "step 3", -0.0, "completed", "x1")
+
+
+def test_a_killed_run_keeps_its_pushover_curve_row_by_row(tmp_path):
+    import numpy as np
+
+    from cli.test_faults import _pvd_files, _slow_case, _start, _wait_for_steps
+
+    out = tmp_path / "out"
+    proc = _start(_slow_case(tmp_path), out)
+    _wait_for_steps(proc, out, steps=8)
+    proc.kill()
+    proc.wait(timeout=60)
+    rows = np.loadtxt(out / "pushover.csv", delimiter=",", skiprows=1, ndmin=2)
+    written = len(_pvd_files(out / "blocks.pvd"))
+    assert rows.shape[0] >= written >= 8
+    np.testing.assert_array_equal(rows[:, 0], np.arange(rows.shape[0]))
+    assert np.isfinite(rows).all()
+    done = _cli("render", str(out), "--pushover", "--step", "last", "--size", "320x240")
+    assert done.returncode == 0, done.stderr
+    assert (out / "pushover.png").is_file()
+
+
+def test_a_row_cut_short_by_a_kill_is_left_out_of_the_curve(tmp_path):
+    from masonry_dem.export.results_series import read_pushover
+
+    (tmp_path / "pushover.csv").write_text("step,lambda,control_displacement\n0,0,0\n1,0.1,0.0")
+    assert read_pushover(tmp_path)["step"].tolist() == [0.0]

@@ -205,13 +205,35 @@ def write_pushover(folder: Path | str, steps, load_factors, control_displacement
     write_atomic(Path(folder) / PUSHOVER, lambda tmp: save_pushover_rows(tmp, rows))
 
 
+PUSHOVER_HEADER = "step,lambda,control_displacement"
+
+
+def append_pushover_row(folder: Path | str, step: int, load_factor: float, control: float) -> None:
+    """One row of ``pushover.csv`` as its step is handed over (the header with the first,
+    ``step`` 0), each in one ``write`` of a whole line to a file opened for appending: a run
+    killed outright leaves the curve up to its last whole row, which the readers take."""
+    path = Path(folder) / PUSHOVER
+    line = f"{int(step)},{float(load_factor):.10g},{float(control):.10g}\n"
+    flags = os.O_WRONLY | os.O_CREAT | (os.O_TRUNC if step == 0 else os.O_APPEND)
+    if step == 0:
+        line = PUSHOVER_HEADER + "\n" + line
+    try:
+        fd = os.open(path, flags, 0o644)
+        try:
+            os.write(fd, line.encode())
+        finally:
+            os.close(fd)
+    except OSError as exc:
+        raise _os_error(path, exc) from exc
+
+
 def save_pushover_rows(path: Path, rows: np.ndarray) -> None:
     """The one layout of ``pushover.csv``: rows of (step, lambda, control_displacement)."""
     np.savetxt(
         path,
         rows,
         delimiter=",",
-        header="step,lambda,control_displacement",
+        header=PUSHOVER_HEADER,
         comments="",
         fmt=["%d", "%.10g", "%.10g"],
     )

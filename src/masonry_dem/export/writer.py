@@ -118,6 +118,9 @@ class ResultsWriter:
         self._count += 1
         if not force:
             self._curve.append((step.step, step.load_factor, step.control_displacement))
+            rf.append_pushover_row(
+                self.folder, len(self._curve) - 1, step.load_factor, step.control_displacement
+            )
         if not force and (self._count - 1) % self.every:
             return
         if self._pool is None:
