@@ -146,3 +146,49 @@ def test_a_row_cut_short_by_a_kill_is_left_out_of_the_curve(tmp_path):
 
     (tmp_path / "pushover.csv").write_text("step,lambda,control_displacement\n0,0,0\n1,0.1,0.0")
     assert read_pushover(tmp_path)["step"].tolist() == [0.0]
+
+
+def test_sigterm_just_after_the_folder_is_claimed_is_recorded(tmp_path):
+    import json
+    import signal
+    import time
+
+    from cli.test_faults import _slow_case, _start
+
+    out = tmp_path / "out"
+    proc = _start(_slow_case(tmp_path), out)
+    deadline = time.monotonic() + 300
+    while not (out / "summary.json").exists():
+        assert proc.poll() is None and time.monotonic() < deadline, proc.communicate()
+        time.sleep(0.001)
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 143, err
+    assert "Traceback" not in err
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "interrupted" and "SIGTERM" in summary["reason"]
+
+
+def test_a_signal_held_back_while_the_folder_is_claimed_is_recorded(tmp_path, monkeypatch):
+    import json
+    import signal
+
+    import pytest
+
+    from masonry_dem._signals import raise_on_signals
+    from masonry_dem.export import results_folder as rf
+
+    written = rf.write_summary
+
+    def then_a_signal(folder, summary, extra=None):
+        data = written(folder, summary, extra)
+        if data["status"] == rf.RUNNING:
+            os.kill(os.getpid(), signal.SIGTERM)  # held back until the claim is done
+        return data
+
+    monkeypatch.setattr(rf, "write_summary", then_a_signal)
+    with raise_on_signals(), pytest.raises(KeyboardInterrupt):
+        rf.claim(tmp_path / "out", False, {"name": "wall"})
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert summary["status"] == "interrupted" and summary["name"] == "wall"
+    assert rf.state(tmp_path / "out").kind == "interrupted"

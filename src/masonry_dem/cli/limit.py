@@ -50,13 +50,17 @@ def run_limit(case, out: Path, options: dict, render: bool = True, overwrite: bo
     ``run`` does (refused if it holds another run, unless ``overwrite``); returns the
     summary."""
     from masonry_dem.export.limit_results import write_limit_results
-    from masonry_dem.export.results_folder import claim, write_summary
+    from masonry_dem.export.results_folder import claim, record_stopped, write_summary
     from masonry_dem.solvers.limit_analysis import limit_analysis
 
     folder = claim(out, overwrite, {"case": case.source, "analysis": "limit"})
     try:
         t0 = time.perf_counter()
-        result = limit_analysis(case.model, **options)
+        try:
+            result = limit_analysis(case.model, **options)
+        except BaseException as exc:  # a signal or an error: summary.json says so
+            record_stopped(out, exc)
+            raise
         summary = write_limit_results(
             out,
             case.model,

@@ -450,6 +450,7 @@ def claim(folder: Path | str, overwrite: bool, start: Mapping[str, Any]) -> RunF
     folder = folder_path(folder)
     _refuse_path(folder)
     fd = _lock(folder)
+    claimed = False
     try:
         previous = state(folder, _locked_here=True)
         # a Ctrl-C while the old run is removed would leave part of it and no summary:
@@ -476,8 +477,37 @@ def claim(folder: Path | str, overwrite: bool, start: Mapping[str, Any]) -> RunF
                 },
                 start,
             )
-    except BaseException:
+            claimed = True
+    except BaseException as exc:
+        if claimed:  # a signal held back while the folder was claimed: the run never started
+            record_stopped(folder, exc)
         if fd is not None:
             os.close(fd)
         raise
     return RunFolder(folder, fd)
+
+
+def record_stopped(folder: Path, exc: BaseException, done: int = 0, **extra: Any) -> dict:
+    """``summary.json`` of a run stopped by ``exc`` after ``done`` steps: ``interrupted``
+    (a signal, Ctrl-C) or ``failed``, over what it says already; ``extra``: more keys. A
+    failing disk is logged: the exception that stopped the run is the one to report."""
+    from masonry_dem._signals import interruption
+
+    signal = interruption(exc)
+    cause = signal or exc
+    why = (
+        (cause.strerror if isinstance(cause, OSError) else None)
+        or str(cause)
+        or type(cause).__name__
+    )
+    reason = (
+        f"{why} after {done} steps"
+        if signal is not None
+        else f"stopped by an error after {done} steps: {why}"
+    )
+    end = {"status": INTERRUPTED if signal is not None else "failed", "reason": reason, **extra}
+    try:
+        return write_summary(folder, {**read_summary(folder), **end})
+    except OSError as err:
+        log.warning("%s: the run's end is not recorded (%s)", folder, err)
+        return end

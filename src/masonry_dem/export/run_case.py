@@ -180,21 +180,26 @@ def run_case(
             check_stop()  # Ctrl-C or SIGTERM: stop here, between steps, all of them written
 
         lazy = LazyBound(enabled=bound)
-        solver = StaticSolver(case.model, case.settings, bound=lazy)
         done = threading.Event()
+        # from the claim on, a signal (or an error) while the solver is set up is recorded by
+        # the writer's exit as it is during the steps
+        with writer:
+            solver = StaticSolver(case.model, case.settings, bound=lazy)
 
-        def tick() -> None:
-            while not done.wait(TICK_SECONDS):
-                shown.tick(solver.iterations, solver.factorizations)
+            def tick() -> None:
+                while not done.wait(TICK_SECONDS):
+                    shown.tick(solver.iterations, solver.factorizations)
 
-        ticker = threading.Thread(target=tick, daemon=True)
-        with writer, shown, stop_on_signals():
-            ticker.start()
-            try:
-                history = solver.run(control=case.control, callback=on_step, monitor=case.monitor)
-            finally:
-                done.set()
-                ticker.join()
+            ticker = threading.Thread(target=tick, daemon=True)
+            with shown, stop_on_signals():
+                ticker.start()
+                try:
+                    history = solver.run(
+                        control=case.control, callback=on_step, monitor=case.monitor
+                    )
+                finally:
+                    done.set()
+                    ticker.join()
         with deferred_signals():  # pushover.csv, the mechanism and summary.json agree
             summary: dict[str, Any] = writer.finish(
                 history,

@@ -14,7 +14,6 @@ from typing import Any
 
 import numpy as np
 
-from masonry_dem._signals import interruption
 from masonry_dem._validation import is_count, plain
 from masonry_dem.export import results_folder as rf
 from masonry_dem.export.pvd import write_pvd
@@ -99,8 +98,6 @@ class ResultsWriter:
             "interfaces": model.interfaces.count,
             **(start or {}),
         }
-        self._run = rf.claim(self.folder, overwrite, self._start)
-        self._start = rf.read_summary(self.folder) or self._start
         self.block_files: list[str] = []
         self.interface_files: list[str] = []
         self.times: list[float] = []
@@ -108,8 +105,15 @@ class ResultsWriter:
         self._curve: list[tuple[int, float, float]] = []
         self._count = 0
         self._failed: BaseException | None = None
-        self._pool = ThreadPoolExecutor(1, "results-writer") if background else None
         self._pending: list[Future] = []
+        self._pool: ThreadPoolExecutor | None = None
+        self._run = rf.claim(self.folder, overwrite, self._start)
+        try:  # from here a signal or an error is recorded in summary.json (abort)
+            self._start = rf.read_summary(self.folder) or self._start
+            self._pool = ThreadPoolExecutor(1, "results-writer") if background else None
+        except BaseException as exc:
+            self.abort(exc)
+            raise
 
     def __call__(self, step: StepResult, force: bool = False) -> None:
         self._raise_failed()
@@ -244,35 +248,27 @@ class ResultsWriter:
         """Record a run stopped by ``exc``: pushover.csv of the steps handed over and
         summary.json ``interrupted`` (a signal) or ``failed``; then unlock the folder. A
         failing disk is logged: the exception that stopped the run is the one to report."""
-        signal = interruption(exc)
-        interrupted = signal is not None
-        exc = signal or exc
-        status = rf.INTERRUPTED if interrupted else "failed"
-        why = (exc.strerror if isinstance(exc, OSError) else None) or str(exc) or type(exc).__name__
-        reason = (
-            f"{why} after {len(self._curve)} steps"
-            if interrupted
-            else f"stopped by an error after {len(self._curve)} steps: {why}"
-        )
         try:
             if self._curve:
                 steps, lams, disp = (np.asarray(c) for c in zip(*self._curve, strict=True))
                 rf.write_pushover(self.folder, np.arange(steps.size), lams, disp)
-            self.write_summary(
-                {
-                    "status": status,
-                    "reason": reason,
-                    "steps": len(self._curve),
+        except OSError as err:
+            log.warning("%s: the run's curve is not rewritten (%s)", self.folder, err)
+        try:
+            end = rf.record_stopped(
+                self.folder,
+                exc,
+                len(self._curve),
+                steps=len(self._curve),
+                **{
                     "lambda": float(self._curve[-1][1]) if self._curve else 0.0,
                     "lambda_bracket": None,
                     "steps_written": len(self.steps_written),
-                }
+                },
             )
-        except OSError as err:
-            log.warning("%s: the run's end is not recorded (%s)", self.folder, err)
         finally:
             self.release()
-        log.info("%s: %s", self.folder, reason)  # the command line says it in its one line
+        log.info("%s: %s", self.folder, end["reason"])  # the command line says it in one line
 
     def release(self) -> None:
         """Unlock the folder (another run may then claim it)."""
