@@ -191,3 +191,16 @@ def test_an_empty_out_is_refused_and_nothing_is_written(wall, tmp_path, monkeypa
     with pytest.raises(OSError, match="a results folder must be named by a path"):
         md.pushover(_build(wall), out=out)
     assert not list(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize("courses", [800, 3000])
+def test_the_free_body_check_is_exact_whatever_the_size(courses):
+    from masonry_dem import stack_bond_column
+
+    blocks, base = add_base(stack_bond_column(courses, 0.2, 0.2, 0.2, 20e3))
+    model = Model.build(blocks, MAT, [Support([base])])
+    assert model.fixed[base].all()
+    with pytest.raises(ValueError, match=r"leave 3 rigid-body motion.*mechanism"):
+        Model.build(blocks, MAT, [Support([base], "translations")])
+    with pytest.raises(ValueError, match=r"leave 1 rigid-body motion.*mechanism"):
+        Model.build(blocks, MAT, [Support(np.arange(courses), "translations")])
