@@ -192,3 +192,60 @@ def test_a_signal_held_back_while_the_folder_is_claimed_is_recorded(tmp_path, mo
     summary = json.loads((tmp_path / "out" / "summary.json").read_text())
     assert summary["status"] == "interrupted" and summary["name"] == "wall"
     assert rf.state(tmp_path / "out").kind == "interrupted"
+
+
+def test_unreadable_case_files_are_named_with_their_cause(tmp_path):
+    text = write_case(tmp_path, SINGLE_BLOCK).read_text()
+    bom = tmp_path / "bom.toml"
+    bom.write_text("\ufeff" + text, encoding="utf-8")
+    deep = tmp_path / "deep.toml"
+    deep.write_text(text + "\nx = " + "[" * 5000 + "]" * 5000 + "\n")
+    long_key = tmp_path / "key.toml"
+    long_key.write_text(text.replace("[material]", "[material]\n" + "k" * 100_000 + " = 1"))
+
+    read = _cli("run", str(bom), "--out", str(tmp_path / "bom"), "--quiet", "--no-render")
+    assert read.returncode == 0, read.stderr  # a byte-order mark is no fault of the case
+    nested = _cli("run", str(deep), "--out", str(tmp_path / "deep"), "--quiet", "--no-render")
+    _one_line(nested, str(deep), "too deeply")
+    assert "recursion" not in nested.stderr
+    unknown = _cli("run", str(long_key), "--out", str(tmp_path / "k"), "--quiet", "--no-render")
+    _one_line(unknown, "unknown key", "100000 characters")
+    assert len(unknown.stderr) < 2000
+
+
+def test_a_negative_seed_names_its_flag(tmp_path):
+    case = write_case(tmp_path, SINGLE_BLOCK)
+    done = _cli(
+        "sweep",
+        str(case),
+        "--sample",
+        "material.friction=uniform(0.5,0.9)",
+        "--samples",
+        "2",
+        "--seed",
+        "-1",
+        "--out",
+        str(tmp_path / "sweep"),
+    )
+    _one_line(done, "--seed", "-1")
+
+
+def test_a_full_disk_under_render_names_the_picture(tmp_path, capsys, monkeypatch):
+    import errno
+
+    from masonry_dem.cli import main
+    from masonry_dem.export.scene import Scene
+
+    out = tmp_path / "out"
+    case = write_case(tmp_path, SINGLE_BLOCK)
+    assert main(["run", str(case), "--out", str(out), "--no-render", "--quiet"]) == 0
+
+    def full(self, path):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(Scene, "save", full)
+    capsys.readouterr()
+    assert main(["render", str(out), "--step", "last", "--size", "320x240"]) == 2
+    err = capsys.readouterr().err
+    assert "no space left on the device" in err and str(out / "render_") in err
+    assert not list(out.glob(".*.tmp*"))

@@ -494,9 +494,16 @@ def _path(loc: tuple) -> str:
             out += f"[{item}]"
             dotted = True
         else:
-            out += f".{item}" if out else str(item)
+            key = _short(str(item))
+            out += f".{key}" if out else key
             dotted = True
     return out
+
+
+def _short(key: str, most: int = 60) -> str:
+    """A key as it is shown in a message: a long one cut, with its length (a key of 10^5
+    characters was echoed whole)."""
+    return key if len(key) <= most else f"{key[: most - 3]}... ({len(key)} characters)"
 
 
 def _message(err: Mapping[str, Any], table: tuple, allowed: list[str]) -> str:
@@ -507,11 +514,12 @@ def _message(err: Mapping[str, Any], table: tuple, allowed: list[str]) -> str:
     if kind == "extra_forbidden":
         key = str(loc[-1])
         close = [a for a in allowed if a.lower() == key.lower()]
-        close = close or difflib.get_close_matches(key.lower(), allowed, n=1)
+        if len(key) <= 100:  # difflib is quadratic in the key's length
+            close = close or difflib.get_close_matches(key.lower(), allowed, n=1)
         top_table = not table and isinstance(value, (dict, list))  # a [table] of the file
         hint = f" (did you mean {f'[{close[0]}]' if top_table else close[0]}?)" if close else ""
         if top_table:
-            where = f"[{key}]"
+            where = f"[{_short(key)}]"
         return f"{where}: unknown key{hint}; allowed: {', '.join(sorted(allowed))}"
     if kind == "missing":
         return f"{where} is missing"

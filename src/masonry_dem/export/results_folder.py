@@ -122,7 +122,7 @@ def write_atomic(path: Path | str, write: Callable[[Path], Any]) -> Path:
         write(tmp)
         os.replace(tmp, path)
     except OSError as exc:
-        raise _os_error(path, exc) from exc
+        raise write_error(path, exc) from exc
     finally:
         with _quiet():
             tmp.unlink(missing_ok=True)
@@ -139,12 +139,12 @@ def replace_together(targets: Mapping[Path, Callable[[Path], Any]]) -> None:
             try:
                 write(tmps[path])
             except OSError as exc:
-                raise _os_error(path, exc) from exc
+                raise write_error(path, exc) from exc
         for path, tmp in tmps.items():
             try:
                 os.replace(tmp, path)
             except OSError as exc:
-                raise _os_error(path, exc) from exc
+                raise write_error(path, exc) from exc
     finally:
         for tmp in tmps.values():
             with _quiet():
@@ -159,7 +159,8 @@ def _quiet() -> Iterator[None]:
         pass
 
 
-def _os_error(path: Path, exc: OSError) -> ResultsFolderError:
+def write_error(path: Path, exc: OSError) -> ResultsFolderError:
+    """``exc`` (a failed write of ``path``) as one line naming the path and why."""
     if isinstance(exc, ResultsFolderError):
         return exc
     return ResultsFolderError(exc.errno or 0, f"cannot write {path}: {_why(exc)}")
@@ -224,7 +225,7 @@ def append_pushover_row(folder: Path | str, step: int, load_factor: float, contr
         finally:
             os.close(fd)
     except OSError as exc:
-        raise _os_error(path, exc) from exc
+        raise write_error(path, exc) from exc
 
 
 def save_pushover_rows(path: Path, rows: np.ndarray) -> None:
@@ -382,7 +383,7 @@ def _lock(folder: Path) -> int | None:
     try:
         fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
     except OSError as exc:
-        raise _os_error(path, exc) from exc
+        raise write_error(path, exc) from exc
     try:
         fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
     except OSError:
@@ -406,7 +407,7 @@ def remove_own_files(folder: Path) -> int:
                 try:
                     path.unlink()
                 except OSError as exc:
-                    raise _os_error(path, exc) from exc
+                    raise write_error(path, exc) from exc
                 removed += 1
     steps = folder / STEPS
     if steps.is_dir() and not steps.is_symlink() and not any(steps.iterdir()):
@@ -430,7 +431,7 @@ def _refuse_foreign_steps(folder: Path, overwrite: bool) -> None:
         try:
             steps.unlink()
         except OSError as exc:
-            raise _os_error(steps, exc) from exc
+            raise write_error(steps, exc) from exc
         log.info("removed the symbolic link %s", steps)
     elif steps.exists() and not steps.is_dir():
         raise ResultsFolderError(
