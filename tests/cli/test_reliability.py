@@ -249,3 +249,58 @@ def test_a_full_disk_under_render_names_the_picture(tmp_path, capsys, monkeypatc
     err = capsys.readouterr().err
     assert "no space left on the device" in err and str(out / "render_") in err
     assert not list(out.glob(".*.tmp*"))
+
+
+def test_the_memory_estimate_respects_the_process_limit(tmp_path):
+    import resource
+
+    data = {
+        **SINGLE_BLOCK,
+        "geometry": {
+            "builder": "running_bond_wall",
+            "blocks_along_length": 300,
+            "courses": 100,
+            "block_height": 0.1,
+            "block_length": 0.25,
+            "thickness": 0.12,
+            "unit_weight": 18e3,
+            "base": True,
+        },
+    }
+    case = write_case(tmp_path, data)
+    limit = 2_500_000_000
+
+    def address_space_limit() -> None:
+        resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
+
+    env = {**os.environ, "PYTHONPATH": str(ROOT / "src"), "NUMBA_NUM_THREADS": "1"}
+    done = subprocess.run(
+        [sys.executable, "-m", "masonry_dem.cli", "run", str(case), "--out", str(tmp_path / "o")]
+        + ["--quiet", "--no-render"],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=300,
+        preexec_fn=address_space_limit,
+    )
+    _one_line(done, "refused", "ulimit -v")
+    assert not (tmp_path / "o").exists()
+
+
+def test_pardiso_out_of_memory_is_no_property_of_the_wall():
+    import numpy as np
+    import pytest
+
+    from masonry_dem.cli import one_line
+    from masonry_dem.solvers import factorization
+
+    pytest.importorskip("pypardiso")
+    handle = factorization.PardisoHandle(np.array([0, 1, 2]), np.array([0, 1]), 2, 11, {})
+
+    def out_of_memory(*args):
+        handle._error.value = factorization.PARDISO_OUT_OF_MEMORY
+
+    handle.solver._mkl_pardiso = out_of_memory
+    with pytest.raises(MemoryError) as err:
+        handle.call(12)
+    assert one_line(err.value).startswith("out of memory")
