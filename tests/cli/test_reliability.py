@@ -304,3 +304,24 @@ def test_pardiso_out_of_memory_is_no_property_of_the_wall():
     with pytest.raises(MemoryError) as err:
         handle.call(12)
     assert one_line(err.value).startswith("out of memory")
+
+
+def test_a_live_load_that_cannot_drive_a_collapse_is_named_and_stops_early(tmp_path):
+    import json
+
+    loads = {
+        "down": {"type": "pressure", "value": 1000.0, "axis": 1, "sign": -1},
+        "tilted": {"type": "weight_proportional", "direction": [1e-12, -1.0, 0.0]},
+    }
+    for name, live in loads.items():
+        data = {**SINGLE_BLOCK, "loads": [{"type": "self_weight"}, live]}
+        folder = tmp_path / name
+        folder.mkdir()
+        out = folder / "out"
+        done = _cli("run", str(write_case(folder, data)), "--out", str(out), "--no-render")
+        assert done.returncode == 0, done.stderr
+        assert "cannot drive a collapse" in done.stderr
+        summary = json.loads((out / "summary.json").read_text())
+        assert summary["status"] == "completed" and summary["lambda"] is None
+        assert "cannot drive a collapse" in summary["reason"]
+        assert len(list((out / "steps").glob("*.vtu"))) == 2  # the dead-load state
