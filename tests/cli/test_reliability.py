@@ -325,3 +325,45 @@ def test_a_live_load_that_cannot_drive_a_collapse_is_named_and_stops_early(tmp_p
         assert summary["status"] == "completed" and summary["lambda"] is None
         assert "cannot drive a collapse" in summary["reason"]
         assert len(list((out / "steps").glob("*.vtu"))) == 2  # the dead-load state
+
+
+def test_sigterm_stops_a_limit_analysis_inside_its_solver(tmp_path):
+    import json
+    import signal
+    import time
+
+    data = {
+        **SINGLE_BLOCK,
+        "geometry": {
+            "builder": "running_bond_wall",
+            "blocks_along_length": 40,
+            "courses": 40,
+            "block_height": 0.1,
+            "block_length": 0.25,
+            "thickness": 0.12,
+            "unit_weight": 18e3,
+            "base": True,
+        },
+    }
+    case, out = write_case(tmp_path, data), tmp_path / "out"
+    env = {**os.environ, "PYTHONPATH": str(ROOT / "src"), "NUMBA_NUM_THREADS": "1"}
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "masonry_dem.cli", "limit", str(case), "--out", str(out)]
+        + ["--non-associative", "--no-render"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+    )
+    try:
+        while not (out / "summary.json").exists():
+            assert proc.poll() is None, proc.communicate()
+            time.sleep(0.01)
+        time.sleep(2)  # inside the solver's first solves (minutes in all)
+        proc.send_signal(signal.SIGTERM)
+        _, err = proc.communicate(timeout=60)  # it ignored the signal for minutes
+    finally:
+        proc.kill()
+    assert proc.returncode == 143, err
+    assert err.strip() == "masonry-dem: interrupted by SIGTERM"
+    assert json.loads((out / "summary.json").read_text())["status"] == "interrupted"

@@ -49,6 +49,7 @@ def run_limit(case, out: Path, options: dict, render: bool = True, overwrite: bo
     """Run the limit analysis of a loaded case into ``out``, a folder this run claims as
     ``run`` does (refused if it holds another run, unless ``overwrite``); returns the
     summary."""
+    from masonry_dem._signals import run_interruptible
     from masonry_dem.export.limit_results import write_limit_results
     from masonry_dem.export.results_folder import claim, record_stopped, write_summary
     from masonry_dem.solvers.limit_analysis import limit_analysis
@@ -57,7 +58,7 @@ def run_limit(case, out: Path, options: dict, render: bool = True, overwrite: bo
     try:
         t0 = time.perf_counter()
         try:
-            result = limit_analysis(case.model, **options)
+            result = run_interruptible(lambda: limit_analysis(case.model, **options))
         except BaseException as exc:  # a signal or an error: summary.json says so
             record_stopped(out, exc)
             raise

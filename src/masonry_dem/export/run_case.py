@@ -188,7 +188,13 @@ def run_case(
     checks lambda against the associative limit-analysis bound, computed then and only then
     (:class:`LazyBound`). ``render``: PNGs of the last step and of the collapse mechanism,
     named in the summary."""
-    from masonry_dem._signals import check_stop, deferred_signals, stop_on_signals
+    from masonry_dem._signals import (
+        Interrupted,
+        check_stop,
+        deferred_signals,
+        run_interruptible,
+        stop_on_signals,
+    )
     from masonry_dem.export.results_folder import MECHANISM_FILES
     from masonry_dem.export.writer import ResultsWriter
     from masonry_dem.solvers.incremental import StaticSolver
@@ -214,9 +220,16 @@ def run_case(
         out, case.model, background=True, overwrite=overwrite, start={"case": case.source}
     )
     try:
+        # the solver runs in a worker thread (run_interruptible), so that a second signal
+        # stops the run at once even inside a long factorization; once the main thread has
+        # stopped it, the worker hands no more steps to the writer
+        handing, abandoned = threading.Lock(), threading.Event()
 
         def on_step(step: StepResult) -> None:
-            writer(step)
+            with handing:
+                if abandoned.is_set():
+                    raise Interrupted()
+                writer(step)
             shown.step(step)
             check_stop()  # Ctrl-C or SIGTERM: stop here, between steps, all of them written
 
@@ -234,9 +247,15 @@ def run_case(
             with shown, stop_on_signals():
                 ticker.start()
                 try:
-                    history = solver.run(
-                        control=case.control, callback=on_step, monitor=case.monitor
+                    history = run_interruptible(
+                        lambda: solver.run(
+                            control=case.control, callback=on_step, monitor=case.monitor
+                        )
                     )
+                except BaseException:
+                    with handing:
+                        abandoned.set()
+                    raise
                 finally:
                     done.set()
                     ticker.join()
