@@ -46,12 +46,13 @@ class Interrupted(KeyboardInterrupt):
 
 def interruption(exc: BaseException | None) -> KeyboardInterrupt | None:
     """The Ctrl-C or signal behind ``exc``: itself, or the cause of the SystemErrors a compiled
-    kernel's call wraps an exception raised inside it in (several, one per nested call)."""
+    kernel's call wraps an exception raised inside it in (several, one per nested call), or
+    of the ImportError an extension's loader makes of it (VTK: "Failed to load ...")."""
     seen = 0
     while exc is not None and seen < 100:
         if isinstance(exc, KeyboardInterrupt):
             return exc
-        if not isinstance(exc, SystemError):
+        if not isinstance(exc, (SystemError, ImportError)):
             return None
         exc, seen = exc.__cause__ or exc.__context__, seen + 1
     return None

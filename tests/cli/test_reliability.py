@@ -367,3 +367,21 @@ def test_sigterm_stops_a_limit_analysis_inside_its_solver(tmp_path):
     assert proc.returncode == 143, err
     assert err.strip() == "masonry-dem: interrupted by SIGTERM"
     assert json.loads((out / "summary.json").read_text())["status"] == "interrupted"
+
+
+def test_a_signal_that_breaks_an_import_is_an_interruption(monkeypatch, capsys):
+    import signal
+
+    import masonry_dem.cli.render as render_cli
+    from masonry_dem._signals import Interrupted
+    from masonry_dem.cli import main
+
+    def vtk_loading(args):
+        try:
+            raise Interrupted(signal.SIGINT)
+        except Interrupted as exc:  # what VTK's loader makes of a Ctrl-C
+            raise ImportError("Failed to load vtkCommonMath") from exc
+
+    monkeypatch.setattr(render_cli, "run", vtk_loading)
+    assert main(["render", "anywhere"]) == 130
+    assert capsys.readouterr().err.strip() == "masonry-dem: interrupted by SIGINT"
