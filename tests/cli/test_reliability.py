@@ -76,6 +76,18 @@ def _u_wall(tmp_path: Path, analysis: dict | None = None, **geometry: object) ->
     return write_case(tmp_path, data)
 
 
+def _running_bond(tmp_path: Path, length: int, courses: int) -> Path:
+    """A running-bond wall of ``length`` x ``courses`` blocks on a base, pushed out of plane."""
+    geometry = {
+        **U_WALL["geometry"],
+        "builder": "running_bond_wall",
+        "blocks_along_length": length,
+        "courses": courses,
+    }
+    del geometry["return_blocks"]
+    return write_case(tmp_path, {**U_WALL, "geometry": geometry})
+
+
 def _one_line(done: subprocess.CompletedProcess, *named: str) -> None:
     assert done.returncode == 2, done.stderr
     assert "Traceback" not in done.stderr and "unable to allocate" not in done.stderr
@@ -254,20 +266,7 @@ def test_a_full_disk_under_render_names_the_picture(tmp_path, capsys, monkeypatc
 def test_the_memory_estimate_respects_the_process_limit(tmp_path):
     import resource
 
-    data = {
-        **SINGLE_BLOCK,
-        "geometry": {
-            "builder": "running_bond_wall",
-            "blocks_along_length": 300,
-            "courses": 100,
-            "block_height": 0.1,
-            "block_length": 0.25,
-            "thickness": 0.12,
-            "unit_weight": 18e3,
-            "base": True,
-        },
-    }
-    case = write_case(tmp_path, data)
+    case = _running_bond(tmp_path, 300, 100)
     limit = 2_500_000_000
 
     def address_space_limit() -> None:
@@ -332,20 +331,7 @@ def test_sigterm_stops_a_limit_analysis_inside_its_solver(tmp_path):
     import signal
     import time
 
-    data = {
-        **SINGLE_BLOCK,
-        "geometry": {
-            "builder": "running_bond_wall",
-            "blocks_along_length": 40,
-            "courses": 40,
-            "block_height": 0.1,
-            "block_length": 0.25,
-            "thickness": 0.12,
-            "unit_weight": 18e3,
-            "base": True,
-        },
-    }
-    case, out = write_case(tmp_path, data), tmp_path / "out"
+    case, out = _running_bond(tmp_path, 40, 40), tmp_path / "out"
     env = {**os.environ, "PYTHONPATH": str(ROOT / "src"), "NUMBA_NUM_THREADS": "1"}
     proc = subprocess.Popen(
         [sys.executable, "-m", "masonry_dem.cli", "limit", str(case), "--out", str(out)]
