@@ -204,3 +204,58 @@ def test_the_free_body_check_is_exact_whatever_the_size(courses):
         Model.build(blocks, MAT, [Support([base], "translations")])
     with pytest.raises(ValueError, match=r"leave 1 rigid-body motion.*mechanism"):
         Model.build(blocks, MAT, [Support(np.arange(courses), "translations")])
+
+
+# ------------------------------------------------------------------ fuzzing of the API calls
+def _anything():
+    from hypothesis import strategies as st
+
+    return st.one_of(
+        st.none(),
+        st.booleans(),
+        st.integers(-(10**12), 10**12),
+        st.floats(allow_nan=True, allow_infinity=True),
+        st.text(max_size=8),
+        st.lists(st.floats(-10, 10), max_size=4),
+        st.dictionaries(st.text(max_size=3), st.integers(), max_size=2),
+    )
+
+
+def test_api_calls_given_anything_build_or_name_what_is_wrong(wall):
+    """Hypothesis gives the loads, the material and Model.build values of any type; each call
+    builds, or raises a ValueError (never an AttributeError, IndexError or TypeError from
+    inside the package)."""
+    from hypothesis import HealthCheck, given, settings
+    from hypothesis import strategies as st
+
+    calls = st.one_of(
+        st.builds(lambda v: lambda: SelfWeight(live=v), _anything()),
+        st.builds(lambda v: lambda: WeightProportional(live=v), _anything()),
+        st.builds(lambda v: lambda: WeightProportional(v).vector(wall), _anything()),
+        st.builds(lambda v, a: lambda: Pressure(v, axis=a).vector(wall), _anything(), _anything()),
+        st.builds(lambda v: lambda: Pressure(1.0, sign=v), _anything()),
+        st.builds(
+            lambda kn, mu: lambda: InterfaceMaterial(kn=kn, kt=1e9, friction=mu),
+            _anything(),
+            _anything(),
+        ),
+        st.builds(lambda b: lambda: Model.build(b, MAT, [Support([0])]), _anything()),
+        st.builds(lambda m: lambda: Model.build(wall, m, [Support([0])]), _anything()),
+        st.builds(lambda s: lambda: Model.build(wall, MAT, s), _anything()),
+        st.builds(lambda o: lambda: _build(wall, material_overrides=[(o, MAT)]), _anything()),
+    )
+
+    @settings(
+        max_examples=300,
+        derandomize=True,
+        deadline=None,
+        suppress_health_check=[HealthCheck.too_slow],
+    )
+    @given(calls)
+    def check(call):
+        try:
+            call()
+        except ValueError:
+            pass
+
+    check()
