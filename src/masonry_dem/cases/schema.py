@@ -16,6 +16,7 @@ function's annotations; ``[analysis]`` holds the fields of ``StaticSettings`` pl
 from __future__ import annotations
 
 import difflib
+import functools
 import inspect
 import logging
 import math
@@ -417,6 +418,7 @@ ANALYSIS_EXTRA: dict[str, tuple[Any, Any]] = {
 }
 
 
+@functools.cache  # a pydantic model takes milliseconds to make: once per settings type
 def _analysis_table(settings_type: type) -> type[BaseModel]:
     """The ``[analysis]`` table: every field of ``settings_type`` (StaticSettings), typed by
     :data:`RANGES` or its annotation, string options by the solver's own constants."""
@@ -444,6 +446,7 @@ def _analysis_table(settings_type: type) -> type[BaseModel]:
     return _table("Analysis", spec)
 
 
+@functools.cache  # once per builder: a sweep checks a case per point
 def _geometry_table(builder: str, func: Callable) -> type[BaseModel]:
     spec: dict[str, Any] = {
         "builder": str,
