@@ -371,3 +371,38 @@ def test_a_signal_that_breaks_an_import_is_an_interruption(monkeypatch, capsys):
     monkeypatch.setattr(render_cli, "run", vtk_loading)
     assert main(["render", "anywhere"]) == 130
     assert capsys.readouterr().err.strip() == "masonry-dem: interrupted by SIGINT"
+
+
+def test_a_signal_at_any_moment_leaves_a_folder_that_says_how_the_run_ended(tmp_path):
+    """Hypothesis picks the signal and the moment (from the interpreter's start to the run's
+    steps); whatever the moment, the process ends by the signal or with 0, one line at most,
+    and a folder it claimed never says ``running``."""
+    import itertools
+    import json
+    import signal
+    import time
+
+    from hypothesis import given, settings
+    from hypothesis import strategies as st
+
+    from cli.test_faults import _slow_case, _start
+
+    case = _slow_case(tmp_path)
+    runs = itertools.count()
+
+    @settings(max_examples=8, derandomize=True, deadline=None)
+    @given(st.sampled_from([signal.SIGINT, signal.SIGTERM]), st.floats(0.0, 3.0))
+    def check(signum, delay):
+        out = tmp_path / f"out{next(runs)}"
+        proc = _start(case, out)
+        time.sleep(delay)
+        proc.send_signal(signum)
+        _, err = proc.communicate(timeout=120)
+        assert proc.returncode in (0, -signum, 128 + signum), err
+        if proc.returncode != -signum:  # before the handlers, the signal's default action
+            assert "Traceback" not in err and len(err.strip().splitlines()) <= 2, err
+        if (out / "summary.json").exists():
+            status = json.loads((out / "summary.json").read_text())["status"]
+            assert status != "running"
+
+    check()
