@@ -19,6 +19,7 @@ from pathlib import Path
 import matplotlib
 
 matplotlib.use("Agg")
+matplotlib.rcParams["axes.formatter.useoffset"] = False  # every tick its own value
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 

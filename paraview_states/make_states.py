@@ -43,6 +43,9 @@ import tempfile
 from pathlib import Path
 
 PLACEHOLDER = "/path/to/your/results"
+#: the title's first line in the shipped states: the case's name replaces it (frame_wall.py when
+#: the state frames itself, copy_state when it copies one)
+CASE_PLACEHOLDER = "masonry_dem: the case's name is read from summary.json"  # = paraview_state's
 STATES = ("damage_map", "deformed_shape", "force_view", "mechanism")
 #: width of the ramp before each bin edge of the mechanism lookup table (a colour transfer
 #: function cannot hold two colours at one value): joint_motion >= edge gets the upper colour
@@ -142,18 +145,43 @@ def _build(data: str, outdir: str, colours_json: str) -> None:  # pragma: no cov
         bar.ScalarBarLength = 0.3
         return bar
 
-    def annotate(view, text, time=False):
-        if time:
-            src = pvs.AnnotateTime(registrationName="lambda")
-            src.Format = "lambda (or step) = {time:.4g}"
-        else:
-            src = pvs.Text(registrationName="title: " + text[:20])
-            src.Text = text
+    def annotate(view, text):
+        """The title: the case's name (its first line, filled in from summary.json by
+        frame_wall.py and by copy_state) over what the state shows."""
+        src = pvs.Text(registrationName="title: " + text[:20])
+        src.Text = f"{spec['case_placeholder']}\n{text}"
         d = pvs.Show(src, view)
-        d.WindowLocation = "Lower Left Corner" if time else "Upper Left Corner"
+        d.WindowLocation = "Upper Left Corner"
         d.Color = [0.0, 0.0, 0.0]
         d.FontSize = 12
         return d
+
+    def step_labels(source, view, prefix=""):
+        """lambda and the step as two named quantities (the files' field data): the PVD's
+        time is lambda only while lambda rises, the step number after."""
+        for array, label, fmt, where in (
+            ("lambda", "lambda = ", "%.4g", "Lower Left Corner"),
+            ("step", "step ", "%d", "Lower Right Corner"),
+        ):
+            src = pvs.AnnotateGlobalData(registrationName=prefix + array, Input=source)
+            src.SelectArrays = array
+            src.Prefix = label
+            src.Format = fmt
+            d = pvs.Show(src, view)
+            d.WindowLocation = where
+            d.Color = [0.0, 0.0, 0.0]
+            d.FontSize = 12
+
+    def length_scale(view):
+        """Axes with ticks in metres along the wall: the picture's length scale."""
+        grid = view.AxesGrid
+        grid.Visibility = 1
+        grid.AxesToLabel = 1 | 2  # the left and the bottom edge: the title keeps the top
+        grid.XTitle, grid.YTitle, grid.ZTitle = "e1 [m]", "e2 [m]", "e3 [m]"
+        for axis in ("X", "Y", "Z"):
+            setattr(grid, f"{axis}TitleColor", [0.0, 0.0, 0.0])
+            setattr(grid, f"{axis}LabelColor", [0.0, 0.0, 0.0])
+        grid.GridColor = [0.3, 0.3, 0.3]
 
     def readers():
         blocks = pvs.PVDReader(registrationName="blocks.pvd", FileName=f"{data}/blocks.pvd")
@@ -205,8 +233,9 @@ def _build(data: str, outdir: str, colours_json: str) -> None:  # pragma: no cov
     lut = state_lut()
     lines_display(interfaces, view, "state", lut)
     scalar_bar(lut, view, "interface state")
-    annotate(view, "masonry_dem damage map: interface states")
-    annotate(view, "", time=True)
+    annotate(view, "damage map: interface states")
+    step_labels(blocks, view)
+    length_scale(view)
     front(view)
     time_aware()
     save("damage_map.pvsm")
@@ -222,8 +251,8 @@ def _build(data: str, outdir: str, colours_json: str) -> None:  # pragma: no cov
     lut = state_lut()
     lines_display(wi, view, "state", lut, width=3.0)
     scalar_bar(lut, view, "interface state")
-    annotate(view, "masonry_dem deformed shape (Warp By Vector: displacement)")
-    annotate(view, "", time=True)
+    annotate(view, "deformed shape (Warp By Vector: displacement)")
+    step_labels(blocks, view)
     oblique(view)
     time_aware()
     save("deformed_shape.pvsm")
@@ -254,8 +283,8 @@ def _build(data: str, outdir: str, colours_json: str) -> None:  # pragma: no cov
         else:
             lut.AutomaticRescaleRangeMode = "Grow and update every timestep"
         scalar_bar(lut, view, title)
-        annotate(view, f"masonry_dem interface {title}")
-        annotate(view, "", time=True)
+        annotate(view, f"interface {title}")
+        step_labels(blocks, view, prefix=f"{array}: ")
         front(view)
     pvs.AddCameraLink(left, right, "forces camera")
     time_aware()
@@ -298,7 +327,8 @@ def _build(data: str, outdir: str, colours_json: str) -> None:  # pragma: no cov
     bar.UseCustomLabels = 1
     bar.CustomLabels = list(spec["mechanism_bins"])
     bar.AddRangeLabels = 1
-    annotate(view, "masonry_dem collapse mechanism: joints by relative motion in the mode")
+    annotate(view, "collapse mechanism: joints by relative motion in the mode")
+    step_labels(mblocks, view)
     oblique(view)
     save("mechanism.pvsm")
 
@@ -407,6 +437,7 @@ def main() -> int:
                 "mechanism_colours": [list(c) for c in MECHANISM_COLOURS],
                 "mechanism_scale": mechanism_scale,
                 "frame_script": frame_script(),
+                "case_placeholder": CASE_PLACEHOLDER,
             }
         )
         proc = subprocess.run(

@@ -15,7 +15,7 @@ from numpy.typing import NDArray
 from masonry_dem._arrays import FloatArray
 from masonry_dem._validation import read_only
 from masonry_dem.constitutive.states import STATE_NAMES as STATE_NAMES
-from masonry_dem.export.results_folder import save_pushover_rows
+from masonry_dem.export.results_folder import recorded_dof_of, save_pushover_rows
 from masonry_dem.solvers.static.outcome import Status, StopReason
 
 if TYPE_CHECKING:
@@ -139,10 +139,9 @@ class History:
 
 def write_pushover_csv(path: Path, history: History) -> None:
     """pushover.csv: step, lambda and the control displacement of every step."""
-    rows = np.column_stack(
-        [np.arange(len(history.steps)), history.load_factors, history.control_displacements]
-    )
-    save_pushover_rows(path, rows)
+    displacements = history.control_displacements
+    rows = np.column_stack([np.arange(len(history.steps)), history.load_factors, displacements])
+    save_pushover_rows(path, rows, recorded_dof_of(history.steps, displacements))
 
 
 def read_summary(folder: Path) -> dict[str, Any]:

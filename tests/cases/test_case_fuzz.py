@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import pytest
 import tomli_w
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
@@ -141,6 +142,7 @@ def _finite(node: Any) -> bool:
     return True
 
 
+@pytest.mark.slow
 @settings(
     max_examples=120,  # ~15 s here; 300 passed too (32 s)
     derandomize=True,  # a fixed seed: the same examples in CI every time

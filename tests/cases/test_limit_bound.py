@@ -15,6 +15,7 @@ from masonry_dem.cases.paper import case_names
 from masonry_dem.solvers.limit_analysis import dem_upper_bound, limit_analysis
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", case_names())
 def test_associative_multiplier_is_never_below_the_pushover(name):
     case, history = run_case(name)

@@ -193,6 +193,7 @@ def test_every_lintel_bears_on_both_piers(name, changes):
         assert blocks.lower[i, 0] < x0 - 1e-9 and blocks.upper[i, 0] > x1 + 1e-9
 
 
+@pytest.mark.slow
 def test_a_stuck_path_is_checked_before_it_is_called_a_collapse():
     """S34 with 10-course windows: Newton and the pseudo-transient step both stop at lambda
     0.040, below the overturning of the whole wall as one free-standing block (s/H = 0.067),

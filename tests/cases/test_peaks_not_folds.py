@@ -15,6 +15,7 @@ its first time step where the path had already moved that far: S11, S12, 10-11).
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from masonry_dem.cases.paper import build_case
 from masonry_dem.solvers.limit_analysis.analysis import dem_upper_bound
@@ -41,6 +42,7 @@ def _relax_above(solver: StaticSolver, peak: float, budget: int):
     return polished, solver.time_steps - before
 
 
+@pytest.mark.slow
 def test_a_certified_collapse_of_s15_has_no_equilibrium_1_percent_above_it():
     """S15 (Table 2, columns): certified at 0.2736 under its bound 0.547; the relaxation to
     1.01 x that leaves the small-displacement range (a mechanism forms) after about 4 000 of
@@ -69,6 +71,7 @@ def test_a_certified_collapse_of_s12_has_no_equilibrium_1_percent_above_it():
     assert polished is None, "an equilibrium 1 % above a certified collapse: a fold"
 
 
+@pytest.mark.slow
 def test_a_certified_collapse_of_s13_with_2_block_returns_has_no_equilibrium_above_it():
     """B = 100 000 time steps, Newton tried from the relaxation's states on the way. On
     d01d26a (the corner check off) the path certified its first fold, 0.0855, and this check

@@ -1,5 +1,5 @@
 """The Restrepo Velez walls with 2-block return walls, where dynamic relaxation and the static
-solver disagreed (docs/walls_that_meet.md, "The 2-block rows against dynamic relaxation").
+solver disagreed (docs/history/walls_that_meet_record.md, "The 2-block rows against dynamic relaxation").
 
 * S11 with 2-block returns: dynamic relaxation (tolerance 1e-3) ended at lambda 0.005, its
   first load step, though the static path holds equilibria (residual 1e-8) up to 0.078. The

@@ -106,6 +106,7 @@ def test_signal_mid_run_ends_interrupted_with_every_step(tmp_path, signum, code)
     assert rf.state(out).kind == "interrupted"
 
 
+@pytest.mark.slow
 def test_sigkill_leaves_a_folder_the_next_commands_name_unfinished(tmp_path, caplog, capsys):
     out = tmp_path / "out"
     case = _slow_case(tmp_path)
@@ -166,6 +167,12 @@ def test_a_folder_in_use_is_refused(tmp_path, capsys):
     finally:
         held.release()
     assert rf.state(out).kind == "unfinished"  # summary 'running', nobody holds the lock
+    assert not (out / rf.LOCK).exists()  # released: no empty lock file left behind
+    again = rf.claim(out, overwrite=True, start={"name": "third"})
+    try:
+        assert rf.state(out).kind == "running"
+    finally:
+        again.release()
 
 
 def test_out_naming_a_file_is_one_line(tmp_path, capsys):

@@ -90,3 +90,18 @@ def test_limit_command_claims_its_folder_as_run_does(tmp_path, capsys):
     assert main(["limit", str(case), "--out", str(out), "--no-render", "--overwrite"]) == 0
     summary = json.loads((out / "summary.json").read_text())
     assert summary["status"] == "collapse" and summary["analysis"] == "limit"
+
+
+def test_limit_command_names_its_picture_and_leaves_no_lock(tmp_path, capsys):
+    """The last line lists the files the analysis left, the mechanism picture among them
+    (which names the limit analysis in its title), and nothing it did not write."""
+    case = _write_case(tmp_path, SINGLE_BLOCK)
+    out = tmp_path / "la"
+    assert main(["limit", str(case), "--out", str(out)]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    last = capsys.readouterr().out.strip().splitlines()[-1]
+    assert last == (
+        f"results in {out}/ (mechanism_blocks.vtu, mechanism_interfaces.vtu, "
+        f"{summary['mechanism_png']}, summary.json)"
+    )
+    assert not (out / ".masonry-dem.lock").exists()

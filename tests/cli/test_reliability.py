@@ -130,7 +130,7 @@ def test_limit_with_no_live_load_is_an_answer_as_the_pushover_says(tmp_path):
 def test_a_caption_never_says_minus_zero():
     from masonry_dem.export.render import caption
 
-    assert "lambda = 0 " in caption("wall", "step 3", -0.0, "completed", "x1")
+    assert "lambda = 0 " in caption("wall", "step 3", -0.0, "completed", "x1", "static pushover")
 
 
 def test_a_killed_run_keeps_its_pushover_curve_row_by_row(tmp_path):

@@ -90,7 +90,9 @@ def test_quickstart_example_runs(tmp_path, capsys):
     assert (tmp_path / "q" / "summary.json").exists()
 
 
-def test_run_renders_the_last_step_and_the_collapse_mechanism(tmp_path):
+def test_run_renders_the_last_step_and_the_collapse_mechanism(tmp_path, capsys):
+    """The PNGs are written, named in the summary and in the run's last line; the folder
+    keeps no lock file once the run is over."""
     case = _write_case(tmp_path, SINGLE_BLOCK)
     out = tmp_path / "res"
     assert main(["run", str(case), "--out", str(out), "--quiet"]) == 0
@@ -98,6 +100,9 @@ def test_run_renders_the_last_step_and_the_collapse_mechanism(tmp_path):
     assert (out / summary["png"]).is_file()
     assert summary["mechanism_png"] == "mechanism_oblique.png"
     assert (out / summary["mechanism_png"]).is_file()
+    last = capsys.readouterr().out.strip().splitlines()[-1]
+    assert summary["png"] in last and summary["mechanism_png"] in last
+    assert not (out / ".masonry-dem.lock").exists()
 
 
 def test_the_limit_analysis_bound_is_computed_only_to_certify_a_collapse(tmp_path, monkeypatch):

@@ -8,6 +8,7 @@ from masonry_dem.cli import main
 from masonry_dem.studies.validation import run_case, run_cases
 
 
+@pytest.mark.slow
 def test_cases_run_side_by_side_give_the_rows_of_one_process():
     names = ["S32", "OL2"]  # the two quickest cases, not in table order
     parallel = run_cases(names, None, render=False, jobs=2)

@@ -10,6 +10,7 @@ import pytest
 from masonry_dem.cli import main
 
 
+@pytest.mark.slow
 def test_return_wall_rows_carry_their_restraint(tmp_path, capsys):
     code = main(
         [

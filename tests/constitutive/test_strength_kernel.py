@@ -132,6 +132,7 @@ def _assert_agree(act, ft, dom, interaction, projection):
     return got
 
 
+@pytest.mark.slow
 @settings(max_examples=300, deadline=None, derandomize=True)
 @given(batch, st.booleans(), st.sampled_from(PROJECTIONS))
 def test_kernel_agrees_with_numpy_per_row_alpha(rows, interaction, projection):

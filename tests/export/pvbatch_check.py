@@ -3,7 +3,8 @@
 pvbatch pvbatch_check.py state STATE.pvsm DATA_DIR|- OUT.png [reset]
     LoadState (with data_directory=DATA_DIR, or the file names stored in the state when
     DATA_DIR is "-"), go to the last time step, optionally reset the cameras, save a
-    screenshot of the layout; print a JSON line with the time steps and the sources.
+    screenshot of the layout; print a JSON line with the time steps, the sources, the text
+    every label shows and whether each view draws its axes grid.
 pvbatch pvbatch_check.py states JOBS.json
     the same for a list of jobs [[state, data_dir, out, reset], ...] in one ParaView
     session (reset between jobs); prints a JSON list.
@@ -12,7 +13,8 @@ pvbatch pvbatch_check.py frame FRAME_WALL.py JOBS.json
     (LoadState with data_directory, then the last time step: the state's own cue frames it;
     how = "recipe") or by paraview_states/frame_wall.py (how = "macro"), hide the 2D overlays (titles, time, scalar
     bars, orientation axes: they do not move with the camera), save one screenshot per
-    render view (out_prefix_<k>.png); prints a JSON list of {scales, images}.
+    render view (out_prefix_<k>.png); prints a JSON list of {scales, images, directions} (each
+    view's unit vector from its focal point to the camera).
 pvbatch pvbatch_check.py pvd FILE.pvd [FILE.pvd ...]
     open each PVD and print a JSON line {file: {timesteps, cells, arrays}}.
 """
@@ -60,6 +62,8 @@ def _state(path, data_dir, out, reset):
             files[name] = name_
     pvs.SaveScreenshot(out, layout, ImageResolution=[1200, 900])
     return {
+        "labels": _labels(),
+        "axes_grids": [int(v.AxesGrid.Visibility) for v in views],
         "timesteps": list(pvs.GetTimeKeeper().TimestepValues),
         "time": views[0].ViewTime if views else None,
         "end_time": scene.EndTime,
@@ -67,6 +71,22 @@ def _state(path, data_dir, out, reset):
         "views": len(views),
         "sources": sorted(name for (name, _) in pvs.GetSources()),
     }
+
+
+def _labels():
+    """The text every text source shows now: {registration name: text} (a Text source's own
+    text; an Annotate Global Data filter's output at the current time)."""
+    from paraview import servermanager
+
+    out = {}
+    for (name, _), src in pvs.GetSources().items():
+        kind = src.GetXMLName()
+        if kind == "TextSource":
+            out[name] = src.Text
+        elif kind == "AnnotateGlobalData":
+            table = servermanager.Fetch(src)
+            out[name] = table.GetValue(0, 0).ToString() if table.GetNumberOfRows() else ""
+    return out
 
 
 def frame(frame_wall_py, jobs_file):
@@ -100,7 +120,12 @@ def frame(frame_wall_py, jobs_file):
             out = f"{prefix}_{k}.png"
             pvs.SaveScreenshot(out, view)
             images.append(out)
-        results.append({"scales": scales, "images": images})
+        directions = []
+        for view in views:
+            d = [p - f for p, f in zip(view.CameraPosition, view.CameraFocalPoint, strict=True)]
+            norm = sum(x * x for x in d) ** 0.5 or 1.0
+            directions.append([x / norm for x in d])
+        results.append({"scales": scales, "images": images, "directions": directions})
     print("RESULT " + json.dumps(results))
 
 

@@ -6,6 +6,8 @@ the block and DOF a displacement control or a monitor drives)."""
 
 from __future__ import annotations
 
+import shutil
+
 import numpy as np
 import pytest
 
@@ -107,7 +109,47 @@ def test_pushover_names_the_monitored_block_and_dof(tmp_path):
     y = model.blocks.centres[:, 1]
     middle = np.abs(y - np.median(y[~model.fixed.all(axis=1)]))
     block = int(np.argmin(np.where(model.fixed.all(axis=1), np.inf, middle)))  # mid-height
-    pushover(model, out=tmp_path / "run", monitor=(block, "u3"))
+    csv_path = tmp_path / "run" / "pushover.csv"
+    while_running: list[tuple[str, int]] = []  # (header, rows) as each step is handed over
+
+    def look(step) -> None:
+        lines = csv_path.read_text().splitlines()
+        while_running.append((lines[0], len(lines) - 1))
+
+    history = pushover(model, out=tmp_path / "run", monitor=(block, "u3"), callback=look)
+    assert control_dof(tmp_path / "run") == (block, "u3")
+    header = csv_path.read_text().splitlines()[0]
+    assert header == f"step,lambda,control_displacement [m] block {block} u3"
+    # written row by row, the file names the same DOF as soon as a step has moved it, and
+    # its header at the last step is the one the end of the run writes again
+    assert [rows for _, rows in while_running] == list(range(1, len(history.steps) + 1))
+    assert while_running[-1][0] == header
+    assert {h for h, _ in while_running[1:]} == {header}
+    shutil.rmtree(tmp_path / "run" / "steps")  # the header alone names it
     assert control_dof(tmp_path / "run") == (block, "u3")
     assert control_label((block, "u3")) == (f"block {block}, u3 [mm]", 1e3)
     assert control_label((block, "w1"))[0] == f"block {block}, w1 [mrad]"
+
+
+def test_a_pushover_csv_with_a_bare_header_is_still_read(results_copy):
+    """Files written before the header named its block, DOF and unit: the columns are read
+    by name, and the block motions name the displacement."""
+    from masonry_dem.export.results_series import read_pushover, recorded_in_pushover
+
+    path = results_copy / "pushover.csv"
+    lines = path.read_text().splitlines()
+    path.write_text("\n".join(["step,lambda,control_displacement", *lines[1:]]) + "\n")
+    assert recorded_in_pushover(results_copy) is None
+    assert read_pushover(results_copy)["lambda"].size == len(lines) - 1
+    assert control_dof(results_copy) is not None
+
+
+def test_a_rotation_is_recorded_in_radians():
+    from masonry_dem.export.results_folder import displacement_column, recorded_of_header
+
+    assert displacement_column((7, "w1")) == "control_displacement [rad] block 7 w1"
+    assert recorded_of_header(displacement_column((7, "w1"))) == (7, "w1")
+    assert displacement_column(LARGEST_TRANSLATION) == (
+        "control_displacement [m] largest block translation"
+    )
+    assert recorded_of_header(displacement_column(None)) is None

@@ -270,6 +270,30 @@ def test_copy_state_fills_in_the_folder(results_copy):
     assert scales == [12.5, 12.5]
 
 
+@pytest.mark.parametrize("name", STEP_STATES)
+def test_copy_state_names_the_case_and_its_method(results_copy, name):
+    """The copy's titles start with the case's name and the method (the shipped states hold a
+    placeholder there), wrapped to lines a Text source shows whole."""
+    summary = json.loads((results_copy / "summary.json").read_text())
+    summary["name"] = "a wall" + " with a long name" * 10
+    (results_copy / "summary.json").write_text(json.dumps(summary))
+    root = ET.parse(paraview_state.copy_state(name, results_copy)).getroot()
+    titles = [
+        el.get("value", "")
+        for proxy in root.iter("Proxy")
+        if proxy.get("type") == "TextSource"
+        for prop in proxy.findall("Property")
+        if prop.get("name") == "Text"
+        for el in prop.findall("Element")
+    ]
+    assert titles
+    for title in titles:
+        assert paraview_state.CASE_PLACEHOLDER not in title
+        flat = " ".join(title.split("\n")[:-1])
+        assert flat == f"{summary['name']}: static pushover (Newton, load/displacement control)"
+        assert max(len(line) for line in title.split("\n")) <= paraview_state.TITLE_WIDTH
+
+
 def test_copy_state_mechanism(mech_copy):
     out = paraview_state.copy_state("mechanism", mech_copy)
     assert out == mech_copy / "mechanism.pvsm"
@@ -458,6 +482,35 @@ def test_state_loads_against_a_results_folder(screenshots, state_folders, name, 
 
 @pytest.mark.paraview
 @pytest.mark.parametrize("how", ["search", "copy"])
+@pytest.mark.parametrize("name", paraview_state.STATES)
+def test_labels_name_the_case_its_method_lambda_and_the_step(screenshots, state_folders, name, how):
+    """Every state, loaded by the README's recipe or as a copy, shows lambda and the step as
+    two named quantities (not "lambda (or step) = 38" once lambda stops rising), and a title
+    naming the case and the method; the damage map draws a length scale (axes in metres)."""
+    info, _ = screenshots[name, how]
+    summary = json.loads((state_folders[name] / "summary.json").read_text())
+    labels = info["labels"]
+    titles = [text for key, text in labels.items() if key.startswith("title: ")]
+    assert titles and all(t.startswith(f"{summary['name']}: static pushover") for t in titles), (
+        titles
+    )
+    lambdas = sorted(text for key, text in labels.items() if key.endswith("lambda"))
+    steps = sorted(text for key, text in labels.items() if key.endswith("step"))
+    if name == "mechanism":  # the collapse step's
+        last = summary["steps"] - 1
+        lam = float(
+            np.loadtxt(state_folders[name] / "pushover.csv", delimiter=",", skiprows=1)[-1, 1]
+        )
+    else:
+        last, lam = 4, 0.5  # write_results: 5 steps up to lambda 0.5
+    assert lambdas and set(lambdas) == {f"lambda = {lam:.4g}"}, labels
+    assert steps and set(steps) == {f"step {last}"}, labels
+    if name == "damage_map":
+        assert info["axes_grids"] == [1]
+
+
+@pytest.mark.paraview
+@pytest.mark.parametrize("how", ["search", "copy"])
 @pytest.mark.parametrize("name", ["damage_map", "deformed_shape"])
 def test_damage_colours_where_interfaces_failed(screenshots, pv_results, name, how):
     model, _ = pv_results
@@ -620,6 +673,36 @@ def test_state_frames_any_wall(framed, name, factor, how):
     if name in ("deformed_shape", "mechanism"):
         want = paraview_state.warp_scale(folder, mechanism=name == "mechanism")
         assert scales == pytest.approx([want, want])
+
+
+@pytest.mark.paraview
+def test_a_front_view_of_walls_that_meet_turns_oblique(pvbatch, tmp_path):
+    """S5 with return walls (a U wall, 0.32 m deep for 1.4 m wide): the damage map's and the
+    force view's front elevations would hide the returns behind the facade, so the framing
+    turns them to the oblique view; the flat default wall keeps its front elevation."""
+    import imageio.v3 as iio
+
+    from masonry_dem.cases.paper import build_case
+
+    folders = {"u": tmp_path / "u", "flat": tmp_path / "flat"}
+    write_with_mechanism(folders["u"], build_case("S5", restraint="return-walls").model)
+    write_with_mechanism(folders["flat"], default_wall_model(1.0))
+    jobs = [
+        [str(paraview_state.state_path(name)), str(folder), str(tmp_path / f"{key}_{name}"), how]
+        for key, folder in folders.items()
+        for name in ("damage_map", "force_view")
+        for how in ("recipe", "macro")
+    ]
+    (tmp_path / "jobs.json").write_text(json.dumps(jobs))
+    infos = run_pvbatch(pvbatch, "frame", FRAME_WALL, tmp_path / "jobs.json")
+    for (_, folder, _, _), info in zip(jobs, infos, strict=True):
+        for direction, image in zip(info["directions"], info["images"], strict=True):
+            if folder.endswith("flat"):
+                assert direction == pytest.approx([0.0, 0.0, 1.0], abs=1e-9)
+            else:
+                assert abs(direction[0]) > 0.3 and abs(direction[2]) < 0.9, direction
+                wall = np.any(iio.imread(image)[..., :3] < 245, axis=-1)
+                assert not wall[:EDGE].any() and not wall[-EDGE:].any()
 
 
 @pytest.mark.parametrize("name", paraview_state.STATES)

@@ -81,6 +81,7 @@ def test_import_masonry_dem_does_not_import_pyvista():
 IMAGE_ERROR = 500.0
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("view", list(render.VIEWS))
 def test_render_image(results, tmp_path, view, verify_image_cache):
     """The picture of the last step in every view, with its caption, triad, length scale,
@@ -91,6 +92,7 @@ def test_render_image(results, tmp_path, view, verify_image_cache):
     assert iio.imread(out).shape[:2] == (SMALL[1], SMALL[0])
 
 
+@pytest.mark.slow
 @pytest.mark.mpl_image_compare(baseline_dir="baseline", tolerance=2, style="default")
 def test_pushover_plot_image(results):
     """The pushover curve: lambda [-] against the named displacement in mm."""
@@ -100,6 +102,7 @@ def test_pushover_plot_image(results):
 
 
 # --------------------------------------------------------------------------- content
+@pytest.mark.slow
 def test_front_view_damage_colours_in_proportion(results, model, tmp_path):
     from helpers.damage_pattern import states_at
 
@@ -110,6 +113,7 @@ def test_front_view_damage_colours_in_proportion(results, model, tmp_path):
     np.testing.assert_allclose(got, want, atol=0.015)
 
 
+@pytest.mark.slow
 def test_damage_colours_where_interfaces_failed(results, tmp_path):
     """Bands 0..4 from left to right in the front view, right to left in the back view."""
     centres = {}
@@ -133,6 +137,7 @@ def test_earlier_step_shows_its_own_states(results, model, tmp_path):
     np.testing.assert_allclose(got, want, atol=0.015)
 
 
+@pytest.mark.slow
 def test_oblique_and_side_views_show_damage(results, tmp_path):
     for view in ("oblique", "side"):
         code = classify(

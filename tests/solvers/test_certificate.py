@@ -279,6 +279,7 @@ def test_displacement_control_passes_the_folds_of_its_path_to_the_load_controlle
     assert "pseudo-transient step(s) past folds" in result.displacement.reason
 
 
+@pytest.mark.slow
 def test_a_stop_at_a_corner_is_checked_whatever_its_tangent():
     """S23 (two openings): work control stops where Newton finds no correction, at a state
     whose tangent is singular along the load (rho 0.013 <= mode_stiffness), while its curve

@@ -59,6 +59,7 @@ def test_the_implicit_check_finds_no_rest_above_a_peak_and_rest_below_it(build):
     assert below.iterations < solver.settings.corner_check_steps
 
 
+@pytest.mark.slow
 def test_the_implicit_check_passes_the_last_fold_of_s13_2():
     """Without the check the path certifies S13/2's first fold, 0.0855; the explicit check
     passes four folds and stops at 0.1082, where a relaxation to 1.01 x still finds rest
@@ -81,6 +82,7 @@ def test_the_implicit_check_passes_the_last_fold_of_s13_2():
     assert unchecked.collapse_multiplier == pytest.approx(0.08551, rel=1e-3)
 
 
+@pytest.mark.slow
 def test_a_check_without_verdict_leaves_it_to_dynamic_relaxation():
     """With a budget of one implicit step no check of S13/2 reaches rest or the displacement
     limit: each falls back to dynamic relaxation, and the path is the explicit check's, to

@@ -36,6 +36,7 @@ def test_the_closed_forms_stand(build):
     assert_closed_form(build)
 
 
+@pytest.mark.slow
 def test_s23_passes_the_fold_a_halved_step_dipped_at():
     case = build_case("S23")
     hist = StaticSolver(case.model, case.settings).run(monitor=case.monitor)

@@ -65,6 +65,7 @@ def test_the_check_records_its_motion_on_each_side_of_a_peak():
     assert max(moved for _, moved, _ in solver.check_motion) <= solver.limit
 
 
+@pytest.mark.slow
 def test_the_last_fold_of_s13_2_is_passed_with_either_budget():
     """S13/2: the explicit check stopped at 0.10819 with rest 1 % above; the implicit check
     passes it within 200 steps, so a larger budget changes nothing there."""
@@ -82,6 +83,7 @@ def test_the_last_fold_of_s13_2_is_passed_with_either_budget():
     assert found[1].collapse_multiplier == pytest.approx(found[0].collapse_multiplier, rel=1e-12)
 
 
+@pytest.mark.slow
 def test_a_slow_fold_of_a_u_wall_is_passed_with_the_default_budget():
     """U 6 x 24 with 4-block returns (Restrepo Velez's stones, tilted on a fixed base, as
     ``benchmarks/endgame_walls.py`` builds it): with 200 implicit steps (the budget before

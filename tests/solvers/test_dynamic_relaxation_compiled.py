@@ -46,6 +46,7 @@ def _record(monkeypatch, compiled: bool) -> list[tuple]:
     return log
 
 
+@pytest.mark.slow
 def test_compiled_steps_give_the_bits_of_the_python_loop_at_folds_and_a_peak(monkeypatch):
     case = build_case("S6", restraint="return-walls", return_blocks=2)
     runs = {}

@@ -51,6 +51,7 @@ def test_the_pseudo_transient_motion_and_the_check_agree_on_each_side_of_a_peak(
         assert solver.residual(below.q, 0.98 * closed_form)[1] <= solver.settings.tolerance
 
 
+@pytest.mark.slow
 def test_a_run_off_answers_the_later_checks_of_its_branch(caplog):
     """S5 with 4-block return walls (the U wall of ``bench_walls_that_meet``): at its peak the
     first pseudo-transient step runs past the displacement limit at 1.005 x the state; the
@@ -69,6 +70,7 @@ def test_a_run_off_answers_the_later_checks_of_its_branch(caplog):
     assert "a pseudo-transient motion from this branch ran past" in found.reason
 
 
+@pytest.mark.slow
 def test_the_last_fold_of_s13_2_is_still_passed():
     """S13/2: the explicit check stopped at 0.10819 with rest 1 % above; the implicit check
     passes it (session 18). The endgame rule may not turn that fold into a peak."""

@@ -17,10 +17,13 @@ Proves:
 
 from __future__ import annotations
 
+import pytest
+
 from masonry_dem.cases.paper import build_case
 from masonry_dem.solvers.static import StaticSolver
 
 
+@pytest.mark.slow
 def test_a_bounded_rest_passes_the_folds_of_s13_2():
     """S13/2 passes 3-6 folds at corners, each checked by the implicit relaxation and then
     by dynamic relaxation, bounded by the check's effort."""
@@ -35,9 +38,14 @@ def test_a_bounded_rest_passes_the_folds_of_s13_2():
     assert 0 < solver.time_steps <= per_step * solver.implicit_steps
 
 
+@pytest.mark.slow
 def test_s23_keeps_the_rests_of_dynamic_relaxation():
     """S23: the implicit rest at its first fold leads to a lower peak (0.1098) than dynamic
-    relaxation's (0.1126); the bounded relaxation still finds that rest."""
+    relaxation's (0.1126); the bounded relaxation still finds that rest. The peak is a
+    path's figure (the rest a relaxation settles in moves with the machine's rounding: 0.11258
+    and 0.11260 were measured on two machines), so it is checked against the threshold 0.112
+    between the two rests' peaks, 2 % from the one and 0.5 % from the other, never to the
+    digit."""
     case = build_case("S23")
     solver = StaticSolver(case.model, case.settings)
     found = solver.run(monitor=case.monitor)

@@ -96,6 +96,7 @@ def test_one_measure_of_a_corner_serves_the_stop_check_and_the_certificate(
     assert math.isnan(curve_slope([0.0, 1.0], [0.0, 1.0], 0.0))  # no elastic slope
 
 
+@pytest.mark.slow
 def test_a_search_that_runs_off_at_a_rising_corner_is_measured_once_and_checked():
     """S6 with 2-block return walls. Without the corner check and with the pseudo-transient
     step's rise of 0.5 % only (``transient_reach=0``, as on d01d26a) the path stops

@@ -131,6 +131,7 @@ def test_peak_does_not_depend_on_the_bracket_tolerance(panel_lambda, bracket):
     assert h.collapse_multiplier == pytest.approx(panel_lambda, rel=TOL)
 
 
+@pytest.mark.slow
 def test_kept_factorization_while_creeping_changes_nothing(panel_lambda, monkeypatch):
     """Where work control creeps along a fold (steps of 1e-10 of the Newton correction, no
     joint changing state) the factorized tangent is kept instead of refactored: the same

@@ -138,6 +138,7 @@ def _peer_wall() -> Model:
     return _on_base(wall, 0.6, direction=(1.0, 0.0, 0.0))
 
 
+@pytest.mark.slow
 def test_peer_wall_matches_the_associative_lp_and_is_grid_independent():
     """Peers: an associative rigid-block LP gives 0.584 (issue 18); the corners (grid 2) and
     a 4 x 4 grid give the same multiplier (the corners are exact, ``interface``).
@@ -367,6 +368,7 @@ def _ladder_wall(side: int, scale: float = 1.0) -> Model:
     return _on_base(wall, 0.6, direction=(1.0, 0.0, 0.0))
 
 
+@pytest.mark.slow
 def test_ladder_wall_is_scale_free_and_its_mechanism_admissible():
     """Rigid blocks with friction and no cohesion have no length or force scale: a wall
     scaled by 20 (its weights by 8000) has the same multiplier, so the ladder's fall with

@@ -94,6 +94,7 @@ def test_the_associative_start_is_unique_with_the_selection(small_l_wall):
     assert np.abs(chosen[1] - chosen[0]).max() < 1e-6 * size
 
 
+@pytest.mark.slow
 def test_two_edge_orders_give_the_same_lambda_with_the_selection(small_l_wall, monkeypatch):
     """The same iteration with the pyramid's edges listed from edge 0 and from edge 1: the
     solver's optima settle at lambdas more than 0.5 % apart (0.5793 and 0.5727, measured),

@@ -245,6 +245,7 @@ def test_a_path_is_straight_while_its_last_step_rises_at_half_the_elastic_slope(
     assert not straight([0.0, 1.0], [0.0, 1.0], 0.0)
 
 
+@pytest.mark.slow
 def test_a_fold_on_the_straight_part_of_s6_is_passed_by_a_longer_pseudo_transient_step():
     """S6 (a validation wall): work control takes over at lambda 0.0422 while the path still
     rises at 0.66 of its elastic slope; its first step and half step fail at a fold, the half

@@ -77,6 +77,7 @@ def client():
         yield c
 
 
+@pytest.mark.slow
 def test_friction_grid_rises_with_mu_and_matches_single_runs(client, tmp_path):
     result = sweep(
         SLIDING_WALL, vary={"material.friction": "0.5:0.9:9"}, out=tmp_path, scheduler=client

@@ -9,7 +9,7 @@ import logging
 import time
 from pathlib import Path
 
-from masonry_dem.cli.options import add_case, add_output, add_overwrite
+from masonry_dem.cli.options import add_case, add_output, add_overwrite, results_line
 
 log = logging.getLogger(__name__)
 
@@ -104,7 +104,7 @@ def limit_command(args: argparse.Namespace) -> int:
         )
     )
     print(f"{summary['status']}: {summary['reason']}")
-    print(f"results in {out}/ (summary.json, mechanism_blocks.vtu, mechanism_interfaces.vtu)")
+    print(results_line(out))
     return exit_code(summary["status"])
 
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 from collections.abc import Callable
+from pathlib import Path
 
 #: ``--overwrite`` of the commands that write a results folder
 OVERWRITE_HELP = (
@@ -51,3 +52,12 @@ def whole_number(option: str, minimum: int) -> Callable[[str], int]:
         return value
 
     return parse
+
+
+def results_line(out: Path) -> str:
+    """A command's last line: the folder and the files the run left in it (the PNGs among
+    them), as they are on disk; ``steps/`` for the step files."""
+    names = sorted(f.name for f in out.iterdir() if f.is_file() and not f.name.startswith("."))
+    if (out / "steps").is_dir():
+        names.append("steps/")
+    return f"results in {out}/ ({', '.join(names)})"

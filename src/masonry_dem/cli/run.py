@@ -9,7 +9,7 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from masonry_dem.cli.options import add_case, add_output, add_overwrite
+from masonry_dem.cli.options import add_case, add_output, add_overwrite, results_line
 from masonry_dem.export.run_case import Progress, estimate_run, run_case
 
 if TYPE_CHECKING:
@@ -101,6 +101,7 @@ def run_command(args: argparse.Namespace) -> int:
         )
         print(json.dumps({k: summary[k] for k in ("status", "lambda", "method", "bound")}))
         print(f"{summary['status']}: {summary['reason']}")
+        print(results_line(out))
         return exit_code(summary["status"])
     try:
         summary = run_case(
@@ -118,5 +119,5 @@ def run_command(args: argparse.Namespace) -> int:
     keys = ("status", "lambda", "steps", "seconds", "blocks", "interfaces")
     print(json.dumps({k: summary[k] for k in keys}))
     print(f"{summary['status']}: {summary['reason']}")
-    print(f"results in {out}/ (blocks.pvd, interfaces.pvd, summary.json, pushover.csv)")
+    print(results_line(out))
     return 0 if summary["status"] in ("collapse", "completed") else 1

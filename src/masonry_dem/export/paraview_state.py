@@ -26,6 +26,7 @@ from __future__ import annotations
 import logging
 import math
 import os
+import textwrap
 import uuid
 import xml.etree.ElementTree as ET
 from importlib import resources
@@ -41,6 +42,12 @@ log = logging.getLogger(__name__)
 STATES = ("damage_map", "deformed_shape", "force_view", "mechanism")
 #: the folder the shipped states point to (a placeholder; ParaView searches by file name)
 PLACEHOLDER = "/path/to/your/results"
+#: the first line of the shipped states' titles, which the case's name and method replace
+#: (frame_wall.py when a state frames itself; :func:`copy_state`)
+CASE_PLACEHOLDER = "masonry_dem: the case's name is read from summary.json"
+#: characters a line of a state's title holds: a Text source does not wrap, and at ParaView's
+#: 12-point default a longer line runs under the scalar bar of a 1200-pixel view
+TITLE_WIDTH = 100
 _STEP_FILES = (rf.BLOCKS_PVD, rf.INTERFACES_PVD)
 _MECHANISM_FILES = rf.MECHANISM_FILES
 #: the data files each state reads (file names in a results folder)
@@ -174,6 +181,24 @@ def _fit_cameras(root: ET.Element, lo: np.ndarray, hi: np.ndarray) -> None:
             _set_values(props["CenterOfRotation"], centre)
 
 
+def _name_case(root: ET.Element, summary: dict[str, object], folder_name: str) -> None:
+    """Put the case's name and the method that made the results on the first line of every
+    title (the Text sources starting with :data:`CASE_PLACEHOLDER`)."""
+    from masonry_dem.export.figure_text import method_of
+
+    title = textwrap.fill(
+        f"{summary.get('name') or folder_name}: {method_of(summary)}", TITLE_WIDTH
+    )
+    for proxy in root.iter("Proxy"):
+        if proxy.get("type") != "TextSource":
+            continue
+        prop = _props(proxy).get("Text")
+        for el in [] if prop is None else _elements(prop):
+            value = el.get("value", "")
+            if value.startswith(CASE_PLACEHOLDER):
+                el.set("value", title + value[len(CASE_PLACEHOLDER) :])
+
+
 def copy_state(
     name: str,
     results_folder: Path | str,
@@ -229,6 +254,7 @@ def copy_state(
         raise ValueError(
             f"state {key}: expected references to {', '.join(data_files)}, found {replaced}"
         )
+    _name_case(root, rf.read_summary(folder), folder.name)
     points, _ = _read_points(first)
     if points.size:
         _fit_cameras(root, points.min(axis=0), points.max(axis=0))

@@ -3,9 +3,10 @@ run recorded, with that displacement named (which block and DOF, in mm) and the 
 multiplier marked.
 
 ``pushover.csv`` stores one displacement per step: the DOF a displacement control drives or
-a ``monitor`` names, else the largest translation of any block. The file does not say which;
-:func:`control_label` finds it from the steps' own block motions (``translation`` and
-``rotation`` of the blocks VTU), so folders of any version are named correctly.
+a ``monitor`` names, else the largest translation of any block. Its header names the block
+and DOF; for files whose header does not, :func:`control_dof` finds them from the steps' own
+block motions (``translation`` and ``rotation`` of the blocks VTU), so folders of any version
+are named correctly.
 """
 
 from __future__ import annotations
@@ -17,18 +18,15 @@ from typing import Any
 import numpy as np
 
 from masonry_dem.export import results_folder as rf
+from masonry_dem.export.figure_text import frame_level, level, method_of, plain_axes, set_title
 from masonry_dem.export.picture_files import check_out, write_atomically
-from masonry_dem.export.results_series import open_results, read_pushover
+from masonry_dem.export.results_series import open_results, read_pushover, recorded_in_pushover
 
 log = logging.getLogger(__name__)
 
 _PLOT_SUFFIXES = (".png", ".svg", ".pdf")
-DOF_NAMES = ("u1", "u2", "u3", "w1", "w2", "w3")
-#: steps whose motion is compared with the recorded displacement to name it
-_STEPS_CHECKED = 4
-#: relative agreement for a block DOF to be the recorded one
-_MATCH = 1e-6
-LARGEST_TRANSLATION = "largest block translation (any block, u1-u3)"
+DOF_NAMES = rf.DOF_NAMES
+LARGEST_TRANSLATION = rf.LARGEST_TRANSLATION
 
 
 def _block_motion(path: Path) -> np.ndarray | None:
@@ -42,12 +40,13 @@ def _block_motion(path: Path) -> np.ndarray | None:
     return np.hstack([np.asarray(data["translation"][0]), np.asarray(data["rotation"][0])])
 
 
-def control_dof(folder: Path | str) -> tuple[int, str] | str | None:
-    """Which displacement ``pushover.csv`` records: ``(block, dof name)`` when one block DOF
-    equals it at every step checked (a displacement control, a monitor, or the largest
-    translation staying on one DOF), else :data:`LARGEST_TRANSLATION` (followed by the block
-    and DOF where it is largest at the largest step) when it is that, else None when the steps written do not tell (no motion yet,
-    or files of another layout)."""
+def control_dof(folder: Path | str) -> rf.Recorded:
+    """Which displacement ``pushover.csv`` records: the block and DOF its header names, else
+    (files written before it named them) :func:`results_folder.recorded_dof` of the steps'
+    block motions; None when neither tells."""
+    named = recorded_in_pushover(folder)
+    if named is not None:
+        return named
     table = read_pushover(folder)
     try:
         series = open_results(folder)
@@ -57,26 +56,12 @@ def control_dof(folder: Path | str) -> tuple[int, str] | str | None:
     file_of = dict(zip(series.steps.tolist(), series.block_files, strict=True))
     rows = [int(k) for k in np.argsort(-np.abs(c)) if abs(c[k]) > 0 and int(k) in file_of]
     motions = []
-    for k in rows[:_STEPS_CHECKED]:
+    for k in rows[: rf.STEPS_CHECKED]:
         q = _block_motion(file_of[k])
         if q is None:
             return None
-        motions.append((c[k], q))
-    if not motions:
-        return None
-    scale = max(abs(v) for v, _ in motions)
-    tol = _MATCH * scale
-    hit = np.ones(motions[0][1].shape, dtype=bool)
-    for v, q in motions:
-        hit &= np.abs(q - v) <= tol
-    found = np.argwhere(hit)
-    if not found.size:  # no one DOF: the largest translation, wherever it is
-        if all(abs(np.abs(q[:, :3]).max() - v) <= tol for v, q in motions):
-            block, dof = divmod(int(np.argmax(np.abs(motions[0][1][:, :3]))), 3)
-            return f"{LARGEST_TRANSLATION}; at its largest block {block} {DOF_NAMES[dof]}"
-        return None
-    block, dof = (int(x) for x in found[0])
-    return block, DOF_NAMES[dof]
+        motions.append((float(c[k]), q))
+    return rf.recorded_dof(motions)
 
 
 def control_label(which: tuple[int, str] | str | None) -> tuple[str, float]:
@@ -122,9 +107,14 @@ def pushover_figure(folder: Path | str) -> Any:
         )
         ax.legend(loc="lower right")
     ax.grid(True, alpha=0.3)
+    plain_axes(ax)
+    flat = level(lam)
+    if flat is not None:
+        frame_level(ax, flat)
     name = summary.get("name", folder.name)
     status = summary.get("status")
-    ax.set_title(f"{name}" + (f" ({status})" if status else ""), fontsize=10)
+    method = method_of(summary)
+    set_title(ax, f"{name}\n{method}" + (f": {status}" if status else ""))
     fig.tight_layout()
     return fig
 

@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from masonry_dem.export import results_folder as rf
+from masonry_dem.export.figure_text import method_of
 from masonry_dem.export.picture_files import check_out, write_atomically
 from masonry_dem.export.plots import plot_pushover
 from masonry_dem.export.results_series import ResultsSeries, open_results, read_pushover
@@ -106,11 +107,18 @@ def _save_and_close(scene: Scene, path: Path) -> None:
         scene.close()
 
 
-def caption(name: str, what: str, lam: float | None, status: str | None, amplification: str) -> str:
-    """The picture's title: the case, then what is drawn, lambda, the run's status and the
-    displacement amplification."""
+def caption(
+    name: str,
+    what: str,
+    lam: float | None,
+    status: str | None,
+    amplification: str,
+    method: str,
+) -> str:
+    """The picture's title: the case, then what is drawn and by which method, lambda, the
+    run's status and the displacement amplification."""
     lam_txt = "n/a" if lam is None or not np.isfinite(lam) else f"{lam + 0.0:.4g}"  # no "-0"
-    parts = [what, f"lambda = {lam_txt}"]
+    parts = [f"{what}, {method}", f"lambda = {lam_txt}"]
     if status:
         parts.append(str(status))
     parts.append(amplification)
@@ -125,6 +133,7 @@ def _title(series: ResultsSeries, index: int, data: StepData, scale: float) -> s
         lam,
         series.summary.get("status"),
         f"displacements x {scale:.3g}",
+        method_of(series.summary),
     )
 
 
@@ -358,7 +367,9 @@ def _mechanism_scene(
             if last_increment
             else f"mode x {s:.3g} (largest translation 1)"
         )
-        scene.title(caption(name, what, lam, summary.get("status"), amplification))
+        scene.title(
+            caption(name, what, lam, summary.get("status"), amplification, method_of(summary))
+        )
     except BaseException:
         scene.close()
         raise

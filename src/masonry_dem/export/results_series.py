@@ -158,8 +158,17 @@ def _load_factors(folder: Path, steps: np.ndarray, times: np.ndarray) -> np.ndar
     return np.array([lookup.get(int(s), np.nan) for s in steps])
 
 
+def recorded_in_pushover(folder: Path | str) -> rf.Recorded:
+    """The block and DOF ``pushover.csv``'s header says its displacement is (None when the
+    header does not name one: files written before it did, or no one DOF)."""
+    with (Path(folder) / rf.PUSHOVER).open(newline="") as fh:
+        header = next(csv.reader(fh), [])
+    return rf.recorded_of_header(header[2]) if len(header) > 2 else None
+
+
 def read_pushover(folder: Path | str) -> dict[str, np.ndarray]:
-    """Columns of ``pushover.csv`` (step, lambda, control_displacement) as arrays."""
+    """Columns of ``pushover.csv`` (step, lambda, control_displacement) as arrays, each
+    found by its name (the third's header goes on with its unit and what it records)."""
     path = Path(folder) / rf.PUSHOVER
     if not path.is_file():
         raise FileNotFoundError(
@@ -171,8 +180,8 @@ def read_pushover(folder: Path | str) -> dict[str, np.ndarray]:
     rows = list(csv.reader(io.StringIO(text, newline="")))
     if not rows:
         raise ValueError(f"{path} is empty")
-    header = [h.strip() for h in rows[0]]
-    need = ("step", "lambda", "control_displacement")
+    header = [rf.pushover_column(h) for h in rows[0]]
+    need = rf.PUSHOVER_COLUMNS
     if any(h not in header for h in need):
         raise ValueError(f"{path}: header must hold {', '.join(need)}, got {', '.join(header)}")
     try:

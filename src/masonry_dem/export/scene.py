@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 
 from masonry_dem.constitutive.states import STATE_NAMES
+from masonry_dem.export.figure_text import fitted_title
 from masonry_dem.export.results_series import ResultsSeries
 
 #: RGB colour (0-255) of each interface state, index = :class:`~masonry_dem.constitutive.states.JointState`.
@@ -400,12 +401,15 @@ class Scene:
         cam.clipping_range = (1e-3 * far, 2 * far)
 
     def title(self, text: str) -> None:
-        """Title at the top centre (one text actor, updated in place: cheap per frame)."""
+        """Title at the top centre, wrapped to the window's width (never cut at its edges;
+        one text actor, updated in place: cheap per frame)."""
+        w, h = self.plotter.window_size
+        size = max(9, int(round(26 * min(w / 1200, h / 900))))
+        text = fitted_title(text, w / 72.0, size)  # VTK's font size: pixels, as points at 72 dpi
         if self._title is None:
-            w, h = self.plotter.window_size
             actor = self.pv.Text(text)
             prop = actor.GetTextProperty()
-            prop.SetFontSize(max(9, int(round(26 * min(w / 1200, h / 900)))))
+            prop.SetFontSize(size)
             prop.SetColor(0.0, 0.0, 0.0)
             prop.SetJustificationToCentered()
             prop.SetVerticalJustificationToTop()

@@ -17,6 +17,8 @@ collapse): the same meshes with the collapse mode as ``displacement`` (largest t
 and ``joint_motion``, the relative motion across each joint in that mode over its largest
 value: the crack pattern of the mechanism, which the states do not show (an unloaded dry head
 joint is "detached" from the first step).
+
+Every file carries field data ``lambda`` and ``step`` (of the mechanism: the collapse step).
 """
 
 from __future__ import annotations
@@ -105,15 +107,46 @@ def write_step_vtu(folder: Path, model: Model, step: StepResult) -> tuple[str, s
     sub = Path(folder) / STEPS
     sub.mkdir(parents=True, exist_ok=True)
     names = (f"{STEPS}/blocks_{step.step:04d}.vtu", f"{STEPS}/interfaces_{step.step:04d}.vtu")
-    _write_vtu(Path(folder) / names[0], blocks_mesh(model, step))
+    fields = step_fields(step)
+    _write_vtu(Path(folder) / names[0], blocks_mesh(model, step), fields)
     if model.interfaces.count:
-        _write_vtu(Path(folder) / names[1], interfaces_mesh(model, step))
+        _write_vtu(Path(folder) / names[1], interfaces_mesh(model, step), fields)
     return names
 
 
-def _write_vtu(path: Path, mesh: meshio.Mesh) -> None:
-    """A whole VTU file or none: written under a temporary name, renamed into place."""
-    write_atomic(path, lambda tmp: meshio.write(tmp, mesh, file_format="vtu", binary=True))
+def step_fields(step: StepResult) -> dict[str, np.ndarray]:
+    """The field data of a step's meshes: ``lambda`` and ``step``, each one value, so that a
+    viewer shows them as two named quantities (a PVD's time is lambda only while lambda
+    rises, and the step number after)."""
+    return {
+        "lambda": np.array([float(step.load_factor)]),
+        "step": np.array([int(step.step)], dtype=np.int64),
+    }
+
+
+def _field_data_xml(fields: dict[str, np.ndarray]) -> bytes:
+    arrays = "".join(
+        f'<DataArray type="{"Int64" if v.dtype.kind in "iu" else "Float64"}" Name="{k}" '
+        f'NumberOfTuples="{v.size}" format="ascii">{" ".join(repr(x) for x in v.tolist())}'
+        "</DataArray>"
+        for k, v in fields.items()
+    )
+    return f"<FieldData>{arrays}</FieldData>".encode()
+
+
+def _write_vtu(path: Path, mesh: meshio.Mesh, fields: dict[str, np.ndarray] | None = None) -> None:
+    """A whole VTU file or none: written under a temporary name, renamed into place.
+    ``fields``: field data (one record of the whole mesh), which meshio does not write to a
+    VTU: put into the grid's XML element after meshio wrote the file."""
+
+    def write(tmp: Path) -> None:
+        meshio.write(tmp, mesh, file_format="vtu", binary=True)
+        if fields:
+            text = tmp.read_bytes()
+            tag = b"<UnstructuredGrid>"
+            tmp.write_bytes(text.replace(tag, tag + _field_data_xml(fields), 1))
+
+    write_atomic(path, write)
 
 
 def joint_relative_motion(model: Model, dq: np.ndarray) -> np.ndarray:
@@ -144,12 +177,12 @@ def write_mechanism_vtu(
         if imesh is not None:
             _, d_i, d_j = _interface_corner_motion(model, increment)
             imesh.point_data["last_increment"] = (0.5 * (d_i + d_j)).reshape(-1, 3)
-    _write_vtu(folder / MECHANISM_FILES[0], bmesh)
+    _write_vtu(folder / MECHANISM_FILES[0], bmesh, step_fields(step))
     if imesh is None:
         return MECHANISM_FILES[0], None
     for name, field in fields.items():
         motion = joint_relative_motion(model, field)
         peak = float(motion.max(initial=0.0))
         imesh.cell_data[name] = [motion / peak if peak > 0 else motion]
-    _write_vtu(folder / MECHANISM_FILES[1], imesh)
+    _write_vtu(folder / MECHANISM_FILES[1], imesh, step_fields(step))
     return MECHANISM_FILES

@@ -103,6 +103,7 @@ class ResultsWriter:
         self.times: list[float] = []
         self.steps_written: list[int] = []
         self._curve: list[tuple[int, float, float]] = []
+        self._recorded = rf.RecordedSoFar()
         self._count = 0
         self._failed: BaseException | None = None
         self._pending: list[Future] = []
@@ -121,16 +122,36 @@ class ResultsWriter:
             warn_large_closure(self.model, step)
         self._count += 1
         if not force:
-            self._curve.append((step.step, step.load_factor, step.control_displacement))
-            rf.append_pushover_row(
-                self.folder, len(self._curve) - 1, step.load_factor, step.control_displacement
-            )
+            self._add_to_curve(step)
         if not force and (self._count - 1) % self.every:
             return
         if self._pool is None:
             self._write(step)
         else:
             self._pending.append(self._pool.submit(self._write, step))
+
+    def _add_to_curve(self, step: StepResult) -> None:
+        """The step's row of ``pushover.csv``, appended; the whole file rewritten (atomically)
+        when the step changes what the header says is recorded (block, DOF, unit: the one
+        :meth:`finish` writes again at the end, :func:`results_folder.recorded_dof_of`)."""
+        index = len(self._curve)
+        self._curve.append((step.step, step.load_factor, step.control_displacement))
+        changed = self._recorded.add(index, step.control_displacement, step.q)
+        if changed and index > 0:
+            self._write_curve()
+        else:
+            rf.append_pushover_row(
+                self.folder,
+                index,
+                step.load_factor,
+                step.control_displacement,
+                self._recorded.recorded,
+            )
+
+    def _write_curve(self) -> None:
+        """``pushover.csv`` of every step handed over, at once."""
+        steps, lams, disp = (np.asarray(c) for c in zip(*self._curve, strict=True))
+        rf.write_pushover(self.folder, np.arange(steps.size), lams, disp, self._recorded.recorded)
 
     def _raise_failed(self) -> None:
         done = [f for f in self._pending if f.done()]
@@ -218,12 +239,7 @@ class ResultsWriter:
         except OSError as exc:
             self.abort(exc)
             raise
-        rf.write_pushover(
-            self.folder,
-            np.arange(len(history.steps)),
-            history.load_factors,
-            history.control_displacements,
-        )
+        rf.write_history_pushover(self.folder, history)
         if history.status == "collapse" and history.steps:
             self._write_mechanism(history)
         summary = self.write_summary(
@@ -250,8 +266,7 @@ class ResultsWriter:
         failing disk is logged: the exception that stopped the run is the one to report."""
         try:
             if self._curve:
-                steps, lams, disp = (np.asarray(c) for c in zip(*self._curve, strict=True))
-                rf.write_pushover(self.folder, np.arange(steps.size), lams, disp)
+                self._write_curve()
         except OSError as err:
             log.warning("%s: the run's curve is not rewritten (%s)", self.folder, err)
         try:

@@ -64,6 +64,7 @@ from masonry_dem.studies.sweep_table import (
     read_rows,
     to_table,
     write_parquet,
+    write_rows,
 )
 
 __all__ = [
@@ -183,6 +184,7 @@ def sweep(
     finally:
         journal.close()
         ordered = [rows[i] for i in sorted(rows)]
+        write_rows(folder / TABLE_CSV, columns, ordered)  # the runs' order, not their ends'
         write_parquet(folder / TABLE_PARQUET, ordered, columns)
         pngs = write_plots(folder, ordered, plan) if plots else []
         if interrupted:
@@ -274,17 +276,22 @@ def _client(scheduler: Any, workers: int | None) -> Iterator[Any]:
     n = int(workers or os.cpu_count() or 1)
     # one run per core: the kernels' own threads would only compete with the other workers
     env = {"NUMBA_NUM_THREADS": "1", "OMP_NUM_THREADS": "1"}
-    with (
-        LocalCluster(  # type: ignore[no-untyped-call]
-            n_workers=n,
-            threads_per_worker=1,
-            processes=True,
-            dashboard_address=":0",
-            env=env,
-        ) as cluster,
-        Client(cluster) as client,  # type: ignore[no-untyped-call]
-    ):
-        yield client
+    cluster = LocalCluster(  # type: ignore[no-untyped-call]
+        n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0", env=env
+    )
+    try:
+        with Client(cluster) as client:  # type: ignore[no-untyped-call]
+            yield client
+    finally:
+        # a worker whose compiled kernels' threads outlast the nanny's wait is killed, as it
+        # would be anyway: the nanny's "still alive ... killing" warning tells the user nothing
+        nanny = logging.getLogger("distributed.nanny")
+        level = nanny.level
+        nanny.setLevel(logging.ERROR)
+        try:
+            cluster.close()
+        finally:
+            nanny.setLevel(level)
 
 
 def _prepare(folder: Path, plan: Plan, resume: bool, overwrite: bool) -> dict[int, dict[str, Any]]:

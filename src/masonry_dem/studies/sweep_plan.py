@@ -100,7 +100,8 @@ def parse_values(text: str, path: str = "") -> list[Any]:
                     f"{where}: a grid is lo:hi:n with finite numbers lo, hi and a whole "
                     "number n from 1 to 10^6"
                 )
-            return [float(x) for x in np.linspace(lo, hi, n)] if n > 1 else [lo]
+            # 15 digits: 0.85, not linspace's 0.8500000000000001, in the table and the case
+            return [float(f"{x:.15g}") for x in np.linspace(lo, hi, n)] if n > 1 else [lo]
     values = [_toml_value(token.strip()) for token in _split_top(text)]
     if not values or any(v == "" for v in values):
         raise ValueError(f"{where}: give a grid lo:hi:n or a list v1,v2,... with no empty item")

@@ -106,12 +106,7 @@ def _run(data: dict[str, Any], source: str, keep: str, folder: str | None) -> di
         from masonry_dem.export import results_folder as rf
 
         Path(folder).mkdir(parents=True, exist_ok=True)
-        rf.write_pushover(
-            folder,
-            np.arange(len(history.steps)),
-            history.load_factors,
-            history.control_displacements,
-        )
+        rf.write_history_pushover(folder, history)
         summary = history.summary(
             blocks=case.model.blocks.count, interfaces=case.model.interfaces.count
         )

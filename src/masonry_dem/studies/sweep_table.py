@@ -41,18 +41,24 @@ def _parse_cell(text: str, kind: type) -> Any:
     return kind(text) if kind in (int, float) else text
 
 
+def write_rows(path: Path, columns: list[str], rows: list[dict[str, Any]]) -> None:
+    """``sweep.csv`` holding ``rows``, rewritten whole under a temporary name (no torn line)."""
+    tmp = path.with_name(f".{path.name}.{uuid.uuid4().hex}.tmp")
+    with tmp.open("w", newline="") as f:
+        writer = csv.writer(f)
+        writer.writerow(columns)
+        writer.writerows([cell(r.get(c)) for c in columns] for r in rows)
+    os.replace(tmp, path)
+
+
 class Journal:
-    """``sweep.csv``, one line per completed run, flushed at once: a killed sweep keeps
-    every row it wrote."""
+    """``sweep.csv``, one line per completed run in the order the runs end, flushed at
+    once: a killed sweep keeps every row it wrote. The sweep rewrites it in run order when
+    it ends (:func:`write_rows`)."""
 
     def __init__(self, path: Path, columns: list[str], rows: list[dict[str, Any]]) -> None:
         self.columns = columns
-        tmp = path.with_name(f".{path.name}.{uuid.uuid4().hex}.tmp")
-        with tmp.open("w", newline="") as f:  # the rows kept, rewritten whole (no torn line)
-            writer = csv.writer(f)
-            writer.writerow(columns)
-            writer.writerows([cell(r.get(c)) for c in columns] for r in rows)
-        os.replace(tmp, path)
+        write_rows(path, columns, rows)
         self._file = path.open("a", newline="")
         self._writer = csv.writer(self._file)
 
