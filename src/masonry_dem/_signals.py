@@ -14,8 +14,11 @@ from __future__ import annotations
 import logging
 import signal
 import threading
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from typing import Any, TypeVar
+
+T = TypeVar("T")
 
 __all__ = [
     "Interrupted",
@@ -24,6 +27,7 @@ __all__ = [
     "exit_code",
     "interruption",
     "raise_on_signals",
+    "run_interruptible",
     "stop_on_signals",
 ]
 
@@ -42,12 +46,13 @@ class Interrupted(KeyboardInterrupt):
 
 def interruption(exc: BaseException | None) -> KeyboardInterrupt | None:
     """The Ctrl-C or signal behind ``exc``: itself, or the cause of the SystemErrors a compiled
-    kernel's call wraps an exception raised inside it in (several, one per nested call)."""
+    kernel's call wraps an exception raised inside it in (several, one per nested call), or
+    of the ImportError an extension's loader makes of it (VTK: "Failed to load ...")."""
     seen = 0
     while exc is not None and seen < 100:
         if isinstance(exc, KeyboardInterrupt):
             return exc
-        if not isinstance(exc, SystemError):
+        if not isinstance(exc, (SystemError, ImportError)):
             return None
         exc, seen = exc.__cause__ or exc.__context__, seen + 1
     return None
@@ -126,3 +131,29 @@ def deferred_signals() -> Iterator[None]:
             signal.signal(s, handler if handler is not None else signal.SIG_DFL)
     if caught:
         raise Interrupted(caught[0])
+
+
+def run_interruptible(work: Callable[[], T]) -> T:
+    """``work()`` in a worker thread while this (the main) thread waits for it: a signal's
+    handler runs only between the main thread's bytecodes, and a solver's long call into
+    a C library (a HiGHS or Clarabel solve of minutes) held it back until the call
+    returned. Here the main thread raises the signal's :class:`Interrupted` at once; the
+    worker is left to the process's end (a daemon thread)."""
+    if threading.current_thread() is not threading.main_thread():
+        return work()
+    box: dict[str, Any] = {}
+
+    def target() -> None:
+        try:
+            box["value"] = work()
+        except BaseException as exc:  # handed to the main thread
+            box["error"] = exc
+
+    worker = threading.Thread(target=target, name="interruptible-work", daemon=True)
+    worker.start()
+    while worker.is_alive():
+        worker.join(0.1)
+    if "error" in box:
+        raise box["error"]
+    value: T = box["value"]
+    return value

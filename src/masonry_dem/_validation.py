@@ -43,7 +43,9 @@ def require_positive(name: str, arr: NDArray[np.float64], strict: bool = True) -
         raise ValueError(f"{name} must be {sign}, got {plain(value)}{where}")
 
 
-def positive_scalar(name: str, value: Any, strict: bool = True) -> float:
+def finite_scalar(name: str, value: Any) -> float:
+    """``value`` as a finite float (-0.0 made 0.0, see :func:`frozen`); a boolean, text or
+    an array is refused by name."""
     if isinstance(value, (bool, np.bool_)):  # True would be read as 1.0
         raise ValueError(f"{name} must be a number, got the boolean {plain(value)}")
     if isinstance(value, (str, bytes)):  # numpy reads "1e9" as 1e9, but the caller keeps text
@@ -51,8 +53,51 @@ def positive_scalar(name: str, value: Any, strict: bool = True) -> float:
     arr = as_finite_array(name, value)
     if arr.ndim != 0:
         raise ValueError(f"{name} must be a scalar, got shape {arr.shape}")
-    require_positive(name, arr, strict)
-    return float(arr)
+    return float(arr) + 0.0
+
+
+def positive_scalar(name: str, value: Any, strict: bool = True) -> float:
+    number = finite_scalar(name, value)
+    require_positive(name, np.asarray(number), strict)
+    return number
+
+
+def boolean(name: str, value: Any) -> bool:
+    """``value`` as a boolean; text ("no", "false": both true in Python) and numbers are
+    refused as the case files refuse them."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise ValueError(
+            f"{name} must be true or false (a boolean, without quotes), got {plain(value)}"
+        )
+    return bool(value)
+
+
+def whole_number(name: str, value: Any, allowed: tuple[int, ...]) -> int:
+    """``value`` as one of the integers ``allowed`` (a float, a boolean or text is refused)."""
+    if not is_count(value, min(allowed)) or int(value) not in allowed:
+        raise ValueError(
+            f"{name} must be one of {', '.join(map(str, allowed))} (a whole number), "
+            f"got {plain(value)}"
+        )
+    return int(value)
+
+
+def frozen(value: Any, dtype: Any = None) -> NDArray[Any]:
+    """A read-only copy of ``value``, a float array's signed zeros made +0.0: a -0.0 reaches
+    copysign, 1/x and the sign tests of the kernels (friction -0.0 ended a pushover failed
+    where 0.0 collapses), and a model changed after it was built answers another question."""
+    arr = np.array(value, dtype=dtype)
+    if arr.dtype.kind == "f":
+        arr += 0.0
+    arr.flags.writeable = False
+    return arr
+
+
+def read_only(arr: NDArray[Any]) -> NDArray[Any]:
+    """A read-only view of ``arr`` (the array itself stays writable for its owner)."""
+    view = arr.view()
+    view.flags.writeable = False
+    return view
 
 
 def is_number(value: Any) -> bool:
@@ -118,9 +163,28 @@ def is_count(value: Any, least: int) -> bool:
     return isinstance(value, Integral) and not isinstance(value, bool) and int(value) >= least
 
 
-def count(default: int, least: int) -> int:
-    """A field that takes an integer >= ``least`` (a boolean or a float is refused)."""
-    return checked(default, lambda v: is_count(v, least), f"an integer >= {least}")
+#: the largest value of a count field (an iteration budget, a window, a number of steps):
+#: 10^8 iterations of the smallest wall take days, and a window or a history of that many
+#: entries would not fit in memory
+MOST_COUNT = 10**8
+#: the finest grid of contact points of the limit analysis (grid x grid points on each
+#: interface, each a column per friction direction): 8 is the non-associative default, and
+#: 100 000 asked for 74.5 GiB before anything named it
+GRID_MOST = 32
+
+
+def count(default: int, least: int, most: int = MOST_COUNT) -> int:
+    """A field that takes an integer from ``least`` to ``most`` (a boolean or a float is
+    refused)."""
+    return field(
+        default=default,
+        metadata={
+            "test": lambda v: is_count(v, least) and int(v) <= most,
+            "what": f"an integer from {least} to {most:.0e}".replace("e+0", "e"),
+            "least": least,
+            "most": most,
+        },
+    )
 
 
 def choice(default: T, allowed: tuple[str, ...]) -> T:

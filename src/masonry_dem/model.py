@@ -10,6 +10,7 @@ import logging
 import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from fractions import Fraction
 from typing import Any, Literal, get_args
 
 import numpy as np
@@ -19,9 +20,13 @@ from masonry_dem._arrays import BoolArray, FloatArray
 from masonry_dem._validation import (
     as_finite_array,
     block_indices,
+    boolean,
     check_choice,
+    finite_scalar,
+    frozen,
     plain,
     positive_scalar,
+    whole_number,
 )
 from masonry_dem.constitutive.strength import PROJECTIONS
 from masonry_dem.geometry.blocks import Blocks
@@ -73,12 +78,11 @@ class InterfaceMaterial:
     projection: str = "energy"
 
     def __post_init__(self) -> None:
-        positive_scalar("kn", self.kn)
-        positive_scalar("kt", self.kt)
-        positive_scalar("friction", self.friction, strict=False)
-        positive_scalar("tensile_strength", self.tensile_strength, strict=False)
-        if self.alpha is not None:
-            positive_scalar("alpha", self.alpha)
+        for name in ("kn", "kt", "friction", "tensile_strength", "alpha"):
+            value = getattr(self, name)
+            if value is not None or name != "alpha":
+                strict = name in ("kn", "kt", "alpha")
+                object.__setattr__(self, name, positive_scalar(name, value, strict=strict))
         for name, allowed in LAW_OPTIONS.items():
             check_choice(name, getattr(self, name), allowed)
 
@@ -203,6 +207,9 @@ class SelfWeight:
 
     live: bool = False
 
+    def __post_init__(self) -> None:
+        boolean("SelfWeight.live", self.live)
+
     def vector(self, blocks: Blocks) -> FloatArray:
         """(n, 6) generalised forces at the block centres."""
         out = np.zeros((blocks.count, 6))
@@ -219,12 +226,19 @@ class WeightProportional:
     live: bool = True
     blocks: ArrayLike | None = None
 
+    def __post_init__(self) -> None:
+        boolean("WeightProportional.live", self.live)
+
     def vector(self, blocks: Blocks) -> FloatArray:
         """(n, 6) generalised forces at the block centres."""
         d = as_finite_array("direction", self.direction, (3,))
+        largest = float(np.abs(d).max())
+        if largest == 0:
+            raise ValueError(f"direction must be a non-zero vector, got {plain(d.tolist())}")
         norm = np.linalg.norm(d)
-        if norm == 0:
-            raise ValueError("direction must be a non-zero vector, got (0, 0, 0)")
+        if not 1e-100 < norm < 1e100:  # its squares under- or overflow: scaled first
+            d = d / largest
+            norm = np.linalg.norm(d)
         out = np.zeros((blocks.count, 6))
         sel = (
             slice(None)
@@ -246,13 +260,15 @@ class Pressure:
     live: bool = True
     blocks: ArrayLike | None = None
 
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "value", finite_scalar("pressure", self.value))
+        whole_number("pressure axis", self.axis, (0, 1, 2))
+        whole_number("pressure sign", self.sign, (-1, 1))
+        boolean("Pressure.live", self.live)
+
     def vector(self, blocks: Blocks) -> FloatArray:
         """(n, 6) generalised forces at the block centres."""
-        p = float(as_finite_array("pressure", self.value))
-        if self.axis not in (0, 1, 2):
-            raise ValueError(f"pressure axis must be 0, 1 or 2, got {plain(self.axis)}")
-        if self.sign not in (-1, 1):
-            raise ValueError(f"pressure sign must be +1 or -1, got {plain(self.sign)}")
+        p = self.value
         others = [k for k in range(3) if k != self.axis]
         area = blocks.sizes[:, others[0]] * blocks.sizes[:, others[1]]
         out = np.zeros((blocks.count, 6))
@@ -275,6 +291,9 @@ class PointLoad:
     offset: Sequence[float] = (0.0, 0.0, 0.0)
     live: bool = False
 
+    def __post_init__(self) -> None:
+        boolean("PointLoad.live", self.live)
+
     def vector(self, blocks: Blocks) -> FloatArray:
         """(n, 6) generalised forces at the block centres."""
         idx = block_indices("PointLoad.blocks", self.blocks, blocks.count)
@@ -295,6 +314,61 @@ LOAD_TYPES: dict[str, type[Load]] = {
     "pressure": Pressure,
     "point": PointLoad,
 }
+
+
+def _kind(value: object) -> str:
+    return f"{type(value).__name__} {plain(value)}"
+
+
+def _check_build(
+    blocks: object,
+    material: object,
+    supports: object,
+    loads: object,
+    interfaces: object,
+    overrides: object,
+) -> None:
+    """What :meth:`Model.build` is given, checked by name before anything uses it (the
+    attribute or index errors it would otherwise raise name none of it)."""
+    if not isinstance(blocks, Blocks):
+        raise ValueError(
+            f"Model.build: blocks must be a Blocks (from a builder such as running_bond_wall, "
+            f"or Blocks.from_boxes), got {_kind(blocks)}"
+        )
+    if not isinstance(material, InterfaceMaterial):
+        raise ValueError(
+            f"Model.build: material must be an InterfaceMaterial (a table of kn, kt, friction "
+            f"... is InterfaceMaterial(**table)), got {_kind(material)}"
+        )
+    if interfaces is not None and not isinstance(interfaces, Interfaces):
+        raise ValueError(
+            f"Model.build: interfaces must be an Interfaces (detect_interfaces(blocks)) or "
+            f"None, got {_kind(interfaces)}"
+        )
+    for name, items, kinds, hint in (
+        ("supports", supports, (Support,), "Support(select.base(blocks))"),
+        ("loads", loads, tuple(LOAD_TYPES.values()), "SelfWeight(), WeightProportional()"),
+    ):
+        if isinstance(items, (str, bytes)) or not isinstance(items, Sequence):
+            raise ValueError(f"Model.build: {name} must be a list, got {_kind(items)}")
+        for k, item in enumerate(items):
+            if not isinstance(item, kinds):
+                allowed = " or ".join(t.__name__ for t in kinds)
+                raise ValueError(
+                    f"Model.build: {name}[{k}] must be a {allowed} (e.g. {hint}), got {_kind(item)}"
+                )
+    if isinstance(overrides, (str, bytes)) or not isinstance(overrides, Sequence):
+        raise ValueError(f"Model.build: material_overrides must be a list, got {_kind(overrides)}")
+    for k, pair in enumerate(overrides):
+        if (
+            not isinstance(pair, Sequence)
+            or len(pair) != 2
+            or not isinstance(pair[1], InterfaceMaterial)
+        ):
+            raise ValueError(
+                f"Model.build: material_overrides[{k}] must be a pair (block indices, "
+                f"InterfaceMaterial), got {_kind(pair)}"
+            )
 
 
 # --------------------------------------------------------------------------- model
@@ -323,6 +397,11 @@ class Model:
     memory: Memory = "none"
     projection: str = "energy"
 
+    def __post_init__(self) -> None:
+        for name in ("kn", "kt", "friction", "tensile_strength", "alpha", "dead", "live"):
+            object.__setattr__(self, name, frozen(getattr(self, name), float))
+        object.__setattr__(self, "fixed", frozen(self.fixed, bool))
+
     @classmethod
     def build(
         cls,
@@ -341,6 +420,7 @@ class Model:
         ``material_overrides`` assigns other materials to interfaces touching given blocks
         (e.g. the joint with a rigid base).
         """
+        _check_build(blocks, material, supports, loads, interfaces, material_overrides)
         n = blocks.count
         fixed = np.zeros((n, 6), dtype=bool)
         for sup in supports:
@@ -356,7 +436,8 @@ class Model:
             return np.array([mat.kn, mat.kt, mat.friction, mat.tensile_strength, alpha])
 
         props = np.tile(per_interface(material), (m, 1))
-        for blk, mat in material_overrides:
+        for k, (blk, mat) in enumerate(material_overrides):
+            blk = block_indices(f"material_overrides[{k}] blocks", blk, n)
             touch = np.isin(its.block_i, blk) | np.isin(its.block_j, blk)
             props[touch] = per_interface(mat)
         props[:, 4] = np.where(np.isnan(props[:, 4]), 1.5, props[:, 4])
@@ -446,53 +527,128 @@ class Model:
         """Each connected group must have its six rigid-body motions stopped by its fixed DOFs.
 
         Anchoring a group by *some* fixed DOF is not enough (e.g. only the translations of
-        one base block, or no DOF along e3 anywhere). Such K_ff is
-        singular in exact arithmetic, but splu usually factors it anyway in floating point
-        and returns a meaningless displacement instead of an error. Elastic interfaces of
-        positive area make each connected group rigid under zero energy, so K_ff is regular
-        iff, per group, the fixed-DOF rows of the rigid-motion map q_b = [u0 + w x r_b, w]
-        have rank 6. Checked with one batched 6 x 6 Gram matrix per group (no loop).
+        one base block, or no DOF along e3 anywhere): K_ff is then singular, though splu
+        often factors it in floating point and returns a meaningless displacement. Elastic
+        interfaces of positive area make each connected group rigid under zero energy, so
+        K_ff is regular iff, per group, the fixed-DOF rows of the rigid-motion map
+        q_b = [u0 + w x r_b, w] have rank 6. The rank is found exactly (integer arithmetic
+        on the arms r_b counted in :data:`ARM_QUANTUM` of the smallest block), so it does
+        not depend on the size of the group: a tolerance on a Gram matrix took a column of
+        800 cubes on a fixed base, its arms 400 block sizes long, for a mechanism.
         """
-        b, d = np.nonzero(self.fixed)  # fixed (block, dof) pairs
-        lab = label[b]
-        # arms from each group's centroid, in units of a block size, for a well-scaled Gram
-        count = np.bincount(label, minlength=ncomp).astype(float)
-        centroid = (
-            np.stack(
-                [np.bincount(label, self.blocks.centres[:, k], ncomp) for k in range(3)], axis=1
-            )
-            / count[:, None]
-        )
+        b, d = np.nonzero(self.fixed)  # fixed (block, dof) pairs, block-major
+        span = float(np.ptp(self.blocks.centres, axis=0).max())
+        # the arms stay well inside int64 whatever the wall's extent
+        quantum = max(ARM_QUANTUM * float(self.blocks.sizes.min()), span * 2.0**-50)
+        order = np.argsort(label[b], kind="stable")
+        groups = np.split(order, np.flatnonzero(np.diff(label[b][order])) + 1)
+        for rows in groups:
+            group = int(label[b[rows[0]]])
+            origin = self.blocks.centres[b[rows[0]]]
+            arms = np.rint((self.blocks.centres[b[rows]] - origin) / quantum).astype(np.int64)
+            basis = _exact_rank(_motion_rows(d[rows], arms))
+            if len(basis) < 6:
+                self._refuse_free_motion(label, group, basis, origin, quantum)
+
+    def _refuse_free_motion(
+        self,
+        label: NDArray[np.int32],
+        group: int,
+        basis: list[tuple[int, list[Fraction]]],
+        origin: FloatArray,
+        quantum: float,
+    ) -> None:
+        """The ValueError of a group whose fixed DOFs leave rigid motions free, with one of
+        them about the group's centroid, its translation in block sizes."""
+        members = np.flatnonzero(label == group)
+        pivots = {col: row for col, row in basis}
+        free = next(c for c in range(6) if c not in pivots)
+        mode = np.zeros(6)
+        mode[free] = 1.0
+        for col, row in pivots.items():
+            mode[col] = -float(row[free])
+        u0, w = mode[:3], mode[3:] / quantum  # rotations per quantum of arm -> per metre
+        centroid = self.blocks.centres[members].mean(axis=0)
         length = float(np.median(self.blocks.sizes))
-        r = (self.blocks.centres[b] - centroid[lab]) / length
-        rows = np.zeros((b.size, 6))
-        rows[np.arange(b.size), d] = 1.0  # u_a of a translation DOF, w_a of a rotation DOF
-        # translation DOF a also sees (w x r)_a = sum_c C[a, c] w_c, C = -[r]x
-        zero = np.zeros(b.size)
-        C = np.stack(
-            [
-                np.stack([zero, r[:, 2], -r[:, 1]], axis=1),
-                np.stack([-r[:, 2], zero, r[:, 0]], axis=1),
-                np.stack([r[:, 1], -r[:, 0], zero], axis=1),
-            ],
-            axis=1,
-        )  # (k, 3, 3)
-        trans = d < 3
-        rows[trans, 3:] = C[trans, d[trans], :]
-        gram = np.zeros((ncomp, 6, 6))
-        np.add.at(gram, lab, rows[:, :, None] * rows[:, None, :])
-        eig, vec = np.linalg.eigh(gram)
-        weak = eig[:, 0] <= 1e-10 * np.maximum(eig[:, -1], 1.0)
-        if weak.any():
-            c = int(np.argmax(weak))
-            first = int(np.flatnonzero(label == c)[0])
-            free_modes = int(np.sum(eig[c] <= 1e-10 * max(eig[c, -1], 1.0)))
-            mode = vec[c, :, 0]
-            mode = np.round(mode / np.abs(mode).max(), 3) + 0.0  # +0.0: no "-0.0"
-            raise ValueError(
-                f"supports: the fixed DOFs leave {free_modes} rigid-body motion(s) of the group "
-                f"of {int(count[c])} block(s) containing block {first} free (e.g. "
-                f"(u1, u2, u3, w1, w2, w3) ~ {mode.tolist()}, u in block sizes, about its "
-                f"centroid); "
-                "the assembly is a mechanism: fix more DOFs"
-            )
+        motion = np.concatenate([(u0 + np.cross(w, centroid - origin)) / length, w])
+        motion = np.round(motion / np.abs(motion).max(), 3) + 0.0  # +0.0: no "-0.0"
+        raise ValueError(
+            f"supports: the fixed DOFs leave {6 - len(basis)} rigid-body motion(s) of the group "
+            f"of {members.size} block(s) containing block {int(members[0])} free (e.g. "
+            f"(u1, u2, u3, w1, w2, w3) ~ {motion.tolist()}, u in block sizes, about its "
+            f"centroid); "
+            "the assembly is a mechanism: fix more DOFs"
+        )
+
+
+#: the unit the arms of the free-body check are counted in, a share of the smallest block:
+#: far below any gap a builder leaves, far above the round-off of a centre
+ARM_QUANTUM = 1e-6
+
+
+def _motion_rows(dofs: NDArray[np.intp], arms: NDArray[np.int64]) -> list[tuple[int, ...]]:
+    """The distinct rows (u1, u2, u3, w1, w2, w3) of the rigid motion seen by fixed DOFs:
+    rotation DOF k sees w_k; translation DOF a at arm r sees u_a + w_p r_q - w_q r_p
+    ((p, q) the axes after a), in whole quanta. Rotations first: one pins a column at once."""
+    rows = np.zeros((dofs.size, 6), dtype=np.int64)
+    turn = dofs >= 3
+    rows[np.flatnonzero(turn), dofs[turn]] = 1
+    k = np.flatnonzero(~turn)
+    a = dofs[k]
+    p, q = (a + 1) % 3, (a + 2) % 3
+    rows[k, a] = 1
+    rows[k, 3 + p] = arms[k, q]
+    rows[k, 3 + q] = -arms[k, p]
+    unique = np.unique(rows, axis=0)
+    unique = unique[np.argsort(unique[:, :3].any(axis=1), kind="stable")]
+    return [tuple(r) for r in unique.tolist()]
+
+
+def _exact_rank(rows: list[tuple[int, ...]]) -> list[tuple[int, list[Fraction]]]:
+    """A reduced row-echelon basis of ``rows`` (pivot column, row), in exact arithmetic; it
+    stops at rank 6."""
+    basis: list[tuple[int, list[Fraction]]] = []
+    for raw in rows:
+        row = [Fraction(x) for x in raw]
+        for pivot, b in basis:
+            if row[pivot]:
+                f = row[pivot]
+                row = [x - f * y for x, y in zip(row, b, strict=True)]
+        lead = next((c for c, x in enumerate(row) if x), None)
+        if lead is None:
+            continue
+        row = [x / row[lead] for x in row]
+        basis = [
+            (c, [x - b[lead] * y for x, y in zip(b, row, strict=True)] if b[lead] else b)
+            for c, b in basis
+        ]
+        basis.append((lead, row))
+        if len(basis) == 6:
+            break
+    return basis
+
+
+def require_model(who: str, value: object) -> Model:
+    """``value`` if it is a built :class:`Model`, else a ValueError saying how to make one
+    (``who``: the function that was given it)."""
+    if not isinstance(value, Model):
+        raise ValueError(
+            f"{who}: model must be a Model (Model.build(blocks, material, supports, loads) or "
+            f"load_case(path).model), got {_kind(value)}"
+        )
+    return value
+
+
+def check_bound(bound: object) -> None:
+    """An upper bound of the collapse multiplier is a finite number, a function of the model
+    or None."""
+    if bound is None or callable(bound):
+        return
+    if isinstance(bound, (bool, np.bool_, str, bytes)) or not isinstance(
+        bound, (int, float, np.integer, np.floating)
+    ):
+        raise ValueError(
+            "bound must be a number (an upper bound of lambda), a function of the model or "
+            f"None, got {_kind(bound)}"
+        )
+    finite_scalar("bound", bound)

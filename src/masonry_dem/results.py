@@ -13,6 +13,7 @@ from numpy.typing import NDArray
 
 # re-exported: the names of the codes of StepResult.state (docs/rendering.md)
 from masonry_dem._arrays import FloatArray
+from masonry_dem._validation import read_only
 from masonry_dem.constitutive.states import STATE_NAMES as STATE_NAMES
 from masonry_dem.export.results_folder import recorded_dof_of, save_pushover_rows
 from masonry_dem.solvers.static.outcome import Status, StopReason
@@ -39,6 +40,12 @@ class StepResult:
     flags: NDArray[np.int32] | None = None
     control_displacement: float = 0.0
     iterations: int = 0
+
+    def __post_init__(self) -> None:
+        for name in ("q", "actions", "state", "utilisation", "flags"):
+            value = getattr(self, name)
+            if isinstance(value, np.ndarray):
+                object.__setattr__(self, name, read_only(value))
 
 
 class Steps(Protocol):

@@ -109,10 +109,22 @@ def test_pushover_names_the_monitored_block_and_dof(tmp_path):
     y = model.blocks.centres[:, 1]
     middle = np.abs(y - np.median(y[~model.fixed.all(axis=1)]))
     block = int(np.argmin(np.where(model.fixed.all(axis=1), np.inf, middle)))  # mid-height
-    pushover(model, out=tmp_path / "run", monitor=(block, "u3"))
+    csv_path = tmp_path / "run" / "pushover.csv"
+    while_running: list[tuple[str, int]] = []  # (header, rows) as each step is handed over
+
+    def look(step) -> None:
+        lines = csv_path.read_text().splitlines()
+        while_running.append((lines[0], len(lines) - 1))
+
+    history = pushover(model, out=tmp_path / "run", monitor=(block, "u3"), callback=look)
     assert control_dof(tmp_path / "run") == (block, "u3")
-    header = (tmp_path / "run" / "pushover.csv").read_text().splitlines()[0]
+    header = csv_path.read_text().splitlines()[0]
     assert header == f"step,lambda,control_displacement [m] block {block} u3"
+    # written row by row, the file names the same DOF as soon as a step has moved it, and
+    # its header at the last step is the one the end of the run writes again
+    assert [rows for _, rows in while_running] == list(range(1, len(history.steps) + 1))
+    assert while_running[-1][0] == header
+    assert {h for h, _ in while_running[1:]} == {header}
     shutil.rmtree(tmp_path / "run" / "steps")  # the header alone names it
     assert control_dof(tmp_path / "run") == (block, "u3")
     assert control_label((block, "u3")) == (f"block {block}, u3 [mm]", 1e3)

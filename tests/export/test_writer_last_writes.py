@@ -57,8 +57,8 @@ def test_a_ctrl_c_during_the_last_writes_is_recorded_as_interrupted(tmp_path, mo
 def test_a_ctrl_c_while_overwrite_clears_the_old_run_leaves_no_half_folder(tmp_path, monkeypatch):
     """``run --overwrite`` interrupted while it removed the previous run's files left part
     of them (463 step files of 2 002) and no summary.json at all. The removal and the new
-    summary now finish first; the signal then stops the run, whose folder a later command
-    names unfinished (summary ``running``, no lock), like that of a killed run."""
+    summary now finish first; the signal then stops the run, and the summary says it was
+    interrupted before its first step."""
     model = _wall_model()
     out = tmp_path / "out"
     pushover(model, StaticSettings(max_steps=3), out=out)
@@ -73,5 +73,5 @@ def test_a_ctrl_c_while_overwrite_clears_the_old_run_leaves_no_half_folder(tmp_p
     with pytest.raises(KeyboardInterrupt):
         ResultsWriter(out, model, overwrite=True)
     assert not list((out / "steps").glob("*.vtu"))
-    assert json.loads((out / rf.SUMMARY).read_text())["status"] == "running"
-    assert rf.state(out).kind == "unfinished"
+    assert json.loads((out / rf.SUMMARY).read_text())["status"] == "interrupted"
+    assert rf.state(out).kind == "interrupted"

@@ -236,7 +236,10 @@ def test_facade_openings_cut_the_facade_only():
 @pytest.mark.parametrize(
     ("call", "message"),
     [
-        (lambda: u_wall(0, 3, 0.1, 0.2, 0.1, GAMMA), "blocks_along_length must be a positive"),
+        (
+            lambda: u_wall(0, 3, 0.1, 0.2, 0.1, GAMMA),
+            "blocks_along_length must be a whole number from 1",
+        ),
         (lambda: u_wall(1, 3, 0.1, 0.2, 0.1, GAMMA), "too short for two corners"),
         (lambda: l_wall(4, 3, 0.1, 0.2, 0.1, GAMMA, return_blocks=0), "return_blocks must be"),
         (lambda: l_wall(4, 3, 0.1, 0.2, 0.2, GAMMA, return_blocks=1), "must reach behind"),

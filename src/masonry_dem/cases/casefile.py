@@ -74,8 +74,9 @@ class Case:
 def _unknown(section: str, given: dict[str, Any], allowed: set[str]) -> None:
     extra = sorted(set(given) - allowed)
     if extra:
+        shown = [k if len(k) <= 60 else f"{k[:57]}... ({len(k)} characters)" for k in extra]
         raise ValueError(
-            f"case file [{section}]: unknown key(s) {extra}; allowed: {sorted(allowed)}"
+            f"case file [{section}]: unknown key(s) {shown}; allowed: {sorted(allowed)}"
         )
 
 
@@ -224,6 +225,7 @@ def case_from_dict(data: dict[str, Any], source: str = "<dict>") -> Case:
     for k, spec in enumerate(data.get("loads", [{"type": "self_weight"}])):
         with _at(source, f"[loads][{k}]"):
             loads.append(_load(spec, blocks, wall, base, k))
+            loads[-1].vector(blocks)  # what it refuses is named here, not as a support
     analysis = dict(data.get("analysis", {}))
     control_spec = analysis.pop("control", None)
     monitor_spec = analysis.pop("monitor", None)
@@ -309,8 +311,15 @@ def read_case_data(path: str | Path | None = None) -> tuple[dict[str, Any], str]
             f"case file {p} is not UTF-8 text (byte {exc.start}: {raw[exc.start : exc.start + 1]!r}); "
             "save it as UTF-8"
         ) from exc
+    # a byte-order mark, which some editors write, is no TOML statement: the text after it is
+    text = text.removeprefix("\ufeff")
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise CaseError(f"case file {p} is not valid TOML: {exc}") from exc
+    except RecursionError as exc:  # the parser recurses once per nested array or table
+        raise CaseError(
+            f"case file {p} nests arrays or inline tables too deeply to be read; a case file "
+            "needs two levels (a list of [x, y, z] corners)"
+        ) from exc
     return data, str(p)

@@ -16,6 +16,7 @@ function's annotations; ``[analysis]`` holds the fields of ``StaticSettings`` pl
 from __future__ import annotations
 
 import difflib
+import functools
 import inspect
 import logging
 import math
@@ -26,7 +27,7 @@ from typing import Annotated, Any
 from pydantic import AfterValidator, BaseModel, ConfigDict, ValidationError, create_model
 from pydantic_core import PydanticCustomError
 
-from masonry_dem._validation import plain
+from masonry_dem._validation import GRID_MOST, plain
 from masonry_dem.model import LAW_OPTIONS, InterfaceMaterial
 
 log = logging.getLogger(__name__)
@@ -184,6 +185,17 @@ RANGES: dict[str, Range] = {
     "block": Range(0, 10**9, "", "a block index, counted from 0", integer=True),
     "target": Range(-1e3, 1e3, "m or rad", "a displacement to reach; not 0"),
     "steps": Range(1, 10**6, "", "steps to the target", integer=True),
+    # plans (walls that meet)
+    "return_blocks": _COUNT,
+    "blocks_along_depth": _COUNT,
+    # [analysis] of the limit analysis
+    "grid": Range(
+        2,
+        GRID_MOST,
+        "",
+        "contact points along each side of an interface, grid x grid per interface",
+        integer=True,
+    ),
 }
 
 DOF_NAMES = ("u1", "u2", "u3", "w1", "w2", "w3")
@@ -401,11 +413,12 @@ ANALYSIS_EXTRA: dict[str, tuple[Any, Any]] = {
     # limit analysis instead of a pushover (``masonry-dem limit``): the method and its options
     "method": (_choice(("pushover", "limit")), "pushover"),
     "associative": (bool | None, None),
-    "grid": (int | None, None),
+    "grid": (_number("grid") | None, None),
     "backend": (_choice(("highs", "clarabel")) | None, None),
 }
 
 
+@functools.cache  # a pydantic model takes milliseconds to make: once per settings type
 def _analysis_table(settings_type: type) -> type[BaseModel]:
     """The ``[analysis]`` table: every field of ``settings_type`` (StaticSettings), typed by
     :data:`RANGES` or its annotation, string options by the solver's own constants."""
@@ -420,13 +433,20 @@ def _analysis_table(settings_type: type) -> type[BaseModel]:
         pass
     spec: dict[str, Any] = {}
     for f in fields(settings_type):
-        kind = _choice(choices[f.name]) if f.name in choices else _by_annotation(f.name, f.type)
+        if f.name in choices:
+            kind = _choice(choices[f.name])
+        elif f.name not in RANGES and "most" in f.metadata:  # a count() field: its own range
+            rng = Range(f.metadata["least"], f.metadata["most"], "", "a count", integer=True)
+            kind = Annotated[int, AfterValidator(rng.check)]
+        else:
+            kind = _by_annotation(f.name, f.type)
         default = None if f.default is MISSING else f.default
         spec[f.name] = (kind | None if default is None and kind is not Any else kind, default)
     spec.update(ANALYSIS_EXTRA)
     return _table("Analysis", spec)
 
 
+@functools.cache  # once per builder: a sweep checks a case per point
 def _geometry_table(builder: str, func: Callable) -> type[BaseModel]:
     spec: dict[str, Any] = {
         "builder": str,
@@ -477,9 +497,16 @@ def _path(loc: tuple) -> str:
             out += f"[{item}]"
             dotted = True
         else:
-            out += f".{item}" if out else str(item)
+            key = _short(str(item))
+            out += f".{key}" if out else key
             dotted = True
     return out
+
+
+def _short(key: str, most: int = 60) -> str:
+    """A key as it is shown in a message: a long one cut, with its length (a key of 10^5
+    characters was echoed whole)."""
+    return key if len(key) <= most else f"{key[: most - 3]}... ({len(key)} characters)"
 
 
 def _message(err: Mapping[str, Any], table: tuple, allowed: list[str]) -> str:
@@ -490,11 +517,12 @@ def _message(err: Mapping[str, Any], table: tuple, allowed: list[str]) -> str:
     if kind == "extra_forbidden":
         key = str(loc[-1])
         close = [a for a in allowed if a.lower() == key.lower()]
-        close = close or difflib.get_close_matches(key.lower(), allowed, n=1)
+        if len(key) <= 100:  # difflib is quadratic in the key's length
+            close = close or difflib.get_close_matches(key.lower(), allowed, n=1)
         top_table = not table and isinstance(value, (dict, list))  # a [table] of the file
         hint = f" (did you mean {f'[{close[0]}]' if top_table else close[0]}?)" if close else ""
         if top_table:
-            where = f"[{key}]"
+            where = f"[{_short(key)}]"
         return f"{where}: unknown key{hint}; allowed: {', '.join(sorted(allowed))}"
     if kind == "missing":
         return f"{where} is missing"

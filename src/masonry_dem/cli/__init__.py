@@ -66,6 +66,31 @@ def version() -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
+    from masonry_dem._signals import exit_code, interruption, raise_on_signals
+
+    debug = "--debug" in (sys.argv[1:] if argv is None else argv)
+    try:
+        # from the first line: a Ctrl-C while the parser loads the commands' modules (VTK,
+        # numba) is one line and 130 as one during the run is
+        with raise_on_signals():
+            return _run(argv)
+    except KeyboardInterrupt as exc:  # Ctrl-C, SIGTERM: the results folder says so too
+        if debug:
+            traceback.print_exc()
+        print(f"masonry-dem: {exc or 'interrupted'}", file=sys.stderr)
+        return exit_code(exc)
+    except (SystemError, ImportError) as exc:  # a signal inside a kernel's call or an import
+        signal = interruption(exc)
+        if signal is None:
+            raise
+        if debug:
+            traceback.print_exc()
+        print(f"masonry-dem: {signal or 'interrupted'}", file=sys.stderr)
+        return exit_code(signal)
+
+
+def _run(argv: list[str] | None) -> int:
+    """The command line after its signals are handled (see :func:`main`)."""
     from masonry_dem._threads import set_thread_wait_policy
 
     set_thread_wait_policy()  # before any kernel starts OpenMP (it reads the policy once)
@@ -78,24 +103,8 @@ def main(argv: list[str] | None = None) -> int:
     if not getattr(args, "func", None):
         parser.print_help()
         return 2
-    from masonry_dem._signals import exit_code, interruption, raise_on_signals
-
     try:
-        with raise_on_signals():  # the run command stops between steps instead
-            return int(args.func(args) or 0)
-    except KeyboardInterrupt as exc:  # Ctrl-C, SIGTERM: the results folder says so too
-        if args.debug:
-            traceback.print_exc()
-        print(f"masonry-dem: {exc or 'interrupted'}", file=sys.stderr)
-        return exit_code(exc)
-    except SystemError as exc:  # a signal raised inside a compiled kernel's call
-        signal = interruption(exc)
-        if signal is None:
-            raise
-        if args.debug:
-            traceback.print_exc()
-        print(f"masonry-dem: {signal or 'interrupted'}", file=sys.stderr)
-        return exit_code(signal)
+        return int(args.func(args) or 0)
     except USER_ERRORS as exc:
         if args.debug:
             traceback.print_exc()

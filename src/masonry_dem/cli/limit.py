@@ -49,14 +49,19 @@ def run_limit(case, out: Path, options: dict, render: bool = True, overwrite: bo
     """Run the limit analysis of a loaded case into ``out``, a folder this run claims as
     ``run`` does (refused if it holds another run, unless ``overwrite``); returns the
     summary."""
+    from masonry_dem._signals import run_interruptible
     from masonry_dem.export.limit_results import write_limit_results
-    from masonry_dem.export.results_folder import claim, write_summary
+    from masonry_dem.export.results_folder import claim, record_stopped, write_summary
     from masonry_dem.solvers.limit_analysis import limit_analysis
 
     folder = claim(out, overwrite, {"case": case.source, "analysis": "limit"})
     try:
         t0 = time.perf_counter()
-        result = limit_analysis(case.model, **options)
+        try:
+            result = run_interruptible(lambda: limit_analysis(case.model, **options))
+        except BaseException as exc:  # a signal or an error: summary.json says so
+            record_stopped(out, exc)
+            raise
         summary = write_limit_results(
             out,
             case.model,
@@ -100,4 +105,10 @@ def limit_command(args: argparse.Namespace) -> int:
     )
     print(f"{summary['status']}: {summary['reason']}")
     print(results_line(out))
-    return 0 if summary["status"] == "collapse" else 1
+    return exit_code(summary["status"])
+
+
+def exit_code(status: str) -> int:
+    """0 for an answer (a collapse, or none possible: the pushover's ``completed``), 1 for a
+    limit analysis that failed."""
+    return 0 if status in ("collapse", "no collapse") else 1

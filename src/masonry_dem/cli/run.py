@@ -69,7 +69,8 @@ class _Bar(Progress):
 
 def _refused(args: argparse.Namespace, model: Model | None = None) -> bool:
     """Print why the run would not fit (before the model is built when the case's geometry
-    can be counted, else after) and say so; print the estimate of a built model."""
+    can be counted, else after) and say so; print the estimate of a built model and keep
+    it (``args.estimate``) for an out-of-memory error to quote."""
     from masonry_dem.solvers.resources import TooLarge
 
     try:
@@ -77,6 +78,7 @@ def _refused(args: argparse.Namespace, model: Model | None = None) -> bool:
     except TooLarge as exc:
         print(f"masonry-dem run: refused: {exc}", file=sys.stderr)
         return True
+    args.estimate = est
     if model is not None and est is not None and not args.quiet:
         print(f"estimate: {est.describe()}", file=sys.stderr)
     return False
@@ -92,7 +94,7 @@ def run_command(args: argparse.Namespace) -> int:
         return 2
     out = Path(args.out)
     if case.method == "limit":  # [analysis] method = "limit"
-        from masonry_dem.cli.limit import run_limit
+        from masonry_dem.cli.limit import exit_code, run_limit
 
         summary = run_limit(
             case, out, dict(case.limit_options or {}), not args.no_render, args.overwrite
@@ -100,15 +102,20 @@ def run_command(args: argparse.Namespace) -> int:
         print(json.dumps({k: summary[k] for k in ("status", "lambda", "method", "bound")}))
         print(f"{summary['status']}: {summary['reason']}")
         print(results_line(out))
-        return 0 if summary["status"] == "collapse" else 1
-    summary = run_case(
-        case,
-        out,
-        overwrite=args.overwrite,
-        bound=not args.no_bound,
-        render=not args.no_render,
-        progress=_Bar(case.model.name, args.quiet),
-    )
+        return exit_code(summary["status"])
+    try:
+        summary = run_case(
+            case,
+            out,
+            overwrite=args.overwrite,
+            bound=not args.no_bound,
+            render=not args.no_render,
+            progress=_Bar(case.model.name, args.quiet),
+        )
+    except MemoryError as exc:  # an allocation failed, wherever: with what was expected
+        est = getattr(args, "estimate", None)
+        expected = f"; estimated {est.describe()}" if est is not None else ""
+        raise MemoryError(f"{exc}{expected}") from exc
     keys = ("status", "lambda", "steps", "seconds", "blocks", "interfaces")
     print(json.dumps({k: summary[k] for k in keys}))
     print(f"{summary['status']}: {summary['reason']}")

@@ -142,7 +142,7 @@ class InterfaceLaw:
         scalar ``tensile_force`` was read past its end)."""
         m = self.kbar.shape[0]
         ft = checked_field("tensile_force", self.tensile_force, m, minimum=0.0, strict=False)
-        return np.ascontiguousarray(ft)
+        return writable_c(ft)
 
     def _check(self, trial: np.ndarray, ft: np.ndarray) -> StrengthCheck:
         if not np.isfinite(trial.sum()):  # one cheap test; _actions says what is wrong
@@ -188,7 +188,7 @@ class InterfaceLaw:
         calls."""
         kernel = forces.for_rows(self.kbar.shape[0])
         rel, trial, ft, actions, flags, internal, finite = kernel(
-            np.ascontiguousarray(x, dtype=float), *self.kernel_operands(H, plastic, cracked, H_T)
+            writable_c(x), *self.kernel_operands(H, plastic, cracked, H_T)
         )
         if not finite:
             checked_actions(trial)  # says which action is not finite

@@ -26,10 +26,14 @@ def check_out(out: Path | str | None, default: Path, suffixes: tuple[str, ...], 
 def write_atomically(path: Path, write: Callable[[Path], Any]) -> None:
     """``write(tmp)`` to a temporary file beside ``path`` (same suffix), then move it onto
     ``path``."""
-    path.parent.mkdir(parents=True, exist_ok=True)
+    from masonry_dem.export.results_folder import write_error
+
     tmp = path.with_name(f".{path.stem}.{os.getpid()}.{uuid.uuid4().hex[:8]}.tmp{path.suffix}")
     try:
+        path.parent.mkdir(parents=True, exist_ok=True)
         write(tmp)
         tmp.replace(path)
+    except OSError as exc:  # a full disk, a read-only folder: named, with the picture's path
+        raise write_error(path, exc) from exc
     finally:
         tmp.unlink(missing_ok=True)

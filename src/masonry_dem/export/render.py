@@ -117,7 +117,7 @@ def caption(
 ) -> str:
     """The picture's title: the case, then what is drawn and by which method, lambda, the
     run's status and the displacement amplification."""
-    lam_txt = "n/a" if lam is None or not np.isfinite(lam) else f"{lam:.4g}"
+    lam_txt = "n/a" if lam is None or not np.isfinite(lam) else f"{lam + 0.0:.4g}"  # no "-0"
     parts = [f"{what}, {method}", f"lambda = {lam_txt}"]
     if status:
         parts.append(str(status))

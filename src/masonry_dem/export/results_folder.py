@@ -94,6 +94,17 @@ class ResultsFolderError(OSError):
     """A results folder that cannot be used or written: the message names the path and why."""
 
 
+def folder_path(folder: object) -> Path:
+    """``folder`` as the path of a results folder: an empty or blank name (which would be
+    the current directory) or something that is no path is refused."""
+    if not isinstance(folder, (str, os.PathLike)) or not str(folder).strip():
+        raise ResultsFolderError(
+            errno.EINVAL,
+            f"a results folder must be named by a path (e.g. results/wall), got {folder!r}",
+        )
+    return Path(folder)
+
+
 # ------------------------------------------------------------------------------ writing
 def _tmp_name(path: Path) -> Path:
     """A name beside ``path`` that no other process or thread uses (hidden, .tmp)."""
@@ -111,7 +122,7 @@ def write_atomic(path: Path | str, write: Callable[[Path], Any]) -> Path:
         write(tmp)
         os.replace(tmp, path)
     except OSError as exc:
-        raise _os_error(path, exc) from exc
+        raise write_error(path, exc) from exc
     finally:
         with _quiet():
             tmp.unlink(missing_ok=True)
@@ -128,12 +139,12 @@ def replace_together(targets: Mapping[Path, Callable[[Path], Any]]) -> None:
             try:
                 write(tmps[path])
             except OSError as exc:
-                raise _os_error(path, exc) from exc
+                raise write_error(path, exc) from exc
         for path, tmp in tmps.items():
             try:
                 os.replace(tmp, path)
             except OSError as exc:
-                raise _os_error(path, exc) from exc
+                raise write_error(path, exc) from exc
     finally:
         for tmp in tmps.values():
             with _quiet():
@@ -148,7 +159,8 @@ def _quiet() -> Iterator[None]:
         pass
 
 
-def _os_error(path: Path, exc: OSError) -> ResultsFolderError:
+def write_error(path: Path, exc: OSError) -> ResultsFolderError:
+    """``exc`` (a failed write of ``path``) as one line naming the path and why."""
     if isinstance(exc, ResultsFolderError):
         return exc
     return ResultsFolderError(exc.errno or 0, f"cannot write {path}: {_why(exc)}")
@@ -227,11 +239,46 @@ def recorded_dof(motions: list[tuple[float, np.ndarray]]) -> Recorded:
 
 def recorded_dof_of(steps: Any, displacements: np.ndarray) -> Recorded:
     """:func:`recorded_dof` of a run's steps (each with its ``q``) and their recorded
-    displacements, checked at the steps where these are largest."""
-    order = [int(k) for k in np.argsort(-np.abs(displacements)) if displacements[k] != 0]
+    displacements, checked at the steps where these are largest (of equal ones, the
+    earlier: :class:`RecordedSoFar` finds the same steps as they arrive)."""
+    displacements = np.asarray(displacements, dtype=float)
+    order = [
+        int(k)
+        for k in np.argsort(-np.abs(displacements), kind="stable")
+        if displacements[k] != 0 and np.isfinite(displacements[k])
+    ]
     return recorded_dof(
         [(float(displacements[k]), np.asarray(steps[k].q)) for k in order[:STEPS_CHECKED]]
     )
+
+
+class RecordedSoFar:
+    """:func:`recorded_dof_of` of a run's steps as they arrive, one by one: it keeps the
+    motions of the :data:`STEPS_CHECKED` steps with the largest recorded displacements so
+    far, so that after the last step :attr:`recorded` is what :func:`recorded_dof_of` says
+    of the whole run (the header ``pushover.csv`` is written with row by row, and again at
+    the end)."""
+
+    def __init__(self) -> None:
+        self._top: list[tuple[float, int, float, np.ndarray]] = []
+        self.recorded: Recorded = None
+
+    def add(self, index: int, value: float, q: Any) -> bool:
+        """Take step ``index`` (its recorded displacement ``value`` and block motion ``q``);
+        True when what the run is found to record changed with it."""
+        value = float(value)
+        if value == 0 or not np.isfinite(value):
+            return False
+        key = (-abs(value), int(index))
+        if len(self._top) >= STEPS_CHECKED and key >= self._top[-1][:2]:
+            return False  # not among the largest: it never will be
+        self._top.append((*key, value, np.array(q, dtype=float)))
+        self._top.sort(key=lambda t: t[:2])
+        del self._top[STEPS_CHECKED:]
+        found = recorded_dof([(v, q) for _, _, v, q in self._top])
+        changed = found != self.recorded
+        self.recorded = found
+        return changed
 
 
 def displacement_column(recorded: Recorded) -> str:
@@ -257,6 +304,28 @@ def write_pushover(
     write_atomic(Path(folder) / PUSHOVER, lambda tmp: save_pushover_rows(tmp, rows, recorded))
 
 
+def append_pushover_row(
+    folder: Path | str, step: int, load_factor: float, control: float, recorded: Recorded = None
+) -> None:
+    """One row of ``pushover.csv`` as its step is handed over (the header with the first,
+    ``step`` 0, naming ``recorded`` as :func:`save_pushover_rows` does), each in one
+    ``write`` of a whole line to a file opened for appending: a run killed outright leaves
+    the curve up to its last whole row, which the readers take."""
+    path = Path(folder) / PUSHOVER
+    line = f"{int(step)},{float(load_factor):.10g},{float(control):.10g}\n"
+    flags = os.O_WRONLY | os.O_CREAT | (os.O_TRUNC if step == 0 else os.O_APPEND)
+    if step == 0:
+        line = pushover_header(recorded) + "\n" + line
+    try:
+        fd = os.open(path, flags, 0o644)
+        try:
+            os.write(fd, line.encode())
+        finally:
+            os.close(fd)
+    except OSError as exc:
+        raise write_error(path, exc) from exc
+
+
 def write_history_pushover(folder: Path | str, history: Any) -> None:
     """``pushover.csv`` of a :class:`~masonry_dem.results.History`: every step's lambda and
     recorded displacement, named by :func:`recorded_dof_of` its steps."""
@@ -270,6 +339,11 @@ def write_history_pushover(folder: Path | str, history: Any) -> None:
     )
 
 
+def pushover_header(recorded: Recorded = None) -> str:
+    """The header line of ``pushover.csv``: step, lambda and :func:`displacement_column`."""
+    return ",".join([*PUSHOVER_COLUMNS[:2], displacement_column(recorded)])
+
+
 def save_pushover_rows(path: Path, rows: np.ndarray, recorded: Recorded = None) -> None:
     """The one layout of ``pushover.csv``: one header line, then rows of (step, lambda,
     control_displacement)."""
@@ -277,7 +351,7 @@ def save_pushover_rows(path: Path, rows: np.ndarray, recorded: Recorded = None) 
         path,
         rows,
         delimiter=",",
-        header=",".join([*PUSHOVER_COLUMNS[:2], displacement_column(recorded)]),
+        header=pushover_header(recorded),
         comments="",
         fmt=["%d", "%.10g", "%.10g"],
     )
@@ -358,8 +432,17 @@ def _lock_is_held(folder: Path) -> bool:
     return False
 
 
+def _own_paths(folder: Path, pattern: str) -> Iterator[Path]:
+    """The paths of ``folder`` matching ``pattern``, never through a symbolic link: a
+    ``steps`` that links elsewhere holds another folder's files, not this run's."""
+    parent = folder / pattern.rpartition("/")[0]
+    if parent.is_symlink() or not parent.is_dir():
+        return iter(())
+    return folder.glob(pattern)
+
+
 def _holds_run(folder: Path) -> bool:
-    return any(any(folder.glob(pattern)) for pattern in RUN_FILES)
+    return any(any(_own_paths(folder, pattern)) for pattern in RUN_FILES)
 
 
 def state(folder: Path | str, _locked_here: bool = False) -> FolderState:
@@ -439,7 +522,7 @@ def _lock(folder: Path) -> int | None:
     try:
         fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
     except OSError as exc:
-        raise _os_error(path, exc) from exc
+        raise write_error(path, exc) from exc
     try:
         fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
     except OSError:
@@ -471,17 +554,43 @@ def remove_own_files(folder: Path) -> int:
     ``steps`` folder too when that leaves it empty. Returns how many were removed."""
     removed = 0
     for pattern in OWN_FILES:
-        for path in folder.glob(pattern):
-            if path.is_file():
+        for path in _own_paths(folder, pattern):
+            if path.is_symlink() or path.is_file():  # a link goes, never what it names
                 try:
                     path.unlink()
                 except OSError as exc:
-                    raise _os_error(path, exc) from exc
+                    raise write_error(path, exc) from exc
                 removed += 1
     steps = folder / STEPS
-    if steps.is_dir() and not any(steps.iterdir()):
+    if steps.is_dir() and not steps.is_symlink() and not any(steps.iterdir()):
         steps.rmdir()
     return removed
+
+
+def _refuse_foreign_steps(folder: Path, overwrite: bool) -> None:
+    """A ``steps`` that is a symbolic link would take this run's VTUs (and ``--overwrite``'s
+    removals) into the folder it names: it is refused, or with ``overwrite`` removed as a
+    link. A ``steps`` that is a file is refused: it is not the package's."""
+    steps = folder / STEPS
+    if steps.is_symlink():
+        if not overwrite:
+            raise ResultsFolderError(
+                errno.EEXIST,
+                f"results folder {folder}: {steps} is a symbolic link to {os.readlink(steps)}; "
+                "a run writes only inside its folder: pass --overwrite (overwrite=True) to "
+                "remove the link (not what it names), or choose another --out",
+            )
+        try:
+            steps.unlink()
+        except OSError as exc:
+            raise write_error(steps, exc) from exc
+        log.info("removed the symbolic link %s", steps)
+    elif steps.exists() and not steps.is_dir():
+        raise ResultsFolderError(
+            errno.ENOTDIR,
+            f"results folder {folder}: {steps} is a file, not the package's steps folder; "
+            "move it or choose another --out",
+        )
 
 
 def claim(folder: Path | str, overwrite: bool, start: Mapping[str, Any]) -> RunFolder:
@@ -491,14 +600,16 @@ def claim(folder: Path | str, overwrite: bool, start: Mapping[str, Any]) -> RunF
 
     Raises :class:`ResultsFolderError` (an OSError) naming the folder: a file, not
     writable, in use by a live run, or holding another run without ``overwrite``."""
-    folder = Path(folder)
+    folder = folder_path(folder)
     _refuse_path(folder)
     fd = _lock(folder)
+    claimed = False
     try:
         previous = state(folder, _locked_here=True)
         # a Ctrl-C while the old run is removed would leave part of it and no summary:
         # it waits until the folder is this run's (summary.json running), then stops it
         with deferred_signals():
+            _refuse_foreign_steps(folder, overwrite)
             if previous.kind != "empty":
                 if not overwrite:
                     raise ResultsFolderError(
@@ -519,8 +630,37 @@ def claim(folder: Path | str, overwrite: bool, start: Mapping[str, Any]) -> RunF
                 },
                 start,
             )
-    except BaseException:
+            claimed = True
+    except BaseException as exc:
+        if claimed:  # a signal held back while the folder was claimed: the run never started
+            record_stopped(folder, exc)
         if fd is not None:
             os.close(fd)
         raise
     return RunFolder(folder, fd)
+
+
+def record_stopped(folder: Path, exc: BaseException, done: int = 0, **extra: Any) -> dict:
+    """``summary.json`` of a run stopped by ``exc`` after ``done`` steps: ``interrupted``
+    (a signal, Ctrl-C) or ``failed``, over what it says already; ``extra``: more keys. A
+    failing disk is logged: the exception that stopped the run is the one to report."""
+    from masonry_dem._signals import interruption
+
+    signal = interruption(exc)
+    cause = signal or exc
+    why = (
+        (cause.strerror if isinstance(cause, OSError) else None)
+        or str(cause)
+        or type(cause).__name__
+    )
+    reason = (
+        f"{why} after {done} steps"
+        if signal is not None
+        else f"stopped by an error after {done} steps: {why}"
+    )
+    end = {"status": INTERRUPTED if signal is not None else "failed", "reason": reason, **extra}
+    try:
+        return write_summary(folder, {**read_summary(folder), **end})
+    except OSError as err:
+        log.warning("%s: the run's end is not recorded (%s)", folder, err)
+        return end

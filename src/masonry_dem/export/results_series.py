@@ -7,6 +7,7 @@ No pyvista here: the VTU files themselves are read by :mod:`masonry_dem.export.s
 from __future__ import annotations
 
 import csv
+import io
 import logging
 import re
 from dataclasses import dataclass
@@ -173,8 +174,10 @@ def read_pushover(folder: Path | str) -> dict[str, np.ndarray]:
         raise FileNotFoundError(
             f"incomplete results folder {Path(folder)}: pushover.csv is missing"
         )
-    with path.open(newline="") as fh:
-        rows = list(csv.reader(fh))
+    text = path.read_text()
+    if text and not text.endswith("\n"):  # a row cut short by a killed run: the whole ones
+        text = text[: text.rfind("\n") + 1]
+    rows = list(csv.reader(io.StringIO(text, newline="")))
     if not rows:
         raise ValueError(f"{path} is empty")
     header = [rf.pushover_column(h) for h in rows[0]]

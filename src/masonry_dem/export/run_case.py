@@ -11,6 +11,7 @@ from __future__ import annotations
 import logging
 import threading
 import time
+from dataclasses import replace
 from pathlib import Path
 from types import TracebackType
 from typing import TYPE_CHECKING, Any
@@ -74,6 +75,34 @@ def limit_analysis_bound(model: Model) -> dict[str, Any]:
         "limit_analysis_status": la.status,
         "limit_analysis_seconds": round(la.seconds, 4),
     }
+
+
+#: the ``stop`` of a run whose live load cannot drive a collapse (:func:`cannot_collapse`)
+HOPELESS = "live load cannot drive a collapse"
+#: a live load pushes sideways when a horizontal force (or a moment over the median block
+#: size) on a free DOF exceeds this share of its largest vertical force
+SIDEWAYS = 1e-9
+
+
+def cannot_collapse(model: Model) -> dict[str, Any] | None:
+    """The associative limit analysis of a live load that pushes nothing sideways (every
+    force on a free DOF along -e2, no moment), when it finds no mechanism: such a load
+    cannot drive the pushover to a collapse either (the associative multiplier is an upper
+    bound of the pushover's), which would climb to max_steps writing every step. None for
+    any other live load (the limit analysis is not run) or one it finds a collapse for."""
+    import numpy as np
+
+    free = ~model.fixed
+    live = np.where(free, model.live, 0.0)
+    down = -live[:, 1]
+    if not live.any() or down.min() < 0:
+        return None
+    length = float(np.median(model.blocks.sizes))
+    sideways = max(np.abs(live[:, [0, 2]]).max(), np.abs(live[:, 3:]).max() / length)
+    if sideways > SIDEWAYS * down.max():
+        return None
+    bound = limit_analysis_bound(model)
+    return bound if bound["limit_analysis_status"] == "no collapse" else None
 
 
 def estimate_run(case: str | Path | Model | None, max_memory: str | None = None) -> Estimate | None:
@@ -159,7 +188,13 @@ def run_case(
     checks lambda against the associative limit-analysis bound, computed then and only then
     (:class:`LazyBound`). ``render``: PNGs of the last step and of the collapse mechanism,
     named in the summary."""
-    from masonry_dem._signals import check_stop, deferred_signals, stop_on_signals
+    from masonry_dem._signals import (
+        Interrupted,
+        check_stop,
+        deferred_signals,
+        run_interruptible,
+        stop_on_signals,
+    )
     from masonry_dem.export.results_folder import MECHANISM_FILES
     from masonry_dem.export.writer import ResultsWriter
     from masonry_dem.solvers.incremental import StaticSolver
@@ -167,34 +202,63 @@ def run_case(
 
     out = Path(out)
     shown = progress or Progress()
+    lazy = LazyBound(enabled=bound)
+    model, stopped = case.model, None
+    hopeless = cannot_collapse(case.model)
+    if hopeless is not None:
+        stopped = (
+            "the live load cannot drive a collapse: it pushes nothing sideways and the "
+            "associative limit analysis, an upper bound of the pushover, finds no mechanism; "
+            "the dead-load state is the answer"
+        )
+        log.warning("%s (the pushover stops after the dead load)", stopped)
+        lazy.result = hopeless
+        model = replace(case.model, live=0.0 * case.model.live)
     prepare(case.model.interfaces.count)  # says "compiling kernels ..." first, if it must
     t0 = time.perf_counter()
     writer = ResultsWriter(
         out, case.model, background=True, overwrite=overwrite, start={"case": case.source}
     )
     try:
+        # the solver runs in a worker thread (run_interruptible), so that a second signal
+        # stops the run at once even inside a long factorization; once the main thread has
+        # stopped it, the worker hands no more steps to the writer
+        handing, abandoned = threading.Lock(), threading.Event()
 
         def on_step(step: StepResult) -> None:
-            writer(step)
+            with handing:
+                if abandoned.is_set():
+                    raise Interrupted()
+                writer(step)
             shown.step(step)
             check_stop()  # Ctrl-C or SIGTERM: stop here, between steps, all of them written
 
-        lazy = LazyBound(enabled=bound)
-        solver = StaticSolver(case.model, case.settings, bound=lazy)
         done = threading.Event()
+        # from the claim on, a signal (or an error) while the solver is set up is recorded by
+        # the writer's exit as it is during the steps
+        with writer:
+            solver = StaticSolver(model, case.settings, bound=lazy)
 
-        def tick() -> None:
-            while not done.wait(TICK_SECONDS):
-                shown.tick(solver.iterations, solver.factorizations)
+            def tick() -> None:
+                while not done.wait(TICK_SECONDS):
+                    shown.tick(solver.iterations, solver.factorizations)
 
-        ticker = threading.Thread(target=tick, daemon=True)
-        with writer, shown, stop_on_signals():
-            ticker.start()
-            try:
-                history = solver.run(control=case.control, callback=on_step, monitor=case.monitor)
-            finally:
-                done.set()
-                ticker.join()
+            ticker = threading.Thread(target=tick, daemon=True)
+            with shown, stop_on_signals():
+                ticker.start()
+                try:
+                    history = run_interruptible(
+                        lambda: solver.run(
+                            control=case.control, callback=on_step, monitor=case.monitor
+                        )
+                    )
+                except BaseException:
+                    with handing:
+                        abandoned.set()
+                    raise
+                finally:
+                    done.set()
+                    ticker.join()
         with deferred_signals():  # pushover.csv, the mechanism and summary.json agree
             summary: dict[str, Any] = writer.finish(
                 history,
@@ -202,6 +266,9 @@ def run_case(
                 case=case.source,
                 wall_seconds=round(time.perf_counter() - t0, 4),
                 **lazy.summary(),
+                **(
+                    {} if stopped is None else {"reason": stopped, "stop": HOPELESS, "lambda": None}
+                ),
             )
         if render:
             summary = _render(out, summary, writer, MECHANISM_FILES[0])

@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from masonry_dem._signals import interruption
+from masonry_dem._validation import is_count, plain
 from masonry_dem.export import results_folder as rf
 from masonry_dem.export.pvd import write_pvd
 from masonry_dem.export.vtu import write_mechanism_vtu, write_step_vtu
@@ -87,26 +87,34 @@ class ResultsWriter:
         overwrite: bool = True,
         start: dict[str, Any] | None = None,
     ) -> None:
-        self.folder = Path(folder)
+        self.folder = rf.folder_path(folder)
         self.model = model
-        self.every = max(1, int(every))
+        if not is_count(every, 1):
+            raise ValueError(f"write_every must be a whole number >= 1, got {plain(every)}")
+        self.every = int(every)
         self._start = {
             "name": model.name,
             "blocks": model.blocks.count,
             "interfaces": model.interfaces.count,
             **(start or {}),
         }
-        self._run = rf.claim(self.folder, overwrite, self._start)
-        self._start = rf.read_summary(self.folder) or self._start
         self.block_files: list[str] = []
         self.interface_files: list[str] = []
         self.times: list[float] = []
         self.steps_written: list[int] = []
         self._curve: list[tuple[int, float, float]] = []
+        self._recorded = rf.RecordedSoFar()
         self._count = 0
         self._failed: BaseException | None = None
-        self._pool = ThreadPoolExecutor(1, "results-writer") if background else None
         self._pending: list[Future] = []
+        self._pool: ThreadPoolExecutor | None = None
+        self._run = rf.claim(self.folder, overwrite, self._start)
+        try:  # from here a signal or an error is recorded in summary.json (abort)
+            self._start = rf.read_summary(self.folder) or self._start
+            self._pool = ThreadPoolExecutor(1, "results-writer") if background else None
+        except BaseException as exc:
+            self.abort(exc)
+            raise
 
     def __call__(self, step: StepResult, force: bool = False) -> None:
         self._raise_failed()
@@ -114,13 +122,36 @@ class ResultsWriter:
             warn_large_closure(self.model, step)
         self._count += 1
         if not force:
-            self._curve.append((step.step, step.load_factor, step.control_displacement))
+            self._add_to_curve(step)
         if not force and (self._count - 1) % self.every:
             return
         if self._pool is None:
             self._write(step)
         else:
             self._pending.append(self._pool.submit(self._write, step))
+
+    def _add_to_curve(self, step: StepResult) -> None:
+        """The step's row of ``pushover.csv``, appended; the whole file rewritten (atomically)
+        when the step changes what the header says is recorded (block, DOF, unit: the one
+        :meth:`finish` writes again at the end, :func:`results_folder.recorded_dof_of`)."""
+        index = len(self._curve)
+        self._curve.append((step.step, step.load_factor, step.control_displacement))
+        changed = self._recorded.add(index, step.control_displacement, step.q)
+        if changed and index > 0:
+            self._write_curve()
+        else:
+            rf.append_pushover_row(
+                self.folder,
+                index,
+                step.load_factor,
+                step.control_displacement,
+                self._recorded.recorded,
+            )
+
+    def _write_curve(self) -> None:
+        """``pushover.csv`` of every step handed over, at once."""
+        steps, lams, disp = (np.asarray(c) for c in zip(*self._curve, strict=True))
+        rf.write_pushover(self.folder, np.arange(steps.size), lams, disp, self._recorded.recorded)
 
     def _raise_failed(self) -> None:
         done = [f for f in self._pending if f.done()]
@@ -233,35 +264,26 @@ class ResultsWriter:
         """Record a run stopped by ``exc``: pushover.csv of the steps handed over and
         summary.json ``interrupted`` (a signal) or ``failed``; then unlock the folder. A
         failing disk is logged: the exception that stopped the run is the one to report."""
-        signal = interruption(exc)
-        interrupted = signal is not None
-        exc = signal or exc
-        status = rf.INTERRUPTED if interrupted else "failed"
-        why = (exc.strerror if isinstance(exc, OSError) else None) or str(exc) or type(exc).__name__
-        reason = (
-            f"{why} after {len(self._curve)} steps"
-            if interrupted
-            else f"stopped by an error after {len(self._curve)} steps: {why}"
-        )
         try:
             if self._curve:
-                steps, lams, disp = (np.asarray(c) for c in zip(*self._curve, strict=True))
-                rf.write_pushover(self.folder, np.arange(steps.size), lams, disp)
-            self.write_summary(
-                {
-                    "status": status,
-                    "reason": reason,
-                    "steps": len(self._curve),
+                self._write_curve()
+        except OSError as err:
+            log.warning("%s: the run's curve is not rewritten (%s)", self.folder, err)
+        try:
+            end = rf.record_stopped(
+                self.folder,
+                exc,
+                len(self._curve),
+                steps=len(self._curve),
+                **{
                     "lambda": float(self._curve[-1][1]) if self._curve else 0.0,
                     "lambda_bracket": None,
                     "steps_written": len(self.steps_written),
-                }
+                },
             )
-        except OSError as err:
-            log.warning("%s: the run's end is not recorded (%s)", self.folder, err)
         finally:
             self.release()
-        log.info("%s: %s", self.folder, reason)  # the command line says it in its one line
+        log.info("%s: %s", self.folder, end["reason"])  # the command line says it in one line
 
     def release(self) -> None:
         """Unlock the folder (another run may then claim it)."""

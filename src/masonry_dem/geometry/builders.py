@@ -14,6 +14,7 @@ unit and its letters) are declared once, in the classes they inherit (``_Along``
 from __future__ import annotations
 
 import logging
+import math
 from collections.abc import Sequence
 from dataclasses import KW_ONLY, dataclass
 
@@ -27,11 +28,23 @@ from masonry_dem.geometry.blocks import Blocks
 log = logging.getLogger(__name__)
 
 
+#: the most blocks along one direction of a builder: 10^4 already make 10^8 blocks
+MOST_BLOCKS_ALONG = 10_000
+
+
 def _count(name: str, value: object) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
-        raise ValueError(f"{name} must be a positive integer, got {plain(value)}")
-    if int(value) != value or int(value) < 1:
-        raise ValueError(f"{name} must be a positive integer, got {plain(value)}")
+    """A count of blocks along one direction, checked before anything is allocated."""
+    if (
+        isinstance(value, bool)
+        or not isinstance(value, (int, float, np.integer, np.floating))
+        or not math.isfinite(value)
+        or int(value) != value
+        or not 1 <= int(value) <= MOST_BLOCKS_ALONG
+    ):
+        raise ValueError(
+            f"{name} must be a whole number from 1 to {MOST_BLOCKS_ALONG} (10^4 blocks along "
+            f"one direction already make 10^8 blocks), got {plain(value)}"
+        )
     return int(value)
 
 

@@ -7,12 +7,12 @@ and l2 along y2. Local action order everywhere: [f1, f2, fn, m1, m2, m3].
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 
 from masonry_dem._arrays import FloatArray, IndexArray, Rows
-from masonry_dem._validation import positive_scalar
+from masonry_dem._validation import frozen, positive_scalar
 from masonry_dem.geometry.blocks import Blocks
 
 
@@ -31,6 +31,10 @@ class Interfaces(Rows):
     centre: FloatArray
     l1: FloatArray
     l2: FloatArray
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            object.__setattr__(self, f.name, frozen(getattr(self, f.name)))
 
     @property
     def area(self) -> FloatArray:

@@ -72,6 +72,10 @@ _PREFERENCE = ("pardiso", "mumps", "umfpack", "superlu")
 PARALLEL_FROM = 2_000
 
 
+#: PARDISO's error code for "not enough memory" (MKL's documentation of pardiso, "error")
+PARDISO_OUT_OF_MEMORY = -2
+
+
 class SingularMatrix(RuntimeError):
     """The matrix is singular to working precision (no backend pivot found)."""
 
@@ -359,8 +363,8 @@ class PardisoHandle:
     def call(self, phase: int, b: np.ndarray | None = None) -> np.ndarray:
         """One call of MKL's pardiso on this handle (phase 11, 12, 22, 33 or -1) with
         :attr:`values`; x for b (one right-hand side, or one a column; None: none). A
-        PARDISO error raises :class:`SingularMatrix` (a zero or refused pivot, a
-        factorization that lacks memory: the caller's matrix is the cause)."""
+        PARDISO error raises :class:`SingularMatrix` (a zero or refused pivot: the caller's
+        matrix is the cause), but its lack of memory a MemoryError (the machine is)."""
         s = self.solver
         # the C entry point (the lower-case name is the Fortran one, which takes a pointer)
         s.libmkl.MKL_Set_Num_Threads_Local(ctypes.c_int(self.threads))
@@ -385,6 +389,8 @@ class PardisoHandle:
             )
         if phase == -1:
             self.analysed = False
+        if self._error.value == PARDISO_OUT_OF_MEMORY:  # no property of the matrix
+            raise MemoryError(f"pardiso: not enough memory for the factorization (phase {phase})")
         if self._error.value != 0:
             raise SingularMatrix(f"pardiso: error {self._error.value} in phase {phase}")
         if phase in (11, 12, 13):

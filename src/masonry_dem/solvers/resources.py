@@ -126,8 +126,26 @@ def estimate(blocks: int, interfaces: int | None = None, dofs: int | None = None
 
 
 def machine_memory() -> float | None:
-    """Bytes of memory available to a new process (MemAvailable of /proc/meminfo, else the
-    physical memory); None where neither can be read."""
+    """Bytes of memory this process may still take: the least of the machine's available
+    memory (MemAvailable of /proc/meminfo, else the physical memory), what the process's
+    address-space limit (RLIMIT_AS, ``ulimit -v``) leaves above its present size, and what
+    its cgroup's memory limit leaves above the cgroup's use; None where none can be read."""
+    limits = [m for m in (_available(), _address_space_left(), _cgroup_left()) if m is not None]
+    return min(limits) if limits else None
+
+
+def memory_limit_source() -> str:
+    """Which limit :func:`machine_memory` comes from, for the message that names it."""
+    named = {
+        "the process's address-space limit (ulimit -v)": _address_space_left(),
+        "the cgroup's memory limit": _cgroup_left(),
+        "the machine's available memory": _available(),
+    }
+    known = {k: v for k, v in named.items() if v is not None}
+    return min(known, key=lambda k: known[k]) if known else "the machine's available memory"
+
+
+def _available() -> float | None:
     try:
         with open("/proc/meminfo") as f:
             for line in f:
@@ -141,6 +159,52 @@ def machine_memory() -> float | None:
         return None
 
 
+def _address_space_left() -> float | None:
+    """RLIMIT_AS less the process's virtual size (VmSize): a run's allocations count against
+    the limit, whatever the machine has free."""
+    try:
+        import resource
+    except ImportError:  # pragma: no cover - Windows
+        return None
+    soft, _ = resource.getrlimit(resource.RLIMIT_AS)
+    if soft == resource.RLIM_INFINITY:
+        return None
+    used = _status_bytes("VmSize:") or 0.0
+    return max(float(soft) - used, 0.0)
+
+
+def _status_bytes(key: str) -> float | None:
+    try:
+        with open("/proc/self/status") as f:
+            for line in f:
+                if line.startswith(key):
+                    return float(line.split()[1]) * 1024.0
+    except OSError:
+        pass
+    return None
+
+
+def _cgroup_left() -> float | None:
+    """memory.max less memory.current of the process's cgroup (v2), or the v1 equivalents."""
+    for limit_file, usage_file in (
+        ("/sys/fs/cgroup/memory.max", "/sys/fs/cgroup/memory.current"),
+        (
+            "/sys/fs/cgroup/memory/memory.limit_in_bytes",
+            "/sys/fs/cgroup/memory/memory.usage_in_bytes",
+        ),
+    ):
+        try:
+            with open(limit_file) as f:
+                text = f.read().strip()
+            if text == "max" or int(text) >= 2**60:  # no limit (v1 writes a huge number)
+                return None
+            with open(usage_file) as f:
+                return max(float(text) - float(f.read().strip()), 0.0)
+        except (OSError, ValueError):
+            continue
+    return None
+
+
 class TooLarge(RuntimeError):
     """The estimated memory of a run is above what it may use."""
 
@@ -152,7 +216,7 @@ def check_fits(est: Estimate, max_memory: float | None = None) -> None:
     if limit is None:
         return
     if est.memory > limit:
-        source = "--max-memory" if max_memory is not None else "the machine's available memory"
+        source = "--max-memory" if max_memory is not None else memory_limit_source()
         raise TooLarge(
             f"the run would need {est.describe()}; that is over {_gb(limit)} "
             f"({source}). Use a smaller wall, or raise --max-memory if the estimate is wrong."
@@ -174,6 +238,10 @@ def parse_memory(text: str) -> float:
     if not math.isfinite(value) or value <= 0:
         raise ValueError(f"--max-memory must be positive, got {text!r}")
     return value
+
+
+#: the return (or cross) walls of the plans behind their facade (the box: its own count)
+_RETURNS = {"l_wall": 1, "u_wall": 2, "t_wall": 1, "box_wall": 0}
 
 
 def blocks_of_geometry(geometry: dict) -> int | None:
@@ -204,6 +272,14 @@ def blocks_of_geometry(geometry: dict) -> int | None:
             return 1 + base
         if builder == "boxes":
             return len(geometry["lower"]) + base
+        if builder in _RETURNS:
+            # an upper bound: whole blocks along each run and a few cut pieces at its ends
+            n, courses = int(geometry["blocks_along_length"]), int(geometry["courses"])
+            if builder == "box_wall":
+                m = int(geometry.get("blocks_along_depth") or n)
+                return courses * (2 * (n + m) + 8) + base
+            m = int(geometry.get("return_blocks", 4))
+            return courses * (n + 3 + _RETURNS[builder] * (m + 2)) + base
     except (KeyError, TypeError, ValueError):
         return None
     return None

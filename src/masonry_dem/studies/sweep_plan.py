@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from masonry_dem._validation import plain
+from masonry_dem._validation import is_count, plain
 
 #: the distributions of ``sample``: name -> the meaning of its two numbers
 DISTRIBUTIONS = {
@@ -305,6 +305,10 @@ def make_plan(
         raise ValueError("sample given but samples = 0: give the number of samples (--samples N)")
     if not grid and not dists:
         raise ValueError("nothing to sweep: give a parameter to vary or to sample")
+    if seed is not None and not (is_count(seed, 0) and int(seed) < 2**63):
+        raise ValueError(
+            f"seed (--seed) must be a whole number from 0 to 2^63 - 1, got {plain(seed)}"
+        )
     if dists and seed is None:  # recorded in sweep.json: a resumed sweep draws the same values
         seed = int(np.random.SeedSequence().entropy % 2**63)  # type: ignore[operator]
     plan = Plan(data, source, grid, dists, samples if dists else 0, seed)

@@ -365,6 +365,9 @@ def relax(
     write_every: int = 1,
 ) -> History:
     """Run dynamic relaxation; with ``out`` write VTU/PVD, pushover.csv and summary.json."""
+    from masonry_dem.model import require_model
+
+    require_model("relax", model)
     writer = None
     if out is not None:
         from masonry_dem.export.writer import ResultsWriter

@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from masonry_dem.model import Model
+from masonry_dem.model import Model, require_model
 
 from .backends import solve_associative
 from .dem_domain import model_friction_scale
@@ -80,6 +80,7 @@ def limit_analysis(
     (bad arguments raise ValueError naming the argument).
     """
     t0 = time.perf_counter()
+    require_model("limit_analysis", model)
     if backend not in BACKENDS:
         raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
     if backend == "clarabel":
@@ -121,7 +122,7 @@ def limit_analysis(
         kw.setdefault("interface_actions", np.zeros((m, 6)))
         out = LimitAnalysisResult(
             status,
-            lam if status == "collapse" else float("nan"),
+            lam + 0.0 if status == "collapse" else float("nan"),  # never "-0"
             reason,
             method=method,
             grid=grid,
@@ -138,7 +139,12 @@ def limit_analysis(
 
     problem = Problem.of(model)
     if not np.any(problem.live):
-        return result("failed", float("nan"), "no live load: there is no multiplier to find")
+        # the pushover's answer too (completed at the dead load): nothing pushes the wall
+        return result(
+            "no collapse",
+            float("nan"),
+            "no live load: nothing pushes the wall, there is no multiplier to find",
+        )
     if associative:
         sol, size = solve_associative(problem, grid, dirs)
         out = finish(problem, sol, size, result, iterations=1, load_factors=(sol.lam,))

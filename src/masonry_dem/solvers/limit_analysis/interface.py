@@ -15,6 +15,8 @@ from __future__ import annotations
 import numpy as np
 from scipy import sparse
 
+from masonry_dem._validation import GRID_MOST, plain
+
 PYRAMIDS = ("circumscribed", "inscribed")
 STATUSES = ("collapse", "no collapse", "failed")
 #: grid of the associative problem: the corners are exact (module docstring)
@@ -28,8 +30,11 @@ NON_ASSOCIATIVE_GRID = 8
 # --------------------------------------------------------------------------- geometry
 def lobatto_rule(n: int) -> tuple[np.ndarray, np.ndarray]:
     """Gauss-Lobatto points and weights on [-1, 1] (n >= 2; the ends included)."""
-    if isinstance(n, bool) or int(n) != n or n < 2:
-        raise ValueError(f"grid must be an integer >= 2 (points along each side), got {n!r}")
+    if isinstance(n, (bool, str, bytes)) or int(n) != n or not 2 <= n <= GRID_MOST:
+        raise ValueError(
+            f"grid must be a whole number from 2 to {GRID_MOST} (contact points along each "
+            f"side of an interface), got {plain(n)}"
+        )
     n = int(n)
     if n == 2:
         return np.array([-1.0, 1.0]), np.array([1.0, 1.0])

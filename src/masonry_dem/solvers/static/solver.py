@@ -366,8 +366,11 @@ def pushover(
     summary.json to that folder as the steps converge. ``callback(step)`` is called after
     each converged step (e.g. a progress bar); ``bound`` see :class:`StaticSolver`;
     ``stream`` (the History's steps on disk) see :meth:`StaticSolver.run`."""
+    from masonry_dem.model import check_bound, require_model
     from masonry_dem.solvers.warmup import prepare
 
+    require_model("pushover", model)
+    check_bound(bound)
     prepare(model.interfaces.count)  # announced compilation of the kernels, on a cold cache
     writer = None
     if out is not None:
