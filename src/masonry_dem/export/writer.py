@@ -190,7 +190,9 @@ class ResultsWriter:
         try:
             self.close()
         except OSError as err:  # the solver's exception goes on; this one is logged
-            log.warning("%s", err)
+            # (quietly when that exception is a write error too: the disk that refused the
+            # curve refused the background writes as well, and one line says so)
+            (log.debug if isinstance(exc, OSError) else log.warning)("%s", err)
         self.abort(exc)
 
     def _write(self, step: StepResult) -> None:
