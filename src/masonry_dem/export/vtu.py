@@ -157,12 +157,19 @@ def joint_relative_motion(model: Model, dq: np.ndarray) -> np.ndarray:
 
 
 def write_mechanism_vtu(
-    folder: Path, model: Model, step: StepResult, mode: np.ndarray, increment: np.ndarray | None
+    folder: Path,
+    model: Model,
+    step: StepResult,
+    mode: np.ndarray,
+    increment: np.ndarray | None,
+    interface_cells: dict[str, np.ndarray] | None = None,
 ) -> tuple[str, str | None]:
     """Write the collapse mechanism at ``step``: blocks moved by ``mode`` (n, 6) (point data
     ``displacement``; ``last_increment`` too when given) and the interfaces with
     ``joint_motion`` (relative displacement across the joint in the mode, divided by its
-    largest value) and, when given, ``joint_motion_last_increment``."""
+    largest value) and, when given, ``joint_motion_last_increment``; ``interface_cells``:
+    more cell data of the interfaces, (m,) arrays by name (the limit analysis's
+    ``utilisation_capped``)."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     moved = replace(step, q=mode)
@@ -184,5 +191,7 @@ def write_mechanism_vtu(
         motion = joint_relative_motion(model, field)
         peak = float(motion.max(initial=0.0))
         imesh.cell_data[name] = [motion / peak if peak > 0 else motion]
+    for name, values in (interface_cells or {}).items():
+        imesh.cell_data[name] = [np.asarray(values)]
     _write_vtu(folder / MECHANISM_FILES[1], imesh, step_fields(step))
     return MECHANISM_FILES
