@@ -5,6 +5,7 @@ file with ``method = "limit"`` that refuses the pushover's keys."""
 from __future__ import annotations
 
 import json
+from importlib import resources
 from pathlib import Path
 from types import SimpleNamespace
 
@@ -14,7 +15,9 @@ import pytest
 
 from helpers.case_files import SINGLE_BLOCK
 from helpers.case_files import write_case as _write_case
+from masonry_dem.cases.casefile import DEFAULT_CASE, case_from_dict
 from masonry_dem.cases.paper import build_case
+from masonry_dem.cases.schema import CaseError
 from masonry_dem.cli import main
 from masonry_dem.cli.limit import run_limit
 from masonry_dem.export.limit_results import UTILISATION_CAP, ZERO_CAPACITY
@@ -72,6 +75,25 @@ def test_limit_of_validation_cases_writes_only_finite_values(tmp_path, name):
         assert written["_vtus"] == ["mechanism_blocks.vtu", "mechanism_interfaces.vtu"]
 
 
+def test_method_limit_in_run_writes_only_finite_values(tmp_path, capsys):
+    """``run`` on the default wall with ``method = "limit"``: its pushover key
+    (``bracket_tolerance``) refused with one line, then, without it, finite files."""
+    text = resources.files("masonry_dem.cases").joinpath("data", DEFAULT_CASE).read_text()
+    assert "[analysis]\nbracket_tolerance" in text
+    case = tmp_path / "wall.toml"
+    case.write_text(text.replace("[analysis]\n", '[analysis]\nmethod = "limit"\n'))
+    out = tmp_path / "run_la"
+    assert main(["run", str(case), "--out", str(out), "--no-render", "--quiet"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert any("[analysis].bracket_tolerance = 0.005: not used by" in line for line in err), err
+    case.write_text(
+        text.replace("[analysis]\nbracket_tolerance", '[analysis]\nmethod = "limit"\n#')
+    )
+    assert main(["run", str(case), "--out", str(out), "--no-render", "--quiet"]) == 0
+    summary = _assert_finite_files(out)
+    assert summary["analysis"] == "limit" and summary["status"] == "collapse"
+
+
 def test_summary_names_the_bound_and_why(tmp_path):
     """upper with --dem-bound; an estimate for alpha 1.5 without it (saying alpha and the
     cure) and for the non-associative analysis (saying why); none without a multiplier."""
@@ -99,3 +121,17 @@ def test_summary_names_the_bound_and_why(tmp_path):
     summary = json.loads((none / "summary.json").read_text())
     assert summary["bound"] == "none" and summary["lambda"] is None
     assert "no collapse" in summary["bound_reason"]
+
+
+@pytest.mark.parametrize(
+    ("key", "value"),
+    [("control", {"block": 0, "dof": "u3", "target": 0.01}), ("tolerance", 1e-5)],
+)
+def test_method_limit_refuses_the_pushover_keys(key, value):
+    """They were silently ignored: the user believed the control acted."""
+    data = dict(SINGLE_BLOCK, analysis={"method": "limit", key: value})
+    with pytest.raises(CaseError, match=rf'\[analysis\]\.{key} = .*not used by method = "limit"'):
+        case_from_dict(data)
+    # the options of the limit analysis stay allowed
+    ok = dict(SINGLE_BLOCK, analysis={"method": "limit", "grid": 4, "associative": False})
+    assert case_from_dict(ok).limit_options == {"grid": 4, "associative": False}
