@@ -94,7 +94,7 @@ def test_method_limit_in_run_writes_only_finite_values(tmp_path, capsys):
     assert summary["analysis"] == "limit" and summary["status"] == "collapse"
 
 
-def test_summary_names_the_bound_and_why(tmp_path):
+def test_summary_names_the_bound_and_why(tmp_path, capsys):
     """upper with --dem-bound; an estimate for alpha 1.5 without it (saying alpha and the
     cure) and for the non-associative analysis (saying why); none without a multiplier."""
     case = _write_case(tmp_path, SINGLE_BLOCK)
@@ -107,6 +107,7 @@ def test_summary_names_the_bound_and_why(tmp_path):
         return summary
 
     plain = limit()
+    assert plain["bound_reason"] in capsys.readouterr().out  # said on the terminal too
     assert plain["bound"] == "estimate"
     assert "alpha = 1.5 > 1" in plain["bound_reason"] and "--dem-bound" in plain["bound_reason"]
     upper = limit("--dem-bound")

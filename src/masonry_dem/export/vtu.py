@@ -16,7 +16,8 @@ mechanism (``mechanism_blocks.vtu``, ``mechanism_interfaces.vtu``, once per run 
 collapse): the same meshes with the collapse mode as ``displacement`` (largest translation 1)
 and ``joint_motion``, the relative motion across each joint in that mode over its largest
 value: the crack pattern of the mechanism, which the states do not show (an unloaded dry head
-joint is "detached" from the first step).
+joint is "detached" from the first step). A limit analysis's mechanism adds
+``utilisation_capped`` (``export.limit_results``: its utilisation is capped, never inf).
 
 Every file carries field data ``lambda`` and ``step`` (of the mechanism: the collapse step).
 """
