@@ -44,18 +44,22 @@ def _assert_finite_files(folder: Path) -> dict:
     return {**summary, "_vtus": [p.name for p in vtus]}
 
 
-def test_limit_of_the_default_wall_writes_only_finite_values(tmp_path):
+@pytest.mark.parametrize(
+    "options", [[], ["--non-associative"], ["--backend", "clarabel", "--dem-bound"]]
+)
+def test_limit_of_the_default_wall_writes_only_finite_values(tmp_path, options):
     """The default wall's collapse puts whole joint compressions at one corner, where the DEM's
-    capacity is zero (utilisation inf on 24 of its 107 joints before): the VTU caps them and
-    says so in ``utilisation_capped``."""
+    capacity is zero (utilisation inf on 24 of its 107 joints with HiGHS, 65 non-associative,
+    before): the VTU caps them and says so in ``utilisation_capped``."""
     out = tmp_path / "la"
-    assert main(["limit", "--out", str(out), "--no-render"]) == 0
+    assert main(["limit", "--out", str(out), "--no-render", *options]) == 0
     summary = _assert_finite_files(out)
     assert summary["status"] == "collapse"
     assert "mechanism_interfaces.vtu" in summary["_vtus"]
     cells = meshio.read(out / "mechanism_interfaces.vtu").cell_data
     util, why = cells["utilisation"][0], cells["utilisation_capped"][0]
-    assert (why == ZERO_CAPACITY).any()
+    if "--backend" not in options:  # the exact cone's actions leave no joint at zero capacity
+        assert (why == ZERO_CAPACITY).any()
     assert np.all(util[why != 0] == UTILISATION_CAP) and np.all(util <= UTILISATION_CAP)
 
 
