@@ -227,6 +227,8 @@ def case_from_dict(data: dict[str, Any], source: str = "<dict>") -> Case:
             loads.append(_load(spec, blocks, wall, base, k))
             loads[-1].vector(blocks)  # what it refuses is named here, not as a support
     analysis = dict(data.get("analysis", {}))
+    if analysis.get("method") == "limit":
+        _refuse_pushover_keys(analysis, source)
     control_spec = analysis.pop("control", None)
     monitor_spec = analysis.pop("monitor", None)
     method = analysis.pop("method", "pushover")
@@ -268,6 +270,19 @@ def case_from_dict(data: dict[str, Any], source: str = "<dict>") -> Case:
     return Case(
         model, settings, control, monitor, source, cast(AnalysisMethod, method), limit_options
     )
+
+
+def _refuse_pushover_keys(analysis: dict[str, Any], source: str) -> None:
+    """``method = "limit"`` uses only ``method`` and :data:`LIMIT_OPTIONS` of
+    ``[analysis]``: a pushover key there (``control``, ``tolerance``, ...) would be silently
+    ignored, and the user would believe it acted."""
+    used = ("method", *LIMIT_OPTIONS)
+    for key, value in analysis.items():
+        if key not in used:
+            raise CaseError(
+                f"case file {source}: [analysis].{key} = {plain(value)}: not used by "
+                f'method = "limit"; with it [analysis] takes only {", ".join(used)}'
+            )
 
 
 @contextmanager

@@ -104,6 +104,7 @@ def limit_command(args: argparse.Namespace) -> int:
         )
     )
     print(f"{summary['status']}: {summary['reason']}")
+    print(summary["bound_reason"])
     print(results_line(out))
     return exit_code(summary["status"])
 

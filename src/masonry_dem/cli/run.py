@@ -101,6 +101,7 @@ def run_command(args: argparse.Namespace) -> int:
         )
         print(json.dumps({k: summary[k] for k in ("status", "lambda", "method", "bound")}))
         print(f"{summary['status']}: {summary['reason']}")
+        print(summary["bound_reason"])
         print(results_line(out))
         return exit_code(summary["status"])
     try:

@@ -16,7 +16,8 @@ mechanism (``mechanism_blocks.vtu``, ``mechanism_interfaces.vtu``, once per run 
 collapse): the same meshes with the collapse mode as ``displacement`` (largest translation 1)
 and ``joint_motion``, the relative motion across each joint in that mode over its largest
 value: the crack pattern of the mechanism, which the states do not show (an unloaded dry head
-joint is "detached" from the first step).
+joint is "detached" from the first step). A limit analysis's mechanism adds
+``utilisation_capped`` (``export.limit_results``: its utilisation is capped, never inf).
 
 Every file carries field data ``lambda`` and ``step`` (of the mechanism: the collapse step).
 """
@@ -157,12 +158,19 @@ def joint_relative_motion(model: Model, dq: np.ndarray) -> np.ndarray:
 
 
 def write_mechanism_vtu(
-    folder: Path, model: Model, step: StepResult, mode: np.ndarray, increment: np.ndarray | None
+    folder: Path,
+    model: Model,
+    step: StepResult,
+    mode: np.ndarray,
+    increment: np.ndarray | None,
+    interface_cells: dict[str, np.ndarray] | None = None,
 ) -> tuple[str, str | None]:
     """Write the collapse mechanism at ``step``: blocks moved by ``mode`` (n, 6) (point data
     ``displacement``; ``last_increment`` too when given) and the interfaces with
     ``joint_motion`` (relative displacement across the joint in the mode, divided by its
-    largest value) and, when given, ``joint_motion_last_increment``."""
+    largest value) and, when given, ``joint_motion_last_increment``; ``interface_cells``:
+    more cell data of the interfaces, (m,) arrays by name (the limit analysis's
+    ``utilisation_capped``)."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     moved = replace(step, q=mode)
@@ -184,5 +192,7 @@ def write_mechanism_vtu(
         motion = joint_relative_motion(model, field)
         peak = float(motion.max(initial=0.0))
         imesh.cell_data[name] = [motion / peak if peak > 0 else motion]
+    for name, values in (interface_cells or {}).items():
+        imesh.cell_data[name] = [np.asarray(values)]
     _write_vtu(folder / MECHANISM_FILES[1], imesh, step_fields(step))
     return MECHANISM_FILES
