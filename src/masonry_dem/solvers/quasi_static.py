@@ -149,14 +149,23 @@ class QuasiStatic:
     """The reference analysis of one model: the wall's state (q, plastic slip, cracked
     joints) at its last rest, and the damped motion that takes it to the next one."""
 
-    def __init__(self, model: Model, settings: QuasiStaticSettings | None = None) -> None:
+    def __init__(
+        self,
+        model: Model,
+        settings: QuasiStaticSettings | None = None,
+        problem: DiscreteProblem | None = None,
+    ) -> None:
         if settings is not None and not isinstance(settings, QuasiStaticSettings):
             raise TypeError(
                 f"settings must be a QuasiStaticSettings or None, got a {type(settings).__name__}"
             )
         self.model = model
         self.settings = settings or QuasiStaticSettings()
-        self.problem = DiscreteProblem(model, displacement_limit=self.settings.displacement_limit)
+        # (``problem``: another analysis's of the same model and displacement limit, whose
+        # assembly, factorizer and count of factorizations this one shares)
+        self.problem = problem or DiscreteProblem(
+            model, displacement_limit=self.settings.displacement_limit
+        )
         self.law = self.problem.law
         m = model.interfaces.count
         self.q = np.zeros(model.n_dofs)

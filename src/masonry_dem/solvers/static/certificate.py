@@ -147,7 +147,7 @@ def certify(
     settings: StaticSettings,
     bound: Bound = None,
     rests_at: Callable[[float], bool] | None = None,
-    run_off: tuple[float, np.ndarray, np.ndarray | None] | None = None,
+    run_off: np.ndarray | None = None,
     instability: str = NOT_CHECKED,
 ) -> Certificate:
     """Check the stop of ``hist`` at its last recorded state (see the module). Only the
@@ -155,7 +155,10 @@ def certify(
     joints cracked before it, the plastic part of the step before it) is rebuilt from the
     steps, so the check does not rest on how the path got there. ``rests_at(lambda)``: does
     an independent method (dynamic relaxation) find rest at that lambda from the last state;
-    asked only of a multiplier the residual cannot tell from zero load."""
+    asked only of a multiplier the residual cannot tell from zero load. ``run_off``: the
+    direction in which the instability rule's motion ran past the displacement limit (full
+    DOFs), and ``instability`` its verdict, reported (:meth:`StaticSolver._instability_rule`
+    reports a collapse only where that motion found no rest or no verdict)."""
     s = settings
     free = problem.free
     law = problem.law
@@ -266,17 +269,15 @@ def certify(
             mode_found = live_work > 0
         else:
             mode_found, mode, mode_vector, live_work = False, "none", None, 0.0
-    # the instability rule decides where it ran: the damped motion from the last rest at
-    # (1 + bracket_tolerance) lambda ran past the displacement limit, along the mechanism
-    # (where the tangent and the curve show no mode, the motion's direction is the mode)
-    if not mode_found and run_off is not None and run_off[2] is not None:
-        moved = (run_off[2] - run_off[1])[free]
-        size = float(np.abs(moved[problem.translation]).max(initial=0.0))
+    # where the tangent and the curve show no mode, the direction of the instability rule's
+    # motion past the displacement limit is the mode
+    if not mode_found and run_off is not None:
+        direction = run_off[free]
+        size = float(np.abs(direction[problem.translation]).max(initial=0.0))
         if size > 0:
-            mode, mode_vector = "motion past the displacement limit", moved / size
+            mode, mode_vector = "motion past the displacement limit", direction / size
             live_work = float(F @ mode_vector)
             mode_found = live_work > 0
-    ran_off = not instability.startswith("refuted")
     # (c) the bound
     value = _bound_value(bound, problem.model)
     if value is None:
@@ -284,7 +285,7 @@ def certify(
     else:
         within = bool(lam <= value * (1.0 + s.bound_tolerance) + 1e-12 * abs(value))
         bound_status = "within" if within else "exceeded"
-    holds = equilibrium and admissible and mode_found and ran_off and within is not False
+    holds = equilibrium and admissible and mode_found and within is not False
     why = []
     if not equilibrium:
         why.append(f"the last state is not an equilibrium (residual {rnorm:.2e} > {s.tolerance:g})")
@@ -332,8 +333,6 @@ def certify(
             f"the motion the load drives (> {tolerance:g}) and the curve goes "
             f"{past:.3g} of its peak displacement past the peak (< {s.mode_displacement:g})"
         )
-    if not ran_off:
-        why.append(f"the instability rule: {instability}")
     if within is False:
         why.append(f"lambda {lam:.6g} exceeds the limit-analysis bound {value:.6g}")
     reason = (

@@ -63,11 +63,10 @@ class StaticSolver(Relaxations):
         self.load_factor = 0.0  # lambda of the last converged state
         # the law state (plastic part, cracked joints) the last converged state was found with
         self.search_state = (self.plastic.copy(), self.cracked.copy())
-        #: the instability rule's verdict on the collapse, and where its motion ran off
-        #: (lambda, the rest it started from, where it passed the displacement limit)
+        #: the instability rule's verdict on the collapse, and the direction of its motion
+        #: past the displacement limit (from the rest it started from)
         self.instability = NOT_CHECKED
-        self.run_off: tuple[float, np.ndarray, np.ndarray | None] | None = None
-        self.judge_cost = (0, 0)  # (iterations, factorizations) of the instability rule
+        self.run_off: np.ndarray | None = None
 
     # ------------------------------------------------------------------ states of the path
     def accept(self, out: Outcome, step: int, control_value: float) -> StepResult:
@@ -222,27 +221,27 @@ class StaticSolver(Relaxations):
                 displacement_limit=s.displacement_limit,
                 max_load_factor=s.max_load_factor,
             ),
+            problem=self.problem,
         )
-        judge.budget = JUDGE_FACTORIZATIONS
+        judge.budget = self.factorizations + JUDGE_FACTORIZATIONS
         judge.start_from(self.q, self.plastic, self.cracked, hist.steps[0].q)
         # (at least the smallest load the residual tells from zero: at a lower one, the
         # state the path stopped at is a rest to the tolerance)
         resolvable = ZERO_LOAD * s.tolerance * self.problem.load_scale
         target = max(lam_c * (1.0 + s.bracket_tolerance), lam_c + resolvable)
         motion = judge.move_to_rest(target)
-        if motion.past_limit:
-            self.run_off = (target, self.q.copy(), motion.end)
+        if motion.past_limit and motion.end is not None:
+            self.run_off = motion.end - self.q
             self.instability = f"no rest at lambda {target:.6g}: {motion.reason}"
         elif motion.undecided:  # the certificate decides without it, and says so
             self.instability = f"no verdict at lambda {target:.6g}: {motion.reason}"
         else:
             log.info(
                 "%s: the wall rests at lambda %.6g, above the collapse %.6g the path reported "
-                "(%d factorizations): the reference's load steps go on",
+                ": the reference's load steps go on",
                 self.model.name,
                 target,
                 lam_c,
-                judge.factorizations,
             )
             refuted = (
                 f"the path follower stopped at lambda {lam_c:.6g} ({hist.stop}), but the "
@@ -255,17 +254,16 @@ class StaticSolver(Relaxations):
 
             def finish(status: Status, stop: StopReason, reason: str) -> History:
                 hist.end(status, stop, f"{reason}; {refuted}")
-                if status is Status.COLLAPSE and judge.no_rest is not None:
+                if judge.no_rest is not None:  # the collapse the load steps found
                     lam_off, motion_off = judge.no_rest
-                    self.run_off = (lam_off, judge.q.copy(), motion_off.end)
+                    if motion_off.end is not None:
+                        self.run_off = motion_off.end - judge.q
                     self.instability = f"no rest at lambda {lam_off:.6g}: {motion_off.reason}"
-                else:
-                    self.instability = f"refuted: {refuted}"
                 return hist
 
             rest(target)
             judge.raise_load(target, s.bracket_tolerance * target, hist, rest, finish)
-        self.judge_cost = (judge.iterations, judge.factorizations)
+        self.iterations += judge.iterations  # its factorizations are the problem's own
 
     def dead_load(self) -> Outcome:
         """The equilibrium under the dead load (the specimens stood: the damped fallback
@@ -334,8 +332,8 @@ class StaticSolver(Relaxations):
                     "%s: the stop is not a certified collapse: %s", self.model.name, cert.reason
                 )
         hist.seconds = time.perf_counter() - t0
-        hist.iterations = self.iterations + self.judge_cost[0]
-        hist.factorizations = self.factorizations + self.judge_cost[1]
+        hist.iterations = self.iterations
+        hist.factorizations = self.factorizations
         log.info(
             "%s: %s after %d steps, %d Newton iterations, %d factorizations, %d time steps of "
             "dynamic relaxation, %d implicit steps of corner checks (%s)",
