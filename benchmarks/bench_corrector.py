@@ -34,7 +34,6 @@ from bench_validation import parse_settings  # noqa: E402
 
 from masonry_dem import set_thread_wait_policy  # noqa: E402
 from masonry_dem.cases.paper import build_case, case_names  # noqa: E402
-from masonry_dem.solvers.static.relaxations import Relaxations  # noqa: E402
 from masonry_dem.solvers.static.settings import StaticSettings  # noqa: E402
 from masonry_dem.solvers.static.solver import StaticSolver  # noqa: E402
 from masonry_dem.studies.runs import warm_up  # noqa: E402
@@ -44,8 +43,8 @@ _SEARCHES: dict[tuple[str, str], list[int]] = collections.defaultdict(lambda: [0
 
 
 def _counted(name: str) -> None:
-    """Count the searches of ``Relaxations.<name>`` (a StaticSolver's searches) into ``_SEARCHES``."""
-    original = getattr(Relaxations, name)
+    """Count the searches of ``StaticSolver.<name>`` into ``_SEARCHES``."""
+    original = getattr(StaticSolver, name)
 
     def counted(self, *args, **kwargs):
         f0, i0 = self.factorizations, self.iterations
@@ -53,7 +52,7 @@ def _counted(name: str) -> None:
         if name == "equilibrate":
             kind = "W" if kwargs.get("control") is not None else "L"
         else:
-            kind = "transient"
+            kind = "motion"
         outcome = "ok" if out.ok else (out.failure.name.lower() if out.failure else "failed")
         row = _SEARCHES[(kind, outcome)]
         row[0] += 1
@@ -61,7 +60,7 @@ def _counted(name: str) -> None:
         row[2] += self.factorizations - f0
         return out
 
-    setattr(Relaxations, name, counted)
+    setattr(StaticSolver, name, counted)
 
 
 def _run(name: str, changes: dict) -> tuple[float, int, int, int, float]:
@@ -99,7 +98,7 @@ def main(argv: list[str] | None = None) -> int:
     columns = [base] + ([{**base, **parse_settings(args.against)}] if args.against else [])
     if args.breakdown:
         _counted("equilibrate")
-        _counted("pseudo_transient")
+        _counted("damped_motion")
     warm_up()
     cases = [] if args.scale_only else args.cases or list(case_names())
     names = cases + [f"scale{n}" for n in args.scale]

@@ -20,8 +20,8 @@ its milliseconds per call:
 * ``bound``: with ``--bound``, the associative limit-analysis bound the certificate checks
   lambda against, computed when the certificate asks for it (``LazyBound``, as ``masonry-dem
   run`` does);
-* ``relaxation``: the dynamic relaxations of the stop checks and rescues (their Newton
-  probes are counted in the parts above);
+* ``damped motion``: the instability rule's motions where Newton finds no equilibrium
+  (their factorizations and residuals are counted in the parts above);
 * ``recording``: a converged state made a step of the History (the plastic part, the
   utilisation of every joint);
 * ``other``: the rest (the Python of the searches and the path followers).
@@ -49,7 +49,6 @@ def _parts() -> dict[str, list[tuple[object, str]]]:
     from masonry_dem.solvers import factorization as fz
     from masonry_dem.solvers.static import solver as solver_module
     from masonry_dem.solvers.static.problem import DiscreteProblem, TangentAssembler
-    from masonry_dem.solvers.static.relaxations import Relaxations
 
     factorizers = [fz._SuperLU, fz._Pardiso, fz._Umfpack, fz._Mumps, fz._CSCOrder]
     factors = [fz._HeldFactors, fz._SuperLUFactors, fz._UmfpackFactors, fz._Pardiso]
@@ -61,7 +60,7 @@ def _parts() -> dict[str, list[tuple[object, str]]]:
         "residual": [(DiscreteProblem, "residual")],
         "certificate": [(solver_module, "certify")],
         "bound": [(LazyBound, "__call__")],
-        "relaxation": [(Relaxations, "dynamic_rescue")],
+        "damped motion": [(solver_module.StaticSolver, "damped_motion")],
         "recording": [(solver_module.StaticSolver, "accept")],
     }
 

@@ -118,8 +118,8 @@ def test_api_counts_have_the_case_files_ranges():
 
     with pytest.raises(ValueError, match=r"return_blocks must be a whole number from 1 to 10000"):
         u_wall(6, 3, 0.1, 0.25, 0.12, 18e3, return_blocks=100_000_000)
-    with pytest.raises(ValueError, match=r"max_cuts must be an integer from 0 to 1e8"):
-        StaticSettings(max_cuts=10**9)
+    with pytest.raises(ValueError, match=r"easy_iterations must be an integer from 0 to 1e8"):
+        StaticSettings(easy_iterations=10**9)
     from masonry_dem.solvers.limit_analysis.interface import lobatto_rule
 
     with pytest.raises(ValueError, match=r"grid must be a whole number from 2 to 32"):

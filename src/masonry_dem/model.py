@@ -7,7 +7,6 @@ block centres: ``dead`` (applied first, held constant) and ``live`` (scaled by l
 from __future__ import annotations
 
 import logging
-import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
@@ -116,21 +115,6 @@ LAW_OPTIONS: dict[str, tuple[str, ...]] = {
     "memory": get_args(Memory),
     "projection": PROJECTIONS,
 }
-
-
-def deprecated_law_option(owner: str, name: str, value: str | None) -> None:
-    """A law option (``tension``, ``memory``) still given to solver settings ``owner``: checked,
-    with a DeprecationWarning (it belongs to the material; kept for one version)."""
-    if value is None:
-        return
-    check_choice(name, value, LAW_OPTIONS[name])
-    warnings.warn(
-        f"{owner}.{name} is deprecated: {name} is a property of the interface law, set "
-        f"InterfaceMaterial({name}={value!r}) (case files: [material] {name} = {value!r}); "
-        "the settings' value still overrides the material's in this version",
-        DeprecationWarning,
-        stacklevel=4,
-    )
 
 
 def dof_mask(dofs: DofGroup | DofName | Sequence[DofGroup | DofName]) -> BoolArray:

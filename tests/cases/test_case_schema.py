@@ -114,7 +114,10 @@ CASES = {
         GOOD + '[analysis]\ncontrol = { block = 7, dof = "u3", target = 0.01 }\n',
         "[analysis].control.block",
     ),
-    "tension option": (GOOD + '[analysis]\ntension = "none"\n', '[analysis].tension = "none"'),
+    "tension option": (
+        GOOD + '[analysis]\ntension = "none"\n',
+        "tension is a property of the interface law: [material] tension",
+    ),
     "bool as a count": (_edit(WALL, "courses = 3", "courses = true"), "[geometry].courses = true"),
     "course selector": (
         _edit(GOOD, 'select = "base"', 'select = "course:x"'),
@@ -224,8 +227,8 @@ def test_readme_case_file_passes_the_schema(tmp_path):
 
 def test_law_options_belong_to_the_material(tmp_path, capsys):
     """tension, memory and projection are [material] fields that reach the interface law;
-    the [analysis] fields of the same names still work for one version, with a
-    DeprecationWarning, and a bad value names the field and the allowed values."""
+    given in [analysis], the error says where they belong, and a bad value names the field
+    and the allowed values."""
     from masonry_dem.cases.casefile import load_case
     from masonry_dem.solvers.static.problem import DiscreteProblem
 
@@ -236,10 +239,10 @@ def test_law_options_belong_to_the_material(tmp_path, capsys):
     assert (law.tension, law.memory, law.projection) == ("plastic", "slip", "radial")
 
     path.write_text(GOOD + '[analysis]\nmemory = "slip"\n')
-    with pytest.warns(DeprecationWarning, match=r"\[material\] memory = 'slip'"):
-        case = load_case(str(path))
-    assert DiscreteProblem(case.model, memory=case.settings.memory).law.memory == "slip"
-    assert DiscreteProblem(case.model).law.memory == "none"  # the material's default
+    with pytest.raises(
+        ValueError, match=r"memory is a property of the interface law: \[material\] memory"
+    ):
+        load_case(str(path))
 
     path.write_text(_edit(GOOD, "friction = 0.7\n", 'friction = 0.7\ntension = "elastic"\n'))
     assert main(["run", str(path), "--out", str(tmp_path / "out"), "--quiet"]) == 2

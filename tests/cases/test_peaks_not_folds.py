@@ -2,23 +2,24 @@
 docs/history/solvers_record.md, "Peaks and folds: the audit").
 
 The invariant: from the state of a certified collapse at lambda_c (its plastic part and
-cracks held, the same step problem the path solves), dynamic relaxation to 1.01 lambda_c
-followed by Newton there (``StaticSolver.dynamic_rescue``) finds no equilibrium within B time
-steps. An equilibrium polished to the static tolerance above lambda_c would prove the stop a
-fold of the path, with the wall's collapse higher up. "No rest within B time steps" is
-evidence, not proof: a slower relaxation might still come to rest. So each test also checks
-that the relaxation did run (it measures its displacement limit from the state it starts
-from, as every search of the path does; measured from the unloaded wall, it used to stop at
-its first time step where the path had already moved that far: S11, S12, 10-11).
+cracks held), the reference analysis's damped motion at its own, finer time-step tolerance
+(:meth:`QuasiStatic.move_to_rest`, the pushover's instability rule run four times more
+finely) at 1.01 lambda_c runs past the displacement limit: no rest. A rest above lambda_c
+would prove the stop a fold of the path, with the wall's collapse higher up. Each test also
+checks that the motion did run (it measures its displacement limit from the state it starts
+from, as every search of the path does).
 """
 
 from __future__ import annotations
+
+from dataclasses import replace
 
 import numpy as np
 import pytest
 
 from masonry_dem.cases.paper import build_case
 from masonry_dem.solvers.limit_analysis.analysis import dem_upper_bound
+from masonry_dem.solvers.quasi_static import QuasiStatic
 from masonry_dem.solvers.static import StaticSolver
 
 RISE = 0.01
@@ -34,61 +35,56 @@ def _certified(case, bound: float | None) -> tuple[StaticSolver, float, bool]:
     return solver, history.collapse_multiplier, history.certificate.corner
 
 
-def _relax_above(solver: StaticSolver, peak: float, budget: int):
-    """From the last converged state (below ``peak`` on a falling curve), the rescue to 1 %
-    above the collapse multiplier: the state it polished (None: no rest) and its time steps."""
-    before = solver.time_steps
-    polished = solver.dynamic_rescue((1.0 + RISE) * peak, solver.load_factor, budget=budget)
-    return polished, solver.time_steps - before
+def _relax_above(solver: StaticSolver, peak: float, budget: int) -> tuple[bool, int]:
+    """From the last converged state (at or below ``peak``), the reference's damped motion
+    at 1 % above the collapse multiplier: (whether it came to rest, its time steps)."""
+    reference = QuasiStatic(solver.model, problem=solver.problem)
+    reference.settings = replace(reference.settings, max_time_steps=budget)
+    reference.start_from(solver.q, solver.plastic, solver.cracked, solver.judge().origin)
+    motion = reference.move_to_rest((1.0 + RISE) * peak)
+    assert motion.rest or motion.past_limit, motion.reason  # a verdict, either way
+    return motion.rest, motion.time_steps
 
 
 @pytest.mark.slow
 def test_a_certified_collapse_of_s15_has_no_equilibrium_1_percent_above_it():
-    """S15 (Table 2, columns): certified at 0.2736 under its bound 0.547; the relaxation to
-    1.01 x that leaves the small-displacement range (a mechanism forms) after about 4 000 of
-    its B = 50 000 time steps (1 s)."""
+    """S15 (Table 2, columns): certified at 0.2736 under its bound 0.547; the motion at
+    1.01 x that leaves the small-displacement range (a mechanism forms)."""
     case = build_case("S15")
     bound = dem_upper_bound(case.model).load_factor
     solver, peak, corner = _certified(case, bound)
     assert not corner  # a formed mechanism: the curve flat into the stop
     start = np.abs(solver.q.reshape(-1, 6)[:, :3]).max()
     assert start < solver.limit  # the relaxation starts inside its displacement limit
-    polished, time_steps = _relax_above(solver, peak, budget=50_000)
-    assert time_steps > 100  # the relaxation ran
-    assert polished is None, "an equilibrium 1 % above a certified collapse: a fold"
+    rest, time_steps = _relax_above(solver, peak, budget=20_000)
+    assert time_steps > 1  # the motion ran
+    assert not rest, "a rest 1 % above a certified collapse: a fold"
 
 
 def test_a_certified_collapse_of_s12_has_no_equilibrium_1_percent_above_it():
     """S12 (Table 2, columns): certified at 0.1362 in a state 15.0 mm from the unloaded wall,
-    past the relaxation's limit of 14.1 mm measured from there (6305d5c: the relaxation
-    stopped at its first time step, so nothing was checked). Measured from the state it
-    starts from, the relaxation to 1.01 x the collapse forms a mechanism (passes half a
-    block) after about 14 700 of its B = 50 000 time steps."""
+    past the limit of 14.1 mm measured from there. Measured from the state it starts from,
+    the motion at 1.01 x the collapse forms a mechanism (passes half a block)."""
     case = build_case("S12")
     solver, peak, _ = _certified(case, None)
-    polished, time_steps = _relax_above(solver, peak, budget=50_000)
-    assert time_steps > 100  # the relaxation ran
-    assert polished is None, "an equilibrium 1 % above a certified collapse: a fold"
+    rest, time_steps = _relax_above(solver, peak, budget=20_000)
+    assert time_steps > 1  # the motion ran
+    assert not rest, "a rest 1 % above a certified collapse: a fold"
 
 
 @pytest.mark.slow
 def test_a_certified_collapse_of_s13_with_2_block_returns_has_no_equilibrium_above_it():
-    """B = 100 000 time steps, Newton tried from the relaxation's states on the way. On
-    d01d26a (the corner check off) the path certified its first fold, 0.0855, and this check
-    found rest at 1.01 x that after 41 782 time steps. With the explicit corner check
-    (``corner_check = "explicit"``, sessions 15-17) the path passed the folds at 0.0855,
-    0.0938, 0.0948 and 0.1036 and stopped at 0.1082, where this check still found rest (after
-    42 335 time steps on faf4f27, about 7 600 with the creep kept undamped): a strict xfail
-    until session 18. The implicit corner check (the default) passes that fold too and stops
-    at 0.1107 (the highest equilibrium dynamic relaxation finds from the unloaded wall is
-    0.110, the associative bound 0.1164), above which this check finds no rest.
-    The bound is left out of the run: it holds there, and costs a limit analysis."""
+    """The path folds at 0.0855, 0.0938, 0.0948, 0.1036 and 0.1082 (a wall with return
+    walls that settles joint by joint): the collapse lies past them (the highest equilibrium
+    dynamic relaxation finds from the unloaded wall is 0.110, the associative bound 0.1164),
+    and 1 % above it the reference's motion finds no rest. The bound is left out of the run:
+    it holds there, and costs a limit analysis."""
     case = build_case("S13", restraint="return-walls", return_blocks=2)
     solver = StaticSolver(case.model, case.settings)
     history = solver.run(monitor=case.monitor)
     peak = history.collapse_multiplier
     assert history.status == "collapse" and peak is not None, history.reason
     assert peak > 1.01 * 0.10819  # past the fold the explicit check certified
-    polished, time_steps = _relax_above(solver, peak, budget=100_000)
-    assert time_steps > 100
-    assert polished is None, f"equilibrium at {(1 + RISE) * peak:.4f} after {time_steps} time steps"
+    rest, time_steps = _relax_above(solver, peak, budget=20_000)
+    assert time_steps > 1
+    assert not rest, f"a rest at {(1 + RISE) * peak:.4f} after {time_steps} time steps"

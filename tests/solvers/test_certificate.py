@@ -128,20 +128,16 @@ def test_elastic_shortening_of_a_tall_column_is_no_mechanism():
 
 
 def test_a_displacement_limit_alone_is_not_a_collapse():
-    """A limit the elastic wall passes long before anything yields (1e-5 m): the path
-    follower stops where the wall has moved that far from its dead-load state (lambda 0.093),
-    but the instability rule finds the wall at rest above it, so the load goes on; a motion
-    at one load running that far from its last rest is what ends it, and the reason says
-    that the last rest lies outside the small-displacement range (on ef802c5: ``failed`` at
-    the path follower's stop)."""
+    """A limit the elastic wall passes long before anything yields (1e-5 m): the path stops
+    where the wall has moved that far from its dead-load state (lambda 0.093), while its
+    curve still rises and its tangent keeps most of its stiffness along the load. That is
+    no collapse: the run ends ``failed``, saying the wall left the small-displacement range
+    before its curve stopped rising, with every step kept."""
     model = tilted_wall(3, 5)
     hist = pushover(model, StaticSettings(displacement_limit=1e-5))
-    assert hist.status == "collapse"
-    assert hist.collapse_multiplier > 0.2  # far past the elastic wall's 1e-5 m at 0.093
-    assert hist.collapse_multiplier < pushover(model).collapse_multiplier
-    assert "past the small-displacement range" in hist.reason
-    assert "rests at" in hist.reason  # the path follower's stop refuted
-    assert len(hist.steps) >= 2  # every step it converged is kept
+    assert hist.status == "failed" and hist.stop is StopReason.DISPLACEMENT_LIMIT
+    assert "left the small-displacement range before its curve stopped rising" in hist.reason
+    assert hist.collapse_multiplier is None and len(hist.steps) > 1
 
 
 @pytest.mark.parametrize(
@@ -176,7 +172,7 @@ def test_certify_false_reports_the_stop_unchecked():
 
 
 def test_settings_name_the_bad_field():
-    for field, value in [("mode_stiffness", 0.0), ("search_cuts", 0), ("bound_tolerance", -1)]:
+    for field, value in [("mode_stiffness", 0.0), ("max_iterations", 0), ("bound_tolerance", -1)]:
         with pytest.raises(ValueError, match=field):
             replace(StaticSettings(), **{field: value})
 
@@ -184,16 +180,12 @@ def test_settings_name_the_bad_field():
 def test_an_in_plane_wall_never_collapses_at_the_residual_tolerance():
     """A held 9 x 3 wall tilted in its plane, friction 29, kn 1.1e8 (found by the property
     sweep): Newton stalls from the dead-load state for every lambda above 1e-8, and on
-    7022155 that was a collapse at lambda 1.04e-8. Without the robust re-try the path
-    follower stops there; the instability rule finds rest above it and the load goes on.
-    With or without the re-try, the run reaches the wall's collapse well above zero, the
-    same within the bracket (0.928; the reference analysis gives 0.927)."""
+    7022155 that was a collapse at lambda 1.04e-8. The instability rule finds rest there and
+    the load goes on to the wall's collapse, within 1 % of the reference analysis's 0.9271."""
     model = tilted_wall(9, 3, InterfaceMaterial(kn=1.1e8, kt=0.44e8, friction=29.0), (1, 0, 0))
-    stalled = pushover(model, StaticSettings(zero_load_robust_iterations=0))
     hist = pushover(model)
-    assert stalled.status == hist.status == "collapse"
-    assert hist.collapse_multiplier > 0.5
-    assert stalled.collapse_multiplier == pytest.approx(hist.collapse_multiplier, rel=0.01)
+    assert hist.status == "collapse", hist.reason
+    assert hist.collapse_multiplier == pytest.approx(0.9271, rel=0.01)
 
 
 def test_a_frictionless_block_collapses_at_zero_load_certified():
@@ -249,8 +241,8 @@ def test_displacement_control_passes_the_folds_of_its_path_to_the_load_controlle
     joint starts to slide: at lambda 0.5077 (u1 = 0.186 mm) no equilibrium with a larger u1
     lies near the last state and halved steps only close in on it; on 5133bd5 the run
     stopped there ("displacement control stuck"), 15.4 % below the load-controlled peak, and
-    the comparison called it a path "stopped before the peak" by its target or budget. A
-    pseudo-transient step to a lambda 0.5 % higher goes round each fold (the controlled
+    the comparison called it a path "stopped before the peak" by its target or budget. The
+    instability rule's damped motion to a lambda a bracket higher goes round each fold (the controlled
     displacement turns back at some: the reason counts them) and the two controls reach the
     same peak."""
     from masonry_dem.solvers.static.branches import compare_controls
@@ -271,7 +263,7 @@ def test_displacement_control_passes_the_folds_of_its_path_to_the_load_controlle
     assert result.verdict == "same peak", result.reason
     assert result.displacement_peak == pytest.approx(0.6, rel=0.01)
     assert result.displacement.status == "completed"
-    assert "pseudo-transient step(s) past folds" in result.displacement.reason
+    assert "damped motion(s) past folds" in result.displacement.reason
 
 
 @pytest.mark.slow
@@ -279,55 +271,31 @@ def test_a_stop_at_a_corner_is_checked_whatever_its_tangent():
     """S23 (two openings): work control stops where Newton finds no correction, at a state
     whose tangent is singular along the load (rho 0.013 <= mode_stiffness), while its curve
     still rose at 0.1 of its elastic slope over its last steps: a corner, where the branch
-    the path followed ends, which a fold of the path shares with a peak. By default the
-    check runs there (d01d26a skipped it at any singular tangent: no time step, collapse at
-    0.084721), and Newton, tried from the relaxation's states on the way, converges 0.5 %
-    higher after about 1 000 time steps: the stop was a fold. The path goes on, passes one
-    more fold (0.1108) and ends certified near 0.112, nearer the test's 0.144 and the paper's
-    DEM 0.130. Where exactly depends on the rounding of the factorization: with PARDISO's
-    METIS ordering the path stopped at a corner at 0.1116 where the check stalled, with its
-    minimum-degree ordering the tangent loses its stiffness at 0.1126 (0.9 % apart, both
-    certified), so the test asks for a certified collapse past the second fold and within
-    2 % of both. With ``fold_check_time_steps = 0`` the check is skipped, and the
-    instability rule passes the folds instead (the check relaxes implicitly by default: the
-    same folds, no time step)."""
-    from dataclasses import replace
-
+    the path followed ends, which a fold of the path shares with a peak (d01d26a certified
+    0.084721 there). The instability rule finds the wall at rest above it, and the path
+    passes one more fold (0.1108) to a certified collapse near 0.112 (the test gave 0.144,
+    the paper's DEM 0.130)."""
     from masonry_dem.cases.paper import build_case
     from masonry_dem.solvers.incremental import StaticSolver
 
     case = build_case("S23")
-    solver = StaticSolver(case.model, replace(case.settings, fold_check_time_steps=0))
-    hist = solver.run(monitor=case.monitor)
-    # the path follower's stop at the corner (0.084721) is refuted by the instability rule,
-    # whose load steps go on past both folds
-    assert hist.status == "collapse" and hist.stop is StopReason.NO_REST
-    assert "the path follower stopped at lambda 0.0847" in hist.reason
-    assert 0.1108 < hist.collapse_multiplier < 1.02 * 0.1126
-    assert solver.time_steps == 0
-
-    solver = StaticSolver(case.model, case.settings)
-    hist = solver.run(monitor=case.monitor)
+    hist = StaticSolver(case.model, case.settings).run(monitor=case.monitor)
     assert hist.status == "collapse", hist.reason
-    assert solver.implicit_steps > 0  # the check (implicit by default) ran
-    assert 0.1108 < hist.collapse_multiplier < 1.02 * 0.1116
+    assert 0.1108 < hist.collapse_multiplier < 1.02 * 0.1126
 
 
 def test_a_limit_stop_on_a_soft_rising_curve_is_not_a_collapse():
-    """A held 10 x 15 panel (friction 11.3) with kn 1.5e9: the displacement limit stops its
-    path follower at 0.20 where the curve still rises (on ef802c5: failed; the same panel
-    with kn 1.5e11 was certified at 0.256, 26 % below the reference's 0.3438). The
-    instability rule finds rest above the stop, and the load goes on to the collapse: the
-    soft and the stiff panel within 2 % of each other and of the reference analysis
-    (0.3438, ``md.quasi_static`` on the stiff panel), the soft one saying that its last
-    rest lies past the small-displacement range."""
+    """A held 10 x 15 panel (friction 11.3) with kn 1.5e9: the displacement limit (half a
+    block from the dead-load state) stops its path at 0.20 where the curve still rises: no
+    collapse, ``failed`` with the reason. The same panel with kn 1.5e11 (ef802c5 certified
+    0.256 there, 26 % low) reaches its collapse within 1 % of the reference analysis's
+    0.3438 (``md.quasi_static`` on the stiff panel)."""
     soft = pushover(tilted_wall(10, 15, InterfaceMaterial(kn=1.5e9, kt=0.6e9, friction=11.3)))
     stiff = pushover(tilted_wall(10, 15, InterfaceMaterial(kn=1.5e11, kt=0.6e11, friction=11.3)))
-    assert soft.status == stiff.status == "collapse"
-    assert soft.stop is StopReason.NO_REST
-    assert stiff.collapse_multiplier == pytest.approx(0.3438, rel=0.02)
-    assert soft.collapse_multiplier == pytest.approx(stiff.collapse_multiplier, rel=0.02)
-    assert "past the small-displacement range" in soft.reason
+    assert soft.status == "failed" and soft.stop is StopReason.DISPLACEMENT_LIMIT
+    assert "joints are too soft for a small-displacement analysis" in soft.reason
+    assert stiff.status == "collapse", stiff.reason
+    assert stiff.collapse_multiplier == pytest.approx(0.3438, rel=0.01)
 
 
 def test_work_control_stops_at_max_load_factor_and_a_completed_run_has_no_collapse():
@@ -380,9 +348,9 @@ def test_the_certificate_of_a_wall_does_not_move_with_its_joint_stiffness():
     assert lambdas == pytest.approx([0.9271] * 3, rel=0.005)
 
 
-@pytest.mark.parametrize("tail_resolution", [0.0, 1e-3], ids=["tail off", "tail 1e-3"])
+@pytest.mark.parametrize("flat_slope", [0.0, 1e-3], ids=["tail off", "tail 1e-3"])
 def test_a_head_joint_at_round_off_does_not_move_the_rechecked_rayleigh_quotient(
-    tail_resolution,
+    flat_slope,
 ):
     """One block by two courses tilted in plane, free, friction 2.0, kn 1e8: the wall tilts
     about its toe at B/H = 0.21/0.162. The head joint of the top course carries nothing at
@@ -392,7 +360,7 @@ def test_a_head_joint_at_round_off_does_not_move_the_rechecked_rayleigh_quotient
     against the certificate's 1.06e-9 from the raw tangent)."""
     material = InterfaceMaterial(kn=1e8, kt=0.4e8, friction=2.0)
     model = tilted_wall(1, 2, material, direction=(1.0, 0.0, 0.0), held=False)
-    settings = StaticSettings(tail_resolution=tail_resolution)
+    settings = StaticSettings(flat_slope=flat_slope)
     hist = pushover(model, settings)
     assert hist.status == "collapse", hist.reason
     assert hist.collapse_multiplier == pytest.approx(0.21 / (2 * 0.081), rel=1e-6)

@@ -3,25 +3,17 @@ or a fold of the path, and only a look above it tells them apart.
 
 S13 of Restrepo Velez with 2-block return walls (``build_case("S13",
 restraint="return-walls", return_blocks=2)``): work control gets stuck at lambda 0.0855
-(Newton finds no correction that lowers the residual in any direction forward, the
-pseudo-transient step finds no rest) while its curve still rises at 0.17 of its elastic
-slope: a corner, where the branch the path followed ends. The tangent there, taken past the
-kink, is singular along the load, so on 6305d5c the dynamic-relaxation check of the stop
-was skipped and 0.0855 was certified as the collapse multiplier, yet a damped relaxation
-from that state comes to rest 0.5-1 % higher and Newton polishes it to the static tolerance
-(tests/cases/test_return_walls_against_dr.py), with equilibria up to 0.110 under the
-associative bound 0.116 (docs/walls_that_meet.md). With ``fold_check_time_steps`` a stop
-at a corner is checked whatever its tangent; with Newton tried from the relaxation's states
-on the way (``fold_probe_every``) the check passes a fold in 500-14 000 time steps where the
-relaxation alone needed 50 000 or more, so it is on by default (20 000 since the creep of a
-snap-through is kept undamped, ``fold_creep_cos``; 30 000 before) and the path passes
-the folds of S13/2 up to 0.108 (docs/history/solvers_record.md, "A corner is checked").
+(Newton finds no correction that lowers the residual in any direction forward) while its
+curve still rises at 0.17 of its elastic slope: a corner, where the branch the path followed
+ends. The tangent there, taken past the kink, is singular along the load, yet a damped motion
+from that state comes to rest 0.5-1 % higher, with equilibria up to 0.110 under the
+associative bound 0.116 (docs/walls_that_meet.md). The instability rule (the reference's
+damped motion at lambda (1 + bracket)) decides every such stop.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -34,29 +26,16 @@ from masonry_dem.solvers.static.certificate import (
     curve_slope,
     still_rising,
 )
-from masonry_dem.solvers.static.outcome import StopReason
 
 
-def test_without_the_corner_check_the_instability_rule_passes_the_first_fold_of_s13_2():
-    """With ``fold_check_time_steps = 0`` the path follower takes the first fold of S13/2
-    (0.0855) for the peak, as on d01d26a. The instability rule finds the wall at rest above
-    it and the load goes on past it: the answer agrees with the default's (0.1107, corner
-    check on) within the bracket, and the collapse is the rule's (no rest above it)."""
+def test_the_instability_rule_passes_the_folds_of_s13_2():
+    """The path passes the first fold of S13/2 (0.0855) and those after it, and the
+    collapse is the rule's (no rest above it), under the associative bound."""
     case = build_case("S13", restraint="return-walls", return_blocks=2)
-    quick = StaticSolver(
-        case.model, replace(case.settings, fold_check_time_steps=0, transient_reach=0.0)
-    ).run()
-    default = StaticSolver(case.model, case.settings).run()
-    assert quick.status == default.status == "collapse"
-    assert quick.collapse_multiplier > 1.2 * 0.08551  # past the first fold
-    assert quick.collapse_multiplier == pytest.approx(default.collapse_multiplier, rel=0.01)
-    assert "the path follower stopped at lambda 0.0855" in quick.reason
-    assert quick.certificate.instability.startswith("no rest")
-
-
-def test_fold_check_time_steps_must_be_a_count():
-    with pytest.raises(ValueError, match="fold_check_time_steps"):
-        StaticSettings(fold_check_time_steps=-1)
+    hist = StaticSolver(case.model, case.settings).run()
+    assert hist.status == "collapse", hist.reason
+    assert 1.2 * 0.08551 < hist.collapse_multiplier <= dem_upper_bound(case.model).load_factor
+    assert hist.certificate.instability.startswith("no rest")
 
 
 @pytest.mark.parametrize(
@@ -96,29 +75,16 @@ def test_one_measure_of_a_corner_serves_the_stop_check_and_the_certificate(
 
 
 @pytest.mark.slow
-def test_a_search_that_runs_off_at_a_rising_corner_is_measured_once_and_checked():
-    """S6 with 2-block return walls. Without the corner check and with the pseudo-transient
-    step's rise of 0.5 % only (``transient_reach=0``, as on d01d26a) the path follower stops
-    at lambda 0.0455, where the searches from the last state run past the displacement limit
-    (14.1 mm, half the smallest moving block) while the curve still rose into it at 0.8 of
-    its elastic slope, the state itself inside the range (measured from the dead-load state:
-    elastic displacement under the dead load never counts). The instability rule finds
-    the wall at rest above that stop and the load goes on; by default the corner check
-    passes it too. Both end in a collapse, within 2 % of each other, under the associative
-    bound 0.1133."""
+def test_a_search_that_runs_off_at_a_rising_corner_is_not_the_collapse():
+    """S6 with 2-block return walls: the searches from the state at lambda 0.0455 run past
+    the displacement limit (14.1 mm, half the smallest moving block) while the curve still
+    rose into it at 0.8 of its elastic slope, the state itself inside the range. The
+    instability rule finds the wall at rest above that stop and the load goes on to a
+    collapse under the associative bound 0.1133."""
     case = build_case("S6", restraint="return-walls", return_blocks=2)
-    solver = StaticSolver(
-        case.model, replace(case.settings, fold_check_time_steps=0, transient_reach=0.0)
-    )
-    quick = solver.run(monitor=case.monitor)
-    assert quick.status == "collapse" and quick.stop is StopReason.NO_REST
-    assert "the path follower stopped at lambda 0.045" in quick.reason
-    checked = StaticSolver(case.model, case.settings)
-    hist = checked.run(monitor=case.monitor)
+    hist = StaticSolver(case.model, case.settings).run(monitor=case.monitor)
     assert hist.status == "collapse", hist.reason
     assert 2.0 * 0.0455 < hist.collapse_multiplier <= dem_upper_bound(case.model).load_factor
-    assert quick.collapse_multiplier == pytest.approx(hist.collapse_multiplier, rel=0.02)
-    assert checked.implicit_steps > 0
 
 
 def test_a_creep_is_kept_only_where_its_direction_has_converged():

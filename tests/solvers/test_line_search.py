@@ -2,8 +2,8 @@
 weighted residual norm plus the control's error.
 
 Proves: each work-control search of a panel that failed fails again when run from the state
-recorded before it, with the same trust radius (the replay that ``benchmarks/path_audit.py
---replay`` relies on is faithful).
+recorded before it, with the same trust radius (a replay of a
+search is faithful).
 """
 
 from __future__ import annotations

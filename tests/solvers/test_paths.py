@@ -1,9 +1,7 @@
 """The steps of the path followers (solvers/static/paths.py): where each search starts, how
-a failed step is re-tried, and when a pseudo-transient step gives up."""
+a failed step is re-tried."""
 
 from __future__ import annotations
-
-from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -17,8 +15,6 @@ from masonry_dem.solvers.static.solver import StaticSolver
 from masonry_dem.solvers.static.steps import (
     SecantPredictor,
     elastic_range,
-    straight,
-    transient_target,
 )
 
 DRY = InterfaceMaterial(kn=2.4e9, kt=1.0e9, friction=0.7)
@@ -92,67 +88,6 @@ def test_load_control_retries_a_failure_from_the_first_easy_step_inside_its_brac
     assert lams[-1] == pytest.approx(0.2, rel=1e-12)
 
 
-def test_pseudo_transient_gives_up_when_its_shortest_time_step_fails(monkeypatch):
-    """When even the shortest pseudo time step (damping by the elastic stiffness) raises the
-    residual tenfold, repeating it factors the same matrix and fails the same way: the step
-    gives up at once (4 factorizations: floors 1e-3, 1e-2, 1e-1, 1) instead of spending
-    its budget of ``transient_steps`` factorizations."""
-    blocks, base = add_base(single_block(0.2, 0.25, 0.1, 20e3))
-    # the path of load steps to collapse, which ends with the joint rocking: a yielded state
-    # to start from (the elastic first step would end inside the domain, where the step
-    # back to 0.1 is elastic and exact)
-    solver = StaticSolver(_tilt(blocks, base), StaticSettings(elastic_first_step=False))
-    solver.run()
-    original = solver.residual
-    start = solver.q.copy()
-
-    def rising(q, lam, dead_factor=1.0):
-        r, n, response = original(q, lam, dead_factor)
-        moved = not np.array_equal(q, start)
-        return r, (1e3 * max(n, 1e-6) if moved else max(n, 1e-6)), response
-
-    monkeypatch.setattr(solver, "residual", rising)
-    before = solver.factorizations
-    out = solver.pseudo_transient(0.1)
-    assert not out.ok
-    assert out.failure is Failure.NO_REST
-    assert "shortest pseudo time step" in out.reason
-    assert solver.factorizations - before == 4
-    assert np.array_equal(out.q, start)
-
-
-def test_pseudo_transient_gives_up_after_its_window_without_a_halving(monkeypatch):
-    """A pseudo-transient step whose residual takes every time step (none raises it
-    tenfold) but never halves gives up after ``transient_window`` accepted steps, one
-    factorization each."""
-    blocks, base = add_base(single_block(0.2, 0.25, 0.1, 20e3))
-    solver = StaticSolver(_tilt(blocks, base), StaticSettings(elastic_first_step=False))
-    solver.run()
-    original = solver.residual
-
-    def steady(q, lam, dead_factor=1.0):
-        r, _, response = original(q, lam, dead_factor)
-        return r, 1e-3, response  # accepted at every step, never halved
-
-    monkeypatch.setattr(solver, "residual", steady)
-    window = solver.settings.transient_window
-    before = solver.factorizations
-    out = solver.pseudo_transient(0.1)
-    assert not out.ok
-    assert out.failure is Failure.NO_REST
-    assert f"has not halved in {window} pseudo time steps" in out.reason
-    assert solver.factorizations - before == window
-
-
-def test_work_control_finds_the_same_peak_from_a_secant_start():
-    """The secant start changes where each search of work control begins, not the path's
-    equilibria: the same peak within the bracket tolerance, on a panel whose path folds."""
-    on = pushover(_panel(), StaticSettings())
-    off = pushover(_panel(), StaticSettings(secant_predictor=False))
-    assert on.status == off.status == "collapse", (on.reason, off.reason)
-    assert on.collapse_multiplier == pytest.approx(off.collapse_multiplier, rel=TOL)
-
-
 def _standing(solver: StaticSolver) -> StaticSolver:
     """The solver at its dead-load state, as load control finds it."""
     dead = solver.dead_load()
@@ -219,49 +154,3 @@ def test_an_elastic_range_shorter_than_the_initial_step_leaves_the_first_step_al
     off = pushover(model, StaticSettings(initial_step=0.8, max_step=0.8, elastic_first_step=False))
     assert on.load_factors == pytest.approx(off.load_factors, rel=1e-12)
     assert on.collapse_multiplier == pytest.approx(0.5, rel=TOL)
-
-
-def test_a_pseudo_transient_step_on_a_straight_path_goes_where_the_failed_search_stopped():
-    """Exact: from lambda = 0.01, after a work search that stopped at 0.0104, the step goes
-    to 0.0104 where the path is straight, to 0.01 x 1.005 where it bends or with
-    ``transient_reach`` 0, to at most 0.01 x 1.1 however far the search went, and never below
-    0.01 x 1.005 (a search that stopped lower)."""
-    lam, rise, reach = 0.01, 0.005, 0.1
-    assert transient_target(lam, 0.0104, rise, reach, True) == 0.0104
-    assert transient_target(lam, 0.0104, rise, reach, False) == pytest.approx(0.01005, 1e-15)
-    assert transient_target(lam, 0.0104, rise, 0.0, True) == pytest.approx(0.01005, 1e-15)
-    assert transient_target(lam, 0.02, rise, reach, True) == pytest.approx(0.011, 1e-15)
-    assert transient_target(lam, 0.01001, rise, reach, True) == pytest.approx(0.01005, 1e-15)
-    assert transient_target(lam, 0.009, rise, reach, True) == pytest.approx(0.01005, 1e-15)
-
-
-def test_a_path_is_straight_while_its_last_step_rises_at_half_the_elastic_slope():
-    """Exact: the last step of (w, lambda) against the elastic slope 10: rising at 5 or more
-    per unit w is straight, at 4.9 not, nor is a step back in w or a path of one state."""
-    assert straight([0.0, 1.0, 2.0], [0.0, 10.0, 15.0], 10.0)
-    assert not straight([0.0, 1.0, 2.0], [0.0, 10.0, 14.9], 10.0)
-    assert not straight([0.0, 2.0, 1.0], [0.0, 10.0, 20.0], 10.0)
-    assert not straight([0.0], [0.0], 10.0)
-    assert not straight([0.0, 1.0], [0.0, 1.0], 0.0)
-
-
-@pytest.mark.slow
-def test_a_fold_on_the_straight_part_of_s6_is_passed_by_a_longer_pseudo_transient_step():
-    """S6 (a validation wall): work control takes over at lambda 0.0422 while the path still
-    rises at 0.66 of its elastic slope; its first step and half step fail at a fold, the half
-    step stopping at 0.0527. The pseudo-transient step goes to 0.0464 (+10 %, the cap) in
-    4 pseudo time steps, and work control goes on from there; rising 0.5 % instead
-    (``transient_reach = 0``, the rule before) it met more failed searches on the way.
-    Measured: 269 against 325 factorizations, lambda 0.172360 against 0.172399 (-0.023 %);
-    asserted: fewer factorizations, the same peak within 0.1 %."""
-    from masonry_dem.cases.paper import build_case
-
-    case = build_case("S6")
-    runs = {}
-    for reach in (0.1, 0.0):
-        solver = StaticSolver(case.model, replace(case.settings, transient_reach=reach))
-        hist = solver.run(monitor=case.monitor)
-        assert hist.status == "collapse", hist.reason
-        runs[reach] = (hist.collapse_multiplier, solver.factorizations)
-    assert runs[0.1][0] == pytest.approx(runs[0.0][0], rel=1e-3)
-    assert runs[0.1][1] < runs[0.0][1]

@@ -93,7 +93,6 @@ _SIZE = Range(
 _COUNT = Range(
     1, 10_000, "", "10^4 blocks along one direction already make 10^8 blocks", integer=True
 )
-_BUDGET = Range(0, 10**7, "", "an iteration budget; 0 switches the strategy off", integer=True)
 _COORDINATE = Range(-1e4, 1e4, "m", "a coordinate of a wall, in metres")
 _STIFFNESS = Range(
     1e5,
@@ -179,8 +178,6 @@ RANGES: dict[str, Range] = {
     "residual_stiffness": Range(
         0.0, 1.0, "", "fraction of the elastic stiffness kept in the tangent", open_lo=True
     ),
-    "transient_steps": _BUDGET,
-    "stop_check_time_steps": _BUDGET,
     # [analysis] control and monitor
     "block": Range(0, 10**9, "", "a block index, counted from 0", integer=True),
     "target": Range(-1e3, 1e3, "m or rad", "a displacement to reach; not 0"),
@@ -347,7 +344,7 @@ MATERIAL = _table(
         "friction": _number("friction"),
         "tensile_strength": (_number("tensile_strength"), 0.0),
         "alpha": (_number("alpha") | None, None),
-        # the interface law's options (the solver settings' tension and memory: deprecated)
+        # the interface law's options
         **{name: (_choice(allowed), default) for name, (allowed, default) in _LAW.items()},
     },
 )
@@ -521,6 +518,8 @@ def _message(err: Mapping[str, Any], table: tuple, allowed: list[str]) -> str:
             close = close or difflib.get_close_matches(key.lower(), allowed, n=1)
         top_table = not table and isinstance(value, (dict, list))  # a [table] of the file
         hint = f" (did you mean {f'[{close[0]}]' if top_table else close[0]}?)" if close else ""
+        if table == ("analysis",) and key in LAW_OPTIONS:
+            hint = f" ({key} is a property of the interface law: [material] {key})"
         if top_table:
             where = f"[{_short(key)}]"
         return f"{where}: unknown key{hint}; allowed: {', '.join(sorted(allowed))}"

@@ -17,7 +17,6 @@ from masonry_dem._validation import (
     positive,
     positive_or_none,
 )
-from masonry_dem.model import Memory, Tension, deprecated_law_option
 
 
 @dataclass(frozen=True)
@@ -34,8 +33,6 @@ class LoadPathSettings:
     max_load_factor: the run ends ``completed`` when lambda reaches it (inf: no cap).
     displacement_limit: largest translation [m] still in the small-displacement range (None:
         the solver's own, from the size of the blocks).
-    tension, memory: deprecated (None: the material's). They are the interface law's, set on
-        :class:`~masonry_dem.model.InterfaceMaterial`; given here they warn and override it.
 
     A subclass declares its own fields with their ranges in the same way.
     """
@@ -51,11 +48,6 @@ class LoadPathSettings:
         math.inf, lambda v: is_number(v) and v > 0, "a number > 0 (inf: no cap)"
     )
     displacement_limit: float | None = positive_or_none()
-    tension: Tension | None = None
-    memory: Memory | None = None
 
     def __post_init__(self) -> None:
         check_fields(self)
-        # here, not in a subclass, so that the warning points at the caller
-        deprecated_law_option(type(self).__name__, "tension", self.tension)
-        deprecated_law_option(type(self).__name__, "memory", self.memory)

@@ -446,14 +446,20 @@ class QuasiStatic:
         )
 
     def start_from(
-        self, q: np.ndarray, plastic: np.ndarray, cracked: np.ndarray, origin: np.ndarray
+        self,
+        q: np.ndarray,
+        plastic: np.ndarray,
+        cracked: np.ndarray,
+        origin: np.ndarray | None,
     ) -> None:
-        """Make a rest found by another method (a state of a pushover, its law state, and
-        its dead-load rest ``origin``) the wall's state, to move or load it from there."""
+        """Make a state found by another method (a state of a pushover, its law state, and
+        its dead-load rest ``origin``; None: the dead load is not carried yet) the wall's
+        state, to move or load it from there."""
         self.q = np.asarray(q, dtype=float).reshape(-1).copy()
         self.plastic = np.asarray(plastic, dtype=float).copy()
         self.cracked = np.asarray(cracked, dtype=bool).copy()
-        self.origin = np.asarray(origin, dtype=float).reshape(-1).copy()
+        self.origin = None if origin is None else np.asarray(origin, dtype=float).reshape(-1).copy()
+        self.no_rest = None
 
     def raise_load(
         self,
@@ -485,6 +491,7 @@ class QuasiStatic:
                     return finish(
                         Status.COMPLETED, StopReason.MAX_LOAD_FACTOR, "max_load_factor reached"
                     )
+
                 # the loading rate; with newton_steps too, where Newton is only a faster way
                 # to the next rest, so that the two are told apart by the rest reached alone
                 rate = max(s.load_increment * lam, s.first_increment * scale)

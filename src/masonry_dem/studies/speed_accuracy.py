@@ -57,7 +57,6 @@ GRIDS: dict[Method, Grid] = {
         ("fine steps", {"initial_step": 0.01, "max_step": 0.05}),
         ("tolerance 1e-5", {"tolerance": 1e-5}),
         ("load control only", {"continuation": "bracket"}),
-        ("no pseudo-transient", {"transient_steps": 0}),
         ("difference tangent", {"tangent": "difference"}),
     ),
     Method.DYNAMIC_RELAXATION: (
@@ -117,7 +116,7 @@ def polish(model: Model, static_settings: Any, hist: History) -> tuple[bool, str
     lam = collapse_lambda(hist)
     if lam is None or not hist.steps:
         return False, "no collapse multiplier"
-    if static_settings.memory != "none":
+    if model.memory != "none":
         return False, "the law has memory: a state is not determined by q alone"
     at = [i for i, st in enumerate(hist.steps) if st.load_factor == lam]
     if not at:

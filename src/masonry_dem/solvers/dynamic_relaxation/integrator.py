@@ -161,9 +161,7 @@ class Relaxation:
         self.settings = s = settings or DRSettings()
         # the discrete problem of the static solver: the same loads, law, residual norm
         # (moments as forces at the median block size) and displacement limit
-        self.problem = DiscreteProblem(
-            model, tension=s.tension, memory=s.memory, displacement_limit=s.displacement_limit
-        )
+        self.problem = DiscreteProblem(model, displacement_limit=s.displacement_limit)
         self.asm = self.problem.asm
         self.law = self.problem.law
         self.Hf = self.asm.H_free.tocsr()

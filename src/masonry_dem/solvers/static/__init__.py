@@ -2,8 +2,8 @@
 
 * :mod:`.problem` - the discrete problem: residual and consistent tangent of a Model under
   its interface law (shared with dynamic relaxation), the factorization behind one method;
-* :mod:`.corrector` - one equilibrium: Newton with its safeguards, the pseudo-transient
-  step, the robust and dynamic-relaxation fallbacks;
+* :mod:`.corrector` - one equilibrium: Newton with its safeguards (where it finds none,
+  the instability rule: the damped motion of :mod:`masonry_dem.solvers.quasi_static`);
 * :mod:`.paths` - path followers (load, work, displacement control) sharing one step rule;
 * :mod:`.outcome` - typed outcomes: :class:`Status`, :class:`StopReason`, :class:`Failure`;
 * :mod:`.certificate` - when a stop of the path is a collapse;

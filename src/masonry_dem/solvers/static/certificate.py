@@ -6,7 +6,7 @@ the state where the path stopped, each independently of how the path got there:
 
 (a) **equilibrium** - the state is a converged equilibrium of the discrete problem at its
     lambda (the residual re-evaluated to the static tolerance) and statically admissible
-    (every interface action inside its strength domain, to ``admissible_tolerance``);
+    (every interface action inside its strength domain, to ``ADMISSIBLE_TOLERANCE``);
 (b) **a collapse mode** - either the tangent of that state is singular along the motion
     the live load drives, v = K_t^-1 F_L, to a stated tolerance: the Rayleigh quotient of
     the tangent along v in the metric of the tangent K_0 of the dead-load state (the wall
@@ -18,7 +18,7 @@ the state where the path stopped, each independently of how the path got there:
     bonded elastic stiffness: a dry wall's head joints carry nothing under its weight, and
     against a bonded wall its own elastic state measured 0.03 in plane. Or the pushover
     curve is flat
-    or falling past its peak over at least ``mode_displacement`` x the work-conjugate
+    or falling past its peak over at least ``MODE_DISPLACEMENT`` x the work-conjugate
     displacement at the peak. Where the law has a kink (a joint that starts to slide, rock
     or lift: elastic up to its strength, then nothing along that motion) the singularity
     lies just past the last converged state, so the tangent is also taken at the linear
@@ -37,9 +37,10 @@ the state where the path stopped, each independently of how the path got there:
 A multiplier the residual cannot tell from zero load (at most ZERO_LOAD x ``tolerance`` load
 scales) needs more for (b): a mechanism of the dead-load state itself (its tangent, or the
 tangent at its extension to the smallest resolvable lambda, singular along the load to
-ZERO_MODE x the tangent's floor against the bonded elastic stiffness), which dynamic
-relaxation confirms by finding no rest at that lambda (a contact may close after a small
-motion: an in-plane held wall whose tangent is singular there carries 0.08 by DR).
+ZERO_MODE x the tangent's floor against the bonded elastic stiffness), which the damped
+motion of the instability rule confirms by finding no rest at that lambda (a contact may
+close after a small motion: an in-plane held wall whose tangent is singular there carries
+0.08).
 
 A stop that fails (a) or (b), or exceeds the bound, is reported ``failed`` with the reason
 and every step kept.
@@ -48,8 +49,7 @@ Reported beside them, not a condition: ``curve_slope``, the d lambda / d w of th
 the state over the elastic slope, and ``corner``, a stuck path that still rose there (at
 least ``flat_slope``): its branch ended at a kink, where a fold of the path has a singular
 tangent as well as a peak. Such a stop is a peak only if no rest is found above it, which
-the path checks (an implicit relaxation, then dynamic relaxation of at most
-``fold_check_time_steps``; the reason says whether it did).
+the instability rule checks (``instability``).
 """
 
 from __future__ import annotations
@@ -78,6 +78,12 @@ NOT_CHECKED = "not checked"
 #: tangent singular along the load to ZERO_MODE x the tangent's floor (residual_stiffness)
 ZERO_LOAD = 100.0
 ZERO_MODE = 1e3
+#: the last state's actions may exceed the strength domain by this fraction of the capacity
+#: (the round-off of the return mapping)
+ADMISSIBLE_TOLERANCE = 1e-6
+#: a pushover curve flat or falling past its peak over at least this fraction of the
+#: work-conjugate displacement at the peak (both from the dead-load state) is a collapse mode
+MODE_DISPLACEMENT = 0.5
 
 
 @dataclass
@@ -108,7 +114,7 @@ class Certificate:
     live_work: float  # F_L . mode (mode scaled to a largest translation of 1 m)
     mode_found: bool
     near_zero: bool  # lambda <= ZERO_LOAD x tolerance load scales: the stricter check applied
-    zero_load_check: str  # dynamic relaxation at the resolvable lambda: "no rest", ...
+    zero_load_check: str  # the damped motion at the resolvable lambda: "no rest", ...
     # (c)
     bound: float | None
     bound_status: str  # "within", "exceeded", or "not checked"
@@ -154,7 +160,7 @@ def certify(
     model's discrete problem and the History are used: the law state of the last step (the
     joints cracked before it, the plastic part of the step before it) is rebuilt from the
     steps, so the check does not rest on how the path got there. ``rests_at(lambda)``: does
-    an independent method (dynamic relaxation) find rest at that lambda from the last state;
+    the instability rule (the damped motion) find rest at that lambda from the last state;
     asked only of a multiplier the residual cannot tell from zero load. ``run_off``: the
     direction in which the instability rule's motion ran past the displacement limit (full
     DOFs), and ``instability`` its verdict, reported (:meth:`StaticSolver._instability_rule`
@@ -173,7 +179,7 @@ def certify(
     _, rnorm, response = problem.residual(q, lam_state, plastic, cracked)
     equilibrium = bool(rnorm <= s.tolerance)
     util = float(np.max(law.admissibility(response), initial=0.0))
-    admissible = bool(util <= 1.0 + s.admissible_tolerance)
+    admissible = bool(util <= 1.0 + ADMISSIBLE_TOLERANCE)
     # (b1) the tangent of the state along the load
     F = problem.F_live
     live_norm = float(np.linalg.norm(F))
@@ -222,7 +228,7 @@ def certify(
     w_peak = path_w[at_peak]
     w_last = path_w[last]
     past = (w_last - w_peak) / w_peak if w_peak > 0 else 0.0
-    flat = bool(last > at_peak and past >= s.mode_displacement)
+    flat = bool(last > at_peak and past >= MODE_DISPLACEMENT)
     # the mode and the work of the live load along it
     mode_vector: np.ndarray | None = None
     live_work = 0.0
@@ -297,7 +303,7 @@ def certify(
             f"({ZERO_LOAD:g} x {s.tolerance:g} load scales) and the dead-load state shows no "
             f"mechanism along the load (its tangent keeps {zero_rho:.3g} of the bonded "
             f"elastic stiffness, limit {ZERO_MODE:g} x the floor {s.residual_stiffness:g}; "
-            f"dynamic relaxation at lambda {lam_end:.3g}: {zero_check})"
+            f"the damped motion at lambda {lam_end:.3g}: {zero_check})"
         )
     elif not mode_found and mode == "motion past the displacement limit":
         why.append("the motion past the displacement limit does no work of the live load")
@@ -331,8 +337,10 @@ def certify(
         why.append(
             f"no collapse mode: the tangent keeps {rho:.3g} of the elastic stiffness along "
             f"the motion the load drives (> {tolerance:g}) and the curve goes "
-            f"{past:.3g} of its peak displacement past the peak (< {s.mode_displacement:g})"
+            f"{past:.3g} of its peak displacement past the peak (< {MODE_DISPLACEMENT:g})"
         )
+    if not mode_found and instability != NOT_CHECKED:
+        why.append(f"the instability rule: {instability}")
     if within is False:
         why.append(f"lambda {lam:.6g} exceeds the limit-analysis bound {value:.6g}")
     reason = (
@@ -344,21 +352,9 @@ def certify(
     if holds and instability != NOT_CHECKED:
         reason += f"; instability rule: {instability}"
     if holds and corner:
-        # a pseudo-transient motion past the limit answers the check
-        motion = (
-            "an implicit relaxation (or a pseudo-transient step of the same branch, to no "
-            "higher a lambda)"
-        )
         reason += (
             f"; the path stopped at a corner (its curve still rose at {slope:.2g} of "
-            f"its elastic slope), where a fold of the path has a singular tangent too: "
-            + (
-                "not checked (fold_check_time_steps = 0)"
-                if s.fold_check_time_steps <= 0 or s.stop_check_time_steps <= 0
-                else f"no rest above it: {motion} ran past the displacement "
-                f"limit, or found no rest within {s.corner_check_steps} steps and dynamic "
-                f"relaxation none within {s.fold_check_time_steps} time steps"
-            )
+            f"its elastic slope), where a fold of the path has a singular tangent too"
         )
     return Certificate(
         holds=bool(holds),
@@ -375,7 +371,7 @@ def certify(
         mode_stiffness=tolerance,
         stiffness_parameter=float(stiffness),
         curve_displacement=float(past),
-        mode_displacement=s.mode_displacement,
+        mode_displacement=MODE_DISPLACEMENT,
         live_work=float(live_work),
         mode_found=mode_found,
         near_zero=near_zero,

@@ -5,12 +5,11 @@ displacement (lambda free).
 * :meth:`Corrector.equilibrate` - Newton on the corrected actions with the consistent
   tangent, safeguarded by a trust region on the translations, a backtracking line search,
   chord steps while they converge fast and (under the dead load) a Levenberg-Marquardt
-  floor;
-* :meth:`Corrector.robust` - initial-stiffness iterations with Anderson acceleration.
+  floor.
 
-The searches that follow a motion of the wall where Newton stops (pseudo-transient and
-implicit relaxations, dynamic relaxation) are :mod:`~masonry_dem.solvers.static.relaxations`'.
-Each returns an :class:`~masonry_dem.solvers.static.outcome.Outcome`: a converged state
+Where Newton stops, the instability rule decides (the damped motion of
+:mod:`masonry_dem.solvers.quasi_static`, :meth:`StaticSolver.damped_motion`).
+A search returns an :class:`~masonry_dem.solvers.static.outcome.Outcome`: a converged state
 is an exact equilibrium of the law at its lambda (whatever the safeguards did on the way);
 a failed one carries a typed :class:`~masonry_dem.solvers.static.outcome.Failure`.
 """
@@ -34,6 +33,30 @@ if TYPE_CHECKING:
 
 log = logging.getLogger(__name__)
 
+# The safeguards of Newton's method (a trust region on the translations and a backtracking
+# line search: Dennis & Schnabel 1983, ch. 6; Conn, Gould & Toint 2000, ch. 6). They bound
+# the effort of one search; none moves the equilibrium it converges to.
+#: the trust radius of a search with no previous increment to go by, in elastic units of the
+#: wall (``DiscreteProblem.displacement_scale``), so that a wall with kn and kt x f takes the
+#: same iterates scaled by 1 / f
+TRUST_SEED = 0.05
+#: a search gives up after this many cuts (by 8) of its trust radius, or when the radius
+#: falls below RADIUS_FLOOR elastic units
+SEARCH_CUTS = 7
+RADIUS_FLOOR = 1e-9
+#: a search whose merit has not fallen by STALL_DECREASE over STALL_WINDOW iterations, with
+#: no cut of the trust radius, has stalled: no equilibrium near the last converged state
+STALL_WINDOW = 8
+STALL_DECREASE = 0.5
+#: the largest floor of the tangent (a fraction of the joints' elastic stiffness) of the
+#: Levenberg-Marquardt fallback of the dead-load search
+MAX_FLOOR = 1e-3
+#: chord steps (modified Newton, Kelley 1995, 5.3): a factorized tangent is kept while each
+#: full step divides the residual by at least 1 / CHORD_RATIO, and after a step shorter than
+#: CREEP of the correction with no joint changing state (the tangent is then the same)
+CHORD_RATIO = 0.25
+CREEP = 1e-3
+
 
 class Corrector:
     """The state of a path (q, plastic part, cracked joints) and the searches that move it
@@ -56,8 +79,6 @@ class Corrector:
         # (``problem``: another solver's, whose state this one moves by the same law)
         self.problem = problem or DiscreteProblem(
             model,
-            tension=s.tension,
-            memory=s.memory,
             tangent=s.tangent,
             residual_stiffness=s.residual_stiffness,
             displacement_limit=s.displacement_limit,
@@ -67,9 +88,8 @@ class Corrector:
         self.plastic = np.zeros((m, 6))
         self.cracked = np.zeros(m, dtype=bool)
         self.q = np.zeros(model.n_dofs)
-        self.iterations = 0  # Newton (and pseudo-transient, robust) iterations
-        self.time_steps = 0  # time steps of the dynamic relaxations the solver ran
-        self.implicit_steps = 0  # steps of the implicit relaxations (corner checks) it ran
+        self.iterations = 0  # Newton iterations (and those of the damped motions)
+        self.time_steps = 0  # time steps of the damped motions the solver ran
         #: the largest translation of the last converged search's correction: the next
         #: search's trust radius starts at four times it
         self.last_increment = 0.0
@@ -88,8 +108,8 @@ class Corrector:
     @property
     def search_seed(self) -> float:
         """The trust radius of a search with no previous increment to go by [m]:
-        ``trust_seed`` elastic units of the wall (:attr:`DiscreteProblem.displacement_scale`)."""
-        return self.settings.trust_seed * self.problem.displacement_scale
+        ``TRUST_SEED`` elastic units of the wall (:attr:`DiscreteProblem.displacement_scale`)."""
+        return TRUST_SEED * self.problem.displacement_scale
 
     def restore(self, q: np.ndarray, cracked: np.ndarray | None = None) -> None:
         """Make (q, cracked) the last converged state (e.g. a state read from a History)."""
@@ -162,17 +182,17 @@ class Corrector:
 
         def regularise() -> bool:
             """Levenberg-Marquardt fallback: stiffen the tangent's floor (x1000, up to
-            s.max_floor x kbar). A near-mechanism of the yielded assembly (a joint at zero gap
+            MAX_FLOOR x kbar). A near-mechanism of the yielded assembly (a joint at zero gap
             beside a sliding one) leaves the tangent almost singular along a direction the
             residual needs; the undamped Newton step along it is huge, the trust region cuts
             it to nothing and the search stalls far from an equilibrium that exists. The
             floor changes only the search direction, never the residual, so a converged
             state is still an exact equilibrium of the law."""
             nonlocal floor, history, budget, lu, cuts
-            if not damped or floor >= s.max_floor:
+            if not damped or floor >= MAX_FLOOR:
                 return False
             assert radius is not None  # set above when not given
-            floor = min(floor * 1e3, s.max_floor)
+            floor = min(floor * 1e3, MAX_FLOOR)
             lu = None
             cuts = 0
             history = [(rnorm + constraint_error(q), radius)]
@@ -269,8 +289,7 @@ class Corrector:
                 radius = min(radius, shrink * size) / 8.0
                 cuts += 1
                 exhausted = (
-                    radius < s.radius_floor * self.problem.displacement_scale
-                    or cuts >= s.search_cuts
+                    radius < RADIUS_FLOOR * self.problem.displacement_scale or cuts >= SEARCH_CUTS
                 )
                 if exhausted and regularise():
                     radius = max(4.0 * self.last_increment, self.search_seed)
@@ -290,15 +309,13 @@ class Corrector:
             if step == 1.0 and shrink < 1.0:
                 radius *= 2.0
             # keep the factorization (modified Newton) while a full step divides the residual
-            # by s.chord_ratio or more, and after a creep (a step too short to change the
-            # tangent: under s.creep of the correction, no joint changing state); otherwise the
+            # by CHORD_RATIO or more, and after a creep (a step too short to change the
+            # tangent: under CREEP of the correction, no joint changing state); otherwise the
             # next iteration refactors
-            crept = shrink * step < s.creep and np.array_equal(
+            crept = shrink * step < CREEP and np.array_equal(
                 accepted[4].flags, response.flags
             )  # the same flags: the same states
-            if not (
-                crept or (step == 1.0 and shrink == 1.0 and accepted[3] < s.chord_ratio * rnorm)
-            ):
+            if not (crept or (step == 1.0 and shrink == 1.0 and accepted[3] < CHORD_RATIO * rnorm)):
                 lu = None
             q, lam, residual, rnorm, response, cerr = accepted
             here = here and crept
@@ -306,13 +323,13 @@ class Corrector:
             if not math.isfinite(umax) or umax > self.limit:
                 return self._past_limit(q, lam, response, it)
             history.append((rnorm + cerr, radius))
-            if len(history) > s.stall_window:
-                window = history[-1 - s.stall_window :]
+            if len(history) > STALL_WINDOW:
+                window = history[-1 - STALL_WINDOW :]
                 steady = all(rad >= window[0][1] for _, rad in window)  # no cut in the window
-                stalled = steady and history[-1][0] > (1.0 - s.stall_decrease) * window[0][0]
-            if len(history) > s.stall_window and stalled and regularise():
+                stalled = steady and history[-1][0] > (1.0 - STALL_DECREASE) * window[0][0]
+            if len(history) > STALL_WINDOW and stalled and regularise():
                 continue
-            if len(history) > s.stall_window and stalled:
+            if len(history) > STALL_WINDOW and stalled:
                 return Outcome(
                     False,
                     q,
@@ -333,94 +350,5 @@ class Corrector:
             response,
             it,
             f"no convergence in {it} iterations (residual {rnorm:.2e})",
-            failure=Failure.NO_CONVERGENCE,
-        )
-
-    def robust(
-        self, load_factor: float, start: np.ndarray | None = None, budget: int | None = None
-    ) -> Outcome:
-        """Second strategy for a load step Newton could not solve: initial-stiffness
-        iterations (the elastic matrix of the assembly, factorized once per analysis) with
-        Anderson acceleration over the last ``anderson`` corrections, no line search, at most
-        ``budget`` of them (None: ``zero_load_robust_iterations``).
-
-        Newton stalls where the yielded tangent is nearly singular or flips between contact
-        states of zero-gap joints; the fixed point of q <- q + K0^-1 R(q) does not depend on
-        the tangent, so it converges (slowly, hence the larger budget) wherever an equilibrium
-        is near. It gives up when the displacements pass the limit (a mechanism) or when the
-        residual has not decreased by a tenth over ``divergence_window`` iterations while the
-        corrections do not shrink (the iterates drift: no equilibrium)."""
-        out = self._robust(load_factor, start, budget)
-        log.debug("robust at lambda=%.6g: %s", load_factor, "ok" if out.ok else out.reason)
-        return out
-
-    def _robust(self, load_factor: float, start: np.ndarray | None, budget: int | None) -> Outcome:
-        s = self.settings
-        free = self.problem.asm.free_index
-        lu = self.problem.elastic_factor()
-        x = (self.q if start is None else start)[free].copy()
-        q = self.q.copy()
-
-        def g(xx):
-            q[free] = xx
-            r, n, resp = self.residual(q, load_factor)
-            return lu.solve(r), n, resp
-
-        f, rnorm, response = g(x)
-        xs, fs = [x.copy()], [f.copy()]
-        best = (rnorm, x.copy(), response)
-        hist: list[tuple[float, float]] = []
-        budget = s.zero_load_robust_iterations if budget is None else budget
-        for it in range(1, budget + 1):
-            self.iterations += 1
-            if len(xs) > 1:
-                dX = np.diff(np.array(xs), axis=0).T
-                dF = np.diff(np.array(fs), axis=0).T
-                gamma = np.linalg.lstsq(dF, f, rcond=1e-10)[0]
-                x_new = x + f - (dX + dF) @ gamma
-            else:
-                x_new = x + f
-            if not np.all(np.isfinite(x_new)):
-                xs, fs = [x.copy()], [f.copy()]
-                x_new = x + f
-            x = x_new
-            f, rnorm, response = g(x)
-            xs.append(x.copy())
-            fs.append(f.copy())
-            if len(xs) > s.anderson + 1:
-                xs.pop(0)
-                fs.pop(0)
-            if rnorm < best[0]:
-                best = (rnorm, x.copy(), response)
-            q_now = self.state_of(x)
-            umax = self.increment(q_now)
-            if rnorm <= s.tolerance:
-                self.last_increment = umax
-                return Outcome(True, q_now, load_factor, response, it)
-            if not math.isfinite(umax) or umax > self.limit:
-                return self._past_limit(q_now, load_factor, response, it)
-            step = float(np.abs(f[self.problem.translation]).max(initial=0.0))
-            hist.append((rnorm, step))
-            if len(hist) > s.divergence_window:
-                r0, s0 = hist[-1 - s.divergence_window]
-                if best[0] > 0.1 * r0 and step >= s0:
-                    return Outcome(
-                        False,
-                        q_now,
-                        load_factor,
-                        response,
-                        it,
-                        f"no equilibrium found: the robust iterations drift (residual "
-                        f"{rnorm:.2e}, correction {step:.2e} m not shrinking)",
-                        failure=Failure.DRIFT,
-                    )
-        q_best = self.state_of(best[1])
-        return Outcome(
-            False,
-            q_best,
-            load_factor,
-            best[2],
-            budget,
-            f"no convergence in {budget} robust iterations (residual {best[0]:.2e})",
             failure=Failure.NO_CONVERGENCE,
         )

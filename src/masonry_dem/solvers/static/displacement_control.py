@@ -1,5 +1,5 @@
 """Displacement control, the path follower that drives one DOF to a target with lambda
-free (``StaticSolver.run(control=...)``): its steps, its pseudo-transient steps past folds
+free (``StaticSolver.run(control=...)``): its steps, its damped motions past folds
 of the controlled path, and why it stops where the controlled DOF has a limit point
 (docs/solvers.md, "Displacement control"; the measurements: docs/history/solvers_record.md,
 "Invariance", its paragraph "Load against displacement control"). It shares the step rule
@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from masonry_dem.results import History
+from masonry_dem.solvers.static.certificate import ZERO_LOAD
 from masonry_dem.solvers.static.outcome import Status, StopReason
 from masonry_dem.solvers.static.paths import Record, control_radius
 from masonry_dem.solvers.static.settings import DisplacementControl
@@ -25,6 +26,13 @@ if TYPE_CHECKING:
     from masonry_dem.solvers.static.solver import StaticSolver
 
 log = logging.getLogger(__name__)
+
+#: halvings of a controlled step in a row after which the path is taken to fold there (a
+#: second halving that fails too: halved steps close in on a fold, a step merely too long
+#: passes after one)
+FOLD_CUTS = 2
+#: displacement control is stuck after this many halvings of its step in a row
+MAX_CONTROL_CUTS = 12
 
 #: d u / d lambda of a controlled DOF below this fraction of its rate on the first live-load
 #: step (or negative) at the state where displacement control is stuck: a limit point of the
@@ -66,6 +74,16 @@ def _control_turn(solver: StaticSolver, hist: History, c: np.ndarray) -> str:
     )
 
 
+def _load_for(solver: StaticSolver, k: int, du: float) -> float:
+    """The live-load increment whose tangent response at the last converged state moves
+    free DOF ``k`` by ``du`` (the smallest load the residual resolves where the DOF does not
+    move that way under the load)."""
+    _, _, response = solver.residual(solver.q, solver.load_factor)
+    rate = float(solver.problem.factor(response).solve(solver.problem.F_live)[k])
+    resolvable = ZERO_LOAD * solver.settings.tolerance * solver.problem.load_scale
+    return du / rate if rate * du > 0 else resolvable
+
+
 def displacement_control(
     solver: StaticSolver, hist: History, record: Record, control: DisplacementControl, dof: int
 ) -> None:
@@ -83,8 +101,8 @@ def displacement_control(
     step = StepController(abs(du_nominal), s.growth, cap=abs(du_nominal))
     lam = 0.0
     u = float(solver.q[dof])
-    transient_from = -1  # the step from which the last pseudo-transient step started
-    turned = []  # (lambda, u before, u after) of the pseudo-transient steps past folds
+    moved_from = -1  # the step from which the last damped motion started
+    turned = []  # (lambda, u before, u after) of the damped motions past folds
 
     def reached() -> bool:
         return abs(u - control.target) <= 1e-12 * abs(control.target)
@@ -105,33 +123,32 @@ def displacement_control(
             step.cuts = 0
         else:
             step.cut()
-            if (
-                step.cuts == s.transient_after
-                and s.transient_steps > 0
-                and transient_from != len(hist.steps)
-                and lam != 0.0
-            ):
+            if step.cuts == FOLD_CUTS and moved_from != len(hist.steps):
                 # the controlled path folds at a kink of the law (a joint that starts to
-                # slide or rock): halved steps only close in on it, as under work control,
-                # so a pseudo-transient step to a slightly higher lambda goes round it, and
+                # slide or rock): halved steps only close in on it, so the instability rule
+                # decides, the damped motion at a slightly higher lambda (from zero load, the
+                # load whose tangent response moves the DOF by the nominal step), and
                 # displacement control goes on from the state it comes to rest in
-                transient_from = len(hist.steps)
-                moved = solver.pseudo_transient(lam + s.transient_rise * abs(lam))
+                moved_from = len(hist.steps)
+                rise = s.bracket_tolerance * abs(lam)
+                if rise <= 0.0:
+                    rise = _load_for(solver, k, abs(du_nominal) * direction)
+                moved = solver.damped_motion(lam + rise)
                 log.debug(
-                    "displacement control stuck at u=%.6g, lambda=%.6g; pseudo-transient: %s",
+                    "displacement control stuck at u=%.6g, lambda=%.6g; damped motion: %s",
                     u,
                     lam,
-                    f"ok in {moved.iterations}" if moved.ok else moved.reason,
+                    "at rest" if moved.ok else moved.reason,
                 )
                 if moved.ok:
                     record(moved)
                     before = u
                     lam, u = float(moved.load_factor), float(moved.q[dof])
                     turned.append((lam, before, u))
-                    step.size = max(step.size, abs(du_nominal) * s.resume_step)
+                    step.size = max(step.size, abs(du_nominal))
                     step.cuts = 0
                     continue
-            if step.cuts > s.max_control_cuts:
+            if step.cuts > MAX_CONTROL_CUTS:
                 hist.end(
                     Status.FAILED,
                     StopReason.CONTROL_STUCK,
@@ -157,7 +174,7 @@ def displacement_control(
     if turned:
         back = [t for t in turned if (t[2] - t[1]) * direction < 0]
         hist.reason += (
-            f"; {len(turned)} pseudo-transient step(s) past folds of the controlled path "
+            f"; {len(turned)} damped motion(s) past folds of the controlled path "
             f"(first at lambda {turned[0][0]:.6g})"
         )
         if back:

@@ -53,6 +53,7 @@ class StopReason(_Text):
     CREEPING = "work control creeps"  # three steps with no displacement to speak of
     DISPLACEMENT_LIMIT = "displacement limit"  # past the small-displacement range
     PATH_STUCK = "path stuck"  # no equilibrium for any step size (work control)
+    LIMIT_POINT = "limit point"  # the pushover curve falls (work control)
     CONTROL_REACHED = "control displacement reached"
     CONTROL_STUCK = "displacement control stuck"
     CONTROL_BUDGET = "displacement control: max_steps spent short of the target"
@@ -61,7 +62,7 @@ class StopReason(_Text):
 
 
 class Failure(Enum):
-    """Why one equilibrium search (Newton, robust, pseudo-transient, relaxation) failed."""
+    """Why one equilibrium search (Newton, or the damped motion) failed."""
 
     NONE = "none"
     DISPLACEMENT_LIMIT = "displacements exceed the limit"
@@ -70,7 +71,6 @@ class Failure(Enum):
     NO_CONVERGENCE = "iteration budget spent"
     SINGULAR = "singular tangent"
     CONTROL_FIXED = "the controlled displacement does not move under the live load"
-    DRIFT = "robust iterations drift"
     NO_REST = "no rest"
 
 

@@ -4,8 +4,9 @@ step rule (:class:`StepController`):
 * :func:`load_control` - lambda raised step by step; at its first failure it hands over
   to work control, or refines the bracket [last converged, first failed];
 * :func:`work_control` - the work-conjugate displacement w = c.q of the live load
-  prescribed (c = F_L / |F_L|, lambda free), past limit points and plastic plateaus, with
-  a pseudo-transient step where the path folds at a kink of the law;
+  prescribed (c = F_L / |F_L|, lambda free) along plastic plateaus, up to the first limit
+  point, with the instability rule (the damped motion of :mod:`..quasi_static`) where
+  Newton finds no equilibrium;
 * displacement control (one DOF driven to a target, lambda free) lives in
   :mod:`.displacement_control`.
 
@@ -30,16 +31,14 @@ from masonry_dem.solvers.static.certificate import (
     ZERO_LOAD,
     curve_slope,
     moved_from_dead_load,
-    still_rising,
 )
+from masonry_dem.solvers.static.corrector import RADIUS_FLOOR
 from masonry_dem.solvers.static.outcome import Outcome, Status, StopReason
 from masonry_dem.solvers.static.steps import (
     SecantPredictor,
     StepController,
     elastic_range,
-    straight,
     tail_cap,
-    transient_target,
 )
 
 if TYPE_CHECKING:
@@ -47,16 +46,43 @@ if TYPE_CHECKING:
 
 log = logging.getLogger(__name__)
 
+#: work control is stuck after this many halvings of its step in a row (a step 1e-3 of the
+#: one that failed first: shorter steps only close in on a fold)
+MAX_CUTS = 10
+#: a work step whose searches pass the displacement limit is a mechanism only when they
+#: do so again after this many halvings in a row (a long first step may run off along a mode
+#: the load does not drive yet)
+LIMIT_CUTS = 2
+
 Record = Callable[[Outcome], None]
 
 
-def load_control(solver: StaticSolver, hist: History, record: Record) -> None:
+#: what work control returns when the instability rule found the wall at rest above a stop
+#: where the curve had turned flat or fallen: load control goes on from that rest
+RESUMED = ("resumed", StopReason.NONE)
+
+
+def load_control(solver: StaticSolver, hist: History, record: Record, resume: bool = False) -> None:
+    """Load control from the dead-load state (or, ``resume``, from the last converged state, a
+    rest the instability rule found), handing over to work control at its first failure,
+    and again from each rest the rule finds above a stop of work control."""
+    while _load_control(solver, hist, record, resume) is RESUMED:
+        resume = True
+
+
+def _load_control(
+    solver: StaticSolver, hist: History, record: Record, resume: bool
+) -> tuple[str, StopReason] | None:
     s = solver.settings
-    lam = 0.0
+    lam = solver.load_factor if resume else 0.0
+    # the smallest load the residual tells from zero
+    resolvable = ZERO_LOAD * s.tolerance * solver.problem.load_scale
     dlam = s.initial_step * solver.problem.load_scale
+    if resume:  # the rule's rest is a bracket above the stop: twice that to begin with
+        dlam = max(2.0 * s.bracket_tolerance * abs(lam), resolvable)
     max_dlam = s.max_step * solver.problem.load_scale
     start: np.ndarray | None = None  # the elastic predictor of the first step
-    if s.elastic_first_step:
+    if s.elastic_first_step and not resume:
         # the first step is the longer of initial_step and the elastic range: inside the
         # range the elastic predictor is the equilibrium, so a shorter step only creeps; a
         # range shorter than initial_step (a few joints yield first) says nothing of how far
@@ -84,18 +110,11 @@ def load_control(solver: StaticSolver, hist: History, record: Record) -> None:
         target = min(lam + dlam, s.max_load_factor)
         out = solver.equilibrate(target, start=start)
         start = None
-        robust_ok = False
-        # the robust re-try: the last resort of a bracket refined down to what the residual
-        # cannot tell from zero load (where Newton stalls from the dead-load state: in-plane
-        # walls held on one edge)
-        near_zero = target <= ZERO_LOAD * s.tolerance * solver.problem.load_scale
-        budget = s.zero_load_robust_iterations if near_zero else 0
-        if not out.ok and budget > 0 and not out.past_limit:
-            second = solver.robust(target, budget=budget)  # logs its outcome
-            if second.ok:
-                out, robust_ok = second, True
-            else:
-                out = replace(out, reason=f"{out.reason}; {second.reason}")
+        if not out.ok and not out.past_limit and target <= resolvable:
+            # Newton stalls from the dead-load state of in-plane walls held on one edge,
+            # at loads the residual cannot tell from zero: the instability rule decides
+            second = solver.damped_motion(target)
+            out = second if second.ok else replace(out, reason=f"{out.reason}; {second.reason}")
         if out.ok:
             record(out)
             lam = target
@@ -105,7 +124,7 @@ def load_control(solver: StaticSolver, hist: History, record: Record) -> None:
                     StopReason.MAX_LOAD_FACTOR,
                     f"reached max_load_factor {lam:.6g}",
                 )
-                return
+                return None
             if lam >= lam_fail:  # the earlier failure came from a long step only
                 log.debug("lambda=%.6g passed after an earlier failure", lam)
                 lam_fail, verified = math.inf, False
@@ -120,8 +139,7 @@ def load_control(solver: StaticSolver, hist: History, record: Record) -> None:
                 dlam = lam_fail - lam
             elif math.isfinite(lam_fail):
                 dlam = (lam_fail - lam) / 2
-            elif out.iterations <= s.easy_iterations or robust_ok:
-                # the robust strategy copes with long steps: grow them after it too
+            elif out.iterations <= s.easy_iterations:
                 dlam = min(dlam * s.growth, max_dlam)
         else:
             last_reason = out.reason
@@ -142,8 +160,8 @@ def load_control(solver: StaticSolver, hist: History, record: Record) -> None:
                 kept = solver.snapshot()
                 hist.collapse_bracket = (lam, lam_fail)
                 work_reason = work_control(solver, hist, record, first_failure=out.reason)
-                if work_reason is None:
-                    return
+                if work_reason is None or work_reason is RESUMED:
+                    return work_reason
                 log.debug(
                     "work control found nothing above lambda=%.6g (%s): refining "
                     "the load-control bracket",
@@ -165,7 +183,7 @@ def load_control(solver: StaticSolver, hist: History, record: Record) -> None:
             StopReason.MAX_STEPS,
             f"max_steps={s.max_steps} reached at lambda={lam:.6g}",
         )
-        return
+        return None
     hist.collapse_bracket = (lam, lam_fail)
     hist.end(
         Status.COLLAPSE,
@@ -177,8 +195,11 @@ def load_control(solver: StaticSolver, hist: History, record: Record) -> None:
         hist.reason += "bracket of the first failure only, not a refined collapse load"
     if hand_over and s.continuation == "work" and _hands_over(hist):
         work_reason = work_control(solver, hist, record, first_failure=last_reason)
+        if work_reason is RESUMED:
+            return RESUMED
     if work_reason is not None:
         hist.reason += f"; work control found no higher equilibrium ({work_reason[0]})"
+    return None
 
 
 def _hands_over(hist: History) -> bool:
@@ -206,22 +227,24 @@ def work_control(
     """Continue past the first failure of load control with lambda free and the
     work-conjugate displacement w = c . q (c = F_L / |F_L|) prescribed, from the last
     converged state. Returns None when the run is decided (a peak above the last
-    load-control state, or ``max_steps`` / ``max_load_factor``), else why nothing
-    higher was found and the stop it met (load control then refines its bracket).
+    load-control state, or ``max_steps`` / ``max_load_factor``), ``RESUMED`` when the
+    instability rule found the wall at rest above a flat or falling curve (load control goes
+    on from there), else why nothing higher was found and the stop it met (load control then
+    refines its bracket).
 
     Load control fails where the pushover curve turns flat (a plastic plateau or a
-    limit point); under work control the same equilibria are found with bounded
-    increments. The curve is followed until one of: lambda at w has risen less than
-    ``bracket_tolerance`` x lambda since w / 2 (w measured from the dead-load state);
-    three steps in a row gain less than ``flat_slope`` of the elastic d(lambda) / d(w) (a
-    formed mechanism, or creeping steps when Newton stalls at a kink); the step has been
-    halved ``max_cuts`` times or below what the control tolerance can resolve, and a
-    pseudo-transient step to lambda x (1 + transient_rise) finds no rest either
-    (one is tried as soon as the step has been halved ``transient_after`` times in a
-    row: a fold of the path, which no shorter step passes); the displacements pass the
-    limit. The collapse multiplier is the highest lambda on the path. With
-    ``tail_resolution`` each step is bounded by the load it can gain where the path may stop
-    (:func:`.steps.tail_cap`)."""
+    limit point); under work control (displacement control on the live load's
+    work-conjugate displacement: Batoz & Dhatt 1979, Int. J. Numer. Meth. Eng. 14) the
+    same equilibria are found with bounded increments. The curve is followed until one of:
+    lambda falls by more than ``bracket_tolerance`` below its peak (a limit point: under a
+    load that does not fall the wall leaves the path there); lambda at w has risen less than
+    ``bracket_tolerance`` x lambda since w / 2 (w measured from the dead-load state); three
+    steps in a row gain less than ``flat_slope`` of the elastic d(lambda) / d(w) (a formed
+    mechanism); the step has been halved ``max_cuts`` times or below what the control
+    tolerance can resolve, and the instability rule finds no rest at lambda (1 +
+    ``bracket_tolerance``); the displacements pass the limit. The collapse multiplier is the
+    highest lambda on the path. With ``tail_resolution`` each step is bounded by the load it
+    can gain where the path may stop (:func:`.steps.tail_cap`)."""
     s = solver.settings
     free = solver.problem.asm.free_index
     c = solver.problem.F_live / float(np.linalg.norm(solver.problem.F_live))
@@ -229,7 +252,7 @@ def work_control(
     path_w = [float(c @ (st.q.reshape(-1)[free] - q0)) for st in hist.steps]
     path_lam = [float(st.load_factor) for st in hist.steps]
     w = path_w[-1]
-    line = SecantPredictor(s.secant_predictor, [])
+    line = SecantPredictor(True, [])
     for st, stw in zip(hist.steps[-2:], path_w[-2:], strict=False):
         line.add(stw, st.q.reshape(-1), float(st.load_factor))
     if len(path_w) > 1:
@@ -245,7 +268,7 @@ def work_control(
         first = 0.5 * failed / elastic_slope if elastic_slope > 0 else 0.0
         first_w = first
     step = StepController(
-        max(first, 1e-3 * abs(w), s.radius_floor * solver.problem.displacement_scale),
+        max(first, 1e-3 * abs(w), RADIUS_FLOOR * solver.problem.displacement_scale),
         s.growth,
         easy_iterations=s.easy_iterations,
     )
@@ -253,144 +276,45 @@ def work_control(
     first_lambda = hist.collapse_bracket[1] if hist.collapse_bracket else lam
     peak = max(path_lam)
     flat_steps = 0
-    first_dw = step.size  # the scale of the steps after a fold (resume_step)
-    uncut = step.size  # the step before the present run of halvings
-    transient_from = -1  # the step from which the last pseudo-transient step started
-    transient_failed = False
     reason = ""
     stop = StopReason.NONE
-    checked_from = -1  # the step from which the last dynamic-relaxation check started
-    last_fold: float | None = None  # lambda where the last failed search stopped
-    fold_failed = False  # a pseudo-transient step past a fold found no rest
-    # the lowest lambda toward which a motion from this branch of the path ran past the
-    # displacement limit: no rest there or higher while the path stays on it
-    ran_off = math.inf
 
-    def transient(why: str, stopped: float, above: float | None = None) -> bool:
-        """A pseudo-transient step to a lambda a little higher (or up to where the failed
-        search ``stopped``, on a straight path: ``transient_target``; and past ``above``),
-        once from each state."""
-        nonlocal transient_from, ran_off
-        transient_from = len(hist.steps)
-        on_line = straight(path_w, path_lam, elastic_slope)
-        target = transient_target(lam, stopped, s.transient_rise, s.transient_reach, on_line)
-        if above is not None:  # just past a fold known to within s.fold_match
-            target = max(target, above + s.fold_match * abs(above))
-        if answered(target, "pseudo-transient step"):
+    def rest_above(why: str) -> bool:
+        """The instability rule where work control stops (:meth:`StaticSolver.rule_at` the
+        peak of the path): where the damped motion comes to rest (the wall snaps through a
+        fold of the path, or carries more past a plateau), the path goes on from there;
+        else the path stops, and the rule's verdict is the certificate's."""
+        nonlocal lam, w, peak, flat_steps
+        if not s.certify or not s.refine:
             return False
-        moved = solver.pseudo_transient(target)
-        if moved.past_limit:
-            ran_off = min(ran_off, target)
+        moved = solver.rule_at(peak)
         log.debug(
-            "work control stuck at lambda=%.6g (%s); pseudo-transient step to %.6g: %s",
+            "work control stopped at lambda=%.6g (%s); damped motion to %.6g: %s",
             lam,
             why,
-            target,
-            f"ok in {moved.iterations}" if moved.ok else moved.reason,
+            moved.load_factor,
+            "at rest" if moved.ok else moved.reason,
         )
-        if moved.ok:
-            accept_moved(moved)
-        return moved.ok
-
-    def at_corner() -> bool:
-        """Did the path's curve still rise into its last state (the corner check is on)? A
-        path stuck there, or whose searches ran off from there, never ran along the
-        mechanism its tangent, taken past the kink, may show: a fold or a peak. The slope
-        is the secant of the last three steps, the span over which work control calls a
-        curve flat: the halved steps that close in on a fold are as short as the control
-        can tell, and one of them may lose a trace of load on the way (a joint that
-        unloads) without the curve having turned."""
-        span = slice(-4, None, 3) if len(path_w) >= 4 else slice(None)
-        return (
-            s.stop_check_time_steps > 0
-            and s.fold_check_time_steps > 0
-            and still_rising(curve_slope(path_w[span], path_lam[span], elastic_slope), s.flat_slope)
-        )
-
-    def answered(target: float, what: str) -> bool:
-        """Has a motion from this branch already run past the displacement limit toward
-        ``target`` or a lower lambda? Then the relaxation to
-        ``target`` would be asked what that motion answered: no rest."""
-        if target < ran_off:
-            return False
-        log.debug(
-            "work control at lambda=%.6g: no %s to %.6g, a motion from this branch ran "
-            "past the displacement limit toward %.6g",
-            lam,
-            what,
-            target,
-            ran_off,
-        )
-        return True
-
-    def rest_above(budget: int, corner: bool = False) -> bool:
-        """A relaxation looks for rest a little above the last state (once from each
-        state), and the path goes on from there if it finds it. At a corner
-        :meth:`Relaxations.implicit_relaxation` first: its motion running past the
-        displacement limit is a peak; rest is a fold (the path goes on from dynamic
-        relaxation's rest, if it finds one); its budget spent, dynamic relaxation decides.
-        Elsewhere dynamic relaxation of ``budget`` time steps."""
-        nonlocal checked_from
-        checked_from = len(hist.steps)
-        target = lam + s.transient_rise * abs(lam)
-        if answered(target, "check"):
-            return False
-        rescued: Outcome | None
-        if corner:
-            moved = solver.implicit_relaxation(target)
-            how = "implicit relaxation"
-            verdict = f"ok in {moved.iterations} steps" if moved.ok else moved.reason
-            settled: Outcome | None = None
-            # dynamic relaxation runs at a fold (the path goes on from its rest: the implicit
-            # motion may settle in another basin at the same lambda; for at most the check's
-            # own effort) and where the implicit check gave no verdict (neither rest nor a
-            # run-off within corner_check_steps: a slow fold, or a peak that creeps)
-            if not moved.past_limit:
-                settled = solver.dynamic_rescue(target, lam, rest_budget(budget, moved))
-                verdict += "; dynamic relaxation: " + ("no rest" if settled is None else "ok")
-            if settled is None and moved.ok:  # the path goes on from the implicit rest
-                solver.last_increment = solver.increment(moved.q)
-            rescued = settled if settled is not None else (moved if moved.ok else None)
-        else:
-            rescued = solver.dynamic_rescue(target, lam, budget)
-            how, verdict = "dynamic relaxation", "ok" if rescued else "no rest"
-        log.debug("work control stuck at lambda=%.6g; %s to %.6g: %s", lam, how, target, verdict)
-        if rescued is not None:
-            accept_moved(rescued)
-        return rescued is not None
-
-    def rest_budget(budget: int, moved: Outcome) -> int:
-        """The time steps dynamic relaxation may take to find its own rest where the
-        implicit check already came to rest: the check's own effort at the rate the two
-        budgets are set by (``budget`` time steps for ``corner_check_steps`` implicit steps);
-        all of ``budget`` where it gave no verdict."""
         if not moved.ok:
-            return budget
-        return max(1, min(budget, budget * moved.iterations // s.corner_check_steps))
-
-    def accept_moved(moved: Outcome) -> None:
-        """Go on from a state found at a higher lambda (not by a work step)."""
-        nonlocal lam, w, peak, flat_steps, ran_off
+            return False
         record(moved)
-        ran_off = math.inf  # another branch: what ran off from the last one says nothing here
         lam = float(moved.load_factor)
         w = float(c @ (moved.q[free] - q0))
         path_w.append(w)
         path_lam.append(lam)
         line.restart(w, moved.q, lam)
         peak = max(peak, lam)
-        # a fraction of the step before the fold's halvings, or of the first step when longer
-        # (so that folds in a row, without growth in between, do not shrink the steps)
-        resume = max(uncut, first_dw) * s.resume_step
-        step.size, step.cuts, flat_steps = max(step.size, resume), 0, 0
+        step.size, step.cuts, flat_steps = max(step.size, first_dw), 0, 0
+        return True
 
+    first_dw = step.size  # the scale of the steps after a rest past a fold
     while len(hist.steps) < s.max_steps:
-        if s.tail_resolution > 0:
+        if s.flat_slope > 0:
             step.cap = tail_cap(
                 lam,
                 elastic_slope,
                 s.flat_slope,
-                s.tail_resolution,
+                s.flat_slope,
                 curve_slope(path_w, path_lam, elastic_slope),
                 _to_limit(solver, hist, path_w),
             )
@@ -413,17 +337,7 @@ def work_control(
                 goal = reached
         if not out.ok:
             log.debug("work step to w=%.6g failed: %s", goal, out.reason)
-            if out.past_limit and step.cuts >= s.limit_cuts:
-                # a corner too: the searches run off while the curve still rose into the
-                # state (no state left the small-displacement range), so the wall may snap
-                # through to rest higher up, as at a stuck corner
-                if (
-                    checked_from != len(hist.steps)
-                    and at_corner()
-                    and rest_above(s.fold_check_time_steps, corner=True)
-                ):
-                    transient_failed = False
-                    continue
+            if out.past_limit and step.cuts >= LIMIT_CUTS:
                 # measured from the dead-load state, as the certificate measures it
                 ran = moved_from_dead_load(solver.problem, hist, out.q)
                 reason = (
@@ -434,56 +348,13 @@ def work_control(
                 )
                 stop = StopReason.DISPLACEMENT_LIMIT
                 break
-            if step.cuts == 0:
-                uncut = step.size
             step.cut()
             # a step below this cannot be told from no step (the control tolerance)
             tiny = 1e-4 * max(abs(w), first_w, 1e-4 * solver.problem.displacement_scale)
-            stuck = step.cuts > s.max_cuts or step.size < tiny
-            # the search stops where the one before it stopped: a fold of the path that
-            # halved steps only close in on (each half converges, the next full step
-            # fails there again), so the pseudo-transient step goes past it at once
-            fold = float(out.load_factor)
-            refold = (
-                last_fold is not None
-                and abs(fold - last_fold) <= s.fold_match * abs(lam)
-                and not fold_failed
-            )
-            last_fold = fold
-            if (
-                (stuck or refold or (step.cuts == s.transient_after and not transient_failed))
-                and s.transient_steps > 0
-                and transient_from != len(hist.steps)
-            ):
-                # Newton stops at a fold of the path
-                if transient(out.reason, fold, above=fold if refold else None):
+            if step.cuts > MAX_CUTS or step.size < tiny:
+                if rest_above(out.reason):
                     continue
-                if refold:
-                    fold_failed = True
-                else:
-                    transient_failed = True
-            # neither Newton nor the pseudo-transient step passes: before calling this a
-            # collapse, let dynamic relaxation look for rest a little higher (where the
-            # tangent is singular along the load only at a corner: a fold of the path has
-            # that too, but so has a flat peak, and the check is dear)
-            corner = stuck and at_corner()
-            budget = max(s.stop_check_time_steps, s.fold_check_time_steps if corner else 0)
-            if (
-                stuck
-                and s.stop_check_time_steps > 0
-                and checked_from != len(hist.steps)
-                and (corner or not _singular_along_load(solver, hist))
-                and rest_above(budget, corner)
-            ):
-                transient_failed = False
-                continue
-            if stuck:
                 reason = f"no equilibrium beyond lambda={lam:.6g} under work control ({out.reason})"
-                if math.isfinite(ran_off):
-                    reason += (
-                        f"; no rest above it: a pseudo-transient motion from this branch ran "
-                        f"past the displacement limit toward lambda={ran_off:.6g}"
-                    )
                 stop = StopReason.PATH_STUCK
                 break
             continue
@@ -493,10 +364,20 @@ def work_control(
             capped = solver.equilibrate(s.max_load_factor)
             if capped.ok:
                 out = capped
+        if float(out.load_factor) < peak * (1.0 - s.bracket_tolerance):
+            # past a limit point: the equilibria ahead carry less load, and a wall under a
+            # load that does not fall moves away from them (the instability rule decides
+            # at the collapse whether it comes to rest higher up)
+            reason = (
+                f"a limit point: the pushover curve falls from lambda={peak:.6g} "
+                f"to {float(out.load_factor):.6g}"
+            )
+            stop = StopReason.LIMIT_POINT
+            if rest_above(reason):
+                return RESUMED  # the curve had not turned: load control goes on
+            break
         record(out)
         w, lam = goal, float(out.load_factor)
-        if lam >= ran_off:  # the path found rest where the motion ran off: no verdict
-            ran_off = math.inf
         line.add(w, out.q, lam)
         path_w.append(w)
         path_lam.append(lam)
@@ -521,6 +402,8 @@ def work_control(
                 f"work-conjugate displacement doubled to {w:.3g} m (peak {peak:.6g})"
             )
             stop = StopReason.CURVE_FLAT
+            if rest_above(reason):
+                return RESUMED  # the curve had not turned: load control goes on
             break
         # a formed mechanism: the last steps gained (almost) nothing for their
         # displacement, compared with the elastic stiffness of the live load
@@ -536,6 +419,8 @@ def work_control(
                 f"elastic stiffness per unit displacement over 3 steps (peak {peak:.6g})"
             )
             stop = StopReason.CREEPING if tiny else StopReason.STIFFNESS_LOST
+            if rest_above(reason):
+                return RESUMED  # the curve had not turned: load control goes on
             break
         if step.cuts == 0:
             step.grow(out.iterations)
@@ -569,21 +454,6 @@ def _to_limit(solver: StaticSolver, hist: History, path_w: list[float]) -> float
         path_w[-1] - path_w[-2]
     )
     return (solver.limit - last) / rate if rate > 0 else math.inf
-
-
-def _singular_along_load(solver: StaticSolver, hist: History) -> bool:
-    """Is the tangent of the last converged state singular along the motion the live load
-    drives (the certificate's rho at most ``mode_stiffness``)? A peak or a fold of the path:
-    the dynamic-relaxation check is skipped there."""
-    from masonry_dem.solvers.static.certificate import _dead_load_tangent, _rayleigh
-
-    F = solver.problem.F_live
-    _, _, response = solver.residual(solver.q, solver.load_factor)
-    v = solver.problem.factor(response).solve(F)
-    rho = _rayleigh(
-        solver.problem, v, float(F @ v), _dead_load_tangent(solver.problem, hist, solver.settings)
-    )
-    return bool(rho <= solver.settings.mode_stiffness)
 
 
 def _tangent_slope(solver: StaticSolver) -> float:

@@ -3,7 +3,7 @@ H^T f(Hq) of a Model under its interface law, and the factorized consistent tang
 dR/dq, assembled into a sparse matrix of fixed pattern.
 
 Every solver of the package answers this problem: the static corrector (Newton), the
-pseudo-transient step, and dynamic relaxation (which relaxes the same residual, with the
+damped motion of the reference analysis, and dynamic relaxation (which relaxes the same residual, with the
 same loads and the same displacement limit). The factorization sits behind one method,
 :meth:`DiscreteProblem.factor`, so that the sparse direct solver can be swapped in one place.
 """

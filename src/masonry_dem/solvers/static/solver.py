@@ -15,7 +15,7 @@ from collections.abc import Callable
 from contextlib import nullcontext
 from dataclasses import replace
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -25,11 +25,14 @@ from masonry_dem.results import History, StepResult
 from masonry_dem.solvers.factorization import SingularMatrix
 from masonry_dem.solvers.static import paths
 from masonry_dem.solvers.static.certificate import NOT_CHECKED, ZERO_LOAD, Bound, certify
+from masonry_dem.solvers.static.corrector import Corrector
 from masonry_dem.solvers.static.displacement_control import displacement_control
-from masonry_dem.solvers.static.outcome import Outcome, Status, StopReason
-from masonry_dem.solvers.static.relaxations import Relaxations
+from masonry_dem.solvers.static.outcome import Failure, Outcome, Status, StopReason
 from masonry_dem.solvers.static.settings import DisplacementControl, StaticSettings
 from masonry_dem.streamed_history import StreamedSteps, should_stream
+
+if TYPE_CHECKING:
+    from masonry_dem.solvers.quasi_static import QuasiStatic
 
 log = logging.getLogger(__name__)
 
@@ -47,7 +50,7 @@ JUDGE_TIME_STEPS = 2000
 JUDGE_FACTORIZATIONS = 20_000
 
 
-class StaticSolver(Relaxations):
+class StaticSolver(Corrector):
     """Incremental-iterative solver for one model (keeps the assembly and the state).
 
     ``bound``: an upper bound of the collapse multiplier (the associative limit-analysis
@@ -67,6 +70,8 @@ class StaticSolver(Relaxations):
         #: past the displacement limit (from the rest it started from)
         self.instability = NOT_CHECKED
         self.run_off: np.ndarray | None = None
+        self._judge: QuasiStatic | None = None
+        self._dead_rest: np.ndarray | None = None  # the dead-load state, once found
 
     # ------------------------------------------------------------------ states of the path
     def accept(self, out: Outcome, step: int, control_value: float) -> StepResult:
@@ -115,6 +120,55 @@ class StaticSolver(Relaxations):
         if control_dof is None:
             return float(np.abs(q.reshape(-1, 6)[:, :3]).max(initial=0.0))
         return float(q[control_dof])
+
+    # ------------------------------------------------------------------ the instability rule
+    def judge(self) -> QuasiStatic:
+        """The reference analysis's damped motion on this solver's discrete problem (its
+        assembly, factorizer and count of factorizations), at the path's state."""
+        if self._judge is None:
+            # (the reference module imports this package's corrector: imported here)
+            from masonry_dem.solvers.quasi_static import QuasiStatic, QuasiStaticSettings
+
+            s = self.settings
+            self._judge = QuasiStatic(
+                self.model,
+                QuasiStaticSettings(
+                    newton_steps=True,
+                    motion_tolerance=JUDGE_MOTION_TOLERANCE,
+                    max_newton=JUDGE_NEWTON,
+                    max_time_steps=JUDGE_TIME_STEPS,
+                    tolerance=s.tolerance,
+                    bracket_tolerance=s.bracket_tolerance,
+                    displacement_limit=s.displacement_limit,
+                    max_load_factor=s.max_load_factor,
+                ),
+                problem=self.problem,
+            )
+            # one budget for the rule's motions of the whole run
+            self._judge.budget = self.factorizations + JUDGE_FACTORIZATIONS
+        judge = self._judge
+        judge.start_from(self.q, self.plastic, self.cracked, self._dead_rest)
+        return judge
+
+    def damped_motion(self, target: float, dead: float = 1.0) -> Outcome:
+        """The instability rule where Newton finds no equilibrium: the reference's damped
+        motion (:meth:`QuasiStatic.move_to_rest`) from the last converged state at load
+        (``dead`` F_D + ``target`` F_L). An equilibrium where it comes to rest; else why
+        not, failing with ``Failure.DISPLACEMENT_LIMIT`` where it ran past the limit (the
+        wall has no rest there) and ``Failure.NO_REST`` where it gave no verdict."""
+        judge = self.judge()
+        before = judge.iterations
+        motion = judge.move_to_rest(target, dead)
+        self.iterations += judge.iterations - before
+        self.time_steps += motion.time_steps
+        if motion.rest:
+            assert judge.response is not None  # set at each rest
+            self.last_increment = self.increment(judge.q)
+            return Outcome(True, judge.q.copy(), target, judge.response, motion.time_steps)
+        q = judge.q if motion.end is None else motion.end
+        _, _, response = self.residual(q, target, dead)
+        failure = Failure.DISPLACEMENT_LIMIT if motion.past_limit else Failure.NO_REST
+        return Outcome(False, q.copy(), target, response, motion.time_steps, motion.reason, failure)
 
     # ------------------------------------------------------------------ analyses
     def run(
@@ -189,81 +243,60 @@ class StaticSolver(Relaxations):
             return self._finish(hist, t0)
         if control is None:
             paths.load_control(self, hist, record)
-            if hist.status is Status.COLLAPSE and self.settings.certify and self.settings.refine:
+            if self.settings.certify and self.settings.refine:
                 self._instability_rule(hist, record)
         else:
             assert monitor_dof is not None  # the control DOF, set above
             displacement_control(self, hist, record, control, monitor_dof)
         return self._finish(hist, t0)
 
-    def _instability_rule(self, hist: History, record: Callable[[Outcome], None]) -> None:
-        """The instability rule at the collapse the path reports (lambda_c): the damped
-        motion of the reference analysis (:mod:`masonry_dem.solvers.quasi_static`) from the
-        last converged state at lambda_c (1 + ``bracket_tolerance``). Running past the
-        displacement limit, it confirms the collapse, and its direction is the mechanism.
-        Coming to rest, it refutes it: the wall carries more than the path follower found,
-        and the reference's load steps (Newton from each rest, the damped motion where
-        Newton fails) go on from that rest to the first load with no rest."""
-        from masonry_dem.solvers.quasi_static import QuasiStatic, QuasiStaticSettings
-
+    def rule_at(self, top: float) -> Outcome:
+        """The instability rule at a stop of the path whose highest lambda is ``top``: the
+        damped motion from the last converged state at ``top`` (1 + ``bracket_tolerance``)
+        (at least the smallest load the residual tells from zero above it). Its verdict is
+        kept for the certificate: no rest (the motion ran past the displacement limit, its
+        direction the mechanism), no verdict, or rest (the returned equilibrium, from which
+        the path goes on)."""
         s = self.settings
-        lam_c = hist.collapse_multiplier
-        assert lam_c is not None  # a collapse has its bracket
-        judge = QuasiStatic(
-            self.model,
-            QuasiStaticSettings(
-                newton_steps=True,
-                motion_tolerance=JUDGE_MOTION_TOLERANCE,
-                max_newton=JUDGE_NEWTON,
-                max_time_steps=JUDGE_TIME_STEPS,
-                tolerance=s.tolerance,
-                bracket_tolerance=s.bracket_tolerance,
-                displacement_limit=s.displacement_limit,
-                max_load_factor=s.max_load_factor,
-            ),
-            problem=self.problem,
-        )
-        judge.budget = self.factorizations + JUDGE_FACTORIZATIONS
-        judge.start_from(self.q, self.plastic, self.cracked, hist.steps[0].q)
-        # (at least the smallest load the residual tells from zero: at a lower one, the
-        # state the path stopped at is a rest to the tolerance)
         resolvable = ZERO_LOAD * s.tolerance * self.problem.load_scale
-        target = max(lam_c * (1.0 + s.bracket_tolerance), lam_c + resolvable)
-        motion = judge.move_to_rest(target)
-        if motion.past_limit and motion.end is not None:
-            self.run_off = motion.end - self.q
-            self.instability = f"no rest at lambda {target:.6g}: {motion.reason}"
-        elif motion.undecided:  # the certificate decides without it, and says so
-            self.instability = f"no verdict at lambda {target:.6g}: {motion.reason}"
-        else:
-            log.info(
-                "%s: the wall rests at lambda %.6g, above the collapse %.6g the path reported "
-                ": the reference's load steps go on",
-                self.model.name,
-                target,
-                lam_c,
+        target = max(top * (1.0 + s.bracket_tolerance), top + resolvable)
+        moved = self.damped_motion(target)
+        self.run_off = None
+        if moved.ok:
+            self.instability = NOT_CHECKED
+            log.debug("%s: at rest at lambda %.6g, above the stop", self.model.name, target)
+        elif moved.past_limit:
+            self.run_off = moved.q - self.q
+            self.instability = f"no rest at lambda {target:.6g}: {moved.reason}"
+        else:  # the certificate decides without it, and says so
+            self.instability = f"no verdict at lambda {target:.6g}: {moved.reason}"
+        return moved
+
+    def _instability_rule(self, hist: History, record: Callable[[Outcome], None]) -> None:
+        """The instability rule at a collapse the path reports (lambda_c) where it has not
+        run yet (a refined load-control bracket): :meth:`rule_at` lambda_c. Coming to rest,
+        it refutes the collapse: load control goes on from that rest (and work control, which
+        applies the rule at each of its own stops)."""
+        first: tuple[float, StopReason, str] | None = None
+        while (
+            hist.status is Status.COLLAPSE
+            and self.instability == NOT_CHECKED
+            and hist.stop is not StopReason.DISPLACEMENT_LIMIT
+        ):
+            lam_c = hist.collapse_multiplier
+            assert lam_c is not None  # a collapse has its bracket
+            moved = self.rule_at(lam_c)
+            if not moved.ok:
+                break
+            first = first or (lam_c, hist.stop, hist.reason)
+            record(moved)
+            hist.collapse_bracket = None
+            paths.load_control(self, hist, record, resume=True)
+        if first is not None:
+            lam_c, stop, refuted = first
+            hist.reason += (
+                f"; the path follower had stopped at lambda {lam_c:.6g} ({stop}: {refuted})"
             )
-            refuted = (
-                f"the path follower stopped at lambda {lam_c:.6g} ({hist.stop}), but the "
-                f"wall rests at {target:.6g}, where the reference's load steps went on"
-            )
-
-            def rest(lam: float) -> None:
-                assert judge.response is not None  # set at each rest
-                record(Outcome(True, judge.q.copy(), lam, judge.response, 0))
-
-            def finish(status: Status, stop: StopReason, reason: str) -> History:
-                hist.end(status, stop, f"{reason}; {refuted}")
-                if judge.no_rest is not None:  # the collapse the load steps found
-                    lam_off, motion_off = judge.no_rest
-                    if motion_off.end is not None:
-                        self.run_off = motion_off.end - judge.q
-                    self.instability = f"no rest at lambda {lam_off:.6g}: {motion_off.reason}"
-                return hist
-
-            rest(target)
-            judge.raise_load(target, s.bracket_tolerance * target, hist, rest, finish)
-        self.iterations += judge.iterations  # its factorizations are the problem's own
 
     def dead_load(self) -> Outcome:
         """The equilibrium under the dead load (the specimens stood: the damped fallback
@@ -278,26 +311,24 @@ class StaticSolver(Relaxations):
                 self._limit_allowance = elastic
                 log.debug("dead load: the limit widened by the elastic %.3g m", elastic)
                 dead = self.equilibrate(0.0, 1.0, radius=self._dead_radius(), damped=True)
-        if not dead.ok and self.settings.transient_steps > 0 and not dead.past_limit:
+        if not dead.ok and not dead.past_limit:
             # where the damped Newton search stalls (a wall with openings, blocks settling
-            # on their neighbours), an overdamped relaxation may still come to rest: from
-            # where Newton stopped (often a few pseudo time steps away), else from the start
-            settled = None
-            if np.all(np.isfinite(dead.q)):
-                settled = self.pseudo_transient(0.0, start=dead.q)
-            if settled is None or not settled.ok:
-                settled = self.pseudo_transient(0.0)
+            # on their neighbours), the instability rule decides: the damped motion from the
+            # unloaded wall, to rest or past the displacement limit
+            settled = self.damped_motion(0.0)
             log.debug(
-                "dead load: Newton %s; pseudo-transient: %s",
+                "dead load: Newton %s; damped motion: %s",
                 dead.reason,
-                "ok" if settled.ok else settled.reason,
+                "at rest" if settled.ok else settled.reason,
             )
             dead = (
                 settled
                 if settled.ok
-                else replace(dead, reason=f"{dead.reason}; pseudo-transient: {settled.reason}")
+                else replace(dead, reason=f"{dead.reason}; damped motion: {settled.reason}")
             )
         self._limit_allowance = 0.0  # from here displacements are measured from this state
+        if dead.ok:
+            self._dead_rest = dead.q.copy()
         return dead
 
     def _dead_radius(self) -> float:
@@ -306,11 +337,8 @@ class StaticSolver(Relaxations):
         return min(self.limit, 1e3 * self.problem.displacement_scale)
 
     def _rests_at(self, lam: float) -> bool:
-        """Does dynamic relaxation from the last converged state come to rest at ``lam``
-        (within ``stop_check_time_steps``, at least 4000 time steps)?"""
-        budget = max(self.settings.stop_check_time_steps, 4000)
-        out = self.dynamic_rescue(lam, self.load_factor, budget, polish=False)
-        return bool(out is not None and out.ok)
+        """Does the damped motion from the last converged state come to rest at ``lam``?"""
+        return self.damped_motion(lam).ok
 
     def _finish(self, hist: History, t0: float) -> History:
         if hist.status is Status.COLLAPSE and self.settings.certify:
@@ -336,14 +364,13 @@ class StaticSolver(Relaxations):
         hist.factorizations = self.factorizations
         log.info(
             "%s: %s after %d steps, %d Newton iterations, %d factorizations, %d time steps of "
-            "dynamic relaxation, %d implicit steps of corner checks (%s)",
+            "damped motion (%s)",
             self.model.name,
             hist.status,
             len(hist.steps),
             self.iterations,
             self.factorizations,
             self.time_steps,
-            self.implicit_steps,
             hist.reason,
         )
         return hist

@@ -1,7 +1,7 @@
 """How long the next step of a path is and where it starts: the step rule shared by the path
 followers (:class:`StepController`), work control's secant start (:class:`SecantPredictor`),
 the first live step's length from the wall's elastic solution (:func:`elastic_range`) and
-how far a pseudo-transient step past a fold goes (:func:`transient_target`).
+the longest work step near the peak (:func:`tail_cap`).
 """
 
 from __future__ import annotations
@@ -13,26 +13,17 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from masonry_dem.constitutive.law import CONTACT_BAND
-from masonry_dem.solvers.static.certificate import curve_slope
 
 if TYPE_CHECKING:
     from masonry_dem.solvers.static.solver import StaticSolver
 
 __all__ = [
-    "STRAIGHT",
     "ElasticRange",
     "SecantPredictor",
     "StepController",
     "elastic_range",
-    "straight",
     "tail_cap",
-    "transient_target",
 ]
-
-#: a path whose last step rose at least this fraction of the elastic slope d lambda / d w is
-#: still straight: the tangent's lambda at a work step's goal is then near the path's (where
-#: the curve bends, the tangent of the state before the bend overshoots it)
-STRAIGHT = 0.5
 
 
 @dataclass
@@ -67,8 +58,8 @@ class SecantPredictor:
     """The start of the next search of work control: the line through the last two converged
     states of the path, extended by the next step (``secant_predictor``). Along a smooth
     stretch of the path Newton then starts within a fraction of the step of the answer
-    instead of a whole step away; a state reached by a jump (a pseudo-transient or
-    dynamic-relaxation step past a fold) starts a new line. The parameter ``t`` is what the
+    instead of a whole step away; a state reached by a jump (the damped motion past a
+    fold) starts a new line. The parameter ``t`` is what the
     follower prescribes (lambda under load control, w under work control)."""
 
     on: bool
@@ -151,13 +142,6 @@ def elastic_range(solver: StaticSolver, cap: float) -> ElasticRange | None:
     return ElasticRange(lo, rate) if lo > 0.0 else None
 
 
-def straight(path_w: list[float], path_lam: list[float], elastic_slope: float) -> bool:
-    """Did the last step of the path (w, lambda) rise forward at least ``STRAIGHT`` times the
-    elastic slope d lambda / d w? (The certificate's measure of the curve's slope; a step
-    back in w, a snap-back included, is not straight.)"""
-    return STRAIGHT <= curve_slope(path_w, path_lam, elastic_slope) < math.inf
-
-
 def tail_cap(
     lam: float,
     elastic_slope: float,
@@ -190,24 +174,3 @@ def tail_cap(
         steep = max(slope, flat_slope) if math.isfinite(slope) else flat_slope
         cap = max(to_limit, resolution * abs(lam) / (steep * elastic_slope))
     return cap
-
-
-def transient_target(lam: float, stopped: float, rise: float, reach: float, on_line: bool) -> float:
-    """The lambda a pseudo-transient step from an equilibrium at ``lam`` relaxes to, after a
-    work step of the path failed at a fold: ``rise`` above ``lam``, or, where the path is
-    still straight (``on_line``), up to the lambda at which the failed work search
-    ``stopped``, at most ``reach`` above ``lam``.
-
-    Why: under work control each Newton iterate meets the prescribed displacement, so a
-    search that stalls at a kink of the law (a joint that starts to rock or slide) stops at
-    about the lambda of its goal, which on a straight path is the path's own. The damped
-    motion of the pseudo-transient step rounds the kink in a few steps wherever an
-    equilibrium is near; rising only ``rise`` (0.5 %) it leaves the next kink ahead of the
-    next work step, which fails again, so a chain of kinks costs two failed searches and a
-    pseudo-transient step per ``rise``. Where the path bends, the tangent's lambda overshoots
-    the path's, and a far target leaves the relaxation too long a way (it finds no rest
-    within its window): there the step stays ``rise``."""
-    low = lam + rise * abs(lam)
-    if not on_line or reach <= 0 or not stopped > low:
-        return low
-    return min(stopped, lam + reach * abs(lam))
