@@ -91,14 +91,15 @@ def test_quickstart_example_runs(tmp_path, capsys):
 
 
 def test_run_renders_the_last_step_and_the_collapse_mechanism(tmp_path, capsys):
-    """The PNGs are written, named in the summary and in the run's last line; the folder
-    keeps no lock file once the run is over."""
+    """The PNGs are written, named in the summary and in the run's last line (the block
+    tilting over along e3 is drawn from the side, where its motion shows); the folder keeps
+    no lock file once the run is over."""
     case = _write_case(tmp_path, SINGLE_BLOCK)
     out = tmp_path / "res"
     assert main(["run", str(case), "--out", str(out), "--quiet"]) == 0
     summary = json.loads((out / "summary.json").read_text())
     assert (out / summary["png"]).is_file()
-    assert summary["mechanism_png"] == "mechanism_oblique.png"
+    assert summary["mechanism_png"] == "mechanism_side.png"
     assert (out / summary["mechanism_png"]).is_file()
     last = capsys.readouterr().out.strip().splitlines()[-1]
     assert summary["png"] in last and summary["mechanism_png"] in last
