@@ -162,3 +162,17 @@ def test_an_in_plane_mechanism_is_drawn_from_the_front(tmp_path):
     assert render.mechanism_view(folder) == "front"
     png = render.render_mechanism(folder, window_size=(300, 225))
     assert png.name == "mechanism_front.png" and png.is_file()
+
+
+def test_render_command_picks_the_mechanism_view_unless_one_is_asked(tilted, capsys):
+    """``masonry-dem render --mechanism`` without ``--view`` draws the overturning wall's
+    mode from the side; with ``--view front`` it draws what was asked."""
+    from masonry_dem.cli import main
+
+    _, _, folder = tilted
+    assert main(["render", str(folder), "--mechanism", "--size", "300x225"]) == 0
+    written = capsys.readouterr().out.split()
+    assert str(folder / "mechanism_side.png") in written
+    assert not any(name.endswith("mechanism_oblique.png") for name in written)
+    assert main(["render", str(folder), "--mechanism", "--view", "front", "--size", "300x225"]) == 0
+    assert str(folder / "mechanism_front.png") in capsys.readouterr().out.split()
