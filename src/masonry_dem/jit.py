@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import hashlib
 import logging
+import os
 import types
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -38,6 +39,7 @@ __all__ = [
     "announce_compilation",
     "compile_estimate",
     "compile_pending",
+    "compile_seconds",
     "kernel",
     "kernels",
     "mark_announced",
@@ -261,6 +263,19 @@ def compile_estimate(parallel: bool, lazy: bool = False) -> float:
     return sum(COMPILE_SECONDS[v] * len(names) / max(total[v], 1) for v, names in pending.items())
 
 
+def compile_seconds(interfaces: int, processes: int = 1) -> float:
+    """Seconds an analysis of a model with ``interfaces`` interfaces will spend compiling
+    kernels first (with ``processes`` >= 2 on a machine of two cores or more, the two groups
+    of :mod:`masonry_dem.solvers.warmup` side by side); 0 when every kernel it uses is
+    cached."""
+    parallel = interfaces >= parallel_from()
+    if not compile_pending(parallel):
+        return 0.0
+    seconds = compile_estimate(parallel)
+    side_by_side = processes >= 2 and (os.cpu_count() or 1) >= 2
+    return seconds * SIDE_BY_SIDE if side_by_side else seconds
+
+
 def announce_compilation(interfaces: int, processes: int = 1) -> float:
     """Log "compiling kernels, once per machine, about N s" if an analysis of a model with
     ``interfaces`` interfaces will compile kernels (on ``processes`` cores: the two groups of
@@ -269,9 +284,7 @@ def announce_compilation(interfaces: int, processes: int = 1) -> float:
     pending = compile_pending(parallel)
     if not pending:
         return 0.0
-    seconds = compile_estimate(parallel)
-    if processes >= 2:
-        seconds *= SIDE_BY_SIDE
+    seconds = compile_seconds(interfaces, processes)
     logger.warning(
         "compiling kernels, once per machine, about %.0f s (%s)", seconds, ", ".join(pending)
     )

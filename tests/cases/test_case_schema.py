@@ -8,6 +8,7 @@ import logging
 import re
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from masonry_dem.cli import main
@@ -213,16 +214,25 @@ def test_schema_reads_the_builder_registry(monkeypatch):
             casefile.case_from_dict(bad, "t.toml")
 
 
-def test_readme_case_file_passes_the_schema(tmp_path):
-    """The case file of the README, as printed, is read (its optional lines commented)."""
-    readme = (Path(__file__).resolve().parents[2] / "README.md").read_text()
-    block = readme.split("## Case files")[1].split("```toml")[1].split("```")[0]
+@pytest.mark.parametrize(
+    "doc, after", [("README.md", "## Modelling your wall"), ("docs/case_files.md", "## The schema")]
+)
+def test_the_printed_case_files_pass_the_schema(doc, after):
+    """The case file of the README (a wall of 3 x 13 blocks on a base, held by a return wall
+    on the left, on a tilt table out of plane) and the full template of docs/case_files.md,
+    as printed, are read (the optional opening commented out)."""
+    text = (Path(__file__).resolve().parents[2] / doc).read_text()
+    block = text.split(after)[1].split("```toml")[1].split("```")[0]
     block = block.replace("openings = [[0.2, 0.3, 0.4, 0.6]]", "# openings")
     from masonry_dem._toml import tomllib
     from masonry_dem.cases.casefile import case_from_dict
 
-    case = case_from_dict(tomllib.loads(block), "README")
-    assert case.settings.bracket_tolerance == 0.005
+    case = case_from_dict(tomllib.loads(block), doc)
+    model = case.model
+    assert model.name == "my wall" and case.method == "pushover"
+    assert model.blocks.count == 3 * 13 + 6 + 1  # 6 courses of 2 halves and 2 whole; the base
+    live = np.asarray(model.live).reshape(-1, 6)
+    assert np.abs(live[:, 2]).sum() > 0 and np.abs(live[:, [0, 1]]).sum() == 0  # along e3
 
 
 def test_law_options_belong_to_the_material(tmp_path, capsys):

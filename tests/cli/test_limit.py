@@ -92,16 +92,29 @@ def test_limit_command_claims_its_folder_as_run_does(tmp_path, capsys):
     assert summary["status"] == "collapse" and summary["analysis"] == "limit"
 
 
-def test_limit_command_names_its_picture_and_leaves_no_lock(tmp_path, capsys):
+def test_limit_command_names_its_picture_and_leaves_no_lock(tmp_path, capsys, monkeypatch):
     """The last line lists the files the analysis left, the mechanism picture among them
-    (which names the limit analysis in its title), and nothing it did not write."""
+    (which names the limit analysis in its title and is drawn from the side, where the
+    block's tilt along e3 shows), and nothing it did not write."""
+    from masonry_dem.export import render
+
+    titles = []
+
+    def caption(*args):
+        titles.append(original(*args))
+        return titles[-1]
+
+    original = render.caption
+    monkeypatch.setattr(render, "caption", caption)
     case = _write_case(tmp_path, SINGLE_BLOCK)
     out = tmp_path / "la"
     assert main(["limit", str(case), "--out", str(out)]) == 0
+    assert len(titles) == 1 and "mechanism (collapse mode), limit analysis (" in titles[0]
     summary = json.loads((out / "summary.json").read_text())
     last = capsys.readouterr().out.strip().splitlines()[-1]
     assert last == (
         f"results in {out}/ (mechanism_blocks.vtu, mechanism_interfaces.vtu, "
         f"{summary['mechanism_png']}, summary.json)"
     )
+    assert summary["mechanism_png"] == "mechanism_side.png"
     assert not (out / ".masonry-dem.lock").exists()

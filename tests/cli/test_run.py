@@ -90,15 +90,32 @@ def test_quickstart_example_runs(tmp_path, capsys):
     assert (tmp_path / "q" / "summary.json").exists()
 
 
+def test_the_readme_python_example_runs(tmp_path, capsys, monkeypatch):
+    """The README's Python example, as printed, builds the default wall and its pushover
+    ends in a certified collapse at the bundled case's lambda."""
+    readme = (ROOT / "README.md").read_text()
+    code = readme.split("### In Python")[1].split("```python")[1].split("```")[0]
+    monkeypatch.chdir(tmp_path)  # its results folder, results/ol1, lands here
+    namespace: dict = {}
+    exec(compile(code, "README.md", "exec"), namespace)
+    history = namespace["history"]
+    assert history.status == "collapse" and history.certificate.holds
+    default = json.loads((tmp_path / "results" / "ol1" / "summary.json").read_text())
+    assert default["status"] == "collapse"
+    assert history.collapse_multiplier == pytest.approx(0.2826, rel=0.01)
+    assert "collapse" in capsys.readouterr().out
+
+
 def test_run_renders_the_last_step_and_the_collapse_mechanism(tmp_path, capsys):
-    """The PNGs are written, named in the summary and in the run's last line; the folder
-    keeps no lock file once the run is over."""
+    """The PNGs are written, named in the summary and in the run's last line (the block
+    tilting over along e3 is drawn from the side, where its motion shows); the folder keeps
+    no lock file once the run is over."""
     case = _write_case(tmp_path, SINGLE_BLOCK)
     out = tmp_path / "res"
     assert main(["run", str(case), "--out", str(out), "--quiet"]) == 0
     summary = json.loads((out / "summary.json").read_text())
     assert (out / summary["png"]).is_file()
-    assert summary["mechanism_png"] == "mechanism_oblique.png"
+    assert summary["mechanism_png"] == "mechanism_side.png"
     assert (out / summary["mechanism_png"]).is_file()
     last = capsys.readouterr().out.strip().splitlines()[-1]
     assert summary["png"] in last and summary["mechanism_png"] in last

@@ -5,7 +5,9 @@ Proves: a run that ends in collapse writes ``mechanism_blocks.vtu`` and
 (a rigid rotation about the base, lambda = s/H), the joint motion of the mode is the largest
 at the base joints and below 5 % of it at every joint inside the wall; the front-view picture
 shows the crack colour only along the base and no crack colour above it; a folder without a
-mechanism gets a clear error naming the missing file.
+mechanism gets a clear error naming the missing file; the picture ``run`` writes is taken
+in the view in which the mode moves the most (a wall overturning out of its plane from the
+side, an in-plane mechanism from the front, walls that meet in the oblique view).
 """
 
 from __future__ import annotations
@@ -16,8 +18,10 @@ import numpy as np
 import pytest
 
 from masonry_dem.export import render
+from masonry_dem.export.scene import StepData, motion_in_view, view_of_motion
 from masonry_dem.export.vtu import MECHANISM_FILES
 from masonry_dem.geometry.builders import add_base, running_bond_wall
+from masonry_dem.geometry.plans import u_wall
 from masonry_dem.model import InterfaceMaterial, Model, SelfWeight, Support, WeightProportional
 from masonry_dem.solvers.incremental import pushover
 
@@ -91,3 +95,84 @@ def test_side_by_side_gallery_of_mechanisms(tilted, tmp_path):
     assert img.shape[:2] == (150, 400)
     crack = np.all(np.abs(img - np.array(render.MECHANISM_COLOURS[-1])) <= 12, axis=2)
     assert crack[:, :200].any() and crack[:, 200:].any()  # the base crack in both panels
+
+
+def _rigid_mode(blocks, rotation, about):
+    """StepData of ``blocks`` moved by a small rigid rotation (vector ``rotation``) about the
+    point ``about``: u = theta x (x - about) at every corner."""
+    pts = blocks.corner_points()
+    disp = np.cross(np.asarray(rotation, dtype=float), pts - np.asarray(about, dtype=float))
+    fixed = np.zeros(len(pts), dtype=bool)
+    return StepData(pts, disp, fixed, None, None, None, None, None)
+
+
+def test_the_mechanism_view_shows_the_motion_in_its_image_plane():
+    """Out-of-plane overturning (rotation about the base's e1 edge: the motion is along e3,
+    the thickness, and e2) is seen from the side, where the front view sees only the small
+    vertical part of it; in-plane rocking about the toe (rotation about e3: e1 and e2) from
+    the front, where the side view sees only the vertical part; walls that meet (a U plan) in
+    the oblique view, whatever they do; a mode that moves nothing in the oblique view."""
+    wall = running_bond_wall(3, COURSES, A, 0.21, S, 20e3)
+    overturning = _rigid_mode(wall, (-1e-3, 0.0, 0.0), (0.0, 0.0, 0.0))
+    assert (
+        np.abs(overturning.block_disp[..., 2]).max()
+        > 10 * np.abs(overturning.block_disp[..., 0]).max()
+    )
+    assert motion_in_view(overturning.block_disp, "side") > 5 * motion_in_view(
+        overturning.block_disp, "front"
+    )
+    assert view_of_motion(overturning) == "side"
+    length = 3 * 0.21
+    rocking = _rigid_mode(wall, (0.0, 0.0, -1e-3), (length, 0.0, 0.0))
+    assert view_of_motion(rocking) == "front"
+    # the same modes, the support blocks (fixed, not moving) do not count
+    blocks, base = add_base(wall)
+    held = _rigid_mode(blocks, (-1e-3, 0.0, 0.0), (0.0, 0.0, 0.0))
+    held.fixed[base] = True
+    held.block_disp[base] = 0.0
+    assert view_of_motion(held) == "side"
+    returns = u_wall(5, COURSES, A, 0.21, S, 20e3, return_blocks=3)
+    assert view_of_motion(_rigid_mode(returns, (-1e-3, 0.0, 0.0), (0.0, 0.0, 0.0))) == "oblique"
+    still = _rigid_mode(wall, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
+    assert view_of_motion(still) == "oblique"
+
+
+def test_run_draws_an_out_of_plane_overturning_from_the_side(tilted, tmp_path):
+    """The free wall on a tilt table along e3 overturns about its base: its mechanism
+    picture, without a view asked, is the side view (``mechanism_side.png``)."""
+    _, _, folder = tilted
+    assert render.mechanism_view(folder) == "side"
+    png = render.render_mechanism(folder, window_size=(300, 225))
+    assert png.name == "mechanism_side.png" and png.is_file()
+
+
+def test_an_in_plane_mechanism_is_drawn_from_the_front(tmp_path):
+    """The same wall on a tilt table along e1 (its own plane), held out of plane: it rocks
+    or slides in its plane and its mechanism picture is the front view."""
+    blocks, base = add_base(running_bond_wall(3, 3, A, 0.21, S, 20e3))
+    model = Model.build(
+        blocks,
+        InterfaceMaterial(kn=2.4e9, kt=1.0e9, friction=0.7),
+        supports=[Support([base]), Support(list(range(len(blocks) - 1)), ["u3"])],
+        loads=[SelfWeight(), WeightProportional((1.0, 0.0, 0.0))],
+    )
+    folder = tmp_path / "in_plane"
+    hist = pushover(model, out=folder)
+    assert hist.status == "collapse", hist.reason
+    assert render.mechanism_view(folder) == "front"
+    png = render.render_mechanism(folder, window_size=(300, 225))
+    assert png.name == "mechanism_front.png" and png.is_file()
+
+
+def test_render_command_picks_the_mechanism_view_unless_one_is_asked(tilted, capsys):
+    """``masonry-dem render --mechanism`` without ``--view`` draws the overturning wall's
+    mode from the side; with ``--view front`` it draws what was asked."""
+    from masonry_dem.cli import main
+
+    _, _, folder = tilted
+    assert main(["render", str(folder), "--mechanism", "--size", "300x225"]) == 0
+    written = capsys.readouterr().out.split()
+    assert str(folder / "mechanism_side.png") in written
+    assert not any(name.endswith("mechanism_oblique.png") for name in written)
+    assert main(["render", str(folder), "--mechanism", "--view", "front", "--size", "300x225"]) == 0
+    assert str(folder / "mechanism_front.png") in capsys.readouterr().out.split()

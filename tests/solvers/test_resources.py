@@ -5,6 +5,7 @@ against the memory the model and the solver's set-up really allocate, and the re
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 import tracemalloc
@@ -163,3 +164,48 @@ def test_the_command_exits_with_code_2(tmp_path):
     )
     assert proc.returncode == 2
     assert "refused: the run would need 1000501 blocks" in proc.stderr
+
+
+def test_a_cold_kernel_cache_adds_the_compilation_to_the_time_said(monkeypatch):
+    """The time said before a run is the whole run's: on an empty or stale numba cache
+    (every kernel reported uncached) it holds the compilation, jit.COMPILE_SECONDS of the
+    serial kernels (x SIDE_BY_SIDE on two cores) for a small wall, and says it happens once
+    per machine; on a warm cache only the loading of the compiled kernels. The pictures
+    count when the run renders."""
+    from masonry_dem import jit
+    from masonry_dem.export.run_case import estimate_run
+
+    model = md.load_case().model
+    monkeypatch.setattr(jit, "_cached", lambda disp: False)
+    cold = estimate_run(model)
+    side_by_side = jit.SIDE_BY_SIDE if (os.cpu_count() or 1) >= 2 else 1.0
+    compiling = "compiling the kernels (once per machine)"
+    assert cold.times[compiling] == pytest.approx(jit.COMPILE_SECONDS["serial"] * side_by_side)
+    assert cold.total_seconds >= cold.times[compiling] + cold.seconds
+    assert compiling in cold.describe()
+    monkeypatch.setattr(jit, "_cached", lambda disp: True)
+    warm = estimate_run(model)
+    assert compiling not in warm.times
+    assert warm.times["loading the compiled kernels"] == resources.KERNEL_LOAD_SECONDS
+    assert cold.total_seconds - warm.total_seconds > 5.0
+    assert "pictures" in warm.times and "pictures" not in estimate_run(model, render=False).times
+
+
+def test_the_time_said_is_a_range_that_widens_on_a_busy_machine():
+    """From half to twice the idle estimate while a core is free; on 2 cores at load 3.9
+    the top of the range grows by (3.9 + 1) / 2 and the message says why."""
+    est = resources.estimate(46, 107, 276)
+    idle = resources.run_time(est, compile_seconds=9.0, pictures=2, load=0.5, cores=2)
+    lo, hi = idle.time_range()
+    assert lo == pytest.approx(idle.total_seconds / 2) and hi == pytest.approx(
+        2 * idle.total_seconds
+    )
+    assert "busy" not in idle.describe()
+    busy = resources.run_time(est, compile_seconds=9.0, pictures=2, load=3.9, cores=2)
+    assert busy.busy == pytest.approx(2.45)
+    assert busy.time_range()[1] == pytest.approx(2.45 * hi)
+    text = busy.describe()
+    assert "expect" in text and "the machine is busy: load 3.9 on 2 cores" in text
+    # the default wall's analysis (0.52 s measured, idle) is not said to take "0 s": the
+    # fixed part of every Newton iteration counts
+    assert 0.25 < est.seconds < 1.0

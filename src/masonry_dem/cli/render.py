@@ -46,7 +46,8 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
         "--view",
         action="append",
         choices=VIEW_CHOICES + ("all",),
-        help="camera preset (default oblique); repeat it or give 'all' for several",
+        help="camera preset (default oblique; the mechanism: the view in which its mode moves "
+        "most); repeat it or give 'all' for several",
     )
     p.add_argument(
         "--scale",
@@ -62,7 +63,8 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
         "--mechanism",
         action="store_true",
         help="also render the collapse mechanism (mechanism_<view>.png: the collapse mode, "
-        "joints coloured by the relative motion across them)",
+        "joints coloured by the relative motion across them; without --view, from the side "
+        "for a wall overturning out of its plane, from the front for an in-plane mechanism)",
     )
     p.add_argument(
         "--size",
@@ -104,7 +106,8 @@ def run(args: argparse.Namespace) -> int:
             )
         )
     if args.mechanism:
-        for view in views:
+        # no --view: the view in which the collapse mode moves the most
+        for view in views if args.view else [None]:
             written.append(
                 render.render_mechanism(
                     args.results, view=view, scale=args.scale, window_size=args.size

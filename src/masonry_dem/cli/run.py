@@ -74,7 +74,9 @@ def _refused(args: argparse.Namespace, model: Model | None = None) -> bool:
     from masonry_dem.solvers.resources import TooLarge
 
     try:
-        est = estimate_run(args.case if model is None else model, args.max_memory)
+        est = estimate_run(
+            args.case if model is None else model, args.max_memory, render=not args.no_render
+        )
     except TooLarge as exc:
         print(f"masonry-dem run: refused: {exc}", file=sys.stderr)
         return True

@@ -49,6 +49,7 @@ from masonry_dem.export.scene import (
     read_cells,
     read_step,
     state_colours,
+    view_of_motion,
     wall_size,
 )
 
@@ -67,6 +68,7 @@ __all__ = [
     "open_results",
     "plot_pushover",
     "read_pushover",
+    "mechanism_view",
     "render_animation",
     "render_mechanism",
     "render_side_by_side",
@@ -318,11 +320,9 @@ def render_animation(
     return path
 
 
-def _mechanism_scene(
-    folder: Path, view: str, scale: float | None, wsize: tuple[int, int], last_increment: bool
-) -> Scene:
-    """A scene of the collapse mechanism of ``folder``, camera and title set; the caller
-    closes it."""
+def _read_mechanism(folder: Path, last_increment: bool) -> StepData:
+    """The collapse mode of ``folder`` (or its last increment): blocks moved by it, joints
+    coded by the relative motion across them (:data:`MECHANISM_BINS`)."""
     bfile, ifile = (folder / f for f in rf.MECHANISM_FILES)
     if not bfile.is_file():
         raise FileNotFoundError(
@@ -345,7 +345,28 @@ def _mechanism_scene(
         motion = np.asarray(igrid.cell_data[field], dtype=float)
         code = np.searchsorted(np.asarray(MECHANISM_BINS), motion, side="right")
         axis = np.asarray(igrid.cell_data["normal_axis"]).astype(int)
-    data = StepData(bpts, bdisp, fixed, jp, jd, axis, code, None, restrained, live)
+    return StepData(bpts, bdisp, fixed, jp, jd, axis, code, None, restrained, live)
+
+
+def mechanism_view(folder: Path | str, last_increment: bool = False) -> str:
+    """The camera preset in which the collapse mode of a results folder moves the most
+    (:func:`masonry_dem.export.scene.view_of_motion`): ``"side"`` for a wall overturning out
+    of its plane, ``"front"`` for an in-plane mechanism, ``"oblique"`` for walls that meet."""
+    return view_of_motion(_read_mechanism(Path(folder), last_increment))
+
+
+def _mechanism_scene(
+    folder: Path,
+    view: str,
+    scale: float | None,
+    wsize: tuple[int, int],
+    last_increment: bool,
+    data: StepData | None = None,
+) -> Scene:
+    """A scene of the collapse mechanism of ``folder`` (``data``: as read already), camera
+    and title set; the caller closes it."""
+    if data is None:
+        data = _read_mechanism(folder, last_increment)
     summary = rf.read_summary(folder)
     name, lam = str(summary.get("name", folder.name)), summary.get("lambda")
     s = auto_scale(max_displacement(data), wall_size(data)) if scale is None else scale
@@ -378,7 +399,7 @@ def _mechanism_scene(
 
 def render_mechanism(
     folder: Path | str,
-    view: str = "oblique",
+    view: str | None = None,
     scale: float | None = None,
     out: Path | str | None = None,
     window_size: Sequence[int] = (1200, 900),
@@ -387,15 +408,20 @@ def render_mechanism(
     """PNG of the collapse mechanism of a results folder: the blocks moved by the collapse
     mode (``mechanism_blocks.vtu``, written when a run ends in collapse) and every joint
     coloured by the relative motion across it, as a share of the largest
-    (:data:`MECHANISM_BINS`): the cracks and hinges of the mechanism. ``last_increment``
-    uses the last displacement increment of the run instead of the mode. Written to ``out``
-    or ``<folder>/mechanism_<view>.png``; returns the path."""
-    check_view(view)
+    (:data:`MECHANISM_BINS`): the cracks and hinges of the mechanism. ``view`` None: the view
+    in which the mode moves the most (:func:`mechanism_view`: a wall overturning out of its
+    plane from the side, an in-plane mechanism from the front). ``last_increment`` uses the
+    last displacement increment of the run instead of the mode. Written to ``out`` or
+    ``<folder>/mechanism_<view>.png``; returns the path."""
+    folder = Path(folder)
+    if view is not None:
+        check_view(view)
     scale = _check_scale(scale)
     wsize = _check_window(window_size)
-    folder = Path(folder)
+    data = _read_mechanism(folder, last_increment)
+    view = view_of_motion(data) if view is None else view
     path = check_out(out, folder / f"mechanism_{view}.png", _IMAGE_SUFFIXES, "render_mechanism")
-    scene = _mechanism_scene(folder, view, scale, wsize, last_increment)
+    scene = _mechanism_scene(folder, view, scale, wsize, last_increment, data)
     _save_and_close(scene, path)
     log.info("rendered the collapse mechanism of %s (%s view) to %s", folder, view, path)
     return path

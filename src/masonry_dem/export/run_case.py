@@ -105,12 +105,21 @@ def cannot_collapse(model: Model) -> dict[str, Any] | None:
     return bound if bound["limit_analysis_status"] == "no collapse" else None
 
 
-def estimate_run(case: str | Path | Model | None, max_memory: str | None = None) -> Estimate | None:
+#: the PNGs a run writes: the last step and, after a collapse, the mechanism
+RUN_PICTURES = 2
+
+
+def estimate_run(
+    case: str | Path | Model | None, max_memory: str | None = None, render: bool = True
+) -> Estimate | None:
     """The memory and time a run needs: of a case file, counted from its ``[geometry]``
     without building it (None for the bundled wall, a builder that cannot be counted, or a
-    file that does not parse: loading the case then names the fault), or of a built model.
-    Raises :class:`~masonry_dem.solvers.resources.TooLarge` when it is above ``max_memory``
-    (a size such as ``16G``; default: the machine's available memory)."""
+    file that does not parse: loading the case then names the fault), or of a built model,
+    whose time is the whole run's (:func:`~masonry_dem.solvers.resources.run_time`: the
+    kernels compiled when numba's cache lacks them, the analysis, the pictures with
+    ``render``, on this machine's load). Raises
+    :class:`~masonry_dem.solvers.resources.TooLarge` when it is above ``max_memory`` (a size
+    such as ``16G``; default: the machine's available memory)."""
     from masonry_dem.solvers import resources
 
     if case is None or isinstance(case, (str, Path)):
@@ -123,7 +132,14 @@ def estimate_run(case: str | Path | Model | None, max_memory: str | None = None)
             return None
         est = resources.estimate(blocks)
     else:
+        from masonry_dem import jit
+
         est = resources.estimate(case.blocks.count, case.interfaces.count, case.n_dofs)
+        est = resources.run_time(
+            est,
+            compile_seconds=jit.compile_seconds(case.interfaces.count, processes=2),
+            pictures=RUN_PICTURES if render else 0,
+        )
     limit = None if max_memory is None else resources.parse_memory(max_memory)
     resources.check_fits(est, limit)
     return est

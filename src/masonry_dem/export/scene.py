@@ -193,6 +193,46 @@ def max_displacement(data: StepData) -> float:
     )
 
 
+#: the views the mechanism picture chooses among (the back view shows what the front does)
+MECHANISM_VIEW_CHOICES: tuple[str, ...] = ("front", "side", "oblique")
+#: walls deeper (e3) than this many times their median block depth are walls that meet (a U,
+#: L or T plan) or several leaves: a front or side elevation hides some of them behind the
+#: others, so their mechanism is drawn in the oblique view
+DEEP_WALL_BLOCKS = 1.5
+
+
+def motion_in_view(disp: np.ndarray, view: str) -> float:
+    """How much of the displacements ``disp`` (..., 3) a camera of preset ``view`` sees: the
+    sum of their squared components in its image plane (the part along its line of sight is
+    invisible)."""
+    d = np.asarray(check_view(view)["direction"], dtype=float)
+    d /= np.linalg.norm(d)
+    u = np.asarray(disp, dtype=float).reshape(-1, 3)
+    return float(np.sum(u * u) - np.sum((u @ d) ** 2))
+
+
+def view_of_motion(data: StepData) -> str:
+    """The camera preset in which the displacements of ``data`` (a collapse mode) move the
+    most: of :data:`MECHANISM_VIEW_CHOICES`, the one whose image plane holds the largest
+    share of the moving blocks' corner displacements (:func:`motion_in_view`). A wall
+    overturning out of its plane (e3) is drawn from the side, an in-plane mechanism (e1)
+    from the front, a ``"front"`` on a tie. Walls that meet (deeper than
+    :data:`DEEP_WALL_BLOCKS` of their blocks' depth) and a mode that moves nothing keep the
+    oblique view."""
+    moving = ~np.asarray(data.fixed, dtype=bool)
+    if not moving.any():
+        return "oblique"
+    pts, disp = data.block_points[moving], data.block_disp[moving]
+    block_depth = float(np.median(np.ptp(pts[..., 2], axis=1)))
+    if np.ptp(pts[..., 2]) > DEEP_WALL_BLOCKS * block_depth:
+        return "oblique"
+    seen = {view: motion_in_view(disp, view) for view in MECHANISM_VIEW_CHOICES}
+    best = max(seen.values())
+    if not best > 0:
+        return "oblique"
+    return next(view for view in MECHANISM_VIEW_CHOICES if seen[view] >= (1 - 1e-9) * best)
+
+
 def auto_scale(max_displacement: float, wall_size: float) -> float:
     """A round amplification (two significant figures, rounded down) making the largest
     displacement about :data:`AUTO_SCALE_TARGET` of the wall size; 1 when nothing moves."""

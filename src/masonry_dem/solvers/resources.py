@@ -17,18 +17,22 @@ docs/history/solvers_record.md, "Scale"):
 * ``history``: every converged step kept in memory (q, actions, states, utilisation, flags),
   or three of them where the run streams its steps to disk (``streamed_history``).
 
-Time: ``factorizations x`` (seconds per factorization, growing like n^FACTOR_EXPONENT)
-``+ iterations x`` (seconds per Newton iteration without the factorization, linear in the
-interfaces), with the iterations and factorizations of the pushovers of the measured
-walls, growing like blocks^GROWTH. It is within a factor of two on an idle machine for
-walls like the benchmark's, a message, not a promise; memory is the figure that refuses a run.
+Time: the analysis is ``factorizations x`` (seconds per factorization, growing like
+n^FACTOR_EXPONENT) ``+ iterations x`` (seconds per Newton iteration without the
+factorization: a fixed part, the Python around the kernels, and a part linear in the
+interfaces), with the iterations and factorizations of the pushovers of the measured walls,
+growing like blocks^GROWTH. :func:`run_time` adds what a run does around the analysis: the
+kernels compiled (an empty or stale numba cache, once per machine) or loaded from the disk
+cache, and the pictures. The total is said as a range, from half to :data:`SPREAD` times it,
+widened on a machine busier than its cores (:func:`busy_factor`): a message, not a promise;
+memory is the figure that refuses a run.
 """
 
 from __future__ import annotations
 
 import math
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 #: bytes of the interpreter, numpy, scipy, numba and the compiled kernels (peak RSS of the
 #: 10^2-block pushover)
@@ -65,6 +69,19 @@ FACTOR_EXPONENT = 1.08
 #: tangent assembly, solves, line search: 0.069 s an iteration at 29 850 interfaces, 0.34 s
 #: at about 3e5)
 ITERATION_SECONDS_PER_INTERFACE = 1.5e-6
+#: seconds per Newton iteration whatever the size (the Python around the kernels: the default
+#: wall, 107 interfaces, ran 572 iterations and 305 factorizations in 0.52 s, idle)
+ITERATION_SECONDS_FIXED = 7e-4
+#: seconds to load the compiled kernels from numba's disk cache (a warm run's first analysis)
+KERNEL_LOAD_SECONDS = 0.7
+#: the pictures ``run`` writes: pyvista's import and OpenGL context once, then per picture a
+#: fixed part and one per block (1.5 s and 2 x 0.3 s for the default wall; 0.6-1.3 s a
+#: picture of 10^4 blocks, ``benchmarks/bench_render.py``)
+PICTURES_SECONDS = 1.5
+PICTURE_SECONDS = 0.3
+PICTURE_SECONDS_PER_BLOCK = 1e-4
+#: the range said: from the estimate / SPREAD to the estimate x SPREAD (x the busy factor)
+SPREAD = 2.0
 
 
 @dataclass(frozen=True)
@@ -75,14 +92,35 @@ class Estimate:
     interfaces: int
     dofs: int
     memory: float
+    #: seconds of the analysis alone
     seconds: float
     parts: dict[str, float] = field(default_factory=dict)
+    #: seconds of the whole run by part (:func:`run_time`; empty: the analysis alone)
+    times: dict[str, float] = field(default_factory=dict)
+    #: how much slower than idle the machine may run it (:func:`busy_factor`), and why
+    busy: float = 1.0
+    busy_reason: str = ""
+
+    @property
+    def total_seconds(self) -> float:
+        """The whole run's seconds on an idle machine (the analysis alone without
+        :attr:`times`)."""
+        return float(sum(self.times.values())) if self.times else self.seconds
+
+    def time_range(self) -> tuple[float, float]:
+        """(shortest, longest) seconds said: the total / SPREAD to the total x SPREAD x busy."""
+        total = self.total_seconds
+        return total / SPREAD, total * SPREAD * self.busy
 
     def describe(self) -> str:
         parts = ", ".join(f"{k} {_gb(v)}" for k, v in self.parts.items())
+        lo, hi = self.time_range()
+        times = ", ".join(f"{k} {_duration(v)}" for k, v in self.times.items())
+        busy = f"; {self.busy_reason}" if self.busy > 1.0 and self.busy_reason else ""
         return (
             f"{self.blocks} blocks, {self.interfaces} interfaces, {self.dofs} DOFs: about "
-            f"{_gb(self.memory)} of memory ({parts}) and {_duration(self.seconds)}"
+            f"{_gb(self.memory)} of memory ({parts}); about {_duration(self.total_seconds)} "
+            f"on an idle machine, expect {_duration(lo, hi)} ({times or 'the analysis'}{busy})"
         )
 
 
@@ -90,12 +128,23 @@ def _gb(b: float) -> str:
     return f"{b / 1e9:.1f} GB" if b >= 1e8 else f"{b / 1e6:.0f} MB"
 
 
-def _duration(s: float) -> str:
+def _unit(s: float) -> tuple[float, str, int]:
+    """Scale, unit and decimals to write ``s`` seconds in."""
+    if s < 10:
+        return 1.0, "s", 1
     if s < 120:
-        return f"{s:.0f} s"
+        return 1.0, "s", 0
     if s < 7200:
-        return f"{s / 60:.0f} min"
-    return f"{s / 3600:.1f} h"
+        return 60.0, "min", 0
+    return 3600.0, "h", 1
+
+
+def _duration(s: float, upto: float | None = None) -> str:
+    """``s`` in a readable unit; with ``upto`` the range "s-upto" in the unit of ``upto``."""
+    scale, unit, digits = _unit(s if upto is None else upto)
+    if upto is None:
+        return f"{s / scale:.{digits}f} {unit}"
+    return f"{s / scale:.{digits}f}-{upto / scale:.{digits}f} {unit}"
 
 
 def estimate(blocks: int, interfaces: int | None = None, dofs: int | None = None) -> Estimate:
@@ -120,9 +169,53 @@ def estimate(blocks: int, interfaces: int | None = None, dofs: int | None = None
     more = (max(blocks, 1) / 1e3) ** GROWTH
     seconds = more * (
         FACTORIZATIONS * FACTOR_SECONDS * (n / 6e4) ** FACTOR_EXPONENT
-        + ITERATIONS * ITERATION_SECONDS_PER_INTERFACE * m
+        + ITERATIONS * (ITERATION_SECONDS_FIXED + ITERATION_SECONDS_PER_INTERFACE * m)
     )
     return Estimate(blocks, m, n, float(sum(parts.values())), float(seconds), parts)
+
+
+def busy_factor(load: float | None = None, cores: int | None = None) -> tuple[float, str]:
+    """How much slower than idle a run may go on a machine whose one-minute load average is
+    ``load`` on ``cores`` cores (default: this machine's now): 1 while a core is free, else
+    (load + 1) / cores, the share of a core the run can expect among the others. Returns the
+    factor and a phrase saying why ("" when 1)."""
+    if cores is None:
+        cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else None
+        cores = cores or os.cpu_count() or 1
+    if load is None:
+        try:
+            load = os.getloadavg()[0]
+        except OSError:  # no load average on this platform: say nothing of it
+            return 1.0, ""
+    factor = max(1.0, (float(load) + 1.0) / max(int(cores), 1))
+    if factor <= 1.0:
+        return 1.0, ""
+    return factor, f"the machine is busy: load {load:.1f} on {cores} cores"
+
+
+def run_time(
+    est: Estimate,
+    compile_seconds: float = 0.0,
+    pictures: int = 0,
+    load: float | None = None,
+    cores: int | None = None,
+) -> Estimate:
+    """``est`` with the seconds of a whole run by part: compiling the kernels
+    (``compile_seconds`` > 0: the cache is empty or stale) or loading them from the disk
+    cache, the analysis, and ``pictures`` PNGs; and the :func:`busy_factor` of the machine
+    (``load`` on ``cores``: default, this machine's now)."""
+    times: dict[str, float] = {}
+    if compile_seconds > 0:
+        times["compiling the kernels (once per machine)"] = float(compile_seconds)
+    else:
+        times["loading the compiled kernels"] = KERNEL_LOAD_SECONDS
+    times["analysis"] = est.seconds
+    if pictures > 0:
+        times["pictures"] = PICTURES_SECONDS + pictures * (
+            PICTURE_SECONDS + PICTURE_SECONDS_PER_BLOCK * est.blocks
+        )
+    busy, reason = busy_factor(load, cores)
+    return replace(est, times=times, busy=busy, busy_reason=reason)
 
 
 def machine_memory() -> float | None:
