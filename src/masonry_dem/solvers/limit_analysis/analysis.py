@@ -14,6 +14,7 @@ import numpy as np
 from masonry_dem.model import Model, require_model
 
 from .backends import solve_associative
+from .dead_load import check_dead_load
 from .dem_domain import model_friction_scale
 from .formulation import Problem
 from .interface import ASSOCIATIVE_GRID, NON_ASSOCIATIVE_GRID, lobatto_rule, pyramid_edges
@@ -137,6 +138,16 @@ def limit_analysis(
         log.info("%s limit analysis of %s: %s (%s)", method, model.name, status, reason)
         return out
 
+    standing = check_dead_load(model)
+    if not standing.stands:
+        # no multiplier for a wall that cannot carry its own weight: the associative one
+        # would hold the hanging blocks by dilatancy alone (``dead_load``)
+        return result(
+            "failed",
+            float("nan"),
+            f"no equilibrium under the dead load: {standing.describe(model)}",
+            hanging_blocks=tuple(int(b) for b in standing.hanging),
+        )
     problem = Problem.of(model)
     if not np.any(problem.live):
         # the pushover's answer too (completed at the dead load): nothing pushes the wall

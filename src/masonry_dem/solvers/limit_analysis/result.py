@@ -53,6 +53,9 @@ class LimitAnalysisResult:
     #: (lower, upper): lambda certified from both sides (statically admissible forces, an
     #: admissible mechanism; ``normal_ipm``), None where the solver gives no such bracket
     bracket: tuple[float, float] | None = None
+    #: the blocks the dead load alone cannot hold with zero dilatancy (``dead_load``): the
+    #: analysis then ends "failed" with no multiplier
+    hanging_blocks: tuple[int, ...] = ()
 
     @property
     def bound(self) -> str:
@@ -86,6 +89,7 @@ class LimitAnalysisResult:
             "variables": self.variables,
             "constraints": self.constraints,
             "seconds": round(self.seconds, 4),
+            "hanging_blocks": list(self.hanging_blocks),
         }
 
 
