@@ -143,6 +143,14 @@ def finish(problem: Problem, sol: Solution, size: tuple[int, int], result, **kw)
             f"no equilibrium under the dead load ({sol.detail})",
             **kw,
         )
+    if sol.status == "budget":
+        return result(
+            "failed",
+            float("nan"),
+            f"the solver's budget ran out ({sol.detail}): no multiplier; raise time_limit "
+            "(--time-limit) or try the other backend",
+            **kw,
+        )
     if sol.status != "optimal":
         return result("failed", float("nan"), f"solver trouble: {sol.detail}", **kw)
     actions = sol.info_actions if hasattr(sol, "info_actions") else None
