@@ -147,8 +147,8 @@ def finish(problem: Problem, sol: Solution, size: tuple[int, int], result, **kw)
         return result(
             "failed",
             float("nan"),
-            f"the solver's budget ran out ({sol.detail}): no multiplier; raise time_limit "
-            "(--time-limit) or try the other backend",
+            f"stopped by the solver's time or iteration limit ({sol.detail}): no "
+            "multiplier; a larger time_limit (--time-limit) or the other backend may reach one",
             **kw,
         )
     if sol.status != "optimal":
