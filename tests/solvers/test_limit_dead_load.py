@@ -153,3 +153,18 @@ def test_the_limit_command_refuses_a_wall_that_cannot_stand(tmp_path, capsys):
     assert "no equilibrium under the dead load: 3 blocks hang" in summary["reason"]
     assert "3 blocks hang" in capsys.readouterr().out
     assert not (out / "mechanism_blocks.vtu").exists()
+
+
+def test_each_group_of_hanging_blocks_is_weighed_on_its_own():
+    """Two such windows 2 m apart in a 20-block wall: two groups of three blocks, 120 N
+    each, none of them resisted (dry joints)."""
+    blocks = md.running_bond_wall(20, 15, 0.1, 0.2, 0.1, 20e3)
+    second = (WINDOW[0] + 2.0, WINDOW[1], WINDOW[2] + 2.0, WINDOW[3])
+    blocks = md.cut_openings(blocks, [WINDOW, second], lintels=False)
+    check = check_dead_load(on_base(blocks))
+    assert len(check.groups) == 2 and [g.size for g in check.groups] == [3, 3]
+    assert check.weight == pytest.approx((120.0, 120.0), rel=1e-9)
+    assert check.resistance == (0.0, 0.0)
+    x = sorted(float(blocks.centres[g, 0].mean()) for g in check.groups)
+    assert x == pytest.approx([1.0, 3.0], abs=1e-9)  # blocks at x 0.9, 1.1, 1.0 (+ 2 m)
+    assert np.array_equal(check.hanging, np.sort(np.concatenate(check.groups)))

@@ -1,12 +1,13 @@
 """The budget of one limit analysis: a wall-clock time limit for the whole analysis and an
 iteration limit for every solver call, so that no solve runs without an end.
 
-:func:`limit_analysis` opens a :func:`budget`; every backend reads :func:`seconds_left` and
-hands it to its solver as that solver's own time limit (HiGHS's ``time_limit``, Clarabel's
-``time_limit``), checks it between its own iterations (the normal-equation interior point
-method, the non-associative iteration, the column generation's rounds), and caps its
-iterations at the constants below. A solver stopped by its budget returns the solution word
-``"budget"``, which the analysis reports as ``failed`` with the solver's own words.
+:func:`limit_analysis` opens a :func:`budget`. Every solver call is handed what is left of
+it (:func:`solver_seconds`) as the solver's own time limit (HiGHS's ``time_limit``, the column
+generation's master's too; Clarabel's ``time_limit``) and an iteration limit (the constants
+below); the package's own loops check :func:`spent` between their steps (the
+normal-equation interior point method, the non-associative iteration). A solve stopped by
+its budget returns the solution word ``"budget"``, which the analysis reports as ``failed``
+with the solver's own words.
 
 The budget is held in a context variable: the analysis's solvers all run in the thread (or
 task) that called :func:`limit_analysis`.

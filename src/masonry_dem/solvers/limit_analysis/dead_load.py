@@ -127,19 +127,23 @@ def check_dead_load(model: Model) -> DeadLoadCheck:
     # compression: its tension where the fall opens it, its cohesion where it slides)
     edge = loose[i] ^ loose[j]
     ft_area = np.asarray(model.tensile_strength)[edge] * np.asarray(its.area)[edge]
-    opening = np.maximum(np.abs(t[edge]), 0.0)  # no boundary joint closes
+    opening = np.abs(t[edge])  # no joint between loose and carried blocks closes
     sliding = np.sqrt(np.maximum(1.0 - t[edge] ** 2, 0.0))
     resist = ft_area * (opening + np.asarray(model.friction)[edge] * sliding)
     owner = np.where(loose[i[edge]], i[edge], j[edge])
-    work = dead @ d
-    groups, weights, resistances = [], [], []
-    for g in np.unique(label[loose]):
-        members = np.flatnonzero(loose & (label == g))
-        w = float(work[members].sum())
-        r = float(resist[label[owner] == g].sum())
-        if w > r * (1 + 1e-9) and w > 1e-12 * size:
-            groups.append(members)
-            weights.append(w)
-            resistances.append(r)
-    hanging = np.sort(np.concatenate(groups)) if groups else empty
+    # per group, in one pass whatever their number (a carried block's group weighs nothing):
+    # the dead load's work on the fall and what the group's joints resist
+    count = int(label.max(initial=-1)) + 1
+    weight = np.bincount(label[loose], weights=(dead @ d)[loose], minlength=count)
+    resisted = np.bincount(label[owner], weights=resist, minlength=count)
+    falls = (weight > resisted * (1 + 1e-9)) & (weight > 1e-12 * size)
+    hang = loose & falls[label]
+    order = np.argsort(label[hang], kind="stable")
+    members = np.flatnonzero(hang)[order]
+    cuts = np.flatnonzero(np.diff(label[members])) + 1
+    groups = np.split(members, cuts) if members.size else []
+    kept = np.flatnonzero(falls)
+    weights = [float(weight[g]) for g in kept]
+    resistances = [float(resisted[g]) for g in kept]
+    hanging = np.flatnonzero(hang)
     return DeadLoadCheck(hanging, tuple(groups), tuple(weights), tuple(resistances), d)
