@@ -40,7 +40,7 @@ from masonry_dem.solvers.incremental import DisplacementControl, StaticSettings
 DEFAULT_CASE = "default_wall.toml"
 AnalysisMethod = Literal["pushover", "limit"]
 ANALYSIS_METHODS: tuple[str, ...] = get_args(AnalysisMethod)
-LIMIT_OPTIONS = ("associative", "grid", "backend")
+LIMIT_OPTIONS = ("associative", "grid", "backend", "time_limit")
 
 _BUILDERS = {
     "running_bond_wall": builders.running_bond_wall,

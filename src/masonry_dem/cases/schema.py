@@ -193,6 +193,9 @@ RANGES: dict[str, Range] = {
         "contact points along each side of an interface, grid x grid per interface",
         integer=True,
     ),
+    "time_limit": Range(
+        0, 1e6, "s", "the limit analysis's wall-clock budget; it stops there", open_lo=True
+    ),
 }
 
 DOF_NAMES = ("u1", "u2", "u3", "w1", "w2", "w3")
@@ -412,6 +415,7 @@ ANALYSIS_EXTRA: dict[str, tuple[Any, Any]] = {
     "associative": (bool | None, None),
     "grid": (_number("grid") | None, None),
     "backend": (_choice(("highs", "clarabel")) | None, None),
+    "time_limit": (_number("time_limit") | None, None),
 }
 
 

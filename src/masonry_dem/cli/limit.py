@@ -9,7 +9,13 @@ import logging
 import time
 from pathlib import Path
 
-from masonry_dem.cli.options import add_case, add_output, add_overwrite, results_line
+from masonry_dem.cli.options import (
+    add_case,
+    add_output,
+    add_overwrite,
+    positive_seconds,
+    results_line,
+)
 
 log = logging.getLogger(__name__)
 
@@ -39,6 +45,14 @@ def add_parser(subparsers) -> None:
         action="store_true",
         help="enlarge the friction by kappa(alpha) (1.0655 for alpha 1.5): a theorem-backed "
         "upper bound of the pushover's multiplier (docs/limit_analysis.md)",
+    )
+    p.add_argument(
+        "--time-limit",
+        type=positive_seconds("--time-limit"),
+        default=None,
+        metavar="SECONDS",
+        help="the analysis's wall-clock budget: every solver stops there, the run ends "
+        "'failed' with no lambda (default 600; [analysis] time_limit in a case file)",
     )
     add_output(p, "results/limit", "the PNG of the mechanism")
     add_overwrite(p)
@@ -92,6 +106,8 @@ def limit_command(args: argparse.Namespace) -> int:
         options["grid"] = args.grid
     if args.backend is not None:
         options["backend"] = args.backend
+    if args.time_limit is not None:
+        options["time_limit"] = args.time_limit
     if args.dem_bound:
         from masonry_dem.solvers.limit_analysis import model_friction_scale
 

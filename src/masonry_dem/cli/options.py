@@ -54,6 +54,24 @@ def whole_number(option: str, minimum: int) -> Callable[[str], int]:
     return parse
 
 
+def positive_seconds(option: str) -> Callable[[str], float]:
+    """An argparse ``type``: a finite number of seconds > 0, else an error that names
+    ``option``, the range and the text given."""
+
+    def parse(text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            value = float("nan")
+        if not 0 < value < float("inf"):
+            raise argparse.ArgumentTypeError(
+                f"{option} must be a finite number of seconds > 0, got {text!r}"
+            )
+        return value
+
+    return parse
+
+
 def results_line(out: Path) -> str:
     """A command's last line: the folder and the files the run left in it (the PNGs among
     them), as they are on disk; ``steps/`` for the step files."""

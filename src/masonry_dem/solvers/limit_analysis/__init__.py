@@ -32,7 +32,10 @@ cone kernels), ``mirror`` (a mirror plane's antisymmetric DOFs: a wall loaded in
 solved on 3 velocities a block), ``dem_domain`` (kappa), ``non_associative``, ``columns``
 (its frozen-capacity LPs by column generation), ``selection`` (the optimum of a degenerate
 frozen LP nearest the frozen actions, ``nearest_optimum``),
-``result`` (the result and the mechanism check), ``analysis`` (the entry points).
+``result`` (the result and the mechanism check), ``dead_load`` (the check made before any
+solve: blocks that hang under the dead load with joints that do not dilate), ``budget`` (the
+time and iteration limits of every solve), ``analysis`` (the entry points; with no backend
+given, HiGHS on small walls and Clarabel from ``EXACT_CONE_FROM`` free DOFs).
 
 Why the associative answer needs only the corners is argued in ``interface``: any grid that
 holds the corners gives the same associative multiplier, so the default ``grid`` of the

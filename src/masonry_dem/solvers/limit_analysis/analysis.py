@@ -14,6 +14,8 @@ import numpy as np
 from masonry_dem.model import Model, require_model
 
 from .backends import solve_associative
+from .budget import DEFAULT_TIME_LIMIT, budget
+from .dead_load import check_dead_load
 from .dem_domain import model_friction_scale
 from .formulation import Problem
 from .interface import ASSOCIATIVE_GRID, NON_ASSOCIATIVE_GRID, lobatto_rule, pyramid_edges
@@ -23,6 +25,14 @@ from .result import _ADMISSIBILITY_TOLERANCE, LimitAnalysisResult, finish, mecha
 log = logging.getLogger(__name__)
 
 BACKENDS = ("highs", "clarabel")
+#: with no backend given: HiGHS (the friction pyramid's LP) below this many free DOFs,
+#: Clarabel (the exact cone) from it. Measured (one process, running-bond walls of
+#: 0.081 x 0.21 x 0.07 m blocks on a base, in and out of plane, held or not): HiGHS's
+#: associative solve takes 0.36, 0.83, 2.6, 11 and 36 s of CPU at 53, 86, 158, 331 and
+#: 586 blocks and does not end in 60 s at 1 007, against 0.02 to 0.4 s for Clarabel at
+#: every size; 600 DOFs (100 free blocks) is where HiGHS passes about a second
+#: (docs/limit_analysis.md, "Budgets")
+EXACT_CONE_FROM = 600
 
 
 # --------------------------------------------------------------------------- public entry
@@ -31,7 +41,7 @@ def limit_analysis(
     *,
     associative: bool = True,
     grid: int | None = None,
-    backend: str = "highs",
+    backend: str | None = None,
     cone: str | None = None,
     friction_sides: int = 8,
     tolerance: float = 1e-3,
@@ -40,6 +50,7 @@ def limit_analysis(
     friction_scale: float = 1.0,
     column_generation: bool = True,
     nearest_optimum: bool = False,
+    time_limit: float = DEFAULT_TIME_LIMIT,
 ) -> LimitAnalysisResult:
     """The collapse multiplier of ``model``'s live load over its dead load, and the mechanism.
 
@@ -50,6 +61,8 @@ def limit_analysis(
             associative problem (exact, see the module docstring) and
             ``NON_ASSOCIATIVE_GRID`` for the frozen capacities of the non-associative one.
         backend: "highs" (LP, friction pyramid) or "clarabel" (SOCP, the exact cone).
+            None: the one ``cone`` names, else by size, HiGHS below ``EXACT_CONE_FROM``
+            free DOFs and Clarabel from it (HiGHS's time grows far faster).
         cone: "circumscribed" (default) or "inscribed" pyramid with "highs"; "exact" (the
             only one) with "clarabel".
         friction_sides: faces of the pyramid (>= 3). 8 by default: on the bundled wall
@@ -75,12 +88,18 @@ def limit_analysis(
             lambda held at the LP's optimum), so that the answer does not depend on which
             of the degenerate LP's optima the solver returns (the order of its columns).
             Ignored with "clarabel" and when associative.
+        time_limit: the analysis's wall-clock budget [s] (> 0): every solver is handed what
+            is left of it as its own time limit, and each has an iteration limit too
+            (``budget``); a solve they stop ends "failed", naming the limit, with no
+            multiplier.
 
     Returns a :class:`LimitAnalysisResult`; solver trouble is a status, never an exception
     (bad arguments raise ValueError naming the argument).
     """
     t0 = time.perf_counter()
     require_model("limit_analysis", model)
+    if backend is None:
+        backend = choose_backend(model, cone)
     if backend not in BACKENDS:
         raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
     if backend == "clarabel":
@@ -111,6 +130,12 @@ def limit_analysis(
         raise ValueError(f"column_generation must be True or False, got {column_generation!r}")
     if not isinstance(nearest_optimum, (bool, np.bool_)):
         raise ValueError(f"nearest_optimum must be True or False, got {nearest_optimum!r}")
+    if (
+        isinstance(time_limit, (bool, np.bool_))
+        or not isinstance(time_limit, (int, float, np.integer, np.floating))
+        or not 0 < time_limit < np.inf
+    ):
+        raise ValueError(f"time_limit must be a finite number of seconds > 0, got {time_limit!r}")
     covers = friction_scale >= model_friction_scale(model) * (1 - 1e-9)
     if friction_scale != 1:
         model = replace(model, friction=model.friction * float(friction_scale))
@@ -137,6 +162,16 @@ def limit_analysis(
         log.info("%s limit analysis of %s: %s (%s)", method, model.name, status, reason)
         return out
 
+    standing = check_dead_load(model)
+    if not standing.stands:
+        # no multiplier for a wall that cannot carry its own weight: the associative one
+        # would hold the hanging blocks by dilatancy alone (``dead_load``)
+        return result(
+            "failed",
+            float("nan"),
+            f"no equilibrium under the dead load: {standing.describe(model)}",
+            hanging_blocks=tuple(int(b) for b in standing.hanging),
+        )
     problem = Problem.of(model)
     if not np.any(problem.live):
         # the pushover's answer too (completed at the dead load): nothing pushes the wall
@@ -145,35 +180,46 @@ def limit_analysis(
             float("nan"),
             "no live load: nothing pushes the wall, there is no multiplier to find",
         )
-    if associative:
-        sol, size = solve_associative(problem, grid, dirs)
-        out = finish(problem, sol, size, result, iterations=1, load_factors=(sol.lam,))
-        if out.status == "collapse":
-            violation = mechanism_violation(model, out.block_velocities, dirs)
-            if violation > _ADMISSIBILITY_TOLERANCE:
-                return replace(
-                    out,
-                    status="failed",
-                    load_factor=float("nan"),
-                    reason=(
-                        f"the solver's mechanism is not kinematically admissible (a corner "
-                        f"closes or slides without dilating by {violation:.3g} of the largest "
-                        f"relative velocity; {sol.detail}): lambda {sol.lam:.6g} is only "
-                        "statically admissible, a lower bound of the multiplier"
-                    ),
-                )
-        return out
-    return non_associative(
-        problem,
-        grid,
-        dirs,
-        tolerance,
-        int(max_iterations),
-        float(relaxation),
-        result,
-        bool(column_generation),
-        bool(nearest_optimum),
-    )
+    with budget(float(time_limit)):  # every solver within it (``budget``)
+        if associative:
+            sol, size = solve_associative(problem, grid, dirs)
+            out = finish(problem, sol, size, result, iterations=1, load_factors=(sol.lam,))
+            if out.status == "collapse":
+                violation = mechanism_violation(model, out.block_velocities, dirs)
+                if violation > _ADMISSIBILITY_TOLERANCE:
+                    return replace(
+                        out,
+                        status="failed",
+                        load_factor=float("nan"),
+                        reason=(
+                            f"the solver's mechanism is not kinematically admissible (a corner "
+                            f"closes or slides without dilating by {violation:.3g} of the largest "
+                            f"relative velocity; {sol.detail}): lambda {sol.lam:.6g} is only "
+                            "statically admissible, a lower bound of the multiplier"
+                        ),
+                    )
+            return out
+        return non_associative(
+            problem,
+            grid,
+            dirs,
+            tolerance,
+            int(max_iterations),
+            float(relaxation),
+            result,
+            bool(column_generation),
+            bool(nearest_optimum),
+        )
+
+
+def choose_backend(model: Model, cone: str | None = None) -> str:
+    """The backend of an analysis given none: the one ``cone`` needs, else HiGHS below
+    ``EXACT_CONE_FROM`` free DOFs and Clarabel from it."""
+    if cone == "exact":
+        return "clarabel"
+    if cone is not None:
+        return "highs"
+    return "highs" if int(np.count_nonzero(model.free)) < EXACT_CONE_FROM else "clarabel"
 
 
 def dem_upper_bound(model: Model, **options: Any) -> LimitAnalysisResult:

@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 from scipy import sparse
 
+from .budget import CLARABEL_ITERATIONS, HIGHS_IPM_ITERATIONS, solver_seconds
 from .formulation import Problem, Solution, associative_columns, lambda_cap, objective_scale
 from .kinematic import solve_kinematic_clarabel
 from .mirror import mirror_dofs
@@ -40,8 +41,20 @@ def solve_highs(
         b_ub = d
     bounds = np.column_stack([np.concatenate([lower, [0.0]]), np.concatenate([upper, [0.0]])])
     c = np.zeros(k + 1)
+
+    def solve():  # within the analysis's budget (``budget``): a time and an iteration limit.
+        # No presolve: HiGHS does not check its time limit everywhere in presolve, and a
+        # limit that ran out there was ignored (0.05 s: the whole 5.3 s solve on a
+        # 331-block wall); presolve changed neither the time nor lambda on 86-331 blocks
+        options = {
+            "time_limit": solver_seconds(),
+            "maxiter": HIGHS_IPM_ITERATIONS,
+            "presolve": False,
+        }
+        return linprog(c, A_ub, b_ub, A, rhs, bounds=bounds, method="highs-ipm", options=options)
+
     if dead_load_first:
-        res = linprog(c, A_ub, b_ub, A, rhs, bounds=bounds, method="highs-ipm")
+        res = solve()
         if res.status == 2:
             return Solution("dead load", detail=f"HiGHS: {res.message} (at lambda = 0)")
         if res.status != 0:
@@ -49,7 +62,7 @@ def solve_highs(
     cap = lambda_cap(live, rhs)
     bounds[k] = (0.0, cap)
     c[k] = -objective_scale(live)
-    res = linprog(c, A_ub, b_ub, A, rhs, bounds=bounds, method="highs-ipm")
+    res = solve()
     if res.status == 2 and not dead_load_first:
         return Solution("infeasible", detail=f"HiGHS: {res.message}")
     if res.status == 3:
@@ -69,9 +82,16 @@ _HIGHS_WORDS = {1: "iteration limit", 2: "infeasible", 3: "unbounded", 4: "numer
 
 
 def _highs_error(res: Any) -> Solution:
-    """The ``error`` solution of a HiGHS run that ended with status ``res.status``."""
+    """The ``error`` solution of a HiGHS run that ended with status ``res.status``; the
+    ``budget`` one where its time or iteration limit stopped it."""
+    if res.status == 1:
+        return Solution("budget", detail=f"HiGHS: {res.message}")
     word = _HIGHS_WORDS.get(res.status, res.status)
     return Solution("error", detail=f"HiGHS: {word}: {res.message}")
+
+
+#: Clarabel's status words of a solve its time or iteration limit stopped
+CLARABEL_BUDGET = ("MaxIterations", "MaxTime")
 
 
 def solve_clarabel(
@@ -147,9 +167,13 @@ def solve_clarabel(
     # faer took 1.23x qdldl's CPU on one thread and 2.7x on two (the kinematic form's 1 041-block
     # ladder wall, docs/limit_analysis.md "Where the time goes")
     settings.direct_solve_method = "qdldl"
+    settings.max_iter = CLARABEL_ITERATIONS
+    settings.time_limit = solver_seconds()
     solver = clarabel.DefaultSolver(P, q, A, np.concatenate(b), cones, settings)
     sol = solver.solve()
     word = str(sol.status)
+    if word in CLARABEL_BUDGET:
+        return Solution("budget", detail=f"Clarabel: {word}")
     if "DualInfeasible" in word:
         return Solution("unbounded", detail=f"Clarabel: {word}")
     if "PrimalInfeasible" in word:
@@ -217,7 +241,8 @@ def _static_clarabel(problem: Problem, R, K: int, kinematic_detail: str) -> Solu
     if first.status == "infeasible":
         return Solution("dead load", detail=f"{note}{first.detail} at lambda = 0")
     if first.status != "optimal":
-        return Solution("error", detail=f"{note}{first.detail} at lambda = 0")
+        word = "budget" if first.status == "budget" else "error"
+        return Solution(word, detail=f"{note}{first.detail} at lambda = 0")
     sol = solve_clarabel(*args)
     sol.detail = note + sol.detail
     if sol.status == "infeasible":  # stood at lambda = 0, so not expected

@@ -41,6 +41,7 @@ import numpy as np
 from scipy import sparse
 
 from .backends import solve_highs
+from .budget import HIGHS_IPM_ITERATIONS, HIGHS_SIMPLEX_ITERATIONS, solver_seconds
 from .formulation import Solution, lambda_cap, objective_scale
 
 log = logging.getLogger(__name__)
@@ -254,6 +255,7 @@ class _HighsMaster:
         # goes on from the last vertex (3-5x faster than HiGHS's default, the dual
         # simplex, on the walls measured in docs/limit_analysis.md)
         h.setOptionValue("simplex_strategy", 4)
+        h.setOptionValue("simplex_iteration_limit", HIGHS_SIMPLEX_ITERATIONS)
         self.optimal = highspy.HighsModelStatus.kOptimal
         n_eq, nn = E_n.shape
         self.n_eq, self.nn, self.m = n_eq, nn, m
@@ -294,7 +296,8 @@ class _HighsMaster:
 
     def solve(self):
         """(corner compressions, lambda, thetas, equilibrium duals, convexity duals), or None
-        where the master has no optimum."""
+        where the master has no optimum (its time or iteration limit among the reasons)."""
+        self.h.setOptionValue("time_limit", solver_seconds())
         self.h.run()
         if self.h.getModelStatus() != self.optimal:
             return None
@@ -333,7 +336,10 @@ class _LinprogMaster:
         bounds = np.zeros((nn + q + 1, 2))
         bounds[:, 1] = np.inf
         bounds[-1, 1] = self.cap
-        res = linprog(c, convex, np.ones(m), A, self.rhs, bounds=bounds, method="highs-ds")
+        options = {"time_limit": solver_seconds(), "maxiter": HIGHS_IPM_ITERATIONS}
+        res = linprog(
+            c, convex, np.ones(m), A, self.rhs, bounds=bounds, method="highs-ds", options=options
+        )
         if res.status != 0:
             return None
         x = np.asarray(res.x)

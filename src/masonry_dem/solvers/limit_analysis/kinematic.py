@@ -29,6 +29,7 @@ from scipy import sparse
 
 from masonry_dem.assembly.compatibility import compatibility_matrix
 
+from .budget import CLARABEL_ITERATIONS, solver_seconds
 from .formulation import Problem, Solution, lambda_cap
 from .interface import grid_points
 
@@ -66,10 +67,12 @@ SUPERNODAL_FROM = 10_000
 
 
 def clarabel_options(velocities: int) -> dict[str, Any]:
-    """Clarabel's settings for a kinematic SOCP of ``velocities`` unknowns."""
+    """Clarabel's settings for a kinematic SOCP of ``velocities`` unknowns, within the
+    analysis's budget (``budget``)."""
+    limits = {"max_iter": CLARABEL_ITERATIONS, "time_limit": solver_seconds()}
     if velocities >= SUPERNODAL_FROM:
-        return {**CLARABEL_OPTIONS, "direct_solve_method": "faer", "max_threads": 1}
-    return {**CLARABEL_OPTIONS, "direct_solve_method": "qdldl"}
+        return {**CLARABEL_OPTIONS, **limits, "direct_solve_method": "faer", "max_threads": 1}
+    return {**CLARABEL_OPTIONS, **limits, "direct_solve_method": "qdldl"}
 
 
 def solve_kinematic_clarabel(
@@ -101,6 +104,8 @@ def solve_kinematic_clarabel(
     sol = out.solve()
     word = str(sol.status)
     K = n_points // max(problem.model.interfaces.count, 1)
+    if word in ("MaxIterations", "MaxTime"):  # its budget (``budget``) stopped it
+        return Solution("budget", detail=f"Clarabel: {word} (kinematic)"), np.zeros(0), K
     if "PrimalInfeasible" in word:  # no admissible mechanism does work on the live load
         return Solution("unbounded", detail=f"Clarabel: {word} (kinematic)"), np.zeros(0), K
     if "DualInfeasible" in word:  # mechanisms of unbounded negative work: no statics at all

@@ -11,6 +11,7 @@ from scipy import sparse
 from masonry_dem.model import Model
 
 from .backends import solve_associative, solve_clarabel
+from .budget import spent
 from .columns import FrozenFriction, Patterns, full_lp, solve_frozen_columns, solve_frozen_full
 from .formulation import Problem, Solution, associative_columns
 from .interface import ASSOCIATIVE_GRID, grid_points, lobatto_rule, resultant_columns
@@ -97,6 +98,12 @@ def non_associative(
     rounds = columns = full_lps = 0
     kw: dict = {}
     for it in range(1, max_iterations + 1):
+        if spent():  # the analysis's time budget (``budget``), between two solves
+            detail = f"its time ran out after {it - 1} non-associative solves"
+            sol = Solution("budget", detail=detail)
+            return finish(
+                problem, sol, size, result, iterations=it - 1, load_factors=tuple(lams), **kw
+            )
         pts, cap = frozen_layout(model, actions, grid)
         K = pts.shape[1]
         iface = np.repeat(np.arange(m), K)

@@ -45,6 +45,7 @@ from scipy import sparse
 from masonry_dem.model import Model
 
 from . import cones
+from .budget import spent
 from .formulation import Problem, Solution, lambda_cap
 from .kinematic import corner_velocity_rows
 
@@ -419,6 +420,9 @@ def _iterate(kin: _Kinematic, max_iterations: int, cap: float):
     e = np.zeros((p, 3))
     e[:, 0] = 1.0
     for it in range(1, max_iterations + 1):
+        if spent():  # the analysis's time budget (``budget``)
+            log.info("normal-equation IPM: the time budget ran out at iteration %d", it)
+            return None
         mu = float(np.einsum("ij,ij->", pt.s, pt.z)) / p
         w, beta, lam = cones.nt_scaling(pt.s, pt.z)
         newton = _Newton(

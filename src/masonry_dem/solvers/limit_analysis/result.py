@@ -53,6 +53,9 @@ class LimitAnalysisResult:
     #: (lower, upper): lambda certified from both sides (statically admissible forces, an
     #: admissible mechanism; ``normal_ipm``), None where the solver gives no such bracket
     bracket: tuple[float, float] | None = None
+    #: the blocks the dead load alone cannot hold with zero dilatancy (``dead_load``): the
+    #: analysis then ends "failed" with no multiplier
+    hanging_blocks: tuple[int, ...] = ()
 
     @property
     def bound(self) -> str:
@@ -86,6 +89,7 @@ class LimitAnalysisResult:
             "variables": self.variables,
             "constraints": self.constraints,
             "seconds": round(self.seconds, 4),
+            "hanging_blocks": list(self.hanging_blocks),
         }
 
 
@@ -137,6 +141,14 @@ def finish(problem: Problem, sol: Solution, size: tuple[int, int], result, **kw)
             "failed",
             float("nan"),
             f"no equilibrium under the dead load ({sol.detail})",
+            **kw,
+        )
+    if sol.status == "budget":
+        return result(
+            "failed",
+            float("nan"),
+            f"stopped by the solver's time or iteration limit ({sol.detail}): no "
+            "multiplier; a larger time_limit (--time-limit) or the other backend may reach one",
             **kw,
         )
     if sol.status != "optimal":

@@ -28,6 +28,7 @@ import logging
 import numpy as np
 from scipy import sparse
 
+from .budget import CLARABEL_ITERATIONS, solver_seconds
 from .columns import FrozenFriction, Patterns, edge_multipliers, full_lp
 from .formulation import Solution
 
@@ -85,6 +86,8 @@ def nearest_optimum(
     settings = clarabel.DefaultSettings()
     settings.verbose = False
     settings.direct_solve_method = "qdldl"
+    settings.max_iter = CLARABEL_ITERATIONS
+    settings.time_limit = solver_seconds()
     out = clarabel.DefaultSolver(P, np.zeros(nvar), M, b, cones, settings).solve()
     word = str(out.status)
     if word not in ("Solved", "AlmostSolved"):
@@ -143,7 +146,10 @@ def nearest_by_columns(
     settings = clarabel.DefaultSettings()
     settings.verbose = False
     settings.direct_solve_method = "qdldl"
+    settings.max_iter = CLARABEL_ITERATIONS
+    settings.time_limit = solver_seconds()
     for rounds in range(MAX_SELECTION_ROUNDS):
+        settings.time_limit = solver_seconds()
         q = choice.shape[0]
         P_q = friction.columns(choice, owner)
         nvar = nn + 1 + q + r  # c, lambda, thetas, distances
