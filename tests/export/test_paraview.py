@@ -15,6 +15,7 @@ import json
 import os
 import shutil
 import subprocess
+import time
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
@@ -57,7 +58,9 @@ def pvbatch() -> list[str]:
 
 
 def run_pvbatch(cmd: list[str], *args) -> dict:
-    for _ in range(2):
+    for attempt in range(4):
+        if attempt:
+            time.sleep(1.0)
         proc = subprocess.run(
             [*cmd, str(CHECK), *map(str, args)],
             capture_output=True,
@@ -65,7 +68,8 @@ def run_pvbatch(cmd: list[str], *args) -> dict:
             timeout=PVBATCH_TIMEOUT,
         )
         # a busy machine sometimes gives xvfb-run a display that the X window then cannot
-        # open (pvbatch aborts in CreateAWindow before loading anything): start it once more
+        # open (pvbatch aborts in CreateAWindow before loading anything, twice in a row at a
+        # load of 3 on 2 cores): start it again
         if not (proc.returncode != 0 and "CreateAWindow" in proc.stdout + proc.stderr):
             break
     lines = [ln for ln in proc.stdout.splitlines() if ln.startswith("RESULT ")]
