@@ -312,23 +312,29 @@ def certify(
         # the geometrically linear model before its curve stopped rising (joints so soft
         # that the displacement at the peak would be a sizeable part of a block)
         moved = moved_from_dead_load(problem, hist, q)
+        limit_is = (
+            "half the smallest moving block"
+            if s.displacement_limit is None
+            else "the displacement_limit given"
+        )
         if moved > problem.limit:
             why.append(
                 f"the wall left the small-displacement range before its curve stopped "
                 f"rising: {moved:.3g} m from the dead-load state (limit {problem.limit:.3g} "
-                f"m, half the smallest moving block) at lambda {lam_state:.6g}, where the "
+                f"m, {limit_is}) at lambda {lam_state:.6g}, where the "
                 f"tangent still keeps {rho:.3g} of its stiffness along the load "
                 f"(> {tolerance:g}); its joints are too soft for a small-displacement "
                 f"analysis to reach the peak (the dead load alone moves it "
                 f"{problem.displacement_scale:.3g} m bonded): stiffer joints in the same "
                 f"kt/kn ratio give the multiplier"
+                + ("" if s.displacement_limit is None else ", or a larger displacement_limit")
             )
         else:
             # no state passed the limit: the searches from the last one ran off
             why.append(
                 f"no state left the small-displacement range: the last, at lambda "
                 f"{lam_state:.6g}, is {moved:.3g} m from the dead-load state (limit "
-                f"{problem.limit:.3g} m, half the smallest moving block), and only the "
+                f"{problem.limit:.3g} m, {limit_is}), and only the "
                 f"searches from it ran past the limit, while the curve still rose into it at "
                 f"{slope:.2g} of its elastic slope and its tangent keeps {rho:.3g} of its "
                 f"stiffness along the load (> {tolerance:g}): no mechanism formed there"
