@@ -20,8 +20,6 @@ from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from masonry_dem.model import Model
 from masonry_dem.results import History
 from masonry_dem.studies import text
@@ -107,27 +105,24 @@ LA_OWN = {True: "exact cone", False: "non-associative"}
 def polish(model: Model, static_settings: Any, hist: History) -> tuple[bool, str]:
     """Verify the collapse state of a run as an equilibrium of the static solver's discrete
     problem: Newton (tolerance of ``static_settings``) started from the run's state at its
-    collapse multiplier, with the joints cracked on its path. The law is memory-free
-    (``memory="none"``), so a state that Newton brings to the static tolerance at the same
-    lambda is an equilibrium of the same model, whatever method found it."""
-    from masonry_dem.constitutive.law import DETACHED_FLAG
+    collapse multiplier, with the law state of that step (the joints cracked on its path,
+    the plastic slip of that state under ``memory = "slip"``). A state that Newton brings to
+    the static tolerance at the same lambda is an equilibrium of the same model, whatever
+    method found it."""
     from masonry_dem.solvers.incremental import StaticSolver
+    from masonry_dem.solvers.static.certificate import law_state_before
 
     lam = collapse_lambda(hist)
     if lam is None or not hist.steps:
         return False, "no collapse multiplier"
-    if model.memory != "none":
-        return False, "the law has memory: a state is not determined by q alone"
     at = [i for i, st in enumerate(hist.steps) if st.load_factor == lam]
     if not at:
         return False, "no recorded state at the collapse multiplier"
-    upto = hist.steps[: at[-1] + 1]
     solver = StaticSolver(model, static_settings)
-    cracked = np.zeros(model.interfaces.count, dtype=bool)
-    for st in upto:
-        if st.flags is not None:
-            cracked |= (np.asarray(st.flags) & DETACHED_FLAG) > 0
-    solver.restore(upto[-1].q, cracked)
+    # the law state the step itself holds: its cracks, and the slip of its own state
+    plastic, cracked = law_state_before(solver.problem, hist, at[-1] + 1)
+    solver.plastic = plastic
+    solver.restore(hist.steps[at[-1]].q, cracked)
     out = solver.equilibrate(lam)  # from the restored state
     if out.ok:
         return True, f"Newton polish converged in {out.iterations} iterations"
