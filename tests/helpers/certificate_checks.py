@@ -78,8 +78,14 @@ def recheck(model: Model, hist: History, settings: StaticSettings) -> None:
     cracked = np.zeros(model.interfaces.count, dtype=bool)
     for st in hist.steps[: cert.step]:
         cracked |= (np.asarray(st.flags) & DETACHED_FLAG) > 0
+    # and the plastic slip stored at the step before it (memory = "slip"; none otherwise)
+    plastic = np.zeros_like(asm.kbar)
+    if cert.step > 0:
+        before = hist.steps[cert.step - 1]
+        relative = asm.relative_displacements(before.q.reshape(-1))
+        plastic = law.plastic_part(relative, before.actions)
     q = state.q.reshape(-1)
-    response = law.respond(asm.relative_displacements(q), np.zeros_like(asm.kbar), cracked)
+    response = law.respond(asm.relative_displacements(q), plastic, cracked)
     F = model.dead.reshape(-1)[free] + state.load_factor * model.live.reshape(-1)[free]
     internal = asm.H_free.T @ response.actions.reshape(-1)
     size = float(np.median(model.blocks.sizes))
