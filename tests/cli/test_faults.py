@@ -23,6 +23,7 @@ import pytest
 
 from helpers.case_files import SINGLE_BLOCK
 from helpers.case_files import write_case as _write_case
+from helpers.cli_process import start_cli
 from masonry_dem.cli import main
 from masonry_dem.export import results_folder as rf
 
@@ -46,15 +47,7 @@ def _pvd_files(path: Path) -> list[str]:
 
 
 def _start(case: Path, out: Path) -> subprocess.Popen:
-    env = {**os.environ, "PYTHONPATH": str(ROOT / "src"), "NUMBA_NUM_THREADS": "1"}
-    return subprocess.Popen(
-        [sys.executable, "-m", "masonry_dem.cli", "run", str(case), "--out", str(out)]
-        + ["--no-render", "--quiet"],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-        env=env,
-    )
+    return start_cli("run", case, "--out", out, "--no-render", "--quiet")
 
 
 def _wait_for_steps(proc: subprocess.Popen, out: Path, steps: int = 5) -> None:
@@ -279,15 +272,7 @@ def test_concurrent_pvd_writes_use_unique_temporary_names(tmp_path):
 def test_ctrl_c_in_another_command_stops_at_once(tmp_path):
     """Commands with no steps to finish (validate here) stop at the first Ctrl-C: one line,
     exit code 130, no traceback (7022155 printed a 60-line numba traceback)."""
-    env = {**os.environ, "PYTHONPATH": str(ROOT / "src"), "NUMBA_NUM_THREADS": "1"}
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "masonry_dem.cli", "validate", "--out", str(tmp_path / "v")]
-        + ["--no-render", "--quiet"],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-        env=env,
-    )
+    proc = start_cli("validate", "--out", tmp_path / "v", "--no-render", "--quiet")
     deadline = time.monotonic() + 300
     while not list((tmp_path / "v").glob("*/steps/*.vtu")) and time.monotonic() < deadline:
         assert proc.poll() is None, proc.communicate()

@@ -5,16 +5,14 @@ time_limit``) ends a run "failed" with no lambda, and SIGTERM or Ctrl-C during a
 from __future__ import annotations
 
 import json
-import os
 import signal
-import subprocess
-import sys
 import time
 from pathlib import Path
 
 import pytest
 
 from helpers.case_files import write_case
+from helpers.cli_process import start_cli
 from masonry_dem.cli import main
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -105,15 +103,7 @@ def test_a_signal_during_the_solve_is_obeyed_within_2_s(tmp_path, signum, code):
     comes a second into it. summary.json says "interrupted" within 2 s (measured: 0.01 to
     0.12 s), and the process exits with 128 + the signal's number."""
     case, out = write_case(tmp_path, held_wall(22, 26)), tmp_path / "out"
-    env = {**os.environ, "PYTHONPATH": str(ROOT / "src"), "NUMBA_NUM_THREADS": "1"}
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "masonry_dem.cli", "limit", str(case), "--out", str(out)]
-        + ["--backend", "highs", "--no-render"],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-        env=env,
-    )
+    proc = start_cli("limit", case, "--out", out, "--backend", "highs", "--no-render")
     try:
         while not (out / "summary.json").exists():
             assert proc.poll() is None, proc.communicate()

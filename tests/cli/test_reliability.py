@@ -10,6 +10,7 @@ import sys
 from pathlib import Path
 
 from helpers.case_files import SINGLE_BLOCK, write_case
+from helpers.cli_process import start_cli
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -332,15 +333,7 @@ def test_sigterm_stops_a_limit_analysis_inside_its_solver(tmp_path):
     import time
 
     case, out = _running_bond(tmp_path, 40, 40), tmp_path / "out"
-    env = {**os.environ, "PYTHONPATH": str(ROOT / "src"), "NUMBA_NUM_THREADS": "1"}
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "masonry_dem.cli", "limit", str(case), "--out", str(out)]
-        + ["--non-associative", "--no-render"],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-        env=env,
-    )
+    proc = start_cli("limit", case, "--out", out, "--non-associative", "--no-render")
     try:
         while not (out / "summary.json").exists():
             assert proc.poll() is None, proc.communicate()

@@ -252,7 +252,7 @@ def work_control(
     path_w = [float(c @ (st.q.reshape(-1)[free] - q0)) for st in hist.steps]
     path_lam = [float(st.load_factor) for st in hist.steps]
     w = path_w[-1]
-    line = SecantPredictor(True, [])
+    line = SecantPredictor()
     for st, stw in zip(hist.steps[-2:], path_w[-2:], strict=False):
         line.add(stw, st.q.reshape(-1), float(st.load_factor))
     if len(path_w) > 1:
@@ -278,6 +278,7 @@ def work_control(
     flat_steps = 0
     reason = ""
     stop = StopReason.NONE
+    turned: tuple[str, StopReason] | None = None  # a stop where the curve fell or went flat
 
     def rest_above(why: str) -> bool:
         """The instability rule where work control stops (:meth:`StaticSolver.rule_at` the
@@ -368,13 +369,11 @@ def work_control(
             # past a limit point: the equilibria ahead carry less load, and a wall under a
             # load that does not fall moves away from them (the instability rule decides
             # at the collapse whether it comes to rest higher up)
-            reason = (
+            turned = (
                 f"a limit point: the pushover curve falls from lambda={peak:.6g} "
-                f"to {float(out.load_factor):.6g}"
+                f"to {float(out.load_factor):.6g}",
+                StopReason.LIMIT_POINT,
             )
-            stop = StopReason.LIMIT_POINT
-            if rest_above(reason):
-                return RESUMED  # the curve had not turned: load control goes on
             break
         record(out)
         w, lam = goal, float(out.load_factor)
@@ -397,13 +396,11 @@ def work_control(
             break
         half = float(np.interp(w / 2, path_w, path_lam))
         if w > 0 and lam - half <= s.bracket_tolerance * abs(peak) and lam < peak + 1e-12:
-            reason = (
+            turned = (
                 f"the pushover curve is flat: lambda rose {lam - half:.3g} while the "
-                f"work-conjugate displacement doubled to {w:.3g} m (peak {peak:.6g})"
+                f"work-conjugate displacement doubled to {w:.3g} m (peak {peak:.6g})",
+                StopReason.CURVE_FLAT,
             )
-            stop = StopReason.CURVE_FLAT
-            if rest_above(reason):
-                return RESUMED  # the curve had not turned: load control goes on
             break
         # a formed mechanism: the last steps gained (almost) nothing for their
         # displacement, compared with the elastic stiffness of the live load
@@ -411,16 +408,14 @@ def work_control(
         flat_steps = flat_steps + 1 if slope < s.flat_slope * elastic_slope else 0
         if flat_steps >= 3:
             tiny = path_w[-1] - path_w[-4] < 1e-3 * w
-            reason = (
+            turned = (
                 f"no equilibrium beyond lambda={peak:.6g}: work control creeps "
                 f"(w {path_w[-4]:.6g} -> {w:.6g} m in 3 steps)"
                 if tiny
                 else f"a mechanism: lambda gains {slope / elastic_slope:.1e} of the "
-                f"elastic stiffness per unit displacement over 3 steps (peak {peak:.6g})"
+                f"elastic stiffness per unit displacement over 3 steps (peak {peak:.6g})",
+                StopReason.CREEPING if tiny else StopReason.STIFFNESS_LOST,
             )
-            stop = StopReason.CREEPING if tiny else StopReason.STIFFNESS_LOST
-            if rest_above(reason):
-                return RESUMED  # the curve had not turned: load control goes on
             break
         if step.cuts == 0:
             step.grow(out.iterations)
@@ -432,6 +427,10 @@ def work_control(
             f"max_steps={s.max_steps} reached at lambda={lam:.6g}",
         )
         return None
+    if turned is not None:  # the curve fell or went flat: the rule looks above the peak
+        reason, stop = turned
+        if rest_above(reason):
+            return RESUMED  # the curve had not turned after all: load control goes on
     assert hist.collapse_bracket is not None  # set by the caller
     if peak <= hist.collapse_bracket[0]:
         return reason, stop

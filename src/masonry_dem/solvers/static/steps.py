@@ -7,7 +7,7 @@ the longest work step near the peak (:func:`tail_cap`).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -56,14 +56,15 @@ class StepController:
 @dataclass
 class SecantPredictor:
     """The start of the next search of work control: the line through the last two converged
-    states of the path, extended by the next step (``secant_predictor``). Along a smooth
+    states of the path, extended by the next step. Along a smooth
     stretch of the path Newton then starts within a fraction of the step of the answer
     instead of a whole step away; a state reached by a jump (the damped motion past a
     fold) starts a new line. The parameter ``t`` is what the
     follower prescribes (lambda under load control, w under work control)."""
 
-    on: bool
-    states: list[tuple[float, np.ndarray, float]]  # (t, q, lambda), at most two
+    states: list[tuple[float, np.ndarray, float]] = field(
+        default_factory=list
+    )  # (t, q, lambda), at most two
 
     def add(self, t: float, q: np.ndarray, lam: float) -> None:
         self.states = [*self.states[-1:], (t, q, lam)]
@@ -73,7 +74,7 @@ class SecantPredictor:
 
     def start(self, t: float) -> tuple[np.ndarray | None, float | None]:
         """(q, lambda) on the line at ``t``; (None, None) without two states on it."""
-        if not self.on or len(self.states) < 2:
+        if len(self.states) < 2:
             return None, None
         (t0, q0, lam0), (t1, q1, lam1) = self.states[-2:]
         if t1 == t0:
