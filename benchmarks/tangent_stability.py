@@ -16,6 +16,7 @@ import argparse
 import numpy as np
 
 from masonry_dem.cases.paper import build_case
+from masonry_dem.solvers.static.certificate import law_state_before
 from masonry_dem.solvers.static.problem import TangentAssembler
 from masonry_dem.solvers.static.solver import StaticSolver
 
@@ -28,14 +29,13 @@ def smallest_real_eigenvalues(name: str, count: int = 2) -> list[tuple[float, np
     asm, law = solver.problem.asm, solver.law
     tangents = TangentAssembler(asm, case.model)
     scale = 1.0 / np.sqrt(asm.stiffness().diagonal())  # the elastic diagonal
-    m = case.model.interfaces.count
-    plastic = np.zeros((m, 6))  # the default law keeps no slip (memory="none")
-    cracked = np.zeros(m, dtype=bool)
     steps = history.steps[1:]
     picked = set(range(0, len(steps), 4)) | set(range(max(0, len(steps) - 10), len(steps)))
     rows = []
     for i, step in enumerate(steps):
         x = step.q.reshape(-1)[asm.free_index]
+        # the law state the step was found with (its slip, its cracked joints)
+        plastic, cracked = law_state_before(solver.problem, history, i + 1)
         response = law.respond((asm.H_free @ x).reshape(-1, 6), plastic, cracked)
         if i in picked:
             K = tangents.matrix(law.tangent(response, 0.0)).toarray() * scale[:, None] * scale

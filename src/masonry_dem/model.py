@@ -63,8 +63,8 @@ class InterfaceMaterial:
     The interface law's behaviour beyond the strength domain (one for the whole model: the
     ``material`` of :meth:`Model.build`; see :mod:`masonry_dem.constitutive.law`):
     tension: ``"brittle"`` (a joint that opens loses its tensile strength for good) or
-    ``"plastic"``; memory: ``"none"`` (holonomic) or ``"slip"`` (sliding keeps its plastic
-    slip); projection: the shear-torsion return, ``"energy"`` (closest point) or ``"radial"``.
+    ``"plastic"``; memory: ``"slip"`` (the paper's incremental law: sliding keeps its plastic
+    slip) or ``"none"`` (holonomic); projection: the shear-torsion return, ``"energy"`` (closest point) or ``"radial"``.
     """
 
     kn: float
@@ -73,7 +73,7 @@ class InterfaceMaterial:
     tensile_strength: float = 0.0
     alpha: float | None = None
     tension: Tension = "brittle"
-    memory: Memory = "none"
+    memory: Memory = "slip"
     projection: str = "energy"
 
     def __post_init__(self) -> None:
@@ -378,7 +378,7 @@ class Model:
     meta: dict[str, Any] = field(default_factory=dict)
     #: the interface law's options (of the ``material`` of :meth:`build`)
     tension: Tension = "brittle"
-    memory: Memory = "none"
+    memory: Memory = "slip"
     projection: str = "energy"
 
     def __post_init__(self) -> None:

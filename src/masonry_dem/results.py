@@ -40,9 +40,23 @@ class StepResult:
     flags: NDArray[np.int32] | None = None
     control_displacement: float = 0.0
     iterations: int = 0
+    #: the law state (m, 6) plastic part and (m,) cracked joints the state was found with,
+    #: where the steps before it cannot rebuild it: a rest of the damped motion under the
+    #: incremental law, whose slip moved with the wall (None: the one stored at the step
+    #: before)
+    found_plastic: FloatArray | None = None
+    found_cracked: NDArray[np.bool_] | None = None
 
     def __post_init__(self) -> None:
-        for name in ("q", "actions", "state", "utilisation", "flags"):
+        for name in (
+            "q",
+            "actions",
+            "state",
+            "utilisation",
+            "flags",
+            "found_plastic",
+            "found_cracked",
+        ):
             value = getattr(self, name)
             if isinstance(value, np.ndarray):
                 object.__setattr__(self, name, read_only(value))

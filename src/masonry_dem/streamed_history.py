@@ -29,7 +29,7 @@ from masonry_dem.results import StepResult
 
 log = logging.getLogger(__name__)
 
-_ARRAYS = ("q", "actions", "state", "utilisation", "flags")
+_ARRAYS = ("q", "actions", "state", "utilisation", "flags", "found_plastic", "found_cracked")
 
 
 class StreamedSteps(Sequence[StepResult]):
@@ -89,6 +89,8 @@ class StreamedSteps(Sequence[StepResult]):
             state=arrays["state"],
             utilisation=arrays["utilisation"],
             flags=arrays.get("flags"),
+            found_plastic=arrays.get("found_plastic"),
+            found_cracked=arrays.get("found_cracked"),
         )
 
     def __len__(self) -> int:

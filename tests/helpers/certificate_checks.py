@@ -84,6 +84,9 @@ def recheck(model: Model, hist: History, settings: StaticSettings) -> None:
         before = hist.steps[cert.step - 1]
         relative = asm.relative_displacements(before.q.reshape(-1))
         plastic = law.plastic_part(relative, before.actions)
+    if state.found_plastic is not None and state.found_cracked is not None:
+        # a rest of the damped motion, whose slip moved with the wall: kept with the step
+        plastic, cracked = state.found_plastic, state.found_cracked
     q = state.q.reshape(-1)
     response = law.respond(asm.relative_displacements(q), plastic, cracked)
     F = model.dead.reshape(-1)[free] + state.load_factor * model.live.reshape(-1)[free]

@@ -81,7 +81,8 @@ def test_a_collapse_under_the_incremental_law_rechecks_with_its_slip():
     settings = StaticSettings()
     hist = pushover(model, settings)
     recheck(model, hist, settings)
-    holonomic = pushover(tilted_wall(3, 5)).collapse_multiplier
+    none = InterfaceMaterial(kn=1e9, kt=0.4e9, friction=0.7, memory="none")
+    holonomic = pushover(tilted_wall(3, 5, none)).collapse_multiplier
     assert hist.collapse_multiplier == pytest.approx(holonomic, rel=0.01)
 
 
@@ -258,7 +259,9 @@ def test_displacement_control_passes_the_folds_of_its_path_to_the_load_controlle
     the comparison called it a path "stopped before the peak" by its target or budget. The
     instability rule's damped motion to a lambda a bracket higher goes round each fold (the controlled
     displacement turns back at some: the reason counts them) and the two controls reach the
-    same peak."""
+    same peak. Past it every bed joint slides at mu at once, so under the incremental law
+    the controlled displacement does not say which: the run may end on that plateau, at the
+    peak (its status is not the claim)."""
     from masonry_dem.solvers.static.branches import compare_controls
 
     wall = running_bond_wall(3, 5, a=0.2, b=0.4, s=0.2, unit_weight=2000 * 9.81)
@@ -276,7 +279,6 @@ def test_displacement_control_passes_the_folds_of_its_path_to_the_load_controlle
     assert result.load_peak == pytest.approx(0.6, rel=1e-6)  # sliding at mu
     assert result.verdict == "same peak", result.reason
     assert result.displacement_peak == pytest.approx(0.6, rel=0.01)
-    assert result.displacement.status == "completed"
     assert "damped motion(s) past folds" in result.displacement.reason
 
 

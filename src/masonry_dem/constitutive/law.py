@@ -7,23 +7,24 @@ of Eqs. (13)-(14).
 
 What the law remembers between converged steps (``memory``):
 
-* ``"none"`` (default): no plastic displacement is stored, so the actions are the projection of
-  the *total* elastic trial (deformation-theory, or holonomic, plasticity). Under the monotonic,
-  proportional loading of a pushover this gives the same actions as the incremental law, and
-  the equilibrium at a load level does not depend on the steps taken to reach it.
-* ``"slip"``: the sliding (shear and torsion) components keep their plastic slip, as friction
-  does; normal and bending components stay memory-free in both modes. A dry joint is a
+* ``"slip"`` (default, the paper's incremental law): the sliding (shear and torsion)
+  components keep their plastic slip, as friction does; normal and bending components stay
+  memory-free in both modes. A dry joint is a
   unilateral contact: one that opened carries load again only when the gap has closed, and a
   rocking joint rocks back along the same curve. Storing a plastic opening (the textbook
   return mapping applied to every component) would instead let a joint that opened take
   compression as soon as its faces start to move back towards each other.
+* ``"none"``: no plastic displacement is stored, so the actions are the projection of the
+  *total* elastic trial (deformation-theory, or holonomic, plasticity): the equilibrium at a
+  load level does not depend on the steps taken to reach it. Without a potential (friction
+  is non-associative) a damped motion under it need not settle, so the reference analysis
+  and the instability rule may give no verdict (docs/solvers.md, "The interface law").
 
 Tensile strength (``tension``): ``"brittle"`` (a joint whose normal force exceeds ft loses
 its tensile strength for good, as a cracked mortar joint does) or ``"plastic"`` (it keeps ft).
 
 ``tension``, ``memory`` and the shear-torsion ``projection`` are set on the model's
-:class:`~masonry_dem.model.InterfaceMaterial` (the solver settings' ``tension`` and ``memory``
-are deprecated). The compiled kernels are :mod:`~masonry_dem.constitutive.law_kernels`'.
+:class:`~masonry_dem.model.InterfaceMaterial`. The compiled kernels are :mod:`~masonry_dem.constitutive.law_kernels`'.
 """
 
 from __future__ import annotations
@@ -95,7 +96,7 @@ class InterfaceLaw:
     tensile_force: np.ndarray  # (m,) ft = tensile strength x area
     alpha: np.ndarray
     tension: Tension = "brittle"
-    memory: Memory = "none"
+    memory: Memory = "slip"
     projection: str = "energy"  # shear-torsion return (see check_strength)
 
     def __post_init__(self) -> None:

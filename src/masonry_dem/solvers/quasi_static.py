@@ -188,6 +188,10 @@ class QuasiStatic:
         self.iterations = 0
         #: the law's response at the wall's state (None before the first rest)
         self.response: LawResponse | None = None
+        #: the law state (plastic slip, cracked joints) the last rest was found with: the one
+        #: carried to the time step before it, which under the incremental law is not the one
+        #: the last rest before it stored
+        self.found_with = (self.plastic, self.cracked)
         #: the lowest load with no rest and its motion, once the analysis has found it
         self.no_rest: tuple[float, Motion] | None = None
         #: the dead-load rest (None before it is found)
@@ -269,6 +273,7 @@ class QuasiStatic:
         _, rnorm, response = self.problem.residual(self.q, lam, self.plastic, self.cracked, dead)
         if rnorm <= s.tolerance:
             self.response = response
+            self.found_with = (self.plastic, self.cracked)
             return Motion(True, 0)
         q = self.q.copy()
         velocity = np.zeros_like(q)  # over the last step taken
@@ -308,6 +313,7 @@ class QuasiStatic:
             taken += 1
             self.time_steps += 1
             # the law's state moves with the wall: an incremental law, one time step at a time
+            self.found_with = (self.plastic, self.cracked)
             self._carry(q_new, response)
             q, velocity = q_new, new_velocity
             if travelled > limit:

@@ -418,7 +418,12 @@ def moved_from_dead_load(problem: DiscreteProblem, hist: History, q: np.ndarray)
     """The largest translation of the state ``q`` (all DOFs) from the dead-load state (the
     first of ``hist``): the one measure of the displacement limit in the path's stop reason
     and in the certificate (elastic displacement under the dead load never counts)."""
-    dq = (np.asarray(q).reshape(-1) - hist.steps[0].q.reshape(-1))[problem.free]
+    return moved_from(problem, hist.steps[0].q, q)
+
+
+def moved_from(problem: DiscreteProblem, origin: np.ndarray, q: np.ndarray) -> float:
+    """The largest translation of the state ``q`` from the state ``origin`` (all DOFs)."""
+    dq = (np.asarray(q).reshape(-1) - np.asarray(origin).reshape(-1))[problem.free]
     return float(np.abs(dq[problem.translation]).max(initial=0.0))
 
 
@@ -438,8 +443,12 @@ def _full(problem: DiscreteProblem, x: np.ndarray) -> np.ndarray:
 def law_state_before(problem: DiscreteProblem, hist: History, index: int):
     """(plastic part, cracked joints) that step ``index`` of the path was found with: the
     joints detached at the steps before it (brittle tension), the plastic part stored at
-    the step before it (memory of slip)."""
+    the step before it (memory of slip); or, for a rest of the damped motion under the
+    incremental law, the law state kept with the step."""
     law = problem.law
+    found = hist.steps[index]
+    if found.found_plastic is not None and found.found_cracked is not None:
+        return found.found_plastic, found.found_cracked
     m = problem.model.interfaces.count
     cracked = np.zeros(m, dtype=bool)
     if law.tension == "brittle" and index > 0:

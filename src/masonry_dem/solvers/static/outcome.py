@@ -85,6 +85,9 @@ class Outcome:
     iterations: int
     reason: str = ""
     failure: Failure = Failure.NONE
+    #: the law state (plastic part, cracked joints) a rest of the damped motion was found
+    #: with, where it differs from the one carried from the last converged state
+    found_with: tuple[np.ndarray, np.ndarray] | None = None
 
     @property
     def past_limit(self) -> bool:

@@ -30,6 +30,7 @@ from masonry_dem.results import History
 from masonry_dem.solvers.static.certificate import (
     ZERO_LOAD,
     curve_slope,
+    moved_from,
     moved_from_dead_load,
 )
 from masonry_dem.solvers.static.corrector import RADIUS_FLOOR
@@ -242,9 +243,10 @@ def work_control(
     steps in a row gain less than ``flat_slope`` of the elastic d(lambda) / d(w) (a formed
     mechanism); the step has been halved ``max_cuts`` times or below what the control
     tolerance can resolve, and the instability rule finds no rest at lambda (1 +
-    ``bracket_tolerance``); the displacements pass the limit. The collapse multiplier is the
-    highest lambda on the path. With ``tail_resolution`` each step is bounded by the load it
-    can gain where the path may stop (:func:`.steps.tail_cap`)."""
+    ``bracket_tolerance``); the displacements pass the limit and the rule finds no rest above
+    (where it finds one, displacements are measured from that rest on). The collapse
+    multiplier is the highest lambda on the path. With ``flat_slope`` > 0 each step is
+    bounded by the load it can gain where the path may stop (:func:`.steps.tail_cap`)."""
     s = solver.settings
     free = solver.problem.asm.free_index
     c = solver.problem.F_live / float(np.linalg.norm(solver.problem.F_live))
@@ -273,6 +275,7 @@ def work_control(
         easy_iterations=s.easy_iterations,
     )
     lam = path_lam[-1]
+    origin = hist.steps[solver.limit_origin].q  # where the displacement limit is measured from
     first_lambda = hist.collapse_bracket[1] if hist.collapse_bracket else lam
     peak = max(path_lam)
     flat_steps = 0
@@ -347,6 +350,8 @@ def work_control(
                     f"dead-load state) ran past the displacement limit {solver.limit:.3g} m "
                     f"(to {ran:.3g} m from the dead-load state; peak {peak:.6g})"
                 )
+                if rest_above(reason):
+                    continue
                 stop = StopReason.DISPLACEMENT_LIMIT
                 break
             step.cut()
@@ -386,13 +391,18 @@ def work_control(
                 Status.COMPLETED, StopReason.MAX_LOAD_FACTOR, f"reached max_load_factor {lam:.6g}"
             )
             return None
-        total = moved_from_dead_load(solver.problem, hist, out.q)
+        total = moved_from(solver.problem, origin, out.q)
         if total > solver.limit:
-            reason = (
+            # the displacement limit is a mechanism of the small-displacement model only where
+            # the instability rule finds no rest above: a curve still rising there (soft
+            # joints, or a wall that settles joint by joint) goes on from the rule's rest,
+            # its displacements measured from there, as the reference measures each motion
+            # from its last rest
+            turned = (
                 f"a mechanism: displacements {total:.3g} m exceed the limit "
-                f"{solver.limit:.3g} m at lambda={lam:.6g}"
+                f"{solver.limit:.3g} m at lambda={lam:.6g}",
+                StopReason.DISPLACEMENT_LIMIT,
             )
-            stop = StopReason.DISPLACEMENT_LIMIT
             break
         half = float(np.interp(w / 2, path_w, path_lam))
         if w > 0 and lam - half <= s.bracket_tolerance * abs(peak) and lam < peak + 1e-12:
@@ -427,9 +437,11 @@ def work_control(
             f"max_steps={s.max_steps} reached at lambda={lam:.6g}",
         )
         return None
-    if turned is not None:  # the curve fell or went flat: the rule looks above the peak
+    if turned is not None:  # the curve fell, went flat or ran far: the rule looks above the peak
         reason, stop = turned
         if rest_above(reason):
+            if stop is StopReason.DISPLACEMENT_LIMIT:
+                solver.limit_origin = len(hist.steps) - 1
             return RESUMED  # the curve had not turned after all: load control goes on
     assert hist.collapse_bracket is not None  # set by the caller
     if peak <= hist.collapse_bracket[0]:
@@ -448,10 +460,9 @@ def _to_limit(solver: StaticSolver, hist: History, path_w: list[float]) -> float
     translation over the last two states (inf where it did not grow)."""
     if len(hist.steps) < 2 or path_w[-1] <= path_w[-2]:
         return math.inf
-    last = moved_from_dead_load(solver.problem, hist, hist.steps[-1].q)
-    rate = (last - moved_from_dead_load(solver.problem, hist, hist.steps[-2].q)) / (
-        path_w[-1] - path_w[-2]
-    )
+    origin = hist.steps[solver.limit_origin].q  # (once a call: the steps may be on disk)
+    last = moved_from(solver.problem, origin, hist.steps[-1].q)
+    rate = (last - moved_from(solver.problem, origin, hist.steps[-2].q)) / (path_w[-1] - path_w[-2])
     return (solver.limit - last) / rate if rate > 0 else math.inf
 
 

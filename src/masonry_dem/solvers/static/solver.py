@@ -24,7 +24,13 @@ from masonry_dem.model import Model, Monitor
 from masonry_dem.results import History, StepResult
 from masonry_dem.solvers.factorization import SingularMatrix
 from masonry_dem.solvers.static import paths
-from masonry_dem.solvers.static.certificate import NOT_CHECKED, ZERO_LOAD, Bound, certify
+from masonry_dem.solvers.static.certificate import (
+    NOT_CHECKED,
+    ZERO_LOAD,
+    Bound,
+    certify,
+    moved_from_dead_load,
+)
 from masonry_dem.solvers.static.corrector import Corrector
 from masonry_dem.solvers.static.displacement_control import displacement_control
 from masonry_dem.solvers.static.outcome import Failure, Outcome, Status, StopReason
@@ -72,13 +78,19 @@ class StaticSolver(Corrector):
         self.run_off: np.ndarray | None = None
         self._judge: QuasiStatic | None = None
         self._dead_rest: np.ndarray | None = None  # the dead-load state, once found
+        #: the step from which the path measures its displacement limit: the dead-load
+        #: state, then each rest the instability rule finds past the limit
+        self.limit_origin = 0
 
     # ------------------------------------------------------------------ states of the path
     def accept(self, out: Outcome, step: int, control_value: float) -> StepResult:
         """Make a converged search the last converged state, as a StepResult."""
         rel = self.problem.asm.relative_displacements(out.q)
         resp = out.response
-        self.search_state = (self.plastic, self.cracked)
+        self.search_state = out.found_with or (self.plastic, self.cracked)
+        # the law state a rest of the damped motion was found with, kept with the step where
+        # the steps before it cannot rebuild it (the slip moved with the wall)
+        found_with = out.found_with if self.law.memory == "slip" else None
         self.plastic = self.law.plastic_part(rel, resp.actions)
         self.cracked = self.law.cracked_after(self.cracked, resp)
         self.q = out.q
@@ -93,6 +105,8 @@ class StaticSolver(Corrector):
             flags=resp.flags.astype(np.int32),
             control_displacement=float(control_value),
             iterations=out.iterations,
+            found_plastic=None if found_with is None else found_with[0],
+            found_cracked=None if found_with is None else found_with[1],
         )
 
     def snapshot(self) -> tuple[Any, ...]:
@@ -164,7 +178,15 @@ class StaticSolver(Corrector):
         if motion.rest:
             assert judge.response is not None  # set at each rest
             self.last_increment = self.increment(judge.q)
-            return Outcome(True, judge.q.copy(), target, judge.response, motion.time_steps)
+            plastic, cracked = judge.found_with
+            return Outcome(
+                True,
+                judge.q.copy(),
+                target,
+                judge.response,
+                motion.time_steps,
+                found_with=(plastic.copy(), cracked.copy()),
+            )
         q = judge.q if motion.end is None else motion.end
         _, _, response = self.residual(q, target, dead)
         failure = Failure.DISPLACEMENT_LIMIT if motion.past_limit else Failure.NO_REST
@@ -340,6 +362,19 @@ class StaticSolver(Corrector):
         """Does the damped motion from the last converged state come to rest at ``lam``?"""
         return self.damped_motion(lam).ok
 
+    def _range_note(self, hist: History) -> str:
+        """A note when the collapse state lies past the small-displacement range from the
+        dead-load state: the path went on from the instability rule's rests there."""
+        moved = moved_from_dead_load(self.problem, hist, hist.steps[-1].q)
+        if moved <= self.limit:
+            return ""
+        return (
+            f"; the collapse state is {moved:.3g} m from the dead-load state, past the "
+            f"small-displacement range ({self.limit:.3g} m): joints this soft deflect beyond "
+            f"it before the wall collapses (the multiplier does not depend on the scale of "
+            f"kn and kt; the deflection does)"
+        )
+
     def _finish(self, hist: History, t0: float) -> History:
         if hist.status is Status.COLLAPSE and self.settings.certify:
             cert = certify(
@@ -352,6 +387,8 @@ class StaticSolver(Corrector):
                 instability=self.instability,
             )
             hist.certificate = cert
+            if cert.holds:
+                hist.reason += self._range_note(hist)
             if not cert.holds:
                 hist.status = Status.FAILED
                 hist.collapse_bracket = None  # a failed run has no collapse multiplier
