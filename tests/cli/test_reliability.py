@@ -399,3 +399,70 @@ def test_a_signal_at_any_moment_leaves_a_folder_that_says_how_the_run_ended(tmp_
             assert status != "running"
 
     check()
+
+
+def _stderr_lines(proc: subprocess.Popen):
+    """The child's stderr lines as they come (a queue filled by a thread; None at the end)."""
+    import queue
+    import threading
+
+    lines: queue.Queue[str | None] = queue.Queue()
+
+    def read() -> None:
+        for line in proc.stderr:  # type: ignore[union-attr]
+            lines.put(line)
+        lines.put(None)
+
+    threading.Thread(target=read, daemon=True).start()
+    return lines
+
+
+def _wait_for_line(lines, words: str, timeout: float) -> tuple[str, list[str]]:
+    """The first line holding ``words`` and the lines before it (AssertionError: none came)."""
+    import time
+
+    seen: list[str] = []
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        try:
+            line = lines.get(timeout=1.0)
+        except Exception:  # queue.Empty: nothing yet
+            continue
+        assert line is not None, "".join(seen)
+        if words in line:
+            return line, seen
+        seen.append(line)
+    raise AssertionError(f"no line with {words!r} in {timeout} s: {''.join(seen)}")
+
+
+def test_a_sweep_of_a_million_points_shows_its_planning_and_stops_on_sigterm(tmp_path):
+    import signal
+
+    out = tmp_path / "sweep"
+    proc = start_cli("sweep", "--vary", "material.friction=0.5:0.9:1000000", "--out", out)
+    try:
+        line, _ = _wait_for_line(_stderr_lines(proc), "planning the sweep", timeout=240)
+        assert "of 1000000 values" in line and "s left" in line
+        proc.send_signal(signal.SIGTERM)
+        proc.wait(timeout=30)
+    finally:
+        proc.kill()
+    assert proc.returncode == 143
+    assert not out.exists()  # stopped while planning: nothing claimed
+
+
+def test_a_crossed_grid_says_its_runs_and_time_before_it_starts(tmp_path):
+    import signal
+
+    out = tmp_path / "sweep"
+    vary = ["--vary", "material.friction=0.5:0.9:1000", "--vary", "material.kt=1e8:2e9:1000"]
+    proc = start_cli("sweep", *vary, "--out", out, "--quiet")
+    try:
+        line, before = _wait_for_line(_stderr_lines(proc), "WARNING", timeout=240)
+        proc.send_signal(signal.SIGTERM)
+        proc.wait(timeout=60)
+    finally:
+        proc.kill()
+    assert "sweep of 1000000 runs (1000 x 1000 crossed)" in line, line
+    assert " h on " in line and "expect" in line  # hours, on how many workers
+    assert not any("to run" in b for b in before)  # before the sweep claims its folder

@@ -82,6 +82,11 @@ PICTURE_SECONDS = 0.3
 PICTURE_SECONDS_PER_BLOCK = 1e-4
 #: the range said: from the estimate / SPREAD to the estimate x SPREAD (x the busy factor)
 SPREAD = 2.0
+#: a sweep's run against its pushover's analysis alone: the case built and the associative
+#: limit-analysis bound besides (the bundled wall: 0.85 s a run, 0.56 s estimated)
+SWEEP_RUN_FACTOR = 1.5
+#: seconds to start a sweep's LocalCluster and load the kernels in its workers
+SWEEP_START_SECONDS = 3.0
 
 
 @dataclass(frozen=True)
@@ -216,6 +221,27 @@ def run_time(
         )
     busy, reason = busy_factor(load, cores)
     return replace(est, times=times, busy=busy, busy_reason=reason)
+
+
+def sweep_time(
+    runs: int,
+    run_seconds: float,
+    workers: int,
+    load: float | None = None,
+    cores: int | None = None,
+) -> tuple[float, str]:
+    """Seconds a sweep of ``runs`` runs of ``run_seconds`` each (:func:`estimate`'s analysis)
+    takes on ``workers`` processes of an idle machine, and the sentence saying it as a range
+    (widened by :func:`busy_factor`)."""
+    one = run_seconds * SWEEP_RUN_FACTOR
+    total = SWEEP_START_SECONDS + math.ceil(runs / max(int(workers), 1)) * one
+    busy, reason = busy_factor(load, cores)
+    lo, hi = total / SPREAD, total * SPREAD * busy
+    why = f"; {reason}" if reason else ""
+    return total, (
+        f"about {_duration(one)} a run, {_duration(total)} on {workers} workers of an idle "
+        f"machine, expect {_duration(lo, hi)}{why}"
+    )
 
 
 def machine_memory() -> float | None:
