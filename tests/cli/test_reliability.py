@@ -417,10 +417,12 @@ def _stderr_lines(proc: subprocess.Popen):
     return lines
 
 
-def _wait_for_line(lines, words: str, timeout: float) -> tuple[str, list[str]]:
-    """The first line holding ``words`` and the lines before it (AssertionError: none came)."""
+def _wait_for_line(lines, words, timeout: float) -> tuple[str, list[str]]:
+    """The first line holding ``words`` (a text, or a test of the line) and the lines before
+    it (AssertionError: none came)."""
     import time
 
+    found = words if callable(words) else lambda line: words in line
     seen: list[str] = []
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
@@ -429,7 +431,7 @@ def _wait_for_line(lines, words: str, timeout: float) -> tuple[str, list[str]]:
         except Exception:  # queue.Empty: nothing yet
             continue
         assert line is not None, "".join(seen)
-        if words in line:
+        if found(line):
             return line, seen
         seen.append(line)
     raise AssertionError(f"no line with {words!r} in {timeout} s: {''.join(seen)}")
@@ -466,3 +468,34 @@ def test_a_crossed_grid_says_its_runs_and_time_before_it_starts(tmp_path):
     assert "sweep of 1000000 runs (1000 x 1000 crossed)" in line, line
     assert " h on " in line and "expect" in line  # hours, on how many workers
     assert not any("to run" in b for b in before)  # before the sweep claims its folder
+
+
+def test_ctrl_c_while_python_imports_numpy_is_one_line_and_130(tmp_path):
+    """The signal lands while the interpreter imports the heavy modules (right after numpy,
+    told by ``-X importtime``): before, the package's own import did so before the command
+    line's first line, and Ctrl-C gave a KeyboardInterrupt traceback and -2."""
+    import signal
+
+    case = write_case(tmp_path, SINGLE_BLOCK)
+    env = {**os.environ, "PYTHONPATH": str(ROOT / "src"), "NUMBA_NUM_THREADS": "1"}
+    for command in (["run", str(case), "--out", str(tmp_path / "out")], ["render", "folder"]):
+        proc = subprocess.Popen(
+            [sys.executable, "-X", "importtime", "-m", "masonry_dem.cli", *command],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+            env=env,
+        )
+        try:
+            lines = _stderr_lines(proc)
+            _wait_for_line(lines, lambda line: line.split("|")[-1].strip() == "numpy", 120)
+            proc.send_signal(signal.SIGINT)
+            proc.wait(timeout=60)
+            rest = []
+            while (line := lines.get(timeout=10)) is not None:
+                rest.append(line)
+        finally:
+            proc.kill()
+        said = [line.strip() for line in rest if not line.startswith("import time:")]
+        assert proc.returncode == 130, said
+        assert said == ["masonry-dem: interrupted by SIGINT"]

@@ -306,7 +306,7 @@ def _compute(
             shown.step()
             following = submit()
             if following is not None:
-                queue.add(following)
+                queue.add(following)  # type: ignore[no-untyped-call]
 
 
 class _Shown:

@@ -207,7 +207,8 @@ def _put(data: dict[str, Any], path: str, value: Any, copy_path: bool) -> dict[s
             elif copy_path and isinstance(node[key], (dict, list)):
                 node[key] = type(node[key])(node[key])
             node = node[key]
-    return out
+    result: dict[str, Any] = out
+    return result
 
 
 def get_path(data: dict[str, Any], path: str) -> Any:
