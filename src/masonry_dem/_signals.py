@@ -1,9 +1,11 @@
 """Stopping a run cleanly on SIGINT (Ctrl-C) and SIGTERM.
 
-:func:`stop_on_signals` records the first signal and :func:`check_stop` (called by the run
-command after each step) raises it as :class:`Interrupted` (a KeyboardInterrupt): the solver
-stops between steps and the results writer, on its way out, records the run as
-``interrupted`` with every step written so far. An exception raised from the handler itself
+:func:`stop_on_signals` records the first signal and :func:`check_stop` raises it as
+:class:`Interrupted` (a KeyboardInterrupt); the run command calls it after each step, the
+static solver at each Newton iteration (so before each factorization) and dynamic relaxation
+at each time step and each return of its kernel, so a long step stops within an iteration, and
+the results writer, on its way out, records the run as ``interrupted`` with every step written
+so far (the step under way is dropped). An exception raised from the handler itself
 would land inside a compiled kernel's call and come out as a SystemError (seen with SIGTERM
 in the residual), so only a second signal stops at once. :func:`deferred_signals` holds a
 signal back while files that must agree are being finished, and raises it afterwards.
@@ -94,7 +96,7 @@ def _request_stop(signum: int, frame) -> None:
         raise Interrupted(signum)
     _received.append(signum)
     log.warning(
-        "%s: stopping after the current step (again to stop at once)",
+        "%s: stopping at the next Newton iteration (again to stop at once)",
         signal.Signals(signum).name,
     )
 

@@ -499,3 +499,58 @@ def test_ctrl_c_while_python_imports_numpy_is_one_line_and_130(tmp_path):
         said = [line.strip() for line in rest if not line.startswith("import time:")]
         assert proc.returncode == 130, said
         assert said == ["masonry-dem: interrupted by SIGINT"]
+
+
+def _signal_at_call(monkeypatch, owner, name: str, call: int, calls: list[int]) -> None:
+    """SIGTERM to this process from inside the ``call``-th call of ``owner.name``; ``calls``
+    counts the calls (a real signal, at a moment inside a step)."""
+    import signal
+
+    original = getattr(owner, name)
+
+    def counted(*args, **kwargs):
+        calls.append(1)
+        if len(calls) == call:
+            os.kill(os.getpid(), signal.SIGTERM)
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(owner, name, counted)
+
+
+def test_a_signal_stops_the_static_solver_at_its_next_newton_iteration(monkeypatch):
+    """The first signal stops a step under way (a 316 x 316 wall's step is a minute): no
+    factorization after it, at most the step it lands in handed on; before, the solver went
+    on to the end and only the run command's check between steps stopped it."""
+    import pytest
+
+    from masonry_dem._signals import Interrupted, stop_on_signals
+    from masonry_dem.cases.casefile import load_case
+    from masonry_dem.solvers.incremental import StaticSolver
+    from masonry_dem.solvers.static.problem import DiscreteProblem
+
+    case = load_case(ROOT / "src" / "masonry_dem" / "cases" / "data" / "default_wall.toml")
+    factored: list[int] = []
+    _signal_at_call(monkeypatch, DiscreteProblem, "factor", 12, factored)
+    steps: list[int] = []
+    solver = StaticSolver(case.model, case.settings)
+    with stop_on_signals(), pytest.raises(Interrupted) as stopped:
+        solver.run(control=case.control, callback=lambda s: steps.append(len(factored)))
+    assert stopped.value.signum == 15
+    assert len(factored) == 12  # none after the signal
+    assert len([n for n in steps if n >= 12]) <= 1  # the step the signal landed in, at most
+
+
+def test_a_signal_stops_dynamic_relaxation_inside_a_relaxation(monkeypatch):
+    import pytest
+
+    from masonry_dem._signals import Interrupted, stop_on_signals
+    from masonry_dem.cases.casefile import load_case
+    from masonry_dem.solvers.dynamic_relaxation import DRSettings, relax
+    from masonry_dem.solvers.dynamic_relaxation.solver import DynamicRelaxation
+
+    case = load_case(ROOT / "src" / "masonry_dem" / "cases" / "data" / "default_wall.toml")
+    relaxed: list[int] = []
+    _signal_at_call(monkeypatch, DynamicRelaxation, "relax_with_cuts", 3, relaxed)
+    with stop_on_signals(), pytest.raises(Interrupted):
+        relax(case.model, DRSettings())
+    assert len(relaxed) == 3  # stopped inside the relaxation the signal landed in
