@@ -50,13 +50,18 @@ def interruption(exc: BaseException | None) -> KeyboardInterrupt | None:
     """The Ctrl-C or signal behind ``exc``: itself, or the cause of the SystemErrors a compiled
     kernel's call wraps an exception raised inside it in (several, one per nested call), or
     of the ImportError an extension's loader makes of it (VTK: "Failed to load ...")."""
-    seen = 0
+    seen, first = 0, exc
     while exc is not None and seen < 100:
         if isinstance(exc, KeyboardInterrupt):
             return exc
         if not isinstance(exc, (SystemError, ImportError)):
             return None
         exc, seen = exc.__cause__ or exc.__context__, seen + 1
+    if isinstance(first, ImportError) and _raised:
+        # a loader in C that keeps only the message of what stopped it (numpy: "Original
+        # error was: PyCapsule_Import could not import module datetime"): the signal that
+        # was raised, not the import, is what went wrong
+        return Interrupted(_raised[-1])
     return None
 
 
@@ -66,9 +71,12 @@ def exit_code(exc: BaseException) -> int:
 
 
 _received: list[int] = []
+#: the signals :func:`raise_on_signals` raised in this process
+_raised: list[int] = []
 
 
 def _raise(signum: int, frame) -> None:
+    _raised.append(signum)
     raise Interrupted(signum)
 
 
@@ -76,6 +84,7 @@ def _raise(signum: int, frame) -> None:
 def raise_on_signals() -> Iterator[None]:
     """SIGINT and SIGTERM raise :class:`Interrupted` at once while inside (commands with no
     steps to finish: render, validate, study)."""
+    _raised.clear()
     yield from _handled(_raise)
 
 

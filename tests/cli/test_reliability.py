@@ -366,6 +366,30 @@ def test_a_signal_that_breaks_an_import_is_an_interruption(monkeypatch, capsys):
     assert capsys.readouterr().err.strip() == "masonry-dem: interrupted by SIGINT"
 
 
+def test_a_signal_an_extension_loader_keeps_only_the_message_of_is_an_interruption(
+    monkeypatch, capsys
+):
+    """numpy's loader, stopped by Ctrl-C while it imports datetime, raises an ImportError
+    that keeps the message and not the KeyboardInterrupt (seen at 0.1 s of a `render`)."""
+    import signal
+
+    import masonry_dem.cli.render as render_cli
+    from masonry_dem.cli import main
+
+    def numpy_loading(args):
+        try:
+            os.kill(os.getpid(), signal.SIGINT)
+        except KeyboardInterrupt:
+            pass
+        raise ImportError(
+            "Original error was: PyCapsule_Import could not import module \"datetime\""
+        )
+
+    monkeypatch.setattr(render_cli, "run", numpy_loading)
+    assert main(["render", "anywhere"]) == 130
+    assert capsys.readouterr().err.strip() == "masonry-dem: interrupted by SIGINT"
+
+
 def test_a_signal_at_any_moment_leaves_a_folder_that_says_how_the_run_ended(tmp_path):
     """Hypothesis picks the signal and the moment (from the interpreter's start to the run's
     steps); whatever the moment, the process ends by the signal or with 0, one line at most,
