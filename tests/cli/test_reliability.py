@@ -381,9 +381,7 @@ def test_a_signal_an_extension_loader_keeps_only_the_message_of_is_an_interrupti
             os.kill(os.getpid(), signal.SIGINT)
         except KeyboardInterrupt:
             pass
-        raise ImportError(
-            "Original error was: PyCapsule_Import could not import module \"datetime\""
-        )
+        raise ImportError('Original error was: PyCapsule_Import could not import module "datetime"')
 
     monkeypatch.setattr(render_cli, "run", numpy_loading)
     assert main(["render", "anywhere"]) == 130
