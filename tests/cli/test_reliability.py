@@ -287,6 +287,60 @@ def test_the_memory_estimate_respects_the_process_limit(tmp_path):
     assert not (tmp_path / "o").exists()
 
 
+def _limited(limit: int, *args: str) -> subprocess.CompletedProcess:
+    """The command line under an address-space limit of ``limit`` bytes (``ulimit -v``)."""
+    import resource
+
+    def address_space_limit() -> None:
+        resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
+
+    env = {**os.environ, "PYTHONPATH": str(ROOT / "src"), "NUMBA_NUM_THREADS": "1"}
+    return subprocess.run(
+        [sys.executable, "-m", "masonry_dem.cli", *args],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=600,
+        preexec_fn=address_space_limit,
+    )
+
+
+def test_a_limit_analysis_out_of_memory_is_named_with_its_estimate(tmp_path):
+    """Under ``ulimit -v``: the estimate refuses the analysis before the folder is claimed;
+    past the estimate (``--max-memory``), HiGHS's arrays fail with numpy's MemoryError and
+    Clarabel, which aborted the process (SIGABRT) on a failed allocation, is stopped before
+    it starts: both are "out of memory", exit 2, with the estimate beside it."""
+    import json
+
+    case = str(_running_bond(tmp_path, 100, 100))
+    limit = 1_200_000_000
+    refused = _limited(limit, "limit", case, "--backend", "clarabel", "--out", str(tmp_path / "a"))
+    _one_line(refused, "refused", "ulimit -v", "clarabel", "29850 interfaces")
+    assert not (tmp_path / "a").exists()
+    for backend in ("clarabel", "highs"):
+        out = tmp_path / backend
+        args = ["limit", case, "--backend", backend, "--out", str(out), "--max-memory", "100G"]
+        done = _limited(limit, *args)
+        _one_line(done, "out of memory", "estimated", f"{backend}: about")
+        summary = json.loads((out / "summary.json").read_text())
+        assert summary["status"] == "failed" and "estimated" in summary["reason"]
+
+
+def test_highs_out_of_memory_is_no_property_of_the_wall():
+    from types import SimpleNamespace
+
+    import pytest
+
+    from masonry_dem.cli import one_line
+    from masonry_dem.solvers.limit_analysis.backends import _highs_error
+
+    res = SimpleNamespace(status=4, message="Memory allocation failed")
+    with pytest.raises(MemoryError) as err:
+        _highs_error(res)
+    assert one_line(err.value).startswith("out of memory")
+    assert _highs_error(SimpleNamespace(status=4, message="Numerical issues")).status == "error"
+
+
 def test_pardiso_out_of_memory_is_no_property_of_the_wall():
     import numpy as np
     import pytest
