@@ -70,22 +70,27 @@ def add_parser(subparsers) -> None:
     p.set_defaults(func=limit_command)
 
 
-def limit_memory(case, options: dict, max_memory: float | None = None) -> LimitEstimate:
-    """The memory estimate of the limit analysis of a loaded case with ``options``; raises
+def limit_memory(case, options: dict, max_memory: float | None = None) -> LimitEstimate | None:
+    """The memory estimate of the limit analysis of a loaded case with ``options`` (None for
+    a backend it does not know: the analysis names it); raises
     :class:`~masonry_dem.solvers.resources.TooLarge` when it is above ``max_memory`` bytes
     (None: what the machine, the process's ``ulimit -v`` and its cgroup leave)."""
     from masonry_dem.solvers.limit_analysis.analysis import choose_backend
     from masonry_dem.solvers.limit_analysis.interface import (
         ASSOCIATIVE_GRID,
         NON_ASSOCIATIVE_GRID,
+        lobatto_rule,
     )
-    from masonry_dem.solvers.resources import check_fits, limit_estimate
+    from masonry_dem.solvers.resources import LIMIT_BYTES, check_fits, limit_estimate
 
     model = case.model
     backend = options.get("backend") or choose_backend(model, options.get("cone"))
     grid = options.get("grid") or (
         ASSOCIATIVE_GRID if options.get("associative", True) else NON_ASSOCIATIVE_GRID
     )
+    lobatto_rule(grid)  # a grid out of its range is named as such, not as too large
+    if backend not in LIMIT_BYTES:
+        return None
     est = limit_estimate(model.blocks.count, model.interfaces.count, int(grid), str(backend))
     check_fits(est, max_memory)
     return est
@@ -116,7 +121,8 @@ def run_limit(
         try:
             result = run_interruptible(lambda: limit_analysis(case.model, **options))
         except MemoryError as exc:  # an allocation failed: with what was expected
-            stopped = MemoryError(f"{exc or 'an allocation failed'}; estimated {est.describe()}")
+            expected = f"; estimated {est.describe()}" if est is not None else ""
+            stopped = MemoryError(f"{exc or 'an allocation failed'}{expected}")
             record_stopped(out, stopped)
             raise stopped from exc
         except BaseException as exc:  # a signal or an error: summary.json says so
