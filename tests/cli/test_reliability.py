@@ -109,6 +109,11 @@ def test_a_plan_too_large_for_the_memory_is_refused_by_the_estimate(tmp_path):
     _one_line(done, "refused", "would need")
 
 
+def test_a_picture_size_has_a_range(tmp_path):
+    done = _cli("render", str(tmp_path / "anywhere"), "--size", "100000x100000")
+    _one_line(done, "--size", "8192", "100000x100000")
+
+
 def test_a_limit_analysis_grid_has_a_range(tmp_path):
     case = _u_wall(tmp_path)
     done = _cli("limit", str(case), "--grid", "100000", "--out", str(tmp_path / "a"))
