@@ -621,6 +621,25 @@ def test_a_signal_stops_the_static_solver_at_its_next_newton_iteration(monkeypat
     assert len([n for n in steps if n >= 12]) <= 1  # the step the signal landed in, at most
 
 
+def test_a_signal_stops_the_non_associative_limit_analysis_between_its_solves(monkeypatch):
+    """The bound a run computes at a collapse runs in the run's worker thread, where only
+    the checks stop it: the signal ends the iteration before its next solve."""
+    import pytest
+
+    from masonry_dem._signals import Interrupted, stop_on_signals
+    from masonry_dem.cases.casefile import load_case
+    from masonry_dem.solvers.limit_analysis import limit_analysis, non_associative
+
+    case = load_case(ROOT / "src" / "masonry_dem" / "cases" / "data" / "default_wall.toml")
+    started: list[int] = []
+    _signal_at_call(monkeypatch, non_associative, "solve_associative", 1, started)
+    solves: list[int] = []
+    _signal_at_call(monkeypatch, non_associative, "solve_frozen_columns", 0, solves)
+    with stop_on_signals(), pytest.raises(Interrupted):
+        limit_analysis(case.model, associative=False)
+    assert started == [1] and solves == []
+
+
 def test_a_signal_stops_dynamic_relaxation_inside_a_relaxation(monkeypatch):
     import pytest
 
