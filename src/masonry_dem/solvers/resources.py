@@ -141,7 +141,10 @@ class Estimate:
 
 
 def _gb(b: float) -> str:
-    return f"{b / 1e9:.1f} GB" if b >= 1e8 else f"{b / 1e6:.0f} MB"
+    # two figures below 1 GB: "0.37 GB over 0.36 GB", not "0.4 GB over 0.4 GB"
+    if b >= 1e9:
+        return f"{b / 1e9:.1f} GB"
+    return f"{b / 1e9:.2f} GB" if b >= 1e8 else f"{b / 1e6:.0f} MB"
 
 
 def _unit(s: float) -> tuple[float, str, int]:
