@@ -1,9 +1,11 @@
 """Stopping a run cleanly on SIGINT (Ctrl-C) and SIGTERM.
 
-:func:`stop_on_signals` records the first signal and :func:`check_stop` (called by the run
-command after each step) raises it as :class:`Interrupted` (a KeyboardInterrupt): the solver
-stops between steps and the results writer, on its way out, records the run as
-``interrupted`` with every step written so far. An exception raised from the handler itself
+:func:`stop_on_signals` records the first signal and :func:`check_stop` raises it as
+:class:`Interrupted` (a KeyboardInterrupt); the run command calls it after each step, the
+static solver at each Newton iteration (so before each factorization) and dynamic relaxation
+at each time step and each return of its kernel, so a long step stops within an iteration, and
+the results writer, on its way out, records the run as ``interrupted`` with every step written
+so far (the step under way is dropped). An exception raised from the handler itself
 would land inside a compiled kernel's call and come out as a SystemError (seen with SIGTERM
 in the residual), so only a second signal stops at once. :func:`deferred_signals` holds a
 signal back while files that must agree are being finished, and raises it afterwards.
@@ -48,13 +50,18 @@ def interruption(exc: BaseException | None) -> KeyboardInterrupt | None:
     """The Ctrl-C or signal behind ``exc``: itself, or the cause of the SystemErrors a compiled
     kernel's call wraps an exception raised inside it in (several, one per nested call), or
     of the ImportError an extension's loader makes of it (VTK: "Failed to load ...")."""
-    seen = 0
+    seen, first = 0, exc
     while exc is not None and seen < 100:
         if isinstance(exc, KeyboardInterrupt):
             return exc
         if not isinstance(exc, (SystemError, ImportError)):
             return None
         exc, seen = exc.__cause__ or exc.__context__, seen + 1
+    if isinstance(first, ImportError) and _raised:
+        # a loader in C that keeps only the message of what stopped it (numpy: "Original
+        # error was: PyCapsule_Import could not import module datetime"): the signal that
+        # was raised, not the import, is what went wrong
+        return Interrupted(_raised[-1])
     return None
 
 
@@ -64,9 +71,12 @@ def exit_code(exc: BaseException) -> int:
 
 
 _received: list[int] = []
+#: the signals :func:`raise_on_signals` raised in this process
+_raised: list[int] = []
 
 
 def _raise(signum: int, frame) -> None:
+    _raised.append(signum)
     raise Interrupted(signum)
 
 
@@ -74,6 +84,7 @@ def _raise(signum: int, frame) -> None:
 def raise_on_signals() -> Iterator[None]:
     """SIGINT and SIGTERM raise :class:`Interrupted` at once while inside (commands with no
     steps to finish: render, validate, study)."""
+    _raised.clear()
     yield from _handled(_raise)
 
 
@@ -94,7 +105,7 @@ def _request_stop(signum: int, frame) -> None:
         raise Interrupted(signum)
     _received.append(signum)
     log.warning(
-        "%s: stopping after the current step (again to stop at once)",
+        "%s: stopping at the next Newton iteration (again to stop at once)",
         signal.Signals(signum).name,
     )
 

@@ -109,6 +109,11 @@ def test_a_plan_too_large_for_the_memory_is_refused_by_the_estimate(tmp_path):
     _one_line(done, "refused", "would need")
 
 
+def test_a_picture_size_has_a_range(tmp_path):
+    done = _cli("render", str(tmp_path / "anywhere"), "--size", "100000x100000")
+    _one_line(done, "--size", "8192", "100000x100000")
+
+
 def test_a_limit_analysis_grid_has_a_range(tmp_path):
     case = _u_wall(tmp_path)
     done = _cli("limit", str(case), "--grid", "100000", "--out", str(tmp_path / "a"))
@@ -287,6 +292,60 @@ def test_the_memory_estimate_respects_the_process_limit(tmp_path):
     assert not (tmp_path / "o").exists()
 
 
+def _limited(limit: int, *args: str) -> subprocess.CompletedProcess:
+    """The command line under an address-space limit of ``limit`` bytes (``ulimit -v``)."""
+    import resource
+
+    def address_space_limit() -> None:
+        resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
+
+    env = {**os.environ, "PYTHONPATH": str(ROOT / "src"), "NUMBA_NUM_THREADS": "1"}
+    return subprocess.run(
+        [sys.executable, "-m", "masonry_dem.cli", *args],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=600,
+        preexec_fn=address_space_limit,
+    )
+
+
+def test_a_limit_analysis_out_of_memory_is_named_with_its_estimate(tmp_path):
+    """Under ``ulimit -v``: the estimate refuses the analysis before the folder is claimed;
+    past the estimate (``--max-memory``), HiGHS's arrays fail with numpy's MemoryError and
+    Clarabel, which aborted the process (SIGABRT) on a failed allocation, is stopped before
+    it starts: both are "out of memory", exit 2, with the estimate beside it."""
+    import json
+
+    case = str(_running_bond(tmp_path, 100, 100))
+    limit = 1_200_000_000
+    refused = _limited(limit, "limit", case, "--backend", "clarabel", "--out", str(tmp_path / "a"))
+    _one_line(refused, "refused", "ulimit -v", "clarabel", "29850 interfaces")
+    assert not (tmp_path / "a").exists()
+    for backend in ("clarabel", "highs"):
+        out = tmp_path / backend
+        args = ["limit", case, "--backend", backend, "--out", str(out), "--max-memory", "100G"]
+        done = _limited(limit, *args)
+        _one_line(done, "out of memory", "estimated", f"{backend}: about")
+        summary = json.loads((out / "summary.json").read_text())
+        assert summary["status"] == "failed" and "estimated" in summary["reason"]
+
+
+def test_highs_out_of_memory_is_no_property_of_the_wall():
+    from types import SimpleNamespace
+
+    import pytest
+
+    from masonry_dem.cli import one_line
+    from masonry_dem.solvers.limit_analysis.backends import _highs_error
+
+    res = SimpleNamespace(status=4, message="Memory allocation failed")
+    with pytest.raises(MemoryError) as err:
+        _highs_error(res)
+    assert one_line(err.value).startswith("out of memory")
+    assert _highs_error(SimpleNamespace(status=4, message="Numerical issues")).status == "error"
+
+
 def test_pardiso_out_of_memory_is_no_property_of_the_wall():
     import numpy as np
     import pytest
@@ -366,6 +425,28 @@ def test_a_signal_that_breaks_an_import_is_an_interruption(monkeypatch, capsys):
     assert capsys.readouterr().err.strip() == "masonry-dem: interrupted by SIGINT"
 
 
+def test_a_signal_an_extension_loader_keeps_only_the_message_of_is_an_interruption(
+    monkeypatch, capsys
+):
+    """numpy's loader, stopped by Ctrl-C while it imports datetime, raises an ImportError
+    that keeps the message and not the KeyboardInterrupt (seen at 0.1 s of a `render`)."""
+    import signal
+
+    import masonry_dem.cli.render as render_cli
+    from masonry_dem.cli import main
+
+    def numpy_loading(args):
+        try:
+            os.kill(os.getpid(), signal.SIGINT)
+        except KeyboardInterrupt:
+            pass
+        raise ImportError('Original error was: PyCapsule_Import could not import module "datetime"')
+
+    monkeypatch.setattr(render_cli, "run", numpy_loading)
+    assert main(["render", "anywhere"]) == 130
+    assert capsys.readouterr().err.strip() == "masonry-dem: interrupted by SIGINT"
+
+
 def test_a_signal_at_any_moment_leaves_a_folder_that_says_how_the_run_ended(tmp_path):
     """Hypothesis picks the signal and the moment (from the interpreter's start to the run's
     steps); whatever the moment, the process ends by the signal or with 0, one line at most,
@@ -399,3 +480,220 @@ def test_a_signal_at_any_moment_leaves_a_folder_that_says_how_the_run_ended(tmp_
             assert status != "running"
 
     check()
+
+
+def _stderr_lines(proc: subprocess.Popen):
+    """The child's stderr lines as they come (a queue filled by a thread; None at the end)."""
+    import queue
+    import threading
+
+    lines: queue.Queue[str | None] = queue.Queue()
+
+    def read() -> None:
+        for line in proc.stderr:  # type: ignore[union-attr]
+            lines.put(line)
+        lines.put(None)
+
+    threading.Thread(target=read, daemon=True).start()
+    return lines
+
+
+def _wait_for_line(lines, words, timeout: float) -> tuple[str, list[str]]:
+    """The first line holding ``words`` (a text, or a test of the line) and the lines before
+    it (AssertionError: none came)."""
+    import time
+
+    found = words if callable(words) else lambda line: words in line
+    seen: list[str] = []
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        try:
+            line = lines.get(timeout=1.0)
+        except Exception:  # queue.Empty: nothing yet
+            continue
+        assert line is not None, "".join(seen)
+        if found(line):
+            return line, seen
+        seen.append(line)
+    raise AssertionError(f"no line with {words!r} in {timeout} s: {''.join(seen)}")
+
+
+def test_a_sweep_of_a_million_points_shows_its_planning_and_stops_on_sigterm(tmp_path):
+    import signal
+
+    out = tmp_path / "sweep"
+    proc = start_cli("sweep", "--vary", "material.friction=0.5:0.9:1000000", "--out", out)
+    try:
+        line, _ = _wait_for_line(_stderr_lines(proc), "planning the sweep", timeout=240)
+        assert "of 1000000 values" in line and "s left" in line
+        proc.send_signal(signal.SIGTERM)
+        proc.wait(timeout=30)
+    finally:
+        proc.kill()
+    assert proc.returncode == 143
+    assert not out.exists()  # stopped while planning: nothing claimed
+
+
+def test_a_crossed_grid_says_its_runs_and_time_before_it_starts(tmp_path):
+    import signal
+
+    out = tmp_path / "sweep"
+    vary = ["--vary", "material.friction=0.5:0.9:1000", "--vary", "material.kt=1e8:2e9:1000"]
+    proc = start_cli("sweep", *vary, "--out", out, "--quiet")
+    try:
+        line, before = _wait_for_line(_stderr_lines(proc), "WARNING", timeout=240)
+        proc.send_signal(signal.SIGTERM)
+        proc.wait(timeout=60)
+    finally:
+        proc.kill()
+    assert "sweep of 1000000 runs (1000 x 1000 crossed)" in line, line
+    assert " h on " in line and "expect" in line  # hours, on how many workers
+    assert not any("to run" in b for b in before)  # before the sweep claims its folder
+
+
+def test_ctrl_c_while_python_imports_numpy_is_one_line_and_130(tmp_path):
+    """The signal lands while the interpreter imports the heavy modules (right after numpy,
+    told by ``-X importtime``): before, the package's own import did so before the command
+    line's first line, and Ctrl-C gave a KeyboardInterrupt traceback and -2."""
+    import signal
+
+    case = write_case(tmp_path, SINGLE_BLOCK)
+    env = {**os.environ, "PYTHONPATH": str(ROOT / "src"), "NUMBA_NUM_THREADS": "1"}
+    for command in (["run", str(case), "--out", str(tmp_path / "out")], ["render", "folder"]):
+        proc = subprocess.Popen(
+            [sys.executable, "-X", "importtime", "-m", "masonry_dem.cli", *command],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+            env=env,
+        )
+        try:
+            lines = _stderr_lines(proc)
+            _wait_for_line(lines, lambda line: line.split("|")[-1].strip() == "numpy", 120)
+            proc.send_signal(signal.SIGINT)
+            proc.wait(timeout=60)
+            rest = []
+            while (line := lines.get(timeout=10)) is not None:
+                rest.append(line)
+        finally:
+            proc.kill()
+        said = [line.strip() for line in rest if not line.startswith("import time:")]
+        assert proc.returncode == 130, said
+        assert said == ["masonry-dem: interrupted by SIGINT"]
+
+
+def _signal_at_call(monkeypatch, owner, name: str, call: int, calls: list[int]) -> None:
+    """SIGTERM to this process from inside the ``call``-th call of ``owner.name``; ``calls``
+    counts the calls (a real signal, at a moment inside a step)."""
+    import signal
+
+    original = getattr(owner, name)
+
+    def counted(*args, **kwargs):
+        calls.append(1)
+        if len(calls) == call:
+            os.kill(os.getpid(), signal.SIGTERM)
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(owner, name, counted)
+
+
+def test_a_signal_stops_the_static_solver_at_its_next_newton_iteration(monkeypatch):
+    """The first signal stops a step under way (a 316 x 316 wall's step is a minute): no
+    factorization after it, at most the step it lands in handed on; before, the solver went
+    on to the end and only the run command's check between steps stopped it."""
+    import pytest
+
+    from masonry_dem._signals import Interrupted, stop_on_signals
+    from masonry_dem.cases.casefile import load_case
+    from masonry_dem.solvers.incremental import StaticSolver
+    from masonry_dem.solvers.static.problem import DiscreteProblem
+
+    case = load_case(ROOT / "src" / "masonry_dem" / "cases" / "data" / "default_wall.toml")
+    factored: list[int] = []
+    _signal_at_call(monkeypatch, DiscreteProblem, "factor", 12, factored)
+    steps: list[int] = []
+    solver = StaticSolver(case.model, case.settings)
+    with stop_on_signals(), pytest.raises(Interrupted) as stopped:
+        solver.run(control=case.control, callback=lambda s: steps.append(len(factored)))
+    assert stopped.value.signum == 15
+    assert len(factored) == 12  # none after the signal
+    assert len([n for n in steps if n >= 12]) <= 1  # the step the signal landed in, at most
+
+
+def test_a_signal_stops_the_non_associative_limit_analysis_between_its_solves(monkeypatch):
+    """The bound a run computes at a collapse runs in the run's worker thread, where only
+    the checks stop it: the signal ends the iteration before its next solve."""
+    import pytest
+
+    from masonry_dem._signals import Interrupted, stop_on_signals
+    from masonry_dem.cases.casefile import load_case
+    from masonry_dem.solvers.limit_analysis import limit_analysis, non_associative
+
+    case = load_case(ROOT / "src" / "masonry_dem" / "cases" / "data" / "default_wall.toml")
+    started: list[int] = []
+    _signal_at_call(monkeypatch, non_associative, "solve_associative", 1, started)
+    solves: list[int] = []
+    _signal_at_call(monkeypatch, non_associative, "solve_frozen_columns", 0, solves)
+    with stop_on_signals(), pytest.raises(Interrupted):
+        limit_analysis(case.model, associative=False)
+    assert started == [1] and solves == []
+
+
+def test_a_signal_stops_dynamic_relaxation_inside_a_relaxation(monkeypatch):
+    import pytest
+
+    from masonry_dem._signals import Interrupted, stop_on_signals
+    from masonry_dem.cases.casefile import load_case
+    from masonry_dem.solvers.dynamic_relaxation import DRSettings, relax
+    from masonry_dem.solvers.dynamic_relaxation.solver import DynamicRelaxation
+
+    case = load_case(ROOT / "src" / "masonry_dem" / "cases" / "data" / "default_wall.toml")
+    relaxed: list[int] = []
+    _signal_at_call(monkeypatch, DynamicRelaxation, "relax_with_cuts", 3, relaxed)
+    with stop_on_signals(), pytest.raises(Interrupted):
+        relax(case.model, DRSettings())
+    assert len(relaxed) == 3  # stopped inside the relaxation the signal landed in
+
+
+def test_an_interrupted_render_ends_without_the_interpreters_teardown(tmp_path):
+    """Ctrl-C in a render, VTK loaded: one line, 130, and no teardown after it (an atexit
+    hook of the program says if there is one). The teardown finalized what the signal left
+    half made (llvmlite's "Exception ignored in OutputString.__del__") and took most of the
+    time to stop (a median of 1.8 s and up to 7.7 s after Ctrl-C, 30 renders, load 7 on 2
+    cores; 0.05 s and 0.44 s without it)."""
+    import signal
+    import time
+
+    out = tmp_path / "out"
+    case = write_case(tmp_path, SINGLE_BLOCK)
+    assert _cli("run", str(case), "--out", str(out), "--no-render", "--quiet").returncode == 0
+    program = (
+        "import atexit, sys\n"
+        "atexit.register(lambda: print('teardown', file=sys.stderr))\n"
+        "from masonry_dem.cli import main\n"
+        f"sys.argv = ['masonry-dem', 'render', {str(out)!r}, '--animate']\n"
+        "sys.exit(main())\n"
+    )
+    env = {**os.environ, "PYTHONPATH": str(ROOT / "src"), "NUMBA_NUM_THREADS": "1"}
+    proc = subprocess.Popen(
+        [sys.executable, "-X", "importtime", "-c", program],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+    )
+    try:
+        lines = _stderr_lines(proc)
+        _wait_for_line(lines, lambda line: line.split("|")[-1].strip() == "pyvista", 240)
+        time.sleep(0.5)
+        assert proc.poll() is None
+        proc.send_signal(signal.SIGINT)
+        proc.wait(timeout=120)
+        rest = []
+        while (line := lines.get(timeout=10)) is not None:
+            rest.append(line)
+    finally:
+        proc.kill()
+    said = [line.strip() for line in rest if not line.startswith("import time:")]
+    assert proc.returncode == 130 and said == ["masonry-dem: interrupted by SIGINT"], said

@@ -239,3 +239,42 @@ def test_version_is_the_installed_one(capsys):
         main(["--version"])
     assert done.value.code == 0
     assert capsys.readouterr().out.strip() == f"masonry-dem {version('masonry_dem')}"
+
+
+def test_runs_are_handed_to_dask_a_few_per_worker_at_a_time(client, tmp_path, monkeypatch):
+    """10^6 tasks submitted at once filled the scheduler until it dropped its workers: at
+    most WINDOW_PER_WORKER x workers runs are in flight, the next one handed on as one
+    ends; every run still gets its row, in order."""
+    import masonry_dem.studies.sweep as sweep_module
+
+    monkeypatch.setattr(sweep_module, "WINDOW_PER_WORKER", 1)
+    submitted, ended, in_flight = [0], [0], []
+
+    class Counting:
+        def __init__(self, inner):
+            self.inner = inner
+
+        def __getattr__(self, name):
+            return getattr(self.inner, name)
+
+        def submit(self, *args, **kwargs):
+            submitted[0] += 1
+            in_flight.append(submitted[0] - ended[0])
+            return self.inner.submit(*args, **kwargs)
+
+    appended = sweep_module.Journal.append
+
+    def append(self, row):
+        ended[0] += 1
+        return appended(self, row)
+
+    monkeypatch.setattr(sweep_module.Journal, "append", append)
+    result = sweep(
+        SLIDING_WALL,
+        vary={"material.friction": "0.5:0.8:12"},
+        out=tmp_path / "sweep",
+        scheduler=Counting(client),
+        plots=False,
+    )
+    assert submitted[0] == 12 and [r["run"] for r in result.rows] == list(range(12))
+    assert max(in_flight) <= 8  # the window: max(8, 1 x 2 workers)

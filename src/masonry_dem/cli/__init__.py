@@ -14,6 +14,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import logging
+import os
 import sys
 import traceback
 
@@ -78,7 +79,7 @@ def main(argv: list[str] | None = None) -> int:
         if debug:
             traceback.print_exc()
         print(f"masonry-dem: {exc or 'interrupted'}", file=sys.stderr)
-        return exit_code(exc)
+        return _stopped(exit_code(exc), argv)
     except (SystemError, ImportError) as exc:  # a signal inside a kernel's call or an import
         signal = interruption(exc)
         if signal is None:
@@ -86,7 +87,25 @@ def main(argv: list[str] | None = None) -> int:
         if debug:
             traceback.print_exc()
         print(f"masonry-dem: {signal or 'interrupted'}", file=sys.stderr)
-        return exit_code(signal)
+        return _stopped(exit_code(signal), argv)
+
+
+def _stopped(code: int, argv: list[str] | None) -> int:
+    """``code`` of an interrupted command. The program itself (``argv`` None: the console
+    script, ``python -m``) ends at once, without the interpreter's teardown: what it must
+    write is written (the results folder says ``interrupted``), and the teardown finalized
+    objects a signal had left half made (llvmlite's "Exception ignored in OutputString.__del__"
+    after a Ctrl-C in a render) while an abandoned solver thread could still be inside a C
+    library (HiGHS, PARDISO) or VTK."""
+    if argv is not None:
+        return code
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            stream.flush()
+        except (OSError, ValueError):  # a closed pipe: nothing more to say there
+            pass
+    logging.shutdown()
+    os._exit(code)
 
 
 def _run(argv: list[str] | None) -> int:

@@ -6,8 +6,10 @@ from __future__ import annotations
 import argparse
 import json
 import logging
+import sys
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from masonry_dem.cli.options import (
     add_case,
@@ -16,6 +18,9 @@ from masonry_dem.cli.options import (
     positive_seconds,
     results_line,
 )
+
+if TYPE_CHECKING:
+    from masonry_dem.solvers.resources import LimitEstimate
 
 log = logging.getLogger(__name__)
 
@@ -56,23 +61,70 @@ def add_parser(subparsers) -> None:
     )
     add_output(p, "results/limit", "the PNG of the mechanism")
     add_overwrite(p)
+    p.add_argument(
+        "--max-memory",
+        default=None,
+        help="refuse an analysis whose estimated memory is above this (e.g. 16G, 500M; "
+        "default: what the machine and the process's limits leave)",
+    )
     p.set_defaults(func=limit_command)
 
 
-def run_limit(case, out: Path, options: dict, render: bool = True, overwrite: bool = False) -> dict:
+def limit_memory(case, options: dict, max_memory: float | None = None) -> LimitEstimate | None:
+    """The memory estimate of the limit analysis of a loaded case with ``options`` (None for
+    a backend it does not know: the analysis names it); raises
+    :class:`~masonry_dem.solvers.resources.TooLarge` when it is above ``max_memory`` bytes
+    (None: what the machine, the process's ``ulimit -v`` and its cgroup leave)."""
+    from masonry_dem.solvers.limit_analysis.analysis import choose_backend
+    from masonry_dem.solvers.limit_analysis.interface import (
+        ASSOCIATIVE_GRID,
+        NON_ASSOCIATIVE_GRID,
+        lobatto_rule,
+    )
+    from masonry_dem.solvers.resources import LIMIT_BYTES, check_fits, limit_estimate
+
+    model = case.model
+    backend = options.get("backend") or choose_backend(model, options.get("cone"))
+    grid = options.get("grid") or (
+        ASSOCIATIVE_GRID if options.get("associative", True) else NON_ASSOCIATIVE_GRID
+    )
+    lobatto_rule(grid)  # a grid out of its range is named as such, not as too large
+    if backend not in LIMIT_BYTES:
+        return None
+    est = limit_estimate(model.blocks.count, model.interfaces.count, int(grid), str(backend))
+    check_fits(est, max_memory)
+    return est
+
+
+def run_limit(
+    case,
+    out: Path,
+    options: dict,
+    render: bool = True,
+    overwrite: bool = False,
+    max_memory: float | None = None,
+) -> dict:
     """Run the limit analysis of a loaded case into ``out``, a folder this run claims as
     ``run`` does (refused if it holds another run, unless ``overwrite``); returns the
-    summary."""
+    summary. An analysis whose memory estimate is above what it may take is refused before
+    the folder is claimed (TooLarge); an allocation that fails anyway is a MemoryError that
+    quotes the estimate."""
     from masonry_dem._signals import run_interruptible
     from masonry_dem.export.limit_results import write_limit_results
     from masonry_dem.export.results_folder import claim, record_stopped, write_summary
     from masonry_dem.solvers.limit_analysis import limit_analysis
 
+    est = limit_memory(case, options, max_memory)
     folder = claim(out, overwrite, {"case": case.source, "analysis": "limit"})
     try:
         t0 = time.perf_counter()
         try:
             result = run_interruptible(lambda: limit_analysis(case.model, **options))
+        except MemoryError as exc:  # an allocation failed: with what was expected
+            expected = f"; estimated {est.describe()}" if est is not None else ""
+            stopped = MemoryError(f"{exc or 'an allocation failed'}{expected}")
+            record_stopped(out, stopped)
+            raise stopped from exc
         except BaseException as exc:  # a signal or an error: summary.json says so
             record_stopped(out, exc)
             raise
@@ -97,6 +149,7 @@ def run_limit(case, out: Path, options: dict, render: bool = True, overwrite: bo
 
 def limit_command(args: argparse.Namespace) -> int:
     from masonry_dem.cases.casefile import load_case
+    from masonry_dem.solvers.resources import TooLarge, parse_memory
 
     case = load_case(args.case)
     options = dict(case.limit_options or {})
@@ -113,7 +166,14 @@ def limit_command(args: argparse.Namespace) -> int:
 
         options["friction_scale"] = model_friction_scale(case.model)
     out = Path(args.out)
-    summary = run_limit(case, out, options, render=not args.no_render, overwrite=args.overwrite)
+    max_memory = None if args.max_memory is None else parse_memory(args.max_memory)
+    try:
+        summary = run_limit(
+            case, out, options, not args.no_render, args.overwrite, max_memory=max_memory
+        )
+    except TooLarge as exc:
+        print(f"masonry-dem limit: refused: {exc}", file=sys.stderr)
+        return 2
     print(
         json.dumps(
             {k: summary[k] for k in ("status", "lambda", "method", "bound", "seconds", "blocks")}

@@ -25,11 +25,22 @@ def _step(text: str) -> int | str:
     raise argparse.ArgumentTypeError(f"expected a step number, 'first' or 'last', got {text!r}")
 
 
+#: the range of a picture's width and height in pixels (8192 x 8192: 0.27 GB of RGBA before
+#: the PNG; a size of 10^5 would ask VTK for 40 GB before failing)
+PIXELS = (16, 8192)
+
+
 def _size(text: str) -> tuple[int, int]:
     m = re.fullmatch(r"\s*(\d+)\s*[xX]\s*(\d+)\s*", text)
     if not m:
         raise argparse.ArgumentTypeError(f"expected WIDTHxHEIGHT in pixels, got {text!r}")
-    return int(m.group(1)), int(m.group(2))
+    width, height = int(m.group(1)), int(m.group(2))
+    if not (PIXELS[0] <= width <= PIXELS[1] and PIXELS[0] <= height <= PIXELS[1]):
+        raise argparse.ArgumentTypeError(
+            f"width and height must be whole numbers of pixels from {PIXELS[0]} to "
+            f"{PIXELS[1]}, got {text!r}"
+        )
+    return width, height
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:

@@ -97,10 +97,20 @@ def run_command(args: argparse.Namespace) -> int:
     out = Path(args.out)
     if case.method == "limit":  # [analysis] method = "limit"
         from masonry_dem.cli.limit import exit_code, run_limit
+        from masonry_dem.solvers.resources import TooLarge, parse_memory
 
-        summary = run_limit(
-            case, out, dict(case.limit_options or {}), not args.no_render, args.overwrite
-        )
+        try:
+            summary = run_limit(
+                case,
+                out,
+                dict(case.limit_options or {}),
+                not args.no_render,
+                args.overwrite,
+                max_memory=None if args.max_memory is None else parse_memory(args.max_memory),
+            )
+        except TooLarge as exc:
+            print(f"masonry-dem run: refused: {exc}", file=sys.stderr)
+            return 2
         print(json.dumps({k: summary[k] for k in ("status", "lambda", "method", "bound")}))
         print(f"{summary['status']}: {summary['reason']}")
         print(summary["bound_reason"])

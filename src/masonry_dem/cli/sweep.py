@@ -58,7 +58,9 @@ def add_parser(subparsers) -> None:
     group.add_argument("--resume", action="store_true", help="run only the rows OUT lacks")
     group.add_argument("--overwrite", action="store_true", help="replace the sweep in OUT")
     p.add_argument("--no-plots", action="store_true", help="no PNGs")
-    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument(
+        "--quiet", action="store_true", help="no progress lines (the planning's, the runs')"
+    )
     p.set_defaults(func=sweep_command)
 
 
@@ -85,6 +87,8 @@ def sweep_command(args: argparse.Namespace) -> int:
     if not args.verbose:  # Dask logs its cluster's life at INFO (set on its import, above)
         logging.getLogger("distributed").setLevel(logging.WARNING)
     logging.getLogger("masonry_dem.studies.sweep").setLevel(logging.INFO)  # the dashboard
+    if not args.quiet:  # how far the checks of a long plan are
+        logging.getLogger("masonry_dem.studies.sweep_plan").setLevel(logging.INFO)
     try:
         result = sweep(
             args.case,
@@ -99,7 +103,7 @@ def sweep_command(args: argparse.Namespace) -> int:
             resume=args.resume,
             overwrite=args.overwrite,
             plots=not args.no_plots,
-            progress=not args.quiet and sys.stdout.isatty(),
+            progress=not args.quiet,
         )
     except ModuleNotFoundError as exc:  # dask or pyarrow not installed
         print(f"masonry-dem sweep: error: {exc}", file=sys.stderr)

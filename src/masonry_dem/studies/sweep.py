@@ -33,7 +33,7 @@ import logging
 import os
 import re
 import shutil
-import threading
+import time
 import uuid
 from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
@@ -100,6 +100,16 @@ log = logging.getLogger(__name__)
 PLAN = "sweep.json"
 RUNS = "runs"
 KEEP = ("none", "summary", "all")
+#: runs from which a sweep's size, and a crossing of values that makes it, is a warning
+MANY_RUNS = 10_000
+#: seconds from which a sweep's time estimate is a warning
+LONG_SECONDS = 3600.0
+#: points whose walls the time estimate measures (evenly spread over the plan)
+ESTIMATED_POINTS = 50
+#: tasks in flight per worker thread
+WINDOW_PER_WORKER = 4
+#: seconds between two progress lines of the runs
+PROGRESS_SECONDS = 10.0
 
 
 @dataclass
@@ -157,7 +167,7 @@ def sweep(
     resume: run only the rows ``out`` does not hold yet (same plan, else refused);
         overwrite: replace a sweep in ``out`` (its own files only); without either, a folder
         that holds a sweep is refused.
-    progress: show Dask's progress bar on stdout.
+    progress: log how many runs are done and how long the rest will take.
     """
     if keep not in KEEP:
         raise ValueError(f"keep = {plain(keep)}: must be one of {', '.join(KEEP)}")
@@ -167,8 +177,9 @@ def sweep(
     if resume and sample and seed is None:  # the seed the sweep drew and recorded
         seed = _recorded(folder).get("seed")
     plan = make_plan(case, vary, sample, samples, seed)
-    done = _prepare(folder, plan, resume, overwrite)
     points = plan.points()
+    _announce(plan, points, scheduler, workers)
+    done = _prepare(folder, plan, resume, overwrite)
     columns = columns_of(plan)
     rows: dict[int, dict[str, Any]] = dict(done)
     todo = [i for i in range(len(points)) if i not in done]
@@ -205,6 +216,40 @@ def sweep(
     )
 
 
+def _announce(
+    plan: Plan, points: list[dict[str, Any]], scheduler: Any, workers: int | None
+) -> None:
+    """Log, before anything starts, how many runs the sweep makes (the crossing of values
+    that makes a large one named) and how long they will take."""
+    from masonry_dem.solvers.resources import SWEEP_RUN_FACTOR, estimate, sweep_time
+    from masonry_dem.solvers.resources import blocks_of_geometry as blocks_of
+
+    runs = len(points)
+    some = points[:: max(1, runs // ESTIMATED_POINTS)][:ESTIMATED_POINTS]
+    sizes = [blocks_of(plan.case_of(p).get("geometry") or {}) for p in some]
+    known = [n for n in sizes if n is not None]
+    if not known:  # a builder the estimate cannot count: no time said
+        log.info("sweep of %d runs", runs)
+        return
+    run_seconds = float(np.mean([estimate(n).seconds for n in known]))
+    if scheduler is None:
+        seconds, text = sweep_time(runs, run_seconds, int(workers or os.cpu_count() or 1))
+    else:  # the scheduler's workers, unknown here, share the work
+        seconds = runs * run_seconds * SWEEP_RUN_FACTOR
+        text = f"{seconds:.0f} s of work for the scheduler's workers"
+    counts = [len(v) for v in plan.vary.values()] + ([plan.samples] if plan.sample else [])
+    crossed = f" ({' x '.join(map(str, counts))} crossed)" if len(counts) > 1 else ""
+    many = runs >= MANY_RUNS or seconds >= LONG_SECONDS
+    log.log(
+        logging.WARNING if many else logging.INFO,
+        "sweep of %d runs%s: %s%s",
+        runs,
+        crossed,
+        text,
+        "; Ctrl-C stops it, resume continues it" if many else "",
+    )
+
+
 def _compute(
     plan: Plan,
     points: list[dict[str, Any]],
@@ -223,21 +268,32 @@ def _compute(
     with _client(scheduler, workers) as client:
         log.info("dask scheduler %s, dashboard %s", client.scheduler.address, client.dashboard_link)
         tag = uuid.uuid4().hex[:8]
-        futures = {
-            client.submit(
+        # a few tasks per worker in flight, not every run at once: 10^6 submitted tasks (each
+        # with its case) filled the scheduler's memory until its workers were dropped
+        window = max(8, WINDOW_PER_WORKER * max(sum(client.nthreads().values()), 1))
+        waiting = iter(todo)
+        futures: dict[Any, int] = {}
+
+        def submit() -> Any:
+            i = next(waiting, None)
+            if i is None:
+                return None
+            future = client.submit(
                 run_point,
                 plan.case_of(points[i]),
                 plan.source,
                 keep,
                 str(runs / f"run_{i:04d}"),
                 key=f"masonry-run-{i}-{tag}",
-            ): i
-            for i in todo
-        }
-        if progress:
-            _show_progress(list(futures))
-        for future in as_completed(futures):  # type: ignore[no-untyped-call]
-            i = futures[future]
+            )
+            futures[future] = i
+            return future
+
+        first = [f for f in (submit() for _ in range(window)) if f is not None]
+        queue = as_completed(first)  # type: ignore[no-untyped-call]
+        shown = _Shown(len(todo), progress)
+        for future in queue:
+            i = futures.pop(future)
             try:
                 result = future.result()
             except Exception as exc:  # the worker died, or the task could not run
@@ -247,15 +303,28 @@ def _compute(
             rows[i] = {"run": i, **points[i], **result}
             journal.append(rows[i])
             future.release()
+            shown.step()
+            following = submit()
+            if following is not None:
+                queue.add(following)  # type: ignore[no-untyped-call]
 
 
-def _show_progress(futures: list[Any]) -> None:
-    """Dask's own text progress bar, drawn by a thread while the rows are written."""
-    from distributed import progress
+class _Shown:
+    """Logs how many runs are done and how long the rest will take, every
+    :data:`PROGRESS_SECONDS` (when ``shown``)."""
 
-    threading.Thread(
-        target=progress, args=(futures,), kwargs={"notebook": False}, daemon=True
-    ).start()
+    def __init__(self, total: int, shown: bool) -> None:
+        self.total, self.shown, self.done = total, shown, 0
+        self.start = self.last = time.monotonic()
+
+    def step(self) -> None:
+        self.done += 1
+        now = time.monotonic()
+        if not self.shown or (now - self.last < PROGRESS_SECONDS and self.done < self.total):
+            return
+        self.last = now
+        left = (now - self.start) / self.done * (self.total - self.done)
+        log.info("%d of %d runs done, about %.0f s left", self.done, self.total, left)
 
 
 @contextmanager

@@ -13,10 +13,13 @@ allowed range.
 from __future__ import annotations
 
 import copy
+import functools
 import itertools
 import json
+import logging
 import math
 import re
+import time
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -25,6 +28,11 @@ from typing import Any
 import numpy as np
 
 from masonry_dem._validation import is_count, plain
+
+log = logging.getLogger(__name__)
+
+#: seconds between two progress lines of a long plan
+PROGRESS_SECONDS = 2.0
 
 #: the distributions of ``sample``: name -> the meaning of its two numbers
 DISTRIBUTIONS = {
@@ -142,6 +150,12 @@ _KEY = re.compile(r"([A-Za-z_]\w*)?((?:\[\d+\])*)")
 
 def path_keys(path: str) -> list[str | int]:
     """``loads[1].direction`` or ``loads.1.direction`` -> ['loads', 1, 'direction']."""
+    return list(_keys(path))
+
+
+@functools.lru_cache(maxsize=256)
+def _keys(path: str) -> tuple[str | int, ...]:
+    # parsed once per path: a plan of 10^6 values asks for the same few paths each time
     keys: list[str | int] = []
     for part in path.strip().split("."):
         m = _KEY.fullmatch(part)
@@ -156,13 +170,23 @@ def path_keys(path: str) -> list[str | int]:
                 f"parameter path {path!r}: must be table keys joined by dots, with list "
                 "indices in brackets, e.g. material.friction or loads[1].direction"
             )
-    return keys
+    return tuple(keys)
 
 
 def set_path(data: dict[str, Any], path: str, value: Any) -> dict[str, Any]:
     """A deep copy of the case ``data`` with ``value`` at ``path`` (a missing table is made)."""
-    out = copy.deepcopy(data)
-    keys = path_keys(path)
+    return _put(copy.deepcopy(data), path, value, copy_path=False)
+
+
+def _with_value(data: dict[str, Any], path: str, value: Any) -> dict[str, Any]:
+    """``data`` with ``value`` at ``path``, copying only the tables and lists on the path:
+    the rest is shared with ``data``, to be read (checked), never changed."""
+    return _put(data, path, value, copy_path=True)
+
+
+def _put(data: dict[str, Any], path: str, value: Any, copy_path: bool) -> dict[str, Any]:
+    keys = _keys(path)
+    out: Any = dict(data) if copy_path else data
     node: Any = out
     for depth, key in enumerate(keys):
         last = depth == len(keys) - 1
@@ -180,13 +204,16 @@ def set_path(data: dict[str, Any], path: str, value: Any) -> dict[str, Any]:
         else:
             if isinstance(node, dict) and key not in node:
                 node[key] = [] if isinstance(keys[depth + 1], int) else {}
+            elif copy_path and isinstance(node[key], (dict, list)):
+                node[key] = type(node[key])(node[key])
             node = node[key]
-    return out
+    result: dict[str, Any] = out
+    return result
 
 
 def get_path(data: dict[str, Any], path: str) -> Any:
     node: Any = data
-    for key in path_keys(path):
+    for key in _keys(path):
         try:
             node = node[key]
         except (KeyError, IndexError, TypeError):
@@ -201,7 +228,7 @@ def _typed(path: str, value: Any, current: Any) -> Any:
 
     if isinstance(value, np.generic):
         value = value.item()
-    key = path_keys(path)[-1]
+    key = _keys(path)[-1]
     rng = RANGES.get(key) if isinstance(key, str) else None
     wants_int = (rng is not None and rng.integer) or (
         isinstance(current, int) and not isinstance(current, bool)
@@ -312,14 +339,40 @@ def make_plan(
     if dists and seed is None:  # recorded in sweep.json: a resumed sweep draws the same values
         seed = int(np.random.SeedSequence().entropy % 2**63)  # type: ignore[operator]
     plan = Plan(data, source, grid, dists, samples if dists else 0, seed)
-    every: dict[str, list[Any]] = {**grid, **plan.draws()}
+    every = {path: _distinct(vals) for path, vals in {**grid, **plan.draws()}.items()}
+    total = sum(len(vals) for vals in every.values())
+    progress = _Progress(total)
     for path, vals in every.items():
-        for value in _distinct(vals):
+        for value in vals:
             try:
-                check_case_data(set_path(data, path, value), source)
+                check_case_data(_with_value(data, path, value), source)
             except CaseError as exc:
                 raise CaseError(f"sweep parameter {path} = {plain(value)}: {exc}") from None
+            progress.step()
     return plan
+
+
+class _Progress:
+    """Logs how far the checks of a long plan are and how long they will still take, every
+    :data:`PROGRESS_SECONDS`."""
+
+    def __init__(self, total: int) -> None:
+        self.total, self.done = total, 0
+        self.start = self.last = time.monotonic()
+
+    def step(self) -> None:
+        self.done += 1
+        now = time.monotonic()
+        if now - self.last < PROGRESS_SECONDS:
+            return
+        self.last = now
+        left = (now - self.start) / self.done * (self.total - self.done)
+        log.info(
+            "planning the sweep: checked %d of %d values, about %.0f s left",
+            self.done,
+            self.total,
+            left,
+        )
 
 
 def _distinct(values: list[Any]) -> list[Any]:

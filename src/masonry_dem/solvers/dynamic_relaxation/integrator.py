@@ -64,6 +64,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import sparse
 
+from masonry_dem._signals import check_stop
 from masonry_dem.constitutive.law import LawResponse
 from masonry_dem.model import Model
 from masonry_dem.solvers.dynamic_relaxation import kinetic as kin
@@ -329,6 +330,7 @@ class Relaxation:
         # a ramp runs until a mechanism forms or lambda reaches its top: only the budget ends it
         for cycle in range(1, (s.max_time_steps if ramp else s.max_cycles) + 1):
             self.stats.time_steps += 1
+            check_stop()
             if self.stats.time_steps > s.max_time_steps:
                 return self._spent(start, lam, resp, cycle)
             Fn = max(float(np.linalg.norm(W * F)), 1e-30)
@@ -485,6 +487,7 @@ class Relaxation:
             self._courant = float(fs[kin.COURANT])
             resp = LawResponse(trial, ft, actions, flags, None)
             cycle = int(ints[kin.CYCLE])
+            check_stop()  # at each return of the kernel: a signal stops a long relaxation
             if code != kin.PEAK:
                 break
             ints[kin.PROBED] = cycle

@@ -86,8 +86,23 @@ def _highs_error(res: Any) -> Solution:
     ``budget`` one where its time or iteration limit stopped it."""
     if res.status == 1:
         return Solution("budget", detail=f"HiGHS: {res.message}")
+    if "memory" in str(res.message).lower():  # the machine's, not the wall's
+        raise MemoryError(f"HiGHS: {res.message}")
     word = _HIGHS_WORDS.get(res.status, res.status)
     return Solution("error", detail=f"HiGHS: {word}: {res.message}")
+
+
+def clarabel_room(A: sparse.csc_matrix) -> None:
+    """MemoryError before Clarabel starts on ``A`` where the process's ``ulimit -v`` leaves
+    too little: Clarabel, in Rust, aborts the process on a failed allocation."""
+    from masonry_dem.solvers.resources import (
+        CLARABEL_BYTES_PER_ENTRY,
+        LIMIT_BYTES,
+        require_address_space,
+    )
+
+    need = LIMIT_BYTES["clarabel"][0] + CLARABEL_BYTES_PER_ENTRY * A.nnz
+    require_address_space(need, f"Clarabel on {A.shape[0]} x {A.shape[1]} ({A.nnz} entries)")
 
 
 #: Clarabel's status words of a solve its time or iteration limit stopped
@@ -169,6 +184,7 @@ def solve_clarabel(
     settings.direct_solve_method = "qdldl"
     settings.max_iter = CLARABEL_ITERATIONS
     settings.time_limit = solver_seconds()
+    clarabel_room(A)
     solver = clarabel.DefaultSolver(P, q, A, np.concatenate(b), cones, settings)
     sol = solver.solve()
     word = str(sol.status)

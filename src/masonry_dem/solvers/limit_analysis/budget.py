@@ -21,6 +21,8 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from contextvars import ContextVar
 
+from masonry_dem._signals import check_stop
+
 #: the default time limit of one analysis [s]: generous (a 10^4-block wall takes seconds to
 #: tens of seconds), so that it stops only a solve that would not end
 DEFAULT_TIME_LIMIT = 600.0
@@ -54,7 +56,10 @@ def seconds_left() -> float:
 
 
 def spent() -> bool:
-    """Has the current budget's time run out?"""
+    """Has the current budget's time run out? A stop a signal asked for (``_signals``)
+    raises here: every loop that asks (the non-associative iteration, the normal-equation
+    IPM) is one the signal stops."""
+    check_stop()
     return seconds_left() <= 0.0
 
 

@@ -99,6 +99,9 @@ def solve_kinematic_clarabel(
     for name, value in {**clarabel_options(n_u), **(options or {})}.items():
         setattr(settings, name, value)
     t0 = time.process_time()
+    from .backends import clarabel_room  # here: backends imports this module
+
+    clarabel_room(A)
     out = clarabel.DefaultSolver(sparse.csc_matrix((n_u, n_u)), -rhs, A, b, cones, settings)
     setup = time.process_time() - t0
     sol = out.solve()

@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from masonry_dem._signals import check_stop
 from masonry_dem.model import Model
 from masonry_dem.solvers.factorization import Factors
 from masonry_dem.solvers.static.outcome import Failure, Outcome
@@ -220,6 +221,7 @@ class Corrector:
                 self.last_increment = self.increment(q)
                 return Outcome(True, q, lam, response, it - 1)
             self.iterations += 1
+            check_stop()  # a signal stops a long step here, not after it
             fresh = lu is None
             if lu is None:
                 lu = self.problem.factor(response, floor)
