@@ -205,17 +205,17 @@ def non_associative(
             # the next capacities from the optimum elastic joints would take (least
             # complementary energy), not from the solver's, one of many, which may hold a
             # self-stress no load path makes; a shade below lambda, where the frozen
-            # capacities hold more than the optimal face
-            if dirs is None:
-                R_st, radius = R_s, mu * capk
-            else:  # the circle through the pyramid's edges: it holds every LP optimum
-                R_st = resultant_columns(
-                    np.repeat(yk, 2, axis=0),
-                    _PLANE_SHEAR[np.arange(2 * m * K) % 2],
-                    np.repeat(iface, 2),
-                    m,
-                )
-                radius = mu * capk * float(np.hypot(*dirs[0]))
+            # capacities hold more than the optimal face. The frozen capacity at the
+            # reduced rectangle's corners only (grid 2): the same shear, more torsion, so
+            # every LP optimum is among its states, on a sixteenth of the cones
+            pts2, cap2 = frozen_layout(model, actions, 2)
+            shear2 = np.tile(_PLANE_SHEAR, (4 * m, 1))
+            R_st = resultant_columns(
+                np.repeat(pts2.reshape(-1, 2), 2, axis=0), shear2, np.repeat(iface4, 2), m
+            )
+            # with the pyramid, the circle through its edges holds every LP optimum
+            rho = 1.0 if dirs is None else float(np.hypot(*dirs[0]))
+            radius = rho * np.repeat(model.friction, 4) * cap2.ravel()
             state = least_energy_frozen(problem, R_n, R_st, radius, sol.lam * (1 - LAMBDA_SLACK))
             if state is not None:
                 new = state

@@ -291,11 +291,8 @@ def least_energy_frozen(
     )
     M.sort_indices()
     b = np.concatenate([problem.rhs + lam * problem.live, -weights * problem.a0, np.zeros(nn), h])
-    cones = [
-        clarabel.ZeroConeT(n_eq + r),
-        clarabel.NonnegativeConeT(nn),
-        *([clarabel.SecondOrderConeT(3)] * p),
-    ]
+    cones = [clarabel.ZeroConeT(n_eq + r), clarabel.NonnegativeConeT(nn)]
+    cones += [clarabel.SecondOrderConeT(3)] * p
     d = k + np.arange(r)
     P = sparse.csc_matrix((np.ones(r), (d, d)), shape=(k + r, k + r))
     settings = clarabel.DefaultSettings()
