@@ -128,7 +128,7 @@ def test_the_nearest_optimum_by_columns_is_the_full_qps(small_l_wall, monkeypatc
         return out
 
     monkeypatch.setattr(na, "solve_frozen_columns", capture)
-    limit_analysis(small_l_wall, associative=False, max_iterations=1)
+    limit_analysis(small_l_wall, associative=False, max_iterations=1, start="associative")
     E_n, friction, live, rhs, sol, patterns = got[0]
     its = small_l_wall.interfaces
     m = its.count
