@@ -18,9 +18,9 @@ SMALL_WALLS = (
     5, 8, 10, 12, 17, 22, 30, 34, 36, 37, 44, 49, 50, 51, 60, 65, 70, 85, 100, 113, 114,
     118, 126, 136, 141, 142, 143, 150, 151, 154, 161,
 )  # fmt: skip
-#: of the 31, within 10 % of the pushover: 22 measured (docs/limit_analysis.md), 13 from the
+#: of the 31, within 10 % of the pushover: 23 measured (docs/limit_analysis.md), 13 from the
 #: associative start; the floor leaves two walls to a solver's other optimum elsewhere
-WITHIN_TEN_PERCENT_AT_LEAST = 20
+WITHIN_TEN_PERCENT_AT_LEAST = 21
 
 
 def test_a_course_tips_block_by_block_with_no_friction_in_its_head_joints():
@@ -52,8 +52,8 @@ def test_against_the_pushover_on_thirty_one_generated_walls():
     an estimate; at least ``WITHIN_TEN_PERCENT_AT_LEAST`` of the 31 lie within 10 % of the
     pushover's. The rest, measured: five walls held on both edges get "no collapse" (rigid
     blocks arch between the held columns), two slender in-plane walls lie 15-17 % above (the
-    associative multiplier too: no friction is involved), one held wall of friction 9.6
-    settles 3.9 times above and one in-plane wall does not settle."""
+    associative multiplier too: no friction is involved) and one held wall of friction 9.6
+    settles 3.9 times above."""
     within = []
     for seed in SMALL_WALLS:
         model = random_wall(seed).build()

@@ -65,7 +65,8 @@ solution need not be unique, and its LPs are degenerate, so the actions may jump
 equivalent vertices); the associative multiplier bounds it from above (Radenkovic); the iteration stops when its last three lambdas lie within
 ``tolerance`` (relative) of each other. Where lambda turns back (it oscillates between
 degenerate LP vertices), the relaxation is halved, down to 1/64, a damping that lets the
-frozen actions settle; the iteration reports ``failed`` with the last lambdas when ``max_iterations`` pass without it.
+frozen actions settle, and doubled back after three steps the same way, so that it does not
+creep; the iteration reports ``failed`` with the last lambdas when ``max_iterations`` pass without it.
 """
 
 from .analysis import BACKENDS, dem_upper_bound, limit_analysis

@@ -72,7 +72,8 @@ def limit_analysis(
             and 2.4 s (docs/limit_analysis.md).
         tolerance, max_iterations, relaxation: the non-associative iteration (the last
             three lambdas within ``tolerance``, relative; the starting under-relaxation of
-            the frozen actions between solves, halved where lambda turns back).
+            the frozen actions between solves, halved where lambda turns back and doubled
+            back, to it at most, after three steps the same way).
         friction_scale: a factor (>= 1) on every joint's friction. ``dem_friction_scale``
             of the model's alpha makes the LA domain contain the DEM's, so the associative
             multiplier is an upper bound of the pushover's by Radenkovic's theorem (the

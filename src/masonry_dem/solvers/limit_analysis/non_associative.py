@@ -28,7 +28,8 @@ from .selection import (
 
 log = logging.getLogger(__name__)
 
-#: the non-associative iteration halves its relaxation each time lambda turns back, down to
+#: the non-associative iteration halves its relaxation each time lambda turns back (and
+#: doubles it, up to the given one, after three steps the same way), down to
 _SMALLEST_RELAXATION = 1.0 / 64
 #: where the iteration's frozen actions start: the joints' elastic state under the dead load
 #: (``selection.elastic_state``), or the associative collapse (Gilbert et al. 2006)
@@ -82,6 +83,7 @@ def non_associative(
     (``selection``), so that the answer does not depend on the order of the columns."""
     model = problem.model
     m = model.interfaces.count
+    start_relaxation = relaxation
     first, size = solve_associative(problem, ASSOCIATIVE_GRID, dirs)
     if first.status != "optimal":
         return finish(problem, first, size, result, iterations=1, load_factors=())
@@ -234,6 +236,10 @@ def non_associative(
             return replace(out, reason=f"{out.reason}; {note}")
         if len(lams) > 2 and (lams[-1] - lams[-2]) * (lams[-2] - lams[-3]) < 0:
             relaxation = max(relaxation / 2, _SMALLEST_RELAXATION)  # it oscillates: damp it
+        elif len(lams) > 3 and np.all(np.diff(lams[-4:]) * (lams[-1] - lams[-2]) > 0):
+            # three steps the same way: the damping outlived the oscillation, and a small
+            # relaxation creeps towards the fixed point by a few per mille a solve
+            relaxation = min(2 * relaxation, start_relaxation)
         actions = actions + relaxation * (new - actions)
     tail = ", ".join(f"{x:.5g}" for x in lams[-4:])
     return result(
