@@ -16,6 +16,9 @@
                                                                # per block, Clarabel's setup,
                                                                # iterations and settings
 
+    python benchmarks/bench_limit_analysis.py --corpus          # non-associative against the
+                                                               # pushover on 31 generated
+                                                               # walls, both starts
     python benchmarks/bench_limit_analysis.py                   # issue 37's table: 10^3 and
     python benchmarks/bench_limit_analysis.py --scale 1000 10000 100000   # 10^4 blocks in
                                                                # and out of plane (s, memory,
@@ -501,6 +504,46 @@ def scale(sizes: list[int]) -> None:
     bound_share()
 
 
+#: the generated walls of ``tests/solvers/test_limit_non_associative.py``: the corpus's walls of
+#: at most 29 blocks with a reference collapse (seeds of ``studies.corpus.random_wall``)
+CORPUS_SEEDS = (
+    5, 8, 10, 12, 17, 22, 30, 34, 36, 37, 44, 49, 50, 51, 60, 65, 70, 85, 100, 113, 114,
+    118, 126, 136, 141, 142, 143, 150, 151, 154, 161,
+)  # fmt: skip
+
+
+def corpus_walls(seeds: list[int], within: float = 0.10) -> None:
+    """The non-associative analysis from both starts against the pushover on generated
+    walls: per wall the pushover, each start's lambda (or status), its ratio and seconds;
+    then how many lie within ``within`` of the pushover, per start."""
+    import masonry_dem as md
+    from masonry_dem.studies.corpus import random_wall
+
+    starts = ("elastic", "associative")
+    print(
+        f"{'wall':40s} {'blocks':>6s} {'pushover':>9s}"
+        + "".join(f" {name:>11s} {'ratio':>6s} {'s':>6s}" for name in starts)
+    )
+    tally: dict[str, dict[str, int]] = {name: {} for name in starts}
+    for seed in seeds:
+        wall = random_wall(seed)
+        model = wall.build()
+        push = md.pushover(model).collapse_multiplier
+        line = f"{wall.name[:40]:40s} {model.blocks.count - 1:6d} {_fmt(push):>9s}"
+        for name in starts:
+            r, t = _timed(limit_analysis, model, associative=False, start=name)
+            lam = r.load_factor if r.status == "collapse" else None
+            ratio = lam / push if lam is not None and push else None
+            kind = r.status if lam is None else ("within" if abs(ratio - 1) <= within else "off")
+            tally[name][kind] = tally[name].get(kind, 0) + 1
+            shown = _fmt(lam) if lam is not None else r.status
+            line += f" {shown:>11s} {_fmt(ratio):>6s} {t:6.1f}"
+        print(line, flush=True)
+    for name in starts:
+        counts = ", ".join(f"{k} {v}" for k, v in sorted(tally[name].items()))
+        print(f"start={name!r}: {counts} (within {within:.0%} of the pushover)")
+
+
 def main(argv: list[str] | None = None) -> None:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
     p.add_argument("--grid-study", action="store_true")
@@ -520,7 +563,10 @@ def main(argv: list[str] | None = None) -> None:
     )
     p.add_argument("--pushover-up-to", type=int, default=2000, help="largest ladder pushover")
     p.add_argument("--scale", nargs="*", type=int, default=None, metavar="BLOCKS")
+    p.add_argument("--corpus", nargs="*", type=int, default=None, metavar="SEED")
     args = p.parse_args(argv)
+    if args.corpus is not None:
+        corpus_walls(args.corpus or list(CORPUS_SEEDS))
     if args.scale is not None:
         scale(args.scale or [1000, 10000])
     if args.grid_study:
@@ -548,6 +594,7 @@ def main(argv: list[str] | None = None) -> None:
         or args.ladder is not None
         or args.speed is not None
         or args.scale is not None
+        or args.corpus is not None
     ):
         scale([1000, 10000])
 
