@@ -32,7 +32,8 @@ from masonry_dem.model import Model
 
 from .budget import CLARABEL_ITERATIONS, solver_seconds
 from .columns import FrozenFriction, Patterns, edge_multipliers, full_lp
-from .formulation import Problem, Solution
+from .formulation import Problem, Solution, associative_columns
+from .interface import ASSOCIATIVE_GRID, pyramid_edges
 
 log = logging.getLogger(__name__)
 
@@ -204,31 +205,27 @@ def nearest_by_columns(
     return nearest_optimum(E, live, rhs, (C, friction.cap), lam, A, target), MAX_SELECTION_ROUNDS
 
 
-def elastic_state(problem: Problem, lam: float = 0.0) -> np.ndarray | None:
-    """The joints' actions (m, 6) under the dead load and ``lam`` times the live load, as
-    elastic joints carry them: among the statically admissible actions (equilibrium at
-    ``lam``, the corners' compressions in the 8-face pyramid), the one of least
-    complementary energy
+def elastic_state(problem: Problem) -> np.ndarray | None:
+    """The joints' actions (m, 6) under the dead load as elastic joints carry them: among
+    the statically admissible actions (equilibrium at lambda = 0, the corners' compressions
+    in the 8-face pyramid), the one of least complementary energy
 
         sum_i f1^2 / kt A + f2^2 / kt A + fn^2 / kn A + 12 m1^2 / kn A l2^2
               + 12 m2^2 / kn A l1^2 + 12 m3^2 / kt A (l1^2 + l2^2)
 
-    (a uniform joint of stiffness kn, kt per unit area on its l1 x l2 rectangle, A = l1 l2):
-    the theorem of least complementary energy (Menabrea), with the quadratic form of fully closed joints and
-    the no-tension and friction limits as constraints. It has no self-stress the
-    dead load does not force on elastic joints: a head joint between blocks that stand on
-    their own carries nothing. None where Clarabel fails."""
-    from .formulation import associative_columns
-    from .interface import ASSOCIATIVE_GRID, pyramid_edges
-
+    (a closed joint of stiffness kn, kt per unit area on its l1 x l2 rectangle, A = l1 l2;
+    the theorem of least complementary energy, Menabrea's, with the no-tension and friction
+    limits as constraints). It holds no self-stress the dead load does not force on elastic
+    joints: a head joint between blocks that stand on their own carries nothing. None where
+    Clarabel fails."""
     model = problem.model
     weights = energy_weights(model)
     R, _ = associative_columns(model, ASSOCIATIVE_GRID, pyramid_edges(8, "circumscribed"))
     A = (sparse.diags(weights) @ R.tocsr()).tocsr()
     E = (problem.H_T @ R).tocsc()
-    # lambda held: the loads are the right side, and lambda has no column to act on
-    rhs = problem.rhs + lam * problem.live
-    sol = nearest_optimum(E, np.zeros_like(problem.live), rhs, None, 0.0, A, -weights * problem.a0)
+    # lambda has no column to act on (a zero live load): the dead load's equilibrium
+    no_live = np.zeros_like(problem.live)
+    sol = nearest_optimum(E, no_live, problem.rhs, None, 0.0, A, -weights * problem.a0)
     if sol.status != "optimal":
         log.debug("the elastic dead-load state: %s", sol.detail)
         return None
