@@ -16,6 +16,16 @@
                                                                # per block, Clarabel's setup,
                                                                # iterations and settings
 
+    python benchmarks/bench_limit_analysis.py --corpus          # non-associative against the
+                                                               # pushover on 31 generated
+                                                               # walls, both starts
+    python benchmarks/bench_limit_analysis.py                   # issue 37's table: 10^3 and
+    python benchmarks/bench_limit_analysis.py --scale 1000 10000 100000   # 10^4 blocks in
+                                                               # and out of plane (s, memory,
+                                                               # bracket, backend), and the
+                                                               # bound's share of
+                                                               # ``masonry-dem run``
+
 Times are wall-clock seconds of one run on this machine; compare the ratios printed in one
 run, not figures from different runs.
 """
@@ -23,8 +33,16 @@ run, not figures from different runs.
 from __future__ import annotations
 
 import argparse
+import json
 import math
+import multiprocessing
+import os
+import resource
+import subprocess
+import sys
+import tempfile
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -335,6 +353,197 @@ def profile(sizes: list[int]) -> None:
         )
 
 
+def scale_wall(blocks: int, plane: str):
+    """A running-bond wall of about ``blocks`` blocks on a rigid base: ``"in"``, the size
+    ladder's wall tilted in its plane; ``"out"``, issue 37's (0.081 x 0.210 x 0.070 m
+    blocks, dry, mu 0.7, the left column held in u1 and u3) tilted out of its plane."""
+    if plane == "in":
+        return ladder_wall(blocks)
+    from masonry_dem.geometry import selectors as select
+    from masonry_dem.geometry.builders import add_base, running_bond_wall
+    from masonry_dem.model import InterfaceMaterial, Model, SelfWeight, Support, WeightProportional
+
+    side = max(2, round(math.sqrt(blocks)))
+    wall = running_bond_wall(side, side, a=0.081, b=0.210, s=0.070, unit_weight=20e3)
+    placed, base = add_base(wall)
+    held = select.column(placed, "left", among=list(range(wall.count)))
+    return Model.build(
+        placed,
+        InterfaceMaterial(kn=1e9, kt=4e8, friction=0.7),
+        [Support([base]), Support(held, ["u1", "u3"])],
+        [SelfWeight(), WeightProportional((0.0, 0.0, 1.0))],
+        name=f"out of plane {side}x{side}",
+    )
+
+
+def _scale_child(blocks: int, plane: str, queue) -> None:
+    """One wall in a fresh process, so that its peak memory is its own: the build and the
+    package's ``limit_analysis`` (associative, backend chosen by size), one thread."""
+    from masonry_dem.solvers.limit_analysis import formulation, normal_ipm
+
+    # numba's kernels loaded before anything is timed
+    normal_ipm.solve_kinematic_normal(formulation.Problem.of(ladder_wall(30)), 2)
+    rss0 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    c0, t0 = time.process_time(), time.perf_counter()
+    model = scale_wall(blocks, plane)
+    out = limit_analysis(model)
+    cpu, wall = time.process_time() - c0, time.perf_counter() - t0
+    rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    queue.put(
+        {
+            "blocks": model.blocks.count - 1,
+            "plane": plane,
+            "status": out.status,
+            "lambda": out.load_factor,
+            "bracket": out.bracket,
+            "backend": out.backend,
+            "solver": out.reason.split("(")[-1].rstrip(")")[:60],
+            "cpu": cpu,
+            "wall": wall,
+            "peak_mb": rss / 1024,
+            "start_mb": rss0 / 1024,
+        }
+    )
+
+
+#: a U wall as ``docs/walls_that_meet.md`` writes it, for the bound's share of a run
+U_WALL = """
+[geometry]
+builder = "u_wall"
+blocks_along_length = 8
+courses = 21
+a = 0.02824
+b = 0.07978
+s = 0.03968
+unit_weight = 26.8e3
+return_blocks = 4
+base = true
+
+[material]
+kn = 1e9
+kt = 0.4e9
+friction = 0.7
+
+[[supports]]
+select = "base"
+
+[[loads]]
+type = "self_weight"
+[[loads]]
+type = "weight_proportional"
+direction = [0, 0, 1]
+"""
+
+
+def bound_share() -> None:
+    """``masonry-dem run --no-render`` on the bundled wall and the U walls of
+    ``docs/walls_that_meet.md``, one process each (one thread): the run's wall seconds and
+    the limit-analysis bound's (``summary.json``)."""
+    print(
+        f"\n{'masonry-dem run':34s} {'blocks':>6s} {'lambda':>8s} {'run s':>7s} {'bound s':>8s} "
+        f"{'share':>6s}  bound"
+    )
+    window = "facade_openings = [[0.23934, 0.19768, 0.39890, 0.39536]]\nlintels = true\n"
+    with tempfile.TemporaryDirectory() as tmp:
+        cases: dict[str, str | None] = {"default wall (bundled)": None}
+        for label, text in (
+            ("U wall 8 x 21, returns 4", U_WALL),
+            (
+                "U wall, window and lintels",
+                U_WALL.replace("base = true\n", window + "base = true\n"),
+            ),
+        ):
+            path = Path(tmp) / f"{len(cases)}.toml"
+            path.write_text(text)
+            cases[label] = str(path)
+        for label, case in cases.items():
+            out = Path(tmp) / f"out{len(label)}"
+            cmd = [sys.executable, "-m", "masonry_dem.cli", "run"] + ([case] if case else [])
+            cmd += ["--out", str(out), "--no-render"]
+            env = dict(os.environ, NUMBA_NUM_THREADS="1")
+            done = subprocess.run(cmd, env=env, capture_output=True, text=True, check=False)
+            if not (out / "summary.json").exists():
+                print(f"{label:34s} no summary: {done.stderr.strip()[-200:]}")
+                continue
+            summary = json.loads((out / "summary.json").read_text())
+            run_s = float(summary.get("wall_seconds") or summary["seconds"])
+            la_s = float(summary.get("limit_analysis_seconds") or 0.0)
+            lam = summary.get("lambda")
+            print(
+                f"{label:34s} {summary['blocks']:6d} {_fmt(lam):>8s} {run_s:7.2f} {la_s:8.3f} "
+                f"{la_s / run_s:6.1%}  {summary.get('limit_analysis_status')}",
+                flush=True,
+            )
+
+
+def scale(sizes: list[int]) -> None:
+    """Issue 37's table: the package's associative ``limit_analysis`` on walls of ``sizes``
+    blocks in and out of plane, one process a wall: CPU and wall seconds, peak memory
+    (the process's, and what it held before the build), status, lambda, the certified
+    bracket, the backend; then the bound's share of ``masonry-dem run``."""
+    print(
+        f"{'blocks':>7s} {'plane':>5s} {'cpu s':>7s} {'wall s':>7s} {'peak MB':>8s} "
+        f"{'start MB':>8s} {'lambda':>10s} {'bracket':>27s} {'backend':>8s}  solver"
+    )
+    ctx = multiprocessing.get_context("spawn")
+    for blocks in sizes:
+        for plane in ("in", "out"):
+            queue = ctx.Queue()
+            child = ctx.Process(target=_scale_child, args=(blocks, plane, queue))
+            child.start()
+            row = queue.get()
+            child.join()
+            bracket = "-" if row["bracket"] is None else "[{:.7g}, {:.7g}]".format(*row["bracket"])
+            lam = row["lambda"] if row["status"] == "collapse" else None
+            print(
+                f"{row['blocks']:7d} {plane:>5s} {row['cpu']:7.2f} {row['wall']:7.2f} "
+                f"{row['peak_mb']:8.0f} {row['start_mb']:8.0f} {_fmt(lam):>10s} {bracket:>27s} "
+                f"{row['backend']:>8s}  {row['status']}: {row['solver']}",
+                flush=True,
+            )
+    bound_share()
+
+
+#: the generated walls of ``tests/solvers/test_limit_non_associative.py``: the corpus's walls of
+#: at most 29 blocks with a reference collapse (seeds of ``studies.corpus.random_wall``)
+CORPUS_SEEDS = (
+    5, 8, 10, 12, 17, 22, 30, 34, 36, 37, 44, 49, 50, 51, 60, 65, 70, 85, 100, 113, 114,
+    118, 126, 136, 141, 142, 143, 150, 151, 154, 161,
+)  # fmt: skip
+
+
+def corpus_walls(seeds: list[int], within: float = 0.10) -> None:
+    """The non-associative analysis from both starts against the pushover on generated
+    walls: per wall the pushover, each start's lambda (or status), its ratio and seconds;
+    then how many lie within ``within`` of the pushover, per start."""
+    import masonry_dem as md
+    from masonry_dem.studies.corpus import random_wall
+
+    starts = ("elastic", "associative")
+    print(
+        f"{'wall':40s} {'blocks':>6s} {'pushover':>9s}"
+        + "".join(f" {name:>11s} {'ratio':>6s} {'s':>6s}" for name in starts)
+    )
+    tally: dict[str, dict[str, int]] = {name: {} for name in starts}
+    for seed in seeds:
+        wall = random_wall(seed)
+        model = wall.build()
+        push = md.pushover(model).collapse_multiplier
+        line = f"{wall.name[:40]:40s} {model.blocks.count - 1:6d} {_fmt(push):>9s}"
+        for name in starts:
+            r, t = _timed(limit_analysis, model, associative=False, start=name)
+            lam = r.load_factor if r.status == "collapse" else None
+            ratio = lam / push if lam is not None and push else None
+            kind = r.status if lam is None else ("within" if abs(ratio - 1) <= within else "off")
+            tally[name][kind] = tally[name].get(kind, 0) + 1
+            shown = _fmt(lam) if lam is not None else r.status
+            line += f" {shown:>11s} {_fmt(ratio):>6s} {t:6.1f}"
+        print(line, flush=True)
+    for name in starts:
+        counts = ", ".join(f"{k} {v}" for k, v in sorted(tally[name].items()))
+        print(f"start={name!r}: {counts} (within {within:.0%} of the pushover)")
+
+
 def main(argv: list[str] | None = None) -> None:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
     p.add_argument("--grid-study", action="store_true")
@@ -353,7 +562,13 @@ def main(argv: list[str] | None = None) -> None:
         "--clarabel-up-to", type=int, default=20_000, help="largest Clarabel SOCP (speed)"
     )
     p.add_argument("--pushover-up-to", type=int, default=2000, help="largest ladder pushover")
+    p.add_argument("--scale", nargs="*", type=int, default=None, metavar="BLOCKS")
+    p.add_argument("--corpus", nargs="*", type=int, default=None, metavar="SEED")
     args = p.parse_args(argv)
+    if args.corpus is not None:
+        corpus_walls(args.corpus or list(CORPUS_SEEDS))
+    if args.scale is not None:
+        scale(args.scale or [1000, 10000])
     if args.grid_study:
         grid_study()
     if args.cases is not None:
@@ -378,8 +593,10 @@ def main(argv: list[str] | None = None) -> None:
         or args.cone_cases is not None
         or args.ladder is not None
         or args.speed is not None
+        or args.scale is not None
+        or args.corpus is not None
     ):
-        p.print_help()
+        scale([1000, 10000])
 
 
 if __name__ == "__main__":

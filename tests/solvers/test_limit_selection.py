@@ -99,17 +99,23 @@ def test_two_edge_orders_give_the_same_lambda_with_the_selection(small_l_wall, m
     """The same iteration with the pyramid's edges listed from edge 0 and from edge 1: the
     solver's optima settle at lambdas more than 0.5 % apart (0.5793 and 0.5727, measured),
     the nearest optima at the same lambda to 1e-5 (0.599708 both, by columns; 0.599707 both
-    with the full QP)."""
+    with the full QP); from the elastic start (the least-energy optima) the same to 1e-4."""
     real = analysis.pyramid_edges
     got: dict[bool, list[float]] = {False: [], True: []}
+    elastic = []
     for shift in (0, 1):
         monkeypatch.setattr(
             analysis, "pyramid_edges", lambda *a, s=shift: np.roll(real(*a), s, axis=0)
         )
         for near in (False, True):
-            r = limit_analysis(small_l_wall, associative=False, nearest_optimum=near)
+            r = limit_analysis(
+                small_l_wall, associative=False, nearest_optimum=near, start="associative"
+            )
             assert r.status == "collapse", r.reason
             got[near].append(r.load_factor)
+        # the default start's least-energy optima are unique too (a strictly convex energy)
+        elastic.append(limit_analysis(small_l_wall, associative=False).load_factor)
+    assert elastic[1] == pytest.approx(elastic[0], rel=1e-4)
     assert abs(got[False][1] / got[False][0] - 1) > 5e-3
     assert got[True][1] == pytest.approx(got[True][0], rel=1e-5)
 
@@ -128,7 +134,7 @@ def test_the_nearest_optimum_by_columns_is_the_full_qps(small_l_wall, monkeypatc
         return out
 
     monkeypatch.setattr(na, "solve_frozen_columns", capture)
-    limit_analysis(small_l_wall, associative=False, max_iterations=1)
+    limit_analysis(small_l_wall, associative=False, max_iterations=1, start="associative")
     E_n, friction, live, rhs, sol, patterns = got[0]
     its = small_l_wall.interfaces
     m = its.count

@@ -47,22 +47,28 @@ the corners.
 
 Non-associative (zero dilatancy). The scheme of Gilbert, Casapulla & Ahmed (2006), "Limit
 analysis of masonry block structures with non-associative frictional joints using linear
-programming", Computers & Structures 84, 873-887: the friction capacity of each interface
-is frozen at the normal actions of the previous solve (a cohesive, Tresca-like capacity,
-which sliding does not dilate), the LP is solved again, and the capacities are updated
-(under-relaxed) until lambda and the normal actions settle. The frozen capacity is spread
-as the DEM spreads it (Figure 10): a uniform compression ``ft - fn`` on the reduced rectangle
-``l1 - 2|m2|/(ft - fn)`` x ``l2 - 2|m1|/(ft - fn)`` centred on the resultant, integrated at its
-``n x n`` Lobatto points, so the frozen torsion capacity is the DEM's ``cT mu (ft - fn)`` to
-within the quadrature error (the default n is the smallest even n for which it is within
-1 % of the closed form on rectangles up to 4:1, ``benchmarks/bench_limit_analysis.py
---grid-study``). The normal forces stay at the four corners (no tension beyond ft, free
-rocking). Convergence: none is proved (the non-associative problem is not convex and its
-solution need not be unique, and its LPs are degenerate, so the actions may jump between
-equivalent vertices); the iteration stops when its last three lambdas lie within
-``tolerance`` (relative) of each other. Where lambda turns back (it oscillates between
-degenerate LP vertices), the relaxation is halved, down to 1/64, a damping that lets the
-frozen actions settle; the iteration reports ``failed`` with the last lambdas when ``max_iterations`` pass without it.
+programming", Computers & Structures 84, 873-887: the friction capacity of each interface is
+frozen at a set of normal actions (a cohesive, Tresca-like capacity, which sliding does not
+dilate), the LP is solved again, and the capacities are updated (under-relaxed) until lambda
+settles. Which actions: by default (``start="elastic"``) those of least complementary
+energy, the dead load's first, then each frozen LP's optimum elastic joints would take
+(``selection.elastic_state``, ``least_energy_frozen``), not the solver's vertex nor the
+associative collapse, which may hold a self-stress no load path makes. The frozen capacity
+is spread as the DEM spreads it (Figure 10): a uniform compression ``ft - fn`` on the
+reduced rectangle ``l1 - 2|m2|/(ft - fn)`` x ``l2 - 2|m1|/(ft - fn)`` centred on the
+resultant, integrated at its ``n x n`` Lobatto points, so the frozen torsion capacity is the
+DEM's ``cT mu (ft - fn)`` to within the quadrature error (the default n is the smallest even
+n for which it is within 1 % of the closed form on rectangles up to 4:1,
+``benchmarks/bench_limit_analysis.py --grid-study``). The normal forces stay at the four
+corners (no tension beyond ft, free rocking). Convergence: none is proved (the
+non-associative problem is not convex and its solution need not be unique, and its LPs are
+degenerate, so the actions may jump between equivalent vertices); the associative multiplier
+bounds it from above (Radenkovic). The iteration stops when its last three lambdas lie
+within ``tolerance`` (relative) of each other. Where lambda turns back (it oscillates
+between degenerate LP vertices), the relaxation is halved, down to 1/64, a damping that lets
+the frozen actions settle, and doubled back after three steps the same way, so that it does
+not creep; the iteration reports ``failed`` with the last lambdas when ``max_iterations``
+pass without it.
 """
 
 from .analysis import BACKENDS, dem_upper_bound, limit_analysis

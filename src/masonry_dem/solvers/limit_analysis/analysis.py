@@ -19,7 +19,7 @@ from .dead_load import check_dead_load
 from .dem_domain import model_friction_scale
 from .formulation import Problem
 from .interface import ASSOCIATIVE_GRID, NON_ASSOCIATIVE_GRID, lobatto_rule, pyramid_edges
-from .non_associative import non_associative
+from .non_associative import STARTS, non_associative
 from .result import _ADMISSIBILITY_TOLERANCE, LimitAnalysisResult, finish, mechanism_violation
 
 log = logging.getLogger(__name__)
@@ -51,6 +51,7 @@ def limit_analysis(
     column_generation: bool = True,
     nearest_optimum: bool = False,
     time_limit: float = DEFAULT_TIME_LIMIT,
+    start: str = "elastic",
 ) -> LimitAnalysisResult:
     """The collapse multiplier of ``model``'s live load over its dead load, and the mechanism.
 
@@ -71,7 +72,8 @@ def limit_analysis(
             and 2.4 s (docs/limit_analysis.md).
         tolerance, max_iterations, relaxation: the non-associative iteration (the last
             three lambdas within ``tolerance``, relative; the starting under-relaxation of
-            the frozen actions between solves, halved where lambda turns back).
+            the frozen actions between solves, halved where lambda turns back and doubled
+            back, to it at most, after three steps the same way).
         friction_scale: a factor (>= 1) on every joint's friction. ``dem_friction_scale``
             of the model's alpha makes the LA domain contain the DEM's, so the associative
             multiplier is an upper bound of the pushover's by Radenkovic's theorem (the
@@ -92,6 +94,12 @@ def limit_analysis(
             is left of it as its own time limit, and each has an iteration limit too
             (``budget``); a solve they stop ends "failed", naming the limit, with no
             multiplier.
+        start: where the non-associative iteration freezes its first capacities:
+            "elastic" (default), the joints' actions under the dead load of least
+            complementary energy (``selection.elastic_state``: the state of the DEM's
+            elastic joints, no self-stress), or "associative", the associative collapse
+            (Gilbert et al. 2006), whose dilatant self-stress the iteration may keep.
+            Ignored when associative.
 
     Returns a :class:`LimitAnalysisResult`; solver trouble is a status, never an exception
     (bad arguments raise ValueError naming the argument).
@@ -130,6 +138,8 @@ def limit_analysis(
         raise ValueError(f"column_generation must be True or False, got {column_generation!r}")
     if not isinstance(nearest_optimum, (bool, np.bool_)):
         raise ValueError(f"nearest_optimum must be True or False, got {nearest_optimum!r}")
+    if start not in STARTS:
+        raise ValueError(f"start must be one of {STARTS}, got {start!r}")
     if (
         isinstance(time_limit, (bool, np.bool_))
         or not isinstance(time_limit, (int, float, np.integer, np.floating))
@@ -209,6 +219,7 @@ def limit_analysis(
             result,
             bool(column_generation),
             bool(nearest_optimum),
+            start,
         )
 
 

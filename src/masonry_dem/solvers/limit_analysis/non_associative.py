@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import logging
+from dataclasses import replace
 
 import numpy as np
 from scipy import sparse
@@ -16,12 +17,25 @@ from .columns import FrozenFriction, Patterns, full_lp, solve_frozen_columns, so
 from .formulation import Problem, Solution, associative_columns
 from .interface import ASSOCIATIVE_GRID, grid_points, lobatto_rule, resultant_columns
 from .result import LimitAnalysisResult, finish
-from .selection import action_weights, nearest_by_columns, nearest_optimum
+from .selection import (
+    LAMBDA_SLACK,
+    action_weights,
+    elastic_state,
+    least_energy_frozen,
+    nearest_by_columns,
+    nearest_optimum,
+)
 
 log = logging.getLogger(__name__)
 
-#: the non-associative iteration halves its relaxation each time lambda turns back, down to
+#: the non-associative iteration halves its relaxation each time lambda turns back (and
+#: doubles it, up to the given one, after three steps the same way), down to
 _SMALLEST_RELAXATION = 1.0 / 64
+#: where the iteration's frozen actions start: the joints' elastic state under the dead load
+#: (``selection.elastic_state``), or the associative collapse (Gilbert et al. 2006)
+STARTS = ("elastic", "associative")
+#: unit shear forces (t1, t2, n) along the interface's two axes
+_PLANE_SHEAR = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
 
 
 # --------------------------------------------------------------------------- non-associative
@@ -59,8 +73,9 @@ def non_associative(
     result,
     column_generation: bool = True,
     nearest: bool = False,
+    start: str = "elastic",
 ) -> LimitAnalysisResult:
-    """The iteration on frozen capacities from the associative start. With HiGHS (``dirs``
+    """The iteration on frozen capacities, from ``start`` (``STARTS``). With HiGHS (``dirs``
     the pyramid's edges), each frozen-capacity LP is solved by ``column_generation``
     (``columns``: the same optimum on a master of a few thousand columns, started from
     the previous iteration's patterns) or, False, in full; ``nearest``: then, among its
@@ -68,9 +83,13 @@ def non_associative(
     (``selection``), so that the answer does not depend on the order of the columns."""
     model = problem.model
     m = model.interfaces.count
-    start, size = solve_associative(problem, ASSOCIATIVE_GRID, dirs)
-    if start.status != "optimal":
-        return finish(problem, start, size, result, iterations=1, load_factors=())
+    start_relaxation = relaxation
+    first, size = solve_associative(problem, ASSOCIATIVE_GRID, dirs)
+    if first.status != "optimal":
+        return finish(problem, first, size, result, iterations=1, load_factors=())
+    # the associative multiplier bounds every zero-dilatancy one of the same cone from above
+    # (Radenkovic's first theorem): the proven side of the estimate
+    upper = float(first.lam)
     select_rows, select_weights = action_weights(model.interfaces.l1, model.interfaces.l2)
     selections = selection_rounds = 0
     if nearest and dirs is not None:
@@ -79,13 +98,20 @@ def non_associative(
         R0, _ = associative_columns(model, ASSOCIATIVE_GRID, dirs)
         A0 = (sparse.diags(select_weights) @ R0.tocsr()[select_rows]).tocsr()
         E0 = (problem.H_T @ R0).tocsc()
-        first = nearest_optimum(
-            E0, problem.live, problem.rhs, None, start.lam, A0, np.zeros(len(select_rows))
+        least = nearest_optimum(
+            E0, problem.live, problem.rhs, None, first.lam, A0, np.zeros(len(select_rows))
         )
-        if first.status == "optimal":
-            start.info_actions = (problem.a0 + R0 @ first.x).reshape(-1, 6)  # type: ignore[attr-defined]
+        if least.status == "optimal":
+            first.info_actions = (problem.a0 + R0 @ least.x).reshape(-1, 6)  # type: ignore[attr-defined]
             selections += 1
-    actions = start.info_actions  # type: ignore[attr-defined]
+    actions = first.info_actions  # type: ignore[attr-defined]
+    if start == "elastic":
+        rest = elastic_state(problem)
+        if rest is None:
+            log.debug("no elastic dead-load state: the iteration starts from the associative")
+            start = "associative"
+        else:
+            actions = rest
     # the normal forces at the corners (rocking, tension) stay associative
     corners, _ = grid_points(model.interfaces.l1, model.interfaces.l2, 2)
     iface4 = np.repeat(np.arange(m), 4)
@@ -93,10 +119,10 @@ def non_associative(
     normal[:, 2] = -1.0
     R_n = resultant_columns(corners.reshape(-1, 2), normal, iface4, m)
     lams: list[float] = []
-    sol = start
+    sol = first
     patterns: Patterns | None = None
     rounds = columns = full_lps = 0
-    kw: dict = {}
+    kw: dict = {"info": {"associative": upper, "start": start}}
     for it in range(1, max_iterations + 1):
         if spent():  # the analysis's time budget (``budget``), between two solves
             detail = f"its time ran out after {it - 1} non-associative solves"
@@ -139,7 +165,7 @@ def non_associative(
                 rounds += stats.rounds
                 columns = stats.columns
                 full_lps += stats.full
-                kw["info"] = {"pricing_rounds": rounds, "patterns": columns, "full_lps": full_lps}
+                kw["info"].update(pricing_rounds=rounds, patterns=columns, full_lps=full_lps)
             else:
                 sol = solve_frozen_full(E, friction, problem.live, problem.rhs)
             if sol.status == "infeasible":
@@ -163,7 +189,7 @@ def non_associative(
                     selections += 1
                 else:
                     log.debug("non-associative iteration %d: %s", it, chosen.detail)
-                kw.setdefault("info", {})["nearest_optima"] = selections
+                kw["info"]["nearest_optima"] = selections
                 kw["info"]["selection_rounds"] = selection_rounds
         if dirs is None:
             size = (E.shape[1] + 1, E.shape[0])
@@ -174,15 +200,46 @@ def non_associative(
         new = (problem.a0 + R @ sol.x).reshape(-1, 6)
         sol.info_actions = new  # type: ignore[attr-defined]
         lams.append(sol.lam)
+        if start == "elastic":
+            # the next capacities from the optimum elastic joints would take (least
+            # complementary energy), not from the solver's, one of many, which may hold a
+            # self-stress no load path makes; a shade below lambda, where the frozen
+            # capacities hold more than the optimal face. The frozen capacity at the
+            # reduced rectangle's corners only (grid 2): the same shear, more torsion, so
+            # every LP optimum is among its states, on a sixteenth of the cones
+            pts2, cap2 = frozen_layout(model, actions, 2)
+            shear2 = np.tile(_PLANE_SHEAR, (4 * m, 1))
+            R_st = resultant_columns(
+                np.repeat(pts2.reshape(-1, 2), 2, axis=0), shear2, np.repeat(iface4, 2), m
+            )
+            # with the pyramid, the circle through its edges holds every LP optimum
+            rho = 1.0 if dirs is None else float(np.hypot(*dirs[0]))
+            radius = rho * np.repeat(model.friction, 4) * cap2.ravel()
+            state = least_energy_frozen(problem, R_n, R_st, radius, sol.lam * (1 - LAMBDA_SLACK))
+            if state is not None:
+                new = state
         # the LPs are degenerate: the actions may jump between equivalent vertices while
         # lambda settles, so the test is on lambda (its last three values)
         last = lams[-3:]
         settled = len(last) == 3 and max(last) - min(last) <= tolerance * max(abs(last[-1]), 1e-12)
         log.debug("non-associative iteration %d: lambda = %.6g", it, sol.lam)
         if settled:
-            return finish(problem, sol, size, result, iterations=it, load_factors=tuple(lams), **kw)
+            note = proven(sol.lam, upper)
+            if sol.lam > upper:  # a state no Coulomb joint carries: the proven side instead
+                note = (
+                    f"the iteration settled at {sol.lam:.6g}, above the associative multiplier, "
+                    "which bounds every zero-dilatancy one of the same cone (Radenkovic): "
+                    "lambda is that bound, a heuristic estimate"
+                )
+                sol.lam = upper
+            out = finish(problem, sol, size, result, iterations=it, load_factors=tuple(lams), **kw)
+            return replace(out, reason=f"{out.reason}; {note}")
         if len(lams) > 2 and (lams[-1] - lams[-2]) * (lams[-2] - lams[-3]) < 0:
             relaxation = max(relaxation / 2, _SMALLEST_RELAXATION)  # it oscillates: damp it
+        elif len(lams) > 3 and np.all(np.diff(lams[-4:]) * (lams[-1] - lams[-2]) > 0):
+            # three steps the same way: the damping outlived the oscillation, and a small
+            # relaxation creeps towards the fixed point by a few per mille a solve
+            relaxation = min(2 * relaxation, start_relaxation)
         actions = actions + relaxation * (new - actions)
     tail = ", ".join(f"{x:.5g}" for x in lams[-4:])
     return result(
@@ -195,4 +252,13 @@ def non_associative(
         variables=size[0],
         constraints=size[1],
         **kw,
+    )
+
+
+def proven(lam: float, upper: float) -> str:
+    """What is proven of a non-associative multiplier, in one clause of the reason."""
+    return (
+        "a heuristic estimate (no theorem bounds the zero-dilatancy multiplier from below, "
+        f"and the iteration is not proved to converge): the associative {upper:.6g} bounds "
+        f"it from above (Radenkovic), {upper / lam - 1:+.1%} from this"
     )

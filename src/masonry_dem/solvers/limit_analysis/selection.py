@@ -28,9 +28,12 @@ import logging
 import numpy as np
 from scipy import sparse
 
+from masonry_dem.model import Model
+
 from .budget import CLARABEL_ITERATIONS, solver_seconds
 from .columns import FrozenFriction, Patterns, edge_multipliers, full_lp
-from .formulation import Solution
+from .formulation import Problem, Solution, associative_columns
+from .interface import ASSOCIATIVE_GRID, pyramid_edges
 
 log = logging.getLogger(__name__)
 
@@ -200,3 +203,103 @@ def nearest_by_columns(
     E, C = full_lp(E_n, friction)
     A = sparse.hstack([A_n, sparse.csr_matrix((r, friction.E_s.shape[1]))], format="csr")
     return nearest_optimum(E, live, rhs, (C, friction.cap), lam, A, target), MAX_SELECTION_ROUNDS
+
+
+def elastic_state(problem: Problem) -> np.ndarray | None:
+    """The joints' actions (m, 6) under the dead load as elastic joints carry them: among
+    the statically admissible actions (equilibrium at lambda = 0, the corners' compressions
+    in the 8-face pyramid), the one of least complementary energy
+
+        sum_i f1^2 / kt A + f2^2 / kt A + fn^2 / kn A + 12 m1^2 / kn A l2^2
+              + 12 m2^2 / kn A l1^2 + 12 m3^2 / kt A (l1^2 + l2^2)
+
+    (a closed joint of stiffness kn, kt per unit area on its l1 x l2 rectangle, A = l1 l2;
+    the theorem of least complementary energy, Menabrea's, with the no-tension and friction
+    limits as constraints). It holds no self-stress the dead load does not force on elastic
+    joints: a head joint between blocks that stand on their own carries nothing. None where
+    Clarabel fails."""
+    model = problem.model
+    weights = energy_weights(model)
+    R, _ = associative_columns(model, ASSOCIATIVE_GRID, pyramid_edges(8, "circumscribed"))
+    A = (sparse.diags(weights) @ R.tocsr()).tocsr()
+    E = (problem.H_T @ R).tocsc()
+    # lambda has no column to act on (a zero live load): the dead load's equilibrium
+    no_live = np.zeros_like(problem.live)
+    sol = nearest_optimum(E, no_live, problem.rhs, None, 0.0, A, -weights * problem.a0)
+    if sol.status != "optimal":
+        log.debug("the elastic dead-load state: %s", sol.detail)
+        return None
+    return (problem.a0 + R @ sol.x).reshape(-1, 6)
+
+
+def energy_weights(model: Model) -> np.ndarray:
+    """(6m,) w with the joints' complementary energy ``|w * a|^2`` (up to a constant factor)
+    for the actions a (:func:`elastic_state`), scaled to a largest weight of one."""
+    its = model.interfaces
+    area = its.l1 * its.l2
+    n = 1.0 / np.sqrt(np.asarray(model.kn, dtype=float) * area)
+    t = 1.0 / np.sqrt(np.asarray(model.kt, dtype=float) * area)
+    r12 = np.sqrt(12.0)
+    weights = np.column_stack(
+        [t, t, n, r12 * n / its.l2, r12 * n / its.l1, r12 * t / np.hypot(its.l1, its.l2)]
+    ).ravel()
+    return weights / weights.max()  # only the ratios matter; order one for Clarabel
+
+
+def least_energy_frozen(
+    problem: Problem,
+    R_n: sparse.csc_matrix,
+    R_s: sparse.csc_matrix,
+    radius: np.ndarray,
+    lam: float,
+) -> np.ndarray | None:
+    """Among the actions ``a = a0 + R_n c + R_s t`` in equilibrium at ``lam`` with the
+    corner compressions ``c >= 0`` and every point's shear ``|t_p| <= radius_p`` (its frozen
+    capacity), the one of least complementary energy (:func:`elastic_state`'s): the
+    mechanical choice among the optima of a frozen LP held at its lambda, as elastic joints
+    would share the load. ``R_s`` has two columns a point (t1, t2). A convex QP by Clarabel;
+    (m, 6) actions, or None where it fails."""
+    try:
+        import clarabel
+    except ImportError:  # pragma: no cover - declared dependency
+        return None
+    model = problem.model
+    weights = energy_weights(model)
+    n_eq = problem.H_T.shape[0]
+    nn, p = R_n.shape[1], R_s.shape[1] // 2
+    r = weights.size
+    R = sparse.hstack([R_n, R_s], format="csr")
+    k = nn + 2 * p
+    # t stored per point as (t1, t2); the cone rows (radius, t1, t2) per point
+    pts = np.arange(p)
+    cone_rows = np.concatenate([3 * pts + 1, 3 * pts + 2])
+    cone_cols = nn + np.concatenate([2 * pts, 2 * pts + 1])
+    G = sparse.csc_matrix((-np.ones(2 * p), (cone_rows, cone_cols)), shape=(3 * p, k + r))
+    h = np.zeros(3 * p)
+    h[3 * pts] = radius
+    M = sparse.vstack(
+        [
+            sparse.hstack([problem.H_T @ R, sparse.csc_matrix((n_eq, r))]),
+            sparse.hstack([sparse.diags(weights) @ R, -sparse.identity(r)]),
+            sparse.hstack([-sparse.identity(nn), sparse.csc_matrix((nn, 2 * p + r))]),
+            G,
+        ],
+        format="csc",
+    )
+    M.sort_indices()
+    b = np.concatenate([problem.rhs + lam * problem.live, -weights * problem.a0, np.zeros(nn), h])
+    cones = [clarabel.ZeroConeT(n_eq + r), clarabel.NonnegativeConeT(nn)]
+    cones += [clarabel.SecondOrderConeT(3)] * p
+    d = k + np.arange(r)
+    P = sparse.csc_matrix((np.ones(r), (d, d)), shape=(k + r, k + r))
+    settings = clarabel.DefaultSettings()
+    settings.verbose = False
+    settings.direct_solve_method = "qdldl"
+    settings.max_iter = CLARABEL_ITERATIONS
+    settings.time_limit = solver_seconds()
+    out = clarabel.DefaultSolver(P, np.zeros(k + r), M, b, cones, settings).solve()
+    if str(out.status) not in ("Solved", "AlmostSolved"):
+        log.debug("the least-energy optimum: Clarabel %s", out.status)
+        return None
+    x = np.asarray(out.x)[:k]
+    return (problem.a0 + R @ x).reshape(-1, 6)
