@@ -276,8 +276,10 @@ def certify(
         else:
             mode_found, mode, mode_vector, live_work = False, "none", None, 0.0
     # where the tangent and the curve show no mode, the direction of the instability rule's
-    # motion past the displacement limit is the mode
-    if not mode_found and run_off is not None:
+    # motion past the displacement limit is the mode; not at a stop of the path by that
+    # limit, where a curve still rising has left the small-displacement range (soft joints,
+    # or a limit the elastic wall passes): there the motion measures the deflection
+    if not mode_found and run_off is not None and hist.stop is not StopReason.DISPLACEMENT_LIMIT:
         direction = run_off[free]
         size = float(np.abs(direction[problem.translation]).max(initial=0.0))
         if size > 0:
@@ -441,14 +443,15 @@ def _full(problem: DiscreteProblem, x: np.ndarray) -> np.ndarray:
 
 
 def law_state_before(problem: DiscreteProblem, hist: History, index: int):
-    """(plastic part, cracked joints) that step ``index`` of the path was found with: the
-    joints detached at the steps before it (brittle tension), the plastic part stored at
-    the step before it (memory of slip); or, for a rest of the damped motion under the
-    incremental law, the law state kept with the step."""
+    """(plastic part, cracked joints) that step ``index`` of the path was found with (or a
+    step after the last would be): the joints detached at the steps before it (brittle
+    tension), the plastic part stored at the step before it (memory of slip); or, for a rest
+    of the damped motion under the incremental law, the law state kept with the step."""
     law = problem.law
-    found = hist.steps[index]
-    if found.found_plastic is not None and found.found_cracked is not None:
-        return found.found_plastic, found.found_cracked
+    if index < len(hist.steps):
+        found = hist.steps[index]
+        if found.found_plastic is not None and found.found_cracked is not None:
+            return found.found_plastic, found.found_cracked
     m = problem.model.interfaces.count
     cracked = np.zeros(m, dtype=bool)
     if law.tension == "brittle" and index > 0:
