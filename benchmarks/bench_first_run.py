@@ -9,9 +9,10 @@ NUMBA_CACHE_DIR on an empty folder (cold: every kernel compiles), then again on 
 seconds of the whole command (interpreter start, imports, compilation, analysis, files,
 renders), the compilation's share and the ratio cold / warm, and with ``--ref`` the same for
 that commit (checked out into a temporary git worktree), in one run, so the machine's load is
-the same for both. ``--python`` runs this tree with another interpreter where the package is
-installed (a fresh venv: ``python3 -m venv /tmp/fresh && /tmp/fresh/bin/pip install .``)
-instead of this tree's ``src`` on PYTHONPATH.
+the same for both. ``--python`` also runs the package installed for another interpreter (a
+fresh venv: ``python3 -m venv /tmp/fresh && /tmp/fresh/bin/pip install .``), whose kernels
+were compiled when it was built (setup.py): its cold run is the first run on a fresh install;
+this tree's ``src`` on PYTHONPATH has no kernels compiled at build and compiles them.
 """
 
 from __future__ import annotations
@@ -66,10 +67,9 @@ def main() -> int:
                 check=True,
             )
             trees[args.ref[:10]] = (sys.executable, worktree / "src")
+        trees["this tree (src)"] = (sys.executable, ROOT / "src")
         if args.python:
             trees["this tree (installed)"] = (args.python, None)
-        else:
-            trees["this tree"] = (sys.executable, ROOT / "src")
         try:
             best: dict[str, dict[str, float]] = {name: {} for name in trees}
             for r in range(args.repeat):

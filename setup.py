@@ -1,0 +1,58 @@
+"""Building the package also compiles its numba kernels (masonry_dem.jit), so that the first
+analysis after ``pip install .`` loads them instead of compiling them. Everything else is in
+pyproject.toml."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+from setuptools import setup
+from setuptools.command.build_py import build_py
+
+# the kernels of both variants (serial: walls below 300 interfaces; parallel) and those compiled
+# on their first call, into numba's cache in a temporary folder, then copied into the package
+_COMPILE = """
+import sys
+from pathlib import Path
+from masonry_dem import jit
+from masonry_dem.solvers.warmup import compile_kernels
+for parallel in (False, True):
+    compile_kernels(parallel, lazy=True)
+print(jit.copy_compiled(Path(sys.argv[1])))
+"""
+
+
+class BuildWithKernels(build_py):
+    """build_py, then the kernels compiled into the built package (not for an editable
+    install, whose kernels compile into numba's cache on first use). A failure leaves the
+    package without them: it works as before, compiling on first use."""
+
+    def run(self) -> None:
+        super().run()
+        if self.editable_mode:
+            return
+        lib = Path(self.build_lib).resolve()
+        with tempfile.TemporaryDirectory() as cache:
+            # the build environment's packages (pip's build isolation) stay on the path
+            path = os.pathsep.join(p for p in (str(lib), os.environ.get("PYTHONPATH")) if p)
+            env = dict(os.environ, NUMBA_CACHE_DIR=cache, PYTHONPATH=path)
+            target = lib / "masonry_dem" / "_compiled"
+            done = subprocess.run(
+                [sys.executable, "-c", _COMPILE, str(target)],
+                env=env,
+                capture_output=True,
+                text=True,
+                check=False,
+            )
+        if done.returncode == 0:
+            print(f"masonry_dem: {done.stdout.strip()} kernel files compiled into {target}")
+        else:
+            tail = done.stderr.strip().splitlines()[-1:]
+            print(f"masonry_dem: kernels not compiled at build ({tail}); they compile on first use")
+
+
+setup(cmdclass={"build_py": BuildWithKernels})
