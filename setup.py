@@ -13,15 +13,16 @@ from pathlib import Path
 from setuptools import setup
 from setuptools.command.build_py import build_py
 
-# the kernels of both variants (serial: walls below 300 interfaces; parallel) and those compiled
-# on their first call, into numba's cache in a temporary folder, then copied into the package
+# the kernels every analysis of a wall below 300 interfaces uses (their serial variants), into
+# numba's cache in a temporary folder, then copied into the package. The parallel variants
+# (larger walls) and the kernels most analyses never call would more than double the build's
+# time: they compile on first use, announced, or with `masonry-dem warmup`.
 _COMPILE = """
 import sys
 from pathlib import Path
 from masonry_dem import jit
 from masonry_dem.solvers.warmup import compile_kernels
-for parallel in (False, True):
-    compile_kernels(parallel, lazy=True)
+compile_kernels(parallel=False)
 print(jit.copy_compiled(Path(sys.argv[1])))
 """
 

@@ -13,9 +13,10 @@ Every compiled kernel is built by :func:`kernel`. What it adds to ``numba.njit``
   holds a hash of :data:`KERNEL_SOURCES`, and so does the stamp that tells a cache file is
   fresh (numba's is the source file's time, which an installation or a checkout changes).
 * **Kernels compiled at installation.** Building the package (``pip install .``: setup.py)
-  compiles every kernel on the machine that installs it and copies its cache files into the
-  package (:data:`INSTALLED`, :func:`copy_compiled`); a kernel found in neither numba's cache
-  nor there (another numba, another CPU, an editable install) is compiled on first use.
+  compiles the serial variants of the eager kernels on the machine that installs it and copies
+  their cache files into the package (:data:`INSTALLED`, :func:`copy_compiled`); a kernel
+  found in neither numba's cache nor there (a parallel or lazy one, another numba or CPU, an
+  editable install) is compiled on first use.
 * **Word before the wait.** :func:`compile_pending` says which kernels a run will compile (their
   cache is empty or stale) and :func:`announce_compilation` logs "compiling kernels, once per
   machine, about N s" before it happens; ``masonry-dem warmup`` compiles them ahead.
@@ -331,9 +332,9 @@ def announce_compilation(interfaces: int, processes: int = 1) -> float:
 
 
 def copy_compiled(target: Path) -> int:
-    """Copy the cache files of every kernel variant (index and compiled code, from numba's
-    cache) into ``target``, where :data:`INSTALLED` of an installed package finds them;
-    returns the number of files."""
+    """Copy the cache files numba's cache holds for the kernels (index and compiled code of
+    each variant compiled) into ``target``, where :data:`INSTALLED` of an installed package
+    finds them; returns the number of files."""
     target.mkdir(parents=True, exist_ok=True)
     copied = 0
     for k in kernels():
