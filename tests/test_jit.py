@@ -3,10 +3,12 @@ keyed on every kernel file, and a compilation is announced before it happens."""
 
 from __future__ import annotations
 
+import hashlib
 import logging
 import os
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -78,6 +80,12 @@ def test_the_cache_key_holds_every_kernel_file():
     )
     assert key[-1] == jit._sources_hash()
     assert {p.name for p in jit.KERNEL_SOURCES} >= {"check_kernels.py", "law_kernels.py"}
+    # a cache file is fresh by these hashes and its own file's (the callees there), not by
+    # the file's time, which an installation changes
+    from masonry_dem.solvers.static import problem
+
+    own = hashlib.sha256(Path(problem.__file__).read_bytes()).hexdigest()
+    assert problem._assemble_tangent.serial._cache._stamp == (jit._sources_hash(), own)
 
 
 def test_a_compilation_is_announced_before_it_happens(monkeypatch, caplog):

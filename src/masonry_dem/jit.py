@@ -10,8 +10,9 @@ Every compiled kernel is built by :func:`kernel`. What it adds to ``numba.njit``
 * **A disk cache keyed on every kernel file.** Numba renews a function's cache when the
   function's own file changes, not when a callee's file does; the kernels of the interface law
   call the strength check's row functions in another file, so the key of every kernel here also
-  holds a hash of :data:`KERNEL_SOURCES`, and so does the stamp that tells a cache file is
-  fresh (numba's is the source file's time, which an installation or a checkout changes).
+  holds a hash of :data:`KERNEL_SOURCES`. The stamp that tells a cache file is fresh is that
+  hash and the kernel's own file's (numba's is that file's time, which an installation or a
+  checkout changes).
 * **Kernels compiled at installation.** Building the package (``pip install .``: setup.py)
   compiles the serial variants of the eager kernels on the machine that installs it and copies
   their cache files into the package (:data:`INSTALLED`, :func:`copy_compiled`); a kernel
@@ -25,6 +26,7 @@ Every compiled kernel is built by :func:`kernel`. What it adds to ``numba.njit``
 from __future__ import annotations
 
 import hashlib
+import inspect
 import logging
 import os
 import shutil
@@ -91,17 +93,21 @@ INSTALLED: Final[Path] = _PACKAGE / "_compiled"
 
 
 class _KernelCache(FunctionCache):  # type: ignore[misc]
-    """numba's function cache with the hash of every kernel file in its key and its stamp,
-    which reads what it lacks from :data:`INSTALLED`."""
+    """numba's function cache with the hash of every kernel file in its key, and in its stamp
+    with the hash of the kernel's own file (its callees there); it reads what it lacks from
+    :data:`INSTALLED`."""
 
     def __init__(self, py_func: Callable[..., Any]) -> None:
         super().__init__(py_func)
-        base = self._impl.filename_base
-        self._cache_file = IndexDataCacheFile(self._cache_path, base, _SOURCES_HASH)
+        own = hashlib.sha256(Path(inspect.getfile(py_func)).read_bytes()).hexdigest()
+        self._stamp = (_SOURCES_HASH, own)
+        self._cache_file = IndexDataCacheFile(
+            self._cache_path, self._impl.filename_base, self._stamp
+        )
 
     def installed(self) -> IndexDataCacheFile:
         """The kernel's cache files in :data:`INSTALLED`."""
-        return IndexDataCacheFile(str(INSTALLED), self._impl.filename_base, _SOURCES_HASH)
+        return IndexDataCacheFile(str(INSTALLED), self._impl.filename_base, self._stamp)
 
     def _index_key(self, sig: Any, codegen: Any) -> tuple[Any, ...]:
         return (*super()._index_key(sig, codegen), _SOURCES_HASH)
