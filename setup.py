@@ -53,7 +53,10 @@ class BuildWithKernels(build_py):
             print(f"masonry_dem: {done.stdout.strip()} kernel files compiled into {target}")
         else:
             tail = done.stderr.strip().splitlines()[-1:]
-            print(f"masonry_dem: kernels not compiled at build ({tail}); they compile on first use")
+            print(
+                f"masonry_dem: kernels not compiled at build ({tail}); they compile on first use",
+                file=sys.stderr,
+            )
 
 
 setup(cmdclass={"build_py": BuildWithKernels})
