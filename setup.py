@@ -5,6 +5,7 @@ pyproject.toml."""
 from __future__ import annotations
 
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -37,11 +38,14 @@ class BuildWithKernels(build_py):
         if self.editable_mode:
             return
         lib = Path(self.build_lib).resolve()
+        target = lib / "masonry_dem" / "_compiled"
+        shutil.rmtree(target, ignore_errors=True)  # a former build's, in a reused build folder
         with tempfile.TemporaryDirectory() as cache:
-            # the build environment's packages (pip's build isolation) stay on the path
+            # the build environment's packages (pip's build isolation) stay on the path; no
+            # bytecode files written into the package built
             path = os.pathsep.join(p for p in (str(lib), os.environ.get("PYTHONPATH")) if p)
             env = dict(os.environ, NUMBA_CACHE_DIR=cache, PYTHONPATH=path)
-            target = lib / "masonry_dem" / "_compiled"
+            env["PYTHONDONTWRITEBYTECODE"] = "1"
             done = subprocess.run(
                 [sys.executable, "-c", _COMPILE, str(target)],
                 env=env,
