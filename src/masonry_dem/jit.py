@@ -69,7 +69,7 @@ KERNEL_SOURCES: Final[tuple[Path, ...]] = (
 )
 
 #: seconds to compile the kernels of one analysis on an idle core (2-core AMD EPYC, see
-#: docs/first_run.md): serial variants (every wall) and the parallel ones (walls of
+#: docs/history/first_run_record.md): serial variants (every wall) and the parallel ones (walls of
 #: SERIAL_BELOW interfaces or more) on top
 COMPILE_SECONDS: Final[dict[str, float]] = {"serial": 15.0, "parallel": 12.0}
 
