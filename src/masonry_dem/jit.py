@@ -69,8 +69,8 @@ KERNEL_SOURCES: Final[tuple[Path, ...]] = (
 )
 
 #: seconds to compile the kernels of one analysis on an idle core (2-core AMD EPYC, see
-#: docs/history/first_run_record.md): serial variants (every wall) and the parallel ones (walls of
-#: SERIAL_BELOW interfaces or more) on top
+#: docs/history/first_run_record.md): serial variants (every wall) and the parallel ones
+#: (walls of SERIAL_BELOW interfaces or more) on top
 COMPILE_SECONDS: Final[dict[str, float]] = {"serial": 15.0, "parallel": 12.0}
 
 
