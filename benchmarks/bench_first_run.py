@@ -1,6 +1,6 @@
 """Benchmark: the first `masonry-dem run` on a machine (empty numba cache) against a warm one.
 
-Run:  python benchmarks/bench_first_run.py [--ref 5133bd5] [--python /tmp/fresh/bin/python]
+Run:  python benchmarks/bench_first_run.py [--ref 5133bd5] [--python /tmp/fresh/bin/python ...]
                                            [--repeat 2] [--case CASE]
 
 Each tree runs the bundled default wall (or CASE) in fresh processes: first with
@@ -9,9 +9,11 @@ NUMBA_CACHE_DIR on an empty folder (cold: every kernel compiles), then again on 
 seconds of the whole command (interpreter start, imports, compilation, analysis, files,
 renders), the compilation's share and the ratio cold / warm, and with ``--ref`` the same for
 that commit (checked out into a temporary git worktree), in one run, so the machine's load is
-the same for both. ``--python`` runs this tree with another interpreter where the package is
-installed (a fresh venv: ``python3 -m venv /tmp/fresh && /tmp/fresh/bin/pip install .``)
-instead of this tree's ``src`` on PYTHONPATH.
+the same for both. ``--python`` (repeatable) also runs the package installed for another
+interpreter (a fresh venv: ``python3 -m venv /tmp/fresh && /tmp/fresh/bin/pip install .``),
+whose kernels were compiled when it was built (setup.py): its cold run is the first run on a
+fresh install; this tree's ``src`` on PYTHONPATH has no kernels compiled at build and compiles
+them. Give the venv of an older commit too to compare installations in the same run.
 """
 
 from __future__ import annotations
@@ -42,7 +44,9 @@ def _run(python: str, src: Path | None, cache: Path, out: Path, case: str | None
 def main() -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--ref", default=None, help="a commit to compare with (hash, tag, branch)")
-    p.add_argument("--python", default=None, help="interpreter with the package installed")
+    p.add_argument(
+        "--python", action="append", default=[], help="interpreter with the package installed"
+    )
     p.add_argument("--repeat", type=int, default=1, help="cold and warm runs per tree")
     p.add_argument("--case", default=None, help="case file (default: the bundled wall)")
     args = p.parse_args()
@@ -66,10 +70,9 @@ def main() -> int:
                 check=True,
             )
             trees[args.ref[:10]] = (sys.executable, worktree / "src")
-        if args.python:
-            trees["this tree (installed)"] = (args.python, None)
-        else:
-            trees["this tree"] = (sys.executable, ROOT / "src")
+        trees["this tree (src)"] = (sys.executable, ROOT / "src")
+        for python in args.python:
+            trees[f"installed: {python}"] = (python, None)
         try:
             best: dict[str, dict[str, float]] = {name: {} for name in trees}
             for r in range(args.repeat):
@@ -82,12 +85,16 @@ def main() -> int:
                     row = best[name]
                     row["cold"] = min(row.get("cold", cold), cold)
                     row["warm"] = min(row.get("warm", warm), warm)
+            width = max(len(name) for name in trees)
             print(
-                f"{'tree':24s} {'cold s':>8s} {'warm s':>8s} {'compile s':>10s} {'cold/warm':>10s}"
+                f"{'tree':{width}s} {'cold s':>8s} {'warm s':>8s} {'compile s':>10s} "
+                f"{'cold/warm':>10s}"
             )
             for name, row in best.items():
                 cold, warm = row["cold"], row["warm"]
-                print(f"{name:24s} {cold:8.1f} {warm:8.1f} {cold - warm:10.1f} {cold / warm:9.2f}x")
+                print(
+                    f"{name:{width}s} {cold:8.1f} {warm:8.1f} {cold - warm:10.1f} {cold / warm:9.2f}x"
+                )
         finally:
             if args.ref:
                 subprocess.run(

@@ -3,9 +3,12 @@ keyed on every kernel file, and a compilation is announced before it happens."""
 
 from __future__ import annotations
 
+import hashlib
 import logging
+import os
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -77,6 +80,12 @@ def test_the_cache_key_holds_every_kernel_file():
     )
     assert key[-1] == jit._sources_hash()
     assert {p.name for p in jit.KERNEL_SOURCES} >= {"check_kernels.py", "law_kernels.py"}
+    # a cache file is fresh by these hashes and its own file's (the callees there), not by
+    # the file's time, which an installation changes
+    from masonry_dem.solvers.static import problem
+
+    own = hashlib.sha256(Path(problem.__file__).read_bytes()).hexdigest()
+    assert problem._assemble_tangent.serial._cache._stamp == (jit._sources_hash(), own)
 
 
 def test_a_compilation_is_announced_before_it_happens(monkeypatch, caplog):
@@ -125,9 +134,36 @@ def test_the_warm_up_compiles_the_zero_capacity_reduction():
         "from masonry_dem.solvers.warmup import _run_group; "
         "from masonry_dem.solvers.static import problem; "
         "_run_group('tangent', False); "
-        "print(len(problem._reduce_zero_capacity.signatures))"
+        "print(len(problem._reduce_zero_capacity.serial.signatures))"
     )
     out = subprocess.run(
         [sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=600
     )
     assert int(out.stdout.split()[-1]) >= 1
+
+
+def test_kernels_compiled_at_build_are_loaded_not_compiled(tmp_path):
+    """What setup.py does: the cache files of compiled kernels copied into a folder
+    (``jit.copy_compiled``) are found there by a process whose numba cache is empty, where
+    the package is installed elsewhere and its files have other times: it loads the kernel
+    and compiles nothing."""
+    from masonry_dem.constitutive.energy_return import row_constants
+
+    row_constants.serial(np.ones(2), np.ones(2), np.full(2, 1.5), np.ones(2))
+    shipped = tmp_path / "compiled"
+    assert jit.copy_compiled(shipped) >= 2  # at least this kernel's index and code
+    code = (
+        "import sys; from pathlib import Path; import numpy as np; "
+        "from masonry_dem import jit; jit.INSTALLED = Path(sys.argv[1]); "
+        "from masonry_dem.constitutive.energy_return import row_constants as k; "
+        "cached = jit._cached(k.serial); "
+        "k.serial(np.ones(2), np.ones(2), np.full(2, 1.5), np.ones(2)); "
+        "print(cached, sum(k.serial.stats.cache_hits.values()), "
+        "sum(k.serial.stats.cache_misses.values()))"
+    )
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "empty"))
+    out = subprocess.run(
+        [sys.executable, "-c", code, str(shipped)],
+        capture_output=True, text=True, check=True, timeout=600, env=env,
+    )  # fmt: skip
+    assert out.stdout.split() == ["True", "1", "0"]

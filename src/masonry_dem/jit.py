@@ -10,7 +10,14 @@ Every compiled kernel is built by :func:`kernel`. What it adds to ``numba.njit``
 * **A disk cache keyed on every kernel file.** Numba renews a function's cache when the
   function's own file changes, not when a callee's file does; the kernels of the interface law
   call the strength check's row functions in another file, so the key of every kernel here also
-  holds a hash of :data:`KERNEL_SOURCES`.
+  holds a hash of :data:`KERNEL_SOURCES`. The stamp that tells a cache file is fresh is that
+  hash and the kernel's own file's (numba's is that file's time, which an installation or a
+  checkout changes).
+* **Kernels compiled at installation.** Building the package (``pip install .``: setup.py)
+  compiles the serial variants of the eager kernels on the machine that installs it and copies
+  their cache files into the package (:data:`INSTALLED`, :func:`copy_compiled`); a kernel
+  found in neither numba's cache nor there (a parallel or lazy one, another numba or CPU, an
+  editable install) is compiled on first use.
 * **Word before the wait.** :func:`compile_pending` says which kernels a run will compile (their
   cache is empty or stale) and :func:`announce_compilation` logs "compiling kernels, once per
   machine, about N s" before it happens; ``masonry-dem warmup`` compiles them ahead.
@@ -19,8 +26,10 @@ Every compiled kernel is built by :func:`kernel`. What it adds to ``numba.njit``
 from __future__ import annotations
 
 import hashlib
+import inspect
 import logging
 import os
+import shutil
 import types
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -28,18 +37,20 @@ from pathlib import Path
 from typing import Any, Final
 
 import numba
-from numba.core.caching import FunctionCache
+from numba.core.caching import FunctionCache, IndexDataCacheFile
 
 from masonry_dem._threads import SERIAL_BELOW
 
 __all__ = [
     "COMPILE_SECONDS",
+    "INSTALLED",
     "KERNEL_SOURCES",
     "Kernel",
     "announce_compilation",
     "compile_estimate",
     "compile_pending",
     "compile_seconds",
+    "copy_compiled",
     "kernel",
     "kernels",
     "mark_announced",
@@ -58,8 +69,8 @@ KERNEL_SOURCES: Final[tuple[Path, ...]] = (
 )
 
 #: seconds to compile the kernels of one analysis on an idle core (2-core AMD EPYC, see
-#: docs/first_run.md): serial variants (every wall) and the parallel ones (walls of
-#: SERIAL_BELOW interfaces or more) on top
+#: docs/history/first_run_record.md): serial variants (every wall) and the parallel ones
+#: (walls of SERIAL_BELOW interfaces or more) on top
 COMPILE_SECONDS: Final[dict[str, float]] = {"serial": 15.0, "parallel": 12.0}
 
 
@@ -77,11 +88,37 @@ def _sources_hash() -> str:
 _SOURCES_HASH: Final[str] = _sources_hash()
 
 
+#: the kernels compiled when the package was built (numba's cache files, read only)
+INSTALLED: Final[Path] = _PACKAGE / "_compiled"
+
+
 class _KernelCache(FunctionCache):  # type: ignore[misc]
-    """numba's function cache with the hash of every kernel file in its key."""
+    """numba's function cache with the hash of every kernel file in its key, and in its stamp
+    with the hash of the kernel's own file (its callees there); it reads what it lacks from
+    :data:`INSTALLED`."""
+
+    def __init__(self, py_func: Callable[..., Any]) -> None:
+        super().__init__(py_func)
+        own = hashlib.sha256(Path(inspect.getfile(py_func)).read_bytes()).hexdigest()
+        self._stamp = (_SOURCES_HASH, own)
+        self._cache_file = IndexDataCacheFile(
+            self._cache_path, self._impl.filename_base, self._stamp
+        )
+
+    def installed(self) -> IndexDataCacheFile:
+        """The kernel's cache files in :data:`INSTALLED`."""
+        return IndexDataCacheFile(str(INSTALLED), self._impl.filename_base, self._stamp)
 
     def _index_key(self, sig: Any, codegen: Any) -> tuple[Any, ...]:
         return (*super()._index_key(sig, codegen), _SOURCES_HASH)
+
+    def _load_overload(self, sig: Any, target_context: Any) -> Any:
+        data = super()._load_overload(sig, target_context)
+        if data is None and self._enabled:
+            payload = self.installed().load(self._index_key(sig, target_context.codegen()))
+            if payload is not None:
+                data = self._impl.rebuild(target_context, payload)
+        return data
 
 
 def _twin(py_func: Callable[..., Any], suffix: str) -> Callable[..., Any]:
@@ -135,6 +172,12 @@ class Kernel:
                     max(seconds, 1.0),
                 )
         return disp
+
+    def __call__(self, *args: Any) -> Any:
+        """The kernel without a parallel variant called on ``args``."""
+        if self.parallel is not None:
+            raise TypeError(f"kernel {self.name} has two variants: pick one with for_rows")
+        return self.for_rows(0)(*args)
 
     @property
     def variants(self) -> tuple[tuple[str, Any], ...]:
@@ -226,9 +269,12 @@ def _cached(disp: Any) -> bool:
     if disp.signatures:
         return True
     try:
-        index = disp._cache._cache_file._load_index()  # {} when stale
         magic = disp.targetctx.codegen().magic_tuple()
-        return any(key[1] == magic and key[-1] == _SOURCES_HASH for key in index)
+        for cache_file in (disp._cache._cache_file, disp._cache.installed()):
+            index = cache_file._load_index()  # {} when stale
+            if any(key[1] == magic and key[-1] == _SOURCES_HASH for key in index):
+                return True
+        return False
     except Exception:  # pragma: no cover - numba's cache layout changed: assume compiled
         logger.debug("cannot read the numba cache index of %s", disp, exc_info=True)
         return True
@@ -289,3 +335,19 @@ def announce_compilation(interfaces: int, processes: int = 1) -> float:
         "compiling kernels, once per machine, about %.0f s (%s)", seconds, ", ".join(pending)
     )
     return seconds
+
+
+def copy_compiled(target: Path) -> int:
+    """Copy the cache files numba's cache holds for the kernels (index and compiled code of
+    each variant compiled) into ``target``, where :data:`INSTALLED` of an installed package
+    finds them; returns the number of files."""
+    target.mkdir(parents=True, exist_ok=True)
+    copied = 0
+    for k in kernels():
+        for _, disp in k.variants:
+            base = disp._cache._impl.filename_base
+            for path in Path(disp._cache._cache_path).glob(f"{base}.*"):
+                if path.suffix in (".nbi", ".nbc"):
+                    shutil.copy2(path, target / path.name)
+                    copied += 1
+    return copied

@@ -123,7 +123,7 @@ def _update_tangent(
     return count
 
 
-@numba.njit(cache=True)
+@kernel()
 def _entry_terms(pair, r, c, ptr, pair_start, record_order):
     """The terms of each stored entry (pair, r, c): the B.flat index 144 i + 12 (6 side(I) +
     r) + 6 side(J) + c of each interface i of its block pair, in the order of the
@@ -140,7 +140,7 @@ def _entry_terms(pair, r, c, ptr, pair_start, record_order):
     return terms
 
 
-@numba.njit(cache=True)
+@kernel()
 def _reduce_zero_capacity(T, trial, tensile_force, kbar, floor, contact_band):
     """In place, the joints of :meth:`DiscreteProblem._zero_capacity_tangent`: no tensile
     strength and a trial normal force within ``contact_band`` x the largest of zero keep
