@@ -41,9 +41,8 @@ class StepResult:
     control_displacement: float = 0.0
     iterations: int = 0
     #: the law state (m, 6) plastic part and (m,) cracked joints the state was found with,
-    #: where the steps before it cannot rebuild it: a rest of the damped motion under the
-    #: incremental law, whose slip moved with the wall (None: the one stored at the step
-    #: before)
+    #: where the steps before it cannot rebuild it: a rest of the damped motion, whose slip
+    #: and cracks moved with the wall (None: the one the steps before it give)
     found_plastic: FloatArray | None = None
     found_cracked: NDArray[np.bool_] | None = None
 

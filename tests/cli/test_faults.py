@@ -12,7 +12,6 @@ import logging
 import os
 import signal
 import subprocess
-import sys
 import time
 import xml.etree.ElementTree as ET
 from pathlib import Path
@@ -23,7 +22,7 @@ import pytest
 
 from helpers.case_files import SINGLE_BLOCK
 from helpers.case_files import write_case as _write_case
-from helpers.cli_process import start_cli
+from helpers.cli_process import run_cli, start_cli
 from masonry_dem.cli import main
 from masonry_dem.export import results_folder as rf
 
@@ -339,15 +338,7 @@ def test_a_real_full_disk(tmp_path):
         pytest.skip(f"no tmpfs here: {done.stderr.decode().strip()}")
     try:
         out = mount / "out"
-        env = {**os.environ, "PYTHONPATH": str(ROOT / "src"), "NUMBA_NUM_THREADS": "1"}
-        run = subprocess.run(
-            [sys.executable, "-m", "masonry_dem.cli", "run", str(DEFAULT), "--out", str(out)]
-            + ["--no-render", "--quiet"],
-            capture_output=True,
-            text=True,
-            env=env,
-            timeout=600,
-        )
+        run = run_cli("run", DEFAULT, "--out", out, "--no-render", "--quiet", timeout=600)
         assert run.returncode == 2, run.stderr
         assert run.stderr.strip().splitlines() == [
             line for line in run.stderr.strip().splitlines() if line.startswith("masonry-dem")

@@ -6,24 +6,14 @@ from __future__ import annotations
 
 import os
 import subprocess
-import sys
 from pathlib import Path
 
 from helpers.case_files import SINGLE_BLOCK, write_case
-from helpers.cli_process import start_cli
-
-ROOT = Path(__file__).resolve().parents[2]
+from helpers.cli_process import ROOT, run_cli, start_cli, start_python
 
 
 def _cli(*args: str, timeout: float = 300) -> subprocess.CompletedProcess:
-    env = {**os.environ, "PYTHONPATH": str(ROOT / "src"), "NUMBA_NUM_THREADS": "1"}
-    return subprocess.run(
-        [sys.executable, "-m", "masonry_dem.cli", *args],
-        capture_output=True,
-        text=True,
-        env=env,
-        timeout=timeout,
-    )
+    return run_cli(*args, timeout=timeout)
 
 
 def _vtus(folder: Path) -> dict[str, bytes]:
@@ -270,44 +260,22 @@ def test_a_full_disk_under_render_names_the_picture(tmp_path, capsys, monkeypatc
 
 
 def test_the_memory_estimate_respects_the_process_limit(tmp_path):
-    import resource
-
     case = _running_bond(tmp_path, 300, 100)
     limit = 2_500_000_000
-
-    def address_space_limit() -> None:
-        resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
-
-    env = {**os.environ, "PYTHONPATH": str(ROOT / "src"), "NUMBA_NUM_THREADS": "1"}
-    done = subprocess.run(
-        [sys.executable, "-m", "masonry_dem.cli", "run", str(case), "--out", str(tmp_path / "o")]
-        + ["--quiet", "--no-render"],
-        capture_output=True,
-        text=True,
-        env=env,
-        timeout=300,
-        preexec_fn=address_space_limit,
-    )
+    args = ("run", str(case), "--out", str(tmp_path / "o"), "--quiet", "--no-render")
+    done = _limited(limit, *args, timeout=300)
     _one_line(done, "refused", "ulimit -v")
     assert not (tmp_path / "o").exists()
 
 
-def _limited(limit: int, *args: str) -> subprocess.CompletedProcess:
+def _limited(limit: int, *args: str, timeout: float = 600) -> subprocess.CompletedProcess:
     """The command line under an address-space limit of ``limit`` bytes (``ulimit -v``)."""
     import resource
 
     def address_space_limit() -> None:
         resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
 
-    env = {**os.environ, "PYTHONPATH": str(ROOT / "src"), "NUMBA_NUM_THREADS": "1"}
-    return subprocess.run(
-        [sys.executable, "-m", "masonry_dem.cli", *args],
-        capture_output=True,
-        text=True,
-        env=env,
-        timeout=600,
-        preexec_fn=address_space_limit,
-    )
+    return run_cli(*args, timeout=timeout, preexec_fn=address_space_limit)
 
 
 def test_a_limit_analysis_out_of_memory_is_named_with_its_estimate(tmp_path):
@@ -558,15 +526,8 @@ def test_ctrl_c_while_python_imports_numpy_is_one_line_and_130(tmp_path):
     import signal
 
     case = write_case(tmp_path, SINGLE_BLOCK)
-    env = {**os.environ, "PYTHONPATH": str(ROOT / "src"), "NUMBA_NUM_THREADS": "1"}
     for command in (["run", str(case), "--out", str(tmp_path / "out")], ["render", "folder"]):
-        proc = subprocess.Popen(
-            [sys.executable, "-X", "importtime", "-m", "masonry_dem.cli", *command],
-            stdout=subprocess.PIPE,
-            stderr=subprocess.PIPE,
-            text=True,
-            env=env,
-        )
+        proc = start_python("-X", "importtime", "-m", "masonry_dem.cli", *command)
         try:
             lines = _stderr_lines(proc)
             _wait_for_line(lines, lambda line: line.split("|")[-1].strip() == "numpy", 120)
@@ -675,14 +636,7 @@ def test_an_interrupted_render_ends_without_the_interpreters_teardown(tmp_path):
         f"sys.argv = ['masonry-dem', 'render', {str(out)!r}, '--animate']\n"
         "sys.exit(main())\n"
     )
-    env = {**os.environ, "PYTHONPATH": str(ROOT / "src"), "NUMBA_NUM_THREADS": "1"}
-    proc = subprocess.Popen(
-        [sys.executable, "-X", "importtime", "-c", program],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-        env=env,
-    )
+    proc = start_python("-X", "importtime", "-c", program)
     try:
         lines = _stderr_lines(proc)
         _wait_for_line(lines, lambda line: line.split("|")[-1].strip() == "pyvista", 240)

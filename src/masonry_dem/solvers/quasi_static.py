@@ -365,15 +365,25 @@ class QuasiStatic:
         self.q = q
         self.response = response
 
+    def moved_from_dead_load(self) -> float:
+        """The largest translation of the wall's state from its dead-load rest (0 before
+        that rest is found)."""
+        if self.origin is None:
+            return 0.0
+        moving = self.problem.moving_translations
+        return float(np.abs(self.q[moving] - self.origin[moving]).max(initial=0.0))
+
+    def past_range(self) -> bool:
+        """Does the wall's state lie past the small-displacement range (the displacement
+        limit) from its dead-load rest?"""
+        return self.moved_from_dead_load() > self.problem.limit
+
     def _range_note(self) -> str:
         """A note when the last rest lies past the displacement limit from the dead-load
         rest: an equilibrium of the geometrically linear model, outside its range."""
-        if self.origin is None:
+        if not self.past_range():
             return ""
-        moving = self.problem.moving_translations
-        total = float(np.abs(self.q[moving] - self.origin[moving]).max(initial=0.0))
-        if total <= self.problem.limit:
-            return ""
+        total = self.moved_from_dead_load()
         return (
             f", {total:.3g} m from the dead-load rest, past the small-displacement range "
             f"({self.problem.limit:.3g} m): joints this soft deflect beyond it before the wall "

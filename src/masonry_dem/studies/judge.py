@@ -15,39 +15,27 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-import numpy as np
-
 from masonry_dem.model import Model
 from masonry_dem.results import History
-from masonry_dem.solvers.quasi_static import QuasiStaticSettings, quasi_static
-from masonry_dem.solvers.static.problem import DiscreteProblem
+from masonry_dem.solvers.quasi_static import QuasiStatic, QuasiStaticSettings
 
 #: the largest stiffening of the joints tried to bring the last rest within the range
 STIFFER_AT_MOST = 1000.0
-
-
-def past_range(model: Model, history: History) -> bool:
-    """Does the last rest of ``history`` lie past the small-displacement range (half the
-    smallest moving block) from its first, the dead-load rest?"""
-    if len(history.steps) < 2:
-        return False
-    problem = DiscreteProblem(model)
-    moving = problem.moving_translations
-    last = history.steps[-1].q.reshape(-1)[moving]
-    first = history.steps[0].q.reshape(-1)[moving]
-    return bool(np.abs(last - first).max(initial=0.0) > problem.limit)
 
 
 def reference_within_range(
     model: Model, settings: QuasiStaticSettings | None = None
 ) -> tuple[History, float]:
     """The reference analysis of ``model``, again with joints ten times stiffer (kn and kt
-    together) while its last rest lies past the small-displacement range: (its History, the
-    stiffening)."""
+    together) while its last rest lies past the small-displacement range from its dead-load
+    rest: (its History, the stiffening)."""
     stiffer = 1.0
-    reference = quasi_static(model, settings)
-    while past_range(model, reference) and stiffer < STIFFER_AT_MOST:
+    reference = QuasiStatic(model, settings)
+    history = reference.run()
+    while reference.past_range() and stiffer < STIFFER_AT_MOST:
         stiffer *= 10.0
-        stiff = replace(model, kn=model.kn * stiffer, kt=model.kt * stiffer)
-        reference = quasi_static(stiff, settings)
-    return reference, stiffer
+        reference = QuasiStatic(
+            replace(model, kn=model.kn * stiffer, kt=model.kt * stiffer), settings
+        )
+        history = reference.run()
+    return history, stiffer

@@ -446,7 +446,7 @@ def law_state_before(problem: DiscreteProblem, hist: History, index: int):
     """(plastic part, cracked joints) that step ``index`` of the path was found with (or a
     step after the last would be): the joints detached at the steps before it (brittle
     tension), the plastic part stored at the step before it (memory of slip); or, for a rest
-    of the damped motion under the incremental law, the law state kept with the step."""
+    of the damped motion, the law state kept with the step."""
     law = problem.law
     if index < len(hist.steps):
         found = hist.steps[index]

@@ -275,7 +275,8 @@ def work_control(
         easy_iterations=s.easy_iterations,
     )
     lam = path_lam[-1]
-    origin = hist.steps[solver.limit_origin].q  # where the displacement limit is measured from
+    # where the displacement limit is measured from (read once: the steps may be on disk)
+    origin = hist.steps[solver.limit_origin].q
     first_lambda = hist.collapse_bracket[1] if hist.collapse_bracket else lam
     peak = max(path_lam)
     flat_steps = 0
@@ -320,7 +321,7 @@ def work_control(
                 s.flat_slope,
                 s.flat_slope,
                 curve_slope(path_w, path_lam, elastic_slope),
-                _to_limit(solver, hist, path_w),
+                _to_limit(solver, hist, path_w, origin),
             )
             step.size = min(step.size, step.cap)
         goal = w + step.size
@@ -455,12 +456,14 @@ def work_control(
     return None
 
 
-def _to_limit(solver: StaticSolver, hist: History, path_w: list[float]) -> float:
-    """How far in w the displacement limit lies ahead, by the secant of the largest
-    translation over the last two states (inf where it did not grow)."""
+def _to_limit(
+    solver: StaticSolver, hist: History, path_w: list[float], origin: np.ndarray
+) -> float:
+    """How far in w the displacement limit (measured from the state ``origin``) lies ahead,
+    by the secant of the largest translation over the last two states (inf where it did
+    not grow)."""
     if len(hist.steps) < 2 or path_w[-1] <= path_w[-2]:
         return math.inf
-    origin = hist.steps[solver.limit_origin].q  # (once a call: the steps may be on disk)
     last = moved_from(solver.problem, origin, hist.steps[-1].q)
     rate = (last - moved_from(solver.problem, origin, hist.steps[-2].q)) / (path_w[-1] - path_w[-2])
     return (solver.limit - last) / rate if rate > 0 else math.inf

@@ -87,10 +87,10 @@ class StaticSolver(Corrector):
         """Make a converged search the last converged state, as a StepResult."""
         rel = self.problem.asm.relative_displacements(out.q)
         resp = out.response
-        self.search_state = out.found_with or (self.plastic, self.cracked)
-        # the law state a rest of the damped motion was found with, kept with the step where
-        # the steps before it cannot rebuild it (the slip moved with the wall)
-        found_with = out.found_with if self.law.memory == "slip" else None
+        # a rest of the damped motion keeps the law state it was found with: its slip and
+        # cracks moved with the wall, so the steps before it cannot rebuild them
+        found_with = out.found_with
+        self.search_state = found_with or (self.plastic, self.cracked)
         self.plastic = self.law.plastic_part(rel, resp.actions)
         self.cracked = self.law.cracked_after(self.cracked, resp)
         self.q = out.q
