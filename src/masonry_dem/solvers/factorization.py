@@ -47,6 +47,7 @@ from typing import Any, Protocol
 import numba
 import numpy as np
 from scipy import sparse
+from scipy.sparse.csgraph import connected_components
 from scipy.sparse.linalg import splu
 
 log = logging.getLogger(__name__)
@@ -206,10 +207,30 @@ class _CSCOrder:
         return self.factor(values)
 
 
+def permutation_parity(perm: np.ndarray) -> int:
+    """+1 for an even permutation, -1 for an odd one: (-1)^(n - its cycles), the cycles
+    counted as the connected components of the graph i -> perm[i]."""
+    n = perm.size
+    graph = sparse.csr_matrix((np.ones(n), (np.arange(n), perm)), shape=(n, n))
+    cycles = connected_components(graph, directed=True, connection="weak")[0]
+    return 1 if (n - cycles) % 2 == 0 else -1
+
+
 class _SuperLUFactors:
     def __init__(self, lu, numbering: np.ndarray | None) -> None:
         self.lu = lu
         self.numbering = numbering  # numbering[k]: the unknown in row k of the permuted matrix
+
+    def determinant_sign(self) -> int:
+        """The sign of det A (0: singular): the product of the signs of U's diagonal and of
+        the parities of the row and column permutations (L has a unit diagonal; the
+        symmetric permutation by ``numbering`` leaves det A as it is)."""
+        diagonal = self.lu.U.diagonal()
+        if not np.all(diagonal):
+            return 0
+        negative = int(np.count_nonzero(diagonal < 0))
+        sign = -1 if negative % 2 else 1
+        return sign * permutation_parity(self.lu.perm_r) * permutation_parity(self.lu.perm_c)
 
     def solve(self, b: np.ndarray) -> np.ndarray:
         if self.numbering is None:
@@ -252,7 +273,7 @@ class _SuperLU(_CSCOrder):
         self.gather = permuted.data.astype(np.int64) - 1
         self.permuted = (permuted.indptr, permuted.indices)
 
-    def factor(self, data: np.ndarray) -> Factors:
+    def factor(self, data: np.ndarray) -> _SuperLUFactors:
         indptr, indices = self.permuted
         A = sparse.csc_matrix((data[self.gather], indices, indptr), shape=(self.n,) * 2)
         try:
@@ -271,6 +292,16 @@ class _SuperLU(_CSCOrder):
             return _SuperLUFactors(splu(K, permc_spec="COLAMD"), None)
         except RuntimeError as exc:
             raise SingularMatrix(f"superlu: {exc}") from exc
+
+
+#: the factorizer whose factors also give the sign of the determinant
+SignedFactorizer = _SuperLU
+
+
+def signed_factorizer(indptr: np.ndarray, indices: np.ndarray, n: int) -> SignedFactorizer:
+    """SuperLU on the pattern (as :func:`analyse` with ``"superlu"``), whose factors also
+    give the sign of the determinant (``determinant_sign``)."""
+    return _SuperLU(np.asarray(indptr), np.asarray(indices), n)
 
 
 # --------------------------------------------------------------------------- PARDISO

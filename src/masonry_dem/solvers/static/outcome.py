@@ -54,6 +54,7 @@ class StopReason(_Text):
     DISPLACEMENT_LIMIT = "displacement limit"  # past the small-displacement range
     PATH_STUCK = "path stuck"  # no equilibrium for any step size (work control)
     LIMIT_POINT = "limit point"  # the pushover curve falls (work control)
+    UNSTABLE = "unstable equilibrium"  # det K_t < 0 at a state of the path, the rule no rest
     CONTROL_REACHED = "control displacement reached"
     CONTROL_STUCK = "displacement control stuck"
     CONTROL_BUDGET = "displacement control: max_steps spent short of the target"

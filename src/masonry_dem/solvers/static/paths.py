@@ -119,6 +119,20 @@ def _load_control(
         if out.ok:
             record(out)
             lam = target
+            if unstable(solver, out):
+                # the wall leaves an unstable equilibrium: the instability rule decides
+                moved = solver.rule_at(lam)
+                if not moved.ok:
+                    hist.collapse_bracket = (lam, float(moved.load_factor))
+                    hist.end(
+                        Status.COLLAPSE,
+                        StopReason.UNSTABLE,
+                        f"an unstable equilibrium at lambda={lam:.6g} (det K_t < 0) under "
+                        f"load control, and {solver.instability}",
+                    )
+                    return None
+                record(moved)
+                lam = float(moved.load_factor)
             if lam >= s.max_load_factor:
                 hist.end(
                     Status.COMPLETED,
@@ -201,6 +215,18 @@ def _load_control(
     if work_reason is not None:
         hist.reason += f"; work control found no higher equilibrium ({work_reason[0]})"
     return None
+
+
+def unstable(solver: StaticSolver, out: Outcome) -> bool:
+    """Is the converged state ``out`` of the path an unstable equilibrium: det K_t < 0
+    (:meth:`.problem.DiscreteProblem.determinant_sign`)? The path follower's equilibria
+    are those of any branch, stable or not; the damped, slowly loaded wall of the reference
+    leaves an unstable one, so the instability rule runs there. Tested where the rule can
+    run (``certify`` and ``refine``)."""
+    s = solver.settings
+    if not (s.certify and s.refine):
+        return False
+    return solver.problem.determinant_sign(out.response) < 0
 
 
 def _hands_over(hist: History) -> bool:
@@ -386,7 +412,16 @@ def work_control(
         line.add(w, out.q, lam)
         path_w.append(w)
         path_lam.append(lam)
+        rising = lam >= peak
         peak = max(peak, lam)
+        if rising and unstable(solver, out):
+            # (past a limit point det K_t < 0 too, but there the curve falls: stopped above)
+            turned = (
+                f"an unstable equilibrium at lambda={lam:.6g} (det K_t < 0: the path passed "
+                f"a bifurcation or limit point)",
+                StopReason.UNSTABLE,
+            )
+            break
         if lam >= s.max_load_factor:
             hist.end(
                 Status.COMPLETED, StopReason.MAX_LOAD_FACTOR, f"reached max_load_factor {lam:.6g}"

@@ -21,7 +21,14 @@ from masonry_dem.assembly.stiffness import Assembly
 from masonry_dem.constitutive.law import CONTACT_BAND, InterfaceLaw, LawResponse, Memory, Tension
 from masonry_dem.jit import kernel
 from masonry_dem.model import Model
-from masonry_dem.solvers.factorization import Factorizer, Factors, SingularMatrix, analyse
+from masonry_dem.solvers.factorization import (
+    Factorizer,
+    Factors,
+    SignedFactorizer,
+    SingularMatrix,
+    analyse,
+    signed_factorizer,
+)
 
 
 @numba.njit(fastmath={"contract"})
@@ -367,6 +374,8 @@ class DiscreteProblem:
         self.moving_translations = free[self.translation]  # DOF numbers
         self.factorizations = 0
         self._fronts: Factorizer | None = None  # the tangent's pattern, analysed once
+        #: SuperLU on the same pattern, whose factors give the sign of det K_t
+        self._signs: SignedFactorizer | None = None
         self._elastic: Factors | None = None
         self._scale: float | None = None
         #: (lambda, dead factor), F_ext and its weighted norm of the last residual
@@ -451,6 +460,25 @@ class DiscreteProblem:
             idx = np.arange(6)
             T[:, idx, idx] += 1e-6 * self.law.kbar
             return fronts.factor_laid_out(self._tangents.data(T, fronts.layout))
+
+    def determinant_sign(self, response: LawResponse) -> int:
+        """The sign of det K_t at ``response`` (the tangent :meth:`factor` factorizes; 0:
+        singular), from a SuperLU factorization of its own: its pivots and permutations are
+        known, where PARDISO permutes rows inside its supernodes and tells neither. A state
+        of the path where it is negative has crossed a limit or bifurcation point: an
+        unstable equilibrium (Crisfield 1997, *Non-linear Finite Element Analysis of Solids
+        and Structures*, vol. 2, 16.5; Wriggers 2008, *Nonlinear Finite Element Methods*,
+        7.4)."""
+        if self._signs is None:
+            pattern = self._tangents
+            self._signs = signed_factorizer(pattern.indptr, pattern.indices, pattern.n)
+        T = self.joint_tangents(response, self.residual_stiffness)
+        self.factorizations += 1
+        try:
+            factors = self._signs.factor(self._tangents.data(T))
+        except SingularMatrix:
+            return 0
+        return factors.determinant_sign()
 
     def relative(self, dq: np.ndarray) -> np.ndarray:
         """(m, 6) relative displacements of the joints for an increment ``dq`` of the free
