@@ -18,7 +18,7 @@ from typing import Any, Literal
 import numpy as np
 
 from masonry_dem.assessment.kinematics import CapacityCurve, Mechanism
-from masonry_dem.assessment.spectra import G, EC8Spectrum, NTC2018Spectrum, Spectrum, check_range
+from masonry_dem.assessment.spectra import EC8Spectrum, G, NTC2018Spectrum, Spectrum, check_range
 
 Code = Literal["ntc2018", "ec8"]
 CODES: tuple[str, ...] = ("ntc2018", "ec8")

@@ -93,6 +93,7 @@ class Spectrum:
         if np.any(T < 0) or not np.all(np.isfinite(T)):
             raise ValueError("a period must be a finite number of seconds >= 0")
         top = self.ag * G * self.S * self.eta * self.plateau
+        Tp = np.where(T > 0, T, 1.0)  # the 1/T branches are never taken at T = 0
         rise = self.ag * G * self.S * (1.0 + T / self.TB * (self.eta * self.plateau - 1.0))
         out = np.where(
             T < self.TB,
@@ -102,8 +103,8 @@ class Spectrum:
                 top,
                 np.where(
                     T < self.TD,
-                    top * self.TC / np.maximum(T, 1e-300),
-                    top * self.TC * self.TD / np.maximum(T, 1e-300) ** 2,
+                    top * self.TC / Tp,
+                    top * self.TC * self.TD / Tp**2,
                 ),
             ),
         )
