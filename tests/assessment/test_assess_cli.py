@@ -109,7 +109,9 @@ def test_config_file_and_flags_over_it(default_run, tmp_path):
     cfg.write_text('code = "ntc2018"\nag = 0.3\nF0 = 2.5\nTc = 0.4\nsoil = "C"\nZ = 0\n')
     assert main(["assess", str(default_run), "--config", str(cfg), "--no-render"]) == 0
     assert _read(default_run)["spectrum"]["ag"] == 0.3
-    assert main(["assess", str(default_run), "--config", str(cfg), "--ag", "0.1", "--no-render"]) == 0
+    assert (
+        main(["assess", str(default_run), "--config", str(cfg), "--ag", "0.1", "--no-render"]) == 0
+    )
     a = _read(default_run)
     assert a["spectrum"]["ag"] == 0.1 and a["spectrum"]["soil"] == "C"
 

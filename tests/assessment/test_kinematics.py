@@ -240,3 +240,37 @@ def test_a_mechanism_at_height_takes_the_larger_demand():
     assert out.demand_ground == pytest.approx(0.2 * G / 2, rel=TOL)
     assert out.demand_height == pytest.approx(0.2 * G * 2.4 * (2 / 3) * (9 / 7) / 2, rel=TOL)
     assert out.demand == out.demand_height
+
+
+# ----------------------------------------------------------------------------- from the analyses
+@pytest.fixture(scope="module")
+def free_wall():
+    return _model(
+        {"builder": "running_bond_wall", "blocks_along_length": 3, "courses": 8}
+    )  # a = 0.4, t = 0.2: H = 3.2 m
+
+
+def test_free_standing_wall_from_the_limit_analysis(free_wall):
+    """The limit analysis's mechanism of the free wall: alpha0 = t/H = 0.0625 and
+    e* = 3 x 64 / 255, to the solver's precision (its velocities are exact at a vertex)."""
+    import masonry_dem as md
+    from masonry_dem.assessment.sources import limit_mechanism
+
+    mech, alpha0 = limit_mechanism(free_wall, md.limit_analysis(free_wall))
+    assert alpha0 == pytest.approx(0.0625, rel=TOL)
+    assert mech.alpha_rigid == pytest.approx(0.0625, rel=TOL)
+    assert mech.participating_mass()[1] == pytest.approx(3 * 64 / 255, rel=TOL)
+
+
+def test_free_standing_wall_from_the_pushover(free_wall):
+    """The pushover's collapse mode (joints turning about their centres, the elastic floor
+    of its damaged stiffness) hinged at the toe: alpha0 and e* of the rigid wall to 1e-8
+    (measured 3e-10: the mode's elastic part)."""
+    import masonry_dem as md
+    from masonry_dem.assessment.sources import history_mechanism
+
+    history = md.pushover(free_wall)
+    mech, alpha0 = history_mechanism(free_wall, history)
+    assert alpha0 == pytest.approx(0.0625, rel=1e-3)  # the pushover's own bracket
+    assert mech.alpha_rigid == pytest.approx(0.0625, rel=1e-8)
+    assert mech.participating_mass()[1] == pytest.approx(3 * 64 / 255, rel=1e-8)
