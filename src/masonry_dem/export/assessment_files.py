@@ -182,6 +182,14 @@ def adrs_figure(assessment: Assessment, curve: CapacityCurve, spectrum: Spectrum
         lw=1,
         label=f"secant period Ts = {a.Ts:.3g} s",
     )
+    ax.plot(
+        [1e3 * a.ds_star],
+        [a.as_star],
+        "o",
+        color="#1f4e9c",
+        ms=5,
+        label=f"d_s* = 0.4 d_u*, a_s* = {a.as_star:.3g} m/s$^2$",
+    )
     ax.axvline(
         1e3 * a.du_star, color="#27ae60", ls="--", lw=1.2, label=f"d_u* = {1e3 * a.du_star:.3g} mm"
     )
@@ -190,7 +198,7 @@ def adrs_figure(assessment: Assessment, curve: CapacityCurve, spectrum: Spectrum
         color="#c0392b",
         ls="--",
         lw=1.2,
-        label=f"demand = {1e3 * a.displacement_demand:.3g} mm",
+        label=f"displacement demand = {1e3 * a.displacement_demand:.3g} mm",
     )
     ax.axhline(
         a.demand,
