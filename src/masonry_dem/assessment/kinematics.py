@@ -109,9 +109,9 @@ def hinged_mode(model: Model, mode: ArrayLike) -> tuple[NDArray[np.float64], flo
     eps = 1e-12 * max(float(Hf.multiply(Hf).sum()) / max(Hf.shape[1], 1), 1.0)
     A = (Hf.T @ Hf + eps * identity(Hf.shape[1], format="csc")).tocsc()
     x = spsolve(A, Hf.T @ target.ravel() + eps * q.ravel()[free])
-    out = np.zeros(q.size)
-    out[free] = x
-    out = out.reshape(-1, 6)
+    flat = np.zeros(q.size)
+    flat[free] = x
+    out = flat.reshape(-1, 6)
     norm = float(np.linalg.norm(target))
     residual = float(np.linalg.norm(H @ out.ravel() - target.ravel())) / norm if norm else 0.0
     return out, residual
