@@ -72,6 +72,7 @@ def test_block_from_its_run(block_run, capsys):
     assert a["passes_nonlinear"] == (a["du_star"] >= a["displacement_demand"])
     np.testing.assert_allclose(a["control_point"], [0.15, 0.2, 0.1], atol=TOL)
     assert a["lambda"] == pytest.approx(0.5, rel=0.005)  # the run's own multiplier
+    assert a["kinematics"] == "chain" and a["overlap_at_du"] < TOL  # one body: both exact
     curve = np.loadtxt(block_run / "capacity_curve.csv", delimiter=",", skiprows=1)
     assert curve[0, 1] == pytest.approx(0.5, rel=TOL) and curve[-1, 1] == 0.0
     assert curve[-1, 3] == pytest.approx(0.1, rel=TOL)
@@ -96,9 +97,12 @@ def test_default_wall(default_run, code):
     a = _read(default_run)
     assert a["code"] == code
     assert a["passes"] == (a["a0_star"] >= a["demand"])
-    assert a["passes_nonlinear"] == (a["du_star"] >= a["displacement_demand"])
     assert 0 < a["e_star"] <= 1 and a["M_star"] > 0
     assert a["a0_star"] == pytest.approx(a["alpha0"] * G / (a["e_star"] * a["FC"]), rel=TOL)
+    # the kinematics chosen overlaps least at d_u*; the chain's has no alpha = 0 here
+    assert a["kinematics"] in ("chain", "independent")
+    assert a["overlap_at_du"] == min(v for v in a["overlaps"].values() if v is not None)
+    assert a["passes_nonlinear"] == (a["du_star"] >= a["displacement_demand"])
     assert a["Ts"] == pytest.approx(2 * math.pi * math.sqrt(a["ds_star"] / a["as_star"]), rel=TOL)
     assert a["du_star"] == pytest.approx(0.4 * a["d0_star"], rel=TOL)
     assert a["analysis"] == "pushover" and a["case"].startswith("bundled:")
@@ -143,6 +147,18 @@ def test_unknown_config_key(block_run, tmp_path, capsys):
     cfg.write_text("ag = 0.2\npga = 0.3\n")
     assert main(["assess", str(block_run), "--config", str(cfg)]) == 2
     assert "unknown key 'pga'" in capsys.readouterr().err
+
+
+def test_chain_kinematics_without_alpha_zero_leaves_the_nonlinear_check_out(default_run):
+    """The default wall's pushover mechanism composed as a chain keeps alpha > 0 until its
+    blocks turn away from the load: the linear check is made, the nonlinear one is None with
+    the reason, and the picture says so."""
+    args = ["assess", str(default_run), *NTC, "--kinematics", "chain"]
+    assert main(args) == 0
+    a = _read(default_run)
+    assert a["d0_star"] is None and a["passes_nonlinear"] is None and a["Ts"] is None
+    assert "no d_k0" in a["nonlinear_reason"]
+    assert a["ratio"] == pytest.approx(a["a0_star"] / a["demand"], rel=TOL)
 
 
 def test_a_folder_without_collapse(tmp_path, capsys):

@@ -12,7 +12,7 @@ from scipy.optimize import brentq
 
 from helpers.case_files import SINGLE_BLOCK
 from masonry_dem.assessment.checks import Building, assess
-from masonry_dem.assessment.kinematics import Mechanism, hinged_mode, screw_positions
+from masonry_dem.assessment.kinematics import Mechanism, hinged_mode
 from masonry_dem.assessment.spectra import NTC2018Spectrum
 from masonry_dem.cases.casefile import case_from_dict
 
@@ -87,7 +87,7 @@ def test_block_alpha_in_finite_rotation(block):
     # the top of the block (its face's centre, at z = t/2, y = h) at theta0:
     # (-t/2)(cos th0 - 1) + h sin th0 = t/2 + t h / (2 sqrt(t^2 + h^2))
     top = model.blocks.centres[b] + np.array([0.0, h / 2, 0.0])
-    moved = screw_positions(mech.v0[[b]], mech.w[[b]], top[None], curve.s[-1])[0, 0]
+    moved = mech.positions(top[None], [b], curve.s[-1])[0, 0]
     assert moved[2] - top[2] == pytest.approx(t / 2 + t * h / (2 * math.hypot(t, h)), rel=TOL)
     assert moved[1] - top[1] == pytest.approx(
         -(-t / 2) * math.sin(math.atan(t / h)) + h * (math.cos(math.atan(t / h)) - 1), rel=TOL
@@ -274,3 +274,69 @@ def test_free_standing_wall_from_the_pushover(free_wall):
     assert alpha0 == pytest.approx(0.0625, rel=1e-3)  # the pushover's own bracket
     assert mech.alpha_rigid == pytest.approx(0.0625, rel=1e-8)
     assert mech.participating_mass()[1] == pytest.approx(3 * 64 / 255, rel=1e-8)
+
+
+def test_two_block_chain_in_finite_rotation():
+    """The chain of ``test_two_block_chain_by_hand`` turned by theta: the lower block by theta
+    about its toe A = (y 0, z 0.2), the upper by theta more about the hinge C = (0.4, 0.2),
+    which turns with the lower block (the hinge stays closed):
+    c1 = A + Rot(th)(c1_0 - A), C = A + Rot(th)(C_0 - A), c2 = C + Rot(2 th)(c2_0 - C_0),
+    Rot(th) (y, z) = (y cos - z sin, y sin + z cos). The weights are equal, so
+    alpha(th) = (c1' + c2')_y / (c1' + c2')_z with Rot'(th) r = Rot(th + pi/2) r."""
+    model = _model({"builder": "stack_bond_column", "courses": 2})
+    c = model.blocks.centres
+    lower, upper = (int(np.flatnonzero(np.isclose(c[:, 1], y))[0]) for y in (0.2, 0.6))
+    mode = np.zeros((model.blocks.count, 6))
+    mode[lower] = [0, 0.1, 0.2, 1, 0, 0]
+    mode[upper] = [0, 0.2, 0.8, 2, 0, 0]
+    mech = Mechanism.of(model, mode)
+    curve = mech.capacity_curve()
+
+    def rot(r, th):
+        return np.array(
+            [r[0] * np.cos(th) - r[1] * np.sin(th), r[0] * np.sin(th) + r[1] * np.cos(th)]
+        )
+
+    A, C0 = np.array([0.0, 0.2]), np.array([0.4, 0.2])
+    r1, rC, r2 = np.array([0.2, 0.1]) - A, C0 - A, np.array([0.6, 0.1]) - C0
+
+    def alpha(th):
+        v1 = rot(r1, th + np.pi / 2)
+        v2 = rot(rC, th + np.pi / 2) + 2 * rot(r2, 2 * th + np.pi / 2)
+        return (v1[0] + v2[0]) / (v1[1] + v2[1])
+
+    exact = np.array([alpha(th) for th in curve.s])
+    assert np.abs(curve.alpha - exact).max() < TOL
+    theta0 = brentq(alpha, 0.01, 0.5, xtol=1e-15)
+    assert curve.s[-1] == pytest.approx(theta0, rel=TOL)
+    # the control point, the centroid of the two, moved along z: the mean of c1 and c2
+    c1 = A + rot(r1, theta0)
+    c2 = A + rot(rC, theta0) + rot(r2, 2 * theta0)
+    assert curve.d_k0 == pytest.approx(0.5 * (c1[1] + c2[1]) - 0.1, rel=TOL)
+    # the hinge C, as a point of either block, at theta0
+    on_lower = mech.positions([0.15, 0.4, 0.2], [lower], theta0)[0, 0]
+    on_upper = mech.positions([0.15, 0.4, 0.2], [upper], theta0)[0, 0]
+    assert np.abs(on_lower - on_upper).max() < TOL
+
+
+def test_overlap_tells_the_chain_from_independent_screws():
+    """At the chain's theta0 the two blocks of the chain still meet at the hinge with no
+    overlap; moved each by its own screw, the upper one turns about a fixed point instead
+    of the moving hinge and overlaps the lower one; ``assess_mode`` picks the chain."""
+    from masonry_dem.assessment.checks import assess_mode
+    from masonry_dem.assessment.kinematics import interpenetration
+
+    model = _model({"builder": "stack_bond_column", "courses": 2})
+    c = model.blocks.centres
+    lower, upper = (int(np.flatnonzero(np.isclose(c[:, 1], y))[0]) for y in (0.2, 0.6))
+    mode = np.zeros((model.blocks.count, 6))
+    mode[lower] = [0, 0.1, 0.2, 1, 0, 0]
+    mode[upper] = [0, 0.2, 0.8, 2, 0, 0]
+    chain = Mechanism.of(model, mode, kinematics="chain")
+    screws = Mechanism.of(model, mode, kinematics="independent")
+    s0 = chain.capacity_curve().s[-1]
+    assert interpenetration(chain, model, s0) < TOL
+    assert interpenetration(screws, model, s0) > 1e-3
+    _, _, _, info = assess_mode(model, mode, "ntc2018", NTC2018Spectrum(0.1))
+    assert info["kinematics"] == "chain"
+    assert info["overlaps"]["chain"] < info["overlaps"]["independent"]

@@ -17,8 +17,15 @@ from typing import Any, Literal
 
 import numpy as np
 
-from masonry_dem.assessment.kinematics import CapacityCurve, Mechanism
+from masonry_dem.assessment.kinematics import (
+    KINEMATICS,
+    MOVING,
+    CapacityCurve,
+    Mechanism,
+    interpenetration,
+)
 from masonry_dem.assessment.spectra import EC8Spectrum, G, NTC2018Spectrum, Spectrum, check_range
+from masonry_dem.model import Model
 
 Code = Literal["ntc2018", "ec8"]
 CODES: tuple[str, ...] = ("ntc2018", "ec8")
@@ -98,15 +105,17 @@ class Assessment:
     demand_height: float | None
     ratio: float
     passes: bool
-    d_k0: float
-    d0_star: float
-    du_star: float
-    ds_star: float
-    as_star: float
-    Ts: float
-    displacement_demand: float
-    displacement_ratio: float
-    passes_nonlinear: bool
+    d_k0: float | None
+    d0_star: float | None
+    du_star: float | None
+    ds_star: float | None
+    as_star: float | None
+    Ts: float | None
+    displacement_demand: float | None
+    displacement_ratio: float | None
+    passes_nonlinear: bool | None
+    nonlinear_reason: str
+    rotation_at_end_deg: float
     control_point: list[float]
     direction: list[float]
     Z: float
@@ -223,20 +232,50 @@ def assess(
     a0_star = a0 * G / (e_star * FC)
 
     curve = mechanism.capacity_curve(alpha0)
-    du = 0.4 * curve.d0_star
-    ds = 0.4 * du
-    s_s = mechanism.configuration_at(ds * e_star, float(curve.s[-1]))
-    as_star = float(mechanism.alpha(s_s, alpha0)[0]) * G / (e_star * FC)
-    Ts = 2.0 * math.pi * math.sqrt(ds / as_star)
+    nonlinear: dict[str, Any] = dict.fromkeys(
+        (
+            "d_k0",
+            "d0_star",
+            "du_star",
+            "ds_star",
+            "as_star",
+            "Ts",
+            "displacement_demand",
+            "displacement_ratio",
+            "passes_nonlinear",
+        )
+    )
+    Ts = None
+    if curve.complete:
+        du = 0.4 * curve.d0_star
+        ds = 0.4 * du
+        s_s = mechanism.configuration_at(ds * e_star, float(curve.s[-1]))
+        as_star = float(mechanism.alpha(s_s, alpha0)[0]) * G / (e_star * FC)
+        Ts = 2.0 * math.pi * math.sqrt(ds / as_star)
+        nonlinear.update(
+            d_k0=curve.d_k0, d0_star=curve.d0_star, du_star=du, ds_star=ds, as_star=as_star, Ts=Ts
+        )
 
     if code == "ntc2018":
         ground, height = ntc_linear_demand(spectrum, building, q)
-        disp = ntc_displacement_demand(spectrum, building, Ts)
+        disp = None if Ts is None else ntc_displacement_demand(spectrum, building, Ts)
     else:
         ground = spectrum.pga() / q
-        amp = ec8_amplification(building, Ts)
+        # Ta = Ts; with no Ts (no alpha = 0), Ta = T1: the resonant, largest amplification
+        amp = (
+            ec8_amplification(building, Ts if Ts is not None else building.period)
+            if building.at_height
+            else 1.0
+        )
         height = ground * amp if building.at_height else None
-        disp = n2_target(spectrum, Ts, a0_star) * amp
+        disp = None if Ts is None else n2_target(spectrum, Ts, a0_star) * amp
+    if disp is not None:
+        du = nonlinear["du_star"]
+        nonlinear.update(
+            displacement_demand=disp,
+            displacement_ratio=du / disp,
+            passes_nonlinear=bool(du >= disp),
+        )
     demand = max(ground, height or 0.0)
     ratio = a0_star / demand
     assessment = Assessment(
@@ -256,15 +295,9 @@ def assess(
         demand_height=height,
         ratio=ratio,
         passes=bool(ratio >= 1.0),
-        d_k0=curve.d_k0,
-        d0_star=curve.d0_star,
-        du_star=du,
-        ds_star=ds,
-        as_star=as_star,
-        Ts=Ts,
-        displacement_demand=disp,
-        displacement_ratio=du / disp,
-        passes_nonlinear=bool(du >= disp),
+        **nonlinear,
+        nonlinear_reason=curve.reason,
+        rotation_at_end_deg=math.degrees(curve.rotation),
         control_point=mechanism.control_point().tolist(),
         direction=mechanism.direction.tolist(),
         Z=building.Z,
@@ -274,3 +307,47 @@ def assess(
         spectrum=spectrum_summary(spectrum),
     )
     return assessment, curve
+
+
+def assess_mode(
+    model: Model,
+    mode: Any,
+    code: str,
+    spectrum: Spectrum,
+    building: Building | None = None,
+    q: float = 2.0,
+    FC: float = 1.35,
+    load_factor: float | None = None,
+    moving: float = MOVING,
+    kinematics: str = "auto",
+) -> tuple[Assessment, CapacityCurve, Mechanism, dict[str, Any]]:
+    """:func:`assess` of a rigid-block mode (n, 6) on ``model``: alpha0 the analysis's
+    ``load_factor`` in the codes' terms (None: the virtual work of the loads).
+
+    ``kinematics`` ``"chain"`` or ``"independent"`` (:meth:`Mechanism.of`), or ``"auto"``:
+    both, and the one whose finite motion overlaps the least across the joints at d_u*
+    (:func:`~masonry_dem.assessment.kinematics.interpenetration`; a curve with no alpha = 0
+    counts as no check at all). Returns the assessment, its curve, its mechanism and what
+    chose it: ``kinematics``, ``overlap_at_du`` [m] and ``overlaps`` of each candidate."""
+    if kinematics != "auto" and kinematics not in KINEMATICS:
+        raise ValueError(f"kinematics = {kinematics!r}: must be auto, chain or independent")
+    candidates = KINEMATICS if kinematics == "auto" else (kinematics,)
+    found: dict[str, tuple[Assessment, CapacityCurve, Mechanism, float]] = {}
+    for name in candidates:
+        mech = Mechanism.of(model, mode, moving, name)
+        alpha0 = None if load_factor is None else load_factor * mech.scale
+        out, curve = assess(mech, code, spectrum, building, q, FC, alpha0)
+        if out.du_star is None:
+            overlap = math.inf
+        else:
+            s_du = mech.configuration_at(out.du_star * out.e_star, float(curve.s[-1]))
+            overlap = interpenetration(mech, model, s_du)
+        found[name] = (out, curve, mech, overlap)
+    best = min(candidates, key=lambda k: found[k][3])  # ties: the chain, listed first
+    out, curve, mech, overlap = found[best]
+    info = {
+        "kinematics": best,
+        "overlap_at_du": overlap,
+        "overlaps": {k: v[3] for k, v in found.items()},
+    }
+    return out, curve, mech, info

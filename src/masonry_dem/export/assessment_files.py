@@ -53,8 +53,8 @@ class FolderMechanism:
     case: str
     residual: float
 
-    def mechanism(self, moving: float = MOVING) -> Mechanism:
-        return Mechanism.of(self.model, self.mode, moving)
+    def mechanism(self, moving: float = MOVING, kinematics: str = "chain") -> Mechanism:
+        return Mechanism.of(self.model, self.mode, moving, kinematics)
 
 
 def _load_model(source: str, folder: Path, case: str | Path | None) -> tuple[Model, str]:
@@ -172,34 +172,43 @@ def adrs_figure(assessment: Assessment, curve: CapacityCurve, spectrum: Spectrum
         lw=2.0,
         label="capacity curve a*(d*)",
     )
-    d_end = max(a.displacement_demand, a.d0_star) * 1.05
-    omega2 = (2.0 * math.pi / a.Ts) ** 2
-    ax.plot(
-        [0.0, 1e3 * d_end],
-        [0.0, omega2 * d_end],
-        ls=":",
-        color="#1f4e9c",
-        lw=1,
-        label=f"secant period Ts = {a.Ts:.3g} s",
-    )
-    ax.plot(
-        [1e3 * a.ds_star],
-        [a.as_star],
-        "o",
-        color="#1f4e9c",
-        ms=5,
-        label=f"d_s* = 0.4 d_u*, a_s* = {a.as_star:.3g} m/s$^2$",
-    )
-    ax.axvline(
-        1e3 * a.du_star, color="#27ae60", ls="--", lw=1.2, label=f"d_u* = {1e3 * a.du_star:.3g} mm"
-    )
-    ax.axvline(
-        1e3 * a.displacement_demand,
-        color="#c0392b",
-        ls="--",
-        lw=1.2,
-        label=f"displacement demand = {1e3 * a.displacement_demand:.3g} mm",
-    )
+    nonlinear = a.Ts is not None and a.displacement_demand is not None
+    d_end = float(curve.d_star[-1]) * 1.05
+    if nonlinear:
+        assert a.Ts is not None and a.displacement_demand is not None
+        assert a.du_star is not None and a.ds_star is not None and a.as_star is not None
+        d_end = max(a.displacement_demand, d_end)
+        omega2 = (2.0 * math.pi / a.Ts) ** 2
+        ax.plot(
+            [0.0, 1e3 * d_end],
+            [0.0, omega2 * d_end],
+            ls=":",
+            color="#1f4e9c",
+            lw=1,
+            label=f"secant period Ts = {a.Ts:.3g} s",
+        )
+        ax.plot(
+            [1e3 * a.ds_star],
+            [a.as_star],
+            "o",
+            color="#1f4e9c",
+            ms=5,
+            label=f"d_s* = 0.4 d_u*, a_s* = {a.as_star:.3g} m/s$^2$",
+        )
+        ax.axvline(
+            1e3 * a.du_star,
+            color="#27ae60",
+            ls="--",
+            lw=1.2,
+            label=f"d_u* = {1e3 * a.du_star:.3g} mm",
+        )
+        ax.axvline(
+            1e3 * a.displacement_demand,
+            color="#c0392b",
+            ls="--",
+            lw=1.2,
+            label=f"displacement demand = {1e3 * a.displacement_demand:.3g} mm",
+        )
     ax.axhline(
         a.demand,
         color="#c0392b",
@@ -212,9 +221,11 @@ def adrs_figure(assessment: Assessment, curve: CapacityCurve, spectrum: Spectrum
     ax.set_ylim(0.0, top)
     ax.set_xlabel("spectral displacement d* [mm]")
     ax.set_ylabel("spectral acceleration a* [m/s$^2$]")
-    verdict = (
-        f"linear: {'passes' if a.passes else 'fails'} (ratio {a.ratio:.3g}); "
-        f"nonlinear: {'passes' if a.passes_nonlinear else 'fails'} (ratio {a.displacement_ratio:.3g})"
+    verdict = f"linear: {'passes' if a.passes else 'fails'} (ratio {a.ratio:.3g}); " + (
+        f"nonlinear: {'passes' if a.passes_nonlinear else 'fails'} "
+        f"(ratio {a.displacement_ratio:.3g})"
+        if nonlinear
+        else "nonlinear: no alpha = 0 (see assessment.json)"
     )
     ax.set_title(verdict, fontsize=10)
     ax.grid(True, alpha=0.3)
