@@ -99,3 +99,27 @@ def test_bad_parameters_are_named_with_range_and_unit(make, words):
     assert "\n" not in text
     for w in words:
         assert w in text
+
+
+def test_n2_target_displacement_by_hand():
+    """EN 1998-1 Annex B on type 1 ground B, ag 0.3 g (plateau 8.829 m/s2, TC 0.5 s):
+    T* = 0.4 s < TC: d_et* = 8.829 (0.4 / 2 pi)^2; with a_y = 4.4145, q_u = 2 and
+    d_t* = d_et* / 2 (1 + 1 x 0.5 / 0.4) = 1.125 d_et*; with a_y = 9 >= Se: d_et*.
+    T* = 1.0 s >= TC: d_t* = d_et* = 4.4145 (1 / 2 pi)^2."""
+    from masonry_dem.assessment.checks import n2_target
+
+    sp = EC8Spectrum(0.3, "B", 1)
+    d_et = 8.829 * (0.4 / (2 * 3.141592653589793)) ** 2
+    assert n2_target(sp, 0.4, 4.4145) == pytest.approx(1.125 * d_et, rel=TOL)
+    assert n2_target(sp, 0.4, 9.0) == pytest.approx(d_et, rel=TOL)
+    assert n2_target(sp, 1.0, 1.0) == pytest.approx(4.4145 / (4 * 3.141592653589793**2), rel=TOL)
+
+
+def test_ec8_amplification_at_height_by_hand():
+    """EN 1998-1 (4.25) over alpha S: z/H = 0.5, Ta/T1 = 0.5: 3 x 1.5 / 1.25 - 0.5 = 3.1;
+    Ta = T1 at the top: 3 x 2 - 0.5 = 5.5; Ta >> T1 at the base: below 1, so 1."""
+    from masonry_dem.assessment.checks import Building, ec8_amplification
+
+    assert ec8_amplification(Building(Z=5, H=10, T1=0.4), 0.2) == pytest.approx(3.1, rel=TOL)
+    assert ec8_amplification(Building(Z=10, H=10, T1=0.4), 0.4) == pytest.approx(5.5, rel=TOL)
+    assert ec8_amplification(Building(Z=0.0, H=10, T1=0.4), 4.0) == 1.0

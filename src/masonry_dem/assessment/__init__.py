@@ -7,3 +7,22 @@ results folder is read and written by ``export/assessment_files.py``.
 * :mod:`.kinematics` - the mechanism: alpha0, M*, e*, the capacity curve in finite rotations;
 * :mod:`.checks` - the codes' checks (linear and nonlinear) and :func:`~.checks.assess`.
 """
+
+from masonry_dem.assessment.checks import Assessment, Building, assess, assess_mode
+from masonry_dem.assessment.kinematics import CapacityCurve, Mechanism, hinged_mode
+from masonry_dem.assessment.sources import history_mechanism, limit_mechanism
+from masonry_dem.assessment.spectra import EC8Spectrum, NTC2018Spectrum
+
+__all__ = [
+    "Assessment",
+    "Building",
+    "CapacityCurve",
+    "EC8Spectrum",
+    "Mechanism",
+    "NTC2018Spectrum",
+    "assess",
+    "assess_mode",
+    "hinged_mode",
+    "history_mechanism",
+    "limit_mechanism",
+]
