@@ -51,6 +51,8 @@ PROPORTIONAL = 1e-6
 MAX_ROTATION = math.pi
 #: configurations of the capacity curve between the undeformed one and d_k0
 CURVE_POINTS = 201
+#: block configurations (blocks x values of s) whose motions are held in memory at once
+CHUNK = 200_000
 #: how the blocks' finite motions are composed (:meth:`Mechanism.of`)
 KINEMATICS = ("chain", "independent")
 
@@ -336,17 +338,27 @@ class Mechanism:
 
     def powers(self, s: ArrayLike = 0.0) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Virtual work rates of the dead and live loads at the configurations ``s`` (k,):
-        sum F_i . (V_i + O_i x c_i(s)) + M_i . O_i, the loads keeping their directions."""
-        R, t, V, O = self.motion(s)
-        c = np.einsum("knij,nj->kni", R, self.centres) + t
-        vel = V + np.cross(O, c)
-        dead = np.einsum("kni,ni->k", vel, self.dead[:, :3]) + np.einsum(
-            "kni,ni->k", O, self.dead[:, 3:]
-        )
-        live = np.einsum("kni,ni->k", vel, self.live[:, :3]) + np.einsum(
-            "kni,ni->k", O, self.live[:, 3:]
-        )
+        sum F_i . (V_i + O_i x c_i(s)) + M_i . O_i, the loads keeping their directions.
+        Computed :data:`CHUNK` block configurations at a time."""
+        s = np.atleast_1d(np.asarray(s, dtype=float))
+        dead, live = np.empty(s.size), np.empty(s.size)
+        for part in self._chunks(s.size):
+            R, t, V, O = self.motion(s[part])
+            c = np.einsum("knij,nj->kni", R, self.centres) + t
+            vel = V + np.cross(O, c)
+            dead[part] = np.einsum("kni,ni->k", vel, self.dead[:, :3]) + np.einsum(
+                "kni,ni->k", O, self.dead[:, 3:]
+            )
+            live[part] = np.einsum("kni,ni->k", vel, self.live[:, :3]) + np.einsum(
+                "kni,ni->k", O, self.live[:, 3:]
+            )
         return dead, live
+
+    def _chunks(self, count: int) -> list[slice]:
+        """Slices of ``count`` configurations, each of at most :data:`CHUNK` blocks x
+        configurations (the motion of one holds 4 x 9 floats per block)."""
+        step = max(1, CHUNK // max(self.centres.shape[0], 1))
+        return [slice(k, min(k + step, count)) for k in range(0, count, step)]
 
     @property
     def alpha_rigid(self) -> float:
@@ -367,11 +379,15 @@ class Mechanism:
     def control_displacement(self, s: ArrayLike) -> NDArray[np.float64]:
         """d_k: the displacement along the load of the centroid of the moving weights, at
         the configurations ``s``."""
+        s = np.atleast_1d(np.asarray(s, dtype=float))
         P = self.weights[self.moving]
         idx = np.flatnonzero(self.moving)
-        c = self.positions(self.centres[idx], idx, s)
-        moved = (c - self.centres[idx][None]) @ self.direction  # (k, m)
-        return np.asarray(moved @ P / P.sum(), dtype=float)
+        out = np.empty(s.size)
+        for part in self._chunks(s.size):
+            c = self.positions(self.centres[idx], idx, s[part])
+            moved = (c - self.centres[idx][None]) @ self.direction  # (k, m)
+            out[part] = moved @ P / P.sum()
+        return out
 
     def control_point(self) -> NDArray[np.float64]:
         """The centroid of the moving weights (3,) [m]."""
@@ -408,7 +424,7 @@ class Mechanism:
                 "displacements"
             )
         s_max = MAX_ROTATION / wmax
-        grid = np.linspace(0.0, s_max, 4001)
+        grid = np.linspace(0.0, s_max, 2001)
         dead, live = self.powers(grid)
         a = self.alpha(grid, alpha0)
         if not a[0] > 0:
