@@ -165,3 +165,31 @@ def test_a_folder_without_collapse(tmp_path, capsys):
     (tmp_path / "summary.json").write_text('{"status": "completed"}')
     assert main(["assess", str(tmp_path), "--ag", "0.2"]) == 2
     assert "not in a collapse" in capsys.readouterr().err
+
+
+def test_in_a_child_process_as_a_shell_runs_it(block_run):
+    """``python -m masonry_dem.cli assess`` with a bad value: one line, exit code 2, as the
+    other commands' input errors; with good ones, exit 0 and the files."""
+    from helpers.cli_process import run_cli
+
+    bad = run_cli("assess", block_run, "--ag", "0.2", "--soil", "Z", "--no-render")
+    assert bad.returncode == 2
+    assert bad.stderr.strip().splitlines() == [
+        "masonry-dem: error: soil = 'Z': must be one of A, B, C, D, E (ground category)"
+    ]
+    good = run_cli("assess", block_run, "--code", "ec8", "--ag", "0.2", "--soil", "C")
+    assert good.returncode == 0, good.stderr
+    assert f"results in {block_run}/" in good.stdout
+    assert _read(block_run)["code"] == "ec8"
+
+
+def test_overwrite_removes_the_assessment(tmp_path):
+    """A run with --overwrite into a folder that was assessed leaves no stale assessment."""
+    case = write_case(tmp_path, SINGLE_BLOCK)
+    out = tmp_path / "res"
+    assert main(["run", str(case), "--out", str(out), "--no-render", "--quiet"]) == 0
+    assert main(["assess", str(out), *NTC]) == 0
+    assert FILES <= {p.name for p in out.iterdir()}
+    args = ["run", str(case), "--out", str(out), "--no-render", "--quiet", "--overwrite"]
+    assert main(args) == 0
+    assert not FILES & {p.name for p in out.iterdir()}
