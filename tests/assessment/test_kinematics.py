@@ -240,6 +240,23 @@ def test_a_mechanism_at_height_takes_the_larger_demand():
     assert out.demand_ground == pytest.approx(0.2 * G / 2, rel=TOL)
     assert out.demand_height == pytest.approx(0.2 * G * 2.4 * (2 / 3) * (9 / 7) / 2, rel=TOL)
     assert out.demand == out.demand_height
+    # nonlinear at height: max(SDe(Ts), SDe(T1) psi gamma r^2 / sqrt((1 - r)^2 + 0.02 r)),
+    # r = Ts/T1, Ts on the 1/T branch, T1 on the plateau
+    Ts = out.Ts
+    assert 0.35 < Ts < 2.4
+    ground = 0.2 * G * 2.4 * 0.35 / Ts * (Ts / (2 * math.pi)) ** 2
+    r = Ts / 0.3
+    height = (
+        0.2
+        * G
+        * 2.4
+        * (0.3 / (2 * math.pi)) ** 2
+        * (2 / 3)
+        * (9 / 7)
+        * r**2
+        / math.sqrt((1 - r) ** 2 + 0.02 * r)
+    )
+    assert out.displacement_demand == pytest.approx(max(ground, height), rel=TOL)
 
 
 # ----------------------------------------------------------------------------- from the analyses
