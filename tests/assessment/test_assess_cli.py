@@ -142,6 +142,25 @@ def test_bad_parameters_one_line_exit_2(block_run, capsys, flags, words):
         assert w in err
 
 
+@pytest.mark.parametrize(
+    ("text", "words"),
+    [
+        ('ag = 0.2\nsoil = "B"\nF0 = 12\n', ["F0 = 12", "[1, 5]"]),
+        ('ag = "0.2"\n', ["ag = '0.2'", "without quotes", "(0, 1.5] g"]),
+        ("ag = 0.2\nZ = 4.0\nH = 3.0\n", ["Z = 4", "[0, H = 3] m"]),
+    ],
+)
+def test_a_bad_value_of_the_config_file_names_the_file(block_run, tmp_path, capsys, text, words):
+    cfg = tmp_path / "site.toml"
+    cfg.write_text(text)
+    assert main(["assess", str(block_run), "--config", str(cfg), "--no-render"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1
+    assert f"assessment file {cfg}: " in err
+    for w in words:
+        assert w in err
+
+
 def test_unknown_config_key(block_run, tmp_path, capsys):
     cfg = tmp_path / "bad.toml"
     cfg.write_text("ag = 0.2\npga = 0.3\n")

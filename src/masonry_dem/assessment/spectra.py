@@ -30,6 +30,8 @@ def check_range(
     ValueError naming ``name``, the value, the range and the unit."""
     opening = "(" if low_open else "["
     bracket = f"{opening}{low:g}, {high:g}] {unit}".rstrip()
+    if isinstance(value, (str, bytes)):  # a quoted number in a file is text, as case files say
+        raise ValueError(f"{name} = {value!r}: must be a number (without quotes) in {bracket}")
     try:
         number = float(value)  # type: ignore[arg-type]
     except (TypeError, ValueError):

@@ -103,8 +103,9 @@ def _number(name: str):
     return parse
 
 
-def parameters(args: argparse.Namespace) -> dict[str, Any]:
-    """The parameters: the --config file's, overridden by the flags given."""
+def parameters(args: argparse.Namespace) -> tuple[dict[str, Any], set[str]]:
+    """The parameters: the --config file's, overridden by the flags given; and the keys
+    that come from the file."""
     from masonry_dem._toml import tomllib
 
     params: dict[str, Any] = {}
@@ -120,11 +121,13 @@ def parameters(args: argparse.Namespace) -> dict[str, Any]:
                 f"assessment file {path}: unknown key {unknown[0]!r}; the keys are "
                 f"{', '.join(FIELDS)}"
             )
+    from_file = set(params)
     for name in FIELDS:
         value = getattr(args, name, None)
         if value is not None:
             params[name] = value
-    return params
+            from_file.discard(name)
+    return params, from_file
 
 
 def run_assessment(
@@ -195,15 +198,22 @@ def run_assessment(
 
 def assess_command(args: argparse.Namespace) -> int:
     folder = Path(args.results)
-    data = run_assessment(
-        folder,
-        parameters(args),
-        args.alpha0,
-        args.case,
-        not args.no_render,
-        args.moving,
-        args.kinematics,
-    )
+    params, from_file = parameters(args)
+    try:
+        data = run_assessment(
+            folder,
+            params,
+            args.alpha0,
+            args.case,
+            not args.no_render,
+            args.moving,
+            args.kinematics,
+        )
+    except ValueError as exc:  # a value of the file is named with the file, as case files are
+        key = str(exc).split(" ", 1)[0].rstrip(":")
+        if key in from_file:
+            raise ValueError(f"assessment file {args.config}: {exc}") from exc
+        raise
     keys = (
         "code",
         "alpha0",
