@@ -26,6 +26,7 @@ COMMANDS = (
     "paraview_state",
     "study",
     "limit",
+    "assess",
     "sweep",
     "warmup",
 )

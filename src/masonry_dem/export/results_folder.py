@@ -9,6 +9,7 @@ Layout::
     pushover.csv            step, lambda, control displacement
     mechanism_blocks.vtu, mechanism_interfaces.vtu   the collapse mode (runs ending in collapse)
     *.png, *.gif, *.pvsm    renders and ParaView states made from the folder
+    assessment.json, capacity_curve.csv, adrs.png   the seismic assessment (masonry-dem assess)
     .masonry-dem.lock       held (flock) by the process writing the folder
 
 A folder belongs to one run: :func:`claim` refuses a folder that holds another run's files
@@ -80,6 +81,9 @@ OWN_FILES = (
     "deformed_shape.pvsm",
     "force_view.pvsm",
     "mechanism.pvsm",
+    "assessment.json",
+    "capacity_curve.csv",
+    "adrs.png",
     ".*.tmp*",
     f"{STEPS}/.*.tmp*",
 )

@@ -1,0 +1,359 @@
+"""The kinematic analysis of a mechanism against closed forms (issue 38, items 1 and 2): a
+rigid block b x h rocking about its toe, a free-standing wall, a two-block chain worked by
+hand. Every expected value below is written from the mechanics, never from the package."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.optimize import brentq
+
+from helpers.case_files import SINGLE_BLOCK
+from masonry_dem.assessment.checks import Building, assess
+from masonry_dem.assessment.kinematics import Mechanism, hinged_mode
+from masonry_dem.assessment.spectra import NTC2018Spectrum
+from masonry_dem.cases.casefile import case_from_dict
+
+G = 9.81
+TOL = 1e-9
+
+
+def _model(geometry: dict, supports=None):
+    data = {
+        **SINGLE_BLOCK,
+        "geometry": {**SINGLE_BLOCK["geometry"], **geometry},
+        "supports": supports or [{"select": "base"}],
+    }
+    return case_from_dict(data).model
+
+
+def _rotation_about(centres, axis_point, theta=1.0):
+    """Mode (n, 6): every block turning by theta about the line along e1 through
+    ``axis_point`` (y, z), the top moving towards +e3."""
+    w = np.array([theta, 0.0, 0.0])
+    arm = centres - np.array([0.0, *axis_point])
+    u = np.cross(w, arm)
+    return np.hstack([u, np.tile(w, (len(centres), 1))])
+
+
+# ----------------------------------------------------------------------------- one block
+@pytest.fixture(scope="module")
+def block():
+    model = _model({})
+    wall = np.flatnonzero(~model.fixed.any(axis=1))
+    assert wall.size == 1
+    b = int(wall[0])
+    h, t = model.blocks.sizes[b, 1], model.blocks.sizes[b, 2]
+    # the DEM's mode: the block turning about the centre line of its base joint (y = 0, z = t/2)
+    mode = np.zeros((model.blocks.count, 6))
+    mode[b] = _rotation_about(model.blocks.centres[[b]], (0.0, t / 2), 0.37)[0]
+    hinged, residual = hinged_mode(model, mode)
+    return model, b, h, t, mode, hinged, residual
+
+
+def test_hinged_mode_turns_the_block_about_its_toe(block):
+    model, b, h, t, mode, hinged, residual = block
+    toe = _rotation_about(model.blocks.centres[[b]], (0.0, t), 0.37)[0]
+    assert residual < TOL
+    assert np.abs(hinged[b] - toe).max() < TOL
+
+
+def test_block_alpha0_mass_and_participation(block):
+    model, b, h, t, _, hinged, _ = block
+    mech = Mechanism.of(model, hinged)
+    W = t * h * model.blocks.sizes[b, 0] * 20e3
+    assert mech.alpha_rigid == pytest.approx(t / h, rel=TOL, abs=0)
+    m_star, e_star = mech.participating_mass()
+    assert m_star == pytest.approx(W / G, rel=TOL)
+    assert e_star == pytest.approx(1.0, rel=TOL)
+    assert mech.total_weight == pytest.approx(W, rel=TOL)
+
+
+def test_block_alpha_in_finite_rotation(block):
+    """alpha(theta) = (t cos th - h sin th) / (h cos th + t sin th) = tan(atan(t/h) - th):
+    the moments of W and alpha W about the toe with the centroid turned by th."""
+    model, b, h, t, _, hinged, _ = block
+    mech = Mechanism.of(model, hinged)
+    curve = mech.capacity_curve()
+    theta = 0.37 * curve.s
+    closed = (t * np.cos(theta) - h * np.sin(theta)) / (h * np.cos(theta) + t * np.sin(theta))
+    assert np.abs(curve.alpha - closed).max() < TOL
+    # alpha = 0 when the centroid is above the toe: theta0 = atan(t/h), the centroid moved t/2
+    assert 0.37 * curve.s[-1] == pytest.approx(math.atan(t / h), rel=TOL)
+    assert curve.d_k0 == pytest.approx(t / 2, rel=TOL)
+    assert curve.d0_star == pytest.approx(t / 2, rel=TOL)  # e* = 1
+    # the top of the block (its face's centre, at z = t/2, y = h) at theta0:
+    # (-t/2)(cos th0 - 1) + h sin th0 = t/2 + t h / (2 sqrt(t^2 + h^2))
+    top = model.blocks.centres[b] + np.array([0.0, h / 2, 0.0])
+    moved = mech.positions(top[None], [b], curve.s[-1])[0, 0]
+    assert moved[2] - top[2] == pytest.approx(t / 2 + t * h / (2 * math.hypot(t, h)), rel=TOL)
+    assert moved[1] - top[1] == pytest.approx(
+        -(-t / 2) * math.sin(math.atan(t / h)) + h * (math.cos(math.atan(t / h)) - 1), rel=TOL
+    )
+
+
+def test_block_checks_in_closed_form(block):
+    """a0* = (t/h) g / FC; d_u* = 0.4 t/2, d_s* = 0.4 d_u*, Ts = 2 pi sqrt(d_s*/a_s*) with
+    a_s* = alpha(theta_s) g / FC, theta_s where the centroid moved d_s*; NTC soil A: the
+    demand ag g / q and SDe(Ts) on the 1/T branch."""
+    model, b, h, t, _, hinged, _ = block
+    FC, q, ag, F0, Tc = 1.35, 2.0, 0.2, 2.4, 0.35
+    out, _ = assess(Mechanism.of(model, hinged), "ntc2018", NTC2018Spectrum(ag, F0, Tc), q=q, FC=FC)
+    assert out.a0_star == pytest.approx(t / h * G / FC, rel=TOL)
+    assert out.demand == pytest.approx(ag * G / q, rel=TOL)
+    assert out.ratio == pytest.approx(t / h / FC / (ag / q), rel=TOL)
+    du, ds = 0.4 * t / 2, 0.16 * t / 2
+    theta_s = brentq(
+        lambda th: (t / 2) * (1 - math.cos(th)) + (h / 2) * math.sin(th) - ds, 0, 1, xtol=1e-15
+    )
+    a_s = math.tan(math.atan(t / h) - theta_s) * G / FC
+    Ts = 2 * math.pi * math.sqrt(ds / a_s)
+    assert out.du_star == pytest.approx(du, rel=TOL)
+    assert out.Ts == pytest.approx(Ts, rel=TOL)
+    assert 0.35 < Ts < 2.4 + 4 * ag  # Tc < Ts < TD: Se = ag g F0 Tc / Ts
+    SDe = ag * G * F0 * Tc / Ts * (Ts / (2 * math.pi)) ** 2
+    assert out.displacement_demand == pytest.approx(SDe, rel=TOL)
+    assert out.passes_nonlinear == (du >= SDe)
+    np.testing.assert_allclose(out.control_point, model.blocks.centres[b], atol=TOL)
+
+
+# ----------------------------------------------------------------------------- free-standing wall
+@pytest.mark.parametrize("courses", [3, 8])
+def test_free_standing_wall(courses):
+    """A running-bond wall of N courses on a base, tipping as one body about its toe:
+    alpha0 = t/H, e* = 3N^2 / (4N^2 - 1) (courses of equal weight at heights (k + 1/2) a),
+    alpha(theta) = tan(atan(t/H) - theta), d_k0 = t/2 at the centroid."""
+    model = _model(
+        {
+            "builder": "running_bond_wall",
+            "blocks_along_length": 3,
+            "courses": courses,
+            "a": 0.081,
+            "b": 0.21,
+            "s": 0.07,
+        }
+    )
+    t, a = 0.07, 0.081
+    H = courses * a
+    wall = ~model.fixed.any(axis=1)
+    mode = np.zeros((model.blocks.count, 6))
+    mode[wall] = _rotation_about(model.blocks.centres[wall], (0.0, t / 2))  # the DEM's
+    hinged, residual = hinged_mode(model, mode)
+    assert residual < TOL
+    toe = _rotation_about(model.blocks.centres[wall], (0.0, t))
+    assert np.abs(hinged[wall] - toe).max() < TOL
+    mech = Mechanism.of(model, hinged)
+    assert mech.moving.sum() == wall.sum()
+    assert mech.alpha_rigid == pytest.approx(t / H, rel=TOL)
+    m_star, e_star = mech.participating_mass()
+    W = float(model.blocks.weights[wall].sum())
+    assert e_star == pytest.approx(3 * courses**2 / (4 * courses**2 - 1), rel=TOL)
+    assert m_star == pytest.approx(e_star * W / G, rel=TOL)
+    curve = mech.capacity_curve()
+    assert np.abs(curve.alpha - np.tan(math.atan(t / H) - curve.s)).max() < TOL
+    assert curve.d_k0 == pytest.approx(t / 2, rel=TOL)
+    assert curve.d0_star == pytest.approx(t / 2 / e_star, rel=TOL)
+
+
+# ----------------------------------------------------------------------------- two blocks
+def test_two_block_chain_by_hand():
+    """Two blocks t = 0.2, h = 0.4, b = 0.3 stacked: the lower turns by th1 = 1 about its
+    toe (y = 0, z = t), the upper by th2 = 2 about the front edge of their joint (y = 0.4,
+    z = t), which moves with the lower block. Centroids' virtual displacements:
+    lower dx = th1 h/2 = 0.2, dy = th1 t/2 = 0.1; upper dx = th1 h + th2 h/2 = 0.8,
+    dy = th2 t/2 = 0.2. With W = 20e3 x 0.3 x 0.4 x 0.2 = 480 N each:
+    alpha0 = (0.1 + 0.2) / (0.2 + 0.8) = 0.3; M* = W (0.2 + 0.8)^2 / (g (0.04 + 0.64))
+    = W / (0.68 g); e* = g M* / 2W = 1 / 1.36; a0* = 0.3 g / (e* FC) = 0.408 g / FC."""
+    model = _model({"builder": "stack_bond_column", "courses": 2})
+    c = model.blocks.centres
+    lower, upper = (int(np.flatnonzero(np.isclose(c[:, 1], y))[0]) for y in (0.2, 0.6))
+    mode = np.zeros((model.blocks.count, 6))
+    mode[lower] = [0, 0.1, 0.2, 1, 0, 0]
+    mode[upper] = [0, 0.2, 0.8, 2, 0, 0]
+    hinged, residual = hinged_mode(model, mode)  # a compatible chain: left as it is
+    assert residual < TOL
+    assert np.abs(hinged - mode).max() < TOL
+    mech = Mechanism.of(model, mode)
+    W = 480.0
+    assert mech.alpha_rigid == pytest.approx(0.3, rel=TOL)
+    m_star, e_star = mech.participating_mass()
+    assert m_star == pytest.approx(W / (0.68 * G), rel=TOL)
+    assert e_star == pytest.approx(1 / 1.36, rel=TOL)
+    FC = 1.35
+    out, _ = assess(mech, "ntc2018", NTC2018Spectrum(0.1), FC=FC)
+    assert out.a0_star == pytest.approx(0.408 * G / FC, rel=TOL)
+    assert out.M_star == pytest.approx(W / (0.68 * G), rel=TOL)
+    # the control point: the centroid of the two weights, at y = 0.4
+    np.testing.assert_allclose(out.control_point, [0.15, 0.4, 0.1], atol=TOL)
+
+
+def test_alpha0_of_the_analysis_keeps_the_joints_work():
+    """With alpha0 above the loads' own (the joints did work at collapse), alpha(s) is
+    alpha_rigid(s) + (alpha0 - alpha_rigid(0)) W_live(0) / W_live(s); for the block,
+    W_live(s) = W (h cos th + t sin th)/2 th' and so the shift goes as h / (h cos + t sin)."""
+    model = _model({})
+    b = int(np.flatnonzero(~model.fixed.any(axis=1))[0])
+    h, t = 0.4, 0.2
+    mode = np.zeros((model.blocks.count, 6))
+    mode[b] = _rotation_about(model.blocks.centres[[b]], (0.0, t))[0]
+    mech = Mechanism.of(model, mode)
+    s = np.linspace(0, 0.3, 7)
+    got = mech.alpha(s, alpha0=0.6)
+    rigid = np.tan(math.atan(t / h) - s)
+    shift = 0.1 * h / (h * np.cos(s) + t * np.sin(s))
+    assert np.abs(got - (rigid + shift)).max() < TOL
+
+
+def test_a_load_not_proportional_to_the_weights_is_refused():
+    """A live point force on one of two blocks is no seismic load: refused by name."""
+    data = {
+        **SINGLE_BLOCK,
+        "geometry": {**SINGLE_BLOCK["geometry"], "builder": "stack_bond_column", "courses": 2},
+        "loads": [
+            {"type": "self_weight"},
+            {"type": "point", "select": "course:1", "force": [0, 0, 5.0], "live": True},
+        ],
+    }
+    model = case_from_dict(data).model
+    mode = np.zeros((model.blocks.count, 6))
+    mode[:, 2] = 1.0
+    with pytest.raises(ValueError, match="proportional to the weights"):
+        Mechanism.of(model, mode)
+
+
+def test_a_mechanism_at_height_takes_the_larger_demand():
+    """NTC: at Z = 6 m of H = 9 m, N = 3, T1 = 0.3 s on soil A (ag 0.2, F0 2.4, Tc* 0.35):
+    Se(T1) on the plateau = 0.2 g 2.4; psi = 2/3, gamma = 9/7; demand Se psi gamma / q."""
+    model = _model({})
+    b = int(np.flatnonzero(~model.fixed.any(axis=1))[0])
+    mode = np.zeros((model.blocks.count, 6))
+    mode[b] = _rotation_about(model.blocks.centres[[b]], (0.0, 0.2))[0]
+    out, _ = assess(
+        Mechanism.of(model, mode),
+        "ntc2018",
+        NTC2018Spectrum(0.2, 2.4, 0.35),
+        Building(Z=6.0, H=9.0, storeys=3, T1=0.3),
+        q=2.0,
+    )
+    assert out.demand_ground == pytest.approx(0.2 * G / 2, rel=TOL)
+    assert out.demand_height == pytest.approx(0.2 * G * 2.4 * (2 / 3) * (9 / 7) / 2, rel=TOL)
+    assert out.demand == out.demand_height
+    # nonlinear at height: max(SDe(Ts), SDe(T1) psi gamma r^2 / sqrt((1 - r)^2 + 0.02 r)),
+    # r = Ts/T1, Ts on the 1/T branch, T1 on the plateau
+    Ts = out.Ts
+    assert 0.35 < Ts < 2.4
+    ground = 0.2 * G * 2.4 * 0.35 / Ts * (Ts / (2 * math.pi)) ** 2
+    r = Ts / 0.3
+    height = (
+        0.2
+        * G
+        * 2.4
+        * (0.3 / (2 * math.pi)) ** 2
+        * (2 / 3)
+        * (9 / 7)
+        * r**2
+        / math.sqrt((1 - r) ** 2 + 0.02 * r)
+    )
+    assert out.displacement_demand == pytest.approx(max(ground, height), rel=TOL)
+
+
+# ----------------------------------------------------------------------------- from the analyses
+@pytest.fixture(scope="module")
+def free_wall():
+    return _model(
+        {"builder": "running_bond_wall", "blocks_along_length": 3, "courses": 8}
+    )  # a = 0.4, t = 0.2: H = 3.2 m
+
+
+def test_free_standing_wall_from_the_limit_analysis(free_wall):
+    """The limit analysis's mechanism of the free wall: alpha0 = t/H = 0.0625 and
+    e* = 3 x 64 / 255, to the solver's precision (its velocities are exact at a vertex)."""
+    import masonry_dem as md
+    from masonry_dem.assessment.sources import limit_mechanism
+
+    mech, alpha0 = limit_mechanism(free_wall, md.limit_analysis(free_wall))
+    assert alpha0 == pytest.approx(0.0625, rel=TOL)
+    assert mech.alpha_rigid == pytest.approx(0.0625, rel=TOL)
+    assert mech.participating_mass()[1] == pytest.approx(3 * 64 / 255, rel=TOL)
+
+
+def test_free_standing_wall_from_the_pushover(free_wall):
+    """The pushover's collapse mode (joints turning about their centres, the elastic floor
+    of its damaged stiffness) hinged at the toe: alpha0 and e* of the rigid wall to 1e-8
+    (measured 3e-10: the mode's elastic part)."""
+    import masonry_dem as md
+    from masonry_dem.assessment.sources import history_mechanism
+
+    history = md.pushover(free_wall)
+    mech, alpha0 = history_mechanism(free_wall, history)
+    assert alpha0 == pytest.approx(0.0625, rel=1e-3)  # the pushover's own bracket
+    assert mech.alpha_rigid == pytest.approx(0.0625, rel=1e-8)
+    assert mech.participating_mass()[1] == pytest.approx(3 * 64 / 255, rel=1e-8)
+
+
+def test_two_block_chain_in_finite_rotation():
+    """The chain of ``test_two_block_chain_by_hand`` turned by theta: the lower block by theta
+    about its toe A = (y 0, z 0.2), the upper by theta more about the hinge C = (0.4, 0.2),
+    which turns with the lower block (the hinge stays closed):
+    c1 = A + Rot(th)(c1_0 - A), C = A + Rot(th)(C_0 - A), c2 = C + Rot(2 th)(c2_0 - C_0),
+    Rot(th) (y, z) = (y cos - z sin, y sin + z cos). The weights are equal, so
+    alpha(th) = (c1' + c2')_y / (c1' + c2')_z with Rot'(th) r = Rot(th + pi/2) r."""
+    model = _model({"builder": "stack_bond_column", "courses": 2})
+    c = model.blocks.centres
+    lower, upper = (int(np.flatnonzero(np.isclose(c[:, 1], y))[0]) for y in (0.2, 0.6))
+    mode = np.zeros((model.blocks.count, 6))
+    mode[lower] = [0, 0.1, 0.2, 1, 0, 0]
+    mode[upper] = [0, 0.2, 0.8, 2, 0, 0]
+    mech = Mechanism.of(model, mode)
+    curve = mech.capacity_curve()
+
+    def rot(r, th):
+        return np.array(
+            [r[0] * np.cos(th) - r[1] * np.sin(th), r[0] * np.sin(th) + r[1] * np.cos(th)]
+        )
+
+    A, C0 = np.array([0.0, 0.2]), np.array([0.4, 0.2])
+    r1, rC, r2 = np.array([0.2, 0.1]) - A, C0 - A, np.array([0.6, 0.1]) - C0
+
+    def alpha(th):
+        v1 = rot(r1, th + np.pi / 2)
+        v2 = rot(rC, th + np.pi / 2) + 2 * rot(r2, 2 * th + np.pi / 2)
+        return (v1[0] + v2[0]) / (v1[1] + v2[1])
+
+    exact = np.array([alpha(th) for th in curve.s])
+    assert np.abs(curve.alpha - exact).max() < TOL
+    theta0 = brentq(alpha, 0.01, 0.5, xtol=1e-15)
+    assert curve.s[-1] == pytest.approx(theta0, rel=TOL)
+    # the control point, the centroid of the two, moved along z: the mean of c1 and c2
+    c1 = A + rot(r1, theta0)
+    c2 = A + rot(rC, theta0) + rot(r2, 2 * theta0)
+    assert curve.d_k0 == pytest.approx(0.5 * (c1[1] + c2[1]) - 0.1, rel=TOL)
+    # the hinge C, as a point of either block, at theta0
+    on_lower = mech.positions([0.15, 0.4, 0.2], [lower], theta0)[0, 0]
+    on_upper = mech.positions([0.15, 0.4, 0.2], [upper], theta0)[0, 0]
+    assert np.abs(on_lower - on_upper).max() < TOL
+
+
+def test_overlap_tells_the_chain_from_independent_screws():
+    """At the chain's theta0 the two blocks of the chain still meet at the hinge with no
+    overlap; moved each by its own screw, the upper one turns about a fixed point instead
+    of the moving hinge and overlaps the lower one; ``assess_mode`` picks the chain."""
+    from masonry_dem.assessment.checks import assess_mode
+    from masonry_dem.assessment.kinematics import interpenetration
+
+    model = _model({"builder": "stack_bond_column", "courses": 2})
+    c = model.blocks.centres
+    lower, upper = (int(np.flatnonzero(np.isclose(c[:, 1], y))[0]) for y in (0.2, 0.6))
+    mode = np.zeros((model.blocks.count, 6))
+    mode[lower] = [0, 0.1, 0.2, 1, 0, 0]
+    mode[upper] = [0, 0.2, 0.8, 2, 0, 0]
+    chain = Mechanism.of(model, mode, kinematics="chain")
+    screws = Mechanism.of(model, mode, kinematics="independent")
+    s0 = chain.capacity_curve().s[-1]
+    assert interpenetration(chain, model, s0) < TOL
+    assert interpenetration(screws, model, s0) > 1e-3
+    _, _, _, info = assess_mode(model, mode, "ntc2018", NTC2018Spectrum(0.1))
+    assert info["kinematics"] == "chain"
+    assert info["overlaps"]["chain"] < info["overlaps"]["independent"]
