@@ -314,6 +314,37 @@ def test_highs_out_of_memory_is_no_property_of_the_wall():
     assert _highs_error(SimpleNamespace(status=4, message="Numerical issues")).status == "error"
 
 
+def test_clarabel_is_stopped_before_it_starts_by_every_memory_limit(monkeypatch):
+    """Clarabel aborts the process on a failed allocation, so it is refused before it
+    starts where its matrix needs more than the machine's available memory or the cgroup's
+    limit leaves, as where ``ulimit -v`` does (on 26a12f1 only the last was checked, and a
+    cgroup's OOM killer or the machine's lack of memory ended the process unreported)."""
+    import pytest
+    from scipy import sparse
+
+    from masonry_dem.cli import one_line
+    from masonry_dem.solvers import resources
+    from masonry_dem.solvers.limit_analysis.backends import clarabel_room
+
+    A = sparse.random(1000, 2000, density=0.01, format="csc", random_state=0)
+    need = resources.LIMIT_BYTES["clarabel"][0] + resources.CLARABEL_BYTES_PER_ENTRY * A.nnz
+    plenty = 1e15
+    for source, getter in (
+        ("the machine's available memory", "_available"),
+        ("the cgroup's memory limit", "_cgroup_left"),
+        ("the process's address-space limit (ulimit -v)", "_address_space_left"),
+    ):
+        for name in ("_available", "_cgroup_left", "_address_space_left"):
+            monkeypatch.setattr(resources, name, lambda: plenty)
+        monkeypatch.setattr(resources, getter, lambda: 0.5 * need)
+        with pytest.raises(MemoryError) as err:
+            clarabel_room(A)
+        line = one_line(err.value)
+        assert line.startswith("out of memory") and source in line, line
+        monkeypatch.setattr(resources, getter, lambda: 2.0 * need)
+        clarabel_room(A)  # room enough: no error
+
+
 def test_pardiso_out_of_memory_is_no_property_of_the_wall():
     import numpy as np
     import pytest

@@ -367,15 +367,16 @@ def _cgroup_left() -> float | None:
     return None
 
 
-def require_address_space(need: float, what: str) -> None:
-    """Raise MemoryError when ``need`` bytes are more than the process's address-space limit
-    (``ulimit -v``) leaves: for a library that aborts the process on a failed allocation
-    (Clarabel, in Rust) instead of reporting it."""
-    left = _address_space_left()
+def require_memory(need: float, what: str) -> None:
+    """Raise MemoryError when ``need`` bytes are more than the process may still take
+    (:func:`machine_memory`: the machine's available memory, what ``ulimit -v`` leaves, what
+    the cgroup's limit leaves), naming the limit met: for a library that aborts the process
+    on a failed allocation (Clarabel, in Rust) instead of reporting it, and for a cgroup,
+    whose OOM killer ends the process with a SIGKILL no process can report."""
+    left = machine_memory()
     if left is not None and need > left:
         raise MemoryError(
-            f"{what} would need about {_gb(need)} of address space; the process's limit "
-            f"(ulimit -v) leaves {_gb(left)}"
+            f"{what} would need about {_gb(need)}; {memory_limit_source()} leaves {_gb(left)}"
         )
 
 

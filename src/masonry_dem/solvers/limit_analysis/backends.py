@@ -93,16 +93,17 @@ def _highs_error(res: Any) -> Solution:
 
 
 def clarabel_room(A: sparse.csc_matrix) -> None:
-    """MemoryError before Clarabel starts on ``A`` where the process's ``ulimit -v`` leaves
-    too little: Clarabel, in Rust, aborts the process on a failed allocation."""
+    """MemoryError before Clarabel starts on ``A`` where the memory the process may still take
+    (the machine's available memory, ``ulimit -v``, the cgroup's limit) is too little:
+    Clarabel, in Rust, aborts the process on a failed allocation."""
     from masonry_dem.solvers.resources import (
         CLARABEL_BYTES_PER_ENTRY,
         LIMIT_BYTES,
-        require_address_space,
+        require_memory,
     )
 
     need = LIMIT_BYTES["clarabel"][0] + CLARABEL_BYTES_PER_ENTRY * A.nnz
-    require_address_space(need, f"Clarabel on {A.shape[0]} x {A.shape[1]} ({A.nnz} entries)")
+    require_memory(need, f"Clarabel on {A.shape[0]} x {A.shape[1]} ({A.nnz} entries)")
 
 
 #: Clarabel's status words of a solve its time or iteration limit stopped
