@@ -27,6 +27,7 @@ COMMANDS = (
     "study",
     "limit",
     "assess",
+    "report",
     "sweep",
     "warmup",
 )
