@@ -28,6 +28,7 @@ COMMANDS = (
     "limit",
     "assess",
     "report",
+    "fragility",
     "sweep",
     "warmup",
 )
