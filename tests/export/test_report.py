@@ -153,3 +153,23 @@ def test_in_headless_chromium(reported, tmp_path):
     green = np.array([0xE8, 0xF6, 0xEC], dtype=float)  # the verdict's "passes" background
     assert (np.abs(box - green).max(axis=2) < 8).mean() > 0.5
     assert (box.mean(axis=2) < 100).mean() > 0.005  # with text in it
+
+
+def test_the_readme_reads_lambda_the_bound_and_their_gap_as_the_run_does(assessed):
+    """Issue 38, item 6: the README's paragraph near the top says what lambda means (its
+    example as the report words it) and gives the bundled wall's lambda, bound and gap as a
+    run of it finds them."""
+    import json
+
+    readme = (Path(__file__).resolve().parents[2] / "README.md").read_text()
+    top = readme[: readme.index("## Modelling your wall")]
+    assert "## What lambda means, and which number to design with" in top
+    assert "Design with the pushover's certified lambda" in top
+    assert "Reading the certificate" in top and "Reading their gap" in top
+    words = lambda_in_words(0.283)
+    assert "a horizontal acceleration of 0.28 g, a tilt of 15.8 degrees" in words
+    assert "horizontal acceleration of 0.28 g, a tilt of atan(0.283) = 15.8 degrees" in top
+    summary = json.loads((assessed / "summary.json").read_text())
+    lam, bound = summary["lambda"], summary["limit_analysis_bound"]
+    gap = round(100 * (bound - lam) / lam)
+    assert f"lambda {lam:.3f} under a bound of {bound:.3f}, a gap of {gap} %" in top

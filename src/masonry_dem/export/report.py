@@ -120,11 +120,11 @@ def certificate_in_words(summary: dict[str, Any]) -> list[str]:
                 if cert.get("within_bound")
                 else f" (the certificate's bound check: {cert.get('bound_status', 'n/a')})"
             )
-            + ". The gap comes from the flow rule: the associative analysis lets a sliding "
-            "or twisting joint dilate and so carry more than the DEM's joints, which slide "
-            "without dilating. A small gap (a mechanism of pure rocking) means both describe "
-            "the same collapse; a large one that sliding and torsion take part and the bound "
-            "is loose. Design with the certified lambda, never with the bound."
+            + ". A small gap (a few %, a mechanism that rocks) means rigid blocks and the "
+            "DEM describe the same collapse; a large one that joints slide or twist (an "
+            "associative joint dilates as it slides and carries more) or that the wall arches "
+            "between held edges (rigid blocks never flatten an arch): the bound is loose, the "
+            "pushover is not wrong. Design with the certified lambda, never with the bound."
         )
     elif status == "collapse":
         lines.append(
