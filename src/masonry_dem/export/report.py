@@ -313,7 +313,11 @@ def _assessment_table(a: dict[str, Any]) -> str:
             f"<td>{html.escape(unit)}</td></tr>"
         )
     spec = a.get("spectrum") or {}
-    site = ", ".join(f"{k} = {v}" for k, v in spec.items() if not isinstance(v, (dict, list)))
+    site = ", ".join(
+        f"{k} = {format(v, '.4g') if isinstance(v, float) else v}"
+        for k, v in spec.items()
+        if not isinstance(v, (dict, list))
+    )
     return (
         "<table><thead><tr><th>quantity</th><th>value</th><th>unit</th></tr></thead><tbody>"
         + "".join(rows)
