@@ -180,7 +180,10 @@ def fragility_figure(
 
     x = np.sort(np.asarray(capacities, dtype=float))
     top = max(float(x.max()), fit.median * math.exp(3 * fit.beta)) * 1.05
-    ag = np.linspace(top / 2000, top, 400)
+    # from zero, unless the curve rises far from it (a small beta): then around its rise
+    low = min(float(x.min()), fit.median * math.exp(-3 * fit.beta)) * 0.95
+    left = 0.0 if low < 0.4 * fit.median else low
+    ag = np.linspace(max(left, top / 2000), top, 400)
     lo, hi = fragility_band(fit, resamples, ag)
     fig = Figure(figsize=(7.0, 4.6), dpi=100)
     FigureCanvasAgg(fig)
@@ -205,7 +208,7 @@ def fragility_figure(
         label=f"the {x.size} runs",
     )
     ax.axvline(fit.median, color="#7f8c8d", ls=":", lw=1)
-    ax.set_xlim(0, top)
+    ax.set_xlim(left, top)
     ax.set_ylim(0, 1)
     ax.set_xlabel("peak ground acceleration ag [g]")
     ax.set_ylabel("probability of failing the check")
