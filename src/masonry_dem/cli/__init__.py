@@ -27,6 +27,8 @@ COMMANDS = (
     "study",
     "limit",
     "assess",
+    "report",
+    "fragility",
     "sweep",
     "warmup",
 )

@@ -31,6 +31,12 @@ RESULT_COLUMNS: dict[str, type] = {
     "mechanism_blocks": int,  # blocks moving >= 5 % of the largest translation of the mode
     "mechanism_cracks": int,  # joints moving >= 50 % of the largest: the cracks
     "mechanism_sliding_share": float,  # sliding / (sliding + opening) over the cracks
+    # the seismic mechanism (a weight-proportional live load c P_i d only): alpha0 = c lambda
+    # and e*, the participating mass fraction of the hinged mode (Circolare [C8A.4.3]); with
+    # them a0* = alpha0 g / (e* FC) and the run's capacity as a ground acceleration
+    # (masonry-dem fragility, docs/assessment.md)
+    "alpha0": float,
+    "e_star": float,
     "seconds": float,  # wall-clock time of the run on its worker
     "cpu_seconds": float,  # CPU time of the worker process meanwhile: seconds / cpu_seconds
     # above 1 is time spent waiting for a core (a loaded machine), not computing
@@ -155,4 +161,24 @@ def mechanism_summary(model: Model, history: History) -> dict[str, Any]:
         else 0,
         "mechanism_cracks": int(cracks.sum()),
         "mechanism_sliding_share": slide / (slide + opening) if slide + opening > 0 else None,
+        **seismic_mechanism(model, mode, history.collapse_multiplier),
     }
+
+
+def seismic_mechanism(model: Model, mode: np.ndarray, lam: float | None) -> dict[str, Any]:
+    """alpha0 = c lambda and e* of the collapse mode turned into the rigid-block mechanism
+    (:func:`masonry_dem.assessment.kinematics.hinged_mode`), as ``masonry-dem assess`` reads
+    it (its default share of moving blocks); {} when the live load is not c P_i d (no seismic
+    reading) or there is no multiplier."""
+    from masonry_dem.assessment.kinematics import Mechanism, hinged_mode
+
+    if lam is None:
+        return {}
+    try:
+        hinged, _ = hinged_mode(model, mode)
+        mechanism = Mechanism.of(model, hinged, kinematics="independent")
+        _, e_star = mechanism.participating_mass()
+    except (ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:
+        log.info("%s: no seismic mechanism (%s)", model.name, exc)
+        return {}
+    return {"alpha0": float(lam) * mechanism.scale, "e_star": float(e_star)}

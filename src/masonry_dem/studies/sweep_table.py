@@ -81,12 +81,23 @@ def read_rows(folder: Path, plan: Plan) -> dict[int, dict[str, Any]]:
     with path.open(newline="") as f:
         reader = csv.reader(f)
         header = next(reader, None)
-        if header != columns:
+        # a table of an older version lacks some result columns: read by name, the missing
+        # ones empty
+        head = len(plan.paths) + 1
+        known = (
+            header is not None
+            and header[:head] == columns[:head]
+            and set(header[head:]) <= set(RESULT_COLUMNS)
+            and {"status", "lambda"} <= set(header[head:])
+        )
+        if not known:
             raise ValueError(
                 f"{path}: its columns are not those of this sweep; use another folder or overwrite"
             )
+        assert header is not None
+        names = header[head:]
         for cells in reader:
-            if len(cells) != len(columns) or not cells[0].isdigit():
+            if len(cells) != len(header) or not cells[0].isdigit():
                 continue
             run = int(cells[0])
             if run >= len(points):
@@ -97,11 +108,8 @@ def read_rows(folder: Path, plan: Plan) -> dict[int, dict[str, Any]]:
                     f"{path}: run {run} was made with other values than this sweep's; use "
                     "another folder or overwrite"
                 )
-            results = cells[1 + len(plan.paths) :]
-            typed = {
-                c: _parse_cell(t, kind)
-                for (c, kind), t in zip(RESULT_COLUMNS.items(), results, strict=True)
-            }
+            given = dict(zip(names, cells[head:], strict=True))
+            typed = {c: _parse_cell(given.get(c, ""), kind) for c, kind in RESULT_COLUMNS.items()}
             rows[run] = {"run": run, **point, **typed}
     return rows
 
