@@ -150,8 +150,8 @@ def _step_scene(
     scene = Scene(data, view, wsize, gap)
     try:
         scene.update(data, s)
-        scene.frame_camera(deformed_extent(data, s, gap))
         scene.title(_title(series, index, data, s))
+        scene.frame_camera(deformed_extent(data, s, gap))
     except BaseException:
         scene.close()
         raise
@@ -300,6 +300,8 @@ def render_animation(
     scene = Scene(data, view, wsize, gap)
     frames = []
     try:
+        # the longest title of the frames sets the room left below it
+        scene.title(_title(series, n - 1, read_step(series, n - 1), scale))
         scene.frame_camera(np.array([lo, hi]))
         for k in range(n):
             data = data if k == 0 else read_step(series, k)
@@ -381,16 +383,16 @@ def _mechanism_scene(
     )
     try:
         scene.update(data, s)
-        scene.frame_camera(deformed_extent(data, s, gap))
         what = "mechanism, last increment" if last_increment else "mechanism (collapse mode)"
         amplification = (
             f"displacements x {s:.3g}"
             if last_increment
-            else f"mode x {s:.3g} (largest translation 1)"
+            else f"unit mode x {s:.3g}"
         )
         scene.title(
             caption(name, what, lam, summary.get("status"), amplification, method_of(summary))
         )
+        scene.frame_camera(deformed_extent(data, s, gap))
     except BaseException:
         scene.close()
         raise

@@ -329,6 +329,9 @@ class Scene:
         self.view = check_view(view)
         self.gap = gap
         self._title: Any = None
+        #: the title's height as a fraction of the window (0 before a title is set): the
+        #: camera keeps the wall below it
+        self._title_height = 0.0
         # no multi-sampling: exact damage colours on screen, and 2-3x faster with Mesa
         theme = copy.deepcopy(pv.global_theme)
         theme.multi_samples = 0
@@ -417,6 +420,7 @@ class Scene:
         aspect = w / h
         # the wall goes in the free part of the window: below the title, left of the legend
         x0, y0, x1, y1 = FREE_BOX
+        y1 = min(y1, 1.0 - self._title_height)  # a title of many lines takes more
         margin = 1.03 if v["parallel"] else 1.1
         half_view = margin * max(half_h / (y1 - y0), half_w / (aspect * (x1 - x0)))
         shift = ((x0 + x1) / 2 - 0.5) * 2 * half_view * aspect * right + (
@@ -442,10 +446,16 @@ class Scene:
 
     def title(self, text: str) -> None:
         """Title at the top centre, wrapped to the window's width (never cut at its edges;
-        one text actor, updated in place: cheap per frame)."""
+        one text actor, updated in place: cheap per frame). Set it before
+        :meth:`frame_camera`, which keeps the wall and its labels below it."""
         w, h = self.plotter.window_size
         size = max(9, int(round(26 * min(w / 1200, h / 900))))
         text = fitted_title(text, w / 72.0, size)  # VTK's font size: pixels, as points at 72 dpi
+        # VTK sets the lines about 0.9 font sizes apart, from max(4, h / 150) pixels below the
+        # top; the load's label, centred on its point, needs half its own font below that
+        lines = text.count("\n") + 1
+        label = max(8, int(round(20 * min(w / 1200, h / 900))))  # Annotations' font
+        self._title_height = (max(4, h // 150) + 0.9 * size * lines + 0.5 * label) / h
         if self._title is None:
             actor = self.pv.Text(text)
             prop = actor.GetTextProperty()
