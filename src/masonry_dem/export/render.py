@@ -384,11 +384,7 @@ def _mechanism_scene(
     try:
         scene.update(data, s)
         what = "mechanism, last increment" if last_increment else "mechanism (collapse mode)"
-        amplification = (
-            f"displacements x {s:.3g}"
-            if last_increment
-            else f"unit mode x {s:.3g}"
-        )
+        amplification = f"displacements x {s:.3g}" if last_increment else f"unit mode x {s:.3g}"
         scene.title(
             caption(name, what, lam, summary.get("status"), amplification, method_of(summary))
         )
