@@ -72,6 +72,55 @@ def test_cone_kernels_against_their_definitions():
             assert inside[0] > np.hypot(inside[1], inside[2])
 
 
+def test_centrality_correction_is_the_clipped_spectral_product():
+    """Gondzio's correction of a cone: the scaled product v = (W s_t) o (W^-1 z_t) at the
+    trial point has spectral values v0 +- |v1|; the correction moves each into [lo, hi]
+    (a decrease capped at -hi) in v's own frame, so v + t has its spectral values there."""
+    rng = np.random.default_rng(5)
+    s, z = _interior(rng, 200), _interior(rng, 200)
+    ds, dz = 0.3 * rng.standard_normal((200, 3)), 0.3 * rng.standard_normal((200, 3))
+    w, beta, _ = cones.nt_scaling(s, z)
+    alpha, lo, hi = 0.6, 0.5, 3.0
+    ws, wz = np.empty_like(s), np.empty_like(s)
+    cones.apply_w(w, beta, s + alpha * ds, 1, ws)
+    cones.apply_w(w, beta, z + alpha * dz, -1, wz)
+    v = cones.jordan(ws, wz)
+    t = cones.centrality_correction(w, beta, s, z, ds, dz, alpha, lo, hi)
+
+    def spectral(x: np.ndarray) -> np.ndarray:  # (p, 2): v0 + |v1|, v0 - |v1|
+        norm = np.hypot(x[:, 1], x[:, 2])
+        return np.column_stack([x[:, 0] + norm, x[:, 0] - norm])
+
+    before = spectral(v)
+    assert np.allclose(spectral(v + t), np.maximum(np.clip(before, lo, hi), before - hi))
+    assert (before < lo).any() and (before > hi).any()  # both sides were clipped
+    # the frame kept: v1 + t1 parallel to v1
+    cross = (v + t)[:, 1] * v[:, 2] - (v + t)[:, 2] * v[:, 1]
+    assert np.allclose(cross, 0.0, atol=1e-12)
+
+
+def test_centrality_correctors_save_iterations():
+    """Gondzio's correctors (``CORRECTORS``, one solve each with the factorization at hand)
+    on the 298-block ladder wall, every DOF: the same certified bracket in fewer iterations
+    than Mehrotra's predictor-corrector alone (20 against 22 when measured)."""
+    _pardiso()
+    problem = formulation.Problem.of(_ladder_wall(17))
+    iterations = {}
+    for correctors in (0, normal_ipm.CORRECTORS):
+        normal_ipm.CORRECTORS, saved = correctors, normal_ipm.CORRECTORS
+        try:
+            out = normal_ipm.solve_kinematic_normal(problem, 2)
+        finally:
+            normal_ipm.CORRECTORS = saved
+        assert out is not None
+        sol, _, _, bracket = out
+        assert bracket.width <= normal_ipm.BRACKET
+        assert bracket.lower - 1e-6 <= 0.465658 <= bracket.upper + 1e-6
+        iterations[correctors] = sol.iterations
+    assert normal_ipm.CORRECTORS >= 1
+    assert iterations[normal_ipm.CORRECTORS] < iterations[0], iterations
+
+
 def test_single_block_tilts_inside_the_bracket():
     """A block a high and s thick on a rigid base tilts out of plane at lambda = s/a (its
     weight's lever s/2 against the push's a/2; friction 0.6 > s/a): the certified bracket
