@@ -99,6 +99,47 @@ def test_centrality_correction_is_the_clipped_spectral_product():
     assert np.allclose(cross, 0.0, atol=1e-12)
 
 
+def test_normal_matrix_is_g_transpose_s_g():
+    """The compiled pattern of the normal matrix (no sort: a block's columns are contiguous)
+    and its entries: ``N x = G^T W^2 G x`` on a wall with a partly held column, on every DOF
+    and on the mirror-symmetric ones; every row starts on its diagonal."""
+    from scipy import sparse
+
+    from masonry_dem.solvers.limit_analysis.kinematic import corner_velocity_rows
+
+    wall = running_bond_wall(5, 6, a=0.1, b=0.25, s=0.12, unit_weight=GAMMA)
+    placed, base = add_base(wall)
+    held = [0, 5, 10]
+    model = Model.build(
+        placed,
+        InterfaceMaterial(kn=1e9, kt=4e8, friction=0.6),
+        [Support([base]), Support(held, ["u1", "u3"])],
+        [SelfWeight(), WeightProportional((1.0, 0.0, 0.0))],
+    )
+    problem = formulation.Problem.of(model)
+    G_all = corner_velocity_rows(problem, 2).tocsr()
+    free = np.flatnonzero(problem.free)
+    rng = np.random.default_rng(7)
+    for drop in (None, mirror_dofs(model)):
+        keep = np.ones(free.size, dtype=bool) if drop is None else ~drop[free]
+        G = G_all[:, keep].tocsr()
+        index = np.full(model.n_dofs, -1)
+        index[free[keep]] = np.arange(int(keep.sum()))
+        normal = normal_ipm._NormalMatrix(G, model, index, 4)
+        p = G.shape[0] // 3
+        s, z = _interior(rng, p), _interior(rng, p)
+        w, beta, _ = cones.nt_scaling(s, z)
+        N = normal.assemble(w, beta, 0.0)
+        assert np.array_equal(N.indices[N.indptr[:-1]], np.arange(N.shape[0]))
+        full = N + sparse.triu(N, 1).T
+        x = rng.standard_normal(G.shape[1])
+        sgx = np.empty((p, 3))
+        cones.apply_w(w, beta, np.ascontiguousarray((G @ x).reshape(-1, 3)), 2, sgx)
+        expected = G.T @ sgx.ravel()
+        assert np.allclose(full @ x, expected, rtol=1e-12, atol=1e-12 * np.abs(expected).max())
+    assert drop is not None  # loaded in its plane: the mirror plane was tried too
+
+
 def test_centrality_correctors_save_iterations():
     """Gondzio's correctors (``CORRECTORS``, one solve each with the factorization at hand)
     on the 298-block ladder wall, every DOF: the same certified bracket in fewer iterations

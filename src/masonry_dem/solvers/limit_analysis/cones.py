@@ -198,3 +198,93 @@ def normal_entries(
                 if t >= 0:
                     data[t] += block[a, b]
     return data
+
+
+@numba.njit(cache=True)
+def local_rows(
+    indptr: np.ndarray, indices: np.ndarray, data: np.ndarray, cols: np.ndarray, rows: int
+) -> np.ndarray:
+    """Each interface's ``rows`` rows of a CSR matrix G (interface-major: rows ``i * rows``
+    to ``(i + 1) * rows``) on its solved columns ``cols[i]`` (-1: none), as (m, rows, C)."""
+    m, C = cols.shape
+    local = np.zeros((m, rows, C))
+    for i in range(m):
+        for r in range(rows):
+            row = i * rows + r
+            for j in range(indptr[row], indptr[row + 1]):
+                col = indices[j]
+                for q in range(C):
+                    if cols[i, q] == col:
+                        local[i, r, q] += data[j]
+                        break
+    return local
+
+
+@numba.njit(cache=True)
+def normal_pattern(
+    cols: np.ndarray,
+    col_block: np.ndarray,
+    start: np.ndarray,
+    count: np.ndarray,
+    bptr: np.ndarray,
+    bnbr: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The upper-triangular CSR pattern of ``N = G^T S G`` and every interface's slots, with
+    no sort: the columns of a block are contiguous (``start``, ``count``) and increase with
+    the block, so row c of block b holds b's columns from c on, then those of b's neighbours
+    above it (``bptr``, ``bnbr``: sorted), in that order. Returns (indptr, indices, slot),
+    ``slot[i, a, b]`` the entry of interface i's pair (a <= b) of solved columns, -1 where
+    either is not solved."""
+    n = col_block.size
+    nb = start.size
+    above = np.zeros(nb, dtype=np.int64)  # columns of a block's neighbours above it
+    prefix = np.zeros(bnbr.size, dtype=np.int64)  # of the neighbours before each pair
+    for b in range(nb):
+        total = 0
+        for p in range(bptr[b], bptr[b + 1]):
+            prefix[p] = total
+            total += count[bnbr[p]]
+        above[b] = total
+    indptr = np.zeros(n + 1, dtype=np.int64)
+    for c in range(n):
+        b = col_block[c]
+        indptr[c + 1] = indptr[c] + (start[b] + count[b] - c) + above[b]
+    indices = np.empty(indptr[n], dtype=np.int32)
+    for c in range(n):
+        b = col_block[c]
+        t = indptr[c]
+        for x in range(c, start[b] + count[b]):
+            indices[t] = x
+            t += 1
+        for p in range(bptr[b], bptr[b + 1]):
+            nbr = bnbr[p]
+            for x in range(start[nbr], start[nbr] + count[nbr]):
+                indices[t] = x
+                t += 1
+    m, C = cols.shape
+    slot = np.full((m, C, C), -1, dtype=np.int64)
+    for i in range(m):
+        for a in range(C):
+            ca = cols[i, a]
+            if ca < 0:
+                continue
+            for b2 in range(a, C):
+                cb = cols[i, b2]
+                if cb < 0:
+                    continue
+                lo, hi = min(ca, cb), max(ca, cb)
+                blo, bhi = col_block[lo], col_block[hi]
+                if blo == bhi:
+                    slot[i, a, b2] = indptr[lo] + hi - lo
+                    continue
+                for p in range(bptr[blo], bptr[blo + 1]):
+                    if bnbr[p] == bhi:
+                        slot[i, a, b2] = (
+                            indptr[lo]
+                            + (start[blo] + count[blo] - lo)
+                            + prefix[p]
+                            + hi
+                            - start[bhi]
+                        )
+                        break
+    return indptr, indices, slot

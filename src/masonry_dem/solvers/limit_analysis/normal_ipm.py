@@ -122,26 +122,36 @@ class _NormalMatrix:
         cols = np.take_along_axis(cols, np.argsort(cols < 0, axis=1, kind="stable"), axis=1)
         C = max(int((cols >= 0).sum(axis=1).max(initial=1)), 1)
         cols = np.ascontiguousarray(cols[:, :C])
-        rows = np.arange(m * 3 * K).reshape(m, 3 * K)
-        present = cols >= 0
-        local = np.zeros((m, 3 * K, C))
-        r = np.broadcast_to(rows[:, :, None], local.shape)
-        c = np.broadcast_to(np.where(present, cols, 0)[:, None, :], local.shape)
-        local[...] = np.asarray(G[r.ravel(), c.ravel()]).reshape(local.shape)
-        local *= present[:, None, :]
+        G = G.tocsr()
+        G.sort_indices()
+        local = cones.local_rows(G.indptr, G.indices, G.data, cols, 3 * K)
         self.local = local.reshape(m, K, 3, C)
-        # the pattern: the upper triangle of every interface's C x C, duplicates summed
-        lo = np.minimum(cols[:, :, None], cols[:, None, :]).astype(np.int64)
-        hi = np.maximum(cols[:, :, None], cols[:, None, :]).astype(np.int64)
-        fixed = (lo < 0) | np.tri(C, k=-1, dtype=bool)[None]  # and each pair once (a <= b)
-        keys = np.where(fixed, -1, lo * n + hi)
-        unique, inverse = np.unique(keys[~fixed], return_inverse=True)
-        self.slot = np.full((m, C, C), -1, dtype=np.int64)
-        self.slot[~fixed] = inverse
-        self.indptr = np.searchsorted(unique // n, np.arange(n + 1)).astype(np.int32)
-        self.indices = (unique % n).astype(np.int32)
-        self.diagonal = np.searchsorted(unique, np.arange(n, dtype=np.int64) * (n + 1))
-        self.nnz = unique.size
+        # the pattern (compiled, no sort: 0.5 s of numpy's unique at 10^4 blocks): the
+        # columns of a block are contiguous and increase with the block (``index`` counts
+        # the solved DOFs in order)
+        solved = np.flatnonzero(index >= 0)
+        assert np.array_equal(index[solved], np.arange(n)), "the solved DOFs counted in order"
+        col_block = np.empty(n, dtype=np.int64)
+        col_block[index[solved]] = solved // 6
+        nb = model.blocks.count
+        count = np.bincount(col_block, minlength=nb).astype(np.int64)
+        start = np.zeros(nb, dtype=np.int64)
+        first = np.flatnonzero(count)
+        start[first] = np.searchsorted(col_block, first)
+        blocks = np.where(cols >= 0, col_block[np.maximum(cols, 0)], -1)
+        b_lo = np.where(blocks < 0, nb, blocks).min(axis=1)
+        b_hi = blocks.max(axis=1)
+        pair = (b_lo < b_hi) & (b_lo < nb)
+        keys = np.unique(b_lo[pair] * nb + b_hi[pair])
+        bptr = np.searchsorted(keys // nb, np.arange(nb + 1)).astype(np.int64)
+        bnbr = (keys % nb).astype(np.int64)
+        indptr, indices, self.slot = cones.normal_pattern(
+            np.ascontiguousarray(cols, dtype=np.int64), col_block, start, count, bptr, bnbr
+        )
+        self.indptr = indptr.astype(np.int32)
+        self.indices = indices
+        self.diagonal = indptr[:-1].copy()  # each row starts on its diagonal
+        self.nnz = int(indptr[-1])
         self._handle: PardisoHandle | None = None  # of the last matrix factorized
         #: seconds of the numeric factorizations and of the solves
         self.seconds = [0.0, 0.0]
