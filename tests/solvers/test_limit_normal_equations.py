@@ -140,6 +140,22 @@ def test_normal_matrix_is_g_transpose_s_g():
     assert drop is not None  # loaded in its plane: the mirror plane was tried too
 
 
+def test_early_iterates_past_the_cap_are_not_no_collapse(monkeypatch):
+    """The first iterates are far from any mechanism, and their ``c . u`` passes lambda's cap
+    on large walls (7 000 at 3 x 10^4 blocks): at 10^5 that sent the wall to Clarabel, which
+    filled the memory. Here, with the cap at 50 and the 298-block wall (c . u 110 at its
+    third iterate, lambda 0.4657), the normal equations still certify the multiplier; the cap
+    counts only once the iterate is nearly a mechanism."""
+    _pardiso()
+    problem = formulation.Problem.of(_ladder_wall(17))
+    monkeypatch.setattr(formulation, "LAMBDA_CAP", 50.0)
+    assert formulation.lambda_cap(problem.live, problem.rhs) < 100
+    out = normal_ipm.solve_kinematic_normal(problem, 2)
+    assert out is not None
+    bracket = out[3]
+    assert bracket.lower - 1e-6 <= 0.465658 <= bracket.upper + 1e-6
+
+
 def test_centrality_correctors_save_iterations():
     """Gondzio's correctors (``CORRECTORS``, one solve each with the factorization at hand)
     on the 298-block ladder wall, every DOF: the same certified bracket in fewer iterations
