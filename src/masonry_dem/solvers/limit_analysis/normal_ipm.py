@@ -64,8 +64,11 @@ ADMISSIBLE = 1e-8
 #: largest equilibrium residual of accepted forces, relative to |c| (Clarabel's feasibility
 #: tolerance)
 EQUILIBRIUM = 1e-8
-#: the iteration gives up (and the caller falls back on Clarabel) after this many steps
-MAX_ITERATIONS = 80
+#: the iteration gives up (and the caller falls back on Clarabel) after this many steps. The
+#: iterations grow with the wall: 35, 52 and 70 at 10^3, 10^4 and 3 x 10^4 blocks in plane
+#: (one corrector); 80 would leave a 10^5-block wall to Clarabel, whose memory there is the
+#: machine's. A stalled step, lambda's cap and the time budget end a stuck iteration sooner
+MAX_ITERATIONS = 150
 #: the exact cone takes this solver from this many velocities (6 per free block): on every
 #: DOF it took Clarabel's CPU time at 636 velocities (106 blocks) and 0.57x at 1 788 (298
 #: blocks); below, Clarabel's answers and its infeasibility certificates come at no cost
