@@ -25,6 +25,13 @@
                                                                # bracket, backend), and the
                                                                # bound's share of
                                                                # ``masonry-dem run``
+    python benchmarks/bench_limit_analysis.py --scale 1000 10000 --against main --no-share
+                                                               # each wall on main's src too,
+                                                               # in turn: before and after in
+                                                               # one run (CPU ratio); a wall
+                                                               # above --max-memory GB (8) is
+                                                               # stopped, or not started when
+                                                               # its estimate is above it
 
 Times are wall-clock seconds of one run on this machine; compare the ratios printed in one
 run, not figures from different runs.
