@@ -156,6 +156,60 @@ def test_early_iterates_past_the_cap_are_not_no_collapse(monkeypatch):
     assert bracket.lower - 1e-6 <= 0.465658 <= bracket.upper + 1e-6
 
 
+def test_a_reflection_that_swaps_blocks_halves_the_velocities():
+    """A wall on a base pushed out of its plane is symmetric about the vertical plane across
+    its middle, which swaps its blocks in pairs (``mirror_pairs``; no plane holds every block,
+    so ``mirror_dofs`` finds none): the normal equations on its symmetric mechanisms give the
+    bracket of every DOF, which holds the closed form of the wall tipping about its base edge
+    as one body, lambda = s / H; the wall held at its left edge only has no such plane."""
+    from masonry_dem.geometry import selectors as select
+    from masonry_dem.solvers.limit_analysis.mirror import mirror_pairs, symmetric_basis
+
+    _pardiso()
+    a, b, s = 0.081, 0.210, 0.070
+    wall = running_bond_wall(14, 14, a=a, b=b, s=s, unit_weight=GAMMA)
+    placed, base = add_base(wall)
+
+    def model(held: list[int]) -> Model:
+        supports = [Support([base])] + ([Support(held, ["u1", "u3"])] if held else [])
+        return Model.build(
+            placed,
+            InterfaceMaterial(kn=1e9, kt=4e8, friction=0.7),
+            supports,
+            [SelfWeight(), WeightProportional((0.0, 0.0, 1.0))],
+        )
+
+    free = model([])
+    assert mirror_dofs(free) is None
+    problem = formulation.Problem.of(free)
+    pairs = mirror_pairs(problem)
+    assert pairs is not None
+    perm, signs, _ = pairs
+    swapped = perm != np.arange(free.blocks.count)
+    assert swapped.sum() >= free.blocks.count - 14 and np.array_equal(
+        perm[perm], np.arange(perm.size)
+    )
+    P, kept, _ = symmetric_basis(problem, pairs)
+    assert P.shape[1] < 0.55 * P.shape[0]  # about half the velocities
+    whole = normal_ipm.solve_kinematic_normal(problem, 2)
+    half = normal_ipm.solve_kinematic_normal(problem, 2, pairs=pairs)
+    assert whole is not None and half is not None
+    closed = s / (14 * a)
+    for out in (whole, half):
+        bracket = out[3]
+        assert bracket.width <= normal_ipm.BRACKET
+        assert bracket.lower - 1e-8 <= closed <= bracket.upper + 1e-8
+    u = half[1]
+    assert mechanism_violation(free, problem.velocities(u), None) < 1e-8
+    R = formulation.associative_columns(free, 2, None)[0]
+    residual = problem.H_T @ (R @ half[0].x) - half[3].lower * problem.live - problem.rhs
+    assert np.abs(residual).max() < 1e-7 * np.abs(problem.rhs).max()
+    r = limit_analysis(free)
+    assert "swaps blocks in pairs" in r.reason and r.bracket is not None
+    held = select.column(placed, "left", among=list(range(wall.count)))
+    assert mirror_pairs(formulation.Problem.of(model(list(held)))) is None
+
+
 def test_centrality_correctors_save_iterations():
     """Gondzio's correctors (``CORRECTORS``, one solve each with the factorization at hand)
     on the 298-block ladder wall, every DOF: the same certified bracket in fewer iterations

@@ -34,6 +34,7 @@ returns None and the caller solves with Clarabel.
 
 from __future__ import annotations
 
+import itertools
 import logging
 import time
 from dataclasses import dataclass, field
@@ -110,8 +111,18 @@ class _NormalMatrix:
     interface (its corners couple the C <= 12 solved velocities of its two blocks) into a fixed
     upper-triangular CSR pattern, and its Cholesky factors (PARDISO)."""
 
-    def __init__(self, G: sparse.csr_matrix, model: Model, index: np.ndarray, K: int) -> None:
-        """``index``: the column of G of every DOF of the model, -1 for those not solved for."""
+    def __init__(
+        self,
+        G: sparse.csr_matrix,
+        model: Model,
+        index: np.ndarray,
+        K: int,
+        dof_columns: np.ndarray | None = None,
+    ) -> None:
+        """``index``: the DOF of the model each column of G is (``index[dof]`` = column, -1
+        for the DOFs not solved for); ``dof_columns``: the column every DOF moves with (a
+        block's mirror image shares its columns: ``mirror.symmetric_basis``), ``index`` by
+        default."""
         its = model.interfaces
         m, n = its.count, G.shape[1]
         self.m, self.K, self.n = m, K, n
@@ -119,9 +130,12 @@ class _NormalMatrix:
             [6 * its.block_i[:, None] + np.arange(6), 6 * its.block_j[:, None] + np.arange(6)],
             axis=1,
         )
-        cols = index[dofs]  # (m, 12) free columns, -1 where fixed
-        # the solved columns first, and only as many as the widest interface has (6 of 12
-        # on the mirror-symmetric mechanisms)
+        cols = (index if dof_columns is None else dof_columns)[dofs]  # (m, 12), -1: none
+        # each column once (an interface between a block and its mirror image meets the same
+        # columns from both sides), the solved columns first, and only as many as the widest
+        # interface has (6 of 12 on the mirror-symmetric mechanisms)
+        cols = np.sort(cols, axis=1)
+        cols[:, 1:][cols[:, 1:] == cols[:, :-1]] = -1
         cols = np.take_along_axis(cols, np.argsort(cols < 0, axis=1, kind="stable"), axis=1)
         C = max(int((cols >= 0).sum(axis=1).max(initial=1)), 1)
         cols = np.ascontiguousarray(cols[:, :C])
@@ -233,10 +247,21 @@ class _Dropped:
     c: np.ndarray
     lift: np.ndarray  # the solved cone of every cone (``_distinct_cones``)
     share: np.ndarray  # the share of that cone's force each carries
+    #: a reflection that swaps blocks (``pairs``): the image of every solved cone and the
+    #: signs (1, +-1, +-1) its components take there; None otherwise
+    image: tuple[np.ndarray, np.ndarray] | None = None
 
     def spread(self, z: np.ndarray) -> np.ndarray:
         """The forces of every cone from those of the solved ones."""
         return z[self.lift] * self.share[:, None]
+
+    def symmetric(self, z: np.ndarray) -> np.ndarray:
+        """The mean of the forces and their mirror image: the reduced equilibrium is kept,
+        and forces symmetric in a symmetric model balance every DOF (``mirror``)."""
+        if self.image is None:
+            return z
+        cone, sign = self.image
+        return 0.5 * (z + z[cone] * sign)
 
 
 @dataclass
@@ -286,12 +311,15 @@ def solve_kinematic_normal(
     threads: int = THREADS,
     max_iterations: int = MAX_ITERATIONS,
     drop: np.ndarray | None = None,
+    pairs: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
 ) -> tuple[Solution, np.ndarray, int, Bracket] | None:
     """The kinematic SOCP of ``problem`` on the normal equations; None where it does not
     reach a certified bracket (the caller then solves with Clarabel). ``drop`` (6n,) bool:
-    DOFs held at zero velocity (``mirror.mirror_dofs``); the bracket is still certified on
-    the whole problem. Returns the solution in ``kinematic.solve_kinematic_clarabel``'s
-    layout, the mechanism u (every free DOF), the points per interface and the bracket."""
+    DOFs held at zero velocity (``mirror.mirror_dofs``); ``pairs``: a reflection that swaps
+    blocks (``mirror.mirror_pairs``), the mechanism sought among its symmetric ones
+    (``mirror.symmetric_basis``); either way the bracket is still certified on the whole
+    problem. Returns the solution in ``kinematic.solve_kinematic_clarabel``'s layout, the
+    mechanism u (every free DOF), the points per interface and the bracket."""
     try:
         import pypardiso  # noqa: F401
     except ImportError:
@@ -300,22 +328,43 @@ def solve_kinematic_normal(
     model = problem.model
     G_all = corner_velocity_rows(problem, grid).tocsr()
     free = np.flatnonzero(problem.free)
-    keep = np.ones(free.size, dtype=bool) if drop is None else ~drop[free]
     K_all = G_all.shape[0] // 3 // max(model.interfaces.count, 1)
-    G_keep = G_all[:, keep].tocsr()
-    kept, lift, share, K = _distinct_cones(G_keep, model.interfaces.count, K_all)
+    norm = max(float(np.linalg.norm(problem.live)), 1e-300)
+    ell_all, c_all = problem.live / norm, -problem.rhs / norm
+    index = np.full(model.n_dofs, -1)
+    P = None
+    dof_columns = None
+    keep = np.ones(free.size, dtype=bool) if drop is None else ~drop[free]
+    if pairs is None:
+        G_keep = G_all[:, keep].tocsr()
+        index[free[keep]] = np.arange(int(keep.sum()))
+        ell, c = ell_all[keep], c_all[keep]
+        rest = (G_all[:, ~keep].T.tocsr(), ell_all[~keep], c_all[~keep])
+    else:
+        from .mirror import symmetric_basis
+
+        P, kept_dofs, dof_columns = symmetric_basis(problem, pairs)
+        G_keep = (G_all @ P).tocsr()
+        index[kept_dofs] = np.arange(kept_dofs.size)
+        ell, c = P.T @ ell_all, P.T @ c_all
+        rest = (G_all.T.tocsr(), ell_all, c_all)  # the equilibrium of every free DOF
+    if pairs is None:
+        kept, lift, share, K = _distinct_cones(G_keep, model.interfaces.count, K_all)
+        image = None
+    else:  # every cone kept, each paired with its mirror image for the certificate
+        kept = lift = np.arange(G_keep.shape[0] // 3)
+        share, K = np.ones(kept.size), K_all
+        image = _mirror_cones(G_keep, pairs[2], K_all)
+        if image is None:
+            return None
     G = G_keep[(3 * kept[:, None] + np.arange(3)).ravel()].tocsr()
     p = G.shape[0] // 3
-    norm = max(float(np.linalg.norm(problem.live)), 1e-300)
-    ell, c = problem.live / norm, -problem.rhs / norm
-    index = np.full(model.n_dofs, -1)
-    index[free[keep]] = np.arange(int(keep.sum()))
-    normal = _NormalMatrix(G, model, index, K)
+    normal = _NormalMatrix(G, model, index, K, dof_columns)
     identity = (np.tile([1.0, 0.0, 0.0], (p, 1)), np.ones(p))  # W = I
     # a shift at rounding size keeps N definite where a DOF meets no corner
     shift = 1e-12 * float(normal.assemble(*identity, 0.0).diagonal().max(initial=1.0))
-    dropped = _Dropped(G_all[:, ~keep].T.tocsr(), ell[~keep], c[~keep], lift, share)
-    kin = _Kinematic(G, G.T.tocsr(), ell[keep], c[keep], normal, shift, threads, dropped)
+    dropped = _Dropped(*rest, lift, share, image)
+    kin = _Kinematic(G, G.T.tocsr(), ell, c, normal, shift, threads, dropped)
     try:
         out = _iterate(kin, max_iterations, lambda_cap(problem.live, problem.rhs))
     except Exception as exc:  # noqa: BLE001 (PARDISO's errors are plain exceptions)
@@ -331,12 +380,15 @@ def solve_kinematic_normal(
         return None  # no statics under the dead load, or no mechanism: Clarabel's words
     seconds = time.process_time() - t0
     u = np.zeros(free.size)
-    u[keep] = point.u / float(kin.ell @ point.u)
+    if P is None:
+        u[keep] = point.u / float(kin.ell @ point.u)
+    else:
+        u = P @ (point.u / float(kin.ell @ point.u))
     mu_f = np.repeat(model.friction, K_all)
     z = dropped.spread(bracket.forces)
     x = np.column_stack([norm * z[:, 0], -norm * mu_f * z[:, 1], -norm * mu_f * z[:, 2]]).ravel()
     detail = (
-        f"normal-equation IPM{'' if drop is None else ' on the mirror-symmetric mechanisms'}: "
+        f"normal-equation IPM{_reduction_words(drop, pairs)}: "
         f"lambda in [{bracket.lower:.9g}, {bracket.upper:.9g}] "
         f"({iterations} iterations, {seconds:.2f} s CPU)"
     )
@@ -344,6 +396,54 @@ def solve_kinematic_normal(
         "optimal", bracket.upper, x, u, detail, iterations, 0.0, (bracket.lower, bracket.upper)
     )
     return sol, u, K_all, bracket
+
+
+def _mirror_cones(
+    G: sparse.csr_matrix, interface_image: np.ndarray, K: int
+) -> tuple[np.ndarray, np.ndarray] | None:
+    """The image of every cone under a reflection that swaps blocks, and its signs: on the
+    symmetric mechanisms (``G`` = the corner rows times the symmetric basis) the rows of a
+    corner's image are its own rows with the tangential ones' signs flipped as the
+    reflection flips the interface's axes. Found among the image interface's K corners by
+    the rows' products with a random vector; None where some corner has no image."""
+    p = G.shape[0] // 3
+    m = p // K
+    if K > 4:  # the associative problem's 2 x 2 corners; finer grids are not paired here
+        return None
+    h = (G @ np.random.default_rng(1).standard_normal(G.shape[1])).reshape(m, K, 3)
+    hi = h[interface_image]  # (m, K, 3): the image interface's corners
+    diff = np.abs(np.abs(h[:, :, None, :]) - np.abs(hi[:, None, :, :])).sum(axis=3)
+    diff += np.abs(h[:, :, None, 0] - hi[:, None, :, 0])  # the normal row keeps its sign
+    # one permutation of the K corners an interface (corners with equal rows tie: the one
+    # that is its own inverse where the interface is its own image, the inverse of its
+    # image's where the two differ)
+    perms = np.array(list(itertools.permutations(range(K))))
+    cost = diff[:, np.arange(K)[None, :], perms].sum(axis=2)  # (m, K!)
+    itself = interface_image == np.arange(m)
+    involutive = np.all(perms[np.arange(len(perms))[:, None], perms] == np.arange(K), axis=1)
+    cost[np.ix_(itself, ~involutive)] = np.inf
+    choice = np.argmin(cost, axis=1)
+    best = perms[choice]  # (m, K)
+    later = interface_image < np.arange(m)  # take the inverse of the first of each pair
+    inverse = np.argsort(best[interface_image[later]], axis=1)
+    best[later] = inverse
+    scale = max(float(np.abs(h).max(initial=0.0)), 1e-300)
+    worst = float(np.take_along_axis(diff, best[:, :, None], axis=2).max(initial=0.0))
+    if worst > 1e-9 * scale:
+        return None
+    cone = (interface_image[:, None] * K + best).ravel()
+    matched = hi[np.arange(m)[:, None], best]  # (m, K, 3)
+    sign = np.where(h * matched < 0, -1.0, 1.0).reshape(p, 3)
+    sign[:, 0] = 1.0
+    if not np.array_equal(cone[cone], np.arange(p)):
+        return None
+    return cone, sign
+
+
+def _reduction_words(drop: np.ndarray | None, pairs: tuple | None) -> str:
+    if pairs is not None:
+        return " on the mechanisms symmetric about a plane that swaps blocks in pairs"
+    return "" if drop is None else " on the mirror-symmetric mechanisms"
 
 
 def _distinct_cones(
@@ -566,6 +666,7 @@ def _certify(kin: _Kinematic, w: np.ndarray, beta: np.ndarray, pt: _Point) -> Br
         v_w += kin.normal.solve(r - GT @ _w(w, beta, (G @ v_w).reshape(-1, 3), 2).ravel())
     z2 = pt.z + _w(w, beta, (G @ v_w).reshape(-1, 3), 2)
     out = kin.dropped
+    z2 = out.symmetric(z2)
     rest = np.concatenate(
         [c - ell * pt.y - GT @ z2.ravel(), out.c - out.ell * pt.y - out.GT @ out.spread(z2).ravel()]
     )
