@@ -362,7 +362,9 @@ def profile(sizes: list[int]) -> None:
 def scale_wall(blocks: int, plane: str):
     """A running-bond wall of about ``blocks`` blocks on a rigid base: ``"in"``, the size
     ladder's wall tilted in its plane; ``"out"``, issue 37's (0.081 x 0.210 x 0.070 m
-    blocks, dry, mu 0.7, the left column held in u1 and u3) tilted out of its plane."""
+    blocks, dry, mu 0.7, the left column held in u1 and u3) tilted out of its plane;
+    ``"sym"``, the same wall standing free on its base (symmetric about the vertical plane
+    across its middle: ``mirror.mirror_pairs``; lambda = s / H)."""
     if plane == "in":
         return ladder_wall(blocks)
     from masonry_dem.geometry import selectors as select
@@ -373,12 +375,13 @@ def scale_wall(blocks: int, plane: str):
     wall = running_bond_wall(side, side, a=0.081, b=0.210, s=0.070, unit_weight=20e3)
     placed, base = add_base(wall)
     held = select.column(placed, "left", among=list(range(wall.count)))
+    supports = [Support([base])] + ([Support(held, ["u1", "u3"])] if plane == "out" else [])
     return Model.build(
         placed,
         InterfaceMaterial(kn=1e9, kt=4e8, friction=0.7),
-        [Support([base]), Support(held, ["u1", "u3"])],
+        supports,
         [SelfWeight(), WeightProportional((0.0, 0.0, 1.0))],
-        name=f"out of plane {side}x{side}",
+        name=f"out of plane {side}x{side}{'' if plane == 'out' else ', free'}",
     )
 
 
@@ -538,6 +541,7 @@ def scale(
     against: str | None = None,
     max_bytes: float = SCALE_MAX_BYTES,
     share: bool = True,
+    planes: tuple[str, ...] = ("in", "out"),
 ) -> None:
     """Issue 37's table: the package's associative ``limit_analysis`` on walls of ``sizes``
     blocks in and out of plane, one process a wall (one thread): CPU and wall seconds, peak
@@ -571,7 +575,7 @@ def scale(
                     f"{max_bytes / 1e9:g} GB: not run"
                 )
                 continue
-            for plane in ("in", "out"):
+            for plane in planes:
                 cpu = {}
                 for name, src in trees.items():
                     row = _scale_row(blocks, plane, src, max_bytes)
@@ -676,6 +680,13 @@ def main(argv: list[str] | None = None) -> None:
         help="--scale: stop a wall above this resident memory; skip one estimated above it",
     )
     p.add_argument("--no-share", action="store_true", help="--scale: without the run shares")
+    p.add_argument(
+        "--planes",
+        nargs="+",
+        choices=("in", "out", "sym"),
+        default=["in", "out"],
+        help="--scale: the walls (sym: out of plane, free on its base, symmetric)",
+    )
     p.add_argument("--scale-child", nargs=2, default=None, metavar=("BLOCKS", "PLANE"))
     p.add_argument("--corpus", nargs="*", type=int, default=None, metavar="SEED")
     args = p.parse_args(argv)
@@ -685,7 +696,13 @@ def main(argv: list[str] | None = None) -> None:
     if args.corpus is not None:
         corpus_walls(args.corpus or list(CORPUS_SEEDS))
     if args.scale is not None:
-        scale(args.scale or [1000, 10000], args.against, args.max_memory * 1e9, not args.no_share)
+        scale(
+            args.scale or [1000, 10000],
+            args.against,
+            args.max_memory * 1e9,
+            not args.no_share,
+            tuple(args.planes),
+        )
     if args.grid_study:
         grid_study()
     if args.cases is not None:
