@@ -345,18 +345,21 @@ def solve_kinematic_normal(
 
         P, kept_dofs, dof_columns = symmetric_basis(problem, pairs)
         G_keep = (G_all @ P).tocsr()
+        # every cone kept, each paired with its mirror image for the certificate
+        image = _mirror_cones(G_keep, pairs[2], K_all)
+        if image is None:  # a corner with no image: every DOF instead (never Clarabel's
+            # memory for want of a pairing)
+            log.info("normal-equation IPM: the mirror's corners do not pair; every DOF")
+            return solve_kinematic_normal(problem, grid, threads, max_iterations, drop, None)
         index[kept_dofs] = np.arange(kept_dofs.size)
         ell, c = P.T @ ell_all, P.T @ c_all
         rest = (G_all.T.tocsr(), ell_all, c_all)  # the equilibrium of every free DOF
     if pairs is None:
         kept, lift, share, K = _distinct_cones(G_keep, model.interfaces.count, K_all)
         image = None
-    else:  # every cone kept, each paired with its mirror image for the certificate
+    else:
         kept = lift = np.arange(G_keep.shape[0] // 3)
         share, K = np.ones(kept.size), K_all
-        image = _mirror_cones(G_keep, pairs[2], K_all)
-        if image is None:
-            return None
     G = G_keep[(3 * kept[:, None] + np.arange(3)).ravel()].tocsr()
     p = G.shape[0] // 3
     normal = _NormalMatrix(G, model, index, K, dof_columns)
