@@ -25,6 +25,13 @@
                                                                # bracket, backend), and the
                                                                # bound's share of
                                                                # ``masonry-dem run``
+    python benchmarks/bench_limit_analysis.py --scale 1000 10000 --against main --no-share
+                                                               # each wall on main's src too,
+                                                               # in turn: before and after in
+                                                               # one run (CPU ratio); a wall
+                                                               # above --max-memory GB (8) is
+                                                               # stopped, or not started when
+                                                               # its estimate is above it
 
 Times are wall-clock seconds of one run on this machine; compare the ratios printed in one
 run, not figures from different runs.
@@ -35,7 +42,6 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import multiprocessing
 import os
 import resource
 import subprocess
@@ -356,7 +362,9 @@ def profile(sizes: list[int]) -> None:
 def scale_wall(blocks: int, plane: str):
     """A running-bond wall of about ``blocks`` blocks on a rigid base: ``"in"``, the size
     ladder's wall tilted in its plane; ``"out"``, issue 37's (0.081 x 0.210 x 0.070 m
-    blocks, dry, mu 0.7, the left column held in u1 and u3) tilted out of its plane."""
+    blocks, dry, mu 0.7, the left column held in u1 and u3) tilted out of its plane;
+    ``"sym"``, the same wall standing free on its base (symmetric about the vertical plane
+    across its middle: ``mirror.mirror_pairs``; lambda = s / H)."""
     if plane == "in":
         return ladder_wall(blocks)
     from masonry_dem.geometry import selectors as select
@@ -367,12 +375,13 @@ def scale_wall(blocks: int, plane: str):
     wall = running_bond_wall(side, side, a=0.081, b=0.210, s=0.070, unit_weight=20e3)
     placed, base = add_base(wall)
     held = select.column(placed, "left", among=list(range(wall.count)))
+    supports = [Support([base])] + ([Support(held, ["u1", "u3"])] if plane == "out" else [])
     return Model.build(
         placed,
         InterfaceMaterial(kn=1e9, kt=4e8, friction=0.7),
-        [Support([base]), Support(held, ["u1", "u3"])],
+        supports,
         [SelfWeight(), WeightProportional((0.0, 0.0, 1.0))],
-        name=f"out of plane {side}x{side}",
+        name=f"out of plane {side}x{side}{'' if plane == 'out' else ', free'}",
     )
 
 
@@ -476,32 +485,126 @@ def bound_share() -> None:
             )
 
 
-def scale(sizes: list[int]) -> None:
-    """Issue 37's table: the package's associative ``limit_analysis`` on walls of ``sizes``
-    blocks in and out of plane, one process a wall: CPU and wall seconds, peak memory
-    (the process's, and what it held before the build), status, lambda, the certified
-    bracket, the backend; then the bound's share of ``masonry-dem run``."""
+#: the largest resident memory a ``--scale`` wall may take before it is stopped (the issue's
+#: 8 GB at 10^5 blocks); a wall whose estimate (``resources.limit_estimate``, three
+#: interfaces a block) is above it is not started
+SCALE_MAX_BYTES = 8e9
+
+
+def _scale_row(blocks: int, plane: str, src: str | None, max_bytes: float) -> dict:
+    """One wall in a fresh process on the tree ``src`` (None: this one), its resident memory
+    watched every 0.2 s and the process stopped above ``max_bytes``."""
+    env = dict(os.environ, NUMBA_NUM_THREADS="1", OMP_NUM_THREADS="1", MKL_NUM_THREADS="1")
+    if src is not None:
+        env["PYTHONPATH"] = os.pathsep.join([src, env.get("PYTHONPATH", "")])
+    cmd = [sys.executable, __file__, "--scale-child", str(blocks), plane]
+    with tempfile.TemporaryFile("w+") as out:
+        child = subprocess.Popen(cmd, env=env, stdout=out, stderr=subprocess.DEVNULL, text=True)
+        peak = 0.0
+        while child.poll() is None:
+            try:
+                with open(f"/proc/{child.pid}/status") as f:
+                    rss = next(int(x.split()[1]) * 1024 for x in f if x.startswith("VmRSS"))
+            except (OSError, StopIteration):
+                rss = 0
+            peak = max(peak, rss)
+            if rss > max_bytes:
+                child.kill()
+                child.wait()
+                return {
+                    "stopped": f"stopped at {rss / 1e9:.1f} GB resident (cap {max_bytes / 1e9:g})"
+                }
+            time.sleep(0.2)
+        out.seek(0)
+        lines = [x for x in out.read().splitlines() if x.startswith("{")]
+    if child.returncode != 0 or not lines:
+        return {"stopped": f"exit {child.returncode}"}
+    return json.loads(lines[-1])
+
+
+def _print_scale_row(row: dict, label: str) -> None:
+    if "stopped" in row:
+        print(f"{label}  {row['stopped']}", flush=True)
+        return
+    bracket = "-" if row["bracket"] is None else "[{:.7g}, {:.7g}]".format(*row["bracket"])
+    lam = row["lambda"] if row["status"] == "collapse" else None
     print(
-        f"{'blocks':>7s} {'plane':>5s} {'cpu s':>7s} {'wall s':>7s} {'peak MB':>8s} "
-        f"{'start MB':>8s} {'lambda':>10s} {'bracket':>27s} {'backend':>8s}  solver"
+        f"{label} {row['blocks']:7d} {row['cpu']:7.2f} {row['wall']:7.2f} "
+        f"{row['peak_mb']:8.0f} {row['start_mb']:8.0f} {_fmt(lam):>10s} {bracket:>27s} "
+        f"{row['backend']:>8s}  {row['status']}: {row['solver']}",
+        flush=True,
     )
-    ctx = multiprocessing.get_context("spawn")
-    for blocks in sizes:
-        for plane in ("in", "out"):
-            queue = ctx.Queue()
-            child = ctx.Process(target=_scale_child, args=(blocks, plane, queue))
-            child.start()
-            row = queue.get()
-            child.join()
-            bracket = "-" if row["bracket"] is None else "[{:.7g}, {:.7g}]".format(*row["bracket"])
-            lam = row["lambda"] if row["status"] == "collapse" else None
-            print(
-                f"{row['blocks']:7d} {plane:>5s} {row['cpu']:7.2f} {row['wall']:7.2f} "
-                f"{row['peak_mb']:8.0f} {row['start_mb']:8.0f} {_fmt(lam):>10s} {bracket:>27s} "
-                f"{row['backend']:>8s}  {row['status']}: {row['solver']}",
-                flush=True,
-            )
-    bound_share()
+
+
+def scale(
+    sizes: list[int],
+    against: str | None = None,
+    max_bytes: float = SCALE_MAX_BYTES,
+    share: bool = True,
+    planes: tuple[str, ...] = ("in", "out"),
+) -> None:
+    """Issue 37's table: the package's associative ``limit_analysis`` on walls of ``sizes``
+    blocks in and out of plane, one process a wall (one thread): CPU and wall seconds, peak
+    memory (the process's, and what it held before the build), status, lambda, the certified
+    bracket, the backend; then the bound's share of ``masonry-dem run``. ``against``: a
+    commit whose ``src`` (``git archive``) runs each wall too, alternately with this tree's,
+    and the CPU ratio (this tree / that one) of each wall is printed: before and after in
+    one run."""
+    from masonry_dem.solvers.resources import limit_estimate
+
+    here = str(Path(__file__).resolve().parents[1] / "src")  # this tree's, first on the path
+    trees: dict[str, str | None] = {"this": here}
+    tmp = tempfile.TemporaryDirectory() if against else None
+    if against and tmp is not None:
+        root = Path(__file__).resolve().parents[1]
+        archive = subprocess.run(
+            ["git", "-C", str(root), "archive", against, "src"], capture_output=True, check=True
+        ).stdout
+        subprocess.run(["tar", "-x", "-C", tmp.name], input=archive, check=True)
+        trees = {against[:8]: str(Path(tmp.name) / "src"), "this": here}
+    print(
+        f"{'tree':>8s} {'plane':>5s} {'blocks':>7s} {'cpu s':>7s} {'wall s':>7s} "
+        f"{'peak MB':>8s} {'start MB':>8s} {'lambda':>10s} {'bracket':>27s} {'backend':>8s}  solver"
+    )
+    try:
+        for blocks in sizes:
+            est = limit_estimate(blocks, 3 * blocks, 2, "clarabel")
+            if est.memory > max_bytes:
+                print(
+                    f"{blocks} blocks: estimated {est.memory / 1e9:.1f} GB, above the cap "
+                    f"{max_bytes / 1e9:g} GB: not run"
+                )
+                continue
+            for plane in planes:
+                cpu = {}
+                for name, src in trees.items():
+                    row = _scale_row(blocks, plane, src, max_bytes)
+                    _print_scale_row(row, f"{name:>8s} {plane:>5s}")
+                    cpu[name] = row.get("cpu")
+                if len(trees) > 1 and None not in cpu.values():
+                    before = cpu[next(iter(trees))]
+                    print(
+                        f"{'':>8s} {plane:>5s} cpu ratio this / {against}: "
+                        f"{cpu['this'] / before:.2f}",
+                        flush=True,
+                    )
+    finally:
+        if tmp is not None:
+            tmp.cleanup()
+    if share:
+        bound_share()
+
+
+def _scale_child_main(blocks: int, plane: str) -> None:
+    """``--scale-child``: one wall in this process, its row as one JSON line."""
+    import queue as q
+
+    out: q.Queue = q.Queue()
+    _scale_child(blocks, plane, out)
+    row = out.get()
+    row["bracket"] = None if row["bracket"] is None else [float(x) for x in row["bracket"]]
+    row["lambda"] = float(row["lambda"])
+    print(json.dumps(row))
 
 
 #: the generated walls of ``tests/solvers/test_limit_non_associative.py``: the corpus's walls of
@@ -563,12 +666,43 @@ def main(argv: list[str] | None = None) -> None:
     )
     p.add_argument("--pushover-up-to", type=int, default=2000, help="largest ladder pushover")
     p.add_argument("--scale", nargs="*", type=int, default=None, metavar="BLOCKS")
+    p.add_argument(
+        "--against",
+        default=None,
+        metavar="REF",
+        help="--scale: run each wall on REF's src too (git archive), alternately: before and after",
+    )
+    p.add_argument(
+        "--max-memory",
+        type=float,
+        default=SCALE_MAX_BYTES / 1e9,
+        metavar="GB",
+        help="--scale: stop a wall above this resident memory; skip one estimated above it",
+    )
+    p.add_argument("--no-share", action="store_true", help="--scale: without the run shares")
+    p.add_argument(
+        "--planes",
+        nargs="+",
+        choices=("in", "out", "sym"),
+        default=["in", "out"],
+        help="--scale: the walls (sym: out of plane, free on its base, symmetric)",
+    )
+    p.add_argument("--scale-child", nargs=2, default=None, metavar=("BLOCKS", "PLANE"))
     p.add_argument("--corpus", nargs="*", type=int, default=None, metavar="SEED")
     args = p.parse_args(argv)
+    if args.scale_child is not None:
+        _scale_child_main(int(args.scale_child[0]), args.scale_child[1])
+        return
     if args.corpus is not None:
         corpus_walls(args.corpus or list(CORPUS_SEEDS))
     if args.scale is not None:
-        scale(args.scale or [1000, 10000])
+        scale(
+            args.scale or [1000, 10000],
+            args.against,
+            args.max_memory * 1e9,
+            not args.no_share,
+            tuple(args.planes),
+        )
     if args.grid_study:
         grid_study()
     if args.cases is not None:

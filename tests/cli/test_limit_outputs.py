@@ -5,6 +5,7 @@ file with ``method = "limit"`` that refuses the pushover's keys."""
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 from importlib import resources
 from pathlib import Path
 from types import SimpleNamespace
@@ -140,3 +141,92 @@ def test_method_limit_refuses_the_pushover_keys(key, value):
     # the options of the limit analysis stay allowed
     ok = dict(SINGLE_BLOCK, analysis={"method": "limit", "grid": 4, "associative": False})
     assert case_from_dict(ok).limit_options == {"grid": 4, "associative": False}
+
+
+def test_estimate_reasons_name_the_gap_they_can_prove(tmp_path):
+    """``bound_reason`` of an estimate says what is proven, specific to its kind (it was one
+    generic sentence): the non-associative one the associative multiplier above it and the
+    gap in per cent, the alpha > 1 one the joints and the kappa that makes it a bound, the
+    inscribed pyramid its side of the exact cone."""
+    from masonry_dem.export.limit_results import bound_of
+    from masonry_dem.solvers.limit_analysis import limit_analysis
+
+    case = _write_case(tmp_path, SINGLE_BLOCK)
+    out = tmp_path / "non"
+    assert main(["limit", str(case), "--out", str(out), "--no-render", "--non-associative"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    la = summary["limit_analysis"]
+    upper, lam = la["associative_lambda"], summary["lambda"]
+    assert la["start"] == "elastic" and upper >= lam > 0
+    reason = summary["bound_reason"]
+    assert f"{upper:.6g}" in reason and "from the elastic state" in reason
+    if lam < upper * (1 - 1e-9):
+        assert f"{upper / lam - 1:+.1%} above this estimate" in reason
+    else:  # the single block tips with no sliding: the iteration reaches the associative
+        assert "proven gap above is 0" in reason
+    model = case_from_dict(SINGLE_BLOCK).model
+    plain = limit_analysis(model, backend="highs")
+    kind, reason = bound_of(model, plain)
+    assert kind == "estimate" and "on 1 of 1 joints" in reason and "x 1.065" in reason
+    inscribed = limit_analysis(model, backend="highs", cone="inscribed", friction_sides=8)
+    kind, reason = bound_of(model, inscribed)
+    assert kind == "estimate" and "inscribed 8-face" in reason and "x 1.082" in reason
+    # a non-associative result without its associative multiplier still says why
+    kind, reason = bound_of(model, replace(inscribed, method="non-associative", info={}))
+    assert kind == "estimate" and "either side" in reason
+
+
+def test_start_of_the_non_associative_analysis_from_the_cli_and_the_case_file(tmp_path, capsys):
+    """``--start`` and ``[analysis] start`` reach the analysis (the summary names it); a start
+    for the associative analysis, which has none, or outside the allowed values is refused
+    with one line."""
+    case = _write_case(tmp_path, SINGLE_BLOCK)
+
+    def limit(*options: str) -> tuple[int, dict | None]:
+        out = tmp_path / f"s{len(list(tmp_path.iterdir()))}"
+        code = main(["limit", str(case), "--out", str(out), "--no-render", *options])
+        path = out / "summary.json"
+        return code, json.loads(path.read_text()) if path.exists() else None
+
+    code, summary = limit("--non-associative", "--start", "associative")
+    assert code == 0 and summary is not None
+    assert summary["limit_analysis"]["start"] == "associative"
+    assert "from the associative state" in summary["bound_reason"]
+    capsys.readouterr()
+    code, summary = limit("--start", "associative")  # associative: no starting state
+    assert code == 2 and summary is None
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "add --non-associative" in err[0], err
+    with pytest.raises(SystemExit):
+        main(["limit", str(case), "--non-associative", "--start", "magic"])
+    # the case file: checked like the other keys, and only with associative = false
+    ok = dict(
+        SINGLE_BLOCK, analysis={"method": "limit", "associative": False, "start": "associative"}
+    )
+    assert case_from_dict(ok).limit_options == {"associative": False, "start": "associative"}
+    (tmp_path / "file").mkdir()
+    from_file = _write_case(tmp_path / "file", ok)
+    out = tmp_path / "from_file"
+    assert main(["limit", str(from_file), "--out", str(out), "--no-render"]) == 0
+    written = json.loads((out / "summary.json").read_text())
+    assert written["method"] == "non-associative"
+    assert written["limit_analysis"]["start"] == "associative"
+    # --associative overrides the file's method: its start goes with it
+    out2 = tmp_path / "overridden"
+    assert main(["limit", str(from_file), "--associative", "--out", str(out2), "--no-render"]) == 0
+    assert json.loads((out2 / "summary.json").read_text())["method"] == "associative"
+    bad = [
+        ({"method": "limit", "associative": False, "start": "magic"}, "must be one of elastic"),
+        ({"method": "limit", "start": "elastic"}, "needs associative = false"),
+        ({"start": "elastic"}, 'needs method = "limit"'),
+    ]
+    for analysis, message in bad:
+        with pytest.raises(CaseError, match=message):
+            case_from_dict(dict(SINGLE_BLOCK, analysis=analysis))
+
+
+def test_the_schema_allows_the_solver_starts():
+    from masonry_dem.cases.schema import LIMIT_STARTS
+    from masonry_dem.solvers.limit_analysis.non_associative import STARTS
+
+    assert LIMIT_STARTS == STARTS

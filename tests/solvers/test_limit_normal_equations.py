@@ -72,6 +72,172 @@ def test_cone_kernels_against_their_definitions():
             assert inside[0] > np.hypot(inside[1], inside[2])
 
 
+def test_centrality_correction_is_the_clipped_spectral_product():
+    """Gondzio's correction of a cone: the scaled product v = (W s_t) o (W^-1 z_t) at the
+    trial point has spectral values v0 +- |v1|; the correction moves each into [lo, hi]
+    (a decrease capped at -hi) in v's own frame, so v + t has its spectral values there."""
+    rng = np.random.default_rng(5)
+    s, z = _interior(rng, 200), _interior(rng, 200)
+    ds, dz = 0.3 * rng.standard_normal((200, 3)), 0.3 * rng.standard_normal((200, 3))
+    w, beta, _ = cones.nt_scaling(s, z)
+    alpha, lo, hi = 0.6, 0.5, 3.0
+    ws, wz = np.empty_like(s), np.empty_like(s)
+    cones.apply_w(w, beta, s + alpha * ds, 1, ws)
+    cones.apply_w(w, beta, z + alpha * dz, -1, wz)
+    v = cones.jordan(ws, wz)
+    t = cones.centrality_correction(w, beta, s, z, ds, dz, alpha, lo, hi)
+
+    def spectral(x: np.ndarray) -> np.ndarray:  # (p, 2): v0 + |v1|, v0 - |v1|
+        norm = np.hypot(x[:, 1], x[:, 2])
+        return np.column_stack([x[:, 0] + norm, x[:, 0] - norm])
+
+    before = spectral(v)
+    assert np.allclose(spectral(v + t), np.maximum(np.clip(before, lo, hi), before - hi))
+    assert (before < lo).any() and (before > hi).any()  # both sides were clipped
+    # the frame kept: v1 + t1 parallel to v1
+    cross = (v + t)[:, 1] * v[:, 2] - (v + t)[:, 2] * v[:, 1]
+    assert np.allclose(cross, 0.0, atol=1e-12)
+
+
+def test_normal_matrix_is_g_transpose_s_g():
+    """The compiled pattern of the normal matrix (no sort: a block's columns are contiguous)
+    and its entries: ``N x = G^T W^2 G x`` on a wall with a partly held column, on every DOF
+    and on the mirror-symmetric ones; every row starts on its diagonal."""
+    from scipy import sparse
+
+    from masonry_dem.solvers.limit_analysis.kinematic import corner_velocity_rows
+
+    wall = running_bond_wall(5, 6, a=0.1, b=0.25, s=0.12, unit_weight=GAMMA)
+    placed, base = add_base(wall)
+    held = [0, 5, 10]
+    model = Model.build(
+        placed,
+        InterfaceMaterial(kn=1e9, kt=4e8, friction=0.6),
+        [Support([base]), Support(held, ["u1", "u3"])],
+        [SelfWeight(), WeightProportional((1.0, 0.0, 0.0))],
+    )
+    problem = formulation.Problem.of(model)
+    G_all = corner_velocity_rows(problem, 2).tocsr()
+    free = np.flatnonzero(problem.free)
+    rng = np.random.default_rng(7)
+    for drop in (None, mirror_dofs(model)):
+        keep = np.ones(free.size, dtype=bool) if drop is None else ~drop[free]
+        G = G_all[:, keep].tocsr()
+        index = np.full(model.n_dofs, -1)
+        index[free[keep]] = np.arange(int(keep.sum()))
+        normal = normal_ipm._NormalMatrix(G, model, index, 4)
+        p = G.shape[0] // 3
+        s, z = _interior(rng, p), _interior(rng, p)
+        w, beta, _ = cones.nt_scaling(s, z)
+        N = normal.assemble(w, beta, 0.0)
+        assert np.array_equal(N.indices[N.indptr[:-1]], np.arange(N.shape[0]))
+        full = N + sparse.triu(N, 1).T
+        x = rng.standard_normal(G.shape[1])
+        sgx = np.empty((p, 3))
+        cones.apply_w(w, beta, np.ascontiguousarray((G @ x).reshape(-1, 3)), 2, sgx)
+        expected = G.T @ sgx.ravel()
+        assert np.allclose(full @ x, expected, rtol=1e-12, atol=1e-12 * np.abs(expected).max())
+    assert drop is not None  # loaded in its plane: the mirror plane was tried too
+
+
+def test_early_iterates_past_the_cap_are_not_no_collapse(monkeypatch):
+    """The first iterates are far from any mechanism, and their ``c . u`` passes lambda's cap
+    on large walls (7 000 at 3 x 10^4 blocks): at 10^5 that sent the wall to Clarabel, which
+    filled the memory. Here, with the cap at 50 and the 298-block wall (c . u 110 at its
+    third iterate, lambda 0.4657), the normal equations still certify the multiplier; the cap
+    counts only once the iterate is nearly a mechanism."""
+    _pardiso()
+    problem = formulation.Problem.of(_ladder_wall(17))
+    monkeypatch.setattr(formulation, "LAMBDA_CAP", 50.0)
+    assert formulation.lambda_cap(problem.live, problem.rhs) < 100
+    out = normal_ipm.solve_kinematic_normal(problem, 2)
+    assert out is not None
+    bracket = out[3]
+    assert bracket.lower - 1e-6 <= 0.465658 <= bracket.upper + 1e-6
+
+
+def test_a_reflection_that_swaps_blocks_halves_the_velocities(monkeypatch):
+    """A wall on a base pushed out of its plane is symmetric about the vertical plane across
+    its middle, which swaps its blocks in pairs (``mirror_pairs``; no plane holds every block,
+    so ``mirror_dofs`` finds none): the normal equations on its symmetric mechanisms give the
+    bracket of every DOF, which holds the closed form of the wall tipping about its base edge
+    as one body, lambda = s / H; the wall held at its left edge only has no such plane."""
+    from masonry_dem.geometry import selectors as select
+    from masonry_dem.solvers.limit_analysis.mirror import mirror_pairs, symmetric_basis
+
+    _pardiso()
+    a, b, s = 0.081, 0.210, 0.070
+    wall = running_bond_wall(14, 14, a=a, b=b, s=s, unit_weight=GAMMA)
+    placed, base = add_base(wall)
+
+    def model(held: list[int]) -> Model:
+        supports = [Support([base])] + ([Support(held, ["u1", "u3"])] if held else [])
+        return Model.build(
+            placed,
+            InterfaceMaterial(kn=1e9, kt=4e8, friction=0.7),
+            supports,
+            [SelfWeight(), WeightProportional((0.0, 0.0, 1.0))],
+        )
+
+    free = model([])
+    assert mirror_dofs(free) is None
+    problem = formulation.Problem.of(free)
+    pairs = mirror_pairs(problem)
+    assert pairs is not None
+    perm, signs, _ = pairs
+    swapped = perm != np.arange(free.blocks.count)
+    assert swapped.sum() >= free.blocks.count - 14 and np.array_equal(
+        perm[perm], np.arange(perm.size)
+    )
+    P, kept, _ = symmetric_basis(problem, pairs)
+    assert P.shape[1] < 0.55 * P.shape[0]  # about half the velocities
+    whole = normal_ipm.solve_kinematic_normal(problem, 2)
+    half = normal_ipm.solve_kinematic_normal(problem, 2, pairs=pairs)
+    assert whole is not None and half is not None
+    closed = s / (14 * a)
+    for out in (whole, half):
+        bracket = out[3]
+        assert bracket.width <= normal_ipm.BRACKET
+        assert bracket.lower - 1e-8 <= closed <= bracket.upper + 1e-8
+    u = half[1]
+    assert mechanism_violation(free, problem.velocities(u), None) < 1e-8
+    R = formulation.associative_columns(free, 2, None)[0]
+    residual = problem.H_T @ (R @ half[0].x) - half[3].lower * problem.live - problem.rhs
+    assert np.abs(residual).max() < 1e-7 * np.abs(problem.rhs).max()
+    r = limit_analysis(free)
+    assert "swaps blocks in pairs" in r.reason and r.bracket is not None
+    held = select.column(placed, "left", among=list(range(wall.count)))
+    assert mirror_pairs(formulation.Problem.of(model(list(held)))) is None
+    # corners that do not pair: every DOF, not Clarabel (whose memory at 10^5 blocks is
+    # the machine's)
+    monkeypatch.setattr(normal_ipm, "_mirror_cones", lambda *args: None)
+    again = normal_ipm.solve_kinematic_normal(problem, 2, pairs=pairs)
+    assert again is not None and "swaps" not in again[0].detail
+    assert again[3].upper == whole[3].upper
+
+
+def test_centrality_correctors_save_iterations():
+    """Gondzio's correctors (``CORRECTORS``, one solve each with the factorization at hand)
+    on the 298-block ladder wall, every DOF: the same certified bracket in fewer iterations
+    than Mehrotra's predictor-corrector alone (20 against 22 when measured)."""
+    _pardiso()
+    problem = formulation.Problem.of(_ladder_wall(17))
+    iterations = {}
+    for correctors in (0, normal_ipm.CORRECTORS):
+        normal_ipm.CORRECTORS, saved = correctors, normal_ipm.CORRECTORS
+        try:
+            out = normal_ipm.solve_kinematic_normal(problem, 2)
+        finally:
+            normal_ipm.CORRECTORS = saved
+        assert out is not None
+        sol, _, _, bracket = out
+        assert bracket.width <= normal_ipm.BRACKET
+        assert bracket.lower - 1e-6 <= 0.465658 <= bracket.upper + 1e-6
+        iterations[correctors] = sol.iterations
+    assert normal_ipm.CORRECTORS >= 1
+    assert iterations[normal_ipm.CORRECTORS] < iterations[0], iterations
+
+
 def test_single_block_tilts_inside_the_bracket():
     """A block a high and s thick on a rigid base tilts out of plane at lambda = s/a (its
     weight's lever s/2 against the push's a/2; friction 0.6 > s/a): the certified bracket

@@ -40,7 +40,7 @@ from masonry_dem.solvers.incremental import DisplacementControl, StaticSettings
 DEFAULT_CASE = "default_wall.toml"
 AnalysisMethod = Literal["pushover", "limit"]
 ANALYSIS_METHODS: tuple[str, ...] = get_args(AnalysisMethod)
-LIMIT_OPTIONS = ("associative", "grid", "backend", "time_limit")
+LIMIT_OPTIONS = ("associative", "grid", "backend", "time_limit", "start")
 
 _BUILDERS = {
     "running_bond_wall": builders.running_bond_wall,
@@ -242,6 +242,12 @@ def case_from_dict(data: dict[str, Any], source: str = "<dict>") -> Case:
         raise CaseError(
             f"case file {source}: [analysis].{key} = {plain(value)}: an option of the limit "
             f'analysis; it needs method = "limit" in [analysis] (method is "{method}")'
+        )
+    if "start" in limit_options and limit_options.get("associative") is not False:
+        raise CaseError(
+            f"case file {source}: [analysis].start = {plain(limit_options['start'])}: the "
+            "starting state of the non-associative analysis; it needs associative = false "
+            "in [analysis]"
         )
     with _at(source, "[analysis]"):
         settings = StaticSettings(**analysis)

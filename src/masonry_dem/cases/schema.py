@@ -406,6 +406,10 @@ CONTROL = _table(
     },
 )
 MONITOR = _table("Monitor", {"block": _number("block"), "dof": _choice(DOF_NAMES)})
+#: ``[analysis] start`` of the non-associative limit analysis: the joints' elastic state
+#: under the dead load, or the associative collapse (Gilbert et al. 2006); the solver's own
+#: ``STARTS`` (a test keeps them equal; the schema does not import the solvers)
+LIMIT_STARTS = ("elastic", "associative")
 #: ``[analysis]`` keys that are not fields of StaticSettings: key -> (type, default)
 ANALYSIS_EXTRA: dict[str, tuple[Any, Any]] = {
     "control": (dict | None, None),
@@ -416,6 +420,8 @@ ANALYSIS_EXTRA: dict[str, tuple[Any, Any]] = {
     "grid": (_number("grid") | None, None),
     "backend": (_choice(("highs", "clarabel")) | None, None),
     "time_limit": (_number("time_limit") | None, None),
+    # the non-associative iteration's starting state (``limit_analysis.non_associative.STARTS``)
+    "start": (_choice(LIMIT_STARTS) | None, None),
 }
 
 

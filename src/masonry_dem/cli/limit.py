@@ -1,4 +1,5 @@
-"""``masonry-dem limit [CASE] [--associative | --non-associative] [--grid N] [--out DIR]``:
+"""``masonry-dem limit [CASE] [--associative | --non-associative] [--start elastic|associative]
+[--grid N] [--out DIR]``:
 the collapse multiplier and mechanism of a case by limit analysis (one convex solve)."""
 
 from __future__ import annotations
@@ -44,6 +45,15 @@ def add_parser(subparsers) -> None:
     )
     kind.add_argument("--non-associative", dest="associative", action="store_false")
     p.add_argument("--grid", type=int, default=None, help="contact points per interface side")
+    p.add_argument(
+        "--start",
+        choices=("elastic", "associative"),
+        default=None,
+        help="with --non-associative: the state the iteration freezes its first friction "
+        "capacities from: 'elastic' (default), the joints' elastic actions under the dead "
+        "load, or 'associative', the associative collapse (Gilbert et al. 2006) "
+        "([analysis] start in a case file)",
+    )
     p.add_argument("--backend", choices=("highs", "clarabel"), default=None)
     p.add_argument(
         "--dem-bound",
@@ -157,6 +167,18 @@ def limit_command(args: argparse.Namespace) -> int:
         options["associative"] = args.associative
     if args.grid is not None:
         options["grid"] = args.grid
+    if args.start is not None:
+        if options.get("associative", True):  # the associative analysis has no start
+            print(
+                f"masonry-dem limit: refused: --start {args.start} is the starting state of "
+                "the non-associative analysis; add --non-associative (or associative = false "
+                "in [analysis])",
+                file=sys.stderr,
+            )
+            return 2
+        options["start"] = args.start
+    elif options.get("associative", True):  # the case file's, for an overriding --associative
+        options.pop("start", None)
     if args.backend is not None:
         options["backend"] = args.backend
     if args.time_limit is not None:

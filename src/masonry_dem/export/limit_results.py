@@ -94,15 +94,14 @@ def bound_of(model: Model, result: LimitAnalysisResult) -> tuple[str, str]:
     if result.status != "collapse":
         return "none", f"no multiplier: the analysis ended '{result.status}' (see reason)"
     if result.method != "associative":
-        return "estimate", (
-            "an estimate, not a bound: the zero-dilatancy (non-associative) analysis iterates "
-            "frozen friction capacities (Gilbert et al. 2006), a non-convex problem with no "
-            "bound theorem, so the pushover's multiplier may lie on either side"
-        )
+        return "estimate", non_associative_reason(result)
     if result.cone == "inscribed":
+        sides = max(int(result.friction_sides), 3)
         return "estimate", (
-            "an estimate, not a bound: the inscribed friction pyramid cuts the joints' Coulomb "
-            "cone, so the multiplier may lie below the pushover's"
+            f"an estimate, not a bound: the inscribed {sides}-face friction pyramid lies inside "
+            "the joints' Coulomb cone, so this is at most the exact cone's associative "
+            "multiplier and may lie below the pushover's; the circumscribed pyramid (friction "
+            f"x {1 / math.cos(math.pi / sides):.4g}) bounds the cone's from above"
         )
     if result.bound == "upper":
         return "upper", (
@@ -115,13 +114,41 @@ def bound_of(model: Model, result: LimitAnalysisResult) -> tuple[str, str]:
     # nan in the model: the joint takes the package's alpha, as the strength check does
     alpha = np.where(np.isnan(model.alpha), DEFAULT_ALPHA, model.alpha)
     largest = float(alpha.max(initial=DEFAULT_ALPHA))
+    twisting = int(np.count_nonzero(alpha > 1)) if alpha.ndim else int(largest > 1)
+    joints = model.interfaces.count
     kappa = model_friction_scale(model)
     return "estimate", (
-        f"an estimate, not a bound: the DEM's torsion-shear interaction (alpha = {largest:g} > "
-        "1) lets "
-        "some joints carry more than this associative analysis allows, so the pushover's "
-        f"multiplier may lie above it; --dem-bound (friction x {kappa:.4g}) makes it an upper "
-        "bound"
+        f"an estimate, not a bound: on {twisting} of {joints} joints the DEM's torsion-shear "
+        f"interaction (alpha = {largest:g} > 1) carries some actions this associative "
+        f"analysis (friction x {result.friction_scale:.4g}) does not, so the pushover's "
+        "multiplier may lie above it; proven: it is at most the associative multiplier with "
+        f"the friction x {kappa:.4g} (--dem-bound)"
+    )
+
+
+def non_associative_reason(result: LimitAnalysisResult) -> str:
+    """The one line of a non-associative multiplier: what is proven of it, the associative
+    multiplier of the same cone above it (Radenkovic's first theorem) and the gap."""
+    upper = result.info.get("associative") if result.info else None
+    lam = float(result.load_factor)
+    start = (result.info or {}).get("start", "elastic")
+    head = (
+        f"an estimate, not a bound: the zero-dilatancy (non-associative) iteration of Gilbert "
+        f"et al. 2006 (from the {start} state) is not convex and no theorem bounds it from below"
+    )
+    if upper is None or not math.isfinite(float(upper)) or not lam > 0:
+        return f"{head}, so the pushover's multiplier may lie on either side"
+    upper = float(upper)
+    if lam >= upper * (1 - 1e-9):
+        return (
+            f"{head}; it settled at the associative multiplier {upper:.6g} of the same cone, "
+            "which bounds every zero-dilatancy one from above (Radenkovic): the proven gap "
+            "above is 0, below none"
+        )
+    return (
+        f"{head}; proven: the zero-dilatancy multiplier is at most the associative "
+        f"{upper:.6g} of the same cone (Radenkovic), {upper / lam - 1:+.1%} above this "
+        "estimate; below, no bound"
     )
 
 

@@ -12,7 +12,7 @@ from scipy import sparse
 from .budget import CLARABEL_ITERATIONS, HIGHS_IPM_ITERATIONS, solver_seconds
 from .formulation import Problem, Solution, associative_columns, lambda_cap, objective_scale
 from .kinematic import solve_kinematic_clarabel
-from .mirror import mirror_dofs
+from .mirror import mirror_dofs, mirror_pairs
 from .normal_ipm import NORMAL_EQUATIONS_FROM, solve_kinematic_normal
 
 
@@ -236,7 +236,11 @@ def _solve_kinematic(problem: Problem, grid: int) -> Solution:
     if velocities >= NORMAL_EQUATIONS_FROM:
         # a failure on the symmetric mechanisms goes to Clarabel: if the whole problem had
         # a mechanism, its symmetric part would be one too
-        out = solve_kinematic_normal(problem, grid, drop=mirror_dofs(problem.model))
+        drop = mirror_dofs(problem.model)
+        # or a plane that swaps blocks in pairs (a wall pushed out of its plane, symmetric
+        # about a vertical plane across it): about half the velocities either way
+        pairs = mirror_pairs(problem) if drop is None else None
+        out = solve_kinematic_normal(problem, grid, drop=drop, pairs=pairs)
         if out is not None:
             return out[0]
     sol, _, _ = solve_kinematic_clarabel(problem, grid)

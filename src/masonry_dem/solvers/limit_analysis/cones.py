@@ -88,6 +88,66 @@ def jordan_solve(lam: np.ndarray, r: np.ndarray) -> np.ndarray:
 
 
 @numba.njit(cache=True)
+def centrality_correction(
+    w: np.ndarray,
+    beta: np.ndarray,
+    s: np.ndarray,
+    z: np.ndarray,
+    ds: np.ndarray,
+    dz: np.ndarray,
+    alpha: float,
+    lo: float,
+    hi: float,
+) -> np.ndarray:
+    """Gondzio's centrality correction of every cone at the trial point ``s + alpha ds``,
+    ``z + alpha dz``: the scaled product ``v = (W s_t) o (W^-1 z_t)`` has the spectral
+    values ``v0 +- |v1|``; each is moved into [lo, hi], a decrease capped at -hi, and the
+    correction ``t`` (p, 3) is the move in the same spectral frame."""
+    p = s.shape[0]
+    t = np.empty((p, 3))
+    a = np.empty(3)
+    b = np.empty(3)
+    for k in range(p):
+        w0, w1, w2 = w[k, 0], w[k, 1], w[k, 2]
+        bt = beta[k]
+        for sign in range(2):
+            if sign == 0:
+                x0 = s[k, 0] + alpha * ds[k, 0]
+                x1 = s[k, 1] + alpha * ds[k, 1]
+                x2 = s[k, 2] + alpha * ds[k, 2]
+                f = bt
+            else:  # W^-1 = (1/beta) J Wbar J
+                x0 = z[k, 0] + alpha * dz[k, 0]
+                x1 = -(z[k, 1] + alpha * dz[k, 1])
+                x2 = -(z[k, 2] + alpha * dz[k, 2])
+                f = 1.0 / bt
+            dot = w1 * x1 + w2 * x2
+            y0 = w0 * x0 + dot
+            c = x0 + dot / (1.0 + w0)
+            y1 = x1 + c * w1
+            y2 = x2 + c * w2
+            if sign == 1:
+                y1, y2 = -y1, -y2
+            out = a if sign == 0 else b
+            out[0], out[1], out[2] = f * y0, f * y1, f * y2
+        v0 = a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+        v1 = a[0] * b[1] + b[0] * a[1]
+        v2 = a[0] * b[2] + b[0] * a[2]
+        norm = math.sqrt(v1 * v1 + v2 * v2)
+        e1, e2 = v0 + norm, v0 - norm
+        t1 = max(min(max(e1, lo), hi) - e1, -hi)
+        t2 = max(min(max(e2, lo), hi) - e2, -hi)
+        t[k, 0] = 0.5 * (t1 + t2)
+        if norm > 0:
+            t[k, 1] = 0.5 * (t1 - t2) * v1 / norm
+            t[k, 2] = 0.5 * (t1 - t2) * v2 / norm
+        else:
+            t[k, 1] = 0.0
+            t[k, 2] = 0.0
+    return t
+
+
+@numba.njit(cache=True)
 def max_step(x: np.ndarray, d: np.ndarray) -> float:
     """The largest alpha with x + alpha d in every cone (x interior): the smallest positive
     root of ``det(x + alpha d) = a alpha^2 + 2 b alpha + c``, written without cancellation
@@ -138,3 +198,93 @@ def normal_entries(
                 if t >= 0:
                     data[t] += block[a, b]
     return data
+
+
+@numba.njit(cache=True)
+def local_rows(
+    indptr: np.ndarray, indices: np.ndarray, data: np.ndarray, cols: np.ndarray, rows: int
+) -> np.ndarray:
+    """Each interface's ``rows`` rows of a CSR matrix G (interface-major: rows ``i * rows``
+    to ``(i + 1) * rows``) on its solved columns ``cols[i]`` (-1: none), as (m, rows, C)."""
+    m, C = cols.shape
+    local = np.zeros((m, rows, C))
+    for i in range(m):
+        for r in range(rows):
+            row = i * rows + r
+            for j in range(indptr[row], indptr[row + 1]):
+                col = indices[j]
+                for q in range(C):
+                    if cols[i, q] == col:
+                        local[i, r, q] += data[j]
+                        break
+    return local
+
+
+@numba.njit(cache=True)
+def normal_pattern(
+    cols: np.ndarray,
+    col_block: np.ndarray,
+    start: np.ndarray,
+    count: np.ndarray,
+    bptr: np.ndarray,
+    bnbr: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The upper-triangular CSR pattern of ``N = G^T S G`` and every interface's slots, with
+    no sort: the columns of a block are contiguous (``start``, ``count``) and increase with
+    the block, so row c of block b holds b's columns from c on, then those of b's neighbours
+    above it (``bptr``, ``bnbr``: sorted), in that order. Returns (indptr, indices, slot),
+    ``slot[i, a, b]`` the entry of interface i's pair (a <= b) of solved columns, -1 where
+    either is not solved."""
+    n = col_block.size
+    nb = start.size
+    above = np.zeros(nb, dtype=np.int64)  # columns of a block's neighbours above it
+    prefix = np.zeros(bnbr.size, dtype=np.int64)  # of the neighbours before each pair
+    for b in range(nb):
+        total = 0
+        for p in range(bptr[b], bptr[b + 1]):
+            prefix[p] = total
+            total += count[bnbr[p]]
+        above[b] = total
+    indptr = np.zeros(n + 1, dtype=np.int64)
+    for c in range(n):
+        b = col_block[c]
+        indptr[c + 1] = indptr[c] + (start[b] + count[b] - c) + above[b]
+    indices = np.empty(indptr[n], dtype=np.int32)
+    for c in range(n):
+        b = col_block[c]
+        t = indptr[c]
+        for x in range(c, start[b] + count[b]):
+            indices[t] = x
+            t += 1
+        for p in range(bptr[b], bptr[b + 1]):
+            nbr = bnbr[p]
+            for x in range(start[nbr], start[nbr] + count[nbr]):
+                indices[t] = x
+                t += 1
+    m, C = cols.shape
+    slot = np.full((m, C, C), -1, dtype=np.int64)
+    for i in range(m):
+        for a in range(C):
+            ca = cols[i, a]
+            if ca < 0:
+                continue
+            for b2 in range(a, C):
+                cb = cols[i, b2]
+                if cb < 0:
+                    continue
+                lo, hi = min(ca, cb), max(ca, cb)
+                blo, bhi = col_block[lo], col_block[hi]
+                if blo == bhi:
+                    slot[i, a, b2] = indptr[lo] + hi - lo
+                    continue
+                for p in range(bptr[blo], bptr[blo + 1]):
+                    if bnbr[p] == bhi:
+                        slot[i, a, b2] = (
+                            indptr[lo]
+                            + (start[blo] + count[blo] - lo)
+                            + prefix[p]
+                            + hi
+                            - start[bhi]
+                        )
+                        break
+    return indptr, indices, slot

@@ -90,7 +90,15 @@ class LimitAnalysisResult:
             "constraints": self.constraints,
             "seconds": round(self.seconds, 4),
             "hanging_blocks": list(self.hanging_blocks),
+            # the non-associative iteration's starting state and the associative multiplier
+            # of the same cone that bounds it from above (None for the associative analysis)
+            "start": self.info.get("start") if self.method != "associative" else None,
+            "associative_lambda": _finite_or_none(self.info.get("associative")),
         }
+
+
+def _finite_or_none(value: Any) -> float | None:
+    return float(value) if value is not None and np.isfinite(value) else None
 
 
 #: largest violation of the kinematic admissibility of a returned mechanism, relative to its
