@@ -326,3 +326,21 @@ def test_friction_scale_of_many_interfaces_is_that_of_their_alphas():
     alphas = np.array([1.5] * 50_000 + [2.0] * 3)
     assert dem_friction_scale(alphas) == dem_friction_scale(2.0)
     assert dem_friction_scale(2.0) == pytest.approx(np.sqrt(5) / 2, rel=1e-8)
+
+
+def test_the_single_block_bracket_does_not_depend_on_what_ran_before():
+    """The same block after a pushover of it: on a948e3a the pushover's round-off left the
+    IPM a full step onto the cones' boundary (mu 7e-18), the next scaling 0 / 0 and every
+    iterate after it NaN, so no bracket; a step is now always a fraction of the way to the
+    boundary, and a step that is not finite ends the iteration."""
+    import masonry_dem as md
+
+    _pardiso()
+    a, s = 0.4, 0.1
+    model = _on_base(single_block(a, 0.3, s, GAMMA), 0.6)
+    assert md.pushover(model).collapse_multiplier == pytest.approx(s / a, rel=1e-6)
+    out = normal_ipm.solve_kinematic_normal(formulation.Problem.of(model), 2)
+    assert out is not None
+    bracket = out[3]
+    assert bracket.lower - 1e-8 <= s / a <= bracket.upper + 1e-8
+    assert bracket.width <= normal_ipm.BRACKET

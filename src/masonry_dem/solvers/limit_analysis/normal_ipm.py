@@ -78,7 +78,9 @@ NORMAL_EQUATIONS_FROM = 1_000
 #: PARDISO's threads: one; two cost more CPU and wall time on a shared 2-core machine, as
 #: faer's did for Clarabel (``kinematic.clarabel_options``; docs/limit_analysis.md, "Speed")
 THREADS = 1
-#: fraction of the step to the cones' boundary
+#: fraction of the step to the cones' boundary, a full step included: an iterate never
+#: lands on the boundary, where the scaling of the next iteration is 0 / 0 (on a single
+#: block a full step left mu at 7e-18, then NaN, as round-off decided)
 STEP_FRACTION = 0.99
 
 
@@ -574,9 +576,7 @@ def _iterate(kin: _Kinematic, max_iterations: int, cap: float):
         second = cones.jordan(_w(w, beta, aff[2], 1), _w(w, beta, aff[3], -1))
         Wd, b = newton.rhs(-lam_lam - second + sigma * mu * e, 1.0 - sigma)
         d = newton.step(Wd, normal.solve(b), 1.0 - sigma)
-        alpha = min(
-            1.0, STEP_FRACTION * min(cones.max_step(pt.s, d[2]), cones.max_step(pt.z, d[3]))
-        )
+        alpha = STEP_FRACTION * min(1.0, cones.max_step(pt.s, d[2]), cones.max_step(pt.z, d[3]))
         d, alpha = _centrality_correctors(newton, pt, d, alpha, sigma * mu)
         log.debug(
             "IPM %d: c.u %.9g y %.9g mu %.2e |r_d| %.2e |r_p| %.2e sigma %.3f alpha %.3f",
@@ -589,7 +589,7 @@ def _iterate(kin: _Kinematic, max_iterations: int, cap: float):
             sigma,
             alpha,
         )
-        if not np.isfinite(alpha) or alpha < 1e-8:
+        if not (np.isfinite(alpha) and all(np.all(np.isfinite(x)) for x in d)) or alpha < 1e-8:
             log.info("normal-equation IPM: the step stalled at iteration %d", it)
             return None
         pt = pt.moved(d, alpha)
@@ -625,7 +625,7 @@ def _centrality_correctors(
     grows enough. One solve each with the factorization at hand."""
     w, beta = newton.w, newton.beta
     for _ in range(CORRECTORS):
-        if alpha >= 0.999:
+        if alpha >= STEP_FRACTION * 0.999:
             break
         trial = min(1.0, 1.5 * alpha + 0.1)
         t = cones.centrality_correction(
@@ -634,9 +634,7 @@ def _centrality_correctors(
         Wd, b = newton.rhs(t, 0.0)
         c = newton.step(Wd, newton.kin.normal.solve(b), 0.0)
         d2 = (d[0] + c[0], d[1] + c[1], d[2] + c[2], d[3] + c[3])
-        alpha2 = min(
-            1.0, STEP_FRACTION * min(cones.max_step(pt.s, d2[2]), cones.max_step(pt.z, d2[3]))
-        )
+        alpha2 = STEP_FRACTION * min(1.0, cones.max_step(pt.s, d2[2]), cones.max_step(pt.z, d2[3]))
         if alpha2 < alpha + 0.1 * (trial - alpha):
             break
         d, alpha = d2, alpha2
