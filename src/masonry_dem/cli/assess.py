@@ -106,21 +106,9 @@ def _number(name: str):
 def parameters(args: argparse.Namespace) -> tuple[dict[str, Any], set[str]]:
     """The parameters: the --config file's, overridden by the flags given; and the keys
     that come from the file."""
-    from masonry_dem._toml import tomllib
+    from masonry_dem.cli.options import parameter_file
 
-    params: dict[str, Any] = {}
-    if args.config is not None:
-        path = Path(args.config)
-        try:
-            params = tomllib.loads(path.read_text())
-        except tomllib.TOMLDecodeError as exc:
-            raise ValueError(f"assessment file {path}: not TOML ({exc})") from exc
-        unknown = sorted(set(params) - set(FIELDS))
-        if unknown:
-            raise ValueError(
-                f"assessment file {path}: unknown key {unknown[0]!r}; the keys are "
-                f"{', '.join(FIELDS)}"
-            )
+    params = parameter_file(args.config, FIELDS, "assessment file")
     from_file = set(params)
     for name in FIELDS:
         value = getattr(args, name, None)

@@ -52,20 +52,9 @@ def add_parser(subparsers) -> None:
 
 
 def site_parameters(args: argparse.Namespace) -> dict[str, Any]:
-    from masonry_dem._toml import tomllib
+    from masonry_dem.cli.options import parameter_file
 
-    params: dict[str, Any] = {}
-    if args.config is not None:
-        path = Path(args.config)
-        try:
-            params = tomllib.loads(path.read_text())
-        except tomllib.TOMLDecodeError as exc:
-            raise ValueError(f"fragility file {path}: not TOML ({exc})") from exc
-        unknown = sorted(set(params) - set(SITE))
-        if unknown:
-            raise ValueError(
-                f"fragility file {path}: unknown key {unknown[0]!r}; the keys are {', '.join(SITE)}"
-            )
+    params = parameter_file(args.config, SITE, "fragility file")
     for name in SITE:
         value = getattr(args, name, None)
         if value is not None:

@@ -4,8 +4,9 @@ so that a flag means the same and reads the same in every command."""
 from __future__ import annotations
 
 import argparse
-from collections.abc import Callable
+from collections.abc import Callable, Collection
 from pathlib import Path
+from typing import Any
 
 #: ``--overwrite`` of the commands that write a results folder
 OVERWRITE_HELP = (
@@ -79,3 +80,24 @@ def results_line(out: Path) -> str:
     if (out / "steps").is_dir():
         names.append("steps/")
     return f"results in {out}/ ({', '.join(names)})"
+
+
+def parameter_file(path: str | None, keys: Collection[str], what: str) -> dict[str, Any]:
+    """The values of a TOML file of parameters (``--config``; None: none), each key among
+    ``keys``; a file that is no TOML, or an unknown key, is a ValueError naming ``what`` (e.g.
+    "assessment file") and the file."""
+    if path is None:
+        return {}
+    from masonry_dem._toml import tomllib
+
+    where = Path(path)
+    try:
+        params: dict[str, Any] = tomllib.loads(where.read_text())
+    except tomllib.TOMLDecodeError as exc:
+        raise ValueError(f"{what} {where}: not TOML ({exc})") from exc
+    unknown = sorted(set(params) - set(keys))
+    if unknown:
+        raise ValueError(
+            f"{what} {where}: unknown key {unknown[0]!r}; the keys are {', '.join(keys)}"
+        )
+    return params
