@@ -155,9 +155,9 @@ def _supervise() -> int | None:
     return _end(code)
 
 
-def _wait(pid: int, watched: set[int]) -> int:
+def _wait(pid: int, watched: set[signal.Signals]) -> int:
     """Wait for the child ``pid``, passing the signals on; its wait status."""
-    ready, held = False, []
+    ready, held = False, list[int]()
     while True:
         info = signal.sigwaitinfo(watched)
         signum = info.si_signo
@@ -291,9 +291,7 @@ def hand_over_lock(folder: Path, fd: int) -> bool:
 
     sock = socket.socket(fileno=os.dup(_channel))
     try:
-        socket.send_fds(
-            sock, [os.fsencode(str(Path(folder).resolve()))], [fd], socket.MSG_DONTWAIT
-        )
+        socket.send_fds(sock, [os.fsencode(str(Path(folder).resolve()))], [fd], socket.MSG_DONTWAIT)
     except OSError:
         return False
     finally:

@@ -3,7 +3,7 @@ killer (SIGKILL), Clarabel's abort on a failed allocation (SIGABRT), a segmentat
 VTK. The supervising parent of ``run``, ``limit`` and ``render`` (masonry_dem._supervisor)
 says so in one line, ends with the documented exit code, and the results folder the dead
 child left ``running`` says ``failed`` with the reason, every step written kept. On main
-(bee0e9f) the process itself died: no line, exit code -9/-6/-11, the folder ``running``.
+(a948e3a) the process itself died: no line, exit code -9/-6/-11, the folder ``running``.
 
 The deaths are real: SIGKILL sent to the process named by ``summary.json``'s pid (the one
 that claimed the folder), ``os.abort()`` and SIGSEGV raised inside it by a ``sitecustomize``
@@ -30,7 +30,7 @@ from masonry_dem.export import results_folder as rf
 #: the hook: in the process that claimed the folder DIE_OUT (summary.json's pid) once
 #: blocks.pvd lists DIE_STEPS steps (0: once claimed), or in the process that imported DIE_MODULE, send it DIE_SIGNAL
 #: (SIGABRT: os.abort(), as a library's abort does)
-HOOK = '''
+HOOK = """
 import os, signal, sys, threading, time
 
 def _watch(name, out, steps, module):
@@ -61,7 +61,7 @@ if os.environ.get("DIE_SIGNAL"):
               int(os.environ.get("DIE_STEPS", "0")), os.environ.get("DIE_MODULE", "")),
         daemon=True,
     ).start()
-'''
+"""
 
 
 def _dying(tmp_path: Path, signame: str, **where: str) -> dict[str, str]:
@@ -189,3 +189,19 @@ def test_a_signal_to_the_parent_reaches_the_child_once(tmp_path, signum, code):
     assert time.monotonic() - started < 60
     assert rf.state(out).kind == "interrupted"
     assert len(_pvd_files(out / "blocks.pvd")) >= 5
+
+
+def test_a_run_killed_by_a_signal_sent_on_purpose_says_interrupted_and_ends_by_it(tmp_path):
+    """SIGHUP (a closed terminal's, sent here to the process at work): the folder says
+    ``interrupted`` by it, and the program ends by the same signal, as the run did."""
+    out = tmp_path / "out"
+    proc = _start(child_env(), "run", _slow_case(tmp_path), "--out", out, "--no-render", "--quiet")
+    _wait_for_steps(proc, out)
+    pid = json.loads((out / "summary.json").read_text())["pid"]
+    os.kill(pid, signal.SIGHUP)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == -signal.SIGHUP, err
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "interrupted" and "SIGHUP" in summary["reason"], summary
+    assert summary["steps_written"] == len(_assert_whole(out, killed=True)) >= 5
+    assert rf.state(out).kind == "interrupted"
