@@ -54,6 +54,22 @@ def _watch(name, out, steps, module):
             os.abort()
         os.kill(os.getpid(), getattr(signal, name))
 
+if os.environ.get("COUNT_SIGNALS"):  # each signal a handler of the package takes, a line
+    _install = signal.signal
+
+    def _counting(signum, handler):
+        if not callable(handler):
+            return _install(signum, handler)
+
+        def counted(s, frame, _handler=handler):
+            with open(os.environ["COUNT_SIGNALS"], "a") as f:
+                f.write(f"{os.getpid()} {s}\\n")
+            return _handler(s, frame)
+
+        return _install(signum, counted)
+
+    signal.signal = _counting
+
 if os.environ.get("DIE_SIGNAL"):
     threading.Thread(
         target=_watch,
@@ -64,16 +80,36 @@ if os.environ.get("DIE_SIGNAL"):
 """
 
 
-def _dying(tmp_path: Path, signame: str, **where: str) -> dict[str, str]:
+def _hooked(tmp_path: Path, **variables: str) -> dict[str, str]:
     """The environment of a CLI process with the hook (:data:`HOOK`) on its path."""
     hooks = tmp_path / "hooks"
     hooks.mkdir(exist_ok=True)
     (hooks / "sitecustomize.py").write_text(HOOK)
     env = child_env()
     env["PYTHONPATH"] = os.pathsep.join([str(hooks), env["PYTHONPATH"]])
-    env["DIE_SIGNAL"] = signame
-    env.update({f"DIE_{k.upper()}": str(v) for k, v in where.items()})
+    env.update(variables)
     return env
+
+
+def _dying(tmp_path: Path, signame: str, **where: str) -> dict[str, str]:
+    """:func:`_hooked`, the process at work to die by ``signame`` (DIE_OUT, DIE_STEPS,
+    DIE_MODULE from ``where``)."""
+    return _hooked(
+        tmp_path, DIE_SIGNAL=signame, **{f"DIE_{k.upper()}": str(v) for k, v in where.items()}
+    )
+
+
+def _counting(tmp_path: Path) -> tuple[dict[str, str], Path]:
+    """:func:`_hooked`, each signal a handler of the package takes written to a file."""
+    counts = tmp_path / "signals.txt"
+    return _hooked(tmp_path, COUNT_SIGNALS=str(counts)), counts
+
+
+def _taken(counts: Path, out: Path) -> list[int]:
+    """The signals the process at work (``summary.json``'s pid) took."""
+    pid = json.loads((out / "summary.json").read_text())["pid"]
+    lines = counts.read_text().split() if counts.exists() else []
+    return [int(s) for p, s in zip(lines[::2], lines[1::2], strict=True) if int(p) == pid]
 
 
 def _start(env: dict[str, str], *args: str | Path) -> subprocess.Popen:
@@ -178,7 +214,8 @@ def test_a_signal_to_the_parent_reaches_the_child_once(tmp_path, signum, code):
     """A signal sent to the process started (the parent) reaches the run once: it stops at
     its next Newton iteration, as the first signal does (a second would stop it at once)."""
     out = tmp_path / "out"
-    proc = _start(child_env(), "run", _slow_case(tmp_path), "--out", out, "--no-render")
+    env, counts = _counting(tmp_path)
+    proc = _start(env, "run", _slow_case(tmp_path), "--out", out, "--no-render")
     _wait_for_steps(proc, out)
     started = time.monotonic()
     proc.send_signal(signum)
@@ -189,6 +226,7 @@ def test_a_signal_to_the_parent_reaches_the_child_once(tmp_path, signum, code):
     assert time.monotonic() - started < 60
     assert rf.state(out).kind == "interrupted"
     assert len(_pvd_files(out / "blocks.pvd")) >= 5
+    assert _taken(counts, out) == [signum]
 
 
 def test_a_run_killed_by_a_signal_sent_on_purpose_says_interrupted_and_ends_by_it(tmp_path):
@@ -205,3 +243,55 @@ def test_a_run_killed_by_a_signal_sent_on_purpose_says_interrupted_and_ends_by_i
     assert summary["status"] == "interrupted" and "SIGHUP" in summary["reason"], summary
     assert summary["steps_written"] == len(_assert_whole(out, killed=True)) >= 5
     assert rf.state(out).kind == "interrupted"
+
+
+def test_a_terminals_ctrl_c_reaches_the_run_once(tmp_path):
+    """Ctrl-C typed at a terminal: the terminal sends SIGINT to its whole foreground process
+    group, the parent and the child; the parent passes on no copy of it, so the run stops
+    at its next Newton iteration (one "stopping" line), as a first Ctrl-C does."""
+    import pty
+
+    out = tmp_path / "out"
+    args = ["run", str(_slow_case(tmp_path)), "--out", str(out), "--no-render", "--quiet"]
+    env, counts = _counting(tmp_path)
+    pid, master = pty.fork()
+    if pid == 0:  # pragma: no cover - the child: the command on the terminal
+        os.execve(sys.executable, [sys.executable, "-m", "masonry_dem.cli", *args], env)
+    said = b""
+    try:
+        deadline = time.monotonic() + 300
+        while len(_listed(out)) < 5:
+            assert time.monotonic() < deadline, said
+            said += _read(master, 0.05)
+        os.write(master, b"\x03")  # Ctrl-C, as typed
+        while chunk := _read(master, 120):
+            said += chunk
+    finally:
+        _, status = os.waitpid(pid, 0)
+        os.close(master)
+    text = said.decode(errors="replace")
+    assert os.waitstatus_to_exitcode(status) == 130, text
+    assert text.count("stopping at the next Newton iteration") == 1, text
+    assert "masonry-dem: interrupted by SIGINT" in text and "Traceback" not in text, text
+    assert rf.state(out).kind == "interrupted"
+    assert _taken(counts, out) == [signal.SIGINT]  # the terminal's, and no copy
+
+
+def _listed(out: Path) -> list[str]:
+    try:
+        return _pvd_files(out / "blocks.pvd")
+    except (OSError, Exception):  # not there yet, or half read
+        return []
+
+
+def _read(fd: int, timeout: float) -> bytes:
+    """What the terminal shows within ``timeout`` (b"" when it is closed)."""
+    import select
+
+    ready, _, _ = select.select([fd], [], [], timeout)
+    if not ready:
+        return b""
+    try:
+        return os.read(fd, 4096) or b""
+    except OSError:  # EIO: every process of the terminal has ended
+        return b""
