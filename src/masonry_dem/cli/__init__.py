@@ -3,6 +3,10 @@
 Each command lives in its own module of this package and exposes ``add_parser(subparsers)``
 (which registers the sub-command and sets ``func``) so commands stay independent.
 
+The program runs ``run``, ``limit`` and ``render`` in a child process under a small parent
+that reports the child's death by a signal no process can handle (SIGKILL, SIGABRT, SIGSEGV:
+:mod:`masonry_dem._supervisor`).
+
 Errors that come from the input, the file system or the machine's resources end the command
 with one line on stderr and exit code 2 (``--debug``: with the traceback); Ctrl-C and SIGTERM
 end it with "interrupted" and 128 + the signal's number (130 for Ctrl-C). Any other exception
@@ -77,6 +81,12 @@ def main(argv: list[str] | None = None) -> int:
         # from the first line: a Ctrl-C while the parser loads the commands' modules (VTK,
         # numba) is one line and 130 as one during the run is
         with raise_on_signals():
+            if argv is None:  # the program: run, limit and render under a supervising parent
+                from masonry_dem._supervisor import supervised
+
+                code = supervised(sys.argv[1:])
+                if code is not None:
+                    return code
             return _run(argv)
     except KeyboardInterrupt as exc:  # Ctrl-C, SIGTERM: the results folder says so too
         if debug:

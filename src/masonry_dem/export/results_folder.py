@@ -34,11 +34,24 @@ from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
-
-import numpy as np
+from typing import TYPE_CHECKING, Any
 
 from masonry_dem._signals import deferred_signals
+
+if TYPE_CHECKING:
+    import numpy as np
+else:
+
+    class _Numpy:
+        """numpy on first use: the supervising process (:mod:`masonry_dem._supervisor`)
+        records a run's end here without loading it."""
+
+        def __getattr__(self, name: str) -> Any:
+            import numpy
+
+            return getattr(numpy, name)
+
+    np = _Numpy()
 
 try:
     import fcntl
@@ -193,12 +206,12 @@ def write_summary(
 
 
 def _plain_json(value: Any) -> Any:
+    if isinstance(value, Path):
+        return str(value)
     if isinstance(value, np.generic):
         return value.item()
     if isinstance(value, np.ndarray):
         return value.tolist()
-    if isinstance(value, Path):
-        return str(value)
     raise TypeError(f"summary.json: {type(value).__name__} is not JSON")
 
 
@@ -485,16 +498,23 @@ class RunFolder:
     """The folder of one run, claimed by :func:`claim`: locked for this process until
     :meth:`release`."""
 
-    def __init__(self, folder: Path, lock_fd: int | None) -> None:
+    def __init__(self, folder: Path, lock_fd: int | None, locked: bool | None = None) -> None:
         self.folder = folder
         self._lock_fd = lock_fd
+        #: whether this run locked the folder (its lock's descriptor may be the supervising
+        #: process's alone: :func:`claim`)
+        self._locked = lock_fd is not None if locked is None else locked
 
     def release(self) -> None:
         """Remove the lock file, then drop the lock: a finished folder keeps no empty lock
-        file (a process waiting on the removed file finds it gone, :func:`_lock`)."""
-        if self._lock_fd is not None:
+        file (a process waiting on the removed file finds it gone, :func:`_lock`). A lock
+        handed to the supervising process is dropped when that process ends, moments after
+        this one; its file is gone now."""
+        if self._locked:
             with _quiet():
                 (self.folder / LOCK).unlink(missing_ok=True)
+            self._locked = False
+        if self._lock_fd is not None:
             with _quiet():
                 os.close(self._lock_fd)  # closing the descriptor drops the flock
             self._lock_fd = None
@@ -607,6 +627,12 @@ def claim(folder: Path | str, overwrite: bool, start: Mapping[str, Any]) -> RunF
     folder = folder_path(folder)
     _refuse_path(folder)
     fd = _lock(folder)
+    locked = fd is not None
+    if fd is not None and _hand_over_lock(folder, fd):
+        # the supervising process holds the lock from now on, so it outlives this process
+        # killed outright (then that process records how it died) and ends with it
+        os.close(fd)
+        fd = None
     claimed = False
     try:
         previous = state(folder, _locked_here=True)
@@ -641,7 +667,54 @@ def claim(folder: Path | str, overwrite: bool, start: Mapping[str, Any]) -> RunF
         if fd is not None:
             os.close(fd)
         raise
-    return RunFolder(folder, fd)
+    return RunFolder(folder, fd, locked)
+
+
+def _hand_over_lock(folder: Path, fd: int) -> bool:
+    from masonry_dem._supervisor import hand_over_lock
+
+    return hand_over_lock(folder, fd)
+
+
+def steps_listed(folder: Path | str) -> int:
+    """How many steps ``blocks.pvd`` of ``folder`` lists (0 without one)."""
+    import xml.etree.ElementTree as ET
+
+    try:
+        return sum(1 for _ in ET.parse(Path(folder) / BLOCKS_PVD).getroot().iter("DataSet"))
+    except (OSError, ET.ParseError):
+        return 0
+
+
+def record_death(folder: Path, fd: int, pid: int, status: str, what: str) -> str | None:
+    """For the supervising process (:mod:`masonry_dem._supervisor`), which holds ``fd``, the
+    lock of ``folder`` handed over by its child ``pid``, now dead by a signal (``what``):
+    if the child left ``summary.json`` ``running``, it says ``status`` (``failed``,
+    ``interrupted``) with ``what`` and the steps the folder keeps (every one written stays).
+    The lock is let go either way. Returns what the folder says now, or None if the child
+    had recorded its end itself."""
+    path = folder / LOCK
+    try:
+        if not _same_file(fd, path):  # released by the child: its end is recorded
+            return None
+        summary = read_summary(folder)
+        if summary.get("status") != RUNNING or summary.get("pid") != pid:
+            return None
+        steps = steps_listed(folder)
+        write_summary(
+            folder,
+            {
+                **summary,
+                "status": status,
+                "reason": f"{what}; after {steps} steps written",
+                "steps_written": steps,
+            },
+        )
+        with _quiet():
+            path.unlink()
+        return f"results folder {folder} says {status}, with the {steps} steps written"
+    finally:
+        os.close(fd)
 
 
 def record_stopped(folder: Path, exc: BaseException, done: int = 0, **extra: Any) -> dict:
