@@ -82,6 +82,13 @@ CHORD_RATIO = 0.25
 NEWTON_FAILURE_CUT = 0.25
 FAILED_CEILING = 0.7
 CEILING_GROWTH = 1.25
+#: a time step's Newton stops once |G| <= NEWTON_FORCING x |R| (or the rest tolerance): the
+#: dashpot force K_e (q - q_n) / dt = R - G is then right to 1 %, and so is the step, well
+#: within its local error (the stopping test of implicit ODE codes solves the step's equation
+#: to a fraction kappa ~ 0.01-0.1 of the local error tolerance, not to round-off: Hairer &
+#: Wanner 1996, IV.8, (8.10)-(8.11); an inexact Newton's forcing term, Dembo, Eisenstat &
+#: Steihaug 1982). A rest (|R| <= tolerance) is still an exact equilibrium of the law.
+NEWTON_FORCING = 1e-2
 
 
 @dataclass(frozen=True)
@@ -233,7 +240,7 @@ class QuasiStatic:
         g, gnorm, response, rnorm = balance(q)
         factors = None  # the matrix factorized at an earlier iterate, kept while it converges
         for _ in range(s.max_newton):
-            if gnorm <= s.tolerance:
+            if gnorm <= max(s.tolerance, NEWTON_FORCING * rnorm):
                 return q, response, rnorm
             self.iterations += 1
             chord = factors is not None
@@ -246,7 +253,7 @@ class QuasiStatic:
                 trial = q.copy()
                 trial[free] += dq
                 g_t, n_t, resp_t, r_t = balance(trial)
-                if n_t > CHORD_RATIO * gnorm and n_t > s.tolerance:
+                if n_t > CHORD_RATIO * gnorm and n_t > max(s.tolerance, NEWTON_FORCING * r_t):
                     factors = None  # factor anew at q
                     continue
             else:  # Newton's step, backtracked until |G| falls
@@ -255,7 +262,7 @@ class QuasiStatic:
                     trial = q.copy()
                     trial[free] += length * dq
                     g_t, n_t, resp_t, r_t = balance(trial)
-                    if n_t < gnorm or n_t <= s.tolerance:
+                    if n_t < gnorm or n_t <= max(s.tolerance, NEWTON_FORCING * r_t):
                         break
                     length *= 0.5
                 else:
@@ -263,7 +270,7 @@ class QuasiStatic:
             if n_t > CHORD_RATIO * gnorm:
                 factors = None  # slow convergence: the next iteration factors
             q, g, gnorm, response, rnorm = trial, g_t, n_t, resp_t, r_t
-        return (q, response, rnorm) if gnorm <= s.tolerance else None
+        return (q, response, rnorm) if gnorm <= max(s.tolerance, NEWTON_FORCING * rnorm) else None
 
     # ------------------------------------------------------------------ one load level
     def move_to_rest(self, lam: float, dead: float = 1.0) -> Motion:
