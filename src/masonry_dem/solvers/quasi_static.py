@@ -73,6 +73,22 @@ log = logging.getLogger(__name__)
 #: a factorized matrix is reused (a chord step) while each step divides the residual of the
 #: time step by at least 1 / CHORD_RATIO (modified Newton, Kelley 1995, 5.3)
 CHORD_RATIO = 0.25
+#: after a time step whose Newton fails it is taken again this much shorter; the step after
+#: it is not longer than the one before (no growth right after a rejection: Hairer & Wanner
+#: 1996, IV.8, RADAU5's step control; CVODE's, Hindmarsh et al. 2005); and the following ones
+#: stay below FAILED_CEILING x the shortest failed time step of the motion, a ceiling that
+#: rises by CEILING_GROWTH with each accepted step. Without that memory a steady run-off
+#: alternates an accepted step with a failed one 4x as long (each ~10 factorizations).
+NEWTON_FAILURE_CUT = 0.25
+FAILED_CEILING = 0.7
+CEILING_GROWTH = 1.25
+#: a time step's Newton stops once |G| <= NEWTON_FORCING x |R| (or the rest tolerance): the
+#: dashpot force K_e (q - q_n) / dt = R - G is then right to 1 %, and so is the step, well
+#: within its local error (the stopping test of implicit ODE codes solves the step's equation
+#: to a fraction kappa ~ 0.01-0.1 of the local error tolerance, not to round-off: Hairer &
+#: Wanner 1996, IV.8, (8.10)-(8.11); an inexact Newton's forcing term, Dembo, Eisenstat &
+#: Steihaug 1982). A rest (|R| <= tolerance) is still an exact equilibrium of the law.
+NEWTON_FORCING = 1e-2
 
 
 @dataclass(frozen=True)
@@ -224,7 +240,7 @@ class QuasiStatic:
         g, gnorm, response, rnorm = balance(q)
         factors = None  # the matrix factorized at an earlier iterate, kept while it converges
         for _ in range(s.max_newton):
-            if gnorm <= s.tolerance:
+            if gnorm <= max(s.tolerance, NEWTON_FORCING * rnorm):
                 return q, response, rnorm
             self.iterations += 1
             chord = factors is not None
@@ -237,7 +253,7 @@ class QuasiStatic:
                 trial = q.copy()
                 trial[free] += dq
                 g_t, n_t, resp_t, r_t = balance(trial)
-                if n_t > CHORD_RATIO * gnorm and n_t > s.tolerance:
+                if n_t > CHORD_RATIO * gnorm and n_t > max(s.tolerance, NEWTON_FORCING * r_t):
                     factors = None  # factor anew at q
                     continue
             else:  # Newton's step, backtracked until |G| falls
@@ -246,7 +262,7 @@ class QuasiStatic:
                     trial = q.copy()
                     trial[free] += length * dq
                     g_t, n_t, resp_t, r_t = balance(trial)
-                    if n_t < gnorm or n_t <= s.tolerance:
+                    if n_t < gnorm or n_t <= max(s.tolerance, NEWTON_FORCING * r_t):
                         break
                     length *= 0.5
                 else:
@@ -254,7 +270,7 @@ class QuasiStatic:
             if n_t > CHORD_RATIO * gnorm:
                 factors = None  # slow convergence: the next iteration factors
             q, g, gnorm, response, rnorm = trial, g_t, n_t, resp_t, r_t
-        return (q, response, rnorm) if gnorm <= s.tolerance else None
+        return (q, response, rnorm) if gnorm <= max(s.tolerance, NEWTON_FORCING * rnorm) else None
 
     # ------------------------------------------------------------------ one load level
     def move_to_rest(self, lam: float, dead: float = 1.0) -> Motion:
@@ -279,6 +295,8 @@ class QuasiStatic:
         velocity = np.zeros_like(q)  # over the last step taken
         dt = self._dt
         taken = 0
+        failed: float | None = None  # the ceiling's failed time step (None: none failed)
+        rejected = False  # the last attempt was rejected: the next step is no longer
         for _ in range(s.max_time_steps):
             if self.budget is not None and self.factorizations >= self.budget:
                 return Motion(
@@ -287,12 +305,16 @@ class QuasiStatic:
                     f"the budget of {self.budget} factorizations is spent",
                     undecided=True,
                 )
-            predicted = q + velocity * dt
-            stepped = self._time_step(q, lam, dead, dt, predicted)
-            if stepped is None and np.any(velocity):
-                stepped = self._time_step(q, lam, dead, dt, q)
+            if failed is not None:
+                dt = min(dt, FAILED_CEILING * failed)
+            # (the velocity predictor; retaking a failed step from q instead is no help: its
+            # zero increment leaves the yielded joints' flags to round-off, and that Newton
+            # fails at its first iteration)
+            stepped = self._time_step(q, lam, dead, dt, q + velocity * dt)
             if stepped is None:
-                dt *= 0.25
+                failed = dt if failed is None else min(failed, dt)
+                rejected = True
+                dt *= NEWTON_FAILURE_CUT
                 if dt < 1e-12:
                     return Motion(
                         False, taken, "no time step converges (dt < 1e-12)", undecided=True
@@ -308,10 +330,13 @@ class QuasiStatic:
             allowed = s.motion_tolerance * (unit + moved)
             error = change / allowed
             if error > 1.0 and taken > 0:
+                rejected = True
                 dt *= max(0.2, 0.9 / math.sqrt(error))
                 continue
             taken += 1
             self.time_steps += 1
+            if failed is not None:
+                failed *= CEILING_GROWTH
             # the law's state moves with the wall: an incremental law, one time step at a time
             self.found_with = (self.plastic, self.cracked)
             self._carry(q_new, response)
@@ -328,8 +353,9 @@ class QuasiStatic:
             if rnorm <= s.tolerance:
                 self._dt = min(dt, 1.0)
                 return Motion(True, taken)
-            dt *= min(4.0, 0.9 / math.sqrt(max(error, 1e-12)))
+            dt *= min(1.0 if rejected else 4.0, 0.9 / math.sqrt(max(error, 1e-12)))
             dt = min(dt, 1e15)
+            rejected = False
         return Motion(
             False,
             taken,
