@@ -112,6 +112,14 @@ def _taken(counts: Path, out: Path) -> list[int]:
     return [int(s) for p, s in zip(lines[::2], lines[1::2], strict=True) if int(p) == pid]
 
 
+def _signals_heard() -> None:
+    """In the child before it starts: the signals the tests send at their default action,
+    whatever the runner left ignored (``nohup`` ignores SIGHUP, a shell's background job
+    SIGINT and SIGQUIT, and an ignored signal stays ignored across exec, as it should)."""
+    for sig in (signal.SIGHUP, signal.SIGINT, signal.SIGQUIT):
+        signal.signal(sig, signal.SIG_DFL)
+
+
 def _start(env: dict[str, str], *args: str | Path) -> subprocess.Popen:
     return subprocess.Popen(
         [sys.executable, "-m", "masonry_dem.cli", *map(str, args)],
@@ -119,6 +127,7 @@ def _start(env: dict[str, str], *args: str | Path) -> subprocess.Popen:
         stderr=subprocess.PIPE,
         text=True,
         env=env,
+        preexec_fn=_signals_heard,
     )
 
 
