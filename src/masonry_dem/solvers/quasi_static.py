@@ -237,10 +237,14 @@ class QuasiStatic:
             g = residual - rate * (self.viscosity @ (qq[free] - q_n[free]))
             return g, self.problem.relative_norm(g, lam, dead), response, rnorm
 
+        def solved(gn: float, rn: float) -> bool:
+            """The stopping test (NEWTON_FORCING); a residual that overflowed solves nothing."""
+            return math.isfinite(rn) and gn <= max(s.tolerance, NEWTON_FORCING * rn)
+
         g, gnorm, response, rnorm = balance(q)
         factors = None  # the matrix factorized at an earlier iterate, kept while it converges
         for _ in range(s.max_newton):
-            if gnorm <= max(s.tolerance, NEWTON_FORCING * rnorm):
+            if solved(gnorm, rnorm):
                 return q, response, rnorm
             self.iterations += 1
             chord = factors is not None
@@ -253,7 +257,7 @@ class QuasiStatic:
                 trial = q.copy()
                 trial[free] += dq
                 g_t, n_t, resp_t, r_t = balance(trial)
-                if n_t > CHORD_RATIO * gnorm and n_t > max(s.tolerance, NEWTON_FORCING * r_t):
+                if n_t > CHORD_RATIO * gnorm and not solved(n_t, r_t):
                     factors = None  # factor anew at q
                     continue
             else:  # Newton's step, backtracked until |G| falls
@@ -262,7 +266,7 @@ class QuasiStatic:
                     trial = q.copy()
                     trial[free] += length * dq
                     g_t, n_t, resp_t, r_t = balance(trial)
-                    if n_t < gnorm or n_t <= max(s.tolerance, NEWTON_FORCING * r_t):
+                    if n_t < gnorm or solved(n_t, r_t):
                         break
                     length *= 0.5
                 else:
@@ -270,7 +274,7 @@ class QuasiStatic:
             if n_t > CHORD_RATIO * gnorm:
                 factors = None  # slow convergence: the next iteration factors
             q, g, gnorm, response, rnorm = trial, g_t, n_t, resp_t, r_t
-        return (q, response, rnorm) if gnorm <= max(s.tolerance, NEWTON_FORCING * rnorm) else None
+        return (q, response, rnorm) if solved(gnorm, rnorm) else None
 
     # ------------------------------------------------------------------ one load level
     def move_to_rest(self, lam: float, dead: float = 1.0) -> Motion:
