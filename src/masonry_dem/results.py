@@ -15,7 +15,7 @@ from numpy.typing import NDArray
 from masonry_dem._arrays import FloatArray
 from masonry_dem._validation import read_only
 from masonry_dem.constitutive.states import STATE_NAMES as STATE_NAMES
-from masonry_dem.export.results_folder import recorded_dof_of, save_pushover_rows
+from masonry_dem.export.pushover_file import recorded_dof_of, save_pushover_rows
 from masonry_dem.solvers.static.outcome import Status, StopReason
 
 if TYPE_CHECKING:

@@ -497,6 +497,19 @@ def _stderr_lines(proc: subprocess.Popen):
     return lines
 
 
+def _interrupted_says(proc: subprocess.Popen, lines, timeout: float) -> list[str]:
+    """SIGINT to ``proc``, then what it says on stderr after it (``-X importtime``'s lines
+    left out) once it has ended within ``timeout``."""
+    import signal
+
+    proc.send_signal(signal.SIGINT)
+    proc.wait(timeout=timeout)
+    rest = []
+    while (line := lines.get(timeout=10)) is not None:
+        rest.append(line)
+    return [line.strip() for line in rest if not line.startswith("import time:")]
+
+
 def _wait_for_line(lines, words, timeout: float) -> tuple[str, list[str]]:
     """The first line holding ``words`` (a text, or a test of the line) and the lines before
     it (AssertionError: none came)."""
@@ -554,7 +567,6 @@ def test_ctrl_c_while_python_imports_numpy_is_one_line_and_130(tmp_path):
     """The signal lands while the interpreter imports the heavy modules (right after numpy,
     told by ``-X importtime``): before, the package's own import did so before the command
     line's first line, and Ctrl-C gave a KeyboardInterrupt traceback and -2."""
-    import signal
 
     case = write_case(tmp_path, SINGLE_BLOCK)
     for command in (["run", str(case), "--out", str(tmp_path / "out")], ["render", "folder"]):
@@ -562,14 +574,9 @@ def test_ctrl_c_while_python_imports_numpy_is_one_line_and_130(tmp_path):
         try:
             lines = _stderr_lines(proc)
             _wait_for_line(lines, lambda line: line.split("|")[-1].strip() == "numpy", 120)
-            proc.send_signal(signal.SIGINT)
-            proc.wait(timeout=60)
-            rest = []
-            while (line := lines.get(timeout=10)) is not None:
-                rest.append(line)
+            said = _interrupted_says(proc, lines, 60)
         finally:
             proc.kill()
-        said = [line.strip() for line in rest if not line.startswith("import time:")]
         assert proc.returncode == 130, said
         assert said == ["masonry-dem: interrupted by SIGINT"]
 
@@ -654,7 +661,6 @@ def test_an_interrupted_render_ends_without_the_interpreters_teardown(tmp_path):
     half made (llvmlite's "Exception ignored in OutputString.__del__") and took most of the
     time to stop (a median of 1.8 s and up to 7.7 s after Ctrl-C, 30 renders, load 7 on 2
     cores; 0.05 s and 0.44 s without it)."""
-    import signal
     import time
 
     out = tmp_path / "out"
@@ -673,12 +679,7 @@ def test_an_interrupted_render_ends_without_the_interpreters_teardown(tmp_path):
         _wait_for_line(lines, lambda line: line.split("|")[-1].strip() == "pyvista", 240)
         time.sleep(0.5)
         assert proc.poll() is None
-        proc.send_signal(signal.SIGINT)
-        proc.wait(timeout=120)
-        rest = []
-        while (line := lines.get(timeout=10)) is not None:
-            rest.append(line)
+        said = _interrupted_says(proc, lines, 120)
     finally:
         proc.kill()
-    said = [line.strip() for line in rest if not line.startswith("import time:")]
     assert proc.returncode == 130 and said == ["masonry-dem: interrupted by SIGINT"], said

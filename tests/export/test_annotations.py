@@ -145,7 +145,7 @@ def test_a_pushover_csv_with_a_bare_header_is_still_read(results_copy):
 
 
 def test_a_rotation_is_recorded_in_radians():
-    from masonry_dem.export.results_folder import displacement_column, recorded_of_header
+    from masonry_dem.export.pushover_file import displacement_column, recorded_of_header
 
     assert displacement_column((7, "w1")) == "control_displacement [rad] block 7 w1"
     assert recorded_of_header(displacement_column((7, "w1"))) == (7, "w1")

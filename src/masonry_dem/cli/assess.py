@@ -36,6 +36,25 @@ FIELDS: dict[str, str] = {
 NUMBERS = ("ag", "F0", "Tc", "damping", "q", "FC", "Z", "H", "T1")
 
 
+def add_site(p: argparse.ArgumentParser, numbers: tuple[str, ...]) -> None:
+    """The code, the site and spectrum flags (``numbers``: those of :data:`NUMBERS` the
+    command takes) and ``--config``, a TOML file of the same keys; shared with fragility."""
+    p.add_argument("--code", choices=("ntc2018", "ec8"), default=None, help=FIELDS["code"])
+    p.add_argument("--config", default=None, metavar="TOML", help="a TOML file of these keys")
+    for name in numbers:
+        p.add_argument(f"--{name}", type=_number(name), default=None, help=FIELDS[name])
+    p.add_argument("--soil", default=None, help=FIELDS["soil"])
+    p.add_argument("--topography", default=None, help=FIELDS["topography"])
+    p.add_argument(
+        "--spectrum-type",
+        dest="spectrum_type",
+        type=int,
+        default=None,
+        choices=(1, 2),
+        help=FIELDS["spectrum_type"],
+    )
+
+
 def add_parser(subparsers) -> None:
     p = subparsers.add_parser(
         "assess",
@@ -49,20 +68,7 @@ def add_parser(subparsers) -> None:
         ),
     )
     add_results(p)
-    p.add_argument("--code", choices=("ntc2018", "ec8"), default=None, help=FIELDS["code"])
-    p.add_argument("--config", default=None, metavar="TOML", help="a TOML file of these keys")
-    for name in NUMBERS:
-        p.add_argument(f"--{name}", type=_number(name), default=None, help=FIELDS[name])
-    p.add_argument("--soil", default=None, help=FIELDS["soil"])
-    p.add_argument("--topography", default=None, help=FIELDS["topography"])
-    p.add_argument(
-        "--spectrum-type",
-        dest="spectrum_type",
-        type=int,
-        default=None,
-        choices=(1, 2),
-        help=FIELDS["spectrum_type"],
-    )
+    add_site(p, NUMBERS)
     p.add_argument("--storeys", type=int, default=None, help=FIELDS["storeys"])
     p.add_argument(
         "--alpha0",

@@ -11,7 +11,7 @@ import json
 from pathlib import Path
 from typing import Any
 
-from masonry_dem.cli.assess import FIELDS, _number
+from masonry_dem.cli.assess import _number, add_site
 
 #: the site's keys (flags, or a --config TOML of the same names)
 SITE = ("code", "F0", "Tc", "soil", "topography", "spectrum_type", "q", "FC")
@@ -25,20 +25,7 @@ def add_parser(subparsers) -> None:
         description=__doc__,
     )
     p.add_argument("sweep", help="the folder of a masonry-dem sweep (its sweep.csv)")
-    p.add_argument("--code", choices=("ntc2018", "ec8"), default=None, help=FIELDS["code"])
-    p.add_argument("--config", default=None, metavar="TOML", help="a TOML file of these keys")
-    for name in ("F0", "Tc", "q", "FC"):
-        p.add_argument(f"--{name}", type=_number(name), default=None, help=FIELDS[name])
-    p.add_argument("--soil", default=None, help=FIELDS["soil"])
-    p.add_argument("--topography", default=None, help=FIELDS["topography"])
-    p.add_argument(
-        "--spectrum-type",
-        dest="spectrum_type",
-        type=int,
-        default=None,
-        choices=(1, 2),
-        help=FIELDS["spectrum_type"],
-    )
+    add_site(p, ("F0", "Tc", "q", "FC"))
     p.add_argument("--bootstrap", type=int, default=1000, help="bootstrap resamples (default 1000)")
     p.add_argument(
         "--confidence",

@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from masonry_dem.export import pushover_file as pf
 from masonry_dem.export import results_folder as rf
 from masonry_dem.export.figure_text import frame_level, level, method_of, plain_axes, set_title
 from masonry_dem.export.picture_files import check_out, write_atomically
@@ -25,8 +26,8 @@ from masonry_dem.export.results_series import open_results, read_pushover, recor
 log = logging.getLogger(__name__)
 
 _PLOT_SUFFIXES = (".png", ".svg", ".pdf")
-DOF_NAMES = rf.DOF_NAMES
-LARGEST_TRANSLATION = rf.LARGEST_TRANSLATION
+DOF_NAMES = pf.DOF_NAMES
+LARGEST_TRANSLATION = pf.LARGEST_TRANSLATION
 
 
 def _block_motion(path: Path) -> np.ndarray | None:
@@ -40,9 +41,9 @@ def _block_motion(path: Path) -> np.ndarray | None:
     return np.hstack([np.asarray(data["translation"][0]), np.asarray(data["rotation"][0])])
 
 
-def control_dof(folder: Path | str) -> rf.Recorded:
+def control_dof(folder: Path | str) -> pf.Recorded:
     """Which displacement ``pushover.csv`` records: the block and DOF its header names, else
-    (files written before it named them) :func:`results_folder.recorded_dof` of the steps'
+    (files written before it named them) :func:`pushover_file.recorded_dof` of the steps'
     block motions; None when neither tells."""
     named = recorded_in_pushover(folder)
     if named is not None:
@@ -56,12 +57,12 @@ def control_dof(folder: Path | str) -> rf.Recorded:
     file_of = dict(zip(series.steps.tolist(), series.block_files, strict=True))
     rows = [int(k) for k in np.argsort(-np.abs(c)) if abs(c[k]) > 0 and int(k) in file_of]
     motions = []
-    for k in rows[: rf.STEPS_CHECKED]:
+    for k in rows[: pf.STEPS_CHECKED]:
         q = _block_motion(file_of[k])
         if q is None:
             return None
         motions.append((float(c[k]), q))
-    return rf.recorded_dof(motions)
+    return pf.recorded_dof(motions)
 
 
 def control_label(which: tuple[int, str] | str | None) -> tuple[str, float]:

@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from masonry_dem.export import pushover_file as pf
 from masonry_dem.export import results_folder as rf
 
 log = logging.getLogger(__name__)
@@ -158,12 +159,12 @@ def _load_factors(folder: Path, steps: np.ndarray, times: np.ndarray) -> np.ndar
     return np.array([lookup.get(int(s), np.nan) for s in steps])
 
 
-def recorded_in_pushover(folder: Path | str) -> rf.Recorded:
+def recorded_in_pushover(folder: Path | str) -> pf.Recorded:
     """The block and DOF ``pushover.csv``'s header says its displacement is (None when the
     header does not name one: files written before it did, or no one DOF)."""
     with (Path(folder) / rf.PUSHOVER).open(newline="") as fh:
         header = next(csv.reader(fh), [])
-    return rf.recorded_of_header(header[2]) if len(header) > 2 else None
+    return pf.recorded_of_header(header[2]) if len(header) > 2 else None
 
 
 def read_pushover(folder: Path | str) -> dict[str, np.ndarray]:
@@ -180,8 +181,8 @@ def read_pushover(folder: Path | str) -> dict[str, np.ndarray]:
     rows = list(csv.reader(io.StringIO(text, newline="")))
     if not rows:
         raise ValueError(f"{path} is empty")
-    header = [rf.pushover_column(h) for h in rows[0]]
-    need = rf.PUSHOVER_COLUMNS
+    header = [pf.pushover_column(h) for h in rows[0]]
+    need = pf.PUSHOVER_COLUMNS
     if any(h not in header for h in need):
         raise ValueError(f"{path}: header must hold {', '.join(need)}, got {', '.join(header)}")
     try:

@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from masonry_dem._validation import is_count, plain
+from masonry_dem.export import pushover_file as pf
 from masonry_dem.export import results_folder as rf
 from masonry_dem.export.pvd import write_pvd
 from masonry_dem.export.vtu import write_mechanism_vtu, write_step_vtu
@@ -103,7 +104,7 @@ class ResultsWriter:
         self.times: list[float] = []
         self.steps_written: list[int] = []
         self._curve: list[tuple[int, float, float]] = []
-        self._recorded = rf.RecordedSoFar()
+        self._recorded = pf.RecordedSoFar()
         self._count = 0
         self._failed: BaseException | None = None
         self._pending: list[Future] = []
@@ -133,14 +134,14 @@ class ResultsWriter:
     def _add_to_curve(self, step: StepResult) -> None:
         """The step's row of ``pushover.csv``, appended; the whole file rewritten (atomically)
         when the step changes what the header says is recorded (block, DOF, unit: the one
-        :meth:`finish` writes again at the end, :func:`results_folder.recorded_dof_of`)."""
+        :meth:`finish` writes again at the end, :func:`pushover_file.recorded_dof_of`)."""
         index = len(self._curve)
         self._curve.append((step.step, step.load_factor, step.control_displacement))
         changed = self._recorded.add(index, step.control_displacement, step.q)
         if changed and index > 0:
             self._write_curve()
         else:
-            rf.append_pushover_row(
+            pf.append_pushover_row(
                 self.folder,
                 index,
                 step.load_factor,
@@ -151,7 +152,7 @@ class ResultsWriter:
     def _write_curve(self) -> None:
         """``pushover.csv`` of every step handed over, at once."""
         steps, lams, disp = (np.asarray(c) for c in zip(*self._curve, strict=True))
-        rf.write_pushover(self.folder, np.arange(steps.size), lams, disp, self._recorded.recorded)
+        pf.write_pushover(self.folder, np.arange(steps.size), lams, disp, self._recorded.recorded)
 
     def _raise_failed(self) -> None:
         done = [f for f in self._pending if f.done()]
@@ -241,7 +242,7 @@ class ResultsWriter:
         except OSError as exc:
             self.abort(exc)
             raise
-        rf.write_history_pushover(self.folder, history)
+        pf.write_history_pushover(self.folder, history)
         if history.status == "collapse" and history.steps:
             self._write_mechanism(history)
         summary = self.write_summary(

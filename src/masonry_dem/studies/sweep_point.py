@@ -109,10 +109,11 @@ def _run(data: dict[str, Any], source: str, keep: str, folder: str | None) -> di
     if writer is not None:
         writer.finish(history, case=source, **extra)
     elif folder is not None:  # keep = "summary"
+        from masonry_dem.export import pushover_file as pf
         from masonry_dem.export import results_folder as rf
 
         Path(folder).mkdir(parents=True, exist_ok=True)
-        rf.write_history_pushover(folder, history)
+        pf.write_history_pushover(folder, history)
         summary = history.summary(
             blocks=case.model.blocks.count, interfaces=case.model.interfaces.count
         )
