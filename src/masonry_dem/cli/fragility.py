@@ -90,6 +90,7 @@ def fragility_command(args: argparse.Namespace) -> int:
                 "median_interval": fit.median_interval,
                 "beta_interval": fit.beta_interval,
                 "used": result.used,
+                "censored": fit.censored,
                 "runs": len(result.rows),
                 "left_out": result.left_out,
             }
@@ -99,7 +100,8 @@ def fragility_command(args: argparse.Namespace) -> int:
     print(
         f"fragility: median {fit.median:.4g} g ({pct} %: {fit.median_interval[0]:.4g} to "
         f"{fit.median_interval[1]:.4g}), beta {fit.beta:.3g} ({fit.beta_interval[0]:.3g} to "
-        f"{fit.beta_interval[1]:.3g}), from {result.used} of {len(result.rows)} runs"
+        f"{fit.beta_interval[1]:.3g}), from {result.used} of {len(result.rows)} runs, "
+        f"{fit.censored} censored (did not collapse)"
     )
     print(f"results in {args.sweep}/ ({', '.join(result.files)})")
     return 0

@@ -3,7 +3,8 @@ a peak ground acceleration from the sweep's rows (``alpha0``, ``e_star``), the l
 and what is written into the sweep's folder, and nowhere else:
 
     fragility.json   the fit (median, beta, their bootstrap intervals), the site, the relation
-    fragility.csv    run, status, lambda, alpha0, e_star, a0_star [m/s2], ag_capacity [g]
+    fragility.csv    run, status, lambda, alpha0, e_star, a0_star [m/s2], ag_capacity [g],
+                     censored (True: the capacity is a lower bound, the run did not collapse)
     fragility.png    the fragility curve with its band and the runs' empirical distribution
 """
 
@@ -19,6 +20,7 @@ from typing import Any
 import numpy as np
 
 from masonry_dem.assessment.fragility import (
+    AG_MAX,
     BOOTSTRAP,
     CONFIDENCE,
     LognormalFit,
@@ -42,13 +44,19 @@ RELATION = (
     "(the linear check of a mechanism at ground level, Circolare C8.7.1 [C8A.4.9], [C8A.4.4]); "
     "a0* q / (g S) where S does not depend on ag"
 )
+CENSORING = (
+    "censored: the capacity is a lower bound only; a run that ended 'completed' (still standing "
+    "at its last lambda, e.g. max_load_factor reached), its a0* from alpha0 = c lambda and "
+    "e* <= 1, or one whose capacity reached AG_MAX; fitted by the likelihood of right-censored "
+    "data, sum ln f(exact) + sum ln(1 - F(censored))"
+)
 
 
 @dataclass(frozen=True)
 class Fragility:
     fit: LognormalFit
     rows: list[dict[str, Any]]
-    used: int
+    used: int  # exact and censored capacities
     left_out: dict[str, int]
     files: list[str]
 
@@ -60,6 +68,24 @@ def _float(text: str | None) -> float | None:
         return float(text)
     except ValueError:
         return None
+
+
+def _counts_text(fit: LognormalFit) -> str:
+    return f"{fit.n} runs, {fit.censored} censored (did not collapse)"
+
+
+def _live_load_scale(rows: list[dict[str, str]]) -> float | None:
+    """c of the live load c P_i d, alpha0 / lambda of the runs that collapsed, when they all
+    share it (to 1e-9): a sweep that does not vary the live load; None otherwise. A completed
+    run of a sweep written before its row carried alpha0 takes its alpha0 = c lambda from it."""
+    ratios = []
+    for raw in rows:
+        lam, alpha0 = _float(raw.get("lambda")), _float(raw.get("alpha0"))
+        if raw.get("status") == "collapse" and lam and alpha0 is not None and lam > 0:
+            ratios.append(alpha0 / lam)
+    if not ratios or max(ratios) - min(ratios) > 1e-9 * max(abs(r) for r in ratios):
+        return None
+    return float(np.mean(ratios))
 
 
 def read_sweep_rows(folder: Path) -> list[dict[str, str]]:
@@ -100,9 +126,11 @@ def sweep_fragility(
     q = check_range("q", q, 1.0, 10.0, "(dimensionless)")
     FC = check_range("FC", FC, 1.0, 3.0, "(dimensionless)")
     spectrum_of(code, ag=0.1, **site)  # the site's values checked before anything is read
+    raw_rows = read_sweep_rows(folder)
+    scale = _live_load_scale(raw_rows)
     rows = []
     left_out: dict[str, int] = {}
-    for raw in read_sweep_rows(folder):
+    for raw in raw_rows:
         lam, alpha0, e_star = (_float(raw.get(k)) for k in ("lambda", "alpha0", "e_star"))
         status = raw.get("status", "")
         row: dict[str, Any] = {
@@ -113,10 +141,23 @@ def sweep_fragility(
             "e_star": e_star,
             "a0_star": None,
             "ag_capacity": None,
+            "censored": None,
         }
+        standing = status == "completed"
+        if standing and alpha0 is None and lam is not None and scale is not None:
+            alpha0 = row["alpha0"] = lam * scale  # c lambda, c read off the collapses
+        if standing and (e_star is None or not 0 < e_star <= 1):
+            # no collapse mode, so no e*: it is at most 1 (the participating mass is a share
+            # of the total), and a0* = alpha0 g / (e* FC) is at least alpha0 g / FC; the
+            # capacity rises with a0*, so the bound stays a lower bound
+            e_star = 1.0
         why = (
             f"status {status}"
-            if status != "collapse"
+            if status not in ("collapse", "completed")
+            else "completed with no lambda above 0 (no live load)"
+            if standing and (lam is None or lam <= 0)
+            else "completed, no alpha0 (the live load is not c P_i d, or c differs between runs)"
+            if standing and alpha0 is None
             else "no seismic mechanism (the live load is not c P_i d, or no mode)"
             if alpha0 is None or e_star is None or e_star <= 0
             else "alpha0 <= 0"
@@ -129,14 +170,21 @@ def sweep_fragility(
             assert alpha0 is not None and e_star is not None
             row["a0_star"] = alpha0 * G / (e_star * FC)
             row["ag_capacity"] = ag_capacity(row["a0_star"], code, site, q)
+            # a run still standing at the end of its path, or one stronger than the largest
+            # capacity sought (reported at AG_MAX), bounds its capacity from below only
+            row["censored"] = standing or row["ag_capacity"] >= AG_MAX
         rows.append(row)
-    capacities = np.array([r["ag_capacity"] for r in rows if r["ag_capacity"] is not None])
-    if capacities.size < 2:
+    used = [r for r in rows if r["ag_capacity"] is not None]
+    capacities = np.array([r["ag_capacity"] for r in used], dtype=float)
+    censored = np.array([r["censored"] for r in used], dtype=bool)
+    exact = int((~censored).sum())
+    if exact < 2:
         raise ValueError(
-            f"{folder}: {capacities.size} run(s) with a capacity ({left_out or 'none left out'}): "
-            "a fit needs at least 2"
+            f"{folder}: {exact} run(s) with a capacity from a collapse"
+            + (f" and {int(censored.sum())} censored (did not collapse)" if censored.any() else "")
+            + f" ({left_out or 'none left out'}): a fit needs at least 2 that collapsed"
         )
-    fit, resamples = fit_lognormal(capacities, bootstrap, confidence, seed)
+    fit, resamples = fit_lognormal(capacities, bootstrap, confidence, seed, censored)
     data = {
         "median": fit.median,
         "beta": fit.beta,
@@ -146,6 +194,8 @@ def sweep_fragility(
         "left_out": left_out,
         "capacity_min": float(capacities.min()),
         "capacity_max": float(capacities.max()),
+        "counts": _counts_text(fit),
+        "censoring": CENSORING,
         "code": code,
         "site": site,
         "q": q,
@@ -155,12 +205,12 @@ def sweep_fragility(
     }
     text = json.dumps(finite_json(data), indent=2)
     write_atomic(folder / FRAGILITY_JSON, lambda tmp: tmp.write_text(text + "\n"))
-    columns = ["run", "status", "lambda", "alpha0", "e_star", "a0_star", "ag_capacity"]
+    columns = ["run", "status", "lambda", "alpha0", "e_star", "a0_star", "ag_capacity", "censored"]
 
     def write_csv(tmp: Path) -> None:
         with tmp.open("w", newline="") as fh:
             writer = csv.writer(fh)
-            writer.writerow([*columns[:5], "a0_star [m/s2]", "ag_capacity [g]"])
+            writer.writerow([*columns[:5], "a0_star [m/s2]", "ag_capacity [g]", "censored"])
             for r in rows:
                 writer.writerow(["" if r[c] is None else r[c] for c in columns])
 
@@ -170,10 +220,16 @@ def sweep_fragility(
         soil = site.get("soil", "A")
         title = (
             f"{folder.name}: {code}, soil {soil}, q {q:g}, FC {FC:g}; "
-            f"{capacities.size} of {len(rows)} runs"
+            f"{_counts_text(fit)}, of {len(rows)}"
         )
-        fig = fragility_figure(fit, resamples, capacities, title)
+        fig = fragility_figure(fit, resamples, capacities, title, censored)
         write_atomically(folder / FRAGILITY_PNG, lambda tmp: fig.savefig(tmp, dpi=150))
         files.append(FRAGILITY_PNG)
-    log.info("fragility of %s: median %.4g g, beta %.4g", folder, fit.median, fit.beta)
+    log.info(
+        "fragility of %s: median %.4g g, beta %.4g (%s)",
+        folder,
+        fit.median,
+        fit.beta,
+        _counts_text(fit),
+    )
     return Fragility(fit, rows, int(capacities.size), left_out, files)
