@@ -491,6 +491,14 @@ class Mechanism:
         )
 
 
+def live_load_scale(model: Model) -> float:
+    """c of the model's live load c P_i d (the codes' seismic action), with no mode: the
+    alpha0 = c lambda of a run that stood at lambda; a ValueError when the live load is not
+    of that form."""
+    weights = np.maximum(-np.asarray(model.dead, dtype=float)[:, 1], 0.0)
+    return _seismic_direction(np.asarray(model.live, dtype=float), weights)[1]
+
+
 def _seismic_direction(
     live: NDArray[np.float64], weights: NDArray[np.float64]
 ) -> tuple[NDArray[np.float64], float]:

@@ -34,7 +34,8 @@ RESULT_COLUMNS: dict[str, type] = {
     # the seismic mechanism (a weight-proportional live load c P_i d only): alpha0 = c lambda
     # and e*, the participating mass fraction of the hinged mode (Circolare [C8A.4.3]); with
     # them a0* = alpha0 g / (e* FC) and the run's capacity as a ground acceleration
-    # (masonry-dem fragility, docs/assessment.md)
+    # (masonry-dem fragility, docs/assessment.md); a completed run (no collapse) has alpha0 =
+    # c lambda at its last lambda, a lower bound, and no e*
     "alpha0": float,
     "e_star": float,
     "seconds": float,  # wall-clock time of the run on its worker
@@ -132,7 +133,22 @@ def _run(data: dict[str, Any], source: str, keep: str, folder: str | None) -> di
     }
     if status == "collapse":
         row.update(mechanism_summary(case.model, history))
+    elif status == "completed" and row["lambda"]:
+        row.update(standing_alpha0(case.model, row["lambda"]))
     return row
+
+
+def standing_alpha0(model: Model, lam: float) -> dict[str, Any]:
+    """alpha0 = c lambda of a run that ended still standing at ``lam`` (no collapse mode, so
+    no e*): a lower bound of its alpha0, the right-censored capacity of ``masonry-dem
+    fragility``; {} when the live load is not c P_i d."""
+    from masonry_dem.assessment.kinematics import live_load_scale
+
+    try:
+        return {"alpha0": float(lam) * live_load_scale(model)}
+    except ValueError as exc:
+        log.info("%s: no seismic reading of the live load (%s)", model.name, exc)
+        return {}
 
 
 def mechanism_summary(model: Model, history: History) -> dict[str, Any]:
