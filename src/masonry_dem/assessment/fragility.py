@@ -1,6 +1,7 @@
 """Fragility of a mechanism over uncertain inputs (issue 38, item 4): the capacity of each run
 of a sampled sweep as a peak ground acceleration, a lognormal fitted to them by maximum
-likelihood with a bootstrap confidence band, and the fragility curve
+likelihood (runs that did not collapse as right-censored: their capacity only exceeds a
+value) with a bootstrap confidence band, and the fragility curve
 P(collapse | ag) = Phi(ln(ag / median) / beta).
 
 The capacity of a run is the ground acceleration at which its mechanism, at ground level,
