@@ -217,7 +217,8 @@ def ec8_amplification(building: Building, Ta: float) -> float:
 def ntc_displacement_demand(
     spectrum: Spectrum, building: Building, Ts: float, demand_at_height: str = "floor_spectrum"
 ) -> float:
-    """Circolare C8.7.1 nonlinear check: SDe(Ts) at ground level; at height the larger of it
+    """Circolare nonlinear check: SDe(Ts) at ground level (C8.7.1.2.1.8, with the Circolare
+    2009 secant period Ts, not 2019's T_SLV [C8.7.1.10]); at height the larger of it
     and, with ``"floor_spectrum"``, the floor's displacement spectrum of Circolare 2019
     C8.7.1.2.1.8: S_eZ(Ts, xi, Z) Ts^2 / 4 pi^2, at least S_eZ(T1, xi, Z) b^2 T1^2 / 4 pi^2
     when Ts > b T1 ([C8.7.1.12]); with ``"circolare_2009"``, SDe(T1) psi gamma (Ts/T1)^2 /

@@ -115,7 +115,9 @@ class Spectrum:
         return np.asarray(out, dtype=float)
 
     def displacement(self, period: ArrayLike) -> NDArray[np.float64]:
-        """SDe(T) = Se(T) (T / 2 pi)^2 [m] (NTC 2018 [3.2.12]; EN 1998-1 (3.7))."""
+        """SDe(T) = Se(T) (T / 2 pi)^2 [m] (NTC 2018 [3.2.10] of section 3.2.3.2.3, which holds
+        up to T_E of its Tab. 3.2.VII, beyond which [3.2.11] is not implemented; EN 1998-1
+        (3.7))."""
         T = np.asarray(period, dtype=float)
         return self.acceleration(T) * (T / (2.0 * math.pi)) ** 2
 
@@ -194,17 +196,17 @@ class NTC2018Spectrum(Spectrum):
 
     @property
     def TC(self) -> float:
-        """Tc = C_C Tc* ([3.2.7])."""
+        """Tc = C_C Tc* ([3.2.5])."""
         return self.C_C * self.Tc_star
 
     @property
     def TB(self) -> float:
-        """TB = Tc / 3 ([3.2.8])."""
+        """TB = Tc / 3 ([3.2.6])."""
         return self.TC / 3.0
 
     @property
     def TD(self) -> float:
-        """TD = 4.0 ag/g + 1.6 ([3.2.9])."""
+        """TD = 4.0 ag/g + 1.6 ([3.2.7])."""
         return 4.0 * self.ag + 1.6
 
 
