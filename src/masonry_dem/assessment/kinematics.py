@@ -364,7 +364,7 @@ class Mechanism:
     def alpha_rigid(self) -> float:
         """alpha0 of the principle of virtual work with the loads alone (rigid blocks, hinges
         at the edges, no work of the joints): alpha0 = -W_dead / W_live (Circolare 2019
-        [C8.7.1.1] with no work of internal forces, L_i = 0)."""
+        [C8.7.1.1] with L_i = 0)."""
         dead, live = self.powers(0.0)
         return float(-dead[0] / live[0])
 
