@@ -132,6 +132,15 @@ def test_config_file_and_flags_over_it(default_run, tmp_path):
         (["--ag", "0.2", "--Z", "12", "--H", "9"], ["Z = 12", "[0, H = 9] m"]),
         (["--code", "ec8", "--ag", "0.2", "--F0", "2.4"], ["F0", "ec8"]),
         (["--soil", "A"], ["ag", "[g]"]),
+        (
+            ["--ag", "0.2", "--demand-at-height", "floor"],
+            ["demand_at_height = 'floor'", "floor_spectrum, circolare_2009"],
+        ),
+        (["--ag", "0.2", "--building-damping", "0"], ["building_damping = 0.0", "(0, 30] %"]),
+        (
+            ["--code", "ec8", "--ag", "0.2", "--demand-at-height", "floor_spectrum"],
+            ["demand_at_height", "ntc2018 code only", "ec8"],
+        ),
     ],
 )
 def test_bad_parameters_one_line_exit_2(block_run, capsys, flags, words):
@@ -148,6 +157,10 @@ def test_bad_parameters_one_line_exit_2(block_run, capsys, flags, words):
         ('ag = 0.2\nsoil = "B"\nF0 = 12\n', ["F0 = 12", "[1, 5]"]),
         ('ag = "0.2"\n', ["ag = '0.2'", "without quotes", "(0, 1.5] g"]),
         ("ag = 0.2\nZ = 4.0\nH = 3.0\n", ["Z = 4", "[0, H = 3] m"]),
+        (
+            'ag = 0.2\ndemand_at_height = "2009"\n',
+            ["demand_at_height = '2009'", "floor_spectrum, circolare_2009"],
+        ),
     ],
 )
 def test_a_bad_value_of_the_config_file_names_the_file(block_run, tmp_path, capsys, text, words):
@@ -159,6 +172,23 @@ def test_a_bad_value_of_the_config_file_names_the_file(block_run, tmp_path, caps
     assert f"assessment file {cfg}: " in err
     for w in words:
         assert w in err
+
+
+def test_demand_at_height_floor_spectrum_by_default_and_2009_on_request(block_run, tmp_path):
+    """At Z = 6 m of H = 9 m, N = 3, T1 = 0.3 s (soil A, ag 0.2, F0 2.4, Tc* 0.35, q 2): the
+    default is the floor's peak acceleration of Circolare 2019 over q, 4.0562446564 / 2;
+    ``demand_at_height = "circolare_2009"`` in the file gives Se(T1) psi gamma / q."""
+    site = [*NTC, "--Z", "6", "--H", "9", "--storeys", "3", "--T1", "0.3", "--no-render"]
+    assert main(["assess", str(block_run), *site]) == 0
+    a = _read(block_run)
+    assert a["demand_at_height"] == "floor_spectrum" and a["building_damping"] == 5.0
+    assert a["demand_height"] == pytest.approx(4.0562446564057755 / 2, rel=TOL)
+    cfg = tmp_path / "old.toml"
+    cfg.write_text('demand_at_height = "circolare_2009"\n')
+    assert main(["assess", str(block_run), *site, "--config", str(cfg)]) == 0
+    a = _read(block_run)
+    assert a["demand_at_height"] == "circolare_2009"
+    assert a["demand_height"] == pytest.approx(0.2 * G * 2.4 * (2 / 3) * (9 / 7) / 2, rel=TOL)
 
 
 def test_unknown_config_key(block_run, tmp_path, capsys):

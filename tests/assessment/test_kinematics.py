@@ -224,8 +224,9 @@ def test_a_load_not_proportional_to_the_weights_is_refused():
 
 
 def test_a_mechanism_at_height_takes_the_larger_demand():
-    """NTC: at Z = 6 m of H = 9 m, N = 3, T1 = 0.3 s on soil A (ag 0.2, F0 2.4, Tc* 0.35):
-    Se(T1) on the plateau = 0.2 g 2.4; psi = 2/3, gamma = 9/7; demand Se psi gamma / q."""
+    """NTC, the Circolare 2009 form: at Z = 6 m of H = 9 m, N = 3, T1 = 0.3 s on soil A (ag
+    0.2, F0 2.4, Tc* 0.35): Se(T1) on the plateau = 0.2 g 2.4; psi = 2/3, gamma = 9/7;
+    demand Se psi gamma / q."""
     model = _model({})
     b = int(np.flatnonzero(~model.fixed.any(axis=1))[0])
     mode = np.zeros((model.blocks.count, 6))
@@ -236,7 +237,9 @@ def test_a_mechanism_at_height_takes_the_larger_demand():
         NTC2018Spectrum(0.2, 2.4, 0.35),
         Building(Z=6.0, H=9.0, storeys=3, T1=0.3),
         q=2.0,
+        demand_at_height="circolare_2009",
     )
+    assert out.demand_at_height == "circolare_2009"
     assert out.demand_ground == pytest.approx(0.2 * G / 2, rel=TOL)
     assert out.demand_height == pytest.approx(0.2 * G * 2.4 * (2 / 3) * (9 / 7) / 2, rel=TOL)
     assert out.demand == out.demand_height
@@ -257,6 +260,38 @@ def test_a_mechanism_at_height_takes_the_larger_demand():
         / math.sqrt((1 - r) ** 2 + 0.02 * r)
     )
     assert out.displacement_demand == pytest.approx(max(ground, height), rel=TOL)
+
+
+def test_a_mechanism_at_height_against_the_floor_spectrum_by_default():
+    """NTC, Circolare 2019 (the default): the same building, xi1 = 5 %. Linear: the floor's
+    peak acceleration a_Z = Se(T1) gamma psi sqrt(1 + 0.0004 x 25) = 4.7088 x 6/7 x
+    sqrt(1.01) = 4.056244656 m/s2 [C7.2.7], over q = 2. Nonlinear: Ts > b T1 = 0.33 s, on
+    the falling branch of [C7.2.6] or the ground spectrum, whichever is larger, in
+    displacement, and at least the plateau's at b T1 ([C8.7.1.12])."""
+    model = _model({})
+    b = int(np.flatnonzero(~model.fixed.any(axis=1))[0])
+    mode = np.zeros((model.blocks.count, 6))
+    mode[b] = _rotation_about(model.blocks.centres[[b]], (0.0, 0.2))[0]
+    out, _ = assess(
+        Mechanism.of(model, mode),
+        "ntc2018",
+        NTC2018Spectrum(0.2, 2.4, 0.35),
+        Building(Z=6.0, H=9.0, storeys=3, T1=0.3),
+        q=2.0,
+    )
+    assert out.demand_at_height == "floor_spectrum" and out.building_damping == 5.0
+    a_Z = 0.2 * G * 2.4 * (6 / 7) * math.sqrt(1.01)
+    assert out.demand_height == pytest.approx(a_Z / 2, rel=TOL)
+    assert out.demand_height == pytest.approx(2.028122328, rel=1e-9)
+    Ts = out.Ts
+    assert 0.35 < Ts < 2.4
+    A = 1.1 / math.sqrt(0.05)
+    fall = A * a_Z / (1 + (A - 1) * (Ts / 0.33 - 1) ** 1.2)
+    ground_Se = 0.2 * G * 2.4 * 0.35 / Ts
+    height = max(fall, ground_Se) * Ts**2 / (4 * math.pi**2)
+    bound = A * a_Z * 0.33**2 / (4 * math.pi**2)
+    ground = ground_Se * Ts**2 / (4 * math.pi**2)
+    assert out.displacement_demand == pytest.approx(max(ground, height, bound), rel=TOL)
 
 
 # ----------------------------------------------------------------------------- from the analyses

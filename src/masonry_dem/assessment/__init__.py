@@ -1,5 +1,5 @@
 """Seismic assessment of a collapse mechanism: the kinematic analysis of NTC 2018 and its
-Circolare 2019 (C8.7.1), a large-displacement capacity curve, and the EN 1998-1 (N2)
+Circolare 2019 (C8.7.1.2.1, the floor spectrum of C7.2.3), a large-displacement capacity curve, and the EN 1998-1 (N2)
 format. It reads a model and a mode (the stages before it) and never the exports: the
 results folder is read and written by ``export/assessment_files.py``.
 

@@ -1,8 +1,10 @@
 """The codes' checks of a mechanism (docs/assessment.md gives every formula and its clause):
 
-* NTC 2018 with the Circolare 2019, C8.7.1: the linear kinematic check a0* >= demand (the
-  mechanism at ground level, and at height Z in a building of height H, N storeys and first
-  period T1), and the nonlinear one d_u* >= SDe(Ts) (and its form at height);
+* NTC 2018 with the Circolare 2019, C8.7.1.2.1: the linear kinematic check a0* >= demand (the
+  mechanism at ground level, and at height Z in a building of height H, N storeys, first
+  period T1 and damping xi1: the floor spectrum of C7.2.3, or the older Circolare 2009 form
+  with ``demand_at_height="circolare_2009"``), and the nonlinear one d_u* >= SDe(Ts) (and its
+  form at height);
 * EN 1998-1: the same capacity against its elastic spectrum: the linear check with the
   amplification of section 4.3.5.2 at height, and the N2 target displacement of Annex B.
 
@@ -24,12 +26,25 @@ from masonry_dem.assessment.kinematics import (
     Mechanism,
     interpenetration,
 )
-from masonry_dem.assessment.spectra import EC8Spectrum, G, NTC2018Spectrum, Spectrum, check_range
+from masonry_dem.assessment.spectra import (
+    FLOOR_B,
+    EC8Spectrum,
+    G,
+    NTC2018Spectrum,
+    Spectrum,
+    check_range,
+    floor_acceleration,
+    floor_spectrum,
+)
 from masonry_dem.model import Model
 
 Code = Literal["ntc2018", "ec8"]
 CODES: tuple[str, ...] = ("ntc2018", "ec8")
-#: C1 of T1 = C1 H^(3/4) for masonry buildings (NTC 2008 [7.3.5], Circolare 2019 C7.3.3.2)
+#: the NTC 2018 demand on a mechanism at height: Circolare 2019 C7.2.3's floor spectrum
+#: (default) or the Circolare 2009 form Se(T1) psi gamma / q
+DEMANDS_AT_HEIGHT: tuple[str, ...] = ("floor_spectrum", "circolare_2009")
+#: C1 of T1 = C1 H^(3/4) for masonry buildings (NTC 2018 [7.3.6] of section 7.3.3.2, as
+#: Circolare 2019 C7.2.3 names it; the value 0.050 is not checked against a text)
 C1_MASONRY = 0.050
 
 
@@ -37,12 +52,14 @@ C1_MASONRY = 0.050
 class Building:
     """Where the mechanism sits: ``Z`` [m] the height of the hinge of the mechanism above the
     foundation (0: at ground level), ``H`` [m] the building's height, ``storeys`` N, ``T1``
-    [s] its first period (None: C1 H^(3/4), C1 = 0.050)."""
+    [s] its first period (None: C1 H^(3/4), C1 = 0.050), ``damping`` xi1 [%] the equivalent
+    viscous damping of its first mode (the floor spectrum's, Circolare 2019 C7.2.3)."""
 
     Z: float = 0.0
     H: float | None = None
     storeys: int = 1
     T1: float | None = None
+    damping: float = 5.0
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
@@ -54,6 +71,11 @@ class Building:
         check_range("storeys", self.storeys, 1, 100, "")
         if self.T1 is not None:
             set_(self, "T1", check_range("T1", self.T1, 0.0, 10.0, "s", low_open=True))
+        set_(
+            self,
+            "damping",
+            check_range("building_damping", self.damping, 0.0, 30.0, "%", low_open=True),
+        )
         if self.Z > 0 and self.H is None:
             raise ValueError(
                 f"Z = {self.Z:g} m: a mechanism at height needs H, the building's height [m]"
@@ -72,7 +94,8 @@ class Building:
 
     @property
     def gamma(self) -> float:
-        """gamma = 3N / (2N + 1), the first mode's participation factor."""
+        """gamma = 3N / (2N + 1), the first mode's participation factor (Circolare 2019
+        [C7.2.10], for masses even along the height and a linear first mode)."""
         return 3.0 * self.storeys / (2.0 * self.storeys + 1.0)
 
     @property
@@ -123,6 +146,8 @@ class Assessment:
     storeys: int
     T1: float | None
     spectrum: dict[str, Any]
+    demand_at_height: str = "floor_spectrum"
+    building_damping: float = 5.0
 
     def as_dict(self) -> dict[str, Any]:
         return asdict(self)
@@ -153,15 +178,30 @@ def spectrum_summary(spectrum: Spectrum) -> dict[str, Any]:
     return out
 
 
+def check_demand_at_height(value: object) -> str:
+    """``value`` as one of :data:`DEMANDS_AT_HEIGHT`, else a one-line ValueError naming it."""
+    if value not in DEMANDS_AT_HEIGHT:
+        raise ValueError(
+            f"demand_at_height = {value!r}: must be one of {', '.join(DEMANDS_AT_HEIGHT)}"
+        )
+    return str(value)
+
+
 def ntc_linear_demand(
-    spectrum: Spectrum, building: Building, q: float
+    spectrum: Spectrum, building: Building, q: float, demand_at_height: str = "floor_spectrum"
 ) -> tuple[float, float | None]:
     """NTC 2018 / Circolare: the spectral acceleration a0* must reach [m/s2]: at ground level
-    ag S / q; at height also Se(T1) psi(Z) gamma / q. Returns (ground, height or None)."""
+    ag S / q; at height also a_Z(Z) / q, the floor's peak acceleration of Circolare 2019
+    [C7.2.7]-[C7.2.8] (``"floor_spectrum"``: C8.7.1.2.1.5 [C8.7.1.8] and C8.7.1.2.1.7), or
+    Se(T1) psi(Z) gamma / q (``"circolare_2009"``). Returns (ground, height or None)."""
+    check_demand_at_height(demand_at_height)
     ground = spectrum.pga() / q
     if not building.at_height:
         return ground, None
     T1 = building.period
+    if demand_at_height == "floor_spectrum":
+        a_Z = floor_acceleration(spectrum, T1, building.gamma, building.psi, building.damping)
+        return ground, a_Z / q
     height = float(spectrum.acceleration(T1)) * building.psi * building.gamma / q
     return ground, height
 
@@ -174,13 +214,27 @@ def ec8_amplification(building: Building, Ta: float) -> float:
     return max(3.0 * (1.0 + building.psi) / (1.0 + (1.0 - Ta / T1) ** 2) - 0.5, 1.0)
 
 
-def ntc_displacement_demand(spectrum: Spectrum, building: Building, Ts: float) -> float:
-    """Circolare C8.7.1 nonlinear check: SDe(Ts) at ground level; at height the larger of it
-    and SDe(T1) psi gamma (Ts/T1)^2 / sqrt((1 - Ts/T1)^2 + 0.02 Ts/T1)."""
+def ntc_displacement_demand(
+    spectrum: Spectrum, building: Building, Ts: float, demand_at_height: str = "floor_spectrum"
+) -> float:
+    """Circolare nonlinear check: SDe(Ts) at ground level (C8.7.1.2.1.8, with the Circolare
+    2009 secant period Ts, not 2019's T_SLV [C8.7.1.10]); at height the larger of it
+    and, with ``"floor_spectrum"``, the floor's displacement spectrum of Circolare 2019
+    C8.7.1.2.1.8: S_eZ(Ts, xi, Z) Ts^2 / 4 pi^2, at least S_eZ(T1, xi, Z) b^2 T1^2 / 4 pi^2
+    when Ts > b T1 ([C8.7.1.12]); with ``"circolare_2009"``, SDe(T1) psi gamma (Ts/T1)^2 /
+    sqrt((1 - Ts/T1)^2 + 0.02 Ts/T1)."""
+    check_demand_at_height(demand_at_height)
     ground = float(spectrum.displacement(Ts))
     if not building.at_height:
         return ground
     T1 = building.period
+    if demand_at_height == "floor_spectrum":
+        args = (T1, building.gamma, building.psi, building.damping)
+        height = float(floor_spectrum(spectrum, Ts, *args)[()]) * Ts**2 / (4.0 * math.pi**2)
+        if Ts > FLOOR_B * T1:
+            bound = float(floor_spectrum(spectrum, T1, *args)[()]) * (FLOOR_B * T1) ** 2
+            height = max(height, bound / (4.0 * math.pi**2))
+        return max(ground, height)
     r = Ts / T1
     height = (
         float(spectrum.displacement(T1))
@@ -213,14 +267,17 @@ def assess(
     q: float = 2.0,
     FC: float = 1.35,
     alpha0: float | None = None,
+    demand_at_height: str = "floor_spectrum",
 ) -> tuple[Assessment, CapacityCurve]:
     """The linear and nonlinear kinematic checks of ``mechanism`` under ``code``.
 
     ``alpha0`` the multiplier that activates the mechanism (None: the virtual work of the
     loads alone, :attr:`Mechanism.alpha_rigid`); ``q`` the behaviour factor of the linear
-    check (2.0 in the Circolare), ``FC`` the confidence factor. Returns the assessment and
-    the capacity curve (its a* with FC = 1)."""
+    check (2.0 in the Circolare), ``FC`` the confidence factor; ``demand_at_height`` the NTC
+    2018 demand on a mechanism at height (:data:`DEMANDS_AT_HEIGHT`). Returns the assessment
+    and the capacity curve (its a* with FC = 1)."""
     building = building or Building()
+    check_demand_at_height(demand_at_height)
     q = check_range("q", q, 1.0, 10.0, "(dimensionless)")
     FC = check_range("FC", FC, 1.0, 3.0, "(dimensionless)")
     if code not in CODES:
@@ -257,8 +314,12 @@ def assess(
         )
 
     if code == "ntc2018":
-        ground, height = ntc_linear_demand(spectrum, building, q)
-        disp = None if Ts is None else ntc_displacement_demand(spectrum, building, Ts)
+        ground, height = ntc_linear_demand(spectrum, building, q, demand_at_height)
+        disp = (
+            None
+            if Ts is None
+            else ntc_displacement_demand(spectrum, building, Ts, demand_at_height)
+        )
     else:
         ground = spectrum.pga() / q
         # Ta = Ts; with no Ts (no alpha = 0), Ta = T1: the resonant, largest amplification
@@ -305,6 +366,8 @@ def assess(
         storeys=building.storeys,
         T1=building.period if building.at_height else building.T1,
         spectrum=spectrum_summary(spectrum),
+        demand_at_height=demand_at_height,
+        building_damping=building.damping,
     )
     return assessment, curve
 
@@ -320,6 +383,7 @@ def assess_mode(
     load_factor: float | None = None,
     moving: float = MOVING,
     kinematics: str = "auto",
+    demand_at_height: str = "floor_spectrum",
 ) -> tuple[Assessment, CapacityCurve, Mechanism, dict[str, Any]]:
     """:func:`assess` of a rigid-block mode (n, 6) on ``model``: alpha0 the analysis's
     ``load_factor`` in the codes' terms (None: the virtual work of the loads).
@@ -327,7 +391,8 @@ def assess_mode(
     ``kinematics`` ``"chain"`` or ``"independent"`` (:meth:`Mechanism.of`), or ``"auto"``:
     both, and the one whose finite motion overlaps the least across the joints at d_u*
     (:func:`~masonry_dem.assessment.kinematics.interpenetration`; a curve with no alpha = 0
-    counts as no check at all). Returns the assessment, its curve, its mechanism and what
+    counts as no check at all); ``demand_at_height`` as :func:`assess` takes it. Returns the
+    assessment, its curve, its mechanism and what
     chose it: ``kinematics``, ``overlap_at_du`` [m] and ``overlaps`` of each candidate."""
     if kinematics != "auto" and kinematics not in KINEMATICS:
         raise ValueError(f"kinematics = {kinematics!r}: must be auto, chain or independent")
@@ -336,7 +401,7 @@ def assess_mode(
     for name in candidates:
         mech = Mechanism.of(model, mode, moving, name)
         alpha0 = None if load_factor is None else load_factor * mech.scale
-        out, curve = assess(mech, code, spectrum, building, q, FC, alpha0)
+        out, curve = assess(mech, code, spectrum, building, q, FC, alpha0, demand_at_height)
         if out.du_star is None:
             overlap = math.inf
         else:

@@ -5,8 +5,8 @@ value) with a bootstrap confidence band, and the fragility curve
 P(collapse | ag) = Phi(ln(ag / median) / beta).
 
 The capacity of a run is the ground acceleration at which its mechanism, at ground level,
-just fails the linear kinematic check of NTC 2018 / Circolare C8.7.1 ([C8A.4.9]),
-a0* = ag S / q, with a0* = alpha0 g / (e* FC) ([C8A.4.4]):
+just fails the linear kinematic check of NTC 2018 / Circolare 2019 C8.7.1.2.1.7 (the
+Circolare 2009's [C8A.4.9]), a0* = ag S / q, with a0* = alpha0 g / (e* FC) (2019 [C8.7.1.8]):
 
     ag_capacity = the smallest ag with ag S(ag) / q >= a0* / g   [g]
 

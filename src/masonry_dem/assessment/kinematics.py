@@ -1,5 +1,5 @@
 """A collapse mechanism as the codes' kinematic analysis reads it (NTC 2018 and Circolare 2019
-C8.7.1; docs/assessment.md): the weights P_i of the blocks that move, their virtual
+C8.7.1.2.1; docs/assessment.md): the weights P_i of the blocks that move, their virtual
 displacements, the multiplier alpha0, the participating mass M* and its fraction e*, and the
 capacity curve alpha(d_k) of the mechanism moved through finite rotations.
 
@@ -363,14 +363,15 @@ class Mechanism:
     @property
     def alpha_rigid(self) -> float:
         """alpha0 of the principle of virtual work with the loads alone (rigid blocks, hinges
-        at the edges, no work of the joints): alpha0 = -W_dead / W_live (Circolare C8.7.1,
-        [C8A.4.1] of 2009 without L_fi)."""
+        at the edges, no work of the joints): alpha0 = -W_dead / W_live (Circolare 2019
+        [C8.7.1.1] with L_i = 0)."""
         dead, live = self.powers(0.0)
         return float(-dead[0] / live[0])
 
     def participating_mass(self) -> tuple[float, float]:
         """M* = (sum P_i dx_i)^2 / (g sum P_i dx_i^2) [kg] and e* = g M* / sum P_i over the
-        moving blocks (Circolare [C8A.4.2], [C8A.4.3])."""
+        moving blocks: e* = (sum P_i dx_i)^2 / (sum P_i sum P_i dx_i^2), Circolare 2019
+        [C8.7.1.5]."""
         P, dx = self.weights[self.moving], self.dx[self.moving]
         m_star = float(np.sum(P * dx) ** 2 / (G * np.sum(P * dx**2)))
         return m_star, G * m_star / self.total_weight
@@ -412,8 +413,8 @@ class Mechanism:
     ) -> CapacityCurve:
         """alpha(d_k) through finite rotations until alpha = 0 at d_k0 (Circolare C8.7.1,
         nonlinear kinematic analysis), and the SDOF curve d* = d_k / e* ... (see
-        d_k / e* and a* = alpha g / e* (Circolare [C8A.4.6], [C8A.4.7] with FC = 1; the
-        confidence factor divides a* where the check is made): ``points`` configurations
+        d_k / e* and a* = alpha g / e* (Circolare 2019 [C8.7.1.4], [C8.7.1.3] with FC = 1;
+        the confidence factor divides a* where the check is made): ``points`` configurations
         from 0 to s0."""
         from scipy.optimize import brentq
 

@@ -1,6 +1,7 @@
 """Elastic response spectra of the codes: NTC 2018 section 3.2.3.2 and EN 1998-1 section
 3.2.2.2, as frozen dataclasses of their parameters, each checked where it is given: a value
-out of range is one line naming the field, the value, the range and the unit.
+out of range is one line naming the field, the value, the range and the unit; and the floor
+spectrum of Circolare 2019 C7.2.3 (:func:`floor_spectrum`) for a mechanism at height.
 
 Accelerations are returned in m/s2 (the parameters ``ag`` are in g), displacements in m,
 periods in s. Every formula and its clause is in docs/assessment.md.
@@ -8,6 +9,7 @@ periods in s. Every formula and its clause is in docs/assessment.md.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import Literal
@@ -113,7 +115,9 @@ class Spectrum:
         return np.asarray(out, dtype=float)
 
     def displacement(self, period: ArrayLike) -> NDArray[np.float64]:
-        """SDe(T) = Se(T) (T / 2 pi)^2 [m] (NTC 2018 [3.2.12]; EN 1998-1 (3.7))."""
+        """SDe(T) = Se(T) (T / 2 pi)^2 [m] (NTC 2018 [3.2.10] of section 3.2.3.2.3, which holds
+        up to T_E of its Tab. 3.2.VII, beyond which [3.2.11] is not implemented; EN 1998-1
+        (3.7))."""
         T = np.asarray(period, dtype=float)
         return self.acceleration(T) * (T / (2.0 * math.pi)) ** 2
 
@@ -192,17 +196,17 @@ class NTC2018Spectrum(Spectrum):
 
     @property
     def TC(self) -> float:
-        """Tc = C_C Tc* ([3.2.7])."""
+        """Tc = C_C Tc* ([3.2.5])."""
         return self.C_C * self.Tc_star
 
     @property
     def TB(self) -> float:
-        """TB = Tc / 3 ([3.2.8])."""
+        """TB = Tc / 3 ([3.2.6])."""
         return self.TC / 3.0
 
     @property
     def TD(self) -> float:
-        """TD = 4.0 ag/g + 1.6 ([3.2.9])."""
+        """TD = 4.0 ag/g + 1.6 ([3.2.7])."""
         return 4.0 * self.ag + 1.6
 
 
@@ -274,3 +278,69 @@ class EC8Spectrum(Spectrum):
     @property
     def plateau(self) -> float:
         return 2.5
+
+
+#: Circolare 2019 C7.2.3: a, b bound the floor spectrum's plateau [a T1, b T1] ("possono
+#: essere assunti pari a 0,8 e 1,1")
+FLOOR_A = 0.8
+FLOOR_B = 1.1
+
+
+def with_damping(spectrum: Spectrum, damping: float) -> Spectrum:
+    """The same spectrum at another viscous damping xi [%] (its eta changes, nothing else)."""
+    return dataclasses.replace(spectrum, damping=damping)  # type: ignore[type-var]
+
+
+def floor_acceleration(
+    spectrum: Spectrum, T1: float, gamma: float, psi: float, building_damping: float = 5.0
+) -> float:
+    """a_Z(z) [m/s2], the peak acceleration of the floor at height z from the building's first
+    mode alone (Circolare 2019 C7.2.3: "sufficiente riferirsi al solo primo modo"):
+    a_Z,1 = Se(T1, xi1) |gamma1 psi1(z)| sqrt(1 + 0.0004 xi1^2) [C7.2.7], a_Z = a_Z,1 [C7.2.8];
+    ``building_damping`` xi1 in percent, as the clause defines it."""
+    xi1 = check_range("building_damping", building_damping, 0.0, 30.0, "%", low_open=True)
+    Se_T1 = float(with_damping(spectrum, xi1).acceleration(T1))
+    return Se_T1 * abs(gamma * psi) * math.sqrt(1.0 + 0.0004 * xi1**2)
+
+
+def floor_peak_factor(spectrum: Spectrum, building_damping: float = 5.0) -> float:
+    """The plateau of the floor spectrum over a_Z: 1.1 xi1^-0.5 eta(xi) [C7.2.6], [C7.2.9],
+    eta of the mechanism's damping (the spectrum's own). xi1 is taken here as a fraction
+    (xi1 / 100): the clause says "in percentuale", but with xi1 = 5 the factor would be
+    0.49, a floor spectrum below the floor's own acceleration at the building's period,
+    against the clause's "forte amplificazione in corrispondenza del periodo fondamentale"
+    and the a_p = 2.5-5 of its Tab. C7.2.II; as a fraction it is 4.92 (docs/assessment.md)."""
+    xi1 = check_range("building_damping", building_damping, 0.0, 30.0, "%", low_open=True)
+    return 1.1 * (xi1 / 100.0) ** -0.5 * spectrum.eta
+
+
+def floor_spectrum(
+    spectrum: Spectrum,
+    period: ArrayLike,
+    T1: float,
+    gamma: float,
+    psi: float,
+    building_damping: float = 5.0,
+) -> NDArray[np.float64]:
+    """S_eZ(T, xi, z) [m/s2], the Circolare 2019 floor spectrum at height z of a building of
+    first period ``T1``, participation ``gamma`` and mode shape ``psi`` = psi1(z), from its
+    first mode (C7.2.3, [C7.2.5]-[C7.2.9]); xi, the mechanism's damping, is the spectrum's:
+
+        T <  a T1:        A a_Z / (1 + (A - 1) (1 - T / (a T1))^1.6)
+        a T1 <= T < b T1: A a_Z
+        T >= b T1:        A a_Z / (1 + (A - 1) (T / (b T1) - 1)^1.2)
+
+    A = :func:`floor_peak_factor`, a_Z = :func:`floor_acceleration`, a = 0.8, b = 1.1; and
+    not below the ground spectrum Se(T, xi) for T > T1 ([C7.2.5])."""
+    T = np.asarray(period, dtype=float)
+    if np.any(T < 0) or not np.all(np.isfinite(T)):
+        raise ValueError("a period must be a finite number of seconds >= 0")
+    T1 = check_range("T1", T1, 0.0, 10.0, "s", low_open=True)
+    a_Z = floor_acceleration(spectrum, T1, gamma, psi, building_damping)
+    A = floor_peak_factor(spectrum, building_damping)
+    low, high = FLOOR_A * T1, FLOOR_B * T1
+    rise = A * a_Z / (1.0 + (A - 1.0) * np.clip(1.0 - T / low, 0.0, None) ** 1.6)
+    fall = A * a_Z / (1.0 + (A - 1.0) * np.clip(T / high - 1.0, 0.0, None) ** 1.2)
+    out = np.where(T < low, rise, np.where(T < high, A * a_Z, fall))
+    out = np.where(T > T1, np.maximum(out, spectrum.acceleration(T)), out)
+    return np.asarray(out, dtype=float)

@@ -32,7 +32,12 @@ FIELDS: dict[str, str] = {
     "H": "height of the building [m] (needed when Z > 0)",
     "storeys": "number of storeys N (default 1)",
     "T1": "first period of the building [s] (default 0.050 H^(3/4))",
+    "building_damping": "NTC 2018: damping xi1 of the building's first mode [%] (default 5)",
+    "demand_at_height": "NTC 2018: the demand at height Z > 0: floor_spectrum (Circolare "
+    "2019 C7.2.3, default) or circolare_2009 (Se(T1) psi gamma)",
 }
+#: the keys of the NTC 2018 demand at height, refused with --code ec8
+NTC_HEIGHT_KEYS = ("building_damping", "demand_at_height")
 NUMBERS = ("ag", "F0", "Tc", "damping", "q", "FC", "Z", "H", "T1")
 
 
@@ -70,6 +75,21 @@ def add_parser(subparsers) -> None:
     add_results(p)
     add_site(p, NUMBERS)
     p.add_argument("--storeys", type=int, default=None, help=FIELDS["storeys"])
+    p.add_argument(
+        "--building-damping",
+        dest="building_damping",
+        type=_number("building-damping"),
+        default=None,
+        help=FIELDS["building_damping"],
+    )
+    # no argparse choices: a bad value is the one line naming the key, as in the TOML file
+    p.add_argument(
+        "--demand-at-height",
+        dest="demand_at_height",
+        default=None,
+        metavar="FORM",
+        help=FIELDS["demand_at_height"],
+    )
     p.add_argument(
         "--alpha0",
         choices=("analysis", "mechanism"),
@@ -135,7 +155,12 @@ def run_assessment(
 ) -> dict[str, Any]:
     """Assess the mechanism of ``folder`` with ``params`` (the keys of :data:`FIELDS`) and
     write the files; returns what assessment.json holds."""
-    from masonry_dem.assessment.checks import Building, assess_mode, spectrum_of
+    from masonry_dem.assessment.checks import (
+        Building,
+        assess_mode,
+        check_demand_at_height,
+        spectrum_of,
+    )
     from masonry_dem.assessment.kinematics import MOVING
     from masonry_dem.export.assessment_files import read_mechanism, write_assessment
 
@@ -152,6 +177,11 @@ def run_assessment(
     given = sorted(other & set(params))
     if given:
         raise ValueError(f"{given[0]}: not a parameter of the {code} spectrum")
+    if code != "ntc2018":
+        given = sorted(set(NTC_HEIGHT_KEYS) & set(params))
+        if given:
+            raise ValueError(f"{given[0]}: a parameter of the ntc2018 code only, not of {code}")
+    demand_at_height = check_demand_at_height(params.pop("demand_at_height", "floor_spectrum"))
     spec = {k: params.pop(k) for k in list(params) if k in spectrum_keys}
     if "Tc" in spec:
         spec["Tc_star"] = spec.pop("Tc")
@@ -161,6 +191,7 @@ def run_assessment(
         H=params.pop("H", None),
         storeys=params.pop("storeys", 1),
         T1=params.pop("T1", None),
+        damping=params.pop("building_damping", 5.0),
     )
     found = read_mechanism(folder, case)
     if alpha0_from == "analysis" and found.load_factor is None:
@@ -176,6 +207,7 @@ def run_assessment(
         load_factor=found.load_factor if alpha0_from == "analysis" else None,
         moving=MOVING if moving is None else moving,
         kinematics=kinematics,
+        demand_at_height=demand_at_height,
     )
     extra = {
         **chosen,

@@ -41,7 +41,8 @@ FRAGILITY_CSV = "fragility.csv"
 FRAGILITY_PNG = "fragility.png"
 RELATION = (
     "ag_capacity: the smallest ag [g] with ag S(ag) / q >= a0* / g, a0* = alpha0 g / (e* FC) "
-    "(the linear check of a mechanism at ground level, Circolare C8.7.1 [C8A.4.9], [C8A.4.4]); "
+    "(the linear check of a mechanism at ground level, Circolare 2019 C8.7.1.2.1.7, [C8.7.1.8]; "
+    "Circolare 2009 [C8A.4.9], [C8A.4.4]); "
     "a0* q / (g S) where S does not depend on ag"
 )
 CENSORING = (

@@ -32,7 +32,7 @@ RESULT_COLUMNS: dict[str, type] = {
     "mechanism_cracks": int,  # joints moving >= 50 % of the largest: the cracks
     "mechanism_sliding_share": float,  # sliding / (sliding + opening) over the cracks
     # the seismic mechanism (a weight-proportional live load c P_i d only): alpha0 = c lambda
-    # and e*, the participating mass fraction of the hinged mode (Circolare [C8A.4.3]); with
+    # and e*, the participating mass fraction of the hinged mode (Circolare 2019 [C8.7.1.5]); with
     # them a0* = alpha0 g / (e* FC) and the run's capacity as a ground acceleration
     # (masonry-dem fragility, docs/assessment.md); a completed run (no collapse) has alpha0 =
     # c lambda at its last lambda, a lower bound, and no e*
