@@ -49,7 +49,10 @@ def _refuse(text: str) -> float:
 def test_block_from_its_run(block_run, capsys):
     """The pushover's mode of the block (rotation about its joint's centre) hinged at its
     toe: alpha0 = t/h = 0.5, e* = 1, M* = W/g, d0* = t/2; a0* = 0.5 g / 1.35 against
-    0.2 g / 2; the control point the block's centroid."""
+    0.2 g / 2; the control point the block's centroid. The nonlinear check is Circolare
+    2019's SLV: d_SLV = 0.4 d0* = 0.04 m, T_SLV = 1.68 pi sqrt(0.04 x 1.35 sqrt(0.1856) /
+    (0.12 g)) = 0.7419513008 s, S_De(T_SLV) at 8 % = 0.027165786102 m
+    (tests/assessment/test_assess_circolare2019.py derives them)."""
     before = {p.name for p in block_run.parent.iterdir()}
     code = main(["assess", str(block_run), *NTC, "--alpha0", "mechanism"])
     assert code == 0
@@ -68,8 +71,14 @@ def test_block_from_its_run(block_run, capsys):
     assert a["ratio"] == pytest.approx(a["a0_star"] / a["demand"], rel=TOL)
     assert a["passes"] is True
     assert a["d0_star"] == pytest.approx(0.1, rel=TOL)
-    assert a["du_star"] == pytest.approx(0.04, rel=TOL)
-    assert a["passes_nonlinear"] == (a["du_star"] >= a["displacement_demand"])
+    assert a["nonlinear_check"] == "circolare_2019" and a["limit_state"] == "SLV"
+    assert a["d_SLV"] == pytest.approx(0.04, rel=TOL) and a["du_star"] is None
+    assert a["T_SLV"] == pytest.approx(0.7419513008172157, rel=TOL)
+    assert a["nonlinear_damping"] == 8.0
+    assert a["displacement_demand"] == pytest.approx(0.027165786102205446, rel=TOL)
+    assert a["passes_nonlinear"] is True
+    assert "T_SLV = 1.68 pi" in a["nonlinear_summary"] and " s," in a["nonlinear_summary"]
+    assert "T_SLV = 1.68 pi sqrt" in printed
     np.testing.assert_allclose(a["control_point"], [0.15, 0.2, 0.1], atol=TOL)
     assert a["lambda"] == pytest.approx(0.5, rel=0.005)  # the run's own multiplier
     assert a["kinematics"] == "chain" and a["overlap_at_du"] < TOL  # one body: both exact
@@ -102,9 +111,19 @@ def test_default_wall(default_run, code):
     # the kinematics chosen overlaps least at d_u*; the chain's has no alpha = 0 here
     assert a["kinematics"] in ("chain", "independent")
     assert a["overlap_at_du"] == min(v for v in a["overlaps"].values() if v is not None)
-    assert a["passes_nonlinear"] == (a["du_star"] >= a["displacement_demand"])
-    assert a["Ts"] == pytest.approx(2 * math.pi * math.sqrt(a["ds_star"] / a["as_star"]), rel=TOL)
-    assert a["du_star"] == pytest.approx(0.4 * a["d0_star"], rel=TOL)
+    if code == "ec8":  # the secant period as T*
+        assert a["passes_nonlinear"] == (a["du_star"] >= a["displacement_demand"])
+        Ts = 2 * math.pi * math.sqrt(a["ds_star"] / a["as_star"])
+        assert a["Ts"] == pytest.approx(Ts, rel=TOL)
+        assert a["du_star"] == pytest.approx(0.4 * a["d0_star"], rel=TOL)
+        assert a["nonlinear_check"] is None
+    else:  # Circolare 2019, SLV
+        assert a["d_SLV"] == pytest.approx(0.4 * a["d0_star"], rel=TOL)
+        T_SLV = 1.68 * math.pi * math.sqrt(a["d_SLV"] / a["a_SLV"])
+        assert a["T_SLV"] == pytest.approx(T_SLV, rel=TOL)
+        assert a["passes_nonlinear"] == (
+            a["d_SLV"] >= a["displacement_demand"] or a["activation_ratio"] >= 1
+        )
     assert a["analysis"] == "pushover" and a["case"].startswith("bundled:")
 
 
@@ -141,6 +160,19 @@ def test_config_file_and_flags_over_it(default_run, tmp_path):
             ["--code", "ec8", "--ag", "0.2", "--demand-at-height", "floor_spectrum"],
             ["demand_at_height", "ntc2018 code only", "ec8"],
         ),
+        (
+            ["--ag", "0.2", "--nonlinear-check", "2019"],
+            ["nonlinear_check = '2019'", "circolare_2019, circolare_2009"],
+        ),
+        (["--ag", "0.2", "--limit-state", "slv"], ["limit_state = 'slv'", "SLV, SLC"]),
+        (
+            ["--ag", "0.2", "--limit-state", "SLC", "--nonlinear-check", "circolare_2009"],
+            ["limit_state = 'SLC'", "must be SLV with nonlinear_check = circolare_2009"],
+        ),
+        (
+            ["--code", "ec8", "--ag", "0.2", "--nonlinear-check", "circolare_2009"],
+            ["nonlinear_check", "ntc2018 code only", "ec8"],
+        ),
     ],
 )
 def test_bad_parameters_one_line_exit_2(block_run, capsys, flags, words):
@@ -160,6 +192,10 @@ def test_bad_parameters_one_line_exit_2(block_run, capsys, flags, words):
         (
             'ag = 0.2\ndemand_at_height = "2009"\n',
             ["demand_at_height = '2009'", "floor_spectrum, circolare_2009"],
+        ),
+        (
+            'ag = 0.2\nnonlinear_check = "T_SLV"\n',
+            ["nonlinear_check = 'T_SLV'", "must be one of circolare_2019, circolare_2009"],
         ),
     ],
 )
@@ -191,6 +227,37 @@ def test_demand_at_height_floor_spectrum_by_default_and_2009_on_request(block_ru
     assert a["demand_height"] == pytest.approx(0.2 * G * 2.4 * (2 / 3) * (9 / 7) / 2, rel=TOL)
 
 
+def test_the_circolare_2009_check_on_request(block_run, tmp_path, capsys):
+    """``nonlinear_check = "circolare_2009"`` (file or flag): d_u* = 0.04 m and the secant
+    period Ts at d_s* = 0.4 d_u* (the values of test_kinematics.py's closed form), no T_SLV;
+    ``--limit-state SLC`` with the 2019 check: d_SLC = 0.6 d0* = 0.06 m, T_SLC = 1.56 pi
+    sqrt(0.06 x 11 x 1.35 / 2g) = 1.044392686 s."""
+    from scipy.optimize import brentq
+
+    cfg = tmp_path / "old.toml"
+    cfg.write_text('nonlinear_check = "circolare_2009"\n')
+    assert main(["assess", str(block_run), *NTC, "--config", str(cfg), "--no-render"]) == 0
+    assert "Circolare 2009 C8A.4.2.2: d_u* = 0.4 d0* = 40 mm" in capsys.readouterr().out
+    a = _read(block_run)
+    h, t, ds = 0.4, 0.2, 0.016
+    theta_s = brentq(
+        lambda th: (t / 2) * (1 - math.cos(th)) + (h / 2) * math.sin(th) - ds, 0, 1, xtol=1e-15
+    )
+    Ts = 2 * math.pi * math.sqrt(ds / (math.tan(math.atan(t / h) - theta_s) * G / 1.35))
+    assert a["nonlinear_check"] == "circolare_2009" and a["T_SLV"] is None
+    assert a["du_star"] == pytest.approx(0.04, rel=TOL)
+    assert a["Ts"] == pytest.approx(Ts, rel=TOL)
+    assert a["displacement_demand"] == pytest.approx(
+        0.2 * G * 2.4 * 0.35 * Ts / (4 * math.pi**2), rel=TOL
+    )
+    assert main(["assess", str(block_run), *NTC, "--limit-state", "SLC", "--no-render"]) == 0
+    a = _read(block_run)
+    assert a["limit_state"] == "SLC" and a["d_SLV"] is None
+    assert a["d_SLC"] == pytest.approx(0.06, rel=TOL)
+    assert a["T_SLC"] == pytest.approx(1.56 * math.pi * math.sqrt(0.06 * 11 * 1.35 / (2 * G)))
+    assert a["nonlinear_damping"] == 10.0
+
+
 def test_unknown_config_key(block_run, tmp_path, capsys):
     cfg = tmp_path / "bad.toml"
     cfg.write_text("ag = 0.2\npga = 0.3\n")
@@ -205,7 +272,7 @@ def test_chain_kinematics_without_alpha_zero_leaves_the_nonlinear_check_out(defa
     args = ["assess", str(default_run), *NTC, "--kinematics", "chain"]
     assert main(args) == 0
     a = _read(default_run)
-    assert a["d0_star"] is None and a["passes_nonlinear"] is None and a["Ts"] is None
+    assert a["d0_star"] is None and a["passes_nonlinear"] is None and a["T_SLV"] is None
     assert "no d_k0" in a["nonlinear_reason"]
     assert a["ratio"] == pytest.approx(a["a0_star"] / a["demand"], rel=TOL)
 

@@ -3,8 +3,10 @@
 * NTC 2018 with the Circolare 2019, C8.7.1.2.1: the linear kinematic check a0* >= demand (the
   mechanism at ground level, and at height Z in a building of height H, N storeys, first
   period T1 and damping xi1: the floor spectrum of C7.2.3, or the older Circolare 2009 form
-  with ``demand_at_height="circolare_2009"``), and the nonlinear one d_u* >= SDe(Ts) (and its
-  form at height);
+  with ``demand_at_height="circolare_2009"``), and the nonlinear one: by default Circolare
+  2019's, d_SLV >= S_De(T_SLV) at the mechanism's damping (C8.7.1.2.1.6, C8.7.1.2.1.8), or
+  (``nonlinear_check="circolare_2009"``) the older d_u* >= SDe(Ts) with the secant period;
+  both with their forms at height;
 * EN 1998-1: the same capacity against its elastic spectrum: the linear check with the
   amplification of section 4.3.5.2 at height, and the N2 target displacement of Annex B.
 
@@ -35,6 +37,7 @@ from masonry_dem.assessment.spectra import (
     check_range,
     floor_acceleration,
     floor_spectrum,
+    with_damping,
 )
 from masonry_dem.model import Model
 
@@ -43,6 +46,19 @@ CODES: tuple[str, ...] = ("ntc2018", "ec8")
 #: the NTC 2018 demand on a mechanism at height: Circolare 2019 C7.2.3's floor spectrum
 #: (default) or the Circolare 2009 form Se(T1) psi gamma / q
 DEMANDS_AT_HEIGHT: tuple[str, ...] = ("floor_spectrum", "circolare_2009")
+#: the NTC 2018 nonlinear kinematic check: Circolare 2019 C8.7.1.2.1.6/.8 (T_SLV [C8.7.1.10],
+#: default) or the Circolare 2009 secant period Ts at d_s* = 0.4 d_u* (C8A.4.2.2)
+NONLINEAR_CHECKS: tuple[str, ...] = ("circolare_2019", "circolare_2009")
+#: the ultimate limit states of Circolare 2019 C8.7.1.2.1.6 ("con riferimento ad uno dei due")
+LIMIT_STATES: tuple[str, ...] = ("SLV", "SLC")
+#: C8.7.1.2.1.6: d_SLV is "il 40% dello spostamento d_0", d_SLC "il 60%" (each the smaller of it
+#: and a displacement the package cannot compute: a broken tie, a beam pulled out, a vault)
+LIMIT_SHARE: dict[str, float] = {"SLV": 0.4, "SLC": 0.6}
+#: C8.7.1.2.1.8: T_SLV = 1.68 pi sqrt(d_SLV / a(d_SLV)) [C8.7.1.10], T_SLC = 1.56 pi ... [C8.7.1.11]
+PERIOD_FACTOR: dict[str, float] = {"SLV": 1.68, "SLC": 1.56}
+#: C8.7.1.2.1.8: the mechanism's equivalent viscous damping "in assenza di valutazioni più
+#: accurate ... pari all'8% per lo SLV e al 10% per lo SLC" [%]
+LIMIT_DAMPING: dict[str, float] = {"SLV": 8.0, "SLC": 10.0}
 #: C1 of T1 = C1 H^(3/4) for masonry buildings (NTC 2018 [7.3.6] of section 7.3.3.2, as
 #: Circolare 2019 C7.2.3 names it; the value 0.050 is not checked against a text)
 C1_MASONRY = 0.050
@@ -148,6 +164,29 @@ class Assessment:
     spectrum: dict[str, Any]
     demand_at_height: str = "floor_spectrum"
     building_damping: float = 5.0
+    #: NTC 2018: which nonlinear check was made (:data:`NONLINEAR_CHECKS`); None with ec8
+    nonlinear_check: str | None = None
+    #: Circolare 2019: the limit state checked, SLV or SLC (None otherwise)
+    limit_state: str | None = None
+    #: Circolare 2019 SLV: d_SLV [m], a(d_SLV) [m/s2], T_SLV [s] (None otherwise)
+    d_SLV: float | None = None
+    a_SLV: float | None = None
+    T_SLV: float | None = None
+    #: Circolare 2019 SLC: d_SLC [m], a(d_SLC) [m/s2], T_SLC [s] (None otherwise)
+    d_SLC: float | None = None
+    a_SLC: float | None = None
+    T_SLC: float | None = None
+    #: Circolare 2019: the mechanism's damping xi of the displacement demand [%]
+    nonlinear_damping: float | None = None
+    #: the displacement the demand is checked against [m]: d_SLV, d_SLC or d_u*
+    displacement_capacity: float | None = None
+    #: the period of the displacement demand [s]: T_SLV, T_SLC or Ts
+    nonlinear_period: float | None = None
+    #: Circolare 2019: a0* over the linear demand without q, a_g,SLD / a_g in the package's
+    #: reading (C8.7.1.2.1.8: a_g,SLV is at least a_g,SLD)
+    activation_ratio: float | None = None
+    #: the nonlinear check in words, with its numbers and units
+    nonlinear_summary: str = ""
 
     def as_dict(self) -> dict[str, Any]:
         return asdict(self)
@@ -187,6 +226,28 @@ def check_demand_at_height(value: object) -> str:
     return str(value)
 
 
+def check_nonlinear_check(value: object) -> str:
+    """``value`` as one of :data:`NONLINEAR_CHECKS`, else a one-line ValueError naming it."""
+    if value not in NONLINEAR_CHECKS:
+        raise ValueError(
+            f"nonlinear_check = {value!r}: must be one of {', '.join(NONLINEAR_CHECKS)}"
+        )
+    return str(value)
+
+
+def check_limit_state(value: object, nonlinear_check: str = "circolare_2019") -> str:
+    """``value`` as one of :data:`LIMIT_STATES` (SLC with the Circolare 2019 check only), else
+    a one-line ValueError naming it."""
+    if value not in LIMIT_STATES:
+        raise ValueError(f"limit_state = {value!r}: must be one of {', '.join(LIMIT_STATES)}")
+    if value != "SLV" and nonlinear_check != "circolare_2019":
+        raise ValueError(
+            f"limit_state = {value!r}: must be SLV with nonlinear_check = {nonlinear_check} "
+            "(SLC is a check of circolare_2019 only)"
+        )
+    return str(value)
+
+
 def ntc_linear_demand(
     spectrum: Spectrum, building: Building, q: float, demand_at_height: str = "floor_spectrum"
 ) -> tuple[float, float | None]:
@@ -217,11 +278,13 @@ def ec8_amplification(building: Building, Ta: float) -> float:
 def ntc_displacement_demand(
     spectrum: Spectrum, building: Building, Ts: float, demand_at_height: str = "floor_spectrum"
 ) -> float:
-    """Circolare nonlinear check: SDe(Ts) at ground level (C8.7.1.2.1.8, with the Circolare
-    2009 secant period Ts, not 2019's T_SLV [C8.7.1.10]); at height the larger of it
-    and, with ``"floor_spectrum"``, the floor's displacement spectrum of Circolare 2019
-    C8.7.1.2.1.8: S_eZ(Ts, xi, Z) Ts^2 / 4 pi^2, at least S_eZ(T1, xi, Z) b^2 T1^2 / 4 pi^2
-    when Ts > b T1 ([C8.7.1.12]); with ``"circolare_2009"``, SDe(T1) psi gamma (Ts/T1)^2 /
+    """Circolare nonlinear check, the displacement demand [m] at the period ``Ts`` (Circolare
+    2019's T_SLV or T_SLC [C8.7.1.10]-[C8.7.1.11], or the 2009 secant period) on
+    ``spectrum`` (at the mechanism's damping xi): SDe(Ts) at ground level (C8.7.1.2.1.8,
+    S_De of NTC 2018 section 3.2.3.2.3); at height the larger of it and, with
+    ``"floor_spectrum"``, the floor's displacement spectrum of Circolare 2019 C8.7.1.2.1.8:
+    S_eZ(Ts, xi, Z) Ts^2 / 4 pi^2, at least S_eZ(T1, xi, Z) b^2 T1^2 / 4 pi^2 when Ts > b T1
+    ([C8.7.1.12]); with ``"circolare_2009"``, SDe(T1) psi gamma (Ts/T1)^2 /
     sqrt((1 - Ts/T1)^2 + 0.02 Ts/T1)."""
     check_demand_at_height(demand_at_height)
     ground = float(spectrum.displacement(Ts))
@@ -268,20 +331,40 @@ def assess(
     FC: float = 1.35,
     alpha0: float | None = None,
     demand_at_height: str = "floor_spectrum",
+    nonlinear_check: str = "circolare_2019",
+    limit_state: str = "SLV",
+    nonlinear_damping: float | None = None,
 ) -> tuple[Assessment, CapacityCurve]:
     """The linear and nonlinear kinematic checks of ``mechanism`` under ``code``.
 
     ``alpha0`` the multiplier that activates the mechanism (None: the virtual work of the
     loads alone, :attr:`Mechanism.alpha_rigid`); ``q`` the behaviour factor of the linear
     check (2.0 in the Circolare), ``FC`` the confidence factor; ``demand_at_height`` the NTC
-    2018 demand on a mechanism at height (:data:`DEMANDS_AT_HEIGHT`). Returns the assessment
-    and the capacity curve (its a* with FC = 1)."""
+    2018 demand on a mechanism at height (:data:`DEMANDS_AT_HEIGHT`).
+
+    NTC 2018's nonlinear check, ``nonlinear_check`` (:data:`NONLINEAR_CHECKS`):
+    ``"circolare_2019"`` checks ``limit_state`` (SLV or SLC) by Circolare 2019 C8.7.1.2.1.6
+    and .8 with the mechanism's damping ``nonlinear_damping`` [%] (None: the clause's 8 % for
+    the SLV, 10 % for the SLC; the spectrum's own damping is not used for it);
+    ``"circolare_2009"`` the secant period Ts on the spectrum as given. EN 1998-1 takes the
+    secant period as its T* whatever these say. Returns the assessment and the capacity curve
+    (its a* with FC = 1)."""
     building = building or Building()
     check_demand_at_height(demand_at_height)
+    nonlinear_check = check_nonlinear_check(nonlinear_check)
+    limit_state = check_limit_state(limit_state, nonlinear_check)
     q = check_range("q", q, 1.0, 10.0, "(dimensionless)")
     FC = check_range("FC", FC, 1.0, 3.0, "(dimensionless)")
     if code not in CODES:
         raise ValueError(f"code = {code!r}: must be one of {', '.join(CODES)}")
+    circ2019 = code == "ntc2018" and nonlinear_check == "circolare_2019"
+    if nonlinear_damping is not None:
+        if not circ2019:
+            raise ValueError(
+                f"nonlinear_damping = {nonlinear_damping!r}: a parameter of the ntc2018 "
+                "nonlinear_check circolare_2019 only"
+            )
+        nonlinear_damping = check_range("damping", nonlinear_damping, 0.0, 30.0, "%")
     source = "virtual work of the loads" if alpha0 is None else "the analysis's multiplier"
     alpha_rigid = mechanism.alpha_rigid
     a0 = alpha_rigid if alpha0 is None else float(alpha0)
@@ -302,25 +385,49 @@ def assess(
             "passes_nonlinear",
         )
     )
-    Ts = None
+    states: dict[str, Any] = {}
+    period = capacity = None
+    xi = None
+    if circ2019:
+        xi = LIMIT_DAMPING[limit_state] if nonlinear_damping is None else nonlinear_damping
     if curve.complete:
-        du = 0.4 * curve.d0_star
-        ds = 0.4 * du
-        s_s = mechanism.configuration_at(ds * e_star, float(curve.s[-1]))
-        as_star = float(mechanism.alpha(s_s, alpha0)[0]) * G / (e_star * FC)
-        Ts = 2.0 * math.pi * math.sqrt(ds / as_star)
-        nonlinear.update(
-            d_k0=curve.d_k0, d0_star=curve.d0_star, du_star=du, ds_star=ds, as_star=as_star, Ts=Ts
-        )
+        nonlinear.update(d_k0=curve.d_k0, d0_star=curve.d0_star)
+        s_end = float(curve.s[-1])
+        if circ2019:
+            # C8.7.1.2.1.6: d_SLV = 0.4 d0 (d_SLC = 0.6 d0), d0 where a(d) = 0
+            capacity = LIMIT_SHARE[limit_state] * curve.d0_star
+            s_ls = mechanism.configuration_at(capacity * e_star, s_end)
+            # a(d) of the curve with FC, as a0* takes it ([C8.7.1.3], [C8.7.1.8])
+            a_ls = float(mechanism.alpha(s_ls, alpha0)[0]) * G / (e_star * FC)
+            # [C8.7.1.10] / [C8.7.1.11]: T = 1.68 (1.56) pi sqrt(d / a(d))
+            period = PERIOD_FACTOR[limit_state] * math.pi * math.sqrt(capacity / a_ls)
+            states = {
+                f"d_{limit_state}": capacity,
+                f"a_{limit_state}": a_ls,
+                f"T_{limit_state}": period,
+            }
+        else:
+            # Circolare 2009 C8A.4.2.2: d_u* = 0.4 d0*, Ts = 2 pi sqrt(d_s*/a_s*) at
+            # d_s* = 0.4 d_u* (also EN 1998-1's T* here)
+            du = 0.4 * curve.d0_star
+            ds = 0.4 * du
+            s_s = mechanism.configuration_at(ds * e_star, s_end)
+            as_star = float(mechanism.alpha(s_s, alpha0)[0]) * G / (e_star * FC)
+            period = 2.0 * math.pi * math.sqrt(ds / as_star)
+            capacity = du
+            nonlinear.update(du_star=du, ds_star=ds, as_star=as_star, Ts=period)
 
     if code == "ntc2018":
         ground, height = ntc_linear_demand(spectrum, building, q, demand_at_height)
+        # C8.7.1.2.1.8: the demand spectrum at the mechanism's damping xi (8 % SLV, 10 % SLC)
+        demand_spectrum = spectrum if xi is None else with_damping(spectrum, xi)
         disp = (
             None
-            if Ts is None
-            else ntc_displacement_demand(spectrum, building, Ts, demand_at_height)
+            if period is None
+            else ntc_displacement_demand(demand_spectrum, building, period, demand_at_height)
         )
     else:
+        Ts = nonlinear["Ts"]
         ground = spectrum.pga() / q
         # Ta = Ts; with no Ts (no alpha = 0), Ta = T1: the resonant, largest amplification
         amp = (
@@ -330,15 +437,35 @@ def assess(
         )
         height = ground * amp if building.at_height else None
         disp = None if Ts is None else n2_target(spectrum, Ts, a0_star) * amp
-    if disp is not None:
-        du = nonlinear["du_star"]
-        nonlinear.update(
-            displacement_demand=disp,
-            displacement_ratio=du / disp,
-            passes_nonlinear=bool(du >= disp),
-        )
     demand = max(ground, height or 0.0)
     ratio = a0_star / demand
+    # a0* against the linear demand without q: the mechanism not activated at the site's ag
+    activation = ratio / q if circ2019 else None
+    summary = "no nonlinear check: " + curve.reason if disp is None else ""
+    if disp is not None:
+        assert capacity is not None and period is not None
+        passes_nl = capacity >= disp
+        if circ2019 and limit_state == "SLV" and activation is not None and activation >= 1.0:
+            # C8.7.1.2.1.8: "nel caso in cui [a_g,SLV] risulti minore di a_g,SLD ... si assume
+            # quest'ultima anche per lo SLV": a_g,SLD >= a_g passes the SLV check too
+            passes_nl = True
+        nonlinear.update(
+            displacement_demand=disp,
+            displacement_ratio=capacity / disp,
+            passes_nonlinear=bool(passes_nl),
+        )
+        summary = _nonlinear_summary(
+            code,
+            nonlinear_check if code == "ntc2018" else None,
+            limit_state,
+            capacity,
+            period,
+            disp,
+            xi,
+            activation,
+            spectrum.damping,
+            building.at_height,
+        )
     assessment = Assessment(
         code=code,
         alpha0=a0,
@@ -368,8 +495,54 @@ def assess(
         spectrum=spectrum_summary(spectrum),
         demand_at_height=demand_at_height,
         building_damping=building.damping,
+        nonlinear_check=nonlinear_check if code == "ntc2018" else None,
+        limit_state=limit_state if circ2019 else None,
+        **states,
+        nonlinear_damping=xi,
+        displacement_capacity=capacity,
+        nonlinear_period=period,
+        activation_ratio=activation,
+        nonlinear_summary=summary,
     )
     return assessment, curve
+
+
+def _nonlinear_summary(
+    code: str,
+    check: str | None,
+    state: str,
+    capacity: float,
+    period: float,
+    demand: float,
+    xi: float | None,
+    activation: float | None,
+    spectrum_damping: float,
+    at_height: bool,
+) -> str:
+    """The nonlinear check in one line, its clauses, numbers and units."""
+    where = "S_De and the floor spectrum at Z" if at_height else "S_De at ground level"
+    if check == "circolare_2019":
+        factor = PERIOD_FACTOR[state]
+        share = LIMIT_SHARE[state]
+        text = (
+            f"Circolare 2019 C8.7.1.2.1.6/.8, {state}: d_{state} = {share:g} d0* = "
+            f"{1e3 * capacity:.4g} mm, T_{state} = {factor:g} pi sqrt(d_{state} / "
+            f"a(d_{state})) = {period:.4g} s, demand ({where}, xi = {xi:g} %) = "
+            f"{1e3 * demand:.4g} mm"
+        )
+        if state == "SLV" and activation is not None:
+            text += f"; a0* / (a_g S or a_Z) = {activation:.3g} (a_g,SLD / a_g)"
+        return text
+    if check == "circolare_2009":
+        return (
+            f"Circolare 2009 C8A.4.2.2: d_u* = 0.4 d0* = {1e3 * capacity:.4g} mm, secant "
+            f"period Ts = {period:.4g} s at d_s* = 0.4 d_u*, demand ({where}, xi = "
+            f"{spectrum_damping:g} %) = {1e3 * demand:.4g} mm"
+        )
+    return (
+        f"EN 1998-1 Annex B (N2): d_u* = 0.4 d0* = {1e3 * capacity:.4g} mm, T* = Ts = "
+        f"{period:.4g} s, target displacement = {1e3 * demand:.4g} mm"
+    )
 
 
 def assess_mode(
@@ -384,6 +557,9 @@ def assess_mode(
     moving: float = MOVING,
     kinematics: str = "auto",
     demand_at_height: str = "floor_spectrum",
+    nonlinear_check: str = "circolare_2019",
+    limit_state: str = "SLV",
+    nonlinear_damping: float | None = None,
 ) -> tuple[Assessment, CapacityCurve, Mechanism, dict[str, Any]]:
     """:func:`assess` of a rigid-block mode (n, 6) on ``model``: alpha0 the analysis's
     ``load_factor`` in the codes' terms (None: the virtual work of the loads).
@@ -391,9 +567,10 @@ def assess_mode(
     ``kinematics`` ``"chain"`` or ``"independent"`` (:meth:`Mechanism.of`), or ``"auto"``:
     both, and the one whose finite motion overlaps the least across the joints at d_u*
     (:func:`~masonry_dem.assessment.kinematics.interpenetration`; a curve with no alpha = 0
-    counts as no check at all); ``demand_at_height`` as :func:`assess` takes it. Returns the
-    assessment, its curve, its mechanism and what
-    chose it: ``kinematics``, ``overlap_at_du`` [m] and ``overlaps`` of each candidate."""
+    counts as no check at all); ``demand_at_height``, ``nonlinear_check``, ``limit_state``
+    and ``nonlinear_damping`` as :func:`assess` takes them. Returns the assessment, its
+    curve, its mechanism and what chose it: ``kinematics``, ``overlap_at_du`` [m] (at the
+    displacement capacity: d_SLV, d_SLC or d_u*) and ``overlaps`` of each candidate."""
     if kinematics != "auto" and kinematics not in KINEMATICS:
         raise ValueError(f"kinematics = {kinematics!r}: must be auto, chain or independent")
     candidates = KINEMATICS if kinematics == "auto" else (kinematics,)
@@ -401,11 +578,23 @@ def assess_mode(
     for name in candidates:
         mech = Mechanism.of(model, mode, moving, name)
         alpha0 = None if load_factor is None else load_factor * mech.scale
-        out, curve = assess(mech, code, spectrum, building, q, FC, alpha0, demand_at_height)
-        if out.du_star is None:
+        out, curve = assess(
+            mech,
+            code,
+            spectrum,
+            building,
+            q,
+            FC,
+            alpha0,
+            demand_at_height,
+            nonlinear_check,
+            limit_state,
+            nonlinear_damping,
+        )
+        if out.displacement_capacity is None:
             overlap = math.inf
         else:
-            s_du = mech.configuration_at(out.du_star * out.e_star, float(curve.s[-1]))
+            s_du = mech.configuration_at(out.displacement_capacity * out.e_star, float(curve.s[-1]))
             overlap = interpenetration(mech, model, s_du)
         found[name] = (out, curve, mech, overlap)
     best = min(candidates, key=lambda k: found[k][3])  # ties: the chain, listed first

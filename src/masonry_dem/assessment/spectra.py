@@ -62,6 +62,7 @@ class Spectrum:
     """What both codes' spectra give: S, eta, the corner periods and Se(T), SDe(T)."""
 
     ag: float
+    damping: float
 
     @property
     def S(self) -> float:

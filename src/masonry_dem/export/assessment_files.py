@@ -24,7 +24,7 @@ import numpy as np
 
 from masonry_dem.assessment.checks import Assessment
 from masonry_dem.assessment.kinematics import MOVING, CapacityCurve, Mechanism, hinged_mode
-from masonry_dem.assessment.spectra import Spectrum
+from masonry_dem.assessment.spectra import Spectrum, with_damping
 from masonry_dem.export.limit_results import finite_json
 from masonry_dem.export.picture_files import write_atomically
 from masonry_dem.export.results_folder import MECHANISM_FILES, read_summary, write_atomic
@@ -149,7 +149,9 @@ def write_assessment(
 
 def adrs_figure(assessment: Assessment, curve: CapacityCurve, spectrum: Spectrum) -> Any:
     """The capacity curve (d*, a*) against the elastic spectrum in ADRS (SDe(T), Se(T)), the
-    secant period Ts, d_u* and the displacement demand; a matplotlib Figure (Agg)."""
+    nonlinear check's period (Circolare 2019: T_SLV or T_SLC with d and a(d), the spectrum at
+    the mechanism's damping; Circolare 2009 and EN 1998-1: the secant period Ts with d_s*,
+    a_s*), its displacement capacity and the displacement demand; a matplotlib Figure (Agg)."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
@@ -157,13 +159,16 @@ def adrs_figure(assessment: Assessment, curve: CapacityCurve, spectrum: Spectrum
     FigureCanvasAgg(fig)
     ax = fig.add_subplot()
     a = assessment
+    # the Circolare 2019 demand is read on the spectrum at the mechanism's damping
+    shown = spectrum if a.nonlinear_damping is None else with_damping(spectrum, a.nonlinear_damping)
     T = np.linspace(1e-3, 4.0, 600)
     ax.plot(
-        1e3 * spectrum.displacement(T),
-        spectrum.acceleration(T),
+        1e3 * shown.displacement(T),
+        shown.acceleration(T),
         color="#7f8c8d",
         lw=1.4,
-        label=f"elastic spectrum ({a.code}, soil {getattr(spectrum, 'soil', '?')})",
+        label=f"elastic spectrum ({a.code}, soil {getattr(spectrum, 'soil', '?')}, "
+        f"xi = {shown.damping:g} %)",
     )
     ax.plot(
         1e3 * curve.d_star,
@@ -172,42 +177,48 @@ def adrs_figure(assessment: Assessment, curve: CapacityCurve, spectrum: Spectrum
         lw=2.0,
         label="capacity curve a*(d*)",
     )
-    nonlinear = a.Ts is not None and a.displacement_demand is not None
+    period = a.nonlinear_period
+    capacity = a.displacement_capacity
+    nonlinear = period is not None and capacity is not None and a.displacement_demand is not None
     d_end = float(curve.d_star[-1]) * 1.05
     if nonlinear:
-        assert a.Ts is not None and a.displacement_demand is not None
-        assert a.du_star is not None and a.ds_star is not None and a.as_star is not None
+        assert period is not None and capacity is not None and a.displacement_demand is not None
+        state = a.limit_state
+        if state is not None:  # Circolare 2019
+            factor = "1.68" if state == "SLV" else "1.56"
+            period_label = f"T_{state} = {factor} pi sqrt(d_{state}/a(d_{state})) = {period:.3g} s"
+            a_point = getattr(a, f"a_{state}")
+            point_label = f"d_{state}, a(d_{state}) = {a_point:.3g} m/s$^2$"
+            d_point = capacity
+            share = "0.4" if state == "SLV" else "0.6"
+            capacity_label = f"d_{state} = {share} d0* = {1e3 * capacity:.3g} mm"
+            demand_label = (
+                f"S_De(T_{state}), xi = {a.nonlinear_damping:g} % = "
+                f"{1e3 * a.displacement_demand:.3g} mm"
+            )
+        else:
+            assert a.ds_star is not None and a.as_star is not None
+            period_label = f"secant period Ts = {period:.3g} s"
+            a_point = a.as_star
+            point_label = f"d_s* = 0.4 d_u*, a_s* = {a.as_star:.3g} m/s$^2$"
+            d_point = a.ds_star
+            capacity_label = f"d_u* = 0.4 d0* = {1e3 * capacity:.3g} mm"
+            demand_label = f"displacement demand = {1e3 * a.displacement_demand:.3g} mm"
         d_end = max(a.displacement_demand, d_end)
-        omega2 = (2.0 * math.pi / a.Ts) ** 2
+        # the radial line of the period meets the spectrum at its demand
+        omega2 = (2.0 * math.pi / period) ** 2
         ax.plot(
             [0.0, 1e3 * d_end],
             [0.0, omega2 * d_end],
             ls=":",
             color="#1f4e9c",
             lw=1,
-            label=f"secant period Ts = {a.Ts:.3g} s",
+            label=period_label,
         )
-        ax.plot(
-            [1e3 * a.ds_star],
-            [a.as_star],
-            "o",
-            color="#1f4e9c",
-            ms=5,
-            label=f"d_s* = 0.4 d_u*, a_s* = {a.as_star:.3g} m/s$^2$",
-        )
+        ax.plot([1e3 * d_point], [a_point], "o", color="#1f4e9c", ms=5, label=point_label)
+        ax.axvline(1e3 * capacity, color="#27ae60", ls="--", lw=1.2, label=capacity_label)
         ax.axvline(
-            1e3 * a.du_star,
-            color="#27ae60",
-            ls="--",
-            lw=1.2,
-            label=f"d_u* = {1e3 * a.du_star:.3g} mm",
-        )
-        ax.axvline(
-            1e3 * a.displacement_demand,
-            color="#c0392b",
-            ls="--",
-            lw=1.2,
-            label=f"displacement demand = {1e3 * a.displacement_demand:.3g} mm",
+            1e3 * a.displacement_demand, color="#c0392b", ls="--", lw=1.2, label=demand_label
         )
     ax.axhline(
         a.demand,
@@ -221,8 +232,12 @@ def adrs_figure(assessment: Assessment, curve: CapacityCurve, spectrum: Spectrum
     ax.set_ylim(0.0, top)
     ax.set_xlabel("spectral displacement d* [mm]")
     ax.set_ylabel("spectral acceleration a* [m/s$^2$]")
+    check = {
+        "circolare_2019": f"Circolare 2019 {a.limit_state}",
+        "circolare_2009": "Circolare 2009",
+    }.get(str(a.nonlinear_check), "N2")
     verdict = f"linear: {'passes' if a.passes else 'fails'} (ratio {a.ratio:.3g}); " + (
-        f"nonlinear: {'passes' if a.passes_nonlinear else 'fails'} "
+        f"nonlinear ({check}): {'passes' if a.passes_nonlinear else 'fails'} "
         f"(ratio {a.displacement_ratio:.3g})"
         if nonlinear
         else "nonlinear: no alpha = 0 (see assessment.json)"

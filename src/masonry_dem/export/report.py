@@ -152,11 +152,14 @@ def verdict(summary: dict[str, Any], assessment: dict[str, Any] | None) -> tuple
                 + ")"
             )
         else:
-            du = assessment.get("du_star")
+            # an assessment.json older than the Circolare 2019 check has du_star alone
+            state = assessment.get("limit_state")
+            du = assessment.get("displacement_capacity", assessment.get("du_star"))
+            name = f"d_{state}" if state else "d_u*"
             dd = assessment.get("displacement_demand")
             nonlinear = (
                 f"the nonlinear check {'passes' if nonlinear_ok else 'fails'} "
-                f"(d_u* = {_mm(du)} mm against a demand of {_mm(dd)} mm)"
+                f"({name} = {_mm(du)} mm against a demand of {_mm(dd)} mm)"
             )
         ok = bool(assessment.get("passes")) and nonlinear_ok is not False
         word = "PASSES" if ok else "FAILS"
@@ -296,10 +299,23 @@ ASSESSMENT_ROWS = (
     ("demand", "linear demand", "m/s2", ".4g", 1.0),
     ("ratio", "capacity / demand (linear)", "", ".3g", 1.0),
     ("d0_star", "d0*, the displacement at which alpha = 0", "mm", ".4g", 1e3),
-    ("du_star", "d_u* = 0.4 d0*, the ultimate displacement", "mm", ".4g", 1e3),
-    ("Ts", "Ts, the secant period", "s", ".3g", 1.0),
+    ("nonlinear_check", "the nonlinear check (NTC 2018)", "", "s", 1.0),
+    ("d_SLV", "d_SLV = 0.4 d0* (Circolare 2019 C8.7.1.2.1.6)", "mm", ".4g", 1e3),
+    ("T_SLV", "T_SLV = 1.68 pi sqrt(d_SLV / a(d_SLV)) [C8.7.1.10]", "s", ".3g", 1.0),
+    ("d_SLC", "d_SLC = 0.6 d0* (Circolare 2019 C8.7.1.2.1.6)", "mm", ".4g", 1e3),
+    ("T_SLC", "T_SLC = 1.56 pi sqrt(d_SLC / a(d_SLC)) [C8.7.1.11]", "s", ".3g", 1.0),
+    ("nonlinear_damping", "xi, the mechanism's damping of the demand", "%", ".3g", 1.0),
+    ("du_star", "d_u* = 0.4 d0*, the ultimate displacement (Circolare 2009)", "mm", ".4g", 1e3),
+    ("Ts", "Ts, the secant period (Circolare 2009)", "s", ".3g", 1.0),
     ("displacement_demand", "displacement demand", "mm", ".4g", 1e3),
     ("displacement_ratio", "capacity / demand (nonlinear)", "", ".3g", 1.0),
+)
+
+
+#: rows of one nonlinear check only (Circolare 2019 SLV or SLC, Circolare 2009): left out
+#: when the check made was another
+ONE_CHECK_ROWS = frozenset(
+    ("nonlinear_check", "d_SLV", "T_SLV", "d_SLC", "T_SLC", "nonlinear_damping", "du_star", "Ts")
 )
 
 
@@ -307,7 +323,12 @@ def _assessment_table(a: dict[str, Any]) -> str:
     rows = []
     for key, label, unit, fmt, factor in ASSESSMENT_ROWS:
         value = a.get(key)
-        text = format(factor * value, fmt) if isinstance(value, (int, float)) else "n/a"
+        if value is None and key in ONE_CHECK_ROWS:
+            continue
+        if isinstance(value, str):
+            text = html.escape(value)
+        else:
+            text = format(factor * value, fmt) if isinstance(value, (int, float)) else "n/a"
         rows.append(
             f"<tr><td>{html.escape(label)}</td><td class='num'>{text}</td>"
             f"<td>{html.escape(unit)}</td></tr>"
