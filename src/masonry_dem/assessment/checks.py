@@ -531,7 +531,11 @@ def _nonlinear_summary(
             f"{1e3 * demand:.4g} mm"
         )
         if state == "SLV" and activation is not None:
-            text += f"; a0* / (a_g S or a_Z) = {activation:.3g} (a_g,SLD / a_g)"
+            text += (
+                f"; a0* over the linear demand without q = {activation:.3g} (a_g,SLD / a_g"
+                + (", which passes the SLV" if activation >= 1.0 else "")
+                + ")"
+            )
         return text
     if check == "circolare_2009":
         return (
