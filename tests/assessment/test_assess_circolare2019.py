@@ -199,3 +199,35 @@ def test_bad_options_are_refused_in_one_line(mechanism, kwargs, message):
     with pytest.raises(ValueError) as err:
         assess(mechanism, "ntc2018", NTC2018Spectrum(0.2, 2.4, 0.35), **kwargs)
     assert message in str(err.value) and "\n" not in str(err.value)
+
+
+@pytest.mark.parametrize(
+    ("check", "words"),
+    [
+        (
+            "circolare_2019",
+            [
+                "xi = 8 %",
+                "T_SLV = 1.68 pi sqrt(d_SLV/a(d_SLV)) = 0.742 s",
+                "d_SLV = 0.4 d0* = 40 mm",
+                "S_De(T_SLV), xi = 8 % = 27.2 mm",
+                "Circolare 2019 SLV",
+            ],
+        ),
+        ("circolare_2009", ["xi = 5 %", "secant period Ts", "d_u* = 0.4 d0* = 40 mm", "2009"]),
+    ],
+)
+def test_the_adrs_figure_names_the_check(mechanism, check, words):
+    """adrs.png's legend and title: the period, the capacity and the demand of the check made,
+    with their units."""
+    from masonry_dem.export.assessment_files import adrs_figure
+
+    spectrum = NTC2018Spectrum(0.2, 2.4, 0.35)
+    out, curve = assess(mechanism, "ntc2018", spectrum, FC=FC, nonlinear_check=check)
+    fig = adrs_figure(out, curve, spectrum)
+    ax = fig.axes[0]
+    texts = [t.get_text() for t in ax.get_legend().get_texts()] + [ax.get_title()]
+    for w in words:
+        assert any(w in t for t in texts), (w, texts)
+    other = "secant period" if check == "circolare_2019" else "T_SLV"
+    assert not any(other in t for t in texts)

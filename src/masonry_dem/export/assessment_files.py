@@ -236,9 +236,14 @@ def adrs_figure(assessment: Assessment, curve: CapacityCurve, spectrum: Spectrum
         "circolare_2019": f"Circolare 2019 {a.limit_state}",
         "circolare_2009": "Circolare 2009",
     }.get(str(a.nonlinear_check), "N2")
-    verdict = f"linear: {'passes' if a.passes else 'fails'} (ratio {a.ratio:.3g}); " + (
-        f"nonlinear ({check}): {'passes' if a.passes_nonlinear else 'fails'} "
-        f"(ratio {a.displacement_ratio:.3g})"
+    ratios = f"ratio {a.displacement_ratio}"
+    if nonlinear:
+        ratios = f"ratio {a.displacement_ratio:.3g}"
+        if a.passes_nonlinear and a.displacement_ratio is not None and a.displacement_ratio < 1:
+            # passed by C8.7.1.2.1.8's floor a_g,SLV >= a_g,SLD, not by the displacement
+            ratios += f"; by a_g,SLD / a_g = {a.activation_ratio:.3g}"
+    verdict = f"linear: {'passes' if a.passes else 'fails'} (ratio {a.ratio:.3g});\n" + (
+        f"nonlinear ({check}): {'passes' if a.passes_nonlinear else 'fails'} ({ratios})"
         if nonlinear
         else "nonlinear: no alpha = 0 (see assessment.json)"
     )

@@ -159,8 +159,16 @@ def verdict(summary: dict[str, Any], assessment: dict[str, Any] | None) -> tuple
             dd = assessment.get("displacement_demand")
             nonlinear = (
                 f"the nonlinear check {'passes' if nonlinear_ok else 'fails'} "
-                f"({name} = {_mm(du)} mm against a demand of {_mm(dd)} mm)"
+                f"({name} = {_mm(du)} mm against a demand of {_mm(dd)} mm"
             )
+            ratio = assessment.get("displacement_ratio")
+            if nonlinear_ok and isinstance(ratio, (int, float)) and ratio < 1:
+                # Circolare 2019 C8.7.1.2.1.8: a_g,SLV is at least a_g,SLD
+                nonlinear += (
+                    ", but the mechanism is not activated at this ag: a_g,SLD / a_g = "
+                    f"{_num(assessment.get('activation_ratio'), '.3g')}"
+                )
+            nonlinear += ")"
         ok = bool(assessment.get("passes")) and nonlinear_ok is not False
         word = "PASSES" if ok else "FAILS"
         return (
