@@ -256,6 +256,12 @@ def test_the_circolare_2009_check_on_request(block_run, tmp_path, capsys):
     assert a["d_SLC"] == pytest.approx(0.06, rel=TOL)
     assert a["T_SLC"] == pytest.approx(1.56 * math.pi * math.sqrt(0.06 * 11 * 1.35 / (2 * G)))
     assert a["nonlinear_damping"] == 10.0
+    # a damping given is the mechanism's (C8.7.1.2.1.8 "in assenza di valutazioni più
+    # accurate"): 5 % gives eta = 1, S_De(T_SLV) = 0.030973762 m (test_assess_circolare2019.py)
+    assert main(["assess", str(block_run), *NTC, "--damping", "5", "--no-render"]) == 0
+    a = _read(block_run)
+    assert a["nonlinear_damping"] == 5.0 and a["limit_state"] == "SLV"
+    assert a["displacement_demand"] == pytest.approx(0.030973761717234347, rel=TOL)
 
 
 def test_unknown_config_key(block_run, tmp_path, capsys):
