@@ -100,7 +100,7 @@ def test_ec8_tables_as_transcribed(spectrum_type, soil):
 def test_ec8_type_1_ground_c_corners():
     """ag 0.2 g, Table 3.2 C: S 1.15, TB 0.2, TC 0.6, TD 2.0: Se(0) = 0.2 x 9.81 x 1.15 =
     2.2563, plateau 5.64075 at TB and TC, Se(TD) = 5.64075 x 0.6 / 2 = 1.692225,
-    Se(4 s) = 5.64075 x 0.6 x 2 / 16 = 0.42305625 m/s2 (the four branches of 3.2.2.2(1)P)."""
+    Se(4 s) = 5.64075 x 0.6 x 2 / 16 = 0.42305625 m/s2, one on each of the four branches."""
     sp = EC8Spectrum(0.2, "C", 1)
     got = _at(sp, [0.0, 0.2, 0.6, 2.0, 4.0])
     assert got == pytest.approx([2.2563, 5.64075, 5.64075, 1.692225, 0.42305625], rel=TOL)
