@@ -72,6 +72,55 @@ def test_ec8_type_2_ground_d():
     assert got == pytest.approx([1.7658, 3.09015, 4.4145, 4.4145, 1.103625, 0.27590625], rel=TOL)
 
 
+#: EN 1998-1 Tables 3.2 (type 1) and 3.3 (type 2), S, TB, TC, TD, as transcribed by
+#: ROB-Seismology/rshalib siteresponse/refspec.py (both types) and, type 1,
+#: GeorgePapazafeiropoulos/ArtifSeismoMatlab paramEC8.m (docs/assessment.md, "Sources"):
+#: written out here, not read from EC8_TABLES, so that a changed table value fails
+TRANSCRIBED = {
+    (1, "A"): (1.0, 0.15, 0.4, 2.0),
+    (1, "B"): (1.2, 0.15, 0.5, 2.0),
+    (1, "C"): (1.15, 0.2, 0.6, 2.0),
+    (1, "D"): (1.35, 0.2, 0.8, 2.0),
+    (1, "E"): (1.4, 0.15, 0.5, 2.0),
+    (2, "A"): (1.0, 0.05, 0.25, 1.2),
+    (2, "B"): (1.35, 0.05, 0.25, 1.2),
+    (2, "C"): (1.5, 0.1, 0.25, 1.2),
+    (2, "D"): (1.8, 0.1, 0.30, 1.2),
+    (2, "E"): (1.6, 0.05, 0.25, 1.2),
+}
+
+
+@pytest.mark.parametrize(("spectrum_type", "soil"), sorted(TRANSCRIBED))
+def test_ec8_tables_as_transcribed(spectrum_type, soil):
+    sp = EC8Spectrum(0.2, soil, spectrum_type)
+    got = (sp.S, sp.TB, sp.TC, sp.TD)
+    assert got == pytest.approx(TRANSCRIBED[(spectrum_type, soil)], rel=TOL)
+
+
+def test_ec8_type_1_ground_c_corners():
+    """ag 0.2 g, Table 3.2 C: S 1.15, TB 0.2, TC 0.6, TD 2.0: Se(0) = 0.2 x 9.81 x 1.15 =
+    2.2563, plateau 5.64075 at TB and TC, Se(TD) = 5.64075 x 0.6 / 2 = 1.692225,
+    Se(4 s) = 5.64075 x 0.6 x 2 / 16 = 0.42305625 m/s2, one on each of the four branches."""
+    sp = EC8Spectrum(0.2, "C", 1)
+    got = _at(sp, [0.0, 0.2, 0.6, 2.0, 4.0])
+    assert got == pytest.approx([2.2563, 5.64075, 5.64075, 1.692225, 0.42305625], rel=TOL)
+
+
+def test_ec8_type_2_ground_e_corners_and_damping():
+    """ag 0.1 g, Table 3.3 E: S 1.6, TB 0.05, TC 0.25, TD 1.2: Se(0) = 1.5696, plateau
+    3.924, Se(TD) = 3.924 x 0.25 / 1.2 = 0.8175, Se(2.4 s) = 3.924 x 0.3 / 5.76 =
+    0.204375 m/s2. At xi = 10 %, eta = sqrt(2/3): the plateau is 3.924 eta and the rising
+    line at TB/2 is ag S (1 + 0.5 (2.5 eta - 1)), not ag S eta (1 + ...)."""
+    sp = EC8Spectrum(0.1, "E", 2)
+    got = _at(sp, [0.0, 0.05, 0.25, 1.2, 2.4])
+    assert got == pytest.approx([1.5696, 3.924, 3.924, 0.8175, 0.204375], rel=TOL)
+    eta = (2 / 3) ** 0.5
+    damped = EC8Spectrum(0.1, "E", 2, damping=10)
+    assert _at(damped, [0.025, 0.1]) == pytest.approx(
+        [1.5696 * (1 + 0.5 * (2.5 * eta - 1)), 3.924 * eta], rel=TOL
+    )
+
+
 def test_damping_correction():
     """eta = sqrt(10 / (5 + xi)) >= 0.55: 10 % -> sqrt(2/3); 40 % would be 0.471, but the
     range of xi stops at 30 % (0.5345 -> 0.55)."""

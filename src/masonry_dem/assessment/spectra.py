@@ -211,7 +211,10 @@ class NTC2018Spectrum(Spectrum):
         return 4.0 * self.ag + 1.6
 
 
-#: EN 1998-1 Tables 3.2 (type 1) and 3.3 (type 2): S, TB, TC, TD by ground type
+#: EN 1998-1 Tables 3.2 (type 1) and 3.3 (type 2): S, TB, TC, TD by ground type, checked
+#: against libraries' transcriptions (docs/assessment.md "Sources"). They are EN 1998-1's own:
+#: a national annex may set others (type 1 TD = 2.5 in the Greek one), so a site under one
+#: is not assessed by these
 EC8_TABLES: dict[int, dict[str, tuple[float, float, float, float]]] = {
     1: {
         "A": (1.00, 0.15, 0.40, 2.0),
