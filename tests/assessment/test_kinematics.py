@@ -230,10 +230,9 @@ def test_a_load_not_proportional_to_the_weights_is_refused():
         Mechanism.of(model, mode)
 
 
-def test_a_mechanism_at_height_takes_the_larger_demand():
-    """NTC, the Circolare 2009 form: at Z = 6 m of H = 9 m, N = 3, T1 = 0.3 s on soil A (ag
-    0.2, F0 2.4, Tc* 0.35): Se(T1) on the plateau = 0.2 g 2.4; psi = 2/3, gamma = 9/7;
-    demand Se psi gamma / q."""
+def _one_block_at_height(**options):
+    """The first free block of the test wall rocking, assessed at Z = 6 m of a 9 m, 3-storey
+    building (T1 = 0.3 s) on NTC soil A (ag 0.2, F0 2.4, Tc* 0.35), q = 2."""
     model = _model({})
     b = int(np.flatnonzero(~model.fixed.any(axis=1))[0])
     mode = np.zeros((model.blocks.count, 6))
@@ -244,9 +243,16 @@ def test_a_mechanism_at_height_takes_the_larger_demand():
         NTC2018Spectrum(0.2, 2.4, 0.35),
         Building(Z=6.0, H=9.0, storeys=3, T1=0.3),
         q=2.0,
-        demand_at_height="circolare_2009",
-        nonlinear_check="circolare_2009",
+        **options,
     )
+    return out
+
+
+def test_a_mechanism_at_height_takes_the_larger_demand():
+    """NTC, the Circolare 2009 form: at Z = 6 m of H = 9 m, N = 3, T1 = 0.3 s on soil A (ag
+    0.2, F0 2.4, Tc* 0.35): Se(T1) on the plateau = 0.2 g 2.4; psi = 2/3, gamma = 9/7;
+    demand Se psi gamma / q."""
+    out = _one_block_at_height(demand_at_height="circolare_2009", nonlinear_check="circolare_2009")
     assert out.demand_at_height == "circolare_2009"
     assert out.demand_ground == pytest.approx(0.2 * G / 2, rel=TOL)
     assert out.demand_height == pytest.approx(0.2 * G * 2.4 * (2 / 3) * (9 / 7) / 2, rel=TOL)
@@ -276,18 +282,8 @@ def test_a_mechanism_at_height_against_the_floor_spectrum_by_default():
     sqrt(1.01) = 4.056244656 m/s2 [C7.2.7], over q = 2. Nonlinear: Ts > b T1 = 0.33 s, on
     the falling branch of [C7.2.6] or the ground spectrum, whichever is larger, in
     displacement, and at least the plateau's at b T1 ([C8.7.1.12])."""
-    model = _model({})
-    b = int(np.flatnonzero(~model.fixed.any(axis=1))[0])
-    mode = np.zeros((model.blocks.count, 6))
-    mode[b] = _rotation_about(model.blocks.centres[[b]], (0.0, 0.2))[0]
-    out, _ = assess(
-        Mechanism.of(model, mode),
-        "ntc2018",
-        NTC2018Spectrum(0.2, 2.4, 0.35),
-        Building(Z=6.0, H=9.0, storeys=3, T1=0.3),
-        q=2.0,
-        nonlinear_check="circolare_2009",  # Ts at 5 %; T_SLV at 8 %: test_assess_circolare2019.py
-    )
+    # Ts at 5 %; T_SLV at 8 %: test_assess_circolare2019.py
+    out = _one_block_at_height(nonlinear_check="circolare_2009")
     assert out.demand_at_height == "floor_spectrum" and out.building_damping == 5.0
     a_Z = 0.2 * G * 2.4 * (6 / 7) * math.sqrt(1.01)
     assert out.demand_height == pytest.approx(a_Z / 2, rel=TOL)

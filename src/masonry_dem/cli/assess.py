@@ -88,27 +88,13 @@ def add_parser(subparsers) -> None:
         help=FIELDS["building_damping"],
     )
     # no argparse choices: a bad value is the one line naming the key, as in the TOML file
-    p.add_argument(
-        "--demand-at-height",
-        dest="demand_at_height",
-        default=None,
-        metavar="FORM",
-        help=FIELDS["demand_at_height"],
-    )
-    p.add_argument(
-        "--nonlinear-check",
-        dest="nonlinear_check",
-        default=None,
-        metavar="FORM",
-        help=FIELDS["nonlinear_check"],
-    )
-    p.add_argument(
-        "--limit-state",
-        dest="limit_state",
-        default=None,
-        metavar="STATE",
-        help=FIELDS["limit_state"],
-    )
+    for flag, metavar in (
+        ("demand-at-height", "FORM"),
+        ("nonlinear-check", "FORM"),
+        ("limit-state", "STATE"),
+    ):
+        dest = flag.replace("-", "_")
+        p.add_argument(f"--{flag}", dest=dest, default=None, metavar=metavar, help=FIELDS[dest])
     p.add_argument(
         "--alpha0",
         choices=("analysis", "mechanism"),
