@@ -27,7 +27,7 @@ Everything is vectorised over blocks (and over the configurations of the curve).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -54,7 +54,25 @@ CURVE_POINTS = 201
 #: block configurations (blocks x values of s) whose motions are held in memory at once
 CHUNK = 200_000
 #: how the blocks' finite motions are composed (:meth:`Mechanism.of`)
-KINEMATICS = ("chain", "independent")
+KINEMATICS = ("chain", "independent", "incremental")
+#: the rotation [rad] of the block that turns fastest over one step of the incremental
+#: motion: the explicit midpoint rule's error is O(step^2) (0.005: about 1e-5 of alpha on
+#: the two-block chain, tests/assessment/test_kinematics.py)
+STEP = 0.005
+#: a joint's corner is in contact when its overlap-signed gap is at most this share of the
+#: joint's smaller side (far above the O(step^3) drift per step of a hinge that stays closed)
+CONTACT_GAP = 1e-3
+#: a corner in contact sticks (its whole relative velocity held at 0, not only the normal
+#: one) when the mode slides it by at most this share of the largest corner speed at s = 0
+STICK = 0.01
+#: a corner in contact is taken as not opening when its normal velocity is below this share
+#: of the largest corner speed (a hinge of the mode opens by round-off only)
+OPENING = 1e-8
+#: penalty of the augmented-Lagrangian projection, relative to the mean of diag(A^T A)
+PENALTY = 1e8
+#: augmented-Lagrangian sweeps (each divides the constraints' residual by about PENALTY) and
+#: rounds of the active set (a corner in contact that the projection turns to closing joins)
+SWEEPS, ROUNDS = 4, 4
 
 
 def rodrigues(axis: NDArray[np.float64], angle: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -228,21 +246,35 @@ class Mechanism:
     moving: NDArray[np.bool_]
     scale: float
     parent: NDArray[np.intp]
+    #: the integrated motion of ``"incremental"`` kinematics (None: composed in closed form)
+    path: IncrementalPath | None = field(default=None, compare=False, repr=False)
 
     @classmethod
     def of(
-        cls, model: Model, mode: ArrayLike, moving: float = MOVING, kinematics: str = "chain"
+        cls,
+        model: Model,
+        mode: ArrayLike,
+        moving: float = MOVING,
+        kinematics: str = "chain",
+        step: float = STEP,
     ) -> Mechanism:
         """The mechanism of ``mode`` (n, 6) on ``model``, whose live load must be horizontal
         forces proportional to the weights along one direction (a ``weight_proportional``
         load): the seismic load of the codes. ``kinematics``: ``"chain"`` composes the
         finite motion along the joints' spanning tree (:func:`spanning_tree`),
-        ``"independent"`` moves each block by the screw motion of its own twist."""
+        ``"independent"`` moves each block by the screw motion of its own twist,
+        ``"incremental"`` integrates it in steps of ``step`` radians of the fastest block, the
+        twists projected at each step onto the joints' contacts (:class:`IncrementalPath`;
+        its mode is the given one projected at s = 0)."""
         if kinematics not in KINEMATICS:
             raise ValueError(f"kinematics = {kinematics!r}: must be one of {', '.join(KINEMATICS)}")
         if not 0 < moving < 1:
             raise ValueError(
                 f"moving = {moving!r} out of range: must be in (0, 1) (a share of the largest motion)"
+            )
+        if not 0 < step <= 0.1:
+            raise ValueError(
+                f"step = {step!r} out of range: must be in (0, 0.1] (radians of the fastest block)"
             )
         q = np.asarray(mode, dtype=float).reshape(model.blocks.count, 6)
         if not np.all(np.isfinite(q)):
@@ -261,13 +293,30 @@ class Mechanism:
         if power == 0:
             raise ValueError("the live load does no work on the mode: it drives no mechanism")
         sign = 1.0 if power > 0 else -1.0
+        v0, w = sign * v0, sign * w
+        path = None
+        if kinematics == "incremental":
+            wmax = float(np.linalg.norm(w, axis=1).max(initial=0.0))
+            if wmax == 0:
+                raise ValueError(
+                    "kinematics = 'incremental': the mode turns no block, so no step of rotation"
+                )
+            path = IncrementalPath(model, v0, w, step / wmax)
+            v0, w = path.xi[0][:, :3], path.xi[0][:, 3:]
+            u = v0 + np.cross(w, centres)
+            reach = np.linalg.norm(u, axis=1) + np.linalg.norm(w, axis=1) * half
+            if float(np.sum(live[:, :3] * u) + np.sum(live[:, 3:] * w)) <= 0:
+                raise ValueError(
+                    "the mode held at the joints' contacts does no work against the live load: "
+                    "kinematics = 'incremental' has no mechanism"
+                )
         return cls(
             centres=centres,
             weights=weights,
             dead=np.asarray(model.dead, dtype=float),
             live=live / scale,
-            v0=sign * v0,
-            w=sign * w,
+            v0=v0,
+            w=w,
             direction=direction,
             moving=reach >= moving * reach.max(),
             scale=scale,
@@ -276,6 +325,7 @@ class Mechanism:
                 if kinematics == "chain"
                 else np.full(model.blocks.count, -1, dtype=np.intp)
             ),
+            path=path,
         )
 
     # ------------------------------------------------------------------ linear analysis
@@ -302,6 +352,8 @@ class Mechanism:
         rotation; V_i = V_p + Ad(g_p) (xi_i - xi_p). Vectorised over the blocks of one depth
         of the tree."""
         s = np.atleast_1d(np.asarray(s, dtype=float))
+        if self.path is not None:
+            return self.path.motion(s)
         n = self.centres.shape[0]
         has = self.parent >= 0
         up = np.where(has, self.parent, 0)
@@ -490,6 +542,304 @@ class Mechanism:
                 rtol=4 * np.finfo(float).eps,
             )
         )
+
+
+# ---------------------------------------------------------------------------- incremental
+
+
+class IncrementalPath:
+    """The finite motion of a mechanism integrated in steps of s, the blocks' twists
+    projected at each configuration onto the joints' contacts (velocity projection, the
+    incremental kinematic analysis of block mechanisms).
+
+    At a configuration g = (R, t) the twists xi (spatial: v0 the velocity of the point at
+    the origin, w) are the closest to a reference (the previous step's, or the mode at
+    s = 0) in the blocks' kinetic metric, sum m_i |u_i - u_i'|^2 + J_i |w_i - w_i'|^2 (u the
+    velocity of the block's current centre, J_i = m_i |sizes_i|^2 / 12), subject to no
+    relative velocity at the joints' corners in contact that the motion does not open:
+    the normal one at every such corner, the whole of it at a corner that sticks in the mode
+    (:data:`CONTACT_GAP`, :data:`OPENING`, :data:`STICK`). A hinge between two moving blocks
+    then turns about its current position and stays closed (to the integrator's order); the
+    corners of a closed loop that the mode would push into each other are held at contact.
+
+    Steps of ``ds`` are taken by the explicit midpoint rule on the group (the twist projected
+    at the start, the configuration half a step on, the twist projected there moves the step
+    from its start by the screw motion exp(ds xi_mid) g): O(ds^2) over a path. The path is
+    integrated lazily, as far as a configuration is asked for. Between two nodes a block
+    moves by the step's screw motion and its twist is interpolated linearly between the
+    nodes' projected twists (both O(ds^2))."""
+
+    def __init__(self, model: Model, v0: NDArray[np.float64], w: NDArray[np.float64], ds: float):
+        itf = model.interfaces
+        self.bi = np.asarray(itf.block_i, dtype=np.intp)
+        self.bj = np.asarray(itf.block_j, dtype=np.intp)
+        self.axis = np.asarray(itf.axis, dtype=np.intp)
+        self.corners = itf.corner_points() if itf.count else np.zeros((0, 4, 3))
+        self.tol_gap = CONTACT_GAP * np.minimum(itf.l1, itf.l2)[:, None]  # (m, 1)
+        self.joint_centres = np.asarray(itf.centre, dtype=float).reshape(-1, 3)
+        self.joint_size = np.maximum(itf.l1, itf.l2).astype(float)
+        self.centres = np.asarray(model.blocks.centres, dtype=float)
+        n = self.centres.shape[0]
+        sizes = np.asarray(model.blocks.sizes, dtype=float)
+        mass = np.asarray(model.blocks.weights, dtype=float) / G
+        # a weightless block still has a metric: the mean mass of the weighted ones
+        mass = np.where(mass > 0, mass, mass[mass > 0].mean() if (mass > 0).any() else 1.0)
+        inertia = mass * np.sum(sizes**2, axis=1) / 12.0
+        self.metric = np.column_stack(
+            [np.repeat(mass[:, None], 3, 1), np.repeat(inertia[:, None], 3, 1)]
+        )
+        self.free = ~np.asarray(model.fixed, dtype=bool)  # (n, 6): fixed DOFs stay at 0
+        self.ds = float(ds)
+        self.s = [0.0]
+        self.R = [np.broadcast_to(np.eye(3), (n, 3, 3)).copy()]
+        self.t = [np.zeros((n, 3))]
+        # a bound on the mode's corner speeds: the scale of the opening and sticking tests
+        u = v0 + np.cross(w, self.centres)
+        reach = np.linalg.norm(u, axis=1) + np.linalg.norm(w, axis=1) * 0.5 * np.linalg.norm(
+            sizes, axis=1
+        )
+        self.speed = float(reach.max(initial=0.0))
+        rel = self._relative(self.R[0], self.t[0], v0, w)[2]
+        self.stick = np.linalg.norm(rel, axis=2) <= STICK * self.speed  # (m, 4) tangential
+        v, o = self.project(self.R[0], self.t[0], v0, w)
+        self.xi = [np.hstack([v, o])]
+        self.xi_mid: list[NDArray[np.float64]] = []
+
+    # -------------------------------------------------------------- one configuration
+    def _relative(
+        self,
+        R: NDArray[np.float64],
+        t: NDArray[np.float64],
+        v0: NDArray[np.float64],
+        w: NDArray[np.float64],
+    ) -> tuple[
+        NDArray[np.float64],
+        NDArray[np.float64],
+        NDArray[np.float64],
+        NDArray[np.float64],
+        NDArray[np.float64],
+    ]:
+        """At the configuration (R, t), for every joint's corners (m, 4): their gap along
+        the normal turned with block i (negative: overlap), their relative normal velocity
+        (of j against i), the tangential one (m, 4, 3), the corners' current positions
+        (midway between the corner as a point of either block) and the normals (m, 3)."""
+        pi = np.einsum("mij,mkj->mki", R[self.bi], self.corners) + t[self.bi][:, None]
+        pj = np.einsum("mij,mkj->mki", R[self.bj], self.corners) + t[self.bj][:, None]
+        normal = R[self.bi, :, self.axis]  # column `axis` of R_i
+        gap = np.einsum("mki,mi->mk", pj - pi, normal)
+        p = 0.5 * (pi + pj)
+        dv = (v0[self.bj] - v0[self.bi])[:, None, :] + np.cross(
+            (w[self.bj] - w[self.bi])[:, None, :], p
+        )
+        vn = np.einsum("mki,mi->mk", dv, normal)
+        return gap, vn, dv - vn[..., None] * normal[:, None, :], p, normal
+
+    def project(
+        self,
+        R: NDArray[np.float64],
+        t: NDArray[np.float64],
+        v0: NDArray[np.float64],
+        w: NDArray[np.float64],
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """The twists (v0, w) (n, 3) projected at the configuration (R, t): see the class."""
+        from scipy.sparse import coo_matrix, identity
+        from scipy.sparse.linalg import splu
+
+        if self.bi.size == 0:
+            return v0, w
+        n = self.centres.shape[0]
+        c = np.einsum("nij,nj->ni", R, self.centres) + t
+        x0 = np.hstack([v0 + np.cross(w, c), w])  # centre velocity and rotation
+        col = np.flatnonzero(self.free.ravel())
+        scale = np.sqrt(self.metric.ravel()[col])
+        z0 = x0.ravel()[col] * scale
+        gap, vn, _, p, normal = self._relative(R, t, v0, w)
+        contact = gap <= self.tol_gap
+        active = contact & (vn <= OPENING * self.speed)
+        # the other two axes of block i: the tangent directions of a sticking corner
+        t1 = R[self.bi, :, (self.axis + 1) % 3]
+        t2 = R[self.bi, :, (self.axis + 2) % 3]
+        place = np.full(n * 6, -1)
+        place[col] = np.arange(col.size)
+        z = z0
+        for _ in range(ROUNDS):
+            normal_at = np.nonzero(active)
+            tangent_at = np.nonzero(active & self.stick)
+            at = [normal_at, tangent_at, tangent_at]
+            e = np.concatenate([d[j] for d, (j, _) in zip((normal, t1, t2), at, strict=True)])
+            pt = np.concatenate([p[j, q] for j, q in at])
+            jm = np.concatenate([j for j, _ in at])
+            k = e.shape[0]
+            if k == 0:
+                break
+            # e . (u + w x (p - c)) = e . u + w . ((p - c) x e): block j's minus block i's
+            bi, bj = self.bi[jm], self.bj[jm]
+            coef = np.concatenate(
+                [-np.hstack([e, np.cross(pt - c[bi], e)]), np.hstack([e, np.cross(pt - c[bj], e)])]
+            )
+            dof = np.concatenate([bi, bj])[:, None] * 6 + np.arange(6)[None]
+            vals = coef.ravel()
+            dofs = place[dof.ravel()]
+            rows = np.tile(np.repeat(np.arange(k), 6), 2)
+            keep = dofs >= 0
+            A = coo_matrix(
+                (vals[keep] / scale[dofs[keep]], (rows[keep], dofs[keep])), shape=(k, col.size)
+            ).tocsr()
+            AtA = (A.T @ A).tocsc()
+            diag = AtA.diagonal()
+            rho = PENALTY / max(float(diag[diag > 0].mean()) if (diag > 0).any() else 1.0, 1e-300)
+            lu = splu((identity(col.size, format="csc") + rho * AtA).tocsc())
+            # augmented Lagrangian on the change d = z - z0: min |d|^2, A d = -A z0 (an
+            # admissible z0 comes back unchanged, to the round-off of the residual alone)
+            r = -(A @ z0)
+            lam = np.zeros(k)
+            d = np.zeros_like(z0)
+            for _ in range(SWEEPS):
+                d = lu.solve(A.T @ (rho * r - lam))
+                lam = lam + rho * (A @ d - r)
+            z = z0 + d
+            flat = np.zeros(n * 6)
+            flat[col] = z / scale
+            x = flat.reshape(n, 6)
+            v_new, w_new = x[:, :3] - np.cross(x[:, 3:], c), x[:, 3:]
+            _, vn_new, _, _, _ = self._relative(R, t, v_new, w_new)
+            joining = contact & ~active & (vn_new < -OPENING * self.speed)
+            if not joining.any():
+                break
+            active |= joining
+        flat = np.zeros(n * 6)
+        flat[col] = z / scale
+        x = flat.reshape(n, 6)
+        return x[:, :3] - np.cross(x[:, 3:], c), x[:, 3:]
+
+    # -------------------------------------------------------------- the path
+    def predict(
+        self,
+        R: NDArray[np.float64],
+        t: NDArray[np.float64],
+        xi: NDArray[np.float64],
+        move: NDArray[np.float64],
+        ds: float,
+    ) -> NDArray[np.float64]:
+        """The twists (n, 6) at the configuration (R, t) reached from the one of ``xi`` by
+        the screw motions exp(ds ``move``), before the projection: each joint's relative
+        twist xi_j - xi_i carried with block i (Ad(exp(ds move_i)), as a hinge's line is
+        carried by both of its blocks), the blocks' twists the least-squares fit of those
+        relative ones (relative velocity at the joint's centre and relative rotation times
+        the joint's larger side), with a whisper (1e-9) of ``xi`` itself for the blocks no
+        joint reaches. On an open chain the fit is exact and the relative motions stay
+        fixed in the parents, as :meth:`Mechanism.motion` composes them; around a closed
+        loop it spreads the loop's misfit over its joints."""
+        from scipy.sparse import coo_matrix, identity
+        from scipy.sparse.linalg import spsolve
+
+        if self.bi.size == 0:
+            return xi
+        n = self.centres.shape[0]
+        Rs, ts = screw_transform(move[:, :3], move[:, 3:], ds)
+        Ri, ti = Rs[0][self.bi], ts[0][self.bi]
+        rel = xi[self.bj] - xi[self.bi]
+        w_rel = np.einsum("mij,mj->mi", Ri, rel[:, 3:])
+        v_rel = np.einsum("mij,mj->mi", Ri, rel[:, :3]) + np.cross(ti, w_rel)
+        c = np.einsum("nij,nj->ni", R, self.centres) + t
+        p = np.einsum("mij,mj->mi", R[self.bi], self.joint_centres) + t[self.bi]
+        size = self.joint_size[:, None]
+        target = np.hstack([v_rel + np.cross(w_rel, p), size * w_rel]).ravel()
+        col = np.flatnonzero(self.free.ravel())
+        scale = np.sqrt(self.metric.ravel()[col])
+        place = np.full(n * 6, -1)
+        place[col] = np.arange(col.size)
+        # rows: u_j + w_j x (p - c_j) - (u_i + w_i x (p - c_i)) and L (w_j - w_i), 6 per joint
+        m = self.bi.size
+        blocks = np.concatenate([self.bi, self.bj])
+        sign = np.concatenate([-np.ones(m), np.ones(m)])
+        arm = np.concatenate([p, p]) - c[blocks]  # (2m, 3)
+        skew = np.zeros((2 * m, 3, 3))  # w x arm = -[arm]x w
+        skew[:, 0, 1], skew[:, 0, 2] = arm[:, 2], -arm[:, 1]
+        skew[:, 1, 0], skew[:, 1, 2] = -arm[:, 2], arm[:, 0]
+        skew[:, 2, 0], skew[:, 2, 1] = arm[:, 1], -arm[:, 0]
+        local = np.zeros((2 * m, 6, 6))
+        local[:, :3, :3] = np.eye(3)
+        local[:, :3, 3:] = skew
+        local[:, 3:, 3:] = np.eye(3) * np.concatenate([size, size])[:, :, None]
+        local *= sign[:, None, None]
+        joint = np.concatenate([np.arange(m), np.arange(m)])
+        rows = np.broadcast_to((joint[:, None] * 6 + np.arange(6))[:, :, None], local.shape)
+        dofs = place[np.broadcast_to((blocks[:, None] * 6 + np.arange(6))[:, None, :], local.shape)]
+        keep = dofs >= 0
+        D = coo_matrix(
+            (local[keep] / scale[dofs[keep]], (rows[keep], dofs[keep])), shape=(6 * m, col.size)
+        ).tocsr()
+        DtD = (D.T @ D).tocsc()
+        eps = 1e-9 * max(float(DtD.diagonal().mean()), 1e-300)
+        x0 = np.hstack([xi[:, :3] + np.cross(xi[:, 3:], c), xi[:, 3:]]).ravel()[col] * scale
+        z = spsolve((DtD + eps * identity(col.size, format="csc")).tocsc(), D.T @ target + eps * x0)
+        flat = np.zeros(n * 6)
+        flat[col] = z / scale
+        x = flat.reshape(n, 6)
+        return np.hstack([x[:, :3] - np.cross(x[:, 3:], c), x[:, 3:]])
+
+    def _advance(self) -> None:
+        """One step of the explicit midpoint rule from the last node."""
+        R, t, xi = self.R[-1], self.t[-1], self.xi[-1]
+        Rh, th = _moved(R, t, xi, 0.5 * self.ds)
+        ref = self.predict(Rh, th, xi, xi, 0.5 * self.ds)
+        mid = np.hstack(self.project(Rh, th, ref[:, :3], ref[:, 3:]))
+        R1, t1 = _moved(R, t, mid, self.ds)
+        ref = self.predict(R1, t1, xi, mid, self.ds)
+        self.xi_mid.append(mid)
+        self.R.append(R1)
+        self.t.append(t1)
+        self.xi.append(np.hstack(self.project(R1, t1, ref[:, :3], ref[:, 3:])))
+        self.s.append(self.s[-1] + self.ds)
+
+    def motion(
+        self, s: NDArray[np.float64]
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        """R, t, V, O at the configurations ``s`` (k,), as :meth:`Mechanism.motion`."""
+        if s.size and s.min() < 0:
+            raise ValueError(f"s = {float(s.min())!r}: the incremental motion starts at s = 0")
+        last = float(s.max(initial=0.0))
+        while self.s[-1] <= last:  # the node past the last s, for the twist's interpolation
+            self._advance()
+        k = np.minimum((s / self.ds).astype(np.intp), len(self.xi_mid) - 1)
+        tau = s - np.asarray(self.s)[k]
+        R0, t0 = np.asarray(self.R)[k], np.asarray(self.t)[k]
+        mid = np.asarray(self.xi_mid)[k]  # (k, n, 6)
+        Rs, ts = _screw_batch(mid[..., :3], mid[..., 3:], tau)
+        R = Rs @ R0
+        t = np.einsum("knij,knj->kni", Rs, t0) + ts
+        a = (tau / self.ds)[:, None, None]
+        xi = np.asarray(self.xi)
+        twist = (1 - a) * xi[k] + a * xi[k + 1]
+        return R, t, twist[..., :3], twist[..., 3:]
+
+
+def _screw_batch(
+    v0: NDArray[np.float64], w: NDArray[np.float64], s: NDArray[np.float64]
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """:func:`screw_transform` with twists of their own for each parameter: ``v0``, ``w``
+    (k, n, 3), ``s`` (k,): R (k, n, 3, 3), t (k, n, 3)."""
+    W = np.linalg.norm(w, axis=-1)  # (k, n)
+    turning = W > 0
+    safe = np.where(turning, W, 1.0)[..., None]
+    axis = np.where(turning[..., None], w / safe, 0.0)
+    vn = np.where(turning[..., None], v0 / safe, 0.0)
+    theta = s[:, None] * W
+    R = rodrigues(axis, theta)
+    kxv = np.cross(axis, vn)
+    along = (np.sum(axis * vn, axis=-1) * theta)[..., None]
+    t_turn = kxv - np.einsum("knij,knj->kni", R, kxv) + axis * along
+    return R, np.where(turning[..., None], t_turn, s[:, None, None] * v0)
+
+
+def _moved(
+    R: NDArray[np.float64], t: NDArray[np.float64], xi: NDArray[np.float64], ds: float
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The configuration (R, t) moved by the screw motions exp(ds xi) of the spatial twists
+    ``xi`` (n, 6): R' = Rs R, t' = Rs t + ts."""
+    Rs, ts = screw_transform(xi[:, :3], xi[:, 3:], ds)
+    return Rs[0] @ R, np.einsum("nij,nj->ni", Rs[0], t) + ts[0]
 
 
 def live_load_scale(model: Model) -> float:
