@@ -576,7 +576,9 @@ def assess_mode(
     curve, its mechanism and what chose it: ``kinematics``, ``overlap_at_du`` [m] (at the
     displacement capacity: d_SLV, d_SLC or d_u*) and ``overlaps`` of each candidate."""
     if kinematics != "auto" and kinematics not in KINEMATICS:
-        raise ValueError(f"kinematics = {kinematics!r}: must be auto, chain or independent")
+        raise ValueError(
+            f"kinematics = {kinematics!r}: must be auto, chain, independent or incremental"
+        )
     candidates = KINEMATICS if kinematics == "auto" else (kinematics,)
     found: dict[str, tuple[Assessment, CapacityCurve, Mechanism, float]] = {}
     for name in candidates:

@@ -51,6 +51,8 @@ PROPORTIONAL = 1e-6
 MAX_ROTATION = math.pi
 #: configurations of the capacity curve between the undeformed one and d_k0
 CURVE_POINTS = 201
+#: configurations of the grid on which the capacity curve looks for alpha = 0, scanned at once
+SCAN = 100
 #: block configurations (blocks x values of s) whose motions are held in memory at once
 CHUNK = 200_000
 #: how the blocks' finite motions are composed (:meth:`Mechanism.of`)
@@ -62,9 +64,6 @@ STEP = 0.005
 #: a joint's corner is in contact when its overlap-signed gap is at most this share of the
 #: joint's smaller side (far above the O(step^3) drift per step of a hinge that stays closed)
 CONTACT_GAP = 1e-3
-#: a corner in contact sticks (its whole relative velocity held at 0, not only the normal
-#: one) when the mode slides it by at most this share of the largest corner speed at s = 0
-STICK = 0.01
 #: a corner in contact is taken as not opening when its normal velocity is below this share
 #: of the largest corner speed (a hinge of the mode opens by round-off only)
 OPENING = 1e-8
@@ -302,7 +301,7 @@ class Mechanism:
                     "kinematics = 'incremental': the mode turns no block, so no step of rotation"
                 )
             path = IncrementalPath(model, v0, w, step / wmax)
-            v0, w = path.xi[0][:, :3], path.xi[0][:, 3:]
+            v0, w = path.xi[0][:, :3].copy(), path.xi[0][:, 3:].copy()
             u = v0 + np.cross(w, centres)
             reach = np.linalg.norm(u, axis=1) + np.linalg.norm(w, axis=1) * half
             if float(np.sum(live[:, :3] * u) + np.sum(live[:, 3:] * w)) <= 0:
@@ -478,8 +477,17 @@ class Mechanism:
             )
         s_max = MAX_ROTATION / wmax
         grid = np.linspace(0.0, s_max, 2001)
-        dead, live = self.powers(grid)
-        a = self.alpha(grid, alpha0)
+        # the grid scanned a part at a time, up to the first part where alpha or the live
+        # load's work stops being positive: an incremental path is integrated no further
+        # than that (the closed-form motions find the same first indices)
+        a, live = np.empty(0), np.empty(0)
+        for start in range(0, grid.size, SCAN):
+            part = grid[start : start + SCAN]
+            _, l_part = self.powers(part)
+            a = np.concatenate([a, self.alpha(part, alpha0)])
+            live = np.concatenate([live, l_part])
+            if not (a > 0).all() or not (live > 0).all():
+                break
         if not a[0] > 0:
             raise ValueError(f"alpha0 = {a[0]:.6g}: the mechanism needs a positive multiplier")
         below = np.flatnonzero(~(a > 0))
@@ -549,25 +557,33 @@ class Mechanism:
 
 class IncrementalPath:
     """The finite motion of a mechanism integrated in steps of s, the blocks' twists
-    projected at each configuration onto the joints' contacts (velocity projection, the
-    incremental kinematic analysis of block mechanisms).
+    projected at each configuration onto the joints' contacts: the incremental kinematic
+    analysis of a block mechanism ("per incrementi finiti"), the velocities found anew at
+    each configuration, here by velocity projection.
 
     At a configuration g = (R, t) the twists xi (spatial: v0 the velocity of the point at
-    the origin, w) are the closest to a reference (the previous step's, or the mode at
-    s = 0) in the blocks' kinetic metric, sum m_i |u_i - u_i'|^2 + J_i |w_i - w_i'|^2 (u the
-    velocity of the block's current centre, J_i = m_i |sizes_i|^2 / 12), subject to no
-    relative velocity at the joints' corners in contact that the motion does not open:
-    the normal one at every such corner, the whole of it at a corner that sticks in the mode
-    (:data:`CONTACT_GAP`, :data:`OPENING`, :data:`STICK`). A hinge between two moving blocks
-    then turns about its current position and stays closed (to the integrator's order); the
-    corners of a closed loop that the mode would push into each other are held at contact.
+    the origin, w) are the closest to a reference (:meth:`predict`: the previous step's
+    relative motions carried with the blocks; at s = 0 the mode) in the blocks' kinetic
+    metric, sum m_i |u_i - u_i'|^2 + J_i |w_i - w_i'|^2 (u the velocity of the block's
+    current centre, J_i = m_i |sizes_i|^2 / 12), subject to no relative normal velocity at
+    the joints' corners that are in contact (gap at most :data:`CONTACT_GAP` of the joint's
+    smaller side, an overlap included) and that the reference does not open (normal
+    velocity at most :data:`OPENING` of the largest corner speed): a hinge of the mode keeps
+    closed, a corner the mode would push into its neighbour is held at contact, a corner the
+    mode opens lifts off, and one that closes during the motion joins when it touches. A
+    corner in contact that the projection turns to closing joins and the projection is made
+    again (:data:`ROUNDS`). Tangential motion is left free (a joint may slide: the mode's
+    sliding is the reference's).
 
-    Steps of ``ds`` are taken by the explicit midpoint rule on the group (the twist projected
-    at the start, the configuration half a step on, the twist projected there moves the step
-    from its start by the screw motion exp(ds xi_mid) g): O(ds^2) over a path. The path is
-    integrated lazily, as far as a configuration is asked for. Between two nodes a block
-    moves by the step's screw motion and its twist is interpolated linearly between the
-    nodes' projected twists (both O(ds^2))."""
+    Steps of ``ds`` are taken by the explicit midpoint rule on the group: the twist at the
+    start moves the configuration half a step, the twist projected there moves the step
+    from its start by the screw motions exp(ds xi_mid) g, and the twist is projected at the
+    end: O(ds^2) over a path (the two-block chain's alpha to 2.8e-7 at ds |w| = 0.005). The
+    path is integrated lazily, as far as a configuration is asked for. Between two nodes a
+    block moves by the step's screw motion and its twist is interpolated linearly between
+    the nodes' projected twists (both O(ds^2)). Each projection factorizes one sparse
+    matrix of the free DOFs (augmented Lagrangian, :data:`PENALTY`, :data:`SWEEPS`), the
+    prediction another."""
 
     def __init__(self, model: Model, v0: NDArray[np.float64], w: NDArray[np.float64], ds: float):
         itf = model.interfaces
@@ -588,131 +604,104 @@ class IncrementalPath:
         self.metric = np.column_stack(
             [np.repeat(mass[:, None], 3, 1), np.repeat(inertia[:, None], 3, 1)]
         )
-        self.free = ~np.asarray(model.fixed, dtype=bool)  # (n, 6): fixed DOFs stay at 0
+        free = ~np.asarray(model.fixed, dtype=bool)  # (n, 6): fixed DOFs stay at 0
+        self.col = np.flatnonzero(free.ravel())
+        self.place = np.full(n * 6, -1)
+        self.place[self.col] = np.arange(self.col.size)
+        self.scale = np.sqrt(self.metric.ravel()[self.col])
         self.ds = float(ds)
         self.s = [0.0]
         self.R = [np.broadcast_to(np.eye(3), (n, 3, 3)).copy()]
         self.t = [np.zeros((n, 3))]
-        # a bound on the mode's corner speeds: the scale of the opening and sticking tests
+        # a bound on the mode's corner speeds: the scale of the opening test
         u = v0 + np.cross(w, self.centres)
-        reach = np.linalg.norm(u, axis=1) + np.linalg.norm(w, axis=1) * 0.5 * np.linalg.norm(
-            sizes, axis=1
-        )
-        self.speed = float(reach.max(initial=0.0))
-        rel = self._relative(self.R[0], self.t[0], v0, w)[2]
-        self.stick = np.linalg.norm(rel, axis=2) <= STICK * self.speed  # (m, 4) tangential
-        v, o = self.project(self.R[0], self.t[0], v0, w)
-        self.xi = [np.hstack([v, o])]
+        half = 0.5 * np.linalg.norm(sizes, axis=1)
+        self.speed = float((np.linalg.norm(u, axis=1) + np.linalg.norm(w, axis=1) * half).max())
+        self.xi = [self.project(self.R[0], self.t[0], np.hstack([v0, w]))]
         self.xi_mid: list[NDArray[np.float64]] = []
 
     # -------------------------------------------------------------- one configuration
-    def _relative(
-        self,
-        R: NDArray[np.float64],
-        t: NDArray[np.float64],
-        v0: NDArray[np.float64],
-        w: NDArray[np.float64],
-    ) -> tuple[
-        NDArray[np.float64],
-        NDArray[np.float64],
-        NDArray[np.float64],
-        NDArray[np.float64],
-        NDArray[np.float64],
-    ]:
-        """At the configuration (R, t), for every joint's corners (m, 4): their gap along
-        the normal turned with block i (negative: overlap), their relative normal velocity
-        (of j against i), the tangential one (m, 4, 3), the corners' current positions
-        (midway between the corner as a point of either block) and the normals (m, 3)."""
+    def _corners(
+        self, R: NDArray[np.float64], t: NDArray[np.float64], xi: NDArray[np.float64]
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        """At the configuration (R, t), for every joint's corners (m, 4): the gap of the
+        corner as a point of block j from block i's face (whose corner it was), along the
+        normal turned with block i (negative: overlap, as :func:`interpenetration` measures
+        it); its rate in the twists ``xi`` (n, 6), n . (v_j - v_i) at the corner of block j
+        (the terms of the turning normal cancel those of the corner of block i); the
+        corners of block j (m, 4, 3) and the normals (m, 3)."""
         pi = np.einsum("mij,mkj->mki", R[self.bi], self.corners) + t[self.bi][:, None]
         pj = np.einsum("mij,mkj->mki", R[self.bj], self.corners) + t[self.bj][:, None]
         normal = R[self.bi, :, self.axis]  # column `axis` of R_i
         gap = np.einsum("mki,mi->mk", pj - pi, normal)
-        p = 0.5 * (pi + pj)
-        dv = (v0[self.bj] - v0[self.bi])[:, None, :] + np.cross(
-            (w[self.bj] - w[self.bi])[:, None, :], p
-        )
-        vn = np.einsum("mki,mi->mk", dv, normal)
-        return gap, vn, dv - vn[..., None] * normal[:, None, :], p, normal
+        rel = xi[self.bj] - xi[self.bi]
+        dv = rel[:, None, :3] + np.cross(rel[:, None, 3:], pj)
+        return gap, np.einsum("mki,mi->mk", dv, normal), pj, normal
+
+    def _to_free(self, xi: NDArray[np.float64], c: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Spatial twists (n, 6) as the free DOFs (centre velocity, rotation) scaled by the
+        square root of the metric."""
+        x = np.hstack([xi[:, :3] + np.cross(xi[:, 3:], c), xi[:, 3:]])
+        return x.ravel()[self.col] * self.scale
+
+    def _from_free(self, z: NDArray[np.float64], c: NDArray[np.float64]) -> NDArray[np.float64]:
+        flat = np.zeros(c.shape[0] * 6)
+        flat[self.col] = z / self.scale
+        x = flat.reshape(-1, 6)
+        return np.hstack([x[:, :3] - np.cross(x[:, 3:], c), x[:, 3:]])
 
     def project(
-        self,
-        R: NDArray[np.float64],
-        t: NDArray[np.float64],
-        v0: NDArray[np.float64],
-        w: NDArray[np.float64],
-    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """The twists (v0, w) (n, 3) projected at the configuration (R, t): see the class."""
+        self, R: NDArray[np.float64], t: NDArray[np.float64], ref: NDArray[np.float64]
+    ) -> NDArray[np.float64]:
+        """The twists (n, 6) closest to ``ref`` (n, 6) at the configuration (R, t) that
+        keep the contacts: see the class."""
         from scipy.sparse import coo_matrix, identity
         from scipy.sparse.linalg import splu
 
         if self.bi.size == 0:
-            return v0, w
-        n = self.centres.shape[0]
+            return ref
         c = np.einsum("nij,nj->ni", R, self.centres) + t
-        x0 = np.hstack([v0 + np.cross(w, c), w])  # centre velocity and rotation
-        col = np.flatnonzero(self.free.ravel())
-        scale = np.sqrt(self.metric.ravel()[col])
-        z0 = x0.ravel()[col] * scale
-        gap, vn, _, p, normal = self._relative(R, t, v0, w)
+        z0 = self._to_free(ref, c)
+        gap, vn, p, normal = self._corners(R, t, ref)
         contact = gap <= self.tol_gap
         active = contact & (vn <= OPENING * self.speed)
-        # the other two axes of block i: the tangent directions of a sticking corner
-        t1 = R[self.bi, :, (self.axis + 1) % 3]
-        t2 = R[self.bi, :, (self.axis + 2) % 3]
-        place = np.full(n * 6, -1)
-        place[col] = np.arange(col.size)
-        z = z0
+        xi = ref
         for _ in range(ROUNDS):
-            normal_at = np.nonzero(active)
-            tangent_at = np.nonzero(active & self.stick)
-            at = [normal_at, tangent_at, tangent_at]
-            e = np.concatenate([d[j] for d, (j, _) in zip((normal, t1, t2), at, strict=True)])
-            pt = np.concatenate([p[j, q] for j, q in at])
-            jm = np.concatenate([j for j, _ in at])
-            k = e.shape[0]
+            jm, corner = np.nonzero(active)
+            k = jm.size
             if k == 0:
                 break
+            e, pt = normal[jm], p[jm, corner]
             # e . (u + w x (p - c)) = e . u + w . ((p - c) x e): block j's minus block i's
             bi, bj = self.bi[jm], self.bj[jm]
             coef = np.concatenate(
                 [-np.hstack([e, np.cross(pt - c[bi], e)]), np.hstack([e, np.cross(pt - c[bj], e)])]
-            )
-            dof = np.concatenate([bi, bj])[:, None] * 6 + np.arange(6)[None]
-            vals = coef.ravel()
-            dofs = place[dof.ravel()]
+            ).ravel()
+            dofs = self.place[(np.concatenate([bi, bj])[:, None] * 6 + np.arange(6)).ravel()]
             rows = np.tile(np.repeat(np.arange(k), 6), 2)
-            keep = dofs >= 0
+            keep = dofs >= 0  # a fixed DOF's velocity is 0
             A = coo_matrix(
-                (vals[keep] / scale[dofs[keep]], (rows[keep], dofs[keep])), shape=(k, col.size)
+                (coef[keep] / self.scale[dofs[keep]], (rows[keep], dofs[keep])),
+                shape=(k, self.col.size),
             ).tocsr()
             AtA = (A.T @ A).tocsc()
-            diag = AtA.diagonal()
-            rho = PENALTY / max(float(diag[diag > 0].mean()) if (diag > 0).any() else 1.0, 1e-300)
-            lu = splu((identity(col.size, format="csc") + rho * AtA).tocsc())
+            rho = PENALTY / max(float(AtA.diagonal().mean()), 1e-300)
+            lu = splu((identity(self.col.size, format="csc") + rho * AtA).tocsc())
             # augmented Lagrangian on the change d = z - z0: min |d|^2, A d = -A z0 (an
-            # admissible z0 comes back unchanged, to the round-off of the residual alone)
+            # admissible z0 comes back unchanged; redundant contacts need no special care)
             r = -(A @ z0)
             lam = np.zeros(k)
             d = np.zeros_like(z0)
             for _ in range(SWEEPS):
                 d = lu.solve(A.T @ (rho * r - lam))
                 lam = lam + rho * (A @ d - r)
-            z = z0 + d
-            flat = np.zeros(n * 6)
-            flat[col] = z / scale
-            x = flat.reshape(n, 6)
-            v_new, w_new = x[:, :3] - np.cross(x[:, 3:], c), x[:, 3:]
-            _, vn_new, _, _, _ = self._relative(R, t, v_new, w_new)
-            joining = contact & ~active & (vn_new < -OPENING * self.speed)
+            xi = self._from_free(z0 + d, c)
+            joining = contact & ~active & (self._corners(R, t, xi)[1] < -OPENING * self.speed)
             if not joining.any():
                 break
             active |= joining
-        flat = np.zeros(n * 6)
-        flat[col] = z / scale
-        x = flat.reshape(n, 6)
-        return x[:, :3] - np.cross(x[:, 3:], c), x[:, 3:]
+        return xi
 
-    # -------------------------------------------------------------- the path
     def predict(
         self,
         R: NDArray[np.float64],
@@ -735,7 +724,6 @@ class IncrementalPath:
 
         if self.bi.size == 0:
             return xi
-        n = self.centres.shape[0]
         Rs, ts = screw_transform(move[:, :3], move[:, 3:], ds)
         Ri, ti = Rs[0][self.bi], ts[0][self.bi]
         rel = xi[self.bj] - xi[self.bi]
@@ -745,10 +733,6 @@ class IncrementalPath:
         p = np.einsum("mij,mj->mi", R[self.bi], self.joint_centres) + t[self.bi]
         size = self.joint_size[:, None]
         target = np.hstack([v_rel + np.cross(w_rel, p), size * w_rel]).ravel()
-        col = np.flatnonzero(self.free.ravel())
-        scale = np.sqrt(self.metric.ravel()[col])
-        place = np.full(n * 6, -1)
-        place[col] = np.arange(col.size)
         # rows: u_j + w_j x (p - c_j) - (u_i + w_i x (p - c_i)) and L (w_j - w_i), 6 per joint
         m = self.bi.size
         blocks = np.concatenate([self.bi, self.bj])
@@ -765,32 +749,32 @@ class IncrementalPath:
         local *= sign[:, None, None]
         joint = np.concatenate([np.arange(m), np.arange(m)])
         rows = np.broadcast_to((joint[:, None] * 6 + np.arange(6))[:, :, None], local.shape)
-        dofs = place[np.broadcast_to((blocks[:, None] * 6 + np.arange(6))[:, None, :], local.shape)]
-        keep = dofs >= 0
+        dofs = self.place[
+            np.broadcast_to((blocks[:, None] * 6 + np.arange(6))[:, None, :], local.shape)
+        ]
+        keep = dofs >= 0  # a fixed DOF's velocity is 0
         D = coo_matrix(
-            (local[keep] / scale[dofs[keep]], (rows[keep], dofs[keep])), shape=(6 * m, col.size)
+            (local[keep] / self.scale[dofs[keep]], (rows[keep], dofs[keep])),
+            shape=(6 * m, self.col.size),
         ).tocsr()
         DtD = (D.T @ D).tocsc()
         eps = 1e-9 * max(float(DtD.diagonal().mean()), 1e-300)
-        x0 = np.hstack([xi[:, :3] + np.cross(xi[:, 3:], c), xi[:, 3:]]).ravel()[col] * scale
-        z = spsolve((DtD + eps * identity(col.size, format="csc")).tocsc(), D.T @ target + eps * x0)
-        flat = np.zeros(n * 6)
-        flat[col] = z / scale
-        x = flat.reshape(n, 6)
-        return np.hstack([x[:, :3] - np.cross(x[:, 3:], c), x[:, 3:]])
+        z = spsolve(
+            (DtD + eps * identity(self.col.size, format="csc")).tocsc(),
+            D.T @ target + eps * self._to_free(xi, c),
+        )
+        return self._from_free(np.asarray(z, dtype=float), c)
 
     def _advance(self) -> None:
         """One step of the explicit midpoint rule from the last node."""
         R, t, xi = self.R[-1], self.t[-1], self.xi[-1]
         Rh, th = _moved(R, t, xi, 0.5 * self.ds)
-        ref = self.predict(Rh, th, xi, xi, 0.5 * self.ds)
-        mid = np.hstack(self.project(Rh, th, ref[:, :3], ref[:, 3:]))
+        mid = self.project(Rh, th, self.predict(Rh, th, xi, xi, 0.5 * self.ds))
         R1, t1 = _moved(R, t, mid, self.ds)
-        ref = self.predict(R1, t1, xi, mid, self.ds)
         self.xi_mid.append(mid)
         self.R.append(R1)
         self.t.append(t1)
-        self.xi.append(np.hstack(self.project(R1, t1, ref[:, :3], ref[:, 3:])))
+        self.xi.append(self.project(R1, t1, self.predict(R1, t1, xi, mid, self.ds)))
         self.s.append(self.s[-1] + self.ds)
 
     def motion(

@@ -125,7 +125,7 @@ def add_parser(subparsers) -> None:
     )
     p.add_argument(
         "--kinematics",
-        choices=("auto", "chain", "independent"),
+        choices=("auto", "chain", "independent", "incremental"),
         default="auto",
         help="the finite motion: each block's mode composed along the joints' spanning tree "
         "(chain: hinges stay closed), each block by its own screw motion (independent), or "
