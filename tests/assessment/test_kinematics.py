@@ -529,3 +529,59 @@ def test_incremental_keeps_a_running_bond_wall_closed_where_screws_overlap():
     out, curve, mech, _ = runs["incremental"]
     s_du = mech.configuration_at(out.displacement_capacity * out.e_star, float(curve.s[-1]))
     assert interpenetration(mech, model, s_du) == pytest.approx(steps, abs=1e-12)
+
+
+def test_incremental_follows_a_three_hinge_loop_the_screws_break():
+    """Three blocks (a = 0.4, t = 0.2) on a base, the top one held horizontally at its
+    centre (u1, u3 fixed: a floor that lets it rise), the limit analysis's mechanism: the
+    lower two turn by th about the toe A = (y 0, z t), the top one about the back hinge
+    C = (0.8, 0) that moves with them, its centre kept at z = t/2 (a closed loop through the
+    ground: one degree of freedom). By hand: C(th) = A + Rot(th)(C0 - A), the top block's
+    turn phi from C_z + 0.2 sin phi + 0.1 cos phi = 0.1, alpha = sum dy / sum dz of the three
+    centroids (equal weights; the held one takes no horizontal load's work). The
+    incremental path follows it (alpha within 1e-5 at step 0.0025, measured 1.2e-6; theta0
+    and d_k0 within 1e-6), where the closed-form motions move the held centre by 0.13 m and
+    end at d_k0 21 % too far."""
+    import masonry_dem as md
+
+    geometry = {"builder": "stack_bond_column", "courses": 3}
+    top = int(np.argmax(_model(geometry).blocks.centres[:, 1]))
+    model = _model(geometry, supports=[{"select": "base"}, {"select": [top], "dofs": ["u1", "u3"]}])
+    mode, residual = hinged_mode(model, np.asarray(md.limit_analysis(model).block_velocities))
+    assert residual < TOL
+    A, C0, r = np.array([0.0, 0.2]), np.array([0.8, 0.0]), np.array([0.2, 0.1])
+
+    def rot(v, th):
+        return np.array(
+            [v[0] * np.cos(th) - v[1] * np.sin(th), v[0] * np.sin(th) + v[1] * np.cos(th)]
+        )
+
+    def centroids(th):
+        C = A + rot(C0 - A, th)
+        phi = brentq(lambda f: (C + rot(r, f))[1] - 0.1, -1.5, 0.5, xtol=1e-15)
+        return np.array(
+            [
+                A + rot(np.array([0.2, 0.1]) - A, th),
+                A + rot(np.array([0.6, 0.1]) - A, th),
+                C + rot(r, phi),
+            ]
+        )
+
+    def alpha(th, h=1e-6):
+        v = (centroids(th + h) - centroids(th - h)) / (2 * h)
+        return v[:, 0].sum() / v[:, 1].sum()
+
+    theta0 = brentq(alpha, 0.01, 0.3, xtol=1e-14)
+    d_k0 = float(np.mean(centroids(theta0)[:, 1] - 0.1))
+    mech = Mechanism.of(model, mode, kinematics="incremental", step=0.0025)
+    curve = mech.capacity_curve()
+    lower = int(np.argmin(np.abs(model.blocks.centres[:, 1] - 0.2)))
+    R = mech.motion(curve.s)[0][:, lower]
+    turn = np.arctan2(R[:, 2, 1], R[:, 1, 1])  # the lower blocks' turn about e1
+    assert max(abs(a - alpha(th)) for a, th in zip(curve.alpha[:-1], turn[:-1], strict=True)) < 1e-5
+    assert turn[-1] == pytest.approx(theta0, abs=1e-6)
+    assert curve.d_k0 == pytest.approx(d_k0, abs=1e-6)
+    held = mech.positions(model.blocks.centres[[top]], [top], curve.s[-1])[0, 0]
+    assert abs(held[2] - model.blocks.centres[top, 2]) < 1e-5
+    screws = Mechanism.of(model, mode, kinematics="independent")
+    assert screws.capacity_curve().d_k0 > 1.1 * d_k0  # what the incremental path corrects
