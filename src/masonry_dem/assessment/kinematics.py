@@ -12,7 +12,9 @@ screw motion exp(s (xi_i - xi_parent)) of its twist relative to the parent (the 
 exponentials of a robot's kinematic chain). A block turning about a hinge on the ground turns
 about it by s |w|; a hinge between two moving blocks is a line of the parent and stays closed
 at any rotation; a joint outside the tree (a closed loop of blocks) keeps its first-order
-motion only.
+motion only. The incremental kinematics (:class:`IncrementalPath`) integrates the motion in
+steps instead, the twists projected at each configuration onto the joints' contacts, which
+keeps closed loops closed.
 
 The DEM's joints turn about their centres (a rocking joint keeps its normal spring and loses
 its bending stiffness), so the pushover's mode lifts no weight at first order: the work that
