@@ -585,3 +585,22 @@ def test_incremental_follows_a_three_hinge_loop_the_screws_break():
     assert abs(held[2] - model.blocks.centres[top, 2]) < 1e-5
     screws = Mechanism.of(model, mode, kinematics="independent")
     assert screws.capacity_curve().d_k0 > 1.1 * d_k0  # what the incremental path corrects
+
+
+def test_incremental_bad_input_and_auto_spares_it_on_a_chain():
+    """A step out of (0, 0.1] and an unknown kinematics are refused in one line naming the
+    field, the value and what is allowed; on the two-block chain the chain's motion has no
+    overlap, so ``auto`` keeps it and never integrates the incremental path."""
+    from masonry_dem.assessment.checks import assess_mode
+
+    model, mode = _two_block_chain()
+    with pytest.raises(ValueError, match=r"step = 0\.0 out of range: must be in \(0, 0\.1\]"):
+        Mechanism.of(model, mode, kinematics="incremental", step=0.0)
+    with pytest.raises(ValueError, match="kinematics = 'spiral': must be one of .*incremental"):
+        Mechanism.of(model, mode, kinematics="spiral")
+    with pytest.raises(ValueError, match="must be auto, chain, independent or incremental"):
+        assess_mode(model, mode, "ntc2018", NTC2018Spectrum(0.1), kinematics="spiral")
+    _, _, mech, info = assess_mode(model, mode, "ntc2018", NTC2018Spectrum(0.1))
+    assert info["kinematics"] == "chain"
+    assert set(info["overlaps"]) == {"chain", "independent"}
+    assert mech.path is None
