@@ -56,6 +56,11 @@ LIMIT_STATES: tuple[str, ...] = ("SLV", "SLC")
 LIMIT_SHARE: dict[str, float] = {"SLV": 0.4, "SLC": 0.6}
 #: C8.7.1.2.1.8: T_SLV = 1.68 pi sqrt(d_SLV / a(d_SLV)) [C8.7.1.10], T_SLC = 1.56 pi ... [C8.7.1.11]
 PERIOD_FACTOR: dict[str, float] = {"SLV": 1.68, "SLC": 1.56}
+#: an overlap [m] at d_u* at or below which ``kinematics = "auto"`` counts a finite motion as
+#: admissible: the closed-form motions are then kept (in KINEMATICS' order) and the
+#: incremental path, which costs a factorization or two per step, is not integrated (round
+#: off leaves 1e-17 m on a hinged chain, the incremental path 1e-11 to 1e-8 m on closed loops)
+OVERLAP_FLOOR = 1e-9
 #: C8.7.1.2.1.8: the mechanism's equivalent viscous damping "in assenza di valutazioni più
 #: accurate ... pari all'8% per lo SLV e al 10% per lo SLC" [%]
 LIMIT_DAMPING: dict[str, float] = {"SLV": 8.0, "SLC": 10.0}
@@ -568,18 +573,28 @@ def assess_mode(
     """:func:`assess` of a rigid-block mode (n, 6) on ``model``: alpha0 the analysis's
     ``load_factor`` in the codes' terms (None: the virtual work of the loads).
 
-    ``kinematics`` ``"chain"`` or ``"independent"`` (:meth:`Mechanism.of`), or ``"auto"``:
-    both, and the one whose finite motion overlaps the least across the joints at d_u*
+    ``kinematics`` ``"chain"``, ``"independent"`` or ``"incremental"`` (:meth:`Mechanism.of`),
+    or ``"auto"``: the one whose finite motion overlaps the least across the joints at d_u*
     (:func:`~masonry_dem.assessment.kinematics.interpenetration`; a curve with no alpha = 0
-    counts as no check at all); ``demand_at_height``, ``nonlinear_check``, ``limit_state``
+    counts as no check at all; overlaps up to :data:`OVERLAP_FLOOR` count as none, ties go
+    to the first of KINEMATICS), the incremental path tried only when neither closed-form
+    motion is admissible; ``demand_at_height``, ``nonlinear_check``, ``limit_state``
     and ``nonlinear_damping`` as :func:`assess` takes them. Returns the assessment, its
     curve, its mechanism and what chose it: ``kinematics``, ``overlap_at_du`` [m] (at the
     displacement capacity: d_SLV, d_SLC or d_u*) and ``overlaps`` of each candidate."""
     if kinematics != "auto" and kinematics not in KINEMATICS:
-        raise ValueError(f"kinematics = {kinematics!r}: must be auto, chain or independent")
+        raise ValueError(
+            f"kinematics = {kinematics!r}: must be auto, chain, independent or incremental"
+        )
     candidates = KINEMATICS if kinematics == "auto" else (kinematics,)
     found: dict[str, tuple[Assessment, CapacityCurve, Mechanism, float]] = {}
     for name in candidates:
+        if (
+            kinematics == "auto"
+            and name == "incremental"
+            and min(v[3] for v in found.values()) <= OVERLAP_FLOOR
+        ):
+            continue
         mech = Mechanism.of(model, mode, moving, name)
         alpha0 = None if load_factor is None else load_factor * mech.scale
         out, curve = assess(
@@ -601,7 +616,8 @@ def assess_mode(
             s_du = mech.configuration_at(out.displacement_capacity * out.e_star, float(curve.s[-1]))
             overlap = interpenetration(mech, model, s_du)
         found[name] = (out, curve, mech, overlap)
-    best = min(candidates, key=lambda k: found[k][3])  # ties: the chain, listed first
+    # ties (overlaps up to the floor among them): the first listed, the chain first
+    best = min(found, key=lambda k: found[k][3] if found[k][3] > OVERLAP_FLOOR else 0.0)
     out, curve, mech, overlap = found[best]
     info = {
         "kinematics": best,

@@ -111,11 +111,14 @@ def add_parser(subparsers) -> None:
     )
     p.add_argument(
         "--kinematics",
-        choices=("auto", "chain", "independent"),
+        choices=("auto", "chain", "independent", "incremental"),
         default="auto",
         help="the finite motion: each block's mode composed along the joints' spanning tree "
-        "(chain: hinges stay closed), each block by its own screw motion (independent), or "
-        "(default) of the two the one whose blocks overlap least across the joints at d_u*",
+        "(chain: hinges stay closed), each block by its own screw motion (independent), "
+        "integrated in steps with the twists projected onto the joints' contacts at each step "
+        "(incremental: slower, closed loops stay closed), or (default) the one whose blocks "
+        "overlap least across the joints at d_u* (incremental only when neither of the other "
+        "two is free of overlap)",
     )
     p.add_argument(
         "--case", default=None, help="the run's case file, if summary.json's is not found"
