@@ -165,6 +165,16 @@ def test_free_standing_wall(courses):
 
 
 # ----------------------------------------------------------------------------- two blocks
+def _two_block_chain():
+    model = _model({"builder": "stack_bond_column", "courses": 2})
+    c = model.blocks.centres
+    lower, upper = (int(np.flatnonzero(np.isclose(c[:, 1], y))[0]) for y in (0.2, 0.6))
+    mode = np.zeros((model.blocks.count, 6))
+    mode[lower] = [0, 0.1, 0.2, 1, 0, 0]
+    mode[upper] = [0, 0.2, 0.8, 2, 0, 0]
+    return model, mode, (lower, upper)
+
+
 def test_two_block_chain_by_hand():
     """Two blocks t = 0.2, h = 0.4, b = 0.3 stacked: the lower turns by th1 = 1 about its
     toe (y = 0, z = t), the upper by th2 = 2 about the front edge of their joint (y = 0.4,
@@ -173,12 +183,7 @@ def test_two_block_chain_by_hand():
     dy = th2 t/2 = 0.2. With W = 20e3 x 0.3 x 0.4 x 0.2 = 480 N each:
     alpha0 = (0.1 + 0.2) / (0.2 + 0.8) = 0.3; M* = W (0.2 + 0.8)^2 / (g (0.04 + 0.64))
     = W / (0.68 g); e* = g M* / 2W = 1 / 1.36; a0* = 0.3 g / (e* FC) = 0.408 g / FC."""
-    model = _model({"builder": "stack_bond_column", "courses": 2})
-    c = model.blocks.centres
-    lower, upper = (int(np.flatnonzero(np.isclose(c[:, 1], y))[0]) for y in (0.2, 0.6))
-    mode = np.zeros((model.blocks.count, 6))
-    mode[lower] = [0, 0.1, 0.2, 1, 0, 0]
-    mode[upper] = [0, 0.2, 0.8, 2, 0, 0]
+    model, mode, _ = _two_block_chain()
     hinged, residual = hinged_mode(model, mode)  # a compatible chain: left as it is
     assert residual < TOL
     assert np.abs(hinged - mode).max() < TOL
@@ -340,12 +345,7 @@ def test_two_block_chain_in_finite_rotation():
     c1 = A + Rot(th)(c1_0 - A), C = A + Rot(th)(C_0 - A), c2 = C + Rot(2 th)(c2_0 - C_0),
     Rot(th) (y, z) = (y cos - z sin, y sin + z cos). The weights are equal, so
     alpha(th) = (c1' + c2')_y / (c1' + c2')_z with Rot'(th) r = Rot(th + pi/2) r."""
-    model = _model({"builder": "stack_bond_column", "courses": 2})
-    c = model.blocks.centres
-    lower, upper = (int(np.flatnonzero(np.isclose(c[:, 1], y))[0]) for y in (0.2, 0.6))
-    mode = np.zeros((model.blocks.count, 6))
-    mode[lower] = [0, 0.1, 0.2, 1, 0, 0]
-    mode[upper] = [0, 0.2, 0.8, 2, 0, 0]
+    model, mode, (lower, upper) = _two_block_chain()
     mech = Mechanism.of(model, mode)
     curve = mech.capacity_curve()
 
@@ -383,12 +383,7 @@ def test_overlap_tells_the_chain_from_independent_screws():
     from masonry_dem.assessment.checks import assess_mode
     from masonry_dem.assessment.kinematics import interpenetration
 
-    model = _model({"builder": "stack_bond_column", "courses": 2})
-    c = model.blocks.centres
-    lower, upper = (int(np.flatnonzero(np.isclose(c[:, 1], y))[0]) for y in (0.2, 0.6))
-    mode = np.zeros((model.blocks.count, 6))
-    mode[lower] = [0, 0.1, 0.2, 1, 0, 0]
-    mode[upper] = [0, 0.2, 0.8, 2, 0, 0]
+    model, mode, _ = _two_block_chain()
     chain = Mechanism.of(model, mode, kinematics="chain")
     screws = Mechanism.of(model, mode, kinematics="independent")
     s0 = chain.capacity_curve().s[-1]
@@ -420,16 +415,6 @@ def test_incremental_block_rocks_about_its_toe_exactly(block):
     assert curve.d_k0 == pytest.approx(t / 2, rel=1e-12)
 
 
-def _two_block_chain():
-    model = _model({"builder": "stack_bond_column", "courses": 2})
-    c = model.blocks.centres
-    lower, upper = (int(np.flatnonzero(np.isclose(c[:, 1], y))[0]) for y in (0.2, 0.6))
-    mode = np.zeros((model.blocks.count, 6))
-    mode[lower] = [0, 0.1, 0.2, 1, 0, 0]
-    mode[upper] = [0, 0.2, 0.8, 2, 0, 0]
-    return model, mode
-
-
 def _hinged_pair_alpha(A, C0, r1, r2, W1, W2):
     """alpha(th) of a lower body turning by th about the toe A and an upper one by 2 th
     about the hinge C (turning with the lower body), their centroids at A + r1 and C0 + r2
@@ -453,7 +438,7 @@ def test_incremental_two_block_chain_against_the_closed_form():
     """The chain of ``test_two_block_chain_in_finite_rotation`` integrated in steps: alpha(th),
     th0 and d_k0 of the closed form within STEP_TOL at step 0.005, and the error falling by
     about 4 when the step halves (the midpoint rule's second order: it could fail both ways)."""
-    model, mode = _two_block_chain()
+    model, mode, _ = _two_block_chain()
     alpha = _hinged_pair_alpha([0.0, 0.2], [0.4, 0.2], [0.2, -0.1], [0.2, -0.1], 1.0, 1.0)
     theta0 = brentq(alpha, 0.01, 0.5, xtol=1e-15)
     errors = []
@@ -589,7 +574,7 @@ def test_incremental_bad_input_and_auto_spares_it_on_a_chain():
     overlap, so ``auto`` keeps it and never integrates the incremental path."""
     from masonry_dem.assessment.checks import assess_mode
 
-    model, mode = _two_block_chain()
+    model, mode, _ = _two_block_chain()
     with pytest.raises(ValueError, match=r"step = 0\.0 out of range: must be in \(0, 0\.1\]"):
         Mechanism.of(model, mode, kinematics="incremental", step=0.0)
     with pytest.raises(ValueError, match="kinematics = 'spiral': must be one of .*incremental"):
