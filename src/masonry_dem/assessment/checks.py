@@ -27,6 +27,7 @@ from masonry_dem.assessment.kinematics import (
     CapacityCurve,
     Mechanism,
     interpenetration,
+    support_drift,
 )
 from masonry_dem.assessment.spectra import (
     FLOOR_B,
@@ -587,12 +588,12 @@ def assess_mode(
             f"kinematics = {kinematics!r}: must be auto, chain, independent or incremental"
         )
     candidates = KINEMATICS if kinematics == "auto" else (kinematics,)
-    found: dict[str, tuple[Assessment, CapacityCurve, Mechanism, float]] = {}
+    found: dict[str, tuple[Assessment, CapacityCurve, Mechanism, float, float]] = {}
     for name in candidates:
         if (
             kinematics == "auto"
             and name == "incremental"
-            and min(v[3] for v in found.values()) <= OVERLAP_FLOOR
+            and min(max(v[3], v[4]) for v in found.values()) <= OVERLAP_FLOOR
         ):
             continue
         mech = Mechanism.of(model, mode, moving, name)
@@ -611,17 +612,27 @@ def assess_mode(
             nonlinear_damping,
         )
         if out.displacement_capacity is None:
-            overlap = math.inf
+            overlap = drift = math.inf
         else:
             s_du = mech.configuration_at(out.displacement_capacity * out.e_star, float(curve.s[-1]))
             overlap = interpenetration(mech, model, s_du)
-        found[name] = (out, curve, mech, overlap)
-    # ties (overlaps up to the floor among them): the first listed, the chain first
-    best = min(found, key=lambda k: found[k][3] if found[k][3] > OVERLAP_FLOOR else 0.0)
-    out, curve, mech, overlap = found[best]
+            drift = support_drift(mech, model, s_du)
+        found[name] = (out, curve, mech, overlap, drift)
+
+    def error(name: str) -> float:
+        """How far a finite motion is from admissible at d_u*: its overlap or its held
+        blocks' drift, whichever is larger (up to the floor: none)."""
+        worst = max(found[name][3], found[name][4])
+        return worst if worst > OVERLAP_FLOOR else 0.0
+
+    # ties (up to the floor among them): the first listed, the chain first
+    best = min(found, key=error)
+    out, curve, mech, overlap, drift = found[best]
     info = {
         "kinematics": best,
         "overlap_at_du": overlap,
         "overlaps": {k: v[3] for k, v in found.items()},
+        "drift_at_du": drift,
+        "drifts": {k: v[4] for k, v in found.items()},
     }
     return out, curve, mech, info

@@ -937,6 +937,34 @@ def _seismic_direction(
     return direction, scale
 
 
+def support_drift(mechanism: Mechanism, model: Model, s: float) -> float:
+    """The largest motion [m] at the configuration ``s`` along a DOF a support holds, of the
+    blocks held in some DOFs and free in others (a roller, a floor that lets a block rise):
+    the translation of the block's centre along each held axis, and the turn about each held
+    axis times the block's largest half size. The mode keeps them still to first order; a
+    finite motion composed from it may move them, which no overlap shows."""
+    fixed = np.asarray(model.fixed, dtype=bool)
+    partial = np.flatnonzero(fixed.any(axis=1) & ~fixed.all(axis=1))
+    if partial.size == 0:
+        return 0.0
+    R, t, _, _ = mechanism.motion(np.array([s]))
+    centres = model.blocks.centres[partial]
+    moved = np.einsum("mij,mj->mi", R[0, partial], centres) + t[0, partial] - centres
+    Rp = R[0, partial]
+    # the turn about each axis: the rotation vector of R (small or not: arcsin of the
+    # skew part's entries bounds it from below, enough to tell a drift from none)
+    skew = 0.5 * np.stack(
+        [Rp[:, 2, 1] - Rp[:, 1, 2], Rp[:, 0, 2] - Rp[:, 2, 0], Rp[:, 1, 0] - Rp[:, 0, 1]], axis=1
+    )
+    turn = (
+        np.arcsin(np.clip(np.abs(skew), 0.0, 1.0))
+        * 0.5
+        * model.blocks.sizes[partial].max(axis=1, keepdims=True)
+    )
+    drift = np.concatenate([np.abs(moved) * fixed[partial, :3], turn * fixed[partial, 3:]], axis=1)
+    return float(drift.max(initial=0.0))
+
+
 def interpenetration(mechanism: Mechanism, model: Model, s: float) -> float:
     """The largest overlap [m] of two blocks across a joint at the configuration ``s``: the
     normal gap at each corner of each joint, the corner moved as a point of either block,
