@@ -57,7 +57,10 @@ class FolderMechanism:
         return Mechanism.of(self.model, self.mode, moving, kinematics)
 
 
-def _load_model(source: str, folder: Path, case: str | Path | None) -> tuple[Model, str]:
+def load_run_model(source: str, folder: Path, case: str | Path | None) -> tuple[Model, str]:
+    """The model of the run in ``folder`` and where it came from: the case file ``case`` when
+    given, else the ``source`` its summary names (``bundled:...``, or a path looked up from
+    here, in the folder and beside it); a ValueError or FileNotFoundError when none is found."""
     from masonry_dem.cases.casefile import load_case
 
     if case is not None:
@@ -94,7 +97,7 @@ def read_mechanism(folder: Path | str, case: str | Path | None = None) -> Folder
     path = folder / MECHANISM_FILES[0]
     if not path.is_file():
         raise FileNotFoundError(f"results folder {folder}: {path.name} is missing")
-    model, source = _load_model(str(summary.get("case", "")), folder, case)
+    model, source = load_run_model(str(summary.get("case", "")), folder, case)
     mesh = meshio.read(path)
     cells = mesh.cell_data
     mode = np.hstack([np.asarray(cells["translation"][0]), np.asarray(cells["rotation"][0])])

@@ -274,20 +274,18 @@ def pushover_png(folder: Path) -> bytes | None:
 def live_scale(folder: Path, summary: dict[str, Any]) -> float | None:
     """c of the run's weight-proportional live load c P_i d (from assessment.json, else the
     case's model); None when the live load is of another kind or the case is not found."""
-    from masonry_dem.assessment.kinematics import _seismic_direction
-    from masonry_dem.export.assessment_files import _load_model
+    from masonry_dem.assessment.kinematics import live_load_scale
+    from masonry_dem.export.assessment_files import load_run_model
 
     try:
-        model, _ = _load_model(str(summary.get("case", "")), folder, None)
+        model, _ = load_run_model(str(summary.get("case", "")), folder, None)
     except (OSError, ValueError) as exc:
         log.info("lambda in general words: the case of %s is not loaded (%s)", folder, exc)
         return None
-    weights = np.maximum(-np.asarray(model.dead, dtype=float)[:, 1], 0.0)
     try:
-        _, scale = _seismic_direction(np.asarray(model.live, dtype=float), weights)
+        return float(live_load_scale(model))
     except ValueError:
         return None
-    return float(scale)
 
 
 ASSESSMENT_ROWS = (
