@@ -230,3 +230,17 @@ def test_the_schema_allows_the_solver_starts():
     from masonry_dem.solvers.limit_analysis.non_associative import STARTS
 
     assert LIMIT_STARTS == STARTS
+
+
+def test_limit_shows_its_iterations_unless_quiet(tmp_path, capsys):
+    """A wall the normal equations solve (a 30 x 33 default wall, 1 007 blocks) shows its
+    interior point iterations on stderr; ``--quiet`` shows nothing there."""
+    pytest.importorskip("pypardiso")
+    text = (resources.files("masonry_dem.cases.data") / "default_wall.toml").read_text()
+    text = text.replace("blocks_along_length = 3", "blocks_along_length = 30")
+    case = tmp_path / "big.toml"
+    case.write_text(text.replace("courses = 13", "courses = 33"))
+    assert main(["limit", str(case), "--out", str(tmp_path / "a"), "--no-render"]) == 0
+    assert "interior point" in capsys.readouterr().err
+    assert main(["limit", str(case), "--out", str(tmp_path / "b"), "--no-render", "--quiet"]) == 0
+    assert capsys.readouterr().err == ""

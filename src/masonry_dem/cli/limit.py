@@ -10,7 +10,7 @@ import logging
 import sys
 import time
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from masonry_dem.cli.options import (
     add_case,
@@ -21,6 +21,7 @@ from masonry_dem.cli.options import (
 )
 
 if TYPE_CHECKING:
+    from masonry_dem.solvers.limit_analysis import LimitProgress
     from masonry_dem.solvers.resources import LimitEstimate
 
 log = logging.getLogger(__name__)
@@ -70,6 +71,7 @@ def add_parser(subparsers) -> None:
         "'failed' with no lambda (default 600; [analysis] time_limit in a case file)",
     )
     add_output(p, "results/limit", "the PNG of the mechanism")
+    p.add_argument("--quiet", action="store_true", help="no progress line")
     add_overwrite(p)
     p.add_argument(
         "--max-memory",
@@ -106,6 +108,40 @@ def limit_memory(case, options: dict, max_memory: float | None = None) -> LimitE
     return est
 
 
+class LimitBar:
+    """The progress line of a limit analysis (tqdm on stderr): the iterations of its stage
+    and the two values that close on lambda (``LimitProgress``). It appears at the first
+    iteration reported: a solve that reports none (HiGHS, Clarabel on small walls) shows
+    nothing."""
+
+    def __init__(self, name: str, quiet: bool) -> None:
+        self.name, self.quiet = name, quiet
+        self.bar: Any = None
+
+    def __enter__(self) -> LimitBar:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        if self.bar is not None:
+            self.bar.close()
+
+    def __call__(self, event: LimitProgress) -> None:
+        if self.quiet:
+            return
+        if self.bar is None:
+            from tqdm import tqdm
+
+            self.bar = tqdm(desc=self.name[:40], unit="it")
+        if event.lower == event.upper:
+            self.bar.set_postfix_str(f"{event.stage} {event.iteration}: lambda {event.lower:.6g}")
+        else:
+            self.bar.set_postfix_str(
+                f"{event.stage} {event.iteration}: lambda in [{event.lower:.6g}, "
+                f"{event.upper:.6g}] (not yet certified)"
+            )
+        self.bar.update(1)
+
+
 def run_limit(
     case,
     out: Path,
@@ -113,12 +149,13 @@ def run_limit(
     render: bool = True,
     overwrite: bool = False,
     max_memory: float | None = None,
+    quiet: bool = True,
 ) -> dict:
     """Run the limit analysis of a loaded case into ``out``, a folder this run claims as
     ``run`` does (refused if it holds another run, unless ``overwrite``); returns the
     summary. An analysis whose memory estimate is above what it may take is refused before
     the folder is claimed (TooLarge); an allocation that fails anyway is a MemoryError that
-    quotes the estimate."""
+    quotes the estimate. Unless ``quiet``, the iterations show on a progress line."""
     from masonry_dem._signals import run_interruptible
     from masonry_dem.export.limit_results import write_limit_results
     from masonry_dem.export.results_folder import claim, record_stopped, write_summary
@@ -129,7 +166,10 @@ def run_limit(
     try:
         t0 = time.perf_counter()
         try:
-            result = run_interruptible(lambda: limit_analysis(case.model, **options))
+            with LimitBar(case.model.name, quiet) as bar:
+                result = run_interruptible(
+                    lambda: limit_analysis(case.model, progress=bar, **options)
+                )
         except MemoryError as exc:  # an allocation failed: with what was expected
             expected = f"; estimated {est.describe()}" if est is not None else ""
             stopped = MemoryError(f"{exc or 'an allocation failed'}{expected}")
@@ -191,7 +231,13 @@ def limit_command(args: argparse.Namespace) -> int:
     max_memory = None if args.max_memory is None else parse_memory(args.max_memory)
     try:
         summary = run_limit(
-            case, out, options, not args.no_render, args.overwrite, max_memory=max_memory
+            case,
+            out,
+            options,
+            not args.no_render,
+            args.overwrite,
+            max_memory=max_memory,
+            quiet=args.quiet,
         )
     except TooLarge as exc:
         print(f"masonry-dem limit: refused: {exc}", file=sys.stderr)

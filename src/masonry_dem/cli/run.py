@@ -107,6 +107,7 @@ def run_command(args: argparse.Namespace) -> int:
                 not args.no_render,
                 args.overwrite,
                 max_memory=None if args.max_memory is None else parse_memory(args.max_memory),
+                quiet=args.quiet,
             )
         except TooLarge as exc:
             print(f"masonry-dem run: refused: {exc}", file=sys.stderr)

@@ -82,6 +82,7 @@ from .interface import (
     lobatto_rule,
     torsion_quadrature,
 )
+from .progress import LimitProgress
 from .result import STATUSES, LimitAnalysisResult, mechanism_violation
 
 __all__ = [
@@ -92,6 +93,7 @@ __all__ = [
     "PYRAMIDS",
     "STATUSES",
     "LimitAnalysisResult",
+    "LimitProgress",
     "dem_friction_scale",
     "dem_upper_bound",
     "grid_points",

@@ -20,6 +20,7 @@ from .dem_domain import model_friction_scale
 from .formulation import Problem
 from .interface import ASSOCIATIVE_GRID, NON_ASSOCIATIVE_GRID, lobatto_rule, pyramid_edges
 from .non_associative import STARTS, non_associative
+from .progress import ProgressCallback, reporting
 from .result import _ADMISSIBILITY_TOLERANCE, LimitAnalysisResult, finish, mechanism_violation
 
 log = logging.getLogger(__name__)
@@ -52,6 +53,7 @@ def limit_analysis(
     nearest_optimum: bool = False,
     time_limit: float = DEFAULT_TIME_LIMIT,
     start: str = "elastic",
+    progress: ProgressCallback | None = None,
 ) -> LimitAnalysisResult:
     """The collapse multiplier of ``model``'s live load over its dead load, and the mechanism.
 
@@ -100,6 +102,11 @@ def limit_analysis(
             elastic joints, no self-stress), or "associative", the associative collapse
             (Gilbert et al. 2006), whose dilatant self-stress the iteration may keep.
             Ignored when associative.
+        progress: called with a :class:`~masonry_dem.solvers.limit_analysis.LimitProgress`
+            at each iteration of the normal-equation interior point method (walls of about
+            170 free blocks and more) and at each solve of the non-associative iteration:
+            what a long analysis shows while it runs (``masonry-dem limit``'s progress
+            line). A callback that raises is logged and dropped.
 
     Returns a :class:`LimitAnalysisResult`; solver trouble is a status, never an exception
     (bad arguments raise ValueError naming the argument).
@@ -190,7 +197,7 @@ def limit_analysis(
             float("nan"),
             "no live load: nothing pushes the wall, there is no multiplier to find",
         )
-    with budget(float(time_limit)):  # every solver within it (``budget``)
+    with budget(float(time_limit)), reporting(progress):  # every solver within them
         if associative:
             sol, size = solve_associative(problem, grid, dirs)
             out = finish(problem, sol, size, result, iterations=1, load_factors=(sol.lam,))

@@ -16,6 +16,7 @@ from .budget import spent
 from .columns import FrozenFriction, Patterns, full_lp, solve_frozen_columns, solve_frozen_full
 from .formulation import Problem, Solution, associative_columns
 from .interface import ASSOCIATIVE_GRID, grid_points, lobatto_rule, resultant_columns
+from .progress import report
 from .result import LimitAnalysisResult, finish
 from .selection import (
     LAMBDA_SLACK,
@@ -200,6 +201,7 @@ def non_associative(
         new = (problem.a0 + R @ sol.x).reshape(-1, 6)
         sol.info_actions = new  # type: ignore[attr-defined]
         lams.append(sol.lam)
+        report("non-associative", it, sol.lam, sol.lam)
         if start == "elastic":
             # the next capacities from the optimum elastic joints would take (least
             # complementary energy), not from the solver's, one of many, which may hold a

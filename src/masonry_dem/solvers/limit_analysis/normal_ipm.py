@@ -49,6 +49,7 @@ from . import cones
 from .budget import spent
 from .formulation import Problem, Solution, lambda_cap
 from .kinematic import corner_velocity_rows
+from .progress import report
 
 if TYPE_CHECKING:
     from masonry_dem.solvers.factorization import PardisoHandle
@@ -560,6 +561,7 @@ def _iterate(kin: _Kinematic, max_iterations: int, cap: float):
         )
         normal.factor(normal.assemble(w, beta, kin.shift), kin.threads)
         upper, lower = float(c @ pt.u), pt.y
+        report("interior point", it, lower, upper)
         if abs(upper - lower) <= 1e-5 * max(abs(upper), 1e-3):
             bracket = _certify(kin, w, beta, pt)
             if bracket is not None and bracket.width <= BRACKET:
