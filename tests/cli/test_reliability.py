@@ -391,7 +391,8 @@ def test_sigterm_stops_a_limit_analysis_inside_its_solver(tmp_path):
     import time
 
     case, out = _running_bond(tmp_path, 40, 40), tmp_path / "out"
-    proc = start_cli("limit", case, "--out", out, "--non-associative", "--no-render")
+    # --quiet: stderr holds the signal's line alone (the progress line is test_limit_outputs')
+    proc = start_cli("limit", case, "--out", out, "--non-associative", "--no-render", "--quiet")
     try:
         while not (out / "summary.json").exists():
             assert proc.poll() is None, proc.communicate()
