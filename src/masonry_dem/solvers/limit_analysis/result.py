@@ -141,7 +141,10 @@ def finish(problem: Problem, sol: Solution, size: tuple[int, int], result, **kw)
         return result(
             "no collapse",
             float("nan"),
-            f"no mechanism: the equilibrium holds for any lambda ({sol.detail})",
+            f"no mechanism: rigid blocks carry the live load at any lambda ({sol.detail}); "
+            "blocks of unlimited stiffness and compressive strength can, e.g. by arching "
+            "between supports, which joints of finite stiffness flatten and masonry of finite "
+            "strength crushes: no proof that the wall stands (its pushover answers that)",
             **kw,
         )
     if sol.status == "dead load":
