@@ -22,6 +22,7 @@ from masonry_dem._lazy import lazy_names
 
 if TYPE_CHECKING:
     from masonry_dem._threads import set_thread_wait_policy
+    from masonry_dem.analysis import analyze
     from masonry_dem.cases.casefile import Case, load_case
     from masonry_dem.geometry import selectors as select
     from masonry_dem.geometry.blocks import Blocks
@@ -46,7 +47,7 @@ if TYPE_CHECKING:
         Support,
         WeightProportional,
     )
-    from masonry_dem.results import History, StepResult
+    from masonry_dem.results import AnalysisResult, History, StepResult
     from masonry_dem.solvers.dynamic_relaxation import DRSettings, relax
     from masonry_dem.solvers.incremental import DisplacementControl, StaticSettings, pushover
     from masonry_dem.solvers.limit_analysis import LimitAnalysisResult, limit_analysis
@@ -102,6 +103,8 @@ _LAZY = {
     "DRSettings": "masonry_dem.solvers.dynamic_relaxation",
     "relax": "masonry_dem.solvers.dynamic_relaxation",
     "LimitAnalysisResult": "masonry_dem.solvers.limit_analysis",
+    "analyze": "masonry_dem.analysis",
+    "AnalysisResult": "masonry_dem.results",
     "limit_analysis": "masonry_dem.solvers.limit_analysis",
     "QuasiStaticSettings": "masonry_dem.solvers.quasi_static",
     "quasi_static": "masonry_dem.solvers.quasi_static",
@@ -123,6 +126,7 @@ def __dir__() -> list[str]:
 
 
 __all__ = [
+    "AnalysisResult",
     "Blocks",
     "Case",
     "DRSettings",
@@ -142,6 +146,7 @@ __all__ = [
     "Support",
     "WeightProportional",
     "add_base",
+    "analyze",
     "box_wall",
     "boxes",
     "collapse_mode",

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 from collections.abc import Iterator
 from dataclasses import dataclass, field
+from functools import cached_property
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Protocol, overload
 
@@ -161,3 +162,77 @@ def read_summary(folder: Path) -> dict[str, Any]:
     """The summary.json of a results folder."""
     summary: dict[str, Any] = json.loads((Path(folder) / "summary.json").read_text())
     return summary
+
+
+@dataclass(frozen=True)
+class AnalysisResult:
+    """What every analysis returns through :func:`masonry_dem.analyze`: the same core fields
+    for the pushover, dynamic relaxation and limit analysis, and the method's own result.
+
+    Attributes:
+        method: ``"pushover"``, ``"relaxation"`` or ``"limit"``.
+        status: ``"collapse"`` (a mechanism at ``load_factor``), ``"completed"`` (the run
+            ended with no collapse to report: its target or ``max_load_factor`` reached, or
+            no live load), ``"no collapse"`` (limit analysis: no mechanism exists) or
+            ``"failed"`` (with every step it converged kept; ``reason`` says why).
+        reason: why the analysis ended, in one line a user can read.
+        load_factor: lambda, the collapse multiplier of the live load; None without a
+            collapse.
+        bracket: (lower, upper) of lambda where the method brackets it: the pushover's last
+            converged load and the first without equilibrium; the limit analysis's certified
+            static and kinematic bounds (the normal-equation method); else None.
+        stop: why the path stopped (a :class:`~masonry_dem.solvers.static.outcome.StopReason`
+            value); None for limit analysis.
+        certificate: the pushover's certificate of its collapse (``Certificate.as_dict()``),
+            None where there is none (relaxation and limit analysis have none).
+        bound: limit analysis: what its multiplier is to the pushover's, ``"upper"``,
+            ``"estimate"`` or ``"none"``, with ``bound_reason``; None for the others.
+        mechanism: (n_blocks, 6) the collapse mechanism at a collapse, else None (computed
+            on first use).
+        history: every converged state (pushover, relaxation); None for limit analysis.
+        seconds: wall-clock seconds of the analysis.
+        cost: what it cost: Newton iterations and factorizations (pushover), time steps
+            and law evaluations (relaxation), iterations (limit analysis).
+        details: the method's own result (a :class:`History` or a
+            :class:`~masonry_dem.solvers.limit_analysis.LimitAnalysisResult`).
+    """
+
+    method: str
+    status: str
+    reason: str
+    load_factor: float | None
+    bracket: tuple[float, float] | None
+    stop: str | None
+    certificate: dict[str, Any] | None
+    bound: str | None
+    bound_reason: str | None
+    history: History | None
+    seconds: float
+    cost: dict[str, int]
+    details: Any = field(repr=False, compare=False)
+    #: computes the mechanism on first use (one sparse solve for the pushover's collapse mode:
+    #: not counted in ``seconds``, nor paid by a caller who never reads it)
+    mechanism_of: Any = field(default=None, repr=False, compare=False)
+
+    @cached_property
+    def mechanism(self) -> NDArray[np.float64] | None:
+        """(n_blocks, 6) the collapse mechanism (the translations of the block centres and the
+        rotations, largest translation 1) at a collapse, else None."""
+        return None if self.mechanism_of is None else self.mechanism_of()
+
+    def summary(self) -> dict[str, Any]:
+        """The core fields as JSON-ready values (no NaN: a missing value is None)."""
+        return {
+            "method": self.method,
+            "status": self.status,
+            "reason": self.reason,
+            "lambda": self.load_factor,
+            "lambda_bracket": None if self.bracket is None else [float(x) for x in self.bracket],
+            "stop": self.stop,
+            "certificate": self.certificate,
+            "bound": self.bound,
+            "bound_reason": self.bound_reason,
+            "steps": None if self.history is None else len(self.history.steps),
+            "seconds": round(self.seconds, 4),
+            "cost": dict(self.cost),
+        }

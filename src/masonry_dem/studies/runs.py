@@ -152,48 +152,24 @@ def relative_error(value: float | None, ref: float | None) -> float | None:
 
 
 def run_method(method: Method, model: Model, settings: Any) -> Timed:
-    """One run of ``method`` on ``model``, timed (wall clock) from the solver's construction."""
+    """One run of ``method`` on ``model`` through :func:`masonry_dem.analyze`, timed (wall
+    clock) around it (the collapse mechanism, computed on first use, left out)."""
+    from masonry_dem.analysis import analyze
+
     method = Method(method)
     t0 = time.perf_counter()
-    if method is Method.STATIC:
-        from masonry_dem.solvers.incremental import StaticSolver
-
-        hist = StaticSolver(model, settings).run()
-        cost = {"iterations": hist.iterations, "factorizations": hist.factorizations}
-        return _timed(method, hist, time.perf_counter() - t0, cost)
-    if method is Method.DYNAMIC_RELAXATION:
-        from masonry_dem.solvers.dynamic_relaxation import DynamicRelaxation
-
-        dr = DynamicRelaxation(model, settings)
-        hist = dr.run()
-        cost = {
-            "time_steps": dr.stats.time_steps,
-            "law_evaluations": dr.stats.law_evaluations,
-            "dt_cuts": dr.stats.cuts,
-        }
-        return _timed(method, hist, time.perf_counter() - t0, cost)
-    if method is Method.LIMIT_ANALYSIS:
-        from masonry_dem.solvers.limit_analysis import limit_analysis
-
-        res = limit_analysis(model, **settings)
-        seconds = time.perf_counter() - t0
-        lam = float(res.load_factor) if res.status == "collapse" else None
-        if lam is not None and not math.isfinite(lam):
-            lam = None
-        return Timed(
-            method,
-            str(res.status),
-            res.reason,
-            lam,
-            seconds,
-            {"iterations": int(res.iterations)},
-            bound=res.bound,
-        )
-    raise ValueError(f"unknown method {method!r}")
-
-
-def _timed(method: Method, hist: History, seconds: float, cost: dict[str, int]) -> Timed:
-    return Timed(method, hist.status, hist.reason, collapse_lambda(hist), seconds, cost, hist)
+    result = analyze(model, method.value, settings)
+    seconds = time.perf_counter() - t0
+    return Timed(
+        method,
+        result.status,
+        result.reason,
+        result.load_factor,
+        seconds,
+        result.cost,
+        result.history,
+        bound=result.bound,
+    )
 
 
 def warm_up(limit: bool = False) -> None:

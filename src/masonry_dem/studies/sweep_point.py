@@ -71,14 +71,13 @@ def run_point(
 
 
 def _run(data: dict[str, Any], source: str, keep: str, folder: str | None) -> dict[str, Any]:
+    from masonry_dem.analysis import analyze
     from masonry_dem.cases.casefile import case_from_dict
     from masonry_dem.export.run_case import limit_analysis_bound
-    from masonry_dem.solvers.incremental import StaticSolver
-    from masonry_dem.solvers.limit_analysis import limit_analysis
 
     case = case_from_dict(data, source)
     if case.method == "limit":
-        la = limit_analysis(case.model, **(case.limit_options or {}))
+        la = analyze(case.model, "limit", case.limit_options or {}).details
         lam = la.load_factor if la.status == "collapse" else None
         if folder is not None:
             from masonry_dem.export import results_folder as rf
@@ -104,9 +103,17 @@ def _run(data: dict[str, Any], source: str, keep: str, folder: str | None) -> di
         from masonry_dem.export.writer import ResultsWriter
 
         writer = ResultsWriter(folder, case.model, overwrite=True, start={"case": source})
-    solver = StaticSolver(case.model, case.settings, bound=bound)
     with writer or nullcontext():
-        history = solver.run(control=case.control, callback=writer, monitor=case.monitor)
+        run = analyze(
+            case.model,
+            "pushover",
+            case.settings,
+            control=case.control,
+            bound=bound,
+            monitor=case.monitor,
+            progress=writer,
+        )
+    history = run.details
     if writer is not None:
         writer.finish(history, case=source, **extra)
     elif folder is not None:  # keep = "summary"

@@ -363,19 +363,38 @@ def relax(
     out: str | Path | None = None,
     monitor: Monitor | None = None,
     write_every: int = 1,
+    callback: StepCallback | None = None,
 ) -> History:
-    """Run dynamic relaxation; with ``out`` write VTU/PVD, pushover.csv and summary.json."""
+    """Run dynamic relaxation; with ``out`` write VTU/PVD, pushover.csv and summary.json.
+    ``callback(step)`` is called after each converged step (e.g. a progress bar)."""
     from masonry_dem.model import require_model
 
     require_model("relax", model)
+    return relax_with(DynamicRelaxation(model, settings), out, monitor, write_every, callback)
+
+
+def relax_with(
+    solver: DynamicRelaxation,
+    out: str | Path | None = None,
+    monitor: Monitor | None = None,
+    write_every: int = 1,
+    callback: StepCallback | None = None,
+) -> History:
+    """:func:`relax` with the solver made by the caller, who keeps it for its ``stats``."""
     writer = None
     if out is not None:
         from masonry_dem.export.writer import ResultsWriter
 
-        writer = ResultsWriter(out, model, every=write_every, background=True)
-    solver = DynamicRelaxation(model, settings)
+        writer = ResultsWriter(out, solver.model, every=write_every, background=True)
+
+    def on_step(step: StepResult) -> None:
+        if writer is not None:
+            writer(step)
+        if callback is not None:
+            callback(step)
+
     with writer or nullcontext():  # the steps handed to the writer reach the disk
-        history = solver.run(callback=writer, monitor=monitor)
+        history = solver.run(callback=on_step, monitor=monitor)
     if writer is not None:
         writer.finish(history, method="dynamic_relaxation", time_steps=solver.stats.time_steps)
     return history

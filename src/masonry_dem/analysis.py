@@ -1,0 +1,215 @@
+"""One way in: :func:`analyze` runs any of the package's three analyses of a model (the
+pushover, dynamic relaxation, limit analysis), each with its own settings object, and returns
+one :class:`~masonry_dem.results.AnalysisResult` with the same core fields for every method.
+``pushover``, ``relax`` and ``limit_analysis`` stay as the methods' own public names; the
+studies (speed-accuracy, size ladder, sweeps) run through this one.
+
+It sits on top of the data flow, beside ``cli/`` and ``studies/``: it calls the solvers, reads
+the collapse mechanism (``mechanism.py``) and, given a folder, writes it (``export/``).
+"""
+
+from __future__ import annotations
+
+import inspect
+import math
+import time
+from collections.abc import Callable, Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from masonry_dem.model import Model, Monitor, require_model
+from masonry_dem.results import AnalysisResult, History
+
+#: the methods, and the other names each answers to (the studies' and the CLI's words)
+METHODS = ("pushover", "relaxation", "limit")
+ALIASES = {
+    "static": "pushover",
+    "dynamic_relaxation": "relaxation",
+    "relax": "relaxation",
+    "limit_analysis": "limit",
+}
+
+
+def method_name(method: str) -> str:
+    """The method's name in :data:`METHODS` (an alias resolved); a ValueError naming the
+    allowed values otherwise."""
+    name = ALIASES.get(str(method), str(method))
+    if name not in METHODS:
+        allowed = ", ".join([*METHODS, *ALIASES])
+        raise ValueError(f"method = {method!r}: must be one of {allowed}")
+    return name
+
+
+def limit_keywords() -> tuple[str, ...]:
+    """The settings limit analysis takes (the keyword arguments of ``limit_analysis``)."""
+    from masonry_dem.solvers.limit_analysis import limit_analysis
+
+    params = inspect.signature(limit_analysis).parameters
+    return tuple(k for k, p in params.items() if p.kind is p.KEYWORD_ONLY and k != "progress")
+
+
+def analyze(
+    model: Model,
+    method: str = "pushover",
+    settings: Any = None,
+    *,
+    control: Any = None,
+    bound: Any = None,
+    monitor: Monitor | None = None,
+    out: str | Path | None = None,
+    progress: Callable[[Any], None] | None = None,
+) -> AnalysisResult:
+    """Run one analysis of ``model`` and return its :class:`~masonry_dem.results.AnalysisResult`.
+
+    Args:
+        model: the wall (``Model.build`` or ``load_case(path).model``).
+        method: ``"pushover"`` (the static incremental analysis, default), ``"relaxation"``
+            (dynamic relaxation) or ``"limit"`` (rigid-block limit analysis); ``"static"``,
+            ``"dynamic_relaxation"``, ``"relax"`` and ``"limit_analysis"`` name them too.
+        settings: the method's settings: a ``StaticSettings`` (pushover), a ``DRSettings``
+            (relaxation), a mapping of ``limit_analysis``'s keyword arguments (limit); None:
+            the method's defaults.
+        control: pushover only: a ``DisplacementControl`` (None: load control).
+        bound: pushover only: the multiplier its collapse must not pass (a number, or a
+            function of the model), see ``pushover``.
+        monitor: pushover and relaxation: the (block, DOF) whose displacement the pushover
+            curve records (None: the one the live load drives most).
+        out: a results folder to write (VTU/PVD, pushover.csv, summary.json; for limit
+            analysis summary.json and the mechanism), None: nothing written.
+        progress: called as the analysis goes: with each converged ``StepResult``
+            (pushover, relaxation) or each ``LimitProgress`` (limit analysis).
+
+    Returns the result; a bad argument raises ValueError (or TypeError for settings of
+    another method) naming it and what is allowed. A solver's trouble is a status, as each
+    method reports it, never an exception.
+    """
+    require_model("analyze", model)
+    name = method_name(method)
+    if name != "pushover":
+        for key, value in (("control", control), ("bound", bound)):
+            if value is not None:
+                raise ValueError(f"{key} is a setting of the pushover, not of method {name!r}")
+    if name == "limit" and monitor is not None:
+        raise ValueError("monitor is a setting of the pushover and the relaxation, not of 'limit'")
+    t0 = time.perf_counter()
+    if name == "pushover":
+        return _pushover(model, settings, control, bound, monitor, out, progress, t0)
+    if name == "relaxation":
+        return _relaxation(model, settings, monitor, out, progress, t0)
+    return _limit(model, settings, out, progress, t0)
+
+
+def _check_settings(name: str, settings: Any, kind: type) -> None:
+    if settings is not None and not isinstance(settings, kind):
+        raise TypeError(
+            f"settings of method {name!r} must be a {kind.__name__} or None, "
+            f"got {type(settings).__name__}"
+        )
+
+
+def _pushover(model, settings, control, bound, monitor, out, progress, t0) -> AnalysisResult:
+    from masonry_dem.solvers.incremental import StaticSettings, pushover
+
+    _check_settings("pushover", settings, StaticSettings)
+    history = pushover(
+        model, settings, control=control, out=out, monitor=monitor, callback=progress, bound=bound
+    )
+    cost = {"iterations": history.iterations, "factorizations": history.factorizations}
+    return _of_history("pushover", model, history, time.perf_counter() - t0, cost)
+
+
+def _relaxation(model, settings, monitor, out, progress, t0) -> AnalysisResult:
+    from masonry_dem.solvers.dynamic_relaxation import DRSettings, DynamicRelaxation
+    from masonry_dem.solvers.dynamic_relaxation.solver import relax_with
+
+    _check_settings("relaxation", settings, DRSettings)
+    solver = DynamicRelaxation(model, settings)
+    history = relax_with(solver, out, monitor, callback=progress)
+    cost = {
+        "time_steps": solver.stats.time_steps,
+        "law_evaluations": solver.stats.law_evaluations,
+        "dt_cuts": solver.stats.cuts,
+    }
+    return _of_history("relaxation", model, history, time.perf_counter() - t0, cost)
+
+
+def _of_history(
+    method: str, model: Model, history: History, seconds: float, cost: dict[str, int]
+) -> AnalysisResult:
+    from masonry_dem.mechanism import collapse_mode
+
+    status = str(history.status)
+    lam = history.collapse_multiplier
+    collapse = status == "collapse" and lam is not None and math.isfinite(lam)
+    return AnalysisResult(
+        method=method,
+        status=status,
+        reason=history.reason,
+        load_factor=float(lam) if collapse and lam is not None else None,
+        bracket=history.collapse_bracket,
+        stop=str(history.stop),
+        certificate=None if history.certificate is None else history.certificate.as_dict(),
+        bound=None,
+        bound_reason=None,
+        history=history,
+        seconds=seconds,
+        cost=cost,
+        details=history,
+        mechanism_of=(lambda: collapse_mode(model, history.last))
+        if collapse and history.steps
+        else None,
+    )
+
+
+def _limit(model, settings, out, progress, t0) -> AnalysisResult:
+    from masonry_dem.export.limit_results import bound_of
+    from masonry_dem.solvers.limit_analysis import limit_analysis
+
+    options = dict(settings or {})
+    if settings is not None and not isinstance(settings, Mapping):
+        raise TypeError(
+            "settings of method 'limit' must be a mapping of limit_analysis's keyword "
+            f"arguments or None, got {type(settings).__name__}"
+        )
+    allowed = limit_keywords()
+    for key in options:
+        if key not in allowed:
+            raise ValueError(
+                f"settings[{key!r}] is not a setting of limit analysis: allowed {', '.join(allowed)}"
+            )
+    result = limit_analysis(model, progress=progress, **options)
+    seconds = time.perf_counter() - t0
+    if out is not None:
+        _write_limit(out, model, result, seconds)
+    collapse = result.status == "collapse" and bool(np.isfinite(result.load_factor))
+    bound, bound_reason = bound_of(model, result)
+    return AnalysisResult(
+        method="limit",
+        status=str(result.status),
+        reason=result.reason,
+        load_factor=float(result.load_factor) if collapse else None,
+        bracket=None if result.bracket is None else tuple(map(float, result.bracket)),  # type: ignore[arg-type]
+        stop=None,
+        certificate=None,
+        bound=bound,
+        bound_reason=bound_reason,
+        history=None,
+        seconds=seconds,
+        cost={"iterations": int(result.iterations)},
+        details=result,
+        mechanism_of=(lambda: result.block_velocities) if collapse else None,
+    )
+
+
+def _write_limit(out: str | Path, model: Model, result: Any, seconds: float) -> None:
+    """The limit analysis's results folder, claimed as a run claims it."""
+    from masonry_dem.export.limit_results import write_limit_results
+    from masonry_dem.export.results_folder import claim
+
+    folder = claim(out, False, {"name": model.name, "analysis": "limit"})
+    try:
+        write_limit_results(out, model, result, wall_seconds=round(seconds, 4))
+    finally:
+        folder.release()
