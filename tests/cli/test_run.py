@@ -104,6 +104,15 @@ def test_the_readme_python_example_runs(tmp_path, capsys, monkeypatch):
     assert default["status"] == "collapse"
     assert history.collapse_multiplier == pytest.approx(0.2826, rel=0.01)
     assert "collapse" in capsys.readouterr().out
+    # the next block: every method through md.analyze on the same model
+    compare = readme.split("### In Python")[1].split("```python")[2].split("```")[0]
+    exec(compile(compare, "README.md", "exec"), namespace)
+    lines = capsys.readouterr().out.splitlines()
+    assert [line.split()[:2] for line in lines] == [
+        ["pushover", "collapse"],
+        ["relaxation", "collapse"],
+        ["limit", "collapse"],
+    ]
 
 
 def test_run_renders_the_last_step_and_the_collapse_mechanism(tmp_path, capsys):
