@@ -157,9 +157,9 @@ def run_limit(
     the folder is claimed (TooLarge); an allocation that fails anyway is a MemoryError that
     quotes the estimate. Unless ``quiet``, the iterations show on a progress line."""
     from masonry_dem._signals import run_interruptible
+    from masonry_dem.analysis import analyze
     from masonry_dem.export.limit_results import write_limit_results
     from masonry_dem.export.results_folder import claim, record_stopped, write_summary
-    from masonry_dem.solvers.limit_analysis import limit_analysis
 
     est = limit_memory(case, options, max_memory)
     folder = claim(out, overwrite, {"case": case.source, "analysis": "limit"})
@@ -168,7 +168,7 @@ def run_limit(
         try:
             with LimitBar(case.model.name, quiet) as bar:
                 result = run_interruptible(
-                    lambda: limit_analysis(case.model, progress=bar, **options)
+                    lambda: analyze(case.model, "limit", options, progress=bar).details
                 )
         except MemoryError as exc:  # an allocation failed: with what was expected
             expected = f"; estimated {est.describe()}" if est is not None else ""
