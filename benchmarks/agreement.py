@@ -1,4 +1,6 @@
-"""The agreement benchmark: the default static solver (``md.pushover``) against the reference
+"""Agreement: the default static solver against the reference quasi-static analysis, wall by wall.
+
+The agreement benchmark: the default static solver (``md.pushover``) against the reference
 quasi-static analysis (``md.quasi_static``) on the corpus of
 :mod:`masonry_dem.studies.corpus`, one row per wall: both multipliers, their ratio, both
 statuses and seconds. A row is ``ok`` when the default agrees with the reference within
@@ -21,7 +23,6 @@ Rows are appended to ``--out`` (JSON lines) as they finish, so a long run keeps 
 
 from __future__ import annotations
 
-import argparse
 import json
 import logging
 import math
@@ -29,6 +30,8 @@ import sys
 import time
 from dataclasses import replace
 from pathlib import Path
+
+from _machine import arguments, print_machine
 
 import masonry_dem as md
 from masonry_dem.studies.corpus import CorpusWall, corpus
@@ -154,7 +157,7 @@ def number(value: float | None, digits: int = 5) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser = arguments(__doc__)
     parser.add_argument(
         "--groups", nargs="+", default=["validation", "issue", "generated"], help="corpus groups"
     )
@@ -172,6 +175,7 @@ def main(argv: list[str] | None = None) -> int:
         "--summarise", type=Path, metavar="ROWS", help="print the totals of a run's JSON lines"
     )
     args = parser.parse_args(argv)
+    print_machine()
     if args.summarise is not None:
         rows = [json.loads(line) for line in args.summarise.read_text().splitlines() if line]
         print(summarise(rows))

@@ -15,13 +15,14 @@ ratio (``cpu ratio``) is the steadier one on a machine that other work keeps bus
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import subprocess
 import sys
 import tempfile
 from pathlib import Path
+
+from _machine import arguments, print_machine
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -63,11 +64,12 @@ def _run(src: Path, case: str, repeat: int) -> dict:
 
 
 def main() -> int:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p = arguments(__doc__)
     p.add_argument("ref", help="the commit to compare with (hash, tag or branch)")
     p.add_argument("--cases", nargs="+", default=None, help="default: every validation case")
     p.add_argument("--repeat", type=int, default=2, help="runs per process, the fastest kept")
     args = p.parse_args()
+    print_machine()
     if args.repeat < 1:
         p.error(f"--repeat must be at least 1, got {args.repeat}")
     from masonry_dem.cases.paper import case_names

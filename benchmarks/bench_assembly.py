@@ -20,7 +20,6 @@ the targets of issue 2: slope <= 1.15 and 10^5 blocks assembled in under 10 s.
 
 from __future__ import annotations
 
-import argparse
 import gc
 import platform
 import sys
@@ -28,6 +27,7 @@ import time
 import tracemalloc
 
 import numpy as np
+from _machine import arguments, print_machine
 
 from masonry_dem.assembly.stiffness import Assembly
 from masonry_dem.geometry.builders import add_base, running_bond_wall
@@ -93,11 +93,12 @@ def slope(x, y) -> float:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = arguments(__doc__)
     parser.add_argument("--sizes", type=int, nargs="+", default=[100, 1_000, 10_000, 100_000])
     parser.add_argument("--repeat", type=int, default=3, help="timed runs per size (best kept)")
     parser.add_argument("--check", action="store_true", help="exit 1 if a target is missed")
     args = parser.parse_args(argv)
+    print_machine()
 
     pipeline(100)  # warm up imports and caches
     print(

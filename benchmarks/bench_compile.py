@@ -18,10 +18,18 @@ import tempfile
 import time
 from collections import defaultdict
 
+from _machine import arguments, print_machine
+
 
 def main() -> int:
+    p = arguments(__doc__)
+    p.add_argument(
+        "case", nargs="?", help="a bundled case or case file (default: the default wall)"
+    )
+    p.parse_known_args()  # anything else goes on to `masonry-dem run`
     with tempfile.TemporaryDirectory() as cache:
         os.environ["NUMBA_CACHE_DIR"] = cache  # before numba is imported
+        print_machine()  # reads versions without importing numba
         from numba.core import event
 
         seconds: dict[str, float] = defaultdict(float)

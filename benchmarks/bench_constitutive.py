@@ -68,6 +68,7 @@ import time
 from collections.abc import Callable
 
 import numpy as np
+from _machine import arguments, print_machine
 from scipy.sparse.linalg import splu
 
 from masonry_dem.assembly.stiffness import Assembly
@@ -661,7 +662,7 @@ def forces_main(baseline: str, rounds: int, pushover: bool = False) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p = arguments(__doc__)
     p.add_argument("--interfaces", type=int, default=1_000_000)
     p.add_argument("--steps", type=int, default=1000)
     p.add_argument("--n", type=int, default=32, help="springs per side")
@@ -687,6 +688,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.pushover_worker:
         pushover_worker(args.pushover_worker[0])
         return 0
+    print_machine()
     if args.law:
         return law_main(args.cases, args.baseline, args.rounds)
     if args.forces and args.parts:

@@ -21,7 +21,6 @@ summed over the cases, for each column.
 
 from __future__ import annotations
 
-import argparse
 import collections
 import sys
 import time
@@ -30,6 +29,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+from _machine import arguments, print_machine
 from bench_validation import parse_settings  # noqa: E402
 
 from masonry_dem import set_thread_wait_policy  # noqa: E402
@@ -86,7 +86,7 @@ def _run(name: str, changes: dict) -> tuple[float, int, int, int, float]:
 
 def main(argv: list[str] | None = None) -> int:
     set_thread_wait_policy()
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p = arguments(__doc__)
     p.add_argument("cases", nargs="*", help="validation cases (default: all)")
     p.add_argument("--settings", nargs="+", default=[], metavar="FIELD=VALUE")
     p.add_argument("--against", nargs="+", default=[], metavar="FIELD=VALUE")
@@ -94,6 +94,7 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--scale-only", action="store_true", help="no validation case")
     p.add_argument("--breakdown", action="store_true")
     args = p.parse_args(argv)
+    print_machine()
     base = parse_settings(args.settings)
     columns = [base] + ([{**base, **parse_settings(args.against)}] if args.against else [])
     if args.breakdown:

@@ -10,13 +10,14 @@ the end of the command (what the estimate covers), with the load average.
 
 from __future__ import annotations
 
-import argparse
 import os
 import subprocess
 import sys
 import tempfile
 import time
 from pathlib import Path
+
+from _machine import arguments, print_machine
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -40,9 +41,10 @@ def timed(case: str | None, cache: Path, out: Path) -> tuple[str, float]:
 
 
 def main() -> None:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p = arguments(__doc__)
     p.add_argument("case", nargs="?")
     args = p.parse_args()
+    print_machine()
     with tempfile.TemporaryDirectory() as tmp:
         cache = Path(tmp) / "numba_cache"
         cache.mkdir()

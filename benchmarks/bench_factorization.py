@@ -1,4 +1,6 @@
-"""Benchmark: seconds per factorization of the tangents the validation set really factorizes,
+"""Benchmark: each sparse LU backend on the validation set's tangents, on 1 and on 2 threads.
+
+Benchmark: seconds per factorization of the tangents the validation set really factorizes,
 with each installed backend on 1 and on 2 threads, in one process.
 
     python benchmarks/bench_factorization.py [--cases OL1 S11 ...] [--repeat 30] [--walls 20 30]
@@ -16,13 +18,13 @@ which PARDISO takes more than one thread.
 
 from __future__ import annotations
 
-import argparse
 import sys
 import time
 from pathlib import Path
 
 import numba
 import numpy as np
+from _machine import arguments, print_machine
 
 from masonry_dem import set_thread_wait_policy
 from masonry_dem.cases.paper import build_case, case_names
@@ -69,12 +71,13 @@ def wall_tangent(n: int) -> tuple[str, np.ndarray, np.ndarray, np.ndarray]:
 
 def main() -> int:
     set_thread_wait_policy()
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p = arguments(__doc__)
     p.add_argument("--cases", nargs="*", default=None, help="default: every validation case")
     p.add_argument("--walls", nargs="*", type=int, default=[], help="default walls of ~N^2 blocks")
     p.add_argument("--repeat", type=int, default=30)
     p.add_argument("--backends", nargs="+", default=None, help="default: pardiso and superlu")
     args = p.parse_args()
+    print_machine()
     # SuperLU runs on one thread whatever the setting: the reference of the single-thread cost
     backends = args.backends or [
         b for b in ("pardiso", "superlu") if b in factorization.installed()

@@ -18,13 +18,14 @@ them. Give the venv of an older commit too to compare installations in the same 
 
 from __future__ import annotations
 
-import argparse
 import os
 import subprocess
 import sys
 import tempfile
 import time
 from pathlib import Path
+
+from _machine import arguments, print_machine
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -42,7 +43,7 @@ def _run(python: str, src: Path | None, cache: Path, out: Path, case: str | None
 
 
 def main() -> int:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p = arguments(__doc__)
     p.add_argument("--ref", default=None, help="a commit to compare with (hash, tag, branch)")
     p.add_argument(
         "--python", action="append", default=[], help="interpreter with the package installed"
@@ -50,6 +51,7 @@ def main() -> int:
     p.add_argument("--repeat", type=int, default=1, help="cold and warm runs per tree")
     p.add_argument("--case", default=None, help="case file (default: the bundled wall)")
     args = p.parse_args()
+    print_machine()
     with tempfile.TemporaryDirectory() as tmp:
         base = Path(tmp)
         trees: dict[str, tuple[str, Path | None]] = {}

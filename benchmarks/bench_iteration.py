@@ -20,9 +20,10 @@ measured close together mean anything on a shared machine.
 
 from __future__ import annotations
 
-import argparse
 import statistics
 import time
+
+from _machine import arguments, print_machine
 
 
 def _median_us(repeat: int, call, *args) -> float:
@@ -35,10 +36,11 @@ def _median_us(repeat: int, call, *args) -> float:
 
 
 def main() -> int:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p = arguments(__doc__)
     p.add_argument("--cases", nargs="+", default=None, help="default: every validation case")
     p.add_argument("--repeat", type=int, default=400, help="calls timed per part (median)")
     args = p.parse_args()
+    print_machine()
     if args.repeat < 1:
         p.error(f"--repeat must be at least 1, got {args.repeat}")
     from masonry_dem.cases.paper import build_case, case_names

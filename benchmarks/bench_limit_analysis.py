@@ -51,6 +51,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from _machine import arguments, print_machine
 
 from masonry_dem.constitutive import torsion_constant
 from masonry_dem.solvers.limit_analysis import limit_analysis, torsion_quadrature
@@ -648,7 +649,7 @@ def corpus_walls(seeds: list[int], within: float = 0.10) -> None:
 
 
 def main(argv: list[str] | None = None) -> None:
-    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
+    p = arguments(__doc__, formatter_class=argparse.RawTextHelpFormatter)
     p.add_argument("--grid-study", action="store_true")
     p.add_argument("--cases", nargs="*", default=None, metavar="NAME")
     p.add_argument("--cone-cases", nargs="*", default=None, metavar="NAME")
@@ -693,6 +694,7 @@ def main(argv: list[str] | None = None) -> None:
     if args.scale_child is not None:
         _scale_child_main(int(args.scale_child[0]), args.scale_child[1])
         return
+    print_machine()
     if args.corpus is not None:
         corpus_walls(args.corpus or list(CORPUS_SEEDS))
     if args.scale is not None:

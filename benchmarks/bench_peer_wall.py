@@ -43,6 +43,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from _machine import arguments, print_machine
 
 N_ALONG, COURSES = 5, 6
 B, A, S = 0.4, 0.2, 0.2  # block length (e1), height (e2), thickness (e3) [m]
@@ -379,7 +380,7 @@ def peer_rows(python: str, args) -> list[tuple[str, str, float, str]]:
 
 
 def main() -> int:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p = arguments(__doc__)
     p.add_argument("--no-peers", action="store_true", help="skip LMGC90 and CRA")
     p.add_argument("--dr", action="store_true", help="dynamic relaxation too (about 30 s)")
     p.add_argument("--mechanism", action="store_true", help="print the two collapse modes")
@@ -397,6 +398,7 @@ def main() -> int:
     args = p.parse_args()
     if args.peer_side:
         return peer_side(args)
+    print_machine()
     print(f"python {platform.python_version()} on {platform.machine()}, {time.ctime()}")
     print(f"peer wall: {N_ALONG} x {COURSES} running bond, {B} x {A} x {S} m, mu {FRICTION}")
     if args.mechanism:

@@ -10,7 +10,6 @@ average is printed: on a shared machine the seconds scale with it.
 
 from __future__ import annotations
 
-import argparse
 import subprocess
 import sys
 import tempfile
@@ -18,6 +17,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from _machine import arguments, print_machine
 
 from masonry_dem.export.writer import ResultsWriter
 from masonry_dem.geometry.builders import add_base, running_bond_wall
@@ -62,11 +62,12 @@ def wall_results(folder: Path, n_blocks: int, n_steps: int) -> Model:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = arguments(__doc__)
     ap.add_argument("--blocks", type=int, default=10_000)
     ap.add_argument("--steps", type=int, default=100)
     ap.add_argument("--anim-blocks", type=int, default=1_000)
     args = ap.parse_args()
+    print_machine()
 
     from masonry_dem.export import render
 

@@ -55,7 +55,6 @@ measured in one run.
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import subprocess
@@ -65,6 +64,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from _machine import arguments, print_machine
 
 ROOT = Path(__file__).resolve().parents[1]
 A, B, S, GAMMA = 0.081, 0.210, 0.070, 20.0e3  # the bundled default wall
@@ -468,7 +468,7 @@ def main() -> int:
         warm_up()
         print(json.dumps(func(**payload)))
         return 0
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p = arguments(__doc__)
     p.add_argument("--sizes", type=int, nargs="+", default=[10, 30, 100, 316],
                    help="blocks per course N of the N x N walls (default: %(default)s)")  # fmt: skip
     p.add_argument("--pushover-up-to", type=int, default=11_000,
@@ -495,6 +495,7 @@ def main() -> int:
     p.add_argument("--pardiso-options", action="store_true",
                    help="only PARDISO's ordering and matching variants and KLU on --sizes, in this process")  # fmt: skip
     args = p.parse_args()
+    print_machine()
     if args.pardiso_options:
         from masonry_dem.studies.runs import warm_up
 

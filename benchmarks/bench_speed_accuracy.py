@@ -1,4 +1,6 @@
-"""Benchmark: speed against accuracy of the static solver, dynamic relaxation and limit
+"""Benchmark: speed against accuracy of the static solver, dynamic relaxation and limit analysis.
+
+Benchmark: speed against accuracy of the static solver, dynamic relaxation and limit
 analysis (issues 6 and 19).
 
 Run:  python benchmarks/bench_speed_accuracy.py [--cases S15 OL1 14-15] [--quick]
@@ -32,6 +34,8 @@ import time
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
+from _machine import arguments, print_machine
+
 from masonry_dem.studies import speed_accuracy as study
 from masonry_dem.studies.chart import chart
 from masonry_dem.studies.kn_sweep import kn_sweep
@@ -49,7 +53,7 @@ def _one_case(case: str, options: dict) -> dict:
 
 
 def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
+    p = arguments(__doc__, formatter_class=argparse.RawTextHelpFormatter)
     p.add_argument("--cases", nargs="+", default=list(study.DEFAULT_CASES))
     p.add_argument(
         "--methods", nargs="+", choices=[m.value for m in Method], default=[m.value for m in Method]
@@ -72,6 +76,7 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--kn-dr", action="store_true", help="the kn sweeps with DR too (slow)")
     p.add_argument("--check", action="store_true")
     args = p.parse_args(argv)
+    print_machine()
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     print(f"python {platform.python_version()} on {platform.machine()}, {time.ctime()}")

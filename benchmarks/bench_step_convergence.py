@@ -47,6 +47,7 @@ from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
+from _machine import arguments, print_machine
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
@@ -263,7 +264,7 @@ def chart(results: dict, png: Path) -> None:
 
 
 def main() -> int:
-    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
+    p = arguments(__doc__, formatter_class=argparse.RawTextHelpFormatter)
     p.add_argument("--case", action="append", default=[], help="a validation case")
     p.add_argument("--variants", nargs="+", default=VARIANTS)
     p.add_argument("--json", default=None, help="write the runs here (after each run)")
@@ -274,6 +275,7 @@ def main() -> int:
     )
     p.add_argument("--reference", default=FINEST, help="the variant the paths are compared with")
     a = p.parse_args()
+    print_machine()
     common = {k: _value(v) for k, v in (kv.split("=", 1) for kv in a.set)}
     if a.from_json:
         results = json.loads(Path(a.from_json).read_text())

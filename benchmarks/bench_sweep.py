@@ -1,4 +1,6 @@
-"""Benchmark: a sweep of the default wall run serially in this process against the same sweep
+"""Benchmark: a sweep of the default wall run serially against a Dask LocalCluster of this machine.
+
+Benchmark: a sweep of the default wall run serially in this process against the same sweep
 on a Dask LocalCluster of this machine, in one run, with the scheduler's overhead per task.
 
 Run:  python benchmarks/bench_sweep.py [--runs 100] [--workers N]
@@ -23,13 +25,13 @@ Each figure is from this one run: the ratios hold for this machine at its presen
 
 from __future__ import annotations
 
-import argparse
 import os
 import platform
 import tempfile
 import time
 
 import numpy as np
+from _machine import arguments, print_machine
 
 from masonry_dem.studies.sweep import make_plan, run_point, sweep
 
@@ -39,10 +41,11 @@ def _noop(i: int) -> int:
 
 
 def main() -> int:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p = arguments(__doc__)
     p.add_argument("--runs", type=int, default=100, help="runs of the default wall")
     p.add_argument("--workers", type=int, default=os.cpu_count() or 1, help="cluster processes")
     args = p.parse_args()
+    print_machine()
     if args.runs < 2 or args.workers < 1:
         p.error("--runs must be at least 2 and --workers at least 1")
     from distributed import Client, LocalCluster

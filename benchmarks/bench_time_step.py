@@ -1,4 +1,6 @@
-"""Where one time step of the dynamic relaxation goes, and the compiled time steps against
+"""Benchmark: where one time step of the dynamic relaxation goes; compiled steps against Python.
+
+Where one time step of the dynamic relaxation goes, and the compiled time steps against
 the Python loop.
 
 Run:  NUMBA_NUM_THREADS=1 python benchmarks/bench_time_step.py [--walls U S23] [--repeat 3]
@@ -22,7 +24,6 @@ same lambda and time steps (the same bits): it says so.
 
 from __future__ import annotations
 
-import argparse
 import dataclasses
 import sys
 import time
@@ -33,6 +34,7 @@ from masonry_dem.solvers.dynamic_relaxation import integrator
 from masonry_dem.solvers.incremental import StaticSolver, pushover
 
 sys.path.insert(0, str(Path(__file__).parent))
+from _machine import arguments, print_machine
 from bench_walls_that_meet import build, walls  # noqa: E402
 
 Relaxation = integrator.Relaxation
@@ -102,10 +104,11 @@ def run(name: str, compiled: bool) -> tuple[Timers, float, float | None]:
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser = arguments(__doc__)
     parser.add_argument("--walls", nargs="+", default=["U", "S23"])
     parser.add_argument("--repeat", type=int, default=3)
     args = parser.parse_args(argv)
+    print_machine()
     for name in args.walls:  # compile the kernels (both loops) before timing
         run(name, True)
         run(name, False)

@@ -1,4 +1,6 @@
-"""Time of every validation case (no files written), and the sensitivity of lambda to the
+"""Benchmark: each validation case's time, and lambda's sensitivity to the paper's assumptions.
+
+Time of every validation case (no files written), and the sensitivity of lambda to the
 assumptions of masonry_dem.cases.paper.Assumptions.
 
     python benchmarks/bench_validation.py                 # time per case and in total
@@ -9,9 +11,10 @@ assumptions of masonry_dem.cases.paper.Assumptions.
 
 from __future__ import annotations
 
-import argparse
 import time
 from dataclasses import fields, replace
+
+from _machine import arguments, print_machine
 
 from masonry_dem import set_thread_wait_policy
 from masonry_dem.cases.paper import build_case, case_names
@@ -96,7 +99,7 @@ def parse_settings(items: list[str]) -> dict:
 
 def main(argv: list[str] | None = None) -> None:
     set_thread_wait_policy()  # as the command line does, before any kernel runs
-    p = argparse.ArgumentParser(description=__doc__)
+    p = arguments(__doc__)
     p.add_argument("cases", nargs="*")
     p.add_argument("--sensitivity", action="store_true")
     p.add_argument(
@@ -107,6 +110,7 @@ def main(argv: list[str] | None = None) -> None:
         help="StaticSettings fields for every case (e.g. memory=slip tension=plastic)",
     )
     args = p.parse_args(argv)
+    print_machine()
     settings = parse_settings(args.settings)
     if args.sensitivity:
         base: dict[str, float | None] = {}

@@ -43,7 +43,6 @@ ratios.
 
 from __future__ import annotations
 
-import argparse
 import platform
 import sys
 import time
@@ -65,6 +64,7 @@ from masonry_dem.solvers.incremental import StaticSettings, StaticSolver
 from masonry_dem.solvers.linear import solve_linear
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _machine import arguments, print_machine
 from bench_validation import parse_settings  # noqa: E402
 
 A, B, S, GAMMA = 0.02824, 0.07978, 0.03968, 26.8e3  # Restrepo Velez's stones
@@ -148,12 +148,13 @@ def measure(
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser = arguments(__doc__)
     parser.add_argument("--sizes", nargs="+", choices=sorted(SIZES), default=["S5", "big"])
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--set", action="append", default=[], metavar="FIELD=VALUE")
     parser.add_argument("--stiffness", type=float, default=1.0, metavar="F")
     args = parser.parse_args(argv)
+    print_machine()
     settings = StaticSettings(**parse_settings(args.set))
     if args.set:
         print(f"# settings: {' '.join(args.set)}")

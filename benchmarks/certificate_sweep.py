@@ -1,4 +1,6 @@
-"""Generated walls over the whole class of issue 18, each run by the static solver: how each
+"""Generated walls of issue 18's class: how each run ends, its certificate and its time.
+
+Generated walls over the whole class of issue 18, each run by the static solver: how each
 ends, the certificate of every collapse, and its time.
 
     python benchmarks/certificate_sweep.py [--walls 30] [--seed 18] [--kn-sweep]
@@ -16,10 +18,10 @@ physical reason) or "other".
 
 from __future__ import annotations
 
-import argparse
 import time
 
 import numpy as np
+from _machine import arguments, print_machine
 
 from masonry_dem.geometry.builders import add_base, running_bond_wall
 from masonry_dem.geometry.selectors import column
@@ -65,11 +67,12 @@ def describe(spec: dict) -> str:
 
 
 def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__)
+    parser = arguments(__doc__)
     parser.add_argument("--walls", type=int, default=30)
     parser.add_argument("--seed", type=int, default=18)
     parser.add_argument("--kn-sweep", action="store_true")
     args = parser.parse_args(argv)
+    print_machine()
     rng = np.random.default_rng(args.seed)
     counts: dict[str, int] = {}
     flagged = 0

@@ -1,4 +1,6 @@
-"""The certificate of every validation case: status, lambda, the Rayleigh quotient rho of the
+"""The certificate of every validation case: status, lambda, rho along the load, mode, residual.
+
+The certificate of every validation case: status, lambda, the Rayleigh quotient rho of the
 tangent along the motion the load drives (against ``mode_stiffness``), Bergan's stiffness
 parameter, the mode, the largest utilisation and the residual of the state checked.
 
@@ -7,14 +9,17 @@ parameter, the mode, the largest utilisation and the residual of the state check
 
 from __future__ import annotations
 
-import sys
+from _machine import arguments, print_machine
 
 from masonry_dem.cases.paper import build_case, case_names
 from masonry_dem.solvers.incremental import StaticSolver
 
 
 def main(argv: list[str] | None = None) -> None:
-    names = (sys.argv[1:] if argv is None else argv) or case_names()
+    p = arguments(__doc__)
+    p.add_argument("cases", nargs="*", metavar="CASE", help="validation cases (default: all)")
+    names = p.parse_args(argv).cases or case_names()
+    print_machine()
     print(
         f"{'case':6s} {'status':9s} {'lambda':>10s} {'rho':>9s} {'S':>9s} {'mode':44s} util residual"
     )

@@ -12,11 +12,11 @@ expected, got, the error in %, the status, the certificate and the limit-analysi
 from __future__ import annotations
 
 import copy
-import sys
 import tempfile
 import time
 
 import numpy as np
+from _machine import arguments, print_machine
 
 from masonry_dem.cases.casefile import case_from_dict
 from masonry_dem.export.run_case import run_case
@@ -59,7 +59,12 @@ def run(label, data, expected, render=False):
 
 
 if __name__ == "__main__":
-    which = sys.argv[1:]
+    parser = arguments(__doc__)
+    parser.add_argument(
+        "groups", nargs="*", metavar="GROUP", help="block slide wall plans opening scale loads"
+    )
+    which = parser.parse_args().groups
+    print_machine()
 
     def g(a, b, s):
         return dict(block_height=a, block_length=b, thickness=s)

@@ -1,4 +1,6 @@
-"""The non-associative limit analysis on a small L wall: a minute where the pushover takes
+"""The non-associative limit analysis of a small L wall against the pushover: time and lambda.
+
+The non-associative limit analysis on a small L wall: a minute where the pushover takes
 a fraction of a second (session 17; a few seconds since its LPs are solved by column
 generation, session 18), and a multiplier 15-26 % above the pushover's certified one.
 
@@ -30,10 +32,10 @@ estimate, not a bound (docs/limit_analysis.md, "Cost on small walls" has the dia
 
 from __future__ import annotations
 
-import argparse
 import time
 
 import numpy as np
+from _machine import arguments, print_machine
 
 import masonry_dem as md
 from masonry_dem.solvers.limit_analysis import analysis, backends, columns, non_associative
@@ -243,7 +245,7 @@ def order(name: str, whole: bool, nearest: tuple[bool, ...]) -> None:
 
 
 def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__)
+    parser = arguments(__doc__)
     parser.add_argument("--courses", type=int, nargs="+", default=[4])
     parser.add_argument("--grids", action="store_true")
     parser.add_argument("--lp", action="store_true")
@@ -259,6 +261,7 @@ def main(argv: list[str] | None = None) -> None:
         help="--order: without and with the nearest-optimum selection (both), or one",
     )
     args = parser.parse_args(argv)
+    print_machine()
     if args.colgen or args.order:
         for name in args.case:
             nearest = {"both": (False, True), "on": (True,), "off": (False,)}[args.nearest]

@@ -32,12 +32,13 @@ read the calls, which do not. ``--repeat`` keeps the fastest run.
 
 from __future__ import annotations
 
-import argparse
 import sys
 import time
 from collections import defaultdict
 from dataclasses import replace
 from pathlib import Path
+
+from _machine import arguments, print_machine
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
@@ -139,13 +140,14 @@ def profile(model, settings, monitor=None, bound: bool = False) -> dict:
 
 
 def main() -> int:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p = arguments(__doc__)
     p.add_argument("--scale", type=int, action="append", default=[], help="scale_wall(N)")
     p.add_argument("--case", action="append", default=[], help="a validation case")
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE")
     p.add_argument("--repeat", type=int, default=1, help="runs of each; the fastest is kept")
     p.add_argument("--bound", action="store_true", help="the certificate checks the LA bound")
     a = p.parse_args()
+    print_machine()
 
     from bench_scale import scale_wall
     from bench_validation import parse_settings

@@ -25,9 +25,10 @@ States (all time-aware: the PVD readers give ParaView every step, the animation 
   plain, interface lines coloured by ``joint_motion`` through a 4-colour step lookup table equal
   to the pyvista mechanism picture's bins and colours (``MECHANISM_BINS``/``MECHANISM_COLOURS``).
 
-Every state also holds ``frame_wall.py`` (up to its main block) as a Python animation cue, so
+Every state also holds ``frame_wall.py`` (up to its main block; the one file of it is the
+package's, ``src/masonry_dem/paraview_states/frame_wall.py``) as a Python animation cue, so
 that it frames the wall it is loaded against (warp scale from the data, cameras reset) when the
-animation first moves; the package copy of ``frame_wall.py`` is refreshed too.
+animation first moves.
 
 Under pvbatch (internal use): ``pvbatch make_states.py --build DATA OUTDIR COLOURS_JSON``.
 """
@@ -403,7 +404,7 @@ def _sample_results(folder: Path) -> tuple[float, float]:
 
 def frame_script() -> str:
     """frame_wall.py up to its main block: frame() and the cue's callbacks."""
-    text = (HERE / "frame_wall.py").read_text()
+    text = (PACKAGE_COPY / "frame_wall.py").read_text()
     return text.split('\nif __name__ == "__main__":')[0] + "\n"
 
 
@@ -457,8 +458,6 @@ def main() -> int:
         if proc.returncode != 0:
             print(proc.stdout, proc.stderr, sep="\n", file=sys.stderr)
             return proc.returncode
-        PACKAGE_COPY.mkdir(parents=True, exist_ok=True)
-        shutil.copyfile(HERE / "frame_wall.py", PACKAGE_COPY / "frame_wall.py")
         for name in STATES:
             text = (out / f"{name}.pvsm").read_text()
             text = text.replace(str(data), PLACEHOLDER)

@@ -11,7 +11,7 @@ pvbatch pvbatch_check.py states JOBS.json
 pvbatch pvbatch_check.py frame FRAME_WALL.py JOBS.json
     for each job [state, data_dir, out_prefix, how]: load the state by the README's recipe
     (LoadState with data_directory, then the last time step: the state's own cue frames it;
-    how = "recipe") or by paraview_states/frame_wall.py (how = "macro"), hide the 2D overlays (titles, time, scalar
+    how = "recipe") or by the package's frame_wall.py (how = "macro"), hide the 2D overlays (titles, time, scalar
     bars, orientation axes: they do not move with the camera), save one screenshot per
     render view (out_prefix_<k>.png); prints a JSON list of {scales, images, directions} (each
     view's unit vector from its focal point to the camera).

@@ -14,9 +14,11 @@ ends in collapse) of a placeholder folder, so they load against any results fold
 or, after :func:`copy_state`, by opening the copy written into the results folder, whose file
 names, camera and warp scale are already filled in (double-click / ``paraview --state=...``).
 
-Each state holds ``paraview_states/frame_wall.py`` as a Python animation cue: when the animation
-first moves (*Last Frame*, ``GoToLast()``) it sets the warp scale from the data and resets the
-cameras, so a state loaded by search frames any wall; :func:`frame_script_path` is that file.
+Each state holds ``masonry_dem/paraview_states/frame_wall.py`` (the one copy of that file; the
+top-level ``paraview_states/`` holds the states only) as a Python animation cue: when the
+animation first moves (*Last Frame*, ``GoToLast()``) it sets the warp scale from the data and
+resets the cameras, so a state loaded by search frames any wall; :func:`frame_script_path` is
+that file.
 
 No ParaView (and no pyvista) is needed here: the state is XML, edited with ElementTree.
 """

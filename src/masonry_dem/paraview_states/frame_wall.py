@@ -13,7 +13,7 @@ this file:
   ``frame_wall`` in the Macros toolbar;
 * pvpython / pvbatch: ``pvbatch frame_wall.py STATE.pvsm RESULTS_FOLDER [OUT.png]`` loads the
   state against the folder, frames it and optionally saves a screenshot; or, in a script after
-  ``LoadState``: ``exec(open("paraview_states/frame_wall.py").read())``.
+  ``LoadState``: ``exec(open("src/masonry_dem/paraview_states/frame_wall.py").read())``.
 
 The warp scale is the one of the package's own pictures (``masonry_dem.export.scene
 .auto_scale``): a round number (two significant figures, rounded down) making the largest
