@@ -38,8 +38,8 @@ def run_case(
     """Run one case; return its row. ``restraint="return-walls"``: the specimen with its
     return walls as blocks, ``return_blocks`` long (None: the default of
     ``cases.paper.Assumptions``)."""
+    from masonry_dem.analysis import analyze
     from masonry_dem.cases.paper import build_case
-    from masonry_dem.solvers.incremental import pushover
 
     if restraint not in RESTRAINTS:
         raise ValueError(f"restraint must be one of {RESTRAINTS}, got {restraint!r}")
@@ -52,7 +52,7 @@ def run_case(
         label = f"{name}_return{case.extra['return_blocks']}"
     folder = None if out is None else Path(out) / label
     t0 = time.perf_counter()
-    hist = pushover(case.model, case.settings, out=folder, monitor=case.monitor)
+    hist = analyze(case.model, "pushover", case.settings, out=folder, monitor=case.monitor).details
     seconds = time.perf_counter() - t0
     ours = hist.collapse_multiplier
     row: Row = {
