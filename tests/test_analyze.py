@@ -5,6 +5,7 @@ the last digit, and every method finds the closed forms of a tilted block and wa
 from __future__ import annotations
 
 import json
+import re
 from dataclasses import replace
 
 import numpy as np
@@ -87,3 +88,28 @@ def test_out_writes_a_results_folder_for_every_method(wall, tmp_path):
         assert summary["status"] == result.status == "collapse"
         assert summary["lambda"] == pytest.approx(result.load_factor, rel=1e-12)
         assert (tmp_path / method / "mechanism_blocks.vtu").exists() or method == "pushover"
+
+
+def test_limit_settings_are_an_object_as_the_others_are(wall):
+    """``LimitSettings`` holds limit_analysis's keyword arguments: through analyze it is the
+    same analysis as the keywords (non-associative, grid 4), and a value out of range is
+    named when the settings are made, not when the analysis runs."""
+    settings = md.LimitSettings(associative=False, grid=4)
+    via_object = md.analyze(wall, "limit", settings)
+    via_keywords = md.limit_analysis(wall, associative=False, grid=4)
+    assert via_object.load_factor == via_keywords.load_factor
+    assert via_object.details.method == "non-associative"
+    assert md.analyze(wall, "limit", {"associative": False, "grid": 4}).load_factor == (
+        via_object.load_factor
+    )
+    for field, value, words in [
+        ("tolerance", 2.0, "tolerance must be in (0, 1), got 2.0"),
+        ("backend", "gurobi", "backend must be one of ('highs', 'clarabel')"),
+        ("start", "plastic", "start must be one of ('elastic', 'associative')"),
+        ("friction_sides", 2, "friction_sides must be an integer >= 3"),
+        ("time_limit", 0, "time_limit must be a finite number of seconds > 0"),
+    ]:
+        with pytest.raises(ValueError, match=re.escape(words)):
+            md.LimitSettings(**{field: value})
+    with pytest.raises(TypeError, match="settings of method 'limit' must be a LimitSettings"):
+        md.analyze(wall, "limit", md.StaticSettings())

@@ -50,7 +50,11 @@ if TYPE_CHECKING:
     from masonry_dem.results import AnalysisResult, History, StepResult
     from masonry_dem.solvers.dynamic_relaxation import DRSettings, relax
     from masonry_dem.solvers.incremental import DisplacementControl, StaticSettings, pushover
-    from masonry_dem.solvers.limit_analysis import LimitAnalysisResult, limit_analysis
+    from masonry_dem.solvers.limit_analysis import (
+        LimitAnalysisResult,
+        LimitSettings,
+        limit_analysis,
+    )
     from masonry_dem.solvers.linear import solve_linear
     from masonry_dem.solvers.quasi_static import QuasiStaticSettings, quasi_static
     from masonry_dem.solvers.static.outcome import Status, StopReason
@@ -103,6 +107,7 @@ _LAZY = {
     "DRSettings": "masonry_dem.solvers.dynamic_relaxation",
     "relax": "masonry_dem.solvers.dynamic_relaxation",
     "LimitAnalysisResult": "masonry_dem.solvers.limit_analysis",
+    "LimitSettings": "masonry_dem.solvers.limit_analysis",
     "analyze": "masonry_dem.analysis",
     "AnalysisResult": "masonry_dem.results",
     "limit_analysis": "masonry_dem.solvers.limit_analysis",
@@ -134,6 +139,7 @@ __all__ = [
     "History",
     "InterfaceMaterial",
     "LimitAnalysisResult",
+    "LimitSettings",
     "Model",
     "PointLoad",
     "Pressure",

@@ -69,8 +69,8 @@ def analyze(
             (dynamic relaxation) or ``"limit"`` (rigid-block limit analysis); ``"static"``,
             ``"dynamic_relaxation"``, ``"relax"`` and ``"limit_analysis"`` name them too.
         settings: the method's settings: a ``StaticSettings`` (pushover), a ``DRSettings``
-            (relaxation), a mapping of ``limit_analysis``'s keyword arguments (limit); None:
-            the method's defaults.
+            (relaxation), a ``LimitSettings`` or a mapping of its fields (limit); None: the
+            method's defaults.
         control: pushover only: a ``DisplacementControl`` (None: load control).
         bound: pushover only: the multiplier its collapse must not pass (a number, or a
             function of the model), see ``pushover``.
@@ -165,20 +165,24 @@ def _of_history(
 
 def _limit(model, settings, out, progress, t0) -> AnalysisResult:
     from masonry_dem.export.limit_results import bound_of
-    from masonry_dem.solvers.limit_analysis import limit_analysis
+    from masonry_dem.solvers.limit_analysis import LimitSettings, limit_analysis
 
-    options = dict(settings or {})
-    if settings is not None and not isinstance(settings, Mapping):
+    if settings is None or isinstance(settings, LimitSettings):
+        options = (settings or LimitSettings()).keywords()
+    elif isinstance(settings, Mapping):
+        options = dict(settings)
+        allowed = limit_keywords()
+        for key in options:
+            if key not in allowed:
+                raise ValueError(
+                    f"settings[{key!r}] is not a setting of limit analysis: allowed "
+                    f"{', '.join(allowed)}"
+                )
+    else:
         raise TypeError(
-            "settings of method 'limit' must be a mapping of limit_analysis's keyword "
-            f"arguments or None, got {type(settings).__name__}"
+            "settings of method 'limit' must be a LimitSettings, a mapping of its fields or "
+            f"None, got {type(settings).__name__}"
         )
-    allowed = limit_keywords()
-    for key in options:
-        if key not in allowed:
-            raise ValueError(
-                f"settings[{key!r}] is not a setting of limit analysis: allowed {', '.join(allowed)}"
-            )
     result = limit_analysis(model, progress=progress, **options)
     seconds = time.perf_counter() - t0
     if out is not None:

@@ -229,7 +229,7 @@ def test_start_of_the_non_associative_analysis_from_the_cli_and_the_case_file(tm
 
 def test_the_schema_allows_the_solver_starts():
     from masonry_dem.cases.schema import LIMIT_STARTS
-    from masonry_dem.solvers.limit_analysis.non_associative import STARTS
+    from masonry_dem.solvers.limit_analysis.settings import STARTS
 
     assert LIMIT_STARTS == STARTS
 

@@ -420,7 +420,7 @@ ANALYSIS_EXTRA: dict[str, tuple[Any, Any]] = {
     "grid": (_number("grid") | None, None),
     "backend": (_choice(("highs", "clarabel")) | None, None),
     "time_limit": (_number("time_limit") | None, None),
-    # the non-associative iteration's starting state (``limit_analysis.non_associative.STARTS``)
+    # the non-associative iteration's starting state (``limit_analysis.settings.STARTS``)
     "start": (_choice(LIMIT_STARTS) | None, None),
 }
 

@@ -84,6 +84,7 @@ from .interface import (
 )
 from .progress import LimitProgress
 from .result import STATUSES, LimitAnalysisResult, mechanism_violation
+from .settings import LimitSettings
 
 __all__ = [
     "ASSOCIATIVE_GRID",
@@ -94,6 +95,7 @@ __all__ = [
     "STATUSES",
     "LimitAnalysisResult",
     "LimitProgress",
+    "LimitSettings",
     "dem_friction_scale",
     "dem_upper_bound",
     "grid_points",

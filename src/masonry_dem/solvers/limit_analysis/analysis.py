@@ -19,13 +19,13 @@ from .dead_load import check_dead_load
 from .dem_domain import model_friction_scale
 from .formulation import Problem
 from .interface import ASSOCIATIVE_GRID, NON_ASSOCIATIVE_GRID, lobatto_rule, pyramid_edges
-from .non_associative import STARTS, non_associative
+from .non_associative import non_associative
 from .progress import ProgressCallback, reporting
 from .result import _ADMISSIBILITY_TOLERANCE, LimitAnalysisResult, finish, mechanism_violation
+from .settings import BACKENDS, LimitSettings
 
 log = logging.getLogger(__name__)
 
-BACKENDS = ("highs", "clarabel")
 #: with no backend given: HiGHS (the friction pyramid's LP) below this many free DOFs,
 #: Clarabel (the exact cone) from it. Measured (one process, running-bond walls of
 #: 0.081 x 0.21 x 0.07 m blocks on a base, in and out of plane, held or not): HiGHS's
@@ -129,30 +129,22 @@ def limit_analysis(
         grid = ASSOCIATIVE_GRID if associative else NON_ASSOCIATIVE_GRID
     lobatto_rule(grid)  # validates grid
     grid = int(grid)
-    if not (isinstance(tolerance, (int, float)) and 0 < tolerance < 1):
-        raise ValueError(f"tolerance must be in (0, 1), got {tolerance!r}")
-    if (
-        isinstance(max_iterations, bool)
-        or int(max_iterations) != max_iterations
-        or max_iterations < 1
-    ):
-        raise ValueError(f"max_iterations must be an integer >= 1, got {max_iterations!r}")
-    if not (isinstance(relaxation, (int, float)) and 0 < relaxation <= 1):
-        raise ValueError(f"relaxation must be in (0, 1], got {relaxation!r}")
-    if not (isinstance(friction_scale, (int, float)) and 1 <= friction_scale < np.inf):
-        raise ValueError(f"friction_scale must be a number >= 1, got {friction_scale!r}")
-    if not isinstance(column_generation, (bool, np.bool_)):
-        raise ValueError(f"column_generation must be True or False, got {column_generation!r}")
-    if not isinstance(nearest_optimum, (bool, np.bool_)):
-        raise ValueError(f"nearest_optimum must be True or False, got {nearest_optimum!r}")
-    if start not in STARTS:
-        raise ValueError(f"start must be one of {STARTS}, got {start!r}")
-    if (
-        isinstance(time_limit, (bool, np.bool_))
-        or not isinstance(time_limit, (int, float, np.integer, np.floating))
-        or not 0 < time_limit < np.inf
-    ):
-        raise ValueError(f"time_limit must be a finite number of seconds > 0, got {time_limit!r}")
+    # every setting checked (a ValueError naming it), as LimitSettings checks it when made
+    LimitSettings(
+        associative=associative,
+        grid=grid,
+        backend=backend,
+        cone=cone,
+        friction_sides=friction_sides,
+        tolerance=tolerance,
+        max_iterations=max_iterations,
+        relaxation=relaxation,
+        friction_scale=friction_scale,
+        column_generation=column_generation,
+        nearest_optimum=nearest_optimum,
+        time_limit=time_limit,
+        start=start,
+    )
     covers = friction_scale >= model_friction_scale(model) * (1 - 1e-9)
     if friction_scale != 1:
         model = replace(model, friction=model.friction * float(friction_scale))

@@ -32,9 +32,6 @@ log = logging.getLogger(__name__)
 #: the non-associative iteration halves its relaxation each time lambda turns back (and
 #: doubles it, up to the given one, after three steps the same way), down to
 _SMALLEST_RELAXATION = 1.0 / 64
-#: where the iteration's frozen actions start: the joints' elastic state under the dead load
-#: (``selection.elastic_state``), or the associative collapse (Gilbert et al. 2006)
-STARTS = ("elastic", "associative")
 #: unit shear forces (t1, t2, n) along the interface's two axes
 _PLANE_SHEAR = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
 
