@@ -63,27 +63,53 @@ def analyze(
 ) -> AnalysisResult:
     """Run one analysis of ``model`` and return its :class:`~masonry_dem.results.AnalysisResult`.
 
-    Args:
-        model: the wall (``Model.build`` or ``load_case(path).model``).
-        method: ``"pushover"`` (the static incremental analysis, default), ``"relaxation"``
-            (dynamic relaxation) or ``"limit"`` (rigid-block limit analysis); ``"static"``,
-            ``"dynamic_relaxation"``, ``"relax"`` and ``"limit_analysis"`` name them too.
-        settings: the method's settings: a ``StaticSettings`` (pushover), a ``DRSettings``
-            (relaxation), a ``LimitSettings`` or a mapping of its fields (limit); None: the
-            method's defaults.
-        control: pushover only: a ``DisplacementControl`` (None: load control).
-        bound: pushover only: the multiplier its collapse must not pass (a number, or a
-            function of the model), see ``pushover``.
-        monitor: pushover and relaxation: the (block, DOF) whose displacement the pushover
-            curve records (None: the one the live load drives most).
-        out: a results folder to write (VTU/PVD, pushover.csv, summary.json; for limit
-            analysis summary.json and the mechanism), None: nothing written.
-        progress: called as the analysis goes: with each converged ``StepResult``
-            (pushover, relaxation) or each ``LimitProgress`` (limit analysis).
+    Parameters
+    ----------
+    model : Model
+        The wall (``Model.build`` or ``load_case(path).model``).
+    method : str, default "pushover"
+        ``"pushover"`` (the static incremental analysis), ``"relaxation"`` (dynamic
+        relaxation) or ``"limit"`` (rigid-block limit analysis); ``"static"``,
+        ``"dynamic_relaxation"``, ``"relax"`` and ``"limit_analysis"`` name them too.
+    settings : StaticSettings, DRSettings, LimitSettings, mapping or None
+        The method's settings: a ``StaticSettings`` (pushover), a ``DRSettings``
+        (relaxation), a ``LimitSettings`` or a mapping of its fields (limit); None: the
+        method's defaults.
+    control : DisplacementControl, optional
+        Pushover only: displacement control (None: load control).
+    bound : float or callable, optional
+        Pushover only: the multiplier its collapse must not pass (a number, or a function
+        of the model), see ``pushover``.
+    monitor : tuple of (int, str), optional
+        Pushover and relaxation: the (block, DOF) whose displacement the pushover curve
+        records (None: the one the live load drives most).
+    out : str or Path, optional
+        A results folder to write (VTU/PVD, pushover.csv, summary.json; for limit analysis
+        summary.json and the mechanism); None: nothing is written.
+    progress : callable, optional
+        Called as the analysis goes: with each converged ``StepResult`` (pushover,
+        relaxation) or each ``LimitProgress`` (limit analysis).
 
-    Returns the result; a bad argument raises ValueError (or TypeError for settings of
-    another method) naming it and what is allowed. A solver's trouble is a status, as each
-    method reports it, never an exception.
+    Returns
+    -------
+    AnalysisResult
+        The same core fields for every method (status, reason, lambda, bracket, stop,
+        certificate or bound, mechanism, history, seconds, cost) and ``details``, the
+        method's own result. A solver's trouble is a status, never an exception.
+
+    Raises
+    ------
+    ValueError
+        A method, setting or argument out of its range, named with what is allowed.
+    TypeError
+        Settings of another method.
+
+    Examples
+    --------
+    >>> import masonry_dem as md
+    >>> result = md.analyze(md.load_case().model, "limit")
+    >>> result.status, round(result.load_factor, 4), result.bound
+    ('collapse', 0.4471, 'estimate')
     """
     require_model("analyze", model)
     name = method_name(method)
