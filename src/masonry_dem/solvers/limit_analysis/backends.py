@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 from scipy import sparse
 
-from .budget import CLARABEL_ITERATIONS, HIGHS_IPM_ITERATIONS, solver_seconds
+from .budget import CLARABEL_ITERATIONS, HIGHS_IPM_ITERATIONS, clarabel_room, solver_seconds
 from .formulation import Problem, Solution, associative_columns, lambda_cap, objective_scale
 from .kinematic import solve_kinematic_clarabel
 from .mirror import mirror_dofs, mirror_pairs
@@ -90,20 +90,6 @@ def _highs_error(res: Any) -> Solution:
         raise MemoryError(f"HiGHS: {res.message}")
     word = _HIGHS_WORDS.get(res.status, res.status)
     return Solution("error", detail=f"HiGHS: {word}: {res.message}")
-
-
-def clarabel_room(A: sparse.csc_matrix) -> None:
-    """MemoryError before Clarabel starts on ``A`` where the memory the process may still take
-    (the machine's available memory, ``ulimit -v``, the cgroup's limit) is too little:
-    Clarabel, in Rust, aborts the process on a failed allocation."""
-    from masonry_dem.solvers.resources import (
-        CLARABEL_BYTES_PER_ENTRY,
-        LIMIT_BYTES,
-        require_memory,
-    )
-
-    need = LIMIT_BYTES["clarabel"][0] + CLARABEL_BYTES_PER_ENTRY * A.nnz
-    require_memory(need, f"Clarabel on {A.shape[0]} x {A.shape[1]} ({A.nnz} entries)")
 
 
 #: Clarabel's status words of a solve its time or iteration limit stopped

@@ -20,8 +20,12 @@ import time
 from collections.abc import Iterator
 from contextlib import contextmanager
 from contextvars import ContextVar
+from typing import TYPE_CHECKING
 
 from masonry_dem._signals import check_stop
+
+if TYPE_CHECKING:
+    from scipy import sparse
 
 #: the default time limit of one analysis [s]: generous (a 10^4-block wall takes seconds to
 #: tens of seconds), so that it stops only a solve that would not end
@@ -68,3 +72,17 @@ def solver_seconds() -> float:
     zero may read as "none" to a solver), and a large finite number outside a budget."""
     left = seconds_left()
     return 1e7 if math.isinf(left) else max(left, 1e-3)
+
+
+def clarabel_room(A: sparse.csc_matrix) -> None:
+    """MemoryError before Clarabel starts on ``A`` where the memory the process may still take
+    (the machine's available memory, ``ulimit -v``, the cgroup's limit) is too little:
+    Clarabel, in Rust, aborts the process on a failed allocation."""
+    from masonry_dem.solvers.resources import (
+        CLARABEL_BYTES_PER_ENTRY,
+        LIMIT_BYTES,
+        require_memory,
+    )
+
+    need = LIMIT_BYTES["clarabel"][0] + CLARABEL_BYTES_PER_ENTRY * A.nnz
+    require_memory(need, f"Clarabel on {A.shape[0]} x {A.shape[1]} ({A.nnz} entries)")

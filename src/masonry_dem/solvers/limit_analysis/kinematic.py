@@ -29,7 +29,7 @@ from scipy import sparse
 
 from masonry_dem.assembly.compatibility import compatibility_matrix
 
-from .budget import CLARABEL_ITERATIONS, solver_seconds
+from .budget import CLARABEL_ITERATIONS, clarabel_room, solver_seconds
 from .formulation import Problem, Solution, lambda_cap
 from .interface import grid_points
 
@@ -99,8 +99,6 @@ def solve_kinematic_clarabel(
     for name, value in {**clarabel_options(n_u), **(options or {})}.items():
         setattr(settings, name, value)
     t0 = time.process_time()
-    from .backends import clarabel_room  # here: backends imports this module
-
     clarabel_room(A)
     out = clarabel.DefaultSolver(sparse.csc_matrix((n_u, n_u)), -rhs, A, b, cones, settings)
     setup = time.process_time() - t0
