@@ -15,7 +15,8 @@ import pytest
 import masonry_dem as md
 from masonry_dem.results import StepResult
 from masonry_dem.solvers.incremental import StaticSettings, pushover
-from masonry_dem.streamed_history import StreamedSteps, should_stream, step_bytes
+from masonry_dem.solvers.resources import should_stream, step_bytes
+from masonry_dem.streamed_history import StreamedSteps
 
 ARRAYS = ("q", "actions", "state", "utilisation", "flags")
 

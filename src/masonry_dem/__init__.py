@@ -60,7 +60,7 @@ if TYPE_CHECKING:
     from masonry_dem.solvers.static.outcome import Status, StopReason
     from masonry_dem.studies.sweep import sweep
 
-__version__ = "0.1.0"
+from masonry_dem._version import __version__ as __version__
 
 #: public names imported on first use: name -> module
 _LAZY = {

@@ -27,7 +27,6 @@ from masonry_dem._validation import (
     positive_scalar,
     whole_number,
 )
-from masonry_dem.constitutive.strength import PROJECTIONS
 from masonry_dem.geometry.blocks import Blocks
 from masonry_dem.geometry.interfaces import Interfaces, detect_interfaces
 
@@ -108,6 +107,9 @@ def _warn_idle_load(k: int, load: Load, vector: FloatArray, fixed: BoolArray) ->
             ", ".join(map(str, held[:5])) + (" ..." if held.size > 5 else ""),
         )
 
+
+#: ways back onto the shear-torsion boundary (see ``constitutive.strength.check_strength``)
+PROJECTIONS: tuple[str, ...] = ("energy", "radial")
 
 #: the interface law's options of :class:`InterfaceMaterial` and their allowed values
 LAW_OPTIONS: dict[str, tuple[str, ...]] = {

@@ -12,7 +12,7 @@ the step that was appended.
 
 ``History(steps=StreamedSteps(folder))``, or ``StaticSolver.run(stream=...)`` /
 ``pushover(..., stream=...)``, which stream by default when the History would not fit in a
-quarter of the machine's available memory (:func:`should_stream`).
+quarter of the machine's available memory (:func:`masonry_dem.solvers.resources.should_stream`).
 """
 
 from __future__ import annotations
@@ -116,22 +116,3 @@ class StreamedSteps(Sequence[StepResult]):
 
     def __iter__(self) -> Iterator[StepResult]:
         return (self[i] for i in range(self._count))
-
-
-def step_bytes(blocks: int, interfaces: int) -> float:
-    """Bytes of one converged step in memory (q, actions, state, utilisation, flags)."""
-    from masonry_dem.solvers.resources import STEP_BYTES_PER_BLOCK, STEP_BYTES_PER_INTERFACE
-
-    return STEP_BYTES_PER_BLOCK * blocks + STEP_BYTES_PER_INTERFACE * interfaces
-
-
-def should_stream(blocks: int, interfaces: int, available: float | None = None) -> bool:
-    """Stream the History when its expected steps (``resources.STEPS``) would take more than a
-    quarter of the memory available (``available`` bytes; None: the machine's)."""
-    from masonry_dem.solvers.resources import STEPS, machine_memory
-
-    if available is None:
-        available = machine_memory()
-    if available is None:
-        return False
-    return STEPS * step_bytes(blocks, interfaces) > 0.25 * available

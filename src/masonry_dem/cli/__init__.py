@@ -22,6 +22,8 @@ import os
 import sys
 import traceback
 
+from masonry_dem._version import version as version
+
 COMMANDS = (
     "run",
     "validate",
@@ -58,19 +60,6 @@ def build_parser() -> argparse.ArgumentParser:
             continue
         module.add_parser(subparsers)
     return parser
-
-
-def version() -> str:
-    """The installed package's version (its metadata: what pip installed)."""
-    from importlib.metadata import PackageNotFoundError
-    from importlib.metadata import version as installed
-
-    try:
-        return installed("masonry_dem")
-    except PackageNotFoundError:  # run from a source tree that was never installed
-        from masonry_dem import __version__
-
-        return f"{__version__} (not installed)"
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -52,6 +52,7 @@ from masonry_dem.constitutive.check_kernels import (
 )
 from masonry_dem.constitutive.energy_return import row_constants
 from masonry_dem.constitutive.states import FACTORS_OF_FLAGS, STATE_OF_FLAGS
+from masonry_dem.model import PROJECTIONS
 
 __all__ = [
     "ALPHA_TABLE_A1",
@@ -88,10 +89,6 @@ ALPHA_TABLE_A1: Final[dict[str, tuple[float, ...]]] = {
     "f1=f2": (2.00, 1.90, 1.70, 1.43, 1.70, 1.90, 2.00),
 }
 DIRECTIONS: Final[tuple[str, ...]] = ("f1", "f2", "f1=f2")
-
-#: ways back onto the shear-torsion boundary (see ``check_strength``)
-PROJECTIONS: Final[tuple[str, ...]] = ("energy", "radial")
-
 
 # --------------------------------------------------------------------------------------------
 # input checking

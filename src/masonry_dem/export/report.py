@@ -455,7 +455,7 @@ def report_html(folder: Path | str, render: bool = True) -> str:
                 else "no adrs.png in the folder",
             )
         )
-    from masonry_dem.cli import version
+    from masonry_dem._version import version
 
     parts += [
         "</section>",

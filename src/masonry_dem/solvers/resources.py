@@ -181,8 +181,6 @@ def estimate(blocks: int, interfaces: int | None = None, dofs: int | None = None
         "factors": BYTES_PER_FACTOR_ENTRY * fill,
         "history": STEPS * (STEP_BYTES_PER_BLOCK * blocks + STEP_BYTES_PER_INTERFACE * m),
     }
-    from masonry_dem.streamed_history import should_stream
-
     if should_stream(blocks, m):  # the run keeps its steps on disk: 3 in memory
         parts["history"] *= 3 / STEPS
     more = (max(blocks, 1) / 1e3) ** GROWTH
@@ -458,3 +456,18 @@ def blocks_of_geometry(geometry: dict) -> int | None:
     except (KeyError, TypeError, ValueError):
         return None
     return None
+
+
+def step_bytes(blocks: int, interfaces: int) -> float:
+    """Bytes of one converged step in memory (q, actions, state, utilisation, flags)."""
+    return STEP_BYTES_PER_BLOCK * blocks + STEP_BYTES_PER_INTERFACE * interfaces
+
+
+def should_stream(blocks: int, interfaces: int, available: float | None = None) -> bool:
+    """Stream the History when its expected steps (:data:`STEPS`) would take more than a
+    quarter of the memory available (``available`` bytes; None: the machine's)."""
+    if available is None:
+        available = machine_memory()
+    if available is None:
+        return False
+    return STEPS * step_bytes(blocks, interfaces) > 0.25 * available

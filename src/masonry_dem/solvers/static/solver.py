@@ -23,6 +23,7 @@ from masonry_dem._threads import kernel_threads_for
 from masonry_dem.model import Model, Monitor
 from masonry_dem.results import History, StepResult
 from masonry_dem.solvers.factorization import SingularMatrix
+from masonry_dem.solvers.resources import should_stream
 from masonry_dem.solvers.static import paths
 from masonry_dem.solvers.static.certificate import (
     NOT_CHECKED,
@@ -35,7 +36,7 @@ from masonry_dem.solvers.static.corrector import Corrector
 from masonry_dem.solvers.static.displacement_control import displacement_control
 from masonry_dem.solvers.static.outcome import Failure, Outcome, Status, StopReason
 from masonry_dem.solvers.static.settings import DisplacementControl, StaticSettings
-from masonry_dem.streamed_history import StreamedSteps, should_stream
+from masonry_dem.streamed_history import StreamedSteps
 
 if TYPE_CHECKING:
     from masonry_dem.solvers.quasi_static import QuasiStatic
