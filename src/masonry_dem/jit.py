@@ -254,11 +254,8 @@ def mark_announced(parallel: bool) -> None:
 
 
 def kernels() -> tuple[Kernel, ...]:
-    """Every kernel of the package (their modules imported)."""
-    import masonry_dem.constitutive.law_kernels  # noqa: F401
-    import masonry_dem.solvers.dynamic_relaxation.kinetic  # noqa: F401
-    import masonry_dem.solvers.static.problem  # noqa: F401
-
+    """Every kernel of the modules imported so far (:mod:`masonry_dem.solvers.warmup`
+    imports them all: the estimates and announcements run through it)."""
     return tuple(_KERNELS)
 
 

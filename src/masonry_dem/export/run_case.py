@@ -133,6 +133,7 @@ def estimate_run(
         est = resources.estimate(blocks)
     else:
         from masonry_dem import jit
+        from masonry_dem.solvers import warmup  # noqa: F401 - every kernel in jit's catalogue
 
         est = resources.estimate(case.blocks.count, case.interfaces.count, case.n_dofs)
         est = resources.run_time(

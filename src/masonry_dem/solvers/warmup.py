@@ -20,6 +20,11 @@ from pathlib import Path
 
 import numpy as np
 
+# the modules of every kernel, so that jit's catalogue (the kernels pending, the estimates,
+# the copy at installation) holds them all; jit, below them, cannot import them
+import masonry_dem.constitutive.law_kernels  # noqa: F401
+import masonry_dem.solvers.dynamic_relaxation.kinetic  # noqa: F401
+import masonry_dem.solvers.static.problem  # noqa: F401
 from masonry_dem import jit
 
 __all__ = ["compile_kernels", "prepare"]
