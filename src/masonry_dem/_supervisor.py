@@ -262,6 +262,9 @@ def _child_started() -> None:
     except OSError:
         return
     _channel = fd
+    from masonry_dem.export import results_folder
+
+    results_folder.lock_keeper = hand_over_lock
     _die_with_parent(parent)
     try:
         os.kill(parent, _READY)

@@ -492,10 +492,13 @@ def claim(folder: Path | str, overwrite: bool, start: Mapping[str, Any]) -> RunF
     return RunFolder(folder, fd, locked)
 
 
-def _hand_over_lock(folder: Path, fd: int) -> bool:
-    from masonry_dem._supervisor import hand_over_lock
+#: in a supervised child, how to hand the lock of a folder to the supervising process
+#: (:func:`masonry_dem._supervisor.hand_over_lock`, set as the child starts); None: no one
+lock_keeper: Callable[[Path, int], bool] | None = None
 
-    return hand_over_lock(folder, fd)
+
+def _hand_over_lock(folder: Path, fd: int) -> bool:
+    return lock_keeper is not None and lock_keeper(folder, fd)
 
 
 def steps_listed(folder: Path | str) -> int:
