@@ -1,12 +1,12 @@
-"""Results of an analysis: one StepResult per converged step, and the History of a run."""
+"""Results of an analysis: one StepResult per converged step, the History of a run, and how a
+run ended (Status) and why its path stopped (StopReason)."""
 
 from __future__ import annotations
 
-import json
 from collections.abc import Iterator
 from dataclasses import dataclass, field
+from enum import Enum
 from functools import cached_property
-from pathlib import Path
 from typing import TYPE_CHECKING, Any, Protocol, overload
 
 import numpy as np
@@ -16,11 +16,53 @@ from numpy.typing import NDArray
 from masonry_dem._arrays import FloatArray
 from masonry_dem._validation import read_only
 from masonry_dem.constitutive.states import STATE_NAMES as STATE_NAMES
-from masonry_dem.export.pushover_file import recorded_dof_of, save_pushover_rows
-from masonry_dem.solvers.static.outcome import Status, StopReason
 
 if TYPE_CHECKING:
     from masonry_dem.solvers.static.certificate import Certificate
+
+
+class _Text(str, Enum):
+    """A str enum that prints and formats as its value (``enum.StrEnum`` is 3.11+)."""
+
+    def __str__(self) -> str:
+        return str(self.value)
+
+    def __format__(self, spec: str) -> str:
+        return format(str(self.value), spec)
+
+
+class Status(_Text):
+    """How a run ended. ``COLLAPSE`` only with a certificate that holds (see
+    :mod:`masonry_dem.solvers.static.certificate`); a path that stops without one is
+    ``FAILED``, with every step it converged kept."""
+
+    RUNNING = "running"
+    COMPLETED = "completed"
+    COLLAPSE = "collapse"
+    FAILED = "failed"
+
+
+class StopReason(_Text):
+    """Why the path of a run stopped (whatever the status that follows from it)."""
+
+    NONE = "none"  # still running
+    DEAD_LOAD = "no equilibrium under the dead load"
+    NO_LIVE_LOAD = "no live load"
+    MAX_LOAD_FACTOR = "max_load_factor reached"
+    MAX_STEPS = "max_steps reached"
+    LOAD_BRACKET = "load control: bracket refined"  # no equilibrium beyond the bracket
+    CURVE_FLAT = "pushover curve flat"  # lambda stopped rising while w doubled
+    STIFFNESS_LOST = "stiffness lost"  # three steps at < flat_slope of the elastic slope
+    CREEPING = "work control creeps"  # three steps with no displacement to speak of
+    DISPLACEMENT_LIMIT = "displacement limit"  # past the small-displacement range
+    PATH_STUCK = "path stuck"  # no equilibrium for any step size (work control)
+    LIMIT_POINT = "limit point"  # the pushover curve falls (work control)
+    UNSTABLE = "unstable equilibrium"  # det K_t < 0 at a state of the path, the rule no rest
+    CONTROL_REACHED = "control displacement reached"
+    CONTROL_STUCK = "displacement control stuck"
+    CONTROL_BUDGET = "displacement control: max_steps spent short of the target"
+    SINGULAR_TANGENT = "singular tangent"  # no factorization, even with a stiffened floor
+    NO_REST = "no rest"  # the reference analysis: the damped wall found no rest above lambda
 
 
 @dataclass(frozen=True)
@@ -149,19 +191,6 @@ class History:
         }
         out.update(extra)
         return out
-
-
-def write_pushover_csv(path: Path, history: History) -> None:
-    """pushover.csv: step, lambda and the control displacement of every step."""
-    displacements = history.control_displacements
-    rows = np.column_stack([np.arange(len(history.steps)), history.load_factors, displacements])
-    save_pushover_rows(path, rows, recorded_dof_of(history.steps, displacements))
-
-
-def read_summary(folder: Path) -> dict[str, Any]:
-    """The summary.json of a results folder."""
-    summary: dict[str, Any] = json.loads((Path(folder) / "summary.json").read_text())
-    return summary
 
 
 @dataclass(frozen=True)
