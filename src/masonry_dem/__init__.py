@@ -24,6 +24,7 @@ if TYPE_CHECKING:
     from masonry_dem._threads import set_thread_wait_policy
     from masonry_dem.analysis import analyze
     from masonry_dem.cases.casefile import Case, load_case
+    from masonry_dem.export.analyses import pushover, relax
     from masonry_dem.geometry import selectors as select
     from masonry_dem.geometry.blocks import Blocks
     from masonry_dem.geometry.builders import (
@@ -47,9 +48,16 @@ if TYPE_CHECKING:
         Support,
         WeightProportional,
     )
-    from masonry_dem.results import AnalysisResult, History, StepResult
-    from masonry_dem.solvers.dynamic_relaxation import DRSettings, relax
-    from masonry_dem.solvers.incremental import DisplacementControl, StaticSettings, pushover
+    from masonry_dem.results import (
+        AnalysisResult,
+        History,
+        Observer,
+        Status,
+        StepResult,
+        StopReason,
+    )
+    from masonry_dem.solvers.dynamic_relaxation import DRSettings
+    from masonry_dem.solvers.incremental import DisplacementControl, StaticSettings
     from masonry_dem.solvers.limit_analysis import (
         LimitAnalysisResult,
         LimitSettings,
@@ -57,7 +65,6 @@ if TYPE_CHECKING:
     )
     from masonry_dem.solvers.linear import solve_linear
     from masonry_dem.solvers.quasi_static import QuasiStaticSettings, quasi_static
-    from masonry_dem.solvers.static.outcome import Status, StopReason
     from masonry_dem.studies.sweep import sweep
 
 from masonry_dem._version import __version__ as __version__
@@ -94,18 +101,19 @@ _LAZY = {
         "masonry_dem.model",
     ),
     "History": "masonry_dem.results",
+    "Observer": "masonry_dem.results",
     "StepResult": "masonry_dem.results",
     "DisplacementControl": "masonry_dem.solvers.incremental",
     "StaticSettings": "masonry_dem.solvers.incremental",
-    "pushover": "masonry_dem.solvers.incremental",
+    "pushover": "masonry_dem.export.analyses",
     "solve_linear": "masonry_dem.solvers.linear",
-    "Status": "masonry_dem.solvers.static.outcome",
-    "StopReason": "masonry_dem.solvers.static.outcome",
+    "Status": "masonry_dem.results",
+    "StopReason": "masonry_dem.results",
     "Case": "masonry_dem.cases.casefile",
     "load_case": "masonry_dem.cases.casefile",
     "collapse_mode": "masonry_dem.mechanism",
     "DRSettings": "masonry_dem.solvers.dynamic_relaxation",
-    "relax": "masonry_dem.solvers.dynamic_relaxation",
+    "relax": "masonry_dem.export.analyses",
     "LimitAnalysisResult": "masonry_dem.solvers.limit_analysis",
     "LimitSettings": "masonry_dem.solvers.limit_analysis",
     "analyze": "masonry_dem.analysis",
@@ -141,6 +149,7 @@ __all__ = [
     "LimitAnalysisResult",
     "LimitSettings",
     "Model",
+    "Observer",
     "PointLoad",
     "Pressure",
     "QuasiStaticSettings",

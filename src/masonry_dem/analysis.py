@@ -136,7 +136,8 @@ def _check_settings(name: str, settings: Any, kind: type) -> None:
 
 
 def _pushover(model, settings, control, bound, monitor, out, progress, t0) -> AnalysisResult:
-    from masonry_dem.solvers.incremental import StaticSettings, pushover
+    from masonry_dem.export.analyses import pushover
+    from masonry_dem.solvers.incremental import StaticSettings
 
     _check_settings("pushover", settings, StaticSettings)
     history = pushover(
@@ -147,12 +148,14 @@ def _pushover(model, settings, control, bound, monitor, out, progress, t0) -> An
 
 
 def _relaxation(model, settings, monitor, out, progress, t0) -> AnalysisResult:
+    from masonry_dem.export.analyses import results_writer
     from masonry_dem.solvers.dynamic_relaxation import DRSettings, DynamicRelaxation
     from masonry_dem.solvers.dynamic_relaxation.solver import relax_with
 
     _check_settings("relaxation", settings, DRSettings)
     solver = DynamicRelaxation(model, settings)
-    history = relax_with(solver, out, monitor, callback=progress)
+    writer = results_writer(model, out)
+    history = relax_with(solver, monitor, callback=progress, observer=writer)
     cost = {
         "time_steps": solver.stats.time_steps,
         "law_evaluations": solver.stats.law_evaluations,

@@ -265,3 +265,20 @@ class AnalysisResult:
             "seconds": round(self.seconds, 4),
             "cost": dict(self.cost),
         }
+
+
+class Observer(Protocol):
+    """What follows a run as it goes, handed to a solver (``observer=``): the solver enters it
+    (``with observer:``) before the first step, calls ``observer(step)`` after each converged
+    step, and ``observer.finish(history)`` once the run is over, with what the solver knows
+    of the run beyond the History (dynamic relaxation: its ``method`` and ``time_steps``);
+    an exception raised by the run leaves the ``with`` block through it. :class:`masonry_dem.export.writer.ResultsWriter` is one: it writes the results
+    folder. The solvers import no writer: whoever wants files passes one."""
+
+    def __enter__(self) -> Any: ...
+
+    def __exit__(self, exc_type: Any, exc: Any, tb: Any, /) -> Any: ...
+
+    def __call__(self, step: StepResult, /) -> None: ...
+
+    def finish(self, history: History, /, *, method: str = ..., time_steps: int = ...) -> Any: ...

@@ -236,7 +236,7 @@ def test_python_api_rerun_replaces_the_previous_run_whole(tmp_path):
     """``pushover(out=...)`` twice into one folder (a script re-run): the second run's folder
     holds its own steps only; 7022155 left the first run's later steps and mechanism beside."""
     from masonry_dem.cases.casefile import load_case
-    from masonry_dem.solvers.incremental import pushover
+    from masonry_dem.export.analyses import pushover
 
     out = tmp_path / "api"
     wall = load_case(None)

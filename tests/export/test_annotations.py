@@ -103,7 +103,7 @@ def test_pushover_names_the_monitored_block_and_dof(tmp_path):
     """A run with a monitor on a mid-height block (never the largest translation) records
     that DOF: the axis names its block and DOF."""
     from helpers.damage_pattern import build_model
-    from masonry_dem.solvers.incremental import pushover
+    from masonry_dem.export.analyses import pushover
 
     model = build_model(3, 3)
     y = model.blocks.centres[:, 1]

@@ -18,12 +18,12 @@ import numpy as np
 import pytest
 
 from masonry_dem.export import render
+from masonry_dem.export.analyses import pushover
 from masonry_dem.export.scene import StepData, motion_in_view, view_of_motion
 from masonry_dem.export.vtu import MECHANISM_FILES
 from masonry_dem.geometry.builders import add_base, running_bond_wall
 from masonry_dem.geometry.plans import u_wall
 from masonry_dem.model import InterfaceMaterial, Model, SelfWeight, Support, WeightProportional
-from masonry_dem.solvers.incremental import pushover
 
 A, S, COURSES = 0.081, 0.07, 6
 

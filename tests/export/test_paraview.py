@@ -120,6 +120,7 @@ def pv_results(tmp_path_factory):
 def mech_results(tmp_path_factory):
     """A free-standing 3 x 6 running-bond wall pushed out of plane: it tilts about its base
     (lambda = s/H), the mode moves the base joints only (as in test_mechanism_render)."""
+    from masonry_dem.export.analyses import pushover
     from masonry_dem.geometry.builders import add_base, running_bond_wall
     from masonry_dem.model import (
         InterfaceMaterial,
@@ -128,7 +129,6 @@ def mech_results(tmp_path_factory):
         Support,
         WeightProportional,
     )
-    from masonry_dem.solvers.incremental import pushover
 
     blocks, base = add_base(running_bond_wall(3, TILT_COURSES, 0.081, 0.21, 0.07, 20e3))
     model = Model.build(

@@ -16,10 +16,11 @@ import signal
 import pytest
 
 from masonry_dem.export import results_folder as rf
+from masonry_dem.export.analyses import pushover
 from masonry_dem.export.writer import ResultsWriter
 from masonry_dem.geometry.builders import add_base, running_bond_wall
 from masonry_dem.model import InterfaceMaterial, Model, SelfWeight, Support, WeightProportional
-from masonry_dem.solvers.incremental import StaticSettings, pushover
+from masonry_dem.solvers.incremental import StaticSettings
 
 
 def _wall_model() -> Model:

@@ -20,6 +20,7 @@ import pytest
 
 import masonry_dem as md
 from helpers.certificate_checks import recheck, tilted_wall
+from masonry_dem.export.analyses import pushover
 from masonry_dem.geometry.builders import (
     add_base,
     running_bond_wall,
@@ -32,7 +33,6 @@ from masonry_dem.solvers.incremental import (
     StaticSettings,
     Status,
     StopReason,
-    pushover,
 )
 
 

@@ -11,13 +11,14 @@ import pytest
 import scipy.linalg as sla
 
 from helpers.walls import A, B, S, on_base
+from masonry_dem.export.analyses import relax
 from masonry_dem.geometry import builders
 from masonry_dem.model import (
     InterfaceMaterial,
     Model,
     Support,
 )
-from masonry_dem.solvers.dynamic_relaxation import DRSettings, DynamicRelaxation, relax
+from masonry_dem.solvers.dynamic_relaxation import DRSettings, DynamicRelaxation
 from masonry_dem.solvers.incremental import StaticSolver
 
 FAST = {"bracket_tolerance": 0.01}

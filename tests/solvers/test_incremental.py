@@ -18,11 +18,12 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from masonry_dem.export.analyses import pushover
 from masonry_dem.geometry.blocks import Blocks
 from masonry_dem.geometry.builders import add_base, boxes, running_bond_wall, single_block
 from masonry_dem.geometry.selectors import column
 from masonry_dem.model import InterfaceMaterial, Model, SelfWeight, Support, WeightProportional
-from masonry_dem.solvers.incremental import DisplacementControl, StaticSettings, pushover
+from masonry_dem.solvers.incremental import DisplacementControl, StaticSettings
 
 DRY = InterfaceMaterial(kn=2.4e9, kt=1.0e9, friction=0.7)
 TOL = 0.005  # the default bracket tolerance

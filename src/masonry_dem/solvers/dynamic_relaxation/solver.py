@@ -28,7 +28,6 @@ import math
 import time
 from collections.abc import Callable
 from contextlib import nullcontext
-from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
@@ -36,7 +35,7 @@ from numpy.typing import NDArray
 from masonry_dem._threads import kernel_threads_for
 from masonry_dem.constitutive.law import LawResponse
 from masonry_dem.model import DofName, Model, Monitor
-from masonry_dem.results import History, StepResult
+from masonry_dem.results import History, Observer, StepResult
 from masonry_dem.solvers.dynamic_relaxation.integrator import (
     FATAL,
     Relaxation,
@@ -360,41 +359,35 @@ class DynamicRelaxation(Relaxation):
 def relax(
     model: Model,
     settings: DRSettings | None = None,
-    out: str | Path | None = None,
     monitor: Monitor | None = None,
-    write_every: int = 1,
     callback: StepCallback | None = None,
+    observer: Observer | None = None,
 ) -> History:
-    """Run dynamic relaxation; with ``out`` write VTU/PVD, pushover.csv and summary.json.
-    ``callback(step)`` is called after each converged step (e.g. a progress bar)."""
+    """Run dynamic relaxation. ``callback(step)`` is called after each converged step (e.g.
+    a progress bar); ``observer`` follows the run (:class:`~masonry_dem.results.Observer`: a
+    results writer). ``masonry_dem.relax`` is this with ``out``, a results folder."""
     from masonry_dem.model import require_model
 
     require_model("relax", model)
-    return relax_with(DynamicRelaxation(model, settings), out, monitor, write_every, callback)
+    return relax_with(DynamicRelaxation(model, settings), monitor, callback, observer)
 
 
 def relax_with(
     solver: DynamicRelaxation,
-    out: str | Path | None = None,
     monitor: Monitor | None = None,
-    write_every: int = 1,
     callback: StepCallback | None = None,
+    observer: Observer | None = None,
 ) -> History:
     """:func:`relax` with the solver made by the caller, who keeps it for its ``stats``."""
-    writer = None
-    if out is not None:
-        from masonry_dem.export.writer import ResultsWriter
-
-        writer = ResultsWriter(out, solver.model, every=write_every, background=True)
 
     def on_step(step: StepResult) -> None:
-        if writer is not None:
-            writer(step)
+        if observer is not None:
+            observer(step)
         if callback is not None:
             callback(step)
 
-    with writer or nullcontext():  # the steps handed to the writer reach the disk
+    with observer or nullcontext():  # the steps handed to a writer reach the disk
         history = solver.run(callback=on_step, monitor=monitor)
-    if writer is not None:
-        writer.finish(history, method="dynamic_relaxation", time_steps=solver.stats.time_steps)
+    if observer is not None:
+        observer.finish(history, method="dynamic_relaxation", time_steps=solver.stats.time_steps)
     return history

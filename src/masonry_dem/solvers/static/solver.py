@@ -21,7 +21,7 @@ import numpy as np
 
 from masonry_dem._threads import kernel_threads_for
 from masonry_dem.model import Model, Monitor
-from masonry_dem.results import History, StepResult
+from masonry_dem.results import History, Observer, StepResult
 from masonry_dem.solvers.factorization import SingularMatrix
 from masonry_dem.solvers.resources import should_stream
 from masonry_dem.solvers.static import paths
@@ -418,38 +418,34 @@ def pushover(
     model: Model,
     settings: StaticSettings | None = None,
     control: DisplacementControl | None = None,
-    out: str | Path | None = None,
     monitor: Monitor | None = None,
-    write_every: int = 1,
     callback: Callable[[StepResult], None] | None = None,
     bound: Bound = None,
     stream: bool | str | Path | None = None,
+    observer: Observer | None = None,
 ) -> History:
-    """Run the static incremental analysis; with ``out`` write VTU/PVD, pushover.csv and
-    summary.json to that folder as the steps converge. ``callback(step)`` is called after
-    each converged step (e.g. a progress bar); ``bound`` see :class:`StaticSolver`;
-    ``stream`` (the History's steps on disk) see :meth:`StaticSolver.run`."""
+    """Run the static incremental analysis. ``callback(step)`` is called after each
+    converged step (e.g. a progress bar); ``observer`` follows the run
+    (:class:`~masonry_dem.results.Observer`: a results writer); ``bound`` see
+    :class:`StaticSolver`; ``stream`` (the History's steps on disk) see
+    :meth:`StaticSolver.run`. ``masonry_dem.pushover`` is this with ``out``, a results
+    folder."""
     from masonry_dem.model import check_bound, require_model
     from masonry_dem.solvers.warmup import prepare
 
     require_model("pushover", model)
     check_bound(bound)
     prepare(model.interfaces.count)  # announced compilation of the kernels, on a cold cache
-    writer = None
-    if out is not None:
-        from masonry_dem.export.writer import ResultsWriter
-
-        writer = ResultsWriter(out, model, every=write_every, background=True)
 
     def on_step(step: StepResult) -> None:
-        if writer is not None:
-            writer(step)
+        if observer is not None:
+            observer(step)
         if callback is not None:
             callback(step)
 
     solver = StaticSolver(model, settings, bound=bound)
-    with writer or nullcontext():  # the steps handed to the writer reach the disk
+    with observer or nullcontext():  # the steps handed to a writer reach the disk
         history = solver.run(control=control, callback=on_step, monitor=monitor, stream=stream)
-    if writer is not None:
-        writer.finish(history)
+    if observer is not None:
+        observer.finish(history)
     return history
