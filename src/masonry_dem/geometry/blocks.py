@@ -16,10 +16,32 @@ from masonry_dem._validation import as_finite_array, require_positive
 
 @dataclass(frozen=True)
 class Blocks(Rows):
-    """Rigid box blocks (``count``, ``len`` and ``subset`` of :class:`~masonry_dem._arrays.Rows`).
+    """Rigid box blocks, one row per block.
 
-    centres: (n, 3) block centres [m]; sizes: (n, 3) edge lengths along e1, e2, e3 [m];
-    unit_weight: (n,) weight per unit volume [N/m^3].
+    ``count``, ``len`` and ``subset`` come from :class:`~masonry_dem._arrays.Rows`. The arrays
+    are checked and frozen (read-only) at construction.
+
+    Parameters
+    ----------
+    centres : array_like, shape (n, 3)
+        Block centres [m], n >= 1.
+    sizes : array_like, shape (n, 3)
+        Edge lengths along e1, e2, e3 [m], each > 0.
+    unit_weight : float or array_like, shape (n,)
+        Weight per unit volume [N/m^3], >= 0 (0: weightless).
+
+    Raises
+    ------
+    ValueError
+        If there is no block, an array has the wrong shape or a non-finite entry, a size is
+        not positive or a unit weight is negative.
+
+    Examples
+    --------
+    >>> import masonry_dem as md
+    >>> blocks = md.Blocks([[0.1, 0.05, 0.05]], [[0.2, 0.1, 0.1]], 18e3)
+    >>> blocks.count, round(float(blocks.weights[0]), 6)
+    (1, 36.0)
     """
 
     centres: FloatArray
@@ -49,7 +71,26 @@ class Blocks(Rows):
 
     @classmethod
     def from_boxes(cls, lower: ArrayLike, upper: ArrayLike, unit_weight: ArrayLike) -> Blocks:
-        """Blocks from lower and upper corners, each (n, 3)."""
+        """Blocks from their lower and upper corners.
+
+        Parameters
+        ----------
+        lower, upper : array_like, shape (n, 3)
+            Lower and upper corners [m]; ``upper`` above ``lower`` along every axis.
+        unit_weight : float or array_like, shape (n,)
+            Weight per unit volume [N/m^3], >= 0.
+
+        Returns
+        -------
+        Blocks
+            The boxes, in the order given.
+
+        Raises
+        ------
+        ValueError
+            If a box has no positive size along an axis (named by the corners given), or as
+            :class:`Blocks` raises.
+        """
         lo = as_finite_array("lower", lower, (None, 3))
         hi = as_finite_array("upper", upper, (lo.shape[0], 3))
         flat = hi <= lo
@@ -63,26 +104,53 @@ class Blocks(Rows):
 
     @property
     def lower(self) -> FloatArray:
+        """(n, 3) lower corners [m]."""
         return self.centres - self.sizes / 2
 
     @property
     def upper(self) -> FloatArray:
+        """(n, 3) upper corners [m]."""
         return self.centres + self.sizes / 2
 
     @property
     def volumes(self) -> FloatArray:
+        """(n,) block volumes [m^3]."""
         return np.asarray(np.prod(self.sizes, axis=1), dtype=np.float64)
 
     @property
     def weights(self) -> FloatArray:
+        """(n,) block weights [N]: volume times unit weight."""
         return self.volumes * self.unit_weight
 
     def permuted(self, order: ArrayLike) -> Blocks:
-        """The same blocks in another order (for numbering-independence checks)."""
+        """The same blocks in another order (for numbering-independence checks).
+
+        Parameters
+        ----------
+        order : array_like of int, shape (n,)
+            The old index of each new block.
+
+        Returns
+        -------
+        Blocks
+            Block ``k`` is block ``order[k]`` of these.
+        """
         return self.subset(np.asarray(order))
 
     @staticmethod
     def concatenate(*parts: Blocks) -> Blocks:
+        """The blocks of several assemblies, in the order given.
+
+        Parameters
+        ----------
+        *parts : Blocks
+            The assemblies, numbered one after another.
+
+        Returns
+        -------
+        Blocks
+            All their blocks.
+        """
         return Blocks(
             np.vstack([p.centres for p in parts]),
             np.vstack([p.sizes for p in parts]),
@@ -90,7 +158,13 @@ class Blocks(Rows):
         )
 
     def corner_points(self) -> FloatArray:
-        """(n, 8, 3) corners in VTK hexahedron order."""
+        """The corners of every block, in VTK hexahedron order.
+
+        Returns
+        -------
+        numpy.ndarray, shape (n, 8, 3)
+            Corner coordinates [m].
+        """
         signs = np.array(
             [
                 [-1, -1, -1],

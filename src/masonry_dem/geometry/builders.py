@@ -126,6 +126,49 @@ class _RunningBondWall(_Unit, _Courses, _Along):
     along e2: the mortar joint thickness ``joint`` is included in the blocks, so the wall
     measures n(b+e) x courses(a+e) x s. The wall's lower-left-back corner sits at ``origin``.
     Block sizes a, b, s: ``block_height``, ``block_length``, ``thickness``.
+
+    Parameters
+    ----------
+    blocks_along_length : int
+        n, whole blocks in an even course, 1 to 10^4.
+    courses : int
+        Number of courses, 1 to 10^4.
+    block_height, block_length, thickness : float
+        The block's a, b and s [m] (along e2, e1, e3), each > 0; required, by name or by
+        letter.
+    unit_weight : float
+        Weight per unit volume [N/m^3], >= 0 (0: weightless); required.
+    joint : float, default 0.0
+        e, the mortar joint thickness [m], >= 0, included in the blocks.
+    origin : sequence of 3 floats, default (0, 0, 0)
+        The wall's lower-left-back corner [m].
+    start_with_half : bool, default False
+        Start the bottom course with half blocks (swaps even and odd courses).
+    a, b, s : float, optional, keyword-only
+        The paper's letters for ``block_height``, ``block_length`` and ``thickness`` (as case
+        files and older scripts write them); giving both names of one size is an error.
+
+    Returns
+    -------
+    Blocks
+        The wall's blocks, course by course from the bottom.
+
+    Raises
+    ------
+    ValueError
+        If a size is missing, given twice (by name and by letter) or not positive, or
+        ``unit_weight`` is missing or negative, a count is not a whole number from 1 to 10^4, or ``joint`` is negative.
+
+    Examples
+    --------
+    >>> import masonry_dem as md
+    >>> wall = md.running_bond_wall(4, 3, 0.1, 0.2, 0.1, 18e3)
+    >>> wall.count  # 4 + 5 + 4 blocks
+    13
+    >>> wall.upper.max(axis=0).tolist()
+    [0.8, 0.30000000000000004, 0.1]
+    >>> md.running_bond_wall(4, 3, a=0.1, b=0.2, s=0.1, unit_weight=18e3).count
+    13
     """
 
     joint: float = 0.0
@@ -164,10 +207,48 @@ class _Extent:
 
 @dataclass(frozen=True)
 class _RunningBondWallOfSize(_Unit, _Extent):
-    """A running-bond wall of the given overall size (``length`` x ``height`` [m]): the
-    nearest whole numbers of blocks of ``block_length`` (b) and courses of ``block_height``
-    (a), with the pitch stretched (by less than half a block) so the wall is exactly that
-    size; ``thickness`` (s)."""
+    """A running-bond wall of the given overall size (``length`` x ``height`` [m]).
+
+    The wall has the nearest whole numbers of blocks of ``block_length`` (b) and courses of
+    ``block_height`` (a), with the pitch stretched (by less than half a block) so the wall is
+    exactly that size; ``thickness`` (s).
+
+    Parameters
+    ----------
+    length, height : float
+        The wall's overall length (along e1) and height (along e2) [m], each > 0.
+    block_height, block_length, thickness : float
+        The block's a, b and s [m] (along e2, e1, e3), each > 0; required, by name or by
+        letter.
+    unit_weight : float
+        Weight per unit volume [N/m^3], >= 0 (0: weightless); required.
+    joint : float, default 0.0
+        The mortar joint thickness [m], >= 0, included in the blocks.
+    a, b, s : float, optional, keyword-only
+        The paper's letters for ``block_height``, ``block_length`` and ``thickness`` (as case
+        files and older scripts write them); giving both names of one size is an error.
+
+    Returns
+    -------
+    Blocks
+        The wall's blocks (as :func:`running_bond_wall` builds them, lower-left-back corner at
+        the origin).
+
+    Raises
+    ------
+    ValueError
+        If a size is missing, given twice (by name and by letter) or not positive, or
+        ``unit_weight`` is missing or negative, or ``length``, ``height`` or ``joint`` is out of range.
+
+    Examples
+    --------
+    >>> import masonry_dem as md
+    >>> wall = md.running_bond_wall_of_size(1.0, 0.5, 0.1, 0.25, 0.12, 18e3)
+    >>> wall.count  # 4 blocks along, 5 courses
+    22
+    >>> wall.upper.max(axis=0).tolist()
+    [1.0, 0.5, 0.12]
+    """
 
     joint: float = 0.0
 
@@ -184,8 +265,42 @@ class _RunningBondWallOfSize(_Unit, _Extent):
 
 @dataclass(frozen=True)
 class _StackBondColumn(_Unit, _Courses):
-    """Blocks stacked one on another (a column of ``courses`` blocks of ``block_height`` (a)
-    x ``block_length`` (b) x ``thickness`` (s)), its base on y = 0."""
+    """Blocks stacked one on another, the column's base on y = 0.
+
+    A column of ``courses`` blocks of ``block_height`` (a) x ``block_length`` (b) x
+    ``thickness`` (s).
+
+    Parameters
+    ----------
+    courses : int
+        Number of blocks, 1 to 10^4.
+    block_height, block_length, thickness : float
+        The block's a, b and s [m] (along e2, e1, e3), each > 0; required, by name or by
+        letter.
+    unit_weight : float
+        Weight per unit volume [N/m^3], >= 0 (0: weightless); required.
+    a, b, s : float, optional, keyword-only
+        The paper's letters for ``block_height``, ``block_length`` and ``thickness`` (as case
+        files and older scripts write them); giving both names of one size is an error.
+
+    Returns
+    -------
+    Blocks
+        The blocks from the bottom up.
+
+    Raises
+    ------
+    ValueError
+        If a size is missing, given twice (by name and by letter) or not positive, or
+        ``unit_weight`` is missing or negative, or ``courses`` is not a whole number from 1 to 10^4.
+
+    Examples
+    --------
+    >>> import masonry_dem as md
+    >>> column = md.stack_bond_column(5, 0.1, 0.2, 0.1, 18e3)
+    >>> column.count, column.upper.max(axis=0).tolist()
+    (5, [0.2, 0.5, 0.1])
+    """
 
     def __call__(self) -> Blocks:
         nc = _count("courses", self.courses)
@@ -197,8 +312,36 @@ class _StackBondColumn(_Unit, _Courses):
 
 @dataclass(frozen=True)
 class _SingleBlock(_Unit):
-    """One block of ``block_height`` (a) x ``block_length`` (b) x ``thickness`` (s) with its
-    base on y = 0."""
+    """One block of ``block_height`` (a) x ``block_length`` (b) x ``thickness`` (s), its base on y = 0.
+
+    Parameters
+    ----------
+    block_height, block_length, thickness : float
+        The block's a, b and s [m] (along e2, e1, e3), each > 0; required, by name or by
+        letter.
+    unit_weight : float
+        Weight per unit volume [N/m^3], >= 0 (0: weightless); required.
+    a, b, s : float, optional, keyword-only
+        The paper's letters for ``block_height``, ``block_length`` and ``thickness`` (as case
+        files and older scripts write them); giving both names of one size is an error.
+
+    Returns
+    -------
+    Blocks
+        The one block, its lower-left-back corner at the origin.
+
+    Raises
+    ------
+    ValueError
+        If a size is missing, given twice (by name and by letter) or not positive, or
+        ``unit_weight`` is missing or negative.
+
+    Examples
+    --------
+    >>> import masonry_dem as md
+    >>> md.single_block(0.1, 0.2, 0.1, 18e3).centres.tolist()
+    [[0.1, 0.05, 0.05]]
+    """
 
     def __call__(self) -> Blocks:
         return stack_bond_column(1, *self.size(), self.unit_weight)
@@ -211,7 +354,32 @@ single_block = function_of(_SingleBlock)
 
 
 def boxes(lower: ArrayLike, upper: ArrayLike, unit_weight: ArrayLike) -> Blocks:
-    """Any user list of boxes given by their lower and upper corners, each (n, 3)."""
+    """Any user list of boxes given by their lower and upper corners.
+
+    Parameters
+    ----------
+    lower, upper : array_like, shape (n, 3)
+        Lower and upper corners [m]; ``upper`` above ``lower`` along every axis.
+    unit_weight : float or array_like, shape (n,)
+        Weight per unit volume [N/m^3], >= 0.
+
+    Returns
+    -------
+    Blocks
+        The boxes, in the order given.
+
+    Raises
+    ------
+    ValueError
+        If a box has no positive size along an axis, or an array has the wrong shape.
+
+    Examples
+    --------
+    >>> import masonry_dem as md
+    >>> two = md.boxes([[0, 0, 0], [0, 0.1, 0]], [[0.2, 0.1, 0.1], [0.2, 0.2, 0.1]], 18e3)
+    >>> two.count
+    2
+    """
     return Blocks.from_boxes(lower, upper, unit_weight)
 
 
@@ -224,11 +392,7 @@ def cut_openings(
 ) -> Blocks:
     """Remove every block whose centre lies inside one of the rectangular openings.
 
-    ``openings`` is a list of (x_min, y_min, x_max, y_max) in the wall plane (e1, e2). Openings
-    are cut in whole blocks: choose their edges on block boundaries for clean jambs.
-    ``among``: a mask of the blocks an opening may remove (None: every block), e.g. the facade
-    of walls that meet; ``field`` names the argument in errors.
-
+    Openings are cut in whole blocks: choose their edges on block boundaries for clean jambs.
     Dry joints cannot span an opening: a block of the course above it with nothing under it
     hangs on the friction of head joints that carry no normal force, and the wall has no
     equilibrium under its own weight. ``lintels=True`` builds the openings as the paper's
@@ -236,6 +400,41 @@ def cut_openings(
     :func:`split_at_jambs`) and a lintel over each opening whose top is a bed joint below the
     top of the wall (:func:`add_lintels`). Without lintels, blocks left with nothing under
     them are named in a warning.
+
+    Parameters
+    ----------
+    blocks : Blocks
+        The wall.
+    openings : sequence of (x_min, y_min, x_max, y_max)
+        Rectangles in the wall plane (e1, e2) [m], max above min.
+    among : numpy.ndarray of bool, shape (n,), optional
+        A mask of the blocks an opening may remove (None: every block), e.g. the facade of
+        walls that meet.
+    field : str, default "openings"
+        Names the argument in errors.
+    lintels : bool, default False
+        Straight jambs and a lintel over each opening (plain walls only).
+
+    Returns
+    -------
+    Blocks
+        The wall without the blocks inside the openings (and with the lintels).
+
+    Raises
+    ------
+    ValueError
+        If an opening is not four finite numbers with the max above the min, removes no
+        block, or the openings remove every block; with ``lintels``: if ``among`` is given, an
+        opening reaches an end of the wall below its top, two lintels would share a block, or
+        an opening's top is not on a bed joint.
+
+    Examples
+    --------
+    >>> import masonry_dem as md
+    >>> wall = md.running_bond_wall(6, 6, 0.1, 0.2, 0.1, 18e3)
+    >>> window = md.cut_openings(wall, [(0.4, 0.2, 0.8, 0.4)], lintels=True)
+    >>> wall.count, window.count
+    (39, 33)
     """
     rects = [checked_opening(field, k, rect) for k, rect in enumerate(openings)]
     if lintels:
@@ -396,6 +595,35 @@ def add_base(
 
     The base spans the footprint of the assembly (plus ``overhang`` on every side in the plane)
     and its top face touches the lowest blocks, so real interfaces join it to the wall.
+
+    Parameters
+    ----------
+    blocks : Blocks
+        The assembly.
+    depth : float, optional
+        The slab's depth [m], > 0 (None: the median block height).
+    overhang : float, default 0.0
+        How far the slab reaches past the footprint on every side in the plane [m], >= 0.
+
+    Returns
+    -------
+    blocks : Blocks
+        The assembly with the base appended last (weightless).
+    base : int
+        The base's index (the number of blocks given).
+
+    Raises
+    ------
+    ValueError
+        If ``depth`` is not positive or ``overhang`` is negative (or not finite).
+
+    Examples
+    --------
+    >>> import masonry_dem as md
+    >>> wall = md.running_bond_wall(6, 6, 0.1, 0.2, 0.1, 18e3)
+    >>> blocks, base = md.add_base(wall)
+    >>> base, blocks.sizes[base].tolist()
+    (39, [1.2000000000000002, 0.1, 0.1])
     """
     lo, hi = blocks.lower.min(axis=0), blocks.upper.max(axis=0)
     # checked by name: a NaN overhang would surface as a non-finite corner, a negative one
