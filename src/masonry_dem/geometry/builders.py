@@ -157,7 +157,8 @@ class _RunningBondWall(_Unit, _Courses, _Along):
     ------
     ValueError
         If a size is missing, given twice (by name and by letter) or not positive, or
-        ``unit_weight`` is missing or negative, a count is not a whole number from 1 to 10^4, or ``joint`` is negative.
+        ``unit_weight`` is missing or negative, a count is not a whole number from 1 to
+        10^4, or ``joint`` is negative.
 
     Examples
     --------
@@ -238,7 +239,8 @@ class _RunningBondWallOfSize(_Unit, _Extent):
     ------
     ValueError
         If a size is missing, given twice (by name and by letter) or not positive, or
-        ``unit_weight`` is missing or negative, or ``length``, ``height`` or ``joint`` is out of range.
+        ``unit_weight`` is missing or negative, or ``length``, ``height`` or ``joint`` is out
+        of range.
 
     Examples
     --------
@@ -312,7 +314,9 @@ class _StackBondColumn(_Unit, _Courses):
 
 @dataclass(frozen=True)
 class _SingleBlock(_Unit):
-    """One block of ``block_height`` (a) x ``block_length`` (b) x ``thickness`` (s), its base on y = 0.
+    """One block, its base on y = 0.
+
+    The block measures ``block_height`` (a) x ``block_length`` (b) x ``thickness`` (s).
 
     Parameters
     ----------

@@ -75,8 +75,10 @@ class Interfaces(Rows):
 
 
 def subdivide_interfaces(interfaces: Interfaces, n1: int, n2: int) -> Interfaces:
-    """Cut every interface into an ``n1`` x ``n2`` grid of equal rectangles (n1 along y1, n2
-    along y2), each an interface of its own between the same two blocks.
+    """Cut every interface into an ``n1`` x ``n2`` grid of equal rectangles.
+
+    n1 pieces along y1, n2 along y2, each an interface of its own between the same two
+    blocks.
 
     Why: the interface law rocks a joint about its centre (the bending moment is clipped at
     fixed normal force, the normal stiffness kept), so a rocking joint does not lift the block
@@ -94,6 +96,32 @@ def subdivide_interfaces(interfaces: Interfaces, n1: int, n2: int) -> Interfaces
 
     Pieces of interface r are rows ``r * n1 * n2`` to ``(r + 1) * n1 * n2 - 1`` (so the
     per-interface properties of the result are ``np.repeat(props, n1 * n2)``).
+
+    Parameters
+    ----------
+    interfaces : Interfaces
+        The interfaces to cut (from :func:`detect_interfaces`).
+    n1, n2 : int
+        Pieces along y1 and along y2, each a whole number >= 1.
+
+    Returns
+    -------
+    Interfaces
+        ``interfaces.count * n1 * n2`` pieces, those of interface r in rows ``r * n1 * n2`` to
+        ``(r + 1) * n1 * n2 - 1``.
+
+    Raises
+    ------
+    ValueError
+        If ``n1`` or ``n2`` is not a whole number >= 1.
+
+    Examples
+    --------
+    >>> import masonry_dem as md
+    >>> joints = md.detect_interfaces(md.running_bond_wall(4, 3, 0.1, 0.2, 0.1, 18e3))
+    >>> pieces = md.subdivide_interfaces(joints, 2, 1)
+    >>> joints.count, pieces.count
+    (26, 52)
     """
     counts = []
     for name, value in (("n1", n1), ("n2", n2)):
@@ -174,7 +202,32 @@ def candidate_pairs(lower: FloatArray, upper: FloatArray, pad: float) -> IndexAr
 def detect_interfaces(blocks: Blocks, tol: float | None = None) -> Interfaces:
     """Find every face-to-face contact of positive area between the blocks.
 
-    Raises ValueError if two blocks overlap (share a volume larger than ``tol`` in every axis).
+    Parameters
+    ----------
+    blocks : Blocks
+        The assembly.
+    tol : float, optional
+        Gap or overlap [m] still taken as contact, >= 0 (None: 10^-6 times the median block
+        size).
+
+    Returns
+    -------
+    Interfaces
+        One row per contact, block ``i`` on the lower side along the normal, sorted by
+        (i, j).
+
+    Raises
+    ------
+    ValueError
+        If two blocks overlap (share a volume larger than ``tol`` in every axis), or ``tol``
+        is negative.
+
+    Examples
+    --------
+    >>> import masonry_dem as md
+    >>> joints = md.detect_interfaces(md.running_bond_wall(4, 3, 0.1, 0.2, 0.1, 18e3))
+    >>> joints.count, joints.axis.tolist()[:5]  # axis 1: a bed joint, 0: a head joint
+    (26, [0, 1, 1, 0, 1])
     """
     size_scale = float(np.median(blocks.sizes))
     # a negative tolerance failed inside numpy ("repeats may not contain negative values")

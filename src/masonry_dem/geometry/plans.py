@@ -289,10 +289,64 @@ class _Plan(_Unit, _Courses, _Along):
 
 @dataclass(frozen=True)
 class _LWall(_Plan):
-    """A facade with one return wall at its ``corner`` (``left``: x = 0, or ``right``),
-    interlocked there; the other end of the facade is straight, as in a running-bond wall.
+    """A facade with one return wall at one corner, interlocked there.
+
+    The return wall stands at ``corner`` (``left``: x = 0, or ``right``); the other end of
+    the facade is straight, as in a running-bond wall.
     ``facade_openings``: (x_min, y_min, x_max, y_max) rectangles cut out of the facade;
-    ``lintels``: straight jambs and a lintel over each (a dry wall cannot stand without)."""
+    ``lintels``: straight jambs and a lintel over each (a dry wall cannot stand without).
+
+    Parameters
+    ----------
+    blocks_along_length : int
+        n, the facade's length in blocks (n b outside to outside), 1 to 10^4; long enough for
+        its corners.
+    courses : int
+        Number of courses, 1 to 10^4.
+    block_height, block_length, thickness : float
+        The block's a, b and s [m] (along e2, e1, e3), each > 0; required, by name or by
+        letter.
+    unit_weight : float
+        Weight per unit volume [N/m^3], >= 0 (0: weightless); required.
+    return_blocks : int, default 4
+        m, the return wall's length in blocks (m b from the facade's outer face), 1 to 10^4,
+        longer than the facade is thick.
+    corner : {"left", "right"}, default "left"
+        Where the return wall stands: x = 0 (``left``) or x = n b (``right``).
+    a, b, s : float, optional, keyword-only
+        The paper's letters for ``block_height``, ``block_length`` and ``thickness``; giving
+        both names of one size is an error.
+    joint : float, default 0.0, keyword-only
+        The mortar joint thickness [m], >= 0, included in the blocks.
+    facade_openings : sequence of (x_min, y_min, x_max, y_max), optional, keyword-only
+        Rectangles cut out of the facade alone [m].
+    lintels : bool, default False, keyword-only
+        Straight jambs and a lintel over each facade opening (a dry wall cannot stand
+        without), within the facade, between the corners.
+
+    Returns
+    -------
+    Blocks
+        The walls' blocks, course by course from the bottom; the parts are found back by
+        :func:`masonry_dem.geometry.selectors.part`.
+
+    Raises
+    ------
+    ValueError
+        If a count, a size or ``unit_weight`` is out of range, the facade is too short for
+        its corners or a return wall does not reach behind the facade, ``corner`` is
+        not one of the two, or an opening is refused (it removes no block, or with
+        ``lintels`` it reaches outside the facade, its end or a corner).
+
+    Examples
+    --------
+    >>> import masonry_dem as md
+    >>> md.l_wall(6, 4, 0.1, 0.2, 0.1, 18e3).count
+    40
+    >>> md.l_wall(6, 4, 0.1, 0.2, 0.1, 18e3, corner="right",
+    ...           facade_openings=[(0.4, 0.1, 0.8, 0.3)], lintels=True).count
+    35
+    """
 
     return_blocks: int = 4
     corner: Corner = "left"
@@ -316,8 +370,57 @@ class _LWall(_Plan):
 
 @dataclass(frozen=True)
 class _UWall(_Plan):
-    """A facade between two return walls of ``return_blocks`` blocks, interlocked at both
-    corners (mirror symmetric about x = n b / 2)."""
+    """A facade between two return walls, interlocked at both corners.
+
+    The return walls are ``return_blocks`` blocks long; the plan is mirror symmetric about
+    x = n b / 2.
+
+    Parameters
+    ----------
+    blocks_along_length : int
+        n, the facade's length in blocks (n b outside to outside), 1 to 10^4; long enough for
+        its corners.
+    courses : int
+        Number of courses, 1 to 10^4.
+    block_height, block_length, thickness : float
+        The block's a, b and s [m] (along e2, e1, e3), each > 0; required, by name or by
+        letter.
+    unit_weight : float
+        Weight per unit volume [N/m^3], >= 0 (0: weightless); required.
+    return_blocks : int, default 4
+        m, the return wall's length in blocks (m b from the facade's outer face), 1 to 10^4,
+        longer than the facade is thick.
+    a, b, s : float, optional, keyword-only
+        The paper's letters for ``block_height``, ``block_length`` and ``thickness``; giving
+        both names of one size is an error.
+    joint : float, default 0.0, keyword-only
+        The mortar joint thickness [m], >= 0, included in the blocks.
+    facade_openings : sequence of (x_min, y_min, x_max, y_max), optional, keyword-only
+        Rectangles cut out of the facade alone [m].
+    lintels : bool, default False, keyword-only
+        Straight jambs and a lintel over each facade opening (a dry wall cannot stand
+        without), within the facade, between the corners.
+
+    Returns
+    -------
+    Blocks
+        The walls' blocks, course by course from the bottom; the parts are found back by
+        :func:`masonry_dem.geometry.selectors.part`.
+
+    Raises
+    ------
+    ValueError
+        If a count, a size or ``unit_weight`` is out of range, the facade is too short for
+        its corners or a return wall does not reach behind the facade, or an opening is
+        refused (it removes no block, or with ``lintels`` it reaches outside the facade or a
+        corner).
+
+    Examples
+    --------
+    >>> import masonry_dem as md
+    >>> md.u_wall(6, 4, 0.1, 0.2, 0.1, 18e3).count
+    54
+    """
 
     return_blocks: int = 4
 
@@ -331,10 +434,60 @@ class _UWall(_Plan):
 
 @dataclass(frozen=True)
 class _TWall(_Plan):
-    """A facade with a cross wall of ``return_blocks`` blocks behind it, centred at
-    x = ``cross_at`` (default: the facade's middle); the cross wall runs through the facade in
-    the odd courses (its end block shows in the outer face) and butts against the facade's
-    back in the even ones. Both ends of the facade are straight."""
+    """A facade with a cross wall behind it.
+
+    The cross wall, ``return_blocks`` blocks long, is centred at x = ``cross_at`` (default:
+    the facade's middle); it runs through the facade in the odd courses (its end block shows
+    in the outer face) and butts against the facade's back in the even ones. Both ends of the facade are straight.
+
+    Parameters
+    ----------
+    blocks_along_length : int
+        n, the facade's length in blocks (n b outside to outside), 1 to 10^4; long enough for
+        its corners.
+    courses : int
+        Number of courses, 1 to 10^4.
+    block_height, block_length, thickness : float
+        The block's a, b and s [m] (along e2, e1, e3), each > 0; required, by name or by
+        letter.
+    unit_weight : float
+        Weight per unit volume [N/m^3], >= 0 (0: weightless); required.
+    return_blocks : int, default 4
+        m, the return wall's length in blocks (m b from the facade's outer face), 1 to 10^4,
+        longer than the facade is thick.
+    cross_at : float, optional
+        x of the cross wall's centre line [m] (None: the facade's middle); the cross wall
+        must stay 0.3 block from the facade's ends.
+    a, b, s : float, optional, keyword-only
+        The paper's letters for ``block_height``, ``block_length`` and ``thickness``; giving
+        both names of one size is an error.
+    joint : float, default 0.0, keyword-only
+        The mortar joint thickness [m], >= 0, included in the blocks.
+    facade_openings : sequence of (x_min, y_min, x_max, y_max), optional, keyword-only
+        Rectangles cut out of the facade alone [m].
+    lintels : bool, default False, keyword-only
+        Straight jambs and a lintel over each facade opening (a dry wall cannot stand
+        without), within the facade, between the corners.
+
+    Returns
+    -------
+    Blocks
+        The walls' blocks, course by course from the bottom; the parts are found back by
+        :func:`masonry_dem.geometry.selectors.part`.
+
+    Raises
+    ------
+    ValueError
+        If a count, a size or ``unit_weight`` is out of range, the facade is too short for
+        its corners or a return wall does not reach behind the facade, ``cross_at``
+        puts the cross wall within 0.3 block of the facade's ends, or an opening is refused.
+
+    Examples
+    --------
+    >>> import masonry_dem as md
+    >>> md.t_wall(6, 4, 0.1, 0.2, 0.1, 18e3).count
+    40
+    """
 
     return_blocks: int = 4
     cross_at: float | None = None
@@ -356,11 +509,59 @@ class _TWall(_Plan):
 
 @dataclass(frozen=True)
 class _BoxWall(_Plan):
-    """A closed box of four walls, n b by m b outside (``blocks_along_depth`` = m, default
+    """A closed box of four walls.
+
+    The box measures n b by m b outside (``blocks_along_depth`` = m, default
     n), the front wall (the facade) at z in [0, s], the back wall at z in [s - m b, 2 s - m b].
     Each wall runs through the corner where it starts (anticlockwise from above) in the even
     courses and through the one where it ends in the odd courses: a square box (m = n) is
-    the same seen from each side."""
+    the same seen from each side.
+
+    Parameters
+    ----------
+    blocks_along_length : int
+        n, the facade's length in blocks (n b outside to outside), 1 to 10^4; long enough for
+        its corners.
+    courses : int
+        Number of courses, 1 to 10^4.
+    block_height, block_length, thickness : float
+        The block's a, b and s [m] (along e2, e1, e3), each > 0; required, by name or by
+        letter.
+    unit_weight : float
+        Weight per unit volume [N/m^3], >= 0 (0: weightless); required.
+    blocks_along_depth : int, optional
+        m, the box's depth in blocks (None: n, a square box); it must leave a side wall
+        between the corners.
+    a, b, s : float, optional, keyword-only
+        The paper's letters for ``block_height``, ``block_length`` and ``thickness``; giving
+        both names of one size is an error.
+    joint : float, default 0.0, keyword-only
+        The mortar joint thickness [m], >= 0, included in the blocks.
+    facade_openings : sequence of (x_min, y_min, x_max, y_max), optional, keyword-only
+        Rectangles cut out of the facade alone [m].
+    lintels : bool, default False, keyword-only
+        Straight jambs and a lintel over each facade opening (a dry wall cannot stand
+        without), within the facade, between the corners.
+
+    Returns
+    -------
+    Blocks
+        The walls' blocks, course by course from the bottom; the parts are found back by
+        :func:`masonry_dem.geometry.selectors.part`.
+
+    Raises
+    ------
+    ValueError
+        If a count, a size or ``unit_weight`` is out of range, the facade is too short for
+        its corners or a return wall does not reach behind the facade, ``blocks_along_depth``
+        leaves no side wall between the corners, or an opening is refused.
+
+    Examples
+    --------
+    >>> import masonry_dem as md
+    >>> md.box_wall(6, 4, 0.1, 0.2, 0.1, 18e3).count
+    96
+    """
 
     blocks_along_depth: int | None = None
 
