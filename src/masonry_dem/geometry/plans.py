@@ -438,7 +438,8 @@ class _TWall(_Plan):
 
     The cross wall, ``return_blocks`` blocks long, is centred at x = ``cross_at`` (default:
     the facade's middle); it runs through the facade in the odd courses (its end block shows
-    in the outer face) and butts against the facade's back in the even ones. Both ends of the facade are straight.
+    in the outer face) and butts against the facade's back in the even ones. Both ends of
+    the facade are straight.
 
     Parameters
     ----------
