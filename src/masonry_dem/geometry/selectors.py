@@ -2,6 +2,15 @@
 
 Every selector raises ValueError when it matches nothing, so a typo in a case file cannot
 silently leave a wall unsupported.
+
+Examples
+--------
+>>> import masonry_dem as md
+>>> wall = md.running_bond_wall(4, 3, 0.1, 0.2, 0.1, 18e3)
+>>> md.select.edge(wall, "bottom").tolist()
+[0, 1, 2, 3]
+>>> md.select.course(wall, -1).tolist()
+[9, 10, 11, 12]
 """
 
 from __future__ import annotations
@@ -62,9 +71,35 @@ def _tol(blocks: Blocks) -> float:
 
 
 def edge(blocks: Blocks, which: Edge, among: ArrayLike | None = None) -> NDArray[np.intp]:
-    """Blocks touching one edge of the assembly's bounding box (``left``, ``right``, ``bottom``,
-    ``top``, ``back``, ``front``); ``among`` (boolean mask or block indices) restricts the
-    search."""
+    """Blocks touching one edge of the assembly's bounding box.
+
+    Parameters
+    ----------
+    blocks : Blocks
+        The assembly.
+    which : {"left", "right", "bottom", "top", "back", "front"}
+        The edge (smallest or largest e1, e2, e3 of the blocks searched).
+    among : array_like of bool or int, optional
+        A boolean mask (n,) or block indices that restricts the search (None: every block).
+
+    Returns
+    -------
+    numpy.ndarray of int
+        The indices of the blocks, ascending.
+
+    Raises
+    ------
+    ValueError
+        If ``which`` is not an edge, ``among`` is out of range or selects no block, or the
+        selector matches no block.
+
+    Examples
+    --------
+    >>> import masonry_dem as md
+    >>> wall = md.running_bond_wall(4, 3, 0.1, 0.2, 0.1, 18e3)
+    >>> md.select.edge(wall, "bottom").tolist()
+    [0, 1, 2, 3]
+    """
     if which not in _EDGE_AXIS:
         raise ValueError(f"edge must be one of {EDGES}, got {which!r}")
     axis, side = _EDGE_AXIS[which]
@@ -85,14 +120,66 @@ def edge(blocks: Blocks, which: Edge, among: ArrayLike | None = None) -> NDArray
 def column(
     blocks: Blocks, which: Literal["left", "right"] = "left", among: ArrayLike | None = None
 ) -> NDArray[np.intp]:
-    """The end column of a wall: ``left`` or ``right`` (whole and half end blocks)."""
+    """The end column of a wall: ``left`` or ``right`` (whole and half end blocks).
+
+    Parameters
+    ----------
+    blocks : Blocks
+        The wall.
+    which : {"left", "right"}, default "left"
+        The end.
+    among : array_like of bool or int, optional
+        A boolean mask (n,) or block indices that restricts the search (None: every block).
+
+    Returns
+    -------
+    numpy.ndarray of int
+        The indices of the blocks, ascending.
+
+    Raises
+    ------
+    ValueError
+        If ``which`` is neither end, or as :func:`edge` raises.
+
+    Examples
+    --------
+    >>> import masonry_dem as md
+    >>> wall = md.running_bond_wall(4, 3, 0.1, 0.2, 0.1, 18e3)
+    >>> md.select.column(wall, "left").tolist()
+    [0, 4, 9]
+    """
     if which not in ("left", "right"):
         raise ValueError(f"column must be 'left' or 'right', got {which!r}")
     return edge(blocks, which, among)
 
 
 def course_levels(blocks: Blocks, among: ArrayLike | None = None) -> NDArray[np.float64]:
-    """(courses,) sorted distinct centre heights (e2) of the blocks: one per course."""
+    """The sorted distinct centre heights (e2) of the blocks: one per course.
+
+    Parameters
+    ----------
+    blocks : Blocks
+        The assembly.
+    among : array_like of bool or int, optional
+        A boolean mask (n,) or block indices that restricts the search (None: every block).
+
+    Returns
+    -------
+    numpy.ndarray, shape (courses,)
+        Heights [m], ascending (empty if ``among`` selects no block).
+
+    Raises
+    ------
+    ValueError
+        If ``among`` is a mask of the wrong shape or an index is out of range.
+
+    Examples
+    --------
+    >>> import masonry_dem as md
+    >>> wall = md.running_bond_wall(4, 3, 0.1, 0.2, 0.1, 18e3)
+    >>> md.select.course_levels(wall).round(6).tolist()
+    [0.05, 0.15, 0.25]
+    """
     mask = _as_mask(blocks, among)
     y = blocks.centres[mask if mask is not None else slice(None), 1]
     y = np.sort(y)
@@ -103,7 +190,34 @@ def course_levels(blocks: Blocks, among: ArrayLike | None = None) -> NDArray[np.
 
 
 def course(blocks: Blocks, k: int, among: ArrayLike | None = None) -> NDArray[np.intp]:
-    """Blocks of course ``k`` (0 = lowest; negative counts from the top)."""
+    """Blocks of course ``k`` (0 = lowest; negative counts from the top).
+
+    Parameters
+    ----------
+    blocks : Blocks
+        The assembly.
+    k : int
+        The course.
+    among : array_like of bool or int, optional
+        A boolean mask (n,) or block indices that restricts the search (None: every block).
+
+    Returns
+    -------
+    numpy.ndarray of int
+        The indices of the blocks, ascending.
+
+    Raises
+    ------
+    ValueError
+        If course ``k`` does not exist, or ``among`` is out of range.
+
+    Examples
+    --------
+    >>> import masonry_dem as md
+    >>> wall = md.running_bond_wall(4, 3, 0.1, 0.2, 0.1, 18e3)
+    >>> md.select.course(wall, -1).tolist()
+    [9, 10, 11, 12]
+    """
     mask_among = _as_mask(blocks, among)
     levels = course_levels(blocks, mask_among)
     if not -levels.size <= k < levels.size:
@@ -115,7 +229,34 @@ def course(blocks: Blocks, k: int, among: ArrayLike | None = None) -> NDArray[np
 def where(
     blocks: Blocks, predicate: Callable[[NDArray[np.float64]], ArrayLike], name: str = "predicate"
 ) -> NDArray[np.intp]:
-    """Blocks whose centres (n, 3) satisfy ``predicate(centres) -> bool mask``."""
+    """Blocks whose centres (n, 3) satisfy ``predicate(centres) -> bool mask``.
+
+    Parameters
+    ----------
+    blocks : Blocks
+        The assembly.
+    predicate : callable
+        Takes the (n, 3) centres [m], returns an (n,) boolean mask.
+    name : str, default "predicate"
+        Names the selector in errors.
+
+    Returns
+    -------
+    numpy.ndarray of int
+        The indices of the blocks, ascending.
+
+    Raises
+    ------
+    ValueError
+        If the mask has the wrong shape, or selects no block.
+
+    Examples
+    --------
+    >>> import masonry_dem as md
+    >>> wall = md.running_bond_wall(4, 3, 0.1, 0.2, 0.1, 18e3)
+    >>> md.select.where(wall, lambda c: c[:, 0] < 0.2).tolist()
+    [0, 4, 9]
+    """
     mask = np.asarray(predicate(blocks.centres), dtype=bool)
     if mask.shape != (blocks.count,):
         raise ValueError(
@@ -181,8 +322,9 @@ def _wall_labels(
 
 
 def part(blocks: Blocks, name: str, among: ArrayLike | None = None) -> NDArray[np.intp]:
-    """Blocks of one part of walls that meet (L, T, U plans, boxes of
-    :mod:`masonry_dem.geometry.plans`), found from the plan alone.
+    """Blocks of one part of walls that meet, found from the plan alone.
+
+    The walls that meet are the L, T, U plans and boxes of :mod:`masonry_dem.geometry.plans`.
 
     Walls: ``facade`` (the front wall, largest e3), ``back`` (the back wall of a box),
     ``return:left``, ``return:right`` (the walls along e3 at the smallest and largest e1; the
@@ -190,7 +332,35 @@ def part(blocks: Blocks, name: str, among: ArrayLike | None = None) -> NDArray[n
     ``corner:right`` (front corners), ``corner:back-left``, ``corner:back-right``, and
     ``corner:cross`` (the junction of a T): the blocks of either wall that overlap the corner
     square, course by course the one that runs through and the one that butts against it.
-    ``among`` restricts the search (e.g. the wall without its base slab)."""
+    ``among`` restricts the search (e.g. the wall without its base slab).
+
+    Parameters
+    ----------
+    blocks : Blocks
+        The walls.
+    name : str
+        The part: one of the walls or corners above.
+    among : array_like of bool or int, optional
+        A boolean mask (n,) or block indices that restricts the search (None: every block).
+
+    Returns
+    -------
+    numpy.ndarray of int
+        The indices of the blocks, ascending.
+
+    Raises
+    ------
+    ValueError
+        If ``name`` is not a part, ``among`` selects no block, or the part matches no block
+        (``corner:cross`` without a cross wall; a corner where no two walls meet).
+
+    Examples
+    --------
+    >>> import masonry_dem as md
+    >>> walls = md.l_wall(6, 4, 0.1, 0.2, 0.1, 18e3)
+    >>> md.select.part(walls, "corner:left").tolist()
+    [4, 13, 24, 33]
+    """
     if name not in PARTS:
         raise ValueError(f"part must be one of {PARTS}, got {name!r}")
     mask = _as_mask(blocks, among)
