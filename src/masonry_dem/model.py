@@ -55,15 +55,41 @@ Memory = Literal["none", "slip"]
 
 @dataclass(frozen=True)
 class InterfaceMaterial:
-    """Joint properties. kn, kt: stiffness per unit area [N/m^3]; friction: mu = tan(phi);
-    tensile_strength [Pa] (also sets cohesion c = mu * ft); alpha: torsion-shear exponent of
-    Eq. (A5) (None: 1.5, the paper's value for running-bond masonry).
+    """Joint properties: stiffness, strength and the interface law's options.
 
-    The interface law's behaviour beyond the strength domain (one for the whole model: the
-    ``material`` of :meth:`Model.build`; see :mod:`masonry_dem.constitutive.law`):
-    tension: ``"brittle"`` (a joint that opens loses its tensile strength for good) or
-    ``"plastic"``; memory: ``"slip"`` (the paper's incremental law: sliding keeps its plastic
-    slip) or ``"none"`` (holonomic); projection: the shear-torsion return, ``"energy"`` (closest point) or ``"radial"``.
+    The interface law's behaviour beyond the strength domain is one for the whole model (the
+    ``material`` of :meth:`Model.build`; see :mod:`masonry_dem.constitutive.law`).
+
+    Parameters
+    ----------
+    kn, kt : float
+        Normal and shear stiffness per unit area [N/m^3], each > 0.
+    friction : float
+        mu = tan(phi), >= 0.
+    tensile_strength : float, default 0.0
+        ft [Pa], >= 0 (also sets cohesion c = mu * ft).
+    alpha : float, optional
+        Torsion-shear exponent of Eq. (A5), > 0 (None: 1.5, the paper's value for
+        running-bond masonry).
+    tension : {"brittle", "plastic"}, default "brittle"
+        ``"brittle"``: a joint that opens loses its tensile strength for good.
+    memory : {"slip", "none"}, default "slip"
+        ``"slip"``: the paper's incremental law, sliding keeps its plastic slip; ``"none"``:
+        holonomic.
+    projection : {"energy", "radial"}, default "energy"
+        The shear-torsion return: ``"energy"`` (closest point) or ``"radial"``.
+
+    Raises
+    ------
+    ValueError
+        If a stiffness is not positive, ``friction`` or ``tensile_strength`` is negative (or
+        any is not finite), ``alpha`` is not positive, or an option is not one of its values.
+
+    Examples
+    --------
+    >>> import masonry_dem as md
+    >>> md.InterfaceMaterial(kn=1e9, kt=4e8, friction=0.7).alpha is None
+    True
     """
 
     kn: float
@@ -162,6 +188,22 @@ class Support:
     under the live load it may also rise or sink with the wall, held only by the joints
     around it. Model the return walls as blocks (:mod:`masonry_dem.geometry.plans`) to let
     them resist uplift by their weight and interlock.
+
+    Parameters
+    ----------
+    blocks : array_like of int or bool
+        The held blocks (indices, or a boolean mask), e.g. from :mod:`masonry_dem.select`.
+    dofs : str or sequence of str, default "all"
+        A group (``all``, ``translations``, ``rotations``, ``in_plane``: u1, u2, w3;
+        ``out_of_plane``: u3, w1, w2) or a list of DOF names (``u1`` ... ``w3``) and groups.
+    settles_with_wall : bool, default False
+        Leave u2 of the held blocks free (the column follows the wall's vertical motion).
+
+    Examples
+    --------
+    >>> import masonry_dem as md
+    >>> md.Support([0, 1], "in_plane").mask(3).astype(int).tolist()
+    [[1, 1, 0, 0, 0, 1], [1, 1, 0, 0, 0, 1], [0, 0, 0, 0, 0, 0]]
     """
 
     blocks: ArrayLike
@@ -169,7 +211,24 @@ class Support:
     settles_with_wall: bool = False
 
     def mask(self, n_blocks: int) -> BoolArray:
-        """(n_blocks, 6) fixed DOFs."""
+        """The DOFs this support fixes.
+
+        Parameters
+        ----------
+        n_blocks : int
+            Blocks in the assembly.
+
+        Returns
+        -------
+        numpy.ndarray of bool, shape (n_blocks, 6)
+            True where a DOF is fixed.
+
+        Raises
+        ------
+        ValueError
+            If the selection is empty or out of range, ``settles_with_wall`` is not true or
+            false, or ``dofs`` names no group or DOF.
+        """
         idx = block_indices("Support.blocks", self.blocks, n_blocks)
         if idx.size == 0:
             raise ValueError("Support.blocks: the selection is empty")
@@ -189,7 +248,25 @@ class Support:
 # --------------------------------------------------------------------------- loads
 @dataclass(frozen=True)
 class SelfWeight:
-    """Block weights acting along -e2 (dead, or live for a vertical-acceleration pattern)."""
+    """Block weights acting along -e2 (dead, or live for a vertical-acceleration pattern).
+
+    Parameters
+    ----------
+    live : bool, default False
+        Scaled by lambda (True) or applied first and held (False).
+
+    Raises
+    ------
+    ValueError
+        If ``live`` is not true or false.
+
+    Examples
+    --------
+    >>> import masonry_dem as md
+    >>> block = md.single_block(0.1, 0.2, 0.1, 18e3)  # weighs 36 N
+    >>> md.SelfWeight().vector(block).round(6).tolist()
+    [[0.0, -36.0, 0.0, 0.0, 0.0, 0.0]]
+    """
 
     live: bool = False
 
@@ -197,7 +274,18 @@ class SelfWeight:
         boolean("SelfWeight.live", self.live)
 
     def vector(self, blocks: Blocks) -> FloatArray:
-        """(n, 6) generalised forces at the block centres."""
+        """The load's (n, 6) generalised forces at the block centres.
+
+        Parameters
+        ----------
+        blocks : Blocks
+            The assembly the load acts on.
+
+        Returns
+        -------
+        numpy.ndarray, shape (n, 6)
+            Forces [N] and moments [N m] at the block centres.
+        """
         out = np.zeros((blocks.count, 6))
         out[:, 1] = -blocks.weights
         return out
@@ -205,8 +293,32 @@ class SelfWeight:
 
 @dataclass(frozen=True)
 class WeightProportional:
-    """A horizontal (or any) pattern proportional to the block weights, e.g. a tilt table:
-    force = weight x unit(direction). Live by default (scaled by lambda)."""
+    """A horizontal (or any) pattern proportional to the block weights, e.g. a tilt table.
+
+    force = weight x unit(direction). Live by default (scaled by lambda).
+
+    Parameters
+    ----------
+    direction : sequence of 3 floats, default (0, 0, 1)
+        The force's direction (any non-zero length; e3: out of plane).
+    live : bool, default True
+        Scaled by lambda (True) or applied first and held (False).
+    blocks : array_like of int or bool, optional
+        The loaded blocks (None: every block).
+
+    Raises
+    ------
+    ValueError
+        If ``live`` is not true or false; when the load is applied (:meth:`vector`), if
+        ``direction`` is zero or not finite or ``blocks`` is out of range.
+
+    Examples
+    --------
+    >>> import masonry_dem as md
+    >>> block = md.single_block(0.1, 0.2, 0.1, 18e3)  # weighs 36 N
+    >>> md.WeightProportional((1, 0, 0)).vector(block).round(6).tolist()
+    [[36.0, 0.0, 0.0, 0.0, 0.0, 0.0]]
+    """
 
     direction: Sequence[float] = (0.0, 0.0, 1.0)
     live: bool = True
@@ -216,7 +328,18 @@ class WeightProportional:
         boolean("WeightProportional.live", self.live)
 
     def vector(self, blocks: Blocks) -> FloatArray:
-        """(n, 6) generalised forces at the block centres."""
+        """The load's (n, 6) generalised forces at the block centres.
+
+        Parameters
+        ----------
+        blocks : Blocks
+            The assembly the load acts on.
+
+        Returns
+        -------
+        numpy.ndarray, shape (n, 6)
+            Forces [N] and moments [N m] at the block centres.
+        """
         d = as_finite_array("direction", self.direction, (3,))
         largest = float(np.abs(d).max())
         if largest == 0:
@@ -237,8 +360,37 @@ class WeightProportional:
 
 @dataclass(frozen=True)
 class Pressure:
-    """Uniform pressure [Pa] on the face of the selected blocks normal to ``axis``, pushing
-    towards ``sign`` x e[axis]. Resultant at block centres (it passes through them)."""
+    """Uniform pressure [Pa] on the face of the selected blocks normal to ``axis``.
+
+    It pushes towards ``sign`` x e[axis]; the resultant acts at the block centres (it passes
+    through them).
+
+    Parameters
+    ----------
+    value : float
+        The pressure [Pa], finite.
+    axis : {0, 1, 2}, default 2
+        The normal of the loaded face (2: out of plane).
+    sign : {1, -1}, default 1
+        Pushes towards +e[axis] or -e[axis].
+    live : bool, default True
+        Scaled by lambda (True) or applied first and held (False).
+    blocks : array_like of int or bool, optional
+        The loaded blocks (None: every block).
+
+    Raises
+    ------
+    ValueError
+        If ``value`` is not finite, ``axis`` or ``sign`` is not one of its values, or
+        ``live`` is not true or false.
+
+    Examples
+    --------
+    >>> import masonry_dem as md
+    >>> block = md.single_block(0.1, 0.2, 0.1, 18e3)  # weighs 36 N
+    >>> md.Pressure(1000.0).vector(block).round(6).tolist()  # 1 kPa on 0.2 m x 0.1 m
+    [[0.0, 0.0, 20.0, 0.0, 0.0, 0.0]]
+    """
 
     value: float
     axis: int = 2
@@ -253,7 +405,18 @@ class Pressure:
         boolean("Pressure.live", self.live)
 
     def vector(self, blocks: Blocks) -> FloatArray:
-        """(n, 6) generalised forces at the block centres."""
+        """The load's (n, 6) generalised forces at the block centres.
+
+        Parameters
+        ----------
+        blocks : Blocks
+            The assembly the load acts on.
+
+        Returns
+        -------
+        numpy.ndarray, shape (n, 6)
+            Forces [N] and moments [N m] at the block centres.
+        """
         p = self.value
         others = [k for k in range(3) if k != self.axis]
         area = blocks.sizes[:, others[0]] * blocks.sizes[:, others[1]]
@@ -269,8 +432,34 @@ class Pressure:
 
 @dataclass(frozen=True)
 class PointLoad:
-    """Point forces (3,) on each selected block, applied at ``point`` offsets from the block
-    centres (default: the centre). Dead by default (e.g. the timber beams of S32)."""
+    """Point forces on each selected block, applied at offsets from the block centres.
+
+    Dead by default (e.g. the timber beams of S32).
+
+    Parameters
+    ----------
+    blocks : array_like of int or bool
+        The loaded blocks (a block named twice is loaded twice).
+    force : sequence of 3 floats
+        The force on each block [N].
+    offset : sequence of 3 floats, default (0, 0, 0)
+        Where it acts, from each block centre [m] (default: the centre).
+    live : bool, default False
+        Scaled by lambda (True) or applied first and held (False).
+
+    Raises
+    ------
+    ValueError
+        If ``live`` is not true or false; when the load is applied (:meth:`vector`), if
+        ``blocks`` is out of range or ``force`` or ``offset`` is not three finite numbers.
+
+    Examples
+    --------
+    >>> import masonry_dem as md
+    >>> block = md.single_block(0.1, 0.2, 0.1, 18e3)  # weighs 36 N
+    >>> md.PointLoad([0], (0, -100.0, 0), offset=(0.05, 0, 0)).vector(block).tolist()
+    [[0.0, -100.0, 0.0, 0.0, 0.0, -5.0]]
+    """
 
     blocks: ArrayLike
     force: Sequence[float]
@@ -281,7 +470,18 @@ class PointLoad:
         boolean("PointLoad.live", self.live)
 
     def vector(self, blocks: Blocks) -> FloatArray:
-        """(n, 6) generalised forces at the block centres."""
+        """The load's (n, 6) generalised forces at the block centres.
+
+        Parameters
+        ----------
+        blocks : Blocks
+            The assembly the load acts on.
+
+        Returns
+        -------
+        numpy.ndarray, shape (n, 6)
+            Forces [N] and moments [N m] at the block centres.
+        """
         idx = block_indices("PointLoad.blocks", self.blocks, blocks.count)
         f = as_finite_array("force", self.force, (3,))
         r = as_finite_array("offset", self.offset, (3,))
@@ -362,8 +562,41 @@ def _check_build(
 class Model:
     """Everything an analysis needs, validated and frozen.
 
-    interface properties are (m,) arrays: kn, kt, friction, tensile_strength, alpha.
-    fixed: (n, 6) bool; dead, live: (n, 6) generalised forces at block centres.
+    Build one with :meth:`build` (or :func:`~masonry_dem.load_case`); the constructor takes
+    the arrays as they are.
+
+    Parameters
+    ----------
+    blocks : Blocks
+        The blocks (n).
+    interfaces : Interfaces
+        The interfaces (m).
+    kn, kt, friction, tensile_strength, alpha : numpy.ndarray, shape (m,)
+        Interface properties (as in :class:`InterfaceMaterial`, ``alpha`` resolved).
+    fixed : numpy.ndarray of bool, shape (n, 6)
+        Fixed DOFs.
+    dead, live : numpy.ndarray, shape (n, 6)
+        Generalised forces at block centres: ``dead`` applied first and held, ``live`` scaled
+        by lambda.
+    name : str, default "model"
+        A label for output.
+    meta : dict, optional
+        Anything the caller keeps with the model (a case's source, ...).
+    tension, memory, projection : str
+        The interface law's options (of the ``material`` of :meth:`build`).
+
+    Examples
+    --------
+    >>> import masonry_dem as md
+    >>> wall = md.running_bond_wall(4, 3, 0.1, 0.2, 0.1, 18e3)
+    >>> model = md.Model.build(
+    ...     wall,
+    ...     md.InterfaceMaterial(kn=1e9, kt=4e8, friction=0.7),
+    ...     supports=[md.Support(md.select.course(wall, 0))],
+    ...     loads=[md.SelfWeight(), md.WeightProportional()],
+    ... )
+    >>> model.interfaces.count, model.n_dofs, int(model.free.sum())
+    (23, 78, 54)
     """
 
     blocks: Blocks
@@ -403,8 +636,40 @@ class Model:
         """Detect contacts, apply supports and loads.
 
         Interfaces between two fully fixed blocks carry nothing and are dropped.
-        ``material_overrides`` assigns other materials to interfaces touching given blocks
-        (e.g. the joint with a rigid base).
+
+        Parameters
+        ----------
+        blocks : Blocks
+            The assembly.
+        material : InterfaceMaterial
+            The joints' material (and the interface law's options, for the whole model).
+        supports : sequence of Support, default ()
+            The fixed DOFs.
+        loads : sequence of loads, default (SelfWeight(),)
+            :class:`SelfWeight`, :class:`WeightProportional`, :class:`Pressure`,
+            :class:`PointLoad`; dead ones add to ``dead``, live ones to ``live``. A live load
+            that pushes nothing (zero, or on held DOFs only) is named in a warning.
+        name : str, default "model"
+            A label for output.
+        interfaces : Interfaces, optional
+            The contacts (None: :func:`~masonry_dem.detect_interfaces` of ``blocks``).
+        material_overrides : sequence of (blocks, InterfaceMaterial), default ()
+            Other materials for the interfaces touching given blocks (e.g. the joint with a
+            rigid base).
+        meta : dict, optional
+            Kept with the model.
+
+        Returns
+        -------
+        Model
+            The model, its supports checked (:meth:`check_supported`).
+
+        Raises
+        ------
+        ValueError
+            If an argument has the wrong type (named, with how to make the right one), a
+            block index is out of range, or the assembly is a mechanism
+            (:meth:`check_supported`).
         """
         _check_build(blocks, material, supports, loads, interfaces, material_overrides)
         n = blocks.count
@@ -458,12 +723,16 @@ class Model:
     # -- DOF bookkeeping
     @property
     def n_dofs(self) -> int:
+        """Number of DOFs, 6 per block."""
         return 6 * self.blocks.count
 
     @property
     def smallest_moving_size(self) -> float:
-        """Smallest dimension of the blocks that can move (fully fixed supports excluded,
-        so a thin support strip does not shrink the solvers' displacement limit)."""
+        """Smallest dimension [m] of the blocks that can move.
+
+        Fully fixed supports are excluded, so a thin support strip does not shrink the
+        solvers' displacement limit.
+        """
         moving = ~self.fixed.all(axis=1)
         sizes = self.blocks.sizes[moving] if moving.any() else self.blocks.sizes
         return float(sizes.min())
@@ -474,7 +743,25 @@ class Model:
         return ~self.fixed.reshape(-1)
 
     def dof_index(self, block: int, dof: DofName) -> int:
-        """Global DOF number of ``dof`` (``u1`` ... ``w3``) of ``block``."""
+        """Global DOF number of ``dof`` (``u1`` ... ``w3``) of ``block``.
+
+        Parameters
+        ----------
+        block : int
+            The block index, 0 to n - 1.
+        dof : {"u1", "u2", "u3", "w1", "w2", "w3"}
+            The DOF.
+
+        Returns
+        -------
+        int
+            ``6 * block`` plus the DOF's place.
+
+        Raises
+        ------
+        ValueError
+            If ``dof`` is not a DOF name or ``block`` is not a block index.
+        """
         if dof not in DOF_NAMES:
             raise ValueError(f"dof must be one of {DOF_NAMES}, got {dof!r}")
         if isinstance(block, (bool, np.bool_)) or not isinstance(block, (int, np.integer)):
@@ -484,8 +771,17 @@ class Model:
         return 6 * int(block) + DOF_NAMES.index(dof)
 
     def check_supported(self) -> None:
-        """Refuse an assembly with a rigid-body mechanism before any solve: every connected
-        group of blocks needs fixed DOFs in it (a free-floating part is a mechanism)."""
+        """Refuse an assembly with a rigid-body mechanism before any solve.
+
+        Every connected group of blocks needs fixed DOFs in it (a free-floating part is a
+        mechanism) that stop its six rigid-body motions.
+
+        Raises
+        ------
+        ValueError
+            If no DOF is fixed, a block touches no support through any interface, or the
+            fixed DOFs of a group leave a rigid-body motion free (one of them named).
+        """
         from scipy.sparse import coo_matrix
         from scipy.sparse.csgraph import connected_components
 
