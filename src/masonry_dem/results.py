@@ -32,9 +32,21 @@ class _Text(str, Enum):
 
 
 class Status(_Text):
-    """How a run ended. ``COLLAPSE`` only with a certificate that holds (see
+    """How a run ended.
+
+    ``COLLAPSE`` only with a certificate that holds (see
     :mod:`masonry_dem.solvers.static.certificate`); a path that stops without one is
-    ``FAILED``, with every step it converged kept."""
+    ``FAILED``, with every step it converged kept. A ``str`` enum: ``status == "collapse"``
+    holds and ``json.dumps`` writes the plain value.
+
+    Examples
+    --------
+    >>> import masonry_dem as md
+    >>> md.Status("collapse") is md.Status.COLLAPSE, md.Status.COLLAPSE == "collapse"
+    (True, True)
+    >>> f"{md.Status.FAILED}"
+    'failed'
+    """
 
     RUNNING = "running"
     COMPLETED = "completed"
@@ -43,7 +55,19 @@ class Status(_Text):
 
 
 class StopReason(_Text):
-    """Why the path of a run stopped (whatever the status that follows from it)."""
+    """Why the path of a run stopped (whatever the status that follows from it).
+
+    Callers branch on these members, never on words of the reason texts (which are for
+    people). A ``str`` enum, its value the words.
+
+    Examples
+    --------
+    >>> import masonry_dem as md
+    >>> md.StopReason.CURVE_FLAT.value
+    'pushover curve flat'
+    >>> md.StopReason("no live load") is md.StopReason.NO_LIVE_LOAD
+    True
+    """
 
     NONE = "none"  # still running
     DEAD_LOAD = "no equilibrium under the dead load"
@@ -69,9 +93,54 @@ class StopReason(_Text):
 class StepResult:
     """One converged equilibrium state.
 
-    q: (n, 6) block displacements/rotations; actions: (m, 6) local interface actions
-    [f1, f2, fn, m1, m2, m3]; state: (m,) damage code (a
-    :class:`~masonry_dem.constitutive.states.JointState`, named by ``STATE_NAMES``); utilisation: (m,) demand/capacity.
+    The arrays are made read-only at construction.
+
+    Parameters
+    ----------
+    step : int
+        The step's number in its run (0: the dead-load state).
+    load_factor : float
+        lambda of the state.
+    q : numpy.ndarray, shape (n, 6)
+        Block displacements/rotations (u1, u2, u3, w1, w2, w3) [m, rad].
+    actions : numpy.ndarray, shape (m, 6)
+        Local interface actions [f1, f2, fn, m1, m2, m3] [N, N m].
+    state : numpy.ndarray of int32, shape (m,)
+        Damage code (a :class:`~masonry_dem.constitutive.states.JointState`, named by
+        ``STATE_NAMES``).
+    utilisation : numpy.ndarray, shape (m,)
+        Demand/capacity.
+    flags : numpy.ndarray of int32, shape (m,), optional
+        The violated criteria of each joint's strength check (bit flags,
+        :class:`~masonry_dem.constitutive.states.JointFlag`).
+    control_displacement : float, default 0.0
+        The monitored (or largest) displacement [m].
+    iterations : int, default 0
+        Iterations the state took.
+    found_plastic : numpy.ndarray, shape (m, 6), optional
+        The law state's plastic part the state was found with, where the steps before it
+        cannot rebuild it: a rest of the damped motion, whose slip and cracks moved with the
+        wall (None: the one the steps before it give).
+    found_cracked : numpy.ndarray of bool, shape (m,), optional
+        The cracked joints the state was found with, likewise.
+
+    Examples
+    --------
+    >>> import masonry_dem as md
+    >>> blocks, base = md.add_base(md.single_block(0.2, 0.2, 0.1, 18e3))
+    >>> model = md.Model.build(
+    ...     blocks,
+    ...     md.InterfaceMaterial(kn=1e9, kt=4e8, friction=0.6),
+    ...     supports=[md.Support([base])],
+    ...     loads=[md.SelfWeight(), md.WeightProportional((1, 0, 0))],
+    ... )
+    >>> history = md.pushover(model)
+    >>> step = history.last
+    >>> step.q.shape, step.actions.shape, round(step.load_factor, 6)
+    ((2, 6), (1, 6), 0.6)
+    >>> from masonry_dem.results import STATE_NAMES
+    >>> STATE_NAMES[step.state[0]]
+    'sliding'
     """
 
     step: int
@@ -123,9 +192,46 @@ class Steps(Protocol):
 
 @dataclass
 class History:
-    """All steps of a run, and how it ended: ``status`` (collapse only when certified),
-    ``stop`` (why the path stopped), ``reason`` (the same for people) and, for a stop the
-    solver took for a collapse, the ``certificate`` that confirmed or refused it."""
+    """All steps of a run, and how it ended.
+
+    Parameters
+    ----------
+    steps : list of StepResult or StreamedSteps, optional
+        The converged steps (a list, or
+        :class:`masonry_dem.streamed_history.StreamedSteps` on disk).
+    status : Status, default Status.RUNNING
+        How the run ended (collapse only when certified).
+    reason : str, default ""
+        Why the path stopped, for people.
+    stop : StopReason, default StopReason.NONE
+        Why the path stopped, for code.
+    certificate : Certificate, optional
+        For a stop the solver took for a collapse, the certificate that confirmed or refused
+        it.
+    collapse_bracket : (float, float), optional
+        The refined bracket of lambda at collapse: the last converged value and the first
+        failed one.
+    seconds : float, default 0.0
+        Wall-clock time of the run.
+    iterations, factorizations : int, default 0
+        Solver iterations and factorizations of the run.
+
+    Examples
+    --------
+    >>> import masonry_dem as md
+    >>> blocks, base = md.add_base(md.single_block(0.2, 0.2, 0.1, 18e3))
+    >>> model = md.Model.build(
+    ...     blocks,
+    ...     md.InterfaceMaterial(kn=1e9, kt=4e8, friction=0.6),
+    ...     supports=[md.Support([base])],
+    ...     loads=[md.SelfWeight(), md.WeightProportional((1, 0, 0))],
+    ... )
+    >>> history = md.pushover(model)
+    >>> history.status, history.stop
+    (<Status.COLLAPSE: 'collapse'>, <StopReason.STIFFNESS_LOST: 'stiffness lost'>)
+    >>> round(history.collapse_multiplier, 6), len(history.steps)
+    (0.6, 7)
+    """
 
     steps: Steps = field(default_factory=lambda: list[StepResult]())
     status: Status = Status.RUNNING
@@ -138,7 +244,18 @@ class History:
     factorizations: int = 0
 
     def end(self, status: Status, stop: StopReason, reason: str) -> None:
-        """How the path ended (a collapse is still to be certified by the solver)."""
+        """Record how the path ended (a collapse is still to be certified by the solver).
+
+        Parameters
+        ----------
+        status : Status
+            How the run ended; ``COMPLETED`` clears the collapse bracket (the path went on
+            past every bracket load control had set: no collapse).
+        stop : StopReason
+            Why the path stopped.
+        reason : str
+            The same for people.
+        """
         self.status, self.stop, self.reason = Status(status), stop, reason
         if self.status == Status.COMPLETED:
             # the path went on past every bracket load control had set: no collapse
@@ -162,6 +279,7 @@ class History:
 
     @property
     def last(self) -> StepResult:
+        """The last converged step."""
         return self.steps[-1]
 
     @property
@@ -171,10 +289,24 @@ class History:
 
     @property
     def final_load_factor(self) -> float:
+        """lambda of the last converged step (0 without one)."""
         return float(self.steps[-1].load_factor) if self.steps else 0.0
 
     def summary(self, **extra: Any) -> dict[str, Any]:
-        """What summary.json holds of the run (``extra``: more fields, e.g. the method)."""
+        """What summary.json holds of the run.
+
+        Parameters
+        ----------
+        **extra
+            More fields, e.g. the method.
+
+        Returns
+        -------
+        dict
+            status, reason, stop, steps, lambda (the collapse multiplier, else the final
+            load factor), lambda_bracket, iterations, factorizations, seconds, certificate,
+            then ``extra``.
+        """
         out = {
             "status": str(self.status),
             "reason": self.reason,
