@@ -28,58 +28,94 @@ CONTINUATION: tuple[str, ...] = get_args(Continuation)
 
 @dataclass(frozen=True)
 class StaticSettings(LoadPathSettings):
-    """The settings of the static solver: the parameters of its methods and its physical
-    tolerances (docs/solvers.md, "Settings", gives each with its range and source). Step
-    sizes are in load scales |F_D| / |F_L| (1 for a tilt table, where the live load is the
-    weight turned horizontal).
+    """The settings of the static solver: the parameters of its methods and its tolerances.
 
-    The path (load control, then work control; Batoz & Dhatt 1979)
-    ---------------------------------------------------------------
-    initial_step, max_step, growth: lambda increments of load control in load scales; an
-        easy step makes the next one ``growth`` times longer (the same rule for the steps of
-        work control).
-    easy_iterations: a step that converges in at most this many Newton iterations is easy
-        (quadratic convergence from well inside the basin).
-    bracket_tolerance: collapse bracket width, relative to lambda; also how far above a stop
-        the instability rule looks for rest.
-    refine: halve a failed load step (False: stop at the first failure, an upper bracket
-        only, unchecked by the instability rule).
-    max_steps: converged steps of a run (all path followers together).
-    max_load_factor: the run ends ``completed`` when lambda reaches it.
-    displacement_limit: largest translation [m] still in the small-displacement range (None:
-        half the smallest dimension of the blocks that can move).
-    continuation: what follows the first failure of load control: ``"work"`` (default), the
-        work-conjugate displacement of the live load prescribed, lambda free, past plastic
-        plateaus; ``"bracket"``: the paper's method, the load-control bracket refined.
-    elastic_first_step: the first live step goes to just short of the end of the elastic
-        range (the load at which the first joint reaches its strength domain along the
-        tangent response of the dead-load state), started from that response.
-    flat_slope: a work step gaining less than this fraction of the elastic d lambda / d w is
-        flat; three in a row end the path (a formed mechanism); near the stop a step gains
-        at most ``flat_slope`` x lambda (:func:`.steps.tail_cap`).
+    The physical tolerances and the parameters of the methods, each with its range and source
+    in docs/solvers.md, "Settings". Step sizes are in load scales |F_D| / |F_L| (1 for a tilt
+    table, where the live load is the weight turned horizontal). The fields come in three
+    groups: the path (load control, then work control; Batoz & Dhatt 1979), from
+    ``initial_step`` to ``flat_slope``; one equilibrium (the corrector: Newton with a trust
+    region and a line search), from ``tolerance`` to ``tangent``; the certificate of a
+    collapse (:mod:`masonry_dem.solvers.static.certificate`), from ``certify`` on. A value out
+    of range is refused at construction, by the field's name.
 
-    One equilibrium (the corrector: Newton with a trust region and a line search)
-    ------------------------------------------------------------------------------
-    tolerance: force residual |R| / |F_D + lambda F_L| (moments as forces at the median
-        block size) below which a state is in equilibrium.
-    control_tolerance: a controlled displacement is reached within this fraction of the step.
-    max_iterations: Newton iterations per search.
-    residual_stiffness: fraction of the elastic stiffness kept on the tangent's diagonal.
-    tangent: ``"analytic"`` (the closed-form derivative of the return) or ``"difference"``.
+    Parameters
+    ----------
+    initial_step, max_step : float, default 0.02 and 1.0
+        The first and the largest lambda increment of load control in load scales, > 0.
+    growth : float, default 1.5
+        An easy step makes the next one ``growth`` times longer (the same rule for the steps
+        of work control), >= 1.
+    bracket_tolerance : float, default 0.005
+        Collapse bracket width, relative to lambda, > 0; also how far above a stop the
+        instability rule looks for rest.
+    refine : bool, default True
+        Halve a failed load step (False: stop at the first failure, an upper bracket only,
+        unchecked by the instability rule).
+    max_steps : int, default 1000
+        Converged steps of a run (all path followers together), >= 1.
+    max_load_factor : float, default inf
+        The run ends ``completed`` when lambda reaches it, > 0 (inf: no cap).
+    displacement_limit : float, optional
+        Largest translation [m] still in the small-displacement range, > 0 (None: half the
+        smallest dimension of the blocks that can move).
+    easy_iterations : int, default 6
+        A step that converges in at most this many Newton iterations is easy (quadratic
+        convergence from well inside the basin), >= 0.
+    continuation : {"work", "bracket"}, default "work"
+        What follows the first failure of load control: ``"work"``, the work-conjugate
+        displacement of the live load prescribed, lambda free, past plastic plateaus;
+        ``"bracket"``: the paper's method, the load-control bracket refined.
+    elastic_first_step : bool, default True
+        The first live step goes to just short of the end of the elastic range (the load at
+        which the first joint reaches its strength domain along the tangent response of the
+        dead-load state), started from that response.
+    tolerance : float, default 1e-8
+        Force residual |R| / |F_D + lambda F_L| (moments as forces at the median block size)
+        below which a state is in equilibrium, > 0.
+    control_tolerance : float, default 1e-6
+        A controlled displacement is reached within this fraction of the step, > 0.
+    max_iterations : int, default 40
+        Newton iterations per search, >= 1.
+    residual_stiffness : float, default 1e-9
+        Fraction of the elastic stiffness kept on the tangent's diagonal, > 0.
+    tangent : {"analytic", "difference"}, default "analytic"
+        ``"analytic"`` (the closed-form derivative of the return) or ``"difference"``.
+    flat_slope : float, default 1e-3
+        A work step gaining less than this fraction of the elastic d lambda / d w is flat;
+        three in a row end the path (a formed mechanism); near the stop a step gains at most
+        ``flat_slope`` x lambda (:func:`.steps.tail_cap`). Finite.
+    certify : bool, default True
+        Check a collapse before reporting it, with the instability rule at every stop (False:
+        the stop of the path is reported as a collapse, unchecked).
+    mode_stiffness : float, default 0.05
+        The tangent of the last state is singular along the live load's mode when its
+        Rayleigh quotient rho (against the dead-load tangent) is at most this, > 0.
+    bound_tolerance : float, default 0.01
+        lambda may exceed the associative limit-analysis bound (when one is given) by this
+        fraction, > 0.
 
-    The certificate of a collapse (:mod:`masonry_dem.solvers.static.certificate`)
-    ---------------------------------------------------------------------------
-    certify: check a collapse before reporting it, with the instability rule at every stop
-        (False: the stop of the path is reported as a collapse, unchecked).
-    mode_stiffness: the tangent of the last state is singular along the live load's mode
-        when its Rayleigh quotient rho (against the dead-load tangent) is at most this.
-    bound_tolerance: lambda may exceed the associative limit-analysis bound (when one is
-        given) by this fraction.
+    Raises
+    ------
+    ValueError
+        If a field is out of its range, named.
 
+    Notes
+    -----
     Where Newton finds no equilibrium, and at every stop of the path, one rule decides: the
     damped motion of the reference analysis (:mod:`masonry_dem.solvers.quasi_static`) at a
     bracket above (``StaticSolver.rule_at``). Its own numbers and the corrector's safeguards
     are constants of their modules, each with its reason.
+
+    Examples
+    --------
+    >>> import masonry_dem as md
+    >>> md.StaticSettings(continuation="bracket").max_step
+    1.0
+    >>> md.StaticSettings(growth=0.5)  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    ValueError: ...growth...
     """
 
     easy_iterations: int = count(6, least=0)
@@ -101,7 +137,30 @@ SETTING_NAMES = tuple(f.name for f in fields(StaticSettings))
 
 @dataclass(frozen=True)
 class DisplacementControl:
-    """Drive DOF ``dof`` (name, e.g. ``u3``) of ``block`` to ``target`` in ``steps`` steps."""
+    """Drive DOF ``dof`` (name, e.g. ``u3``) of ``block`` to ``target`` in ``steps`` steps.
+
+    Parameters
+    ----------
+    block : int
+        The driven block, >= 0.
+    dof : {"u1", "u2", "u3", "w1", "w2", "w3"}
+        The driven DOF.
+    target : float
+        The displacement [m] (or rotation [rad]) to reach, finite and not 0.
+    steps : int, default 50
+        Steps to reach it, >= 1.
+
+    Raises
+    ------
+    ValueError
+        If a field is out of its range, named.
+
+    Examples
+    --------
+    >>> import masonry_dem as md
+    >>> md.DisplacementControl(block=5, dof="u3", target=0.01).steps
+    50
+    """
 
     block: int
     dof: DofName
