@@ -95,36 +95,64 @@ NEWTON_FORCING = 1e-2
 class QuasiStaticSettings:
     """How finely the reference analysis loads and moves the wall.
 
-    first_increment: the load increment while lambda is small, in load scales |F_D| / |F_L|
-        (1 for a tilt table).
-    load_increment: the largest load increment, relative to lambda (the loading rate).
-    growth: an increment after which the wall came to rest in a few time steps (an elastic
-        or nearly elastic response) makes the next one this many times longer, up to the
-        cap of ``load_increment``.
-    bracket_tolerance: the width of the collapse bracket, relative to lambda.
-    tolerance: the force residual |R| / |F_D + lambda F_L| of a rest (moments as forces at
-        the median block size), as the static solver's ``tolerance``.
-    motion_tolerance: the local error of a time step, in elastic units of the wall (its
-        largest translation under the dead load) and as a fraction of the distance moved
-        since the last rest.
-    max_time_steps: time steps at one load before the analysis gives up without a verdict.
-    max_newton: Newton iterations of one time step before it is taken again half as long.
-    displacement_limit: a motion at one load that runs this far from the last rest [m]
-        is a mechanism: no rest (None: half the smallest dimension of the moving blocks, as
-        the static solver); under the dead load, from the unloaded wall, with the elastic
-        displacement of the bonded wall under its weight added. The model is geometrically
-        linear: an elastic deflection that grows with the load is no mechanism, however
-        large (the collapse's reason says when the last rest lies past the limit).
-    max_load_factor: the analysis ends ``completed`` when lambda reaches it.
-    newton_steps: each increment is first tried by the static solver's safeguarded Newton
-        corrector from the last rest (:meth:`QuasiStatic.newton`), the damped motion
-        running only where Newton does not converge, and the increments follow the
-        iteration rule of Crisfield (1981): times (``target_iterations`` / I) ** 1/2 after
-        a step of I iterations, within [1/2, ``growth``], up to ``max_step`` load scales and
-        the loading rate of ``load_increment``, and never below ``bracket_tolerance`` x
-        lambda. False (the reference): every increment by the damped motion.
-    target_iterations, max_step: the iteration rule's target and its largest increment
-        (load scales), with ``newton_steps``.
+    A value out of range is refused at construction, by the field's name.
+
+    Parameters
+    ----------
+    first_increment : float, default 0.01
+        The load increment while lambda is small, in load scales |F_D| / |F_L| (1 for a tilt
+        table), > 0.
+    load_increment : float, default 0.02
+        The largest load increment, relative to lambda (the loading rate), > 0.
+    growth : float, default 1.5
+        An increment after which the wall came to rest in a few time steps (an elastic or
+        nearly elastic response) makes the next one this many times longer, up to the cap of
+        ``load_increment``; >= 1.
+    bracket_tolerance : float, default 1e-3
+        The width of the collapse bracket, relative to lambda, > 0.
+    tolerance : float, default 1e-8
+        The force residual |R| / |F_D + lambda F_L| of a rest (moments as forces at the
+        median block size), as the static solver's ``tolerance``; > 0.
+    motion_tolerance : float, default 0.01
+        The local error of a time step, in elastic units of the wall (its largest
+        translation under the dead load) and as a fraction of the distance moved since the
+        last rest; > 0.
+    max_time_steps : int, default 20000
+        Time steps at one load before the analysis gives up without a verdict, >= 1.
+    max_newton : int, default 25
+        Newton iterations of one time step before it is taken again half as long, >= 1.
+    displacement_limit : float, optional
+        A motion at one load that runs this far from the last rest [m] is a mechanism: no
+        rest (None: half the smallest dimension of the moving blocks, as the static solver);
+        under the dead load, from the unloaded wall, with the elastic displacement of the
+        bonded wall under its weight added. The model is geometrically linear: an elastic
+        deflection that grows with the load is no mechanism, however large (the collapse's
+        reason says when the last rest lies past the limit).
+    max_load_factor : float, default inf
+        The analysis ends ``completed`` when lambda reaches it, > 0 (inf: no cap).
+    newton_steps : bool, default False
+        Each increment is first tried by the static solver's safeguarded Newton corrector
+        from the last rest (:meth:`QuasiStatic.newton`), the damped motion running only
+        where Newton does not converge, and the increments follow the iteration rule of
+        Crisfield (1981): times (``target_iterations`` / I) ** 1/2 after a step of I
+        iterations, within [1/2, ``growth``], up to ``max_step`` load scales and the loading
+        rate of ``load_increment``, and never below ``bracket_tolerance`` x lambda. False
+        (the reference): every increment by the damped motion.
+    target_iterations : int, default 4
+        The iteration rule's target, with ``newton_steps``; >= 1.
+    max_step : float, default 1.0
+        The iteration rule's largest increment (load scales), with ``newton_steps``; > 0.
+
+    Raises
+    ------
+    ValueError
+        If a field is out of its range, named.
+
+    Examples
+    --------
+    >>> import masonry_dem as md
+    >>> md.QuasiStaticSettings(load_increment=0.05).bracket_tolerance
+    0.001
     """
 
     first_increment: float = positive(0.01)
@@ -574,7 +602,44 @@ def quasi_static(
     settings: QuasiStaticSettings | None = None,
     callback: Callable[[StepResult], None] | None = None,
 ) -> History:
-    """The reference quasi-static analysis of ``model`` (see :mod:`.quasi_static`): the
-    wall, with dashpots beside its joints, loaded slowly and moved to rest after every
-    increment; the collapse multiplier is the highest load at which it rests."""
+    """The reference quasi-static analysis of ``model``.
+
+    The wall, with dashpots beside its joints, is loaded slowly and moved to rest after every
+    increment (see :mod:`masonry_dem.solvers.quasi_static`); the collapse multiplier is the
+    highest load at which it rests.
+
+    Parameters
+    ----------
+    model : Model
+        The wall.
+    settings : QuasiStaticSettings, optional
+        How finely it is loaded and moved (None: the defaults).
+    callback : callable, optional
+        Called with each rest (a :class:`~masonry_dem.StepResult`) as it is found.
+
+    Returns
+    -------
+    History
+        The rests, the status (``collapse`` with the bracket of the last rest and the first
+        load with no rest), the stop and its reason.
+
+    Raises
+    ------
+    ValueError
+        If ``model`` is not a :class:`~masonry_dem.Model`.
+
+    Examples
+    --------
+    >>> import masonry_dem as md
+    >>> blocks, base = md.add_base(md.single_block(0.2, 0.2, 0.1, 18e3))
+    >>> model = md.Model.build(
+    ...     blocks,
+    ...     md.InterfaceMaterial(kn=1e9, kt=4e8, friction=0.6),
+    ...     supports=[md.Support([base])],
+    ...     loads=[md.SelfWeight(), md.WeightProportional((1, 0, 0))],
+    ... )
+    >>> history = md.quasi_static(model)
+    >>> str(history.status), round(history.collapse_multiplier, 3)
+    ('collapse', 0.6)
+    """
     return QuasiStatic(model, settings).run(callback)

@@ -21,48 +21,105 @@ Stability = Literal["elastic", "current"]
 
 @dataclass(frozen=True)
 class DRSettings(LoadPathSettings):
-    """Knobs of dynamic relaxation (why each default has its value:
-    docs/history/solvers_record.md, "Dynamic relaxation: what it does and its defaults").
+    """Knobs of dynamic relaxation.
 
-    The load path's fields (steps, bracket, caps) are those of
+    Why each default has its value: docs/history/solvers_record.md, "Dynamic relaxation: what
+    it does and its defaults". The load path's fields (steps, bracket, caps: ``initial_step``
+    to ``displacement_limit``) are those of
     :class:`~masonry_dem.solvers.load_path.LoadPathSettings`, as in
     :class:`~masonry_dem.solvers.static.settings.StaticSettings`; only ``max_step`` has its
-    own default here.
+    own default here. A value out of range is refused at construction, by the field's name.
 
-    max_step: the largest lambda increment of a load step (shorter than the static solver's:
-        each step is relaxed from the last converged state).
-    mass: ``"stiffness"`` (M_ii from the rows of the elastic K: the stable step is 2 on every
+    Parameters
+    ----------
+    initial_step : float, default 0.02
+        The first lambda increment, in load scales |F_D| / |F_L|, > 0.
+    max_step : float, default 0.2
+        The largest lambda increment of a load step (shorter than the static solver's: each
+        step is relaxed from the last converged state), > 0.
+    growth : float, default 1.5
+        An easy step makes the next one ``growth`` times longer, >= 1.
+    bracket_tolerance : float, default 0.005
+        Width of the collapse bracket, relative to lambda, > 0.
+    refine : bool, default True
+        Halve a failed load step (False: stop at the first failure, an upper bracket only).
+    max_steps : int, default 1000
+        Converged steps of a run, >= 1.
+    max_load_factor : float, default inf
+        The run ends ``completed`` when lambda reaches it, > 0 (inf: no cap).
+    displacement_limit : float, optional
+        Largest translation [m] still in the small-displacement range, > 0 (None: the
+        solver's own, from the size of the blocks).
+    mass : {"stiffness", "density"}, default "stiffness"
+        ``"stiffness"`` (M_ii from the rows of the elastic K: the stable step is 2 on every
         wall) or ``"density"`` (the blocks' masses and inertias, one common factor).
-    dt_rule: how the stability limit 2 / sqrt(lambda_max(M^-1 K)) is estimated:
-        ``"gershgorin"`` (a bound, never under) or ``"power"`` (power iterations, 5 % margin).
-    dt_fraction: the time step as a fraction of that limit.
-    dt: the time step by hand (None: from ``dt_rule`` and ``dt_fraction``).
-    stability: the stiffness the limit is taken from: ``"elastic"`` (bounds every state of the
-        law) or ``"current"`` (the secant stiffness of the last converged state).
-    damping: ``"kinetic"`` (velocities zeroed at each peak of the kinetic energy) or
-        ``"viscous"`` (Underwood's adaptive C = 2 xi omega_min M).
-    viscous_ratio: xi of the viscous damping, as a fraction of critical.
-    loading: ``"steps"`` (load steps relaxed one by one, as in the static solver) or
-        ``"ramp"`` (lambda grows continuously, then the passed states are verified).
-    ramp_rate: lambda, in load scales, per unit of pseudo time of the ramp (the stable step
-        is 2).
-    check_every, ramp_tolerance: the ramp offers a state for verification every
-        ``check_every`` time steps when its relative residual is at most ``ramp_tolerance``.
-    tolerance, energy_tolerance: a relaxation is at rest when its relative residual is at most
-        ``tolerance`` and its kinetic energy at most ``energy_tolerance`` times its peak.
-    max_cycles: the most time steps one relaxation may take while its residual keeps halving.
-    stall_factor, min_stall_window: a relaxation whose residual does not halve within
-        ``stall_factor`` times the time steps of the slowest converged one (at least
-        ``min_stall_window``) has stalled: a mechanism, or too close to one to settle.
-    max_time_steps: time steps of the whole run; spent, the run ends ``failed``.
-    on_blowup: a time step found above the stability limit is ``"cut"`` (halved, and the
-        relaxation repeated from its start) or ends the run (``"refuse"``).
-    max_cuts: the most halvings of the time step in one run.
-    blowup_patience: steps above the stability limit that end a relaxation.
-    power_iterations: iterations of ``dt_rule="power"``.
-    compiled_steps: the time steps of kinetic damping at a fixed load run in one compiled
-        function (the same bits as the Python loop, which False selects;
-        docs/history/solvers_record.md, "One compiled time step").
+    dt_rule : {"gershgorin", "power"}, default "gershgorin"
+        How the stability limit 2 / sqrt(lambda_max(M^-1 K)) is estimated: ``"gershgorin"``
+        (a bound, never under) or ``"power"`` (power iterations, 5 % margin).
+    dt_fraction : float, default 0.9
+        The time step as a fraction of that limit, > 0.
+    dt : float, optional
+        The time step by hand, finite and > 0 (None: from ``dt_rule`` and ``dt_fraction``).
+    stability : {"elastic", "current"}, default "elastic"
+        The stiffness the limit is taken from: ``"elastic"`` (bounds every state of the law)
+        or ``"current"`` (the secant stiffness of the last converged state).
+    damping : {"kinetic", "viscous"}, default "kinetic"
+        ``"kinetic"`` (velocities zeroed at each peak of the kinetic energy) or ``"viscous"``
+        (Underwood's adaptive C = 2 xi omega_min M).
+    viscous_ratio : float, default 1.0
+        xi of the viscous damping, as a fraction of critical, > 0.
+    loading : {"steps", "ramp"}, default "steps"
+        ``"steps"`` (load steps relaxed one by one, as in the static solver) or ``"ramp"``
+        (lambda grows continuously, then the passed states are verified).
+    ramp_rate : float, default 2e-4
+        lambda, in load scales, per unit of pseudo time of the ramp (the stable step is 2),
+        > 0.
+    check_every : int, default 25
+        The ramp offers a state for verification every ``check_every`` time steps when its
+        relative residual is at most ``ramp_tolerance``; >= 1.
+    ramp_tolerance : float, default 0.01
+        See ``check_every``; > 0.
+    tolerance : float, default 1e-4
+        A relaxation is at rest when its relative residual is at most ``tolerance`` and its
+        kinetic energy at most ``energy_tolerance`` times its peak; > 0.
+    energy_tolerance : float, default 1e-6
+        See ``tolerance``; > 0.
+    max_cycles : int, default 400000
+        The most time steps one relaxation may take while its residual keeps halving (near a
+        peak one load step can need 1e5 time steps; one that stops converging ends earlier,
+        by the stall test); >= 1.
+    stall_factor : float, default 5.0
+        A relaxation whose residual does not halve within ``stall_factor`` times the time
+        steps of the slowest converged one (at least ``min_stall_window``) has stalled: a
+        mechanism, or too close to one to settle; > 0.
+    min_stall_window : int, default 200
+        See ``stall_factor``; >= 1.
+    max_time_steps : int, default 2000000
+        Time steps of the whole run; spent, the run ends ``failed``. >= 1.
+    on_blowup : {"cut", "refuse"}, default "cut"
+        A time step found above the stability limit is ``"cut"`` (halved, and the relaxation
+        repeated from its start) or ends the run (``"refuse"``).
+    max_cuts : int, default 6
+        The most halvings of the time step in one run, >= 0.
+    blowup_patience : int, default 5
+        Steps above the stability limit that end a relaxation, >= 1.
+    power_iterations : int, default 30
+        Iterations of ``dt_rule="power"``, >= 1.
+    compiled_steps : bool, default True
+        The time steps of kinetic damping at a fixed load run in one compiled function (the
+        same bits as the Python loop, which False selects; docs/history/solvers_record.md,
+        "One compiled time step").
+
+    Raises
+    ------
+    ValueError
+        If a field is out of its range, named.
+
+    Examples
+    --------
+    >>> import masonry_dem as md
+    >>> md.DRSettings(damping="viscous").max_step
+    0.2
     """
 
     max_step: float = positive(0.2)
