@@ -41,8 +41,10 @@ def last_increment(history: History) -> NDArray[np.float64]:
 
 
 def collapse_mode(model: Model, step: StepResult, floor: float = 1e-9) -> NDArray[np.float64]:
-    """(n, 6) collapse mechanism at a converged step: the displacement field that the live
-    load drives through the damaged stiffness of the assembly (Eqs. 13-14 of the paper).
+    """The collapse mechanism at a converged step.
+
+    The displacement field that the live load drives through the damaged stiffness of the
+    assembly (Eqs. 13-14 of the paper).
 
     Each interface keeps the stiffness components its state at ``step`` leaves it (zero
     shear and torsion where it slides, zero bending about a rocking axis, nothing where it is
@@ -51,6 +53,39 @@ def collapse_mode(model: Model, step: StepResult, floor: float = 1e-9) -> NDArra
     dominated by the mechanism the load drives: the blocks that turn and the joints across
     which they do. Unlike the last increment of a run, it does not depend on how close to
     the limit the last step came. Scaled so that the largest translation is 1.
+
+    Parameters
+    ----------
+    model : Model
+        The model the step belongs to.
+    step : StepResult
+        A converged step with its interface flags (as every solver records them).
+    floor : float, default 1e-9
+        The fraction of each interface's elastic stiffness kept.
+
+    Returns
+    -------
+    numpy.ndarray, shape (n, 6)
+        The mechanism, its largest block translation 1.
+
+    Raises
+    ------
+    ValueError
+        If the step has no interface flags, or the live load drives no motion.
+
+    Examples
+    --------
+    >>> import masonry_dem as md
+    >>> blocks, base = md.add_base(md.single_block(0.2, 0.2, 0.1, 18e3))  # 72 N
+    >>> model = md.Model.build(
+    ...     blocks,
+    ...     md.InterfaceMaterial(kn=1e9, kt=4e8, friction=0.6),
+    ...     supports=[md.Support([base])],
+    ...     loads=[md.SelfWeight(), md.WeightProportional((1, 0, 0))],
+    ... )
+    >>> mode = md.collapse_mode(model, md.pushover(model).last)
+    >>> mode[0, :3].round(3).tolist()  # the block slides along e1
+    [1.0, 0.0, 0.0]
     """
     from scipy.sparse.linalg import spsolve
 

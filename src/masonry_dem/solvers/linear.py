@@ -25,7 +25,43 @@ class LinearSolution:
 def solve_linear(
     model: Model, load_factor: float = 1.0, assembly: Assembly | None = None
 ) -> LinearSolution:
-    """Solve K q = F_dead + load_factor F_live on the free DOFs."""
+    """Solve K q = F_dead + load_factor F_live on the free DOFs.
+
+    Parameters
+    ----------
+    model : Model
+        The assembly, its joints elastic (bonded).
+    load_factor : float, default 1.0
+        lambda, the factor of the live load.
+    assembly : Assembly, optional
+        The model's assembled matrices, if already built (None: built here).
+
+    Returns
+    -------
+    LinearSolution
+        ``q`` (n, 6) block displacements and rotations, ``actions`` (m, 6) interface actions
+        (local order [f1, f2, fn, m1, m2, m3]), ``reactions`` (n, 6) support reactions (zero
+        on free DOFs), ``relative`` (m, 6) relative displacements.
+
+    Raises
+    ------
+    ValueError
+        If the assembly is a mechanism (the stiffness is singular).
+
+    Examples
+    --------
+    >>> import masonry_dem as md
+    >>> blocks, base = md.add_base(md.single_block(0.2, 0.2, 0.1, 18e3))  # 72 N
+    >>> model = md.Model.build(
+    ...     blocks,
+    ...     md.InterfaceMaterial(kn=1e9, kt=4e8, friction=0.6),
+    ...     supports=[md.Support([base])],
+    ...     loads=[md.SelfWeight(), md.WeightProportional((1, 0, 0))],
+    ... )
+    >>> solution = md.solve_linear(model)
+    >>> solution.reactions[base, :2].round(6).tolist()  # weight and horizontal load
+    [-72.0, 72.0]
+    """
     asm = Assembly.of(model) if assembly is None else assembly
     F = (model.dead + load_factor * model.live).reshape(-1)
     K = asm.stiffness()
