@@ -32,10 +32,39 @@ def set_thread_wait_policy(policy: WaitPolicy = "PASSIVE") -> str:
 
     Threads that spin while they wait (``ACTIVE``) take a core from the serial work between
     the loops and from any other process: passive waiting is the safe default for long runs
-    and busy machines (docs/history/solvers_record.md, "Compiled kernels and threads"). OpenMP reads
-    ``OMP_WAIT_POLICY`` once, when it starts, so call this before the first analysis of the process;
-    the command line calls it first thing. A value already set in the environment is kept. Returns
-    the policy in force.
+    and busy machines (docs/history/solvers_record.md, "Compiled kernels and threads").
+    OpenMP reads ``OMP_WAIT_POLICY`` once, when it starts, so call this before the first
+    analysis of the process; the command line calls it first thing. A value already set in
+    the environment is kept; set after the kernels' threads started, it applies to the next
+    process only (a warning says so).
+
+    Parameters
+    ----------
+    policy : {"PASSIVE", "ACTIVE"}, default "PASSIVE"
+        How the threads wait.
+
+    Returns
+    -------
+    str
+        The policy in force (``OMP_WAIT_POLICY``).
+
+    Raises
+    ------
+    ValueError
+        If ``policy`` is neither value.
+
+    Examples
+    --------
+    >>> import os
+    >>> import masonry_dem as md
+    >>> saved = os.environ.get("OMP_WAIT_POLICY")
+    >>> os.environ["OMP_WAIT_POLICY"] = "ACTIVE"  # set in the environment: kept
+    >>> md.set_thread_wait_policy("PASSIVE")
+    'ACTIVE'
+    >>> if saved is None:
+    ...     del os.environ["OMP_WAIT_POLICY"]
+    ... else:
+    ...     os.environ["OMP_WAIT_POLICY"] = saved
     """
     if policy not in ("PASSIVE", "ACTIVE"):
         raise ValueError(f"policy must be 'PASSIVE' or 'ACTIVE', got {policy!r}")

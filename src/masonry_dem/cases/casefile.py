@@ -58,7 +58,36 @@ _GEOMETRY_EXTRA = {"builder", "base", "openings", "lintels"}
 
 @dataclass(frozen=True)
 class Case:
-    """A scene ready to run: the model, the solver settings and the optional control."""
+    """A scene ready to run: the model, the solver settings and the optional control.
+
+    Made by :func:`load_case` from a case file (docs/case_files.md).
+
+    Parameters
+    ----------
+    model : Model
+        The wall, its supports and loads.
+    settings : StaticSettings
+        The static solver's settings (``[solver]``).
+    control : DisplacementControl or None
+        Displacement control (None: load control).
+    monitor : (int, str) or None
+        (block, DOF name) whose displacement the pushover curve records (None: the largest
+        block translation).
+    source : str
+        Where the case came from (a path, or ``bundled:<name>``).
+    method : {"pushover", "limit"}, default "pushover"
+        ``[analysis] method``: "pushover" (default) or "limit" (limit analysis).
+    limit_options : dict, optional
+        The options of the limit analysis (``associative``, ``grid``, ``backend``,
+        ``time_limit``, ``start``).
+
+    Examples
+    --------
+    >>> import masonry_dem as md
+    >>> case = md.load_case()
+    >>> case.source, case.method, case.model.blocks.count
+    ('bundled:default_wall.toml', 'pushover', 46)
+    """
 
     model: Model
     settings: StaticSettings
@@ -303,9 +332,37 @@ def _at(source: str, where: str) -> Iterator[None]:
 
 
 def load_case(path: str | Path | None = None) -> Case:
-    """Read a case file; with no path, the bundled default wall. Raises FileNotFoundError
-    (no such file) or CaseError naming the file (a folder, unreadable, not UTF-8, not TOML,
-    or refused by the schema)."""
+    """Read a case file; with no path, the bundled default wall.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path, optional
+        The TOML case file (docs/case_files.md); None: the bundled default wall.
+
+    Returns
+    -------
+    Case
+        The model, settings, control, monitor and method the file describes.
+
+    Raises
+    ------
+    FileNotFoundError
+        If there is no such file.
+    CaseError
+        A ValueError naming the file: it is a folder, unreadable, not UTF-8, not TOML, or
+        refused by the schema (the table path, the value and what is allowed named).
+
+    Examples
+    --------
+    >>> import masonry_dem as md
+    >>> case = md.load_case()  # the bundled default wall
+    >>> case.model.name
+    'default wall: dry running-bond panel held on the left edge'
+    >>> md.load_case("no_such_case.toml")
+    Traceback (most recent call last):
+    ...
+    FileNotFoundError: case file not found: no_such_case.toml
+    """
     data, source = read_case_data(path)
     return case_from_dict(data, source=source)
 
