@@ -57,59 +57,104 @@ def limit_analysis(
 ) -> LimitAnalysisResult:
     """The collapse multiplier of ``model``'s live load over its dead load, and the mechanism.
 
-    Args:
-        associative: True: the classical (associative) multiplier, an upper bound of the
-            DEM's with the default cone; False: zero dilatancy (Gilbert et al. 2006).
-        grid: contact points per side of each interface (n x n, >= 2). None: 2 for the
-            associative problem (exact, see the module docstring) and
-            ``NON_ASSOCIATIVE_GRID`` for the frozen capacities of the non-associative one.
-        backend: "highs" (LP, friction pyramid) or "clarabel" (SOCP, the exact cone).
-            None: the one ``cone`` names, else by size, HiGHS below ``EXACT_CONE_FROM``
-            free DOFs and Clarabel from it (HiGHS's time grows far faster).
-        cone: "circumscribed" (default) or "inscribed" pyramid with "highs"; "exact" (the
-            only one) with "clarabel".
-        friction_sides: faces of the pyramid (>= 3). 8 by default: on the bundled wall
-            (out of plane, held on one edge) the circumscribed pyramid of 4, 8 and 16 faces
-            gives 0.587, 0.447 and 0.434 against 0.429 with the exact cone, in 0.7, 1.2
-            and 2.4 s (docs/limit_analysis.md).
-        tolerance, max_iterations, relaxation: the non-associative iteration (the last
-            three lambdas within ``tolerance``, relative; the starting under-relaxation of
-            the frozen actions between solves, halved where lambda turns back and doubled
-            back, to it at most, after three steps the same way).
-        friction_scale: a factor (>= 1) on every joint's friction. ``dem_friction_scale``
-            of the model's alpha makes the LA domain contain the DEM's, so the associative
-            multiplier is an upper bound of the pushover's by Radenkovic's theorem (the
-            result's ``bound`` is then "upper"; ``dem_upper_bound`` does this).
-        column_generation: the non-associative iteration's LPs with "highs": True solves
-            each by column generation (``columns``: the full LP's optimum to a relative
-            1e-7, or 1e-5 where HiGHS's tolerances stall it, certified by its duals, on a
-            master of a few thousand columns), False the
-            full LP (the same lambda per LP, tens of times slower: docs/limit_analysis.md).
-            Ignored with "clarabel" and when associative.
-        nearest_optimum: the non-associative iteration with "highs": after each frozen LP,
-            among its optimal force distributions, the one whose normal actions (fn, m1,
-            m2) are nearest the frozen ones (``selection``: a convex QP by Clarabel at
-            lambda held at the LP's optimum), so that the answer does not depend on which
-            of the degenerate LP's optima the solver returns (the order of its columns).
-            Ignored with "clarabel" and when associative.
-        time_limit: the analysis's wall-clock budget [s] (> 0): every solver is handed what
-            is left of it as its own time limit, and each has an iteration limit too
-            (``budget``); a solve they stop ends "failed", naming the limit, with no
-            multiplier.
-        start: where the non-associative iteration freezes its first capacities:
-            "elastic" (default), the joints' actions under the dead load of least
-            complementary energy (``selection.elastic_state``: the state of the DEM's
-            elastic joints, no self-stress), or "associative", the associative collapse
-            (Gilbert et al. 2006), whose dilatant self-stress the iteration may keep.
-            Ignored when associative.
-        progress: called with a :class:`~masonry_dem.solvers.limit_analysis.LimitProgress`
-            at each iteration of the normal-equation interior point method (walls of about
-            170 free blocks and more) and at each solve of the non-associative iteration:
-            what a long analysis shows while it runs (``masonry-dem limit``'s progress
-            line). A callback that raises is logged and dropped.
+    Solver trouble is a status of the result, never an exception; bad arguments raise
+    ValueError naming the argument.
 
-    Returns a :class:`LimitAnalysisResult`; solver trouble is a status, never an exception
-    (bad arguments raise ValueError naming the argument).
+    Parameters
+    ----------
+    model : Model
+        The wall.
+    associative : bool, default True, keyword-only
+        True: the classical (associative) multiplier, an upper bound of the DEM's with the
+        default cone; False: zero dilatancy (Gilbert et al. 2006).
+    grid : int, optional, keyword-only
+        Contact points per side of each interface (n x n, >= 2). None: 2 for the associative
+        problem (exact, see the module docstring) and ``NON_ASSOCIATIVE_GRID`` for the frozen
+        capacities of the non-associative one.
+    backend : {"highs", "clarabel"}, optional, keyword-only
+        "highs" (LP, friction pyramid) or "clarabel" (SOCP, the exact cone). None: the one
+        ``cone`` names, else by size, HiGHS below ``EXACT_CONE_FROM`` free DOFs and Clarabel
+        from it (HiGHS's time grows far faster).
+    cone : {"circumscribed", "inscribed", "exact"}, optional, keyword-only
+        "circumscribed" (default) or "inscribed" pyramid with "highs"; "exact" (the only
+        one) with "clarabel".
+    friction_sides : int, default 8, keyword-only
+        Faces of the pyramid (>= 3). 8 by default: on the bundled wall (out of plane, held on
+        one edge) the circumscribed pyramid of 4, 8 and 16 faces gives 0.587, 0.447 and
+        0.434 against 0.429 with the exact cone, in 0.7, 1.2 and 2.4 s
+        (docs/limit_analysis.md).
+    tolerance : float, default 1e-3, keyword-only
+        The non-associative iteration stops when its last three lambdas agree within
+        ``tolerance``, relative; in (0, 1).
+    max_iterations : int, default 50, keyword-only
+        Solves of the non-associative iteration, >= 1.
+    relaxation : float, default 0.5, keyword-only
+        The non-associative iteration's starting under-relaxation of the frozen actions
+        between solves, halved where lambda turns back and doubled back, to it at most, after
+        three steps the same way; in (0, 1].
+    friction_scale : float, default 1.0, keyword-only
+        A factor (>= 1) on every joint's friction. ``dem_friction_scale`` of the model's
+        alpha makes the LA domain contain the DEM's, so the associative multiplier is an
+        upper bound of the pushover's by Radenkovic's theorem (the result's ``bound`` is then
+        "upper"; ``dem_upper_bound`` does this).
+    column_generation : bool, default True, keyword-only
+        The non-associative iteration's LPs with "highs": True solves each by column
+        generation (``columns``: the full LP's optimum to a relative 1e-7, or 1e-5 where
+        HiGHS's tolerances stall it, certified by its duals, on a master of a few thousand
+        columns), False the full LP (the same lambda per LP, tens of times slower:
+        docs/limit_analysis.md). Ignored with "clarabel" and when associative.
+    nearest_optimum : bool, default False, keyword-only
+        The non-associative iteration with "highs": after each frozen LP, among its optimal
+        force distributions, the one whose normal actions (fn, m1, m2) are nearest the frozen
+        ones (``selection``: a convex QP by Clarabel at lambda held at the LP's optimum), so
+        that the answer does not depend on which of the degenerate LP's optima the solver
+        returns (the order of its columns). Ignored with "clarabel" and when associative.
+    time_limit : float, default 600, keyword-only
+        The analysis's wall-clock budget [s] (> 0): every solver is handed what is left of it
+        as its own time limit, and each has an iteration limit too (``budget``); a solve they
+        stop ends "failed", naming the limit, with no multiplier.
+    start : {"elastic", "associative"}, default "elastic", keyword-only
+        Where the non-associative iteration freezes its first capacities: "elastic", the
+        joints' actions under the dead load of least complementary energy
+        (``selection.elastic_state``: the state of the DEM's elastic joints, no
+        self-stress), or "associative", the associative collapse (Gilbert et al. 2006), whose
+        dilatant self-stress the iteration may keep. Ignored when associative.
+    progress : callable, optional, keyword-only
+        Called with a :class:`~masonry_dem.solvers.limit_analysis.LimitProgress` at each
+        iteration of the normal-equation interior point method (walls of about 170 free
+        blocks and more) and at each solve of the non-associative iteration: what a long
+        analysis shows while it runs (``masonry-dem limit``'s progress line). A callback
+        that raises is logged and dropped.
+
+    Returns
+    -------
+    LimitAnalysisResult
+        The status ("collapse", "no collapse" or "failed"), the multiplier, the mechanism and
+        the interface actions at collapse.
+
+    Raises
+    ------
+    ValueError
+        If ``model`` is not a :class:`~masonry_dem.Model` or an argument is out of its range
+        (named).
+
+    Examples
+    --------
+    >>> import masonry_dem as md
+    >>> blocks, base = md.add_base(md.single_block(0.2, 0.2, 0.1, 18e3))
+    >>> model = md.Model.build(
+    ...     blocks,
+    ...     md.InterfaceMaterial(kn=1e9, kt=4e8, friction=0.6),
+    ...     supports=[md.Support([base])],
+    ...     loads=[md.SelfWeight(), md.WeightProportional((1, 0, 0))],
+    ... )
+    >>> result = md.limit_analysis(model)
+    >>> result.status, round(result.load_factor, 6)
+    ('collapse', 0.6)
+    >>> result.block_velocities[0, :2].round(3).tolist()  # sliding, dilatant (associative)
+    [1.0, 0.6]
+    >>> round(md.limit_analysis(model, associative=False).load_factor, 6)
+    0.6
     """
     t0 = time.perf_counter()
     require_model("limit_analysis", model)

@@ -21,15 +21,67 @@ STATUSES = ("collapse", "no collapse", "failed")
 class LimitAnalysisResult:
     """Outcome of :func:`limit_analysis`.
 
-    status: "collapse", "no collapse" (no mechanism is possible: the LP is unbounded, or
-        lambda reaches ``LAMBDA_CAP`` x max(1, |dead| / |live|)) or
-        "failed" (``reason`` says why, with the solver's own status).
-    load_factor: the collapse multiplier (nan unless "collapse").
-    bracket: where the solver certifies lambda both ways, (lower, upper) with
-        ``load_factor`` = upper (``normal_ipm``); None otherwise.
-    block_velocities: (n, 6) the collapse mechanism (zeros unless "collapse"), scaled so
-        that the largest translation is 1 and the live load does positive work.
-    interface_actions: (m, 6) local actions [f1, f2, fn, m1, m2, m3] at collapse.
+    Parameters
+    ----------
+    status : {"collapse", "no collapse", "failed"}
+        "collapse"; "no collapse" (no mechanism is possible: the LP is unbounded, or lambda
+        reaches ``LAMBDA_CAP`` x max(1, |dead| / |live|)); or "failed" (``reason`` says why,
+        with the solver's own status).
+    load_factor : float
+        The collapse multiplier (nan unless "collapse").
+    reason : str
+        Why the analysis ended as it did, for people.
+    block_velocities : numpy.ndarray, shape (n, 6)
+        The collapse mechanism (zeros unless "collapse"), scaled so that the largest
+        translation is 1 and the live load does positive work.
+    interface_actions : numpy.ndarray, shape (m, 6)
+        Local actions [f1, f2, fn, m1, m2, m3] at collapse.
+    method : {"associative", "non-associative"}
+        The problem solved.
+    grid : int
+        Contact points per side of each interface.
+    backend : {"highs", "clarabel"}
+        The solver.
+    seconds : float
+        Wall-clock time of the analysis.
+    cone : str, default "circumscribed"
+        The friction cone: "circumscribed" or "inscribed" pyramid, or "exact".
+    friction_sides : int, default 8
+        Faces of the pyramid (0 with the exact cone).
+    iterations : int, default 1
+        Solves of the analysis.
+    load_factors : tuple of float, default ()
+        One per solve (the non-associative iterations).
+    variables, constraints : int, default 0
+        Size of the (last) problem solved.
+    info : dict, optional
+        More about the run (e.g. ``start``, the associative multiplier that bounds the
+        non-associative one).
+    friction_scale : float, default 1.0
+        The factor on every joint's friction.
+    covers_dem : bool, default False
+        ``friction_scale`` >= kappa(alpha): the LA domain holds the DEM's.
+    bracket : (float, float), optional
+        Where the solver certifies lambda both ways, (lower, upper) (statically admissible
+        forces, an admissible mechanism) with ``load_factor`` = upper (``normal_ipm``); None
+        where the solver gives no such bracket.
+    hanging_blocks : tuple of int, default ()
+        The blocks the dead load alone cannot hold with zero dilatancy (``dead_load``): the
+        analysis then ends "failed" with no multiplier.
+
+    Examples
+    --------
+    >>> import masonry_dem as md
+    >>> blocks, base = md.add_base(md.single_block(0.2, 0.2, 0.1, 18e3))
+    >>> model = md.Model.build(
+    ...     blocks,
+    ...     md.InterfaceMaterial(kn=1e9, kt=4e8, friction=0.6),
+    ...     supports=[md.Support([base])],
+    ...     loads=[md.SelfWeight(), md.WeightProportional((1, 0, 0))],
+    ... )
+    >>> result = md.limit_analysis(model)
+    >>> result.summary()["status"], result.bound, result.method
+    ('collapse', 'estimate', 'associative')
     """
 
     status: str
@@ -59,10 +111,12 @@ class LimitAnalysisResult:
 
     @property
     def bound(self) -> str:
-        """What the multiplier is to the DEM's: an "upper" bound (associative, with a cone
-        and a friction whose domain contains the DEM's: ``friction_scale`` >= kappa(alpha),
-        ``dem_domain``) or an "estimate" (non-associative, an inscribed cone, or a DEM
-        alpha the friction does not cover)."""
+        """What the multiplier is to the DEM's: "upper" or "estimate".
+
+        An "upper" bound: associative, with a cone and a friction whose domain contains the
+        DEM's (``friction_scale`` >= kappa(alpha), ``dem_domain``); an "estimate":
+        non-associative, an inscribed cone, or a DEM alpha the friction does not cover.
+        """
         upper = (
             self.method == "associative"
             and self.cone in ("circumscribed", "exact")
@@ -71,6 +125,17 @@ class LimitAnalysisResult:
         return "upper" if upper else "estimate"
 
     def summary(self) -> dict[str, Any]:
+        """What summary.json holds of the analysis.
+
+        Returns
+        -------
+        dict
+            status, reason, lambda (None unless finite), lambda_bracket, method, bound, grid,
+            backend, cone, friction_sides, friction_scale, iterations, load_factors,
+            variables, constraints, seconds, hanging_blocks, and for the non-associative
+            analysis its ``start`` and the associative multiplier of the same cone that
+            bounds it from above (``associative_lambda``).
+        """
         lam = self.load_factor if np.isfinite(self.load_factor) else None
         return {
             "status": self.status,
