@@ -152,22 +152,69 @@ def sweep(
     plots: bool = True,
     progress: bool = False,
 ) -> SweepResult:
-    """Run a case (a TOML path, a parsed case dict, or None: the bundled default wall) over
-    varied values on Dask, writing one row per run to ``out``.
+    """Run a case over varied values on Dask, writing one row per run to ``out``.
 
-    vary: path -> values, or their text (``"0.5:0.9:9"`` a grid, ``"0.5,0.6,0.8"`` a list);
+    Before anything starts, the number of runs and an estimate of their time are logged (a
+    sweep of 10^4 runs or more, or of more than an hour, as a warning).
+
+    Parameters
+    ----------
+    case : str or pathlib.Path or mapping, optional
+        A TOML path, a parsed case dict, or None: the bundled default wall.
+    vary : mapping, optional
+        path -> values, or their text (``"0.5:0.9:9"`` a grid, ``"0.5,0.6,0.8"`` a list);
         several paths are crossed.
-    sample, samples, seed: path -> distribution (``"lognormal(1e9,0.3)"``, ``normal(mean,sd)``,
-        ``uniform(lo,hi)``), drawn ``samples`` times with ``seed`` (one is drawn and recorded
-        in ``sweep.json`` when not given).
-    scheduler: None for a LocalCluster of ``workers`` processes (default: the cores) with one
+    sample : mapping, optional
+        path -> distribution (``"lognormal(1e9,0.3)"``, ``normal(mean,sd)``,
+        ``uniform(lo,hi)``), drawn ``samples`` times with ``seed``.
+    samples : int, default 0
+        Draws of ``sample``.
+    seed : int, optional
+        The seed of the draws (one is drawn and recorded in ``sweep.json`` when not given).
+    out : str or pathlib.Path, default "results/sweep"
+        The sweep's folder.
+    scheduler : optional
+        None for a LocalCluster of ``workers`` processes (default: the cores) with one
         thread each, an address (``"tcp://host:8786"``), or a ``distributed.Client``.
-    keep: "none" (rows only), "summary" (each run's summary.json and pushover.csv) or "all"
+    workers : int, optional
+        Processes of the LocalCluster, 1 to 4096 (None: the cores).
+    keep : {"none", "summary", "all"}, default "none"
+        "none" (rows only), "summary" (each run's summary.json and pushover.csv) or "all"
         (each run's whole results folder, VTU/PVD) under ``out/runs/run_NNNN``.
-    resume: run only the rows ``out`` does not hold yet (same plan, else refused);
-        overwrite: replace a sweep in ``out`` (its own files only); without either, a folder
-        that holds a sweep is refused.
-    progress: log how many runs are done and how long the rest will take.
+    resume : bool, default False
+        Run only the rows ``out`` does not hold yet (same plan, else refused).
+    overwrite : bool, default False
+        Replace a sweep in ``out`` (its own files only); without ``resume`` or
+        ``overwrite``, a folder that holds a sweep is refused.
+    plots : bool, default True
+        Write the sweep's plots (PNG) to ``out``.
+    progress : bool, default False
+        Log how many runs are done and how long the rest will take.
+
+    Returns
+    -------
+    SweepResult
+        What the sweep left in ``out``: the rows (one per run, by run number), the table
+        files (CSV, Parquet), the plots, how many runs ran now and how many a resume found
+        done.
+
+    Raises
+    ------
+    ValueError
+        If ``keep`` or ``workers`` is out of range, the plan is refused (a path, a value or a
+        distribution), or ``out`` holds a sweep and neither ``resume`` (with the same plan)
+        nor ``overwrite`` is given.
+
+    Examples
+    --------
+    Two runs of the bundled wall (about 10 s, most of it starting Dask):
+
+    >>> import masonry_dem as md
+    >>> result = md.sweep(
+    ...     vary={"material.friction": "0.6,0.8"}, out="results/mu", workers=1, plots=False
+    ... )  # doctest: +SKIP
+    >>> result.lambdas.round(3).tolist()  # doctest: +SKIP
+    [0.266, 0.298]
     """
     if keep not in KEEP:
         raise ValueError(f"keep = {plain(keep)}: must be one of {', '.join(KEEP)}")
