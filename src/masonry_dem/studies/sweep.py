@@ -202,8 +202,8 @@ def sweep(
     ------
     ValueError
         If ``keep`` or ``workers`` is out of range, the plan is refused (a path, a value or a
-        distribution), or ``out`` holds a sweep and neither ``resume`` (with the same plan)
-        nor ``overwrite`` is given.
+        distribution), ``resume`` and ``overwrite`` are both given, or ``out`` holds a sweep
+        and neither ``resume`` (with the same plan) nor ``overwrite`` is given.
 
     Examples
     --------
