@@ -327,35 +327,68 @@ class History:
 
 @dataclass(frozen=True)
 class AnalysisResult:
-    """What every analysis returns through :func:`masonry_dem.analyze`: the same core fields
-    for the pushover, dynamic relaxation and limit analysis, and the method's own result.
+    """What every analysis returns through :func:`masonry_dem.analyze`.
 
-    Attributes:
-        method: ``"pushover"``, ``"relaxation"`` or ``"limit"``.
-        status: ``"collapse"`` (a mechanism at ``load_factor``), ``"completed"`` (the run
-            ended with no collapse to report: its target or ``max_load_factor`` reached, or
-            no live load), ``"no collapse"`` (limit analysis: no mechanism exists) or
-            ``"failed"`` (with every step it converged kept; ``reason`` says why).
-        reason: why the analysis ended, in one line a user can read.
-        load_factor: lambda, the collapse multiplier of the live load; None without a
-            collapse.
-        bracket: (lower, upper) of lambda where the method brackets it: the pushover's last
-            converged load and the first without equilibrium; the limit analysis's certified
-            static and kinematic bounds (the normal-equation method); else None.
-        stop: why the path stopped (a :class:`~masonry_dem.solvers.static.outcome.StopReason`
-            value); None for limit analysis.
-        certificate: the pushover's certificate of its collapse (``Certificate.as_dict()``),
-            None where there is none (relaxation and limit analysis have none).
-        bound: limit analysis: what its multiplier is to the pushover's, ``"upper"``,
-            ``"estimate"`` or ``"none"``, with ``bound_reason``; None for the others.
-        mechanism: (n_blocks, 6) the collapse mechanism at a collapse, else None (computed
-            on first use).
-        history: every converged state (pushover, relaxation); None for limit analysis.
-        seconds: wall-clock seconds of the analysis.
-        cost: what it cost: Newton iterations and factorizations (pushover), time steps
-            and law evaluations (relaxation), iterations (limit analysis).
-        details: the method's own result (a :class:`History` or a
-            :class:`~masonry_dem.solvers.limit_analysis.LimitAnalysisResult`).
+    The same core fields for the pushover, dynamic relaxation and limit analysis, and the
+    method's own result.
+
+    Parameters
+    ----------
+    method : {"pushover", "relaxation", "limit"}
+        The method that ran.
+    status : {"collapse", "completed", "no collapse", "failed"}
+        ``"collapse"`` (a mechanism at ``load_factor``), ``"completed"`` (the run ended with
+        no collapse to report: its target or ``max_load_factor`` reached, or no live load),
+        ``"no collapse"`` (limit analysis: no mechanism exists) or ``"failed"`` (with every
+        step it converged kept; ``reason`` says why).
+    reason : str
+        Why the analysis ended, in one line a user can read.
+    load_factor : float or None
+        lambda, the collapse multiplier of the live load; None without a collapse.
+    bracket : (float, float) or None
+        (lower, upper) of lambda where the method brackets it: the pushover's last converged
+        load and the first without equilibrium; the limit analysis's certified static and
+        kinematic bounds (the normal-equation method); else None.
+    stop : str or None
+        Why the path stopped (a :class:`~masonry_dem.solvers.static.outcome.StopReason`
+        value); None for limit analysis.
+    certificate : dict or None
+        The pushover's certificate of its collapse (``Certificate.as_dict()``), None where
+        there is none (relaxation and limit analysis have none).
+    bound : str or None
+        Limit analysis: what its multiplier is to the pushover's, ``"upper"``,
+        ``"estimate"`` or ``"none"``, with ``bound_reason``; None for the others.
+    bound_reason : str or None
+        Why ``bound`` is what it is.
+    history : History or None
+        Every converged state (pushover, relaxation); None for limit analysis.
+    seconds : float
+        Wall-clock seconds of the analysis.
+    cost : dict
+        What it cost: Newton iterations and factorizations (pushover), time steps and law
+        evaluations (relaxation), iterations (limit analysis).
+    details : History or LimitAnalysisResult
+        The method's own result (a :class:`History` or a
+        :class:`~masonry_dem.solvers.limit_analysis.LimitAnalysisResult`).
+    mechanism_of : callable, optional
+        Computes the mechanism on first use (one sparse solve for the pushover's collapse
+        mode: not counted in ``seconds``, nor paid by a caller who never reads it); the
+        property ``mechanism`` is (n_blocks, 6) the collapse mechanism at a collapse, else
+        None.
+
+    Examples
+    --------
+    >>> import masonry_dem as md
+    >>> blocks, base = md.add_base(md.single_block(0.2, 0.2, 0.1, 18e3))
+    >>> model = md.Model.build(
+    ...     blocks,
+    ...     md.InterfaceMaterial(kn=1e9, kt=4e8, friction=0.6),
+    ...     supports=[md.Support([base])],
+    ...     loads=[md.SelfWeight(), md.WeightProportional((1, 0, 0))],
+    ... )
+    >>> result = md.analyze(model, "relaxation")
+    >>> result.summary()["status"], result.mechanism[0, :3].round(3).tolist()
+    ('collapse', [1.0, 0.0, 0.0])
     """
 
     method: str
@@ -377,12 +410,21 @@ class AnalysisResult:
 
     @cached_property
     def mechanism(self) -> NDArray[np.float64] | None:
-        """(n_blocks, 6) the collapse mechanism (the translations of the block centres and the
-        rotations, largest translation 1) at a collapse, else None."""
+        """(n_blocks, 6) the collapse mechanism at a collapse, else None.
+
+        The translations of the block centres and the rotations, largest translation 1.
+        """
         return None if self.mechanism_of is None else self.mechanism_of()
 
     def summary(self) -> dict[str, Any]:
-        """The core fields as JSON-ready values (no NaN: a missing value is None)."""
+        """The core fields as JSON-ready values (no NaN: a missing value is None).
+
+        Returns
+        -------
+        dict
+            method, status, reason, lambda, lambda_bracket, stop, certificate, bound,
+            bound_reason, steps (None without a history), seconds, cost.
+        """
         return {
             "method": self.method,
             "status": self.status,

@@ -28,9 +28,55 @@ def _boolean(name: str, value: Any) -> None:
 
 @dataclass(frozen=True)
 class LimitSettings:
-    """The settings of one limit analysis; each is the keyword argument of ``limit_analysis``
-    of the same name, documented there, and a value out of its range is a ValueError naming
-    it when the settings are made."""
+    """The settings of one limit analysis.
+
+    Each is the keyword argument of ``limit_analysis`` of the same name, documented there in
+    full, and a value out of its range is a ValueError naming it when the settings are made.
+
+    Parameters
+    ----------
+    associative : bool, default True
+        The classical (associative) multiplier; False: zero dilatancy.
+    grid : int, optional
+        Contact points per side of each interface (>= 2; None: by the problem).
+    backend : {"highs", "clarabel"}, optional
+        The solver (None: by ``cone``, else by size).
+    cone : {"circumscribed", "inscribed", "exact"}, optional
+        The friction cone; only "exact" with "clarabel".
+    friction_sides : int, default 8
+        Faces of the pyramid, >= 3.
+    tolerance : float, default 1e-3
+        The non-associative iteration's convergence, relative; in (0, 1).
+    max_iterations : int, default 50
+        Solves of the non-associative iteration, >= 1.
+    relaxation : float, default 0.5
+        Its starting under-relaxation, in (0, 1].
+    friction_scale : float, default 1.0
+        A factor on every joint's friction, >= 1.
+    column_generation : bool, default True
+        The non-associative LPs by column generation.
+    nearest_optimum : bool, default False
+        Among a frozen LP's optima, the one nearest the frozen normal actions.
+    time_limit : float, default 600
+        The wall-clock budget [s], finite and > 0.
+    start : {"elastic", "associative"}, default "elastic"
+        Where the non-associative iteration freezes its first capacities.
+
+    Raises
+    ------
+    ValueError
+        If a setting is out of its range (named).
+
+    Examples
+    --------
+    >>> import masonry_dem as md
+    >>> md.LimitSettings(associative=False, grid=3).keywords()["grid"]
+    3
+    >>> md.LimitSettings(friction_sides=2)
+    Traceback (most recent call last):
+    ...
+    ValueError: friction_sides must be an integer >= 3, got 2
+    """
 
     associative: bool = True
     grid: int | None = None
@@ -82,5 +128,11 @@ class LimitSettings:
             raise ValueError(f"time_limit must be a finite number of seconds > 0, got {limit!r}")
 
     def keywords(self) -> dict[str, Any]:
-        """The settings as ``limit_analysis``'s keyword arguments."""
+        """The settings as ``limit_analysis``'s keyword arguments.
+
+        Returns
+        -------
+        dict
+            Each field by its name.
+        """
         return asdict(self)
