@@ -9,6 +9,12 @@ the API page.
 
 from __future__ import annotations
 
+from pathlib import Path
+from typing import Any
+
+from sphinx.addnodes import pending_xref
+from sphinx.transforms.post_transforms import SphinxPostTransform
+
 import masonry_dem
 
 project = "masonry_dem"
@@ -41,3 +47,27 @@ myst_enable_extensions = ["dollarmath"]
 
 html_theme = "alabaster"
 html_title = f"masonry_dem {release}"
+
+
+def setup(app: Any) -> None:
+    app.add_post_transform(RepositoryLinks)
+
+
+class RepositoryLinks(SphinxPostTransform):
+    """A guide's link to a Markdown file of the repository outside docs/ (e.g.
+    benchmarks/README.md) is right where the guides are read, on the repository's pages; the
+    HTML build has no page for it and shows the link's text. A link to a file that does not
+    exist is still a warning (myst's, after this transform)."""
+
+    default_priority = 8  # before myst's resolver (9)
+
+    def run(self, **kwargs: Any) -> None:
+        docs = Path(self.env.srcdir).resolve()
+        for node in list(self.document.findall(pending_xref)):
+            if node.get("reftype") != "myst" or node.get("refdomain") != "doc":
+                continue
+            target = Path(str(node["reftarget"]))
+            if not target.is_absolute() or target.resolve().is_relative_to(docs):
+                continue
+            if target.with_suffix(".md").is_file() and docs.parent in target.parents:
+                node.replace_self(node[0].deepcopy())

@@ -87,7 +87,7 @@ def subdivide_interfaces(interfaces: Interfaces, n1: int, n2: int) -> Interfaces
     joint turns about its last compressed piece, within 1 / (2 n) of the side from the edge.
     The elastic stiffness is the same matrix (the pieces' areas and second moments about the
     joint centre sum to the joint's), and so is the strength of the joint in shear and
-    bending (mu |fn| and |fn| l / 2); the torsion capacity grows (the pieces' shear forces
+    bending (``mu |fn|`` and ``|fn| l / 2``); the torsion capacity grows (the pieces' shear forces
     act as a couple, as the four corner points of a contact-dynamics code do), and with a
     tensile strength each piece cracks on its own. ``docs/peer_wall.md`` measures what it
     changes: the in-plane peer wall goes from 0.546 to 0.579, inside LMGC90's bracket; on the

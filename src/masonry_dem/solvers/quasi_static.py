@@ -100,7 +100,7 @@ class QuasiStaticSettings:
     Parameters
     ----------
     first_increment : float, default 0.01
-        The load increment while lambda is small, in load scales |F_D| / |F_L| (1 for a tilt
+        The load increment while lambda is small, in load scales ``|F_D| / |F_L|`` (1 for a tilt
         table), > 0.
     load_increment : float, default 0.02
         The largest load increment, relative to lambda (the loading rate), > 0.
@@ -111,7 +111,7 @@ class QuasiStaticSettings:
     bracket_tolerance : float, default 1e-3
         The width of the collapse bracket, relative to lambda, > 0.
     tolerance : float, default 1e-8
-        The force residual |R| / |F_D + lambda F_L| of a rest (moments as forces at the
+        The force residual ``|R| / |F_D + lambda F_L|`` of a rest (moments as forces at the
         median block size), as the static solver's ``tolerance``; > 0.
     motion_tolerance : float, default 0.01
         The local error of a time step, in elastic units of the wall (its largest

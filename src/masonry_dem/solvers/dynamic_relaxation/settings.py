@@ -33,7 +33,7 @@ class DRSettings(LoadPathSettings):
     Parameters
     ----------
     initial_step : float, default 0.02
-        The first lambda increment, in load scales |F_D| / |F_L|, > 0.
+        The first lambda increment, in load scales ``|F_D| / |F_L|``, > 0.
     max_step : float, default 0.2
         The largest lambda increment of a load step (shorter than the static solver's: each
         step is relaxed from the last converged state), > 0.

@@ -25,7 +25,7 @@ class LimitAnalysisResult:
     ----------
     status : {"collapse", "no collapse", "failed"}
         "collapse"; "no collapse" (no mechanism is possible: the LP is unbounded, or lambda
-        reaches ``LAMBDA_CAP`` x max(1, |dead| / |live|)); or "failed" (``reason`` says why,
+        reaches ``LAMBDA_CAP x max(1, |dead| / |live|)``); or "failed" (``reason`` says why,
         with the solver's own status).
     load_factor : float
         The collapse multiplier (nan unless "collapse").

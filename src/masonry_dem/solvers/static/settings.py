@@ -31,7 +31,7 @@ class StaticSettings(LoadPathSettings):
     """The settings of the static solver: the parameters of its methods and its tolerances.
 
     The physical tolerances and the parameters of the methods, each with its range and source
-    in docs/solvers.md, "Settings". Step sizes are in load scales |F_D| / |F_L| (1 for a tilt
+    in docs/solvers.md, "Settings". Step sizes are in load scales ``|F_D| / |F_L|`` (1 for a tilt
     table, where the live load is the weight turned horizontal). The fields come in three
     groups: the path (load control, then work control; Batoz & Dhatt 1979), from
     ``initial_step`` to ``flat_slope``; one equilibrium (the corrector: Newton with a trust
@@ -71,7 +71,7 @@ class StaticSettings(LoadPathSettings):
         which the first joint reaches its strength domain along the tangent response of the
         dead-load state), started from that response.
     tolerance : float, default 1e-8
-        Force residual |R| / |F_D + lambda F_L| (moments as forces at the median block size)
+        Force residual ``|R| / |F_D + lambda F_L|`` (moments as forces at the median block size)
         below which a state is in equilibrium, > 0.
     control_tolerance : float, default 1e-6
         A controlled displacement is reached within this fraction of the step, > 0.
