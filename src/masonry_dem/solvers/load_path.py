@@ -21,20 +21,34 @@ from masonry_dem._validation import (
 
 @dataclass(frozen=True)
 class LoadPathSettings:
-    """How a solver steps lambda from the dead-load state to a collapse (step sizes in units
-    of the load scale |F_D| / |F_L|: 1 for a tilt table, where the live load is the weight
-    turned horizontal).
+    """How a solver steps lambda from the dead-load state to a collapse.
 
-    initial_step, max_step, growth: the first and the largest lambda increment; an easy step
-        makes the next one ``growth`` times longer.
-    bracket_tolerance: width of the collapse bracket, relative to lambda.
-    refine: halve a failed load step (False: stop at the first failure, an upper bracket only).
-    max_steps: converged steps of a run.
-    max_load_factor: the run ends ``completed`` when lambda reaches it (inf: no cap).
-    displacement_limit: largest translation [m] still in the small-displacement range (None:
-        the solver's own, from the size of the blocks).
+    Step sizes are in units of the load scale ``|F_D| / |F_L|``: 1 for a tilt table, where
+    the live load is the weight turned horizontal. A subclass declares its own fields with
+    their ranges in the same way, and documents every field, its base's too.
 
-    A subclass declares its own fields with their ranges in the same way.
+    Parameters
+    ----------
+    initial_step, max_step : float, default 0.02 and 1.0
+        The first and the largest lambda increment, > 0.
+    growth : float, default 1.5
+        An easy step makes the next one ``growth`` times longer, >= 1.
+    bracket_tolerance : float, default 0.005
+        Width of the collapse bracket, relative to lambda, > 0.
+    refine : bool, default True
+        Halve a failed load step (False: stop at the first failure, an upper bracket only).
+    max_steps : int, default 1000
+        Converged steps of a run, >= 1.
+    max_load_factor : float, default inf
+        The run ends ``completed`` when lambda reaches it, > 0 (inf: no cap).
+    displacement_limit : float, optional
+        Largest translation [m] still in the small-displacement range, > 0 (None: the
+        solver's own, from the size of the blocks).
+
+    Raises
+    ------
+    ValueError
+        If a field is out of its range, named.
     """
 
     initial_step: float = positive(0.02)
