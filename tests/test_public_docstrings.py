@@ -50,6 +50,8 @@ def signature_parameters(obj: Any) -> list[str] | None:
     """The parameters a caller passes (None: not a callable with a signature to document)."""
     if isinstance(obj, types.ModuleType) or (inspect.isclass(obj) and issubclass(obj, enum.Enum)):
         return None
+    if getattr(obj, "_is_protocol", False):  # a Protocol is implemented, not constructed
+        return None
     try:
         sig = inspect.signature(obj)
     except (TypeError, ValueError):

@@ -442,12 +442,40 @@ class AnalysisResult:
 
 
 class Observer(Protocol):
-    """What follows a run as it goes, handed to a solver (``observer=``): the solver enters it
-    (``with observer:``) before the first step, calls ``observer(step)`` after each converged
-    step, and ``observer.finish(history)`` once the run is over, with what the solver knows
-    of the run beyond the History (dynamic relaxation: its ``method`` and ``time_steps``);
-    an exception raised by the run leaves the ``with`` block through it. :class:`masonry_dem.export.writer.ResultsWriter` is one: it writes the results
-    folder. The solvers import no writer: whoever wants files passes one."""
+    """What follows a run as it goes, handed to a solver (``observer=``).
+
+    The solver enters it (``with observer:``) before the first step, calls
+    ``observer(step)`` after each converged step, and ``observer.finish(history)`` once the
+    run is over, with what the solver knows of the run beyond the History (dynamic
+    relaxation: its ``method`` and ``time_steps``); an exception raised by the run leaves the
+    ``with`` block through it. :class:`masonry_dem.export.writer.ResultsWriter` is one: it
+    writes the results folder. The solvers import no writer: whoever wants files passes one.
+
+    Examples
+    --------
+    >>> import masonry_dem as md
+    >>> blocks, base = md.add_base(md.single_block(0.2, 0.2, 0.1, 18e3))  # 72 N
+    >>> model = md.Model.build(
+    ...     blocks,
+    ...     md.InterfaceMaterial(kn=1e9, kt=4e8, friction=0.6),
+    ...     supports=[md.Support([base])],
+    ...     loads=[md.SelfWeight(), md.WeightProportional((1, 0, 0))],
+    ... )
+    >>> class Count:
+    ...     def __enter__(self):
+    ...         self.steps = 0
+    ...         return self
+    ...     def __exit__(self, *exc):
+    ...         return None
+    ...     def __call__(self, step):
+    ...         self.steps += 1
+    ...     def finish(self, history, **run):
+    ...         self.status = str(history.status)
+    >>> count = Count()
+    >>> history = md.pushover(model, observer=count)
+    >>> count.steps == len(history.steps), count.status
+    (True, 'collapse')
+    """
 
     def __enter__(self) -> Any: ...
 
@@ -455,4 +483,21 @@ class Observer(Protocol):
 
     def __call__(self, step: StepResult, /) -> None: ...
 
-    def finish(self, history: History, /, *, method: str = ..., time_steps: int = ...) -> Any: ...
+    def finish(self, history: History, /, *, method: str = ..., time_steps: int = ...) -> Any:
+        """Called once the run is over.
+
+        Parameters
+        ----------
+        history : History
+            The run's steps and how it ended.
+        method : str, optional
+            The method, where the solver says it (dynamic relaxation).
+        time_steps : int, optional
+            Time steps of the run (dynamic relaxation).
+
+        Returns
+        -------
+        object
+            Anything; the solver ignores it.
+        """
+        ...

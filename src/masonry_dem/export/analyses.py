@@ -49,12 +49,70 @@ def pushover(
     stream: bool | str | Path | None = None,
     observer: Observer | None = None,
 ) -> History:
-    """Run the static incremental analysis; with ``out`` write VTU/PVD, pushover.csv and
-    summary.json to that folder as the steps converge. ``callback(step)`` is called after
-    each converged step (e.g. a progress bar); ``observer`` follows the run instead of a
-    results folder (:class:`~masonry_dem.results.Observer`); ``bound`` see
-    :class:`~masonry_dem.solvers.static.solver.StaticSolver`; ``stream`` (the History's
-    steps on disk) see :meth:`~masonry_dem.solvers.static.solver.StaticSolver.run`."""
+    """Run the static incremental analysis (the pushover) of ``model``.
+
+    Dead load, then lambda raised (load control, then work control) or a DOF driven
+    (displacement control). With ``out``, VTU/PVD, pushover.csv and summary.json are written
+    to that folder as the steps converge.
+
+    Parameters
+    ----------
+    model : Model
+        The wall.
+    settings : StaticSettings, optional
+        The solver's settings (None: the defaults).
+    control : DisplacementControl, optional
+        Drive one DOF to a target instead of raising lambda (None: load control).
+    out : str or pathlib.Path, optional
+        A results folder to write as the steps converge (None: nothing written; give
+        ``out`` or ``observer``, not both).
+    monitor : (int, str), optional
+        (block, DOF name) whose displacement the pushover curve records (None: the largest
+        block translation).
+    write_every : int, default 1
+        With ``out``: write every ``write_every``-th step (>= 1).
+    callback : callable, optional
+        ``callback(step)`` is called after each converged step (e.g. a progress bar).
+    bound : float or callable, optional
+        An upper bound of the collapse multiplier (the associative limit-analysis multiplier
+        of the model, a number or a function of the model) that a certified collapse may not
+        exceed; None: the certificate says the bound was not checked
+        (:class:`~masonry_dem.solvers.static.solver.StaticSolver`).
+    stream : bool or str or pathlib.Path, optional
+        Keep the History's steps on disk (:mod:`masonry_dem.streamed_history`): a folder,
+        True (a temporary folder), False (in memory), None (on disk when the History would
+        not fit in a quarter of the available memory;
+        :meth:`~masonry_dem.solvers.static.solver.StaticSolver.run`).
+    observer : Observer, optional
+        Follows the run instead of a results folder (:class:`~masonry_dem.results.Observer`).
+
+    Returns
+    -------
+    History
+        The converged steps and how the run ended: ``collapse`` only with a certificate that
+        holds, else ``completed`` or ``failed``, with the stop and its reason.
+
+    Raises
+    ------
+    ValueError
+        If ``model`` is not a :class:`~masonry_dem.Model`, ``bound`` is neither a finite
+        number, a function nor None, ``write_every`` is not a whole number >= 1, or both
+        ``out`` and ``observer`` are given.
+
+    Examples
+    --------
+    >>> import masonry_dem as md
+    >>> blocks, base = md.add_base(md.single_block(0.2, 0.2, 0.1, 18e3))  # 72 N
+    >>> model = md.Model.build(
+    ...     blocks,
+    ...     md.InterfaceMaterial(kn=1e9, kt=4e8, friction=0.6),
+    ...     supports=[md.Support([base])],
+    ...     loads=[md.SelfWeight(), md.WeightProportional((1, 0, 0))],
+    ... )
+    >>> history = md.pushover(model)
+    >>> str(history.status), round(history.collapse_multiplier, 6)  # sliding: mu = 0.6
+    ('collapse', 0.6)
+    """
     from masonry_dem.model import check_bound, require_model
     from masonry_dem.solvers.static.solver import pushover as run
 
@@ -82,9 +140,52 @@ def relax(
     observer: Observer | None = None,
 ) -> History:
     """Run dynamic relaxation; with ``out`` write VTU/PVD, pushover.csv and summary.json.
-    ``callback(step)`` is called after each converged step (e.g. a progress bar);
-    ``observer`` follows the run instead of a results folder
-    (:class:`~masonry_dem.results.Observer`)."""
+
+    Parameters
+    ----------
+    model : Model
+        The wall.
+    settings : DRSettings, optional
+        The knobs of dynamic relaxation (None: the defaults).
+    out : str or pathlib.Path, optional
+        A results folder to write as the steps converge (None: nothing written; give
+        ``out`` or ``observer``, not both).
+    monitor : (int, str), optional
+        (block, DOF name) whose displacement the pushover curve records (None: the largest
+        block translation).
+    write_every : int, default 1
+        With ``out``: write every ``write_every``-th step (>= 1).
+    callback : callable, optional
+        ``callback(step)`` is called after each converged step (e.g. a progress bar).
+    observer : Observer, optional
+        Follows the run instead of a results folder (:class:`~masonry_dem.results.Observer`).
+
+    Returns
+    -------
+    History
+        The converged steps and how the run ended (``collapse`` with the bracket of the last
+        converged and the first failed lambda).
+
+    Raises
+    ------
+    ValueError
+        If ``model`` is not a :class:`~masonry_dem.Model`, ``write_every`` is not a whole
+        number >= 1, or both ``out`` and ``observer`` are given.
+
+    Examples
+    --------
+    >>> import masonry_dem as md
+    >>> blocks, base = md.add_base(md.single_block(0.2, 0.2, 0.1, 18e3))  # 72 N
+    >>> model = md.Model.build(
+    ...     blocks,
+    ...     md.InterfaceMaterial(kn=1e9, kt=4e8, friction=0.6),
+    ...     supports=[md.Support([base])],
+    ...     loads=[md.SelfWeight(), md.WeightProportional((1, 0, 0))],
+    ... )
+    >>> history = md.relax(model)
+    >>> str(history.status), round(history.collapse_multiplier, 3)
+    ('collapse', 0.6)
+    """
     from masonry_dem.model import require_model
     from masonry_dem.solvers.dynamic_relaxation.solver import relax as run
 
