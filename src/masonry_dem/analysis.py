@@ -10,10 +10,10 @@ the collapse mechanism (``mechanism.py``) and, given a folder, writes it (``expo
 
 from __future__ import annotations
 
-import inspect
 import math
 import time
 from collections.abc import Callable, Mapping
+from dataclasses import fields
 from pathlib import Path
 from typing import Any
 
@@ -40,14 +40,6 @@ def method_name(method: str) -> str:
         allowed = ", ".join([*METHODS, *ALIASES])
         raise ValueError(f"method = {method!r}: must be one of {allowed}")
     return name
-
-
-def limit_keywords() -> tuple[str, ...]:
-    """The settings limit analysis takes (the keyword arguments of ``limit_analysis``)."""
-    from masonry_dem.solvers.limit_analysis import limit_analysis
-
-    params = inspect.signature(limit_analysis).parameters
-    return tuple(k for k, p in params.items() if p.kind is p.KEYWORD_ONLY and k != "progress")
 
 
 def analyze(
@@ -127,6 +119,14 @@ def analyze(
     return _limit(model, settings, out, progress, t0)
 
 
+def collapse_lambda(history: History) -> float | None:
+    """The collapse multiplier of a run; None unless it ended in a (finite) collapse."""
+    lam = history.collapse_multiplier
+    if history.status != "collapse" or lam is None or not math.isfinite(lam):
+        return None
+    return float(lam)
+
+
 def _check_settings(name: str, settings: Any, kind: type) -> None:
     if settings is not None and not isinstance(settings, kind):
         raise TypeError(
@@ -170,13 +170,13 @@ def _of_history(
     from masonry_dem.mechanism import collapse_mode
 
     status = str(history.status)
-    lam = history.collapse_multiplier
-    collapse = status == "collapse" and lam is not None and math.isfinite(lam)
+    lam = collapse_lambda(history)
+    collapse = lam is not None
     return AnalysisResult(
         method=method,
         status=status,
         reason=history.reason,
-        load_factor=float(lam) if collapse and lam is not None else None,
+        load_factor=lam,
         bracket=history.collapse_bracket,
         stop=str(history.stop),
         certificate=None if history.certificate is None else history.certificate.as_dict(),
@@ -196,22 +196,21 @@ def _limit(model, settings, out, progress, t0) -> AnalysisResult:
     from masonry_dem.export.limit_results import bound_of
     from masonry_dem.solvers.limit_analysis import LimitSettings, limit_analysis
 
-    if settings is None or isinstance(settings, LimitSettings):
-        options = (settings or LimitSettings()).keywords()
-    elif isinstance(settings, Mapping):
-        options = dict(settings)
-        allowed = limit_keywords()
-        for key in options:
+    if isinstance(settings, Mapping):
+        allowed = [f.name for f in fields(LimitSettings)]
+        for key in settings:
             if key not in allowed:
                 raise ValueError(
                     f"settings[{key!r}] is not a setting of limit analysis: allowed "
                     f"{', '.join(allowed)}"
                 )
-    else:
+        settings = LimitSettings(**settings)
+    if settings is not None and not isinstance(settings, LimitSettings):
         raise TypeError(
             "settings of method 'limit' must be a LimitSettings, a mapping of its fields or "
             f"None, got {type(settings).__name__}"
         )
+    options = (settings or LimitSettings()).keywords()
     result = limit_analysis(model, progress=progress, **options)
     seconds = time.perf_counter() - t0
     if out is not None:

@@ -9,7 +9,6 @@ keyword arguments of :func:`masonry_dem.solvers.limit_analysis.limit_analysis` (
 
 from __future__ import annotations
 
-import math
 import time
 from dataclasses import dataclass, field, replace
 from enum import Enum
@@ -17,6 +16,7 @@ from typing import Any
 
 import numpy as np
 
+from masonry_dem.analysis import collapse_lambda as collapse_lambda
 from masonry_dem.model import Model
 from masonry_dem.results import History
 
@@ -135,14 +135,6 @@ def settings_for(method: Method, static: Any) -> Any:
     if method is Method.LIMIT_ANALYSIS:
         return {}
     raise ValueError(f"unknown method {method!r}")
-
-
-def collapse_lambda(history: History) -> float | None:
-    """The collapse multiplier of a run; None unless it ended in a (finite) collapse."""
-    lam = history.collapse_multiplier
-    if history.status != "collapse" or lam is None or not math.isfinite(lam):
-        return None
-    return float(lam)
 
 
 def relative_error(value: float | None, ref: float | None) -> float | None:

@@ -77,18 +77,17 @@ def _run(data: dict[str, Any], source: str, keep: str, folder: str | None) -> di
 
     case = case_from_dict(data, source)
     if case.method == "limit":
-        la = analyze(case.model, "limit", case.limit_options or {}).details
-        lam = la.load_factor if la.status == "collapse" else None
+        la = analyze(case.model, "limit", case.limit_options or {})
         if folder is not None:
             from masonry_dem.export import results_folder as rf
 
             Path(folder).mkdir(parents=True, exist_ok=True)
-            rf.write_summary(folder, {"case": source, **la.summary()})
+            rf.write_summary(folder, {"case": source, **la.details.summary()})
         return {
             "status": la.status,
             "reason": la.reason,
-            "lambda": lam,
-            "limit_analysis_bound": lam if la.bound == "upper" else None,
+            "lambda": la.load_factor,
+            "limit_analysis_bound": la.load_factor if la.bound == "upper" else None,
             "limit_analysis_status": la.status,
             "folder": folder,
         }

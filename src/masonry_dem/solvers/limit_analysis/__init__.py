@@ -71,7 +71,7 @@ not creep; the iteration reports ``failed`` with the last lambdas when ``max_ite
 pass without it.
 """
 
-from .analysis import BACKENDS, dem_upper_bound, limit_analysis
+from .analysis import dem_upper_bound, limit_analysis
 from .dem_domain import dem_friction_scale, model_friction_scale
 from .formulation import LAMBDA_CAP
 from .interface import (
@@ -84,7 +84,7 @@ from .interface import (
 )
 from .progress import LimitProgress
 from .result import STATUSES, LimitAnalysisResult, mechanism_violation
-from .settings import LimitSettings
+from .settings import BACKENDS, LimitSettings
 
 __all__ = [
     "ASSOCIATIVE_GRID",

@@ -18,11 +18,11 @@ from .budget import DEFAULT_TIME_LIMIT, budget
 from .dead_load import check_dead_load
 from .dem_domain import model_friction_scale
 from .formulation import Problem
-from .interface import ASSOCIATIVE_GRID, NON_ASSOCIATIVE_GRID, lobatto_rule, pyramid_edges
+from .interface import ASSOCIATIVE_GRID, NON_ASSOCIATIVE_GRID, pyramid_edges
 from .non_associative import non_associative
 from .progress import ProgressCallback, reporting
 from .result import _ADMISSIBILITY_TOLERANCE, LimitAnalysisResult, finish, mechanism_violation
-from .settings import BACKENDS, LimitSettings
+from .settings import LimitSettings
 
 log = logging.getLogger(__name__)
 
@@ -158,23 +158,7 @@ def limit_analysis(
     """
     t0 = time.perf_counter()
     require_model("limit_analysis", model)
-    if backend is None:
-        backend = choose_backend(model, cone)
-    if backend not in BACKENDS:
-        raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
-    if backend == "clarabel":
-        if cone not in (None, "exact"):
-            raise ValueError(f"cone must be 'exact' with backend 'clarabel', got {cone!r}")
-        cone = "exact"
-        dirs = None
-    else:
-        cone = "circumscribed" if cone is None else cone
-        dirs = pyramid_edges(friction_sides, cone)
-    if grid is None:
-        grid = ASSOCIATIVE_GRID if associative else NON_ASSOCIATIVE_GRID
-    lobatto_rule(grid)  # validates grid
-    grid = int(grid)
-    # every setting checked (a ValueError naming it), as LimitSettings checks it when made
+    # every setting checked (a ValueError naming it and its range) where LimitSettings is
     LimitSettings(
         associative=associative,
         grid=grid,
@@ -189,6 +173,19 @@ def limit_analysis(
         nearest_optimum=nearest_optimum,
         time_limit=time_limit,
         start=start,
+    )
+    if backend is None:
+        backend = choose_backend(model, cone)
+    if backend == "clarabel":
+        cone = "exact"
+        dirs = None
+    else:
+        cone = "circumscribed" if cone is None else cone
+        dirs = pyramid_edges(friction_sides, cone)  # refuses the exact cone with HiGHS
+    grid = (
+        int(ASSOCIATIVE_GRID if associative else NON_ASSOCIATIVE_GRID)
+        if grid is None
+        else int(grid)
     )
     covers = friction_scale >= model_friction_scale(model) * (1 - 1e-9)
     if friction_scale != 1:
