@@ -19,7 +19,7 @@ import numpy as np
 from _machine import arguments, print_machine
 
 from masonry_dem.cases.casefile import case_from_dict
-from masonry_dem.export.run_case import run_case
+from masonry_dem.run_case import run_case
 
 
 def case(builder, geo, material=None, supports=None, loads=None, analysis=None):

@@ -46,7 +46,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 def _parts() -> dict[str, list[tuple[object, str]]]:
     """(owner, method name) of each part; the owner is a class or a module."""
     from masonry_dem.constitutive.law import InterfaceLaw
-    from masonry_dem.export.run_case import LazyBound
+    from masonry_dem.run_case import LazyBound
     from masonry_dem.solvers import factorization as fz
     from masonry_dem.solvers.static import solver as solver_module
     from masonry_dem.solvers.static.problem import DiscreteProblem, TangentAssembler
@@ -110,7 +110,7 @@ class Timer:
 
 
 def profile(model, settings, monitor=None, bound: bool = False) -> dict:
-    from masonry_dem.export.run_case import LazyBound
+    from masonry_dem.run_case import LazyBound
     from masonry_dem.solvers.static import StaticSolver
 
     timer = Timer()

@@ -21,6 +21,7 @@ STAGES: tuple[tuple[str, ...], ...] = (
         "_arrays",
         "_lazy",
         "_parameters",
+        "_progress",
         "_signals",
         "_threads",
         "_toml",
@@ -38,6 +39,7 @@ STAGES: tuple[tuple[str, ...], ...] = (
     ("cases",),
     ("export",),
     ("analysis",),
+    ("run_case",),
     ("studies",),
     ("cli", "_supervisor", "paraview_states", ""),
 )

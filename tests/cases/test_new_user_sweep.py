@@ -17,7 +17,6 @@ from masonry_dem.cases.casefile import build_blocks, case_from_dict
 from masonry_dem.cases.schema import CaseError
 from masonry_dem.cli import main
 from masonry_dem.export.analyses import pushover
-from masonry_dem.export.run_case import run_case
 from masonry_dem.export.writer import warn_large_closure
 from masonry_dem.geometry.blocks import Blocks
 from masonry_dem.geometry.builders import add_base, single_block, stack_bond_column
@@ -29,6 +28,7 @@ from masonry_dem.model import (
     Support,
     WeightProportional,
 )
+from masonry_dem.run_case import run_case
 from masonry_dem.solvers.incremental import StaticSettings
 
 A, B, S = 0.2, 0.21, 0.07  # s / a = 0.35, below mu = 0.7: the blocks tilt before they slide

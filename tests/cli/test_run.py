@@ -136,7 +136,7 @@ def test_the_limit_analysis_bound_is_computed_only_to_certify_a_collapse(tmp_pat
     then: a run that ends ``completed`` (max_load_factor 0.2, below the block's s/a = 0.5)
     does no limit analysis; a collapse carries the bound (0.5, the block's s/a) checked
     within it; ``--no-bound`` leaves the certificate's bound unchecked."""
-    import masonry_dem.export.run_case as run_module
+    import masonry_dem.run_case as run_module
 
     calls: list[int] = []
     original = run_module.limit_analysis_bound
@@ -166,3 +166,43 @@ def test_the_limit_analysis_bound_is_computed_only_to_certify_a_collapse(tmp_pat
     assert summary["status"] == "collapse" and len(calls) == 1
     assert summary["certificate"]["bound_status"] == "not checked"
     assert summary["limit_analysis_status"] == "not computed (--no-bound)"
+
+
+def test_run_goes_through_analyze_and_shows_the_newton_progress(tmp_path, monkeypatch):
+    """``run_case`` (``masonry-dem run``) runs its pushover through ``md.analyze``: the steps
+    its progress sees are those of the results folder and its lambda is ``analyze``'s on the
+    same model to the last digit; within the steps it is told the solver's Newton iterations
+    and factorizations (every tick here, the interval set to 0), which only grow."""
+    import masonry_dem.analysis as analysis_module
+    import masonry_dem.run_case as run_module
+
+    class Recorder(run_module.Progress):
+        def __init__(self) -> None:
+            self.steps: list[float] = []
+            self.ticks: list[tuple[int, int]] = []
+
+        def step(self, step):
+            self.steps.append(step.load_factor)
+
+        def tick(self, iterations, factorizations):
+            self.ticks.append((iterations, factorizations))
+
+    calls: list[str] = []
+    original = analysis_module.analyze
+
+    def counting(model, method="pushover", *args, **kwargs):
+        calls.append(method)
+        return original(model, method, *args, **kwargs)
+
+    monkeypatch.setattr(analysis_module, "analyze", counting)
+    monkeypatch.setattr(run_module, "TICK_SECONDS", 0.0)
+    case = load_case(_write_case(tmp_path, SINGLE_BLOCK))
+    shown = Recorder()
+    summary = run_module.run_case(case, tmp_path / "res", render=False, progress=shown)
+    assert calls == ["pushover"]
+    rows = np.loadtxt(tmp_path / "res" / "pushover.csv", delimiter=",", skiprows=1, ndmin=2)
+    assert shown.steps == pytest.approx(rows[:, 1].tolist(), rel=1e-9)  # the CSV: 10 digits
+    alone = original(case.model, "pushover", case.settings, monitor=case.monitor)
+    assert summary["lambda"] == alone.load_factor
+    assert shown.ticks and shown.ticks == sorted(shown.ticks)
+    assert shown.ticks[-1][0] <= summary["iterations"]

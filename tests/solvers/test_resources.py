@@ -173,7 +173,7 @@ def test_a_cold_kernel_cache_adds_the_compilation_to_the_time_said(monkeypatch):
     per machine; on a warm cache only the loading of the compiled kernels. The pictures
     count when the run renders."""
     from masonry_dem import jit
-    from masonry_dem.export.run_case import estimate_run
+    from masonry_dem.run_case import estimate_run
 
     model = md.load_case().model
     monkeypatch.setattr(jit, "_cached", lambda disp: False)

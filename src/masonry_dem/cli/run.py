@@ -1,5 +1,5 @@
 """``masonry-dem run [CASE] [--out DIR]``: run a case file (or the bundled default wall); the run
-itself is :func:`masonry_dem.export.run_case.run_case`."""
+itself is :func:`masonry_dem.run_case.run_case`."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from masonry_dem.cli.options import add_case, add_output, add_overwrite, results_line
-from masonry_dem.export.run_case import Progress, estimate_run, run_case
+from masonry_dem.run_case import Progress, estimate_run, run_case
 
 if TYPE_CHECKING:
     from masonry_dem.model import Model

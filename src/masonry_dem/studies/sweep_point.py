@@ -73,7 +73,7 @@ def run_point(
 def _run(data: dict[str, Any], source: str, keep: str, folder: str | None) -> dict[str, Any]:
     from masonry_dem.analysis import analyze
     from masonry_dem.cases.casefile import case_from_dict
-    from masonry_dem.export.run_case import limit_analysis_bound
+    from masonry_dem.run_case import limit_analysis_bound
 
     case = case_from_dict(data, source)
     if case.method == "limit":

@@ -27,6 +27,7 @@ from masonry_dem.model import Model
 from masonry_dem.solvers.factorization import Factors
 from masonry_dem.solvers.static.outcome import Failure, Outcome
 from masonry_dem.solvers.static.problem import DiscreteProblem
+from masonry_dem.solvers.static.progress import report_newton
 from masonry_dem.solvers.static.settings import StaticSettings
 
 if TYPE_CHECKING:
@@ -221,6 +222,7 @@ class Corrector:
                 self.last_increment = self.increment(q)
                 return Outcome(True, q, lam, response, it - 1)
             self.iterations += 1
+            report_newton(self.iterations, self.factorizations)
             check_stop()  # a signal stops a long step here, not after it
             fresh = lu is None
             if lu is None:

@@ -1,9 +1,11 @@
 """One case run into a results folder, as ``masonry-dem run`` runs it: the memory estimate
-checked before anything is built (:func:`estimate_run`), the pushover written step by step
-(:func:`run_case`: Ctrl-C or SIGTERM stop it between steps, every step written), the
-associative limit-analysis bound computed only when a collapse is to be certified
-(:class:`LazyBound`), the summary and the PNGs. The command line adds the progress bar
-(a :class:`Progress`) and prints.
+checked before anything is built (:func:`estimate_run`), the pushover run through
+:func:`~masonry_dem.analysis.analyze` and written step by step (:func:`run_case`: Ctrl-C or
+SIGTERM stop it between steps, every step written), the associative limit-analysis bound
+computed only when a collapse is to be certified (:class:`LazyBound`), the summary and the
+PNGs. The command line adds the progress bar (a :class:`Progress`) and prints.
+
+It sits on top of the data flow with ``analysis.py``, whose entry point it runs.
 """
 
 from __future__ import annotations
@@ -11,6 +13,7 @@ from __future__ import annotations
 import logging
 import threading
 import time
+from collections.abc import Callable
 from dataclasses import replace
 from pathlib import Path
 from types import TracebackType
@@ -20,7 +23,7 @@ if TYPE_CHECKING:
     from masonry_dem.cases.casefile import Case
     from masonry_dem.export.writer import ResultsWriter
     from masonry_dem.model import Model
-    from masonry_dem.results import StepResult
+    from masonry_dem.results import AnalysisResult, StepResult
     from masonry_dem.solvers.resources import Estimate
 
 log = logging.getLogger(__name__)
@@ -212,9 +215,9 @@ def run_case(
         run_interruptible,
         stop_on_signals,
     )
+    from masonry_dem.analysis import analyze
     from masonry_dem.export.results_folder import MECHANISM_FILES
     from masonry_dem.export.writer import ResultsWriter
-    from masonry_dem.solvers.incremental import StaticSolver
     from masonry_dem.solvers.warmup import prepare
 
     out = Path(out)
@@ -250,32 +253,30 @@ def run_case(
             shown.step(step)
             check_stop()  # Ctrl-C or SIGTERM: stop here, between steps, all of them written
 
-        done = threading.Event()
         # from the claim on, a signal (or an error) while the solver is set up is recorded by
         # the writer's exit as it is during the steps
-        with writer:
-            solver = StaticSolver(model, case.settings, bound=lazy)
-
-            def tick() -> None:
-                while not done.wait(TICK_SECONDS):
-                    shown.tick(solver.iterations, solver.factorizations)
-
-            ticker = threading.Thread(target=tick, daemon=True)
-            with shown, stop_on_signals():
-                ticker.start()
-                try:
-                    history = run_interruptible(
-                        lambda: solver.run(
-                            control=case.control, callback=on_step, monitor=case.monitor
-                        )
+        with writer, shown, stop_on_signals():
+            try:
+                result = run_interruptible(
+                    lambda: _reporting_ticks(
+                        shown,
+                        lambda: analyze(
+                            model,
+                            "pushover",
+                            case.settings,
+                            control=case.control,
+                            bound=lazy,
+                            monitor=case.monitor,
+                            progress=on_step,
+                        ),
                     )
-                except BaseException:
-                    with handing:
-                        abandoned.set()
-                    raise
-                finally:
-                    done.set()
-                    ticker.join()
+                )
+            except BaseException:
+                with handing:
+                    abandoned.set()
+                raise
+        history = result.history
+        assert history is not None  # a pushover's result has its history
         with deferred_signals():  # pushover.csv, the mechanism and summary.json agree
             summary: dict[str, Any] = writer.finish(
                 history,
@@ -292,6 +293,25 @@ def run_case(
     finally:
         writer.release()
     return summary
+
+
+def _reporting_ticks(shown: Progress, work: Callable[[], AnalysisResult]) -> AnalysisResult:
+    """``work()`` with the static solver's Newton progress shown by ``shown.tick``, at most
+    once every :data:`TICK_SECONDS` (it runs in the thread that does the work: the
+    progress channel is that thread's)."""
+    from masonry_dem._progress import reporting
+    from masonry_dem.solvers.static.progress import NewtonProgress
+
+    last = [time.monotonic()]
+
+    def listen(event: object) -> None:
+        now = time.monotonic()
+        if isinstance(event, NewtonProgress) and now - last[0] >= TICK_SECONDS:
+            last[0] = now
+            shown.tick(event.iterations, event.factorizations)
+
+    with reporting(listen):
+        return work()
 
 
 def _render(
