@@ -168,10 +168,10 @@ def warm_up(limit: bool = False) -> None:
     """Load the compiled interface law (numba's on-disk cache: about 0.4 s once per process)
     with both incremental solvers on one block, so that the first timed run does not pay
     for it; ``limit``: also both backends of limit analysis (their imports)."""
+    from masonry_dem.analysis import analyze
     from masonry_dem.geometry import builders
     from masonry_dem.model import InterfaceMaterial, SelfWeight, Support, WeightProportional
-    from masonry_dem.solvers.dynamic_relaxation import DRSettings, DynamicRelaxation
-    from masonry_dem.solvers.incremental import StaticSolver
+    from masonry_dem.solvers.dynamic_relaxation import DRSettings
 
     blocks, base = builders.add_base(builders.single_block(0.2, 0.3, 0.1, 20e3))
     model = Model.build(
@@ -180,10 +180,8 @@ def warm_up(limit: bool = False) -> None:
         [Support(np.array([base]))],
         [SelfWeight(), WeightProportional((0.0, 0.0, 1.0))],
     )
-    StaticSolver(model).run()
-    DynamicRelaxation(model, DRSettings(bracket_tolerance=0.05)).run()
+    analyze(model, "pushover")
+    analyze(model, "relaxation", DRSettings(bracket_tolerance=0.05))
     if limit:
-        from masonry_dem.solvers.limit_analysis import limit_analysis
-
         for backend in ("highs", "clarabel"):
-            limit_analysis(model, backend=backend)
+            analyze(model, "limit", {"backend": backend})
