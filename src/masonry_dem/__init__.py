@@ -38,6 +38,7 @@ if TYPE_CHECKING:
     )
     from masonry_dem.geometry.interfaces import detect_interfaces, subdivide_interfaces
     from masonry_dem.geometry.plans import box_wall, l_wall, t_wall, u_wall
+    from masonry_dem.geometry.specimens import shear_wall
     from masonry_dem.mechanism import collapse_mode
     from masonry_dem.model import (
         InterfaceMaterial,
@@ -88,6 +89,7 @@ _LAZY = {
     "detect_interfaces": "masonry_dem.geometry.interfaces",
     "subdivide_interfaces": "masonry_dem.geometry.interfaces",
     **dict.fromkeys(("box_wall", "l_wall", "t_wall", "u_wall"), "masonry_dem.geometry.plans"),
+    "shear_wall": "masonry_dem.geometry.specimens",
     **dict.fromkeys(
         (
             "InterfaceMaterial",
@@ -177,6 +179,7 @@ __all__ = [
     "running_bond_wall_of_size",
     "select",
     "set_thread_wait_policy",
+    "shear_wall",
     "single_block",
     "solve_linear",
     "stack_bond_column",

@@ -22,7 +22,7 @@ from numpy.typing import NDArray
 from masonry_dem._toml import tomllib
 from masonry_dem._validation import plain
 from masonry_dem.cases.schema import CaseError, check_case, located
-from masonry_dem.geometry import builders, plans
+from masonry_dem.geometry import builders, plans, specimens
 from masonry_dem.geometry import selectors as sel
 from masonry_dem.geometry.blocks import Blocks
 from masonry_dem.geometry.interfaces import detect_interfaces
@@ -52,6 +52,7 @@ _BUILDERS = {
     "t_wall": plans.t_wall,
     "u_wall": plans.u_wall,
     "box_wall": plans.box_wall,
+    "shear_wall": specimens.shear_wall,
 }
 _GEOMETRY_EXTRA = {"builder", "base", "openings", "lintels"}
 
@@ -143,11 +144,16 @@ def build_blocks(
         )
     if facade:
         params["lintels"] = lintels
+    # a builder that cuts its own openings (the shear wall: out of the wall, not its beams)
+    own_openings = "openings" in allowed
+    if own_openings:
+        params["openings"] = geometry.get("openings", ())
+        params["lintels"] = lintels
     try:
         blocks = func(**params)
     except TypeError as exc:
         raise ValueError(f"case file [geometry] for builder {builder!r}: {exc}") from exc
-    if geometry.get("openings"):
+    if geometry.get("openings") and not own_openings:
         blocks = builders.cut_openings(blocks, geometry["openings"], lintels=lintels)
     wall = np.ones(blocks.count, dtype=bool)
     base = None

@@ -1,0 +1,153 @@
+"""Test specimens: the in-plane shear wall, a wall built between a bottom and a top beam.
+
+In the classic shear test of masonry (Raijmakers & Vermeltfoort, TU Eindhoven, 1992, as
+Lourenco used them, 1996) the wall stands on a concrete (or steel) beam clamped to the floor;
+a second beam on its top course carries the vertical precompression, is then held at its
+height and against rotation and pushed sideways. Both beams are built here as single rigid
+blocks, so that a support holds the bottom beam and loads, supports and a displacement drive
+act on the top beam as one body.
+
+The wall is a run of ``courses`` courses cut at the bond points: in running bond the head
+joints of alternate courses shift by half a block, and a wall whose length is not a whole
+number of blocks ends in shorter pieces (the 990 mm wall of 210 mm bricks with 10 mm joints:
+four whole bricks and a half in every course, the half at alternate ends), as a bricklayer
+lays it; a piece shorter than 0.3 block stays with its neighbour
+(:data:`~masonry_dem.geometry.plans.SHORTEST_PIECE`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Literal, get_args
+
+import numpy as np
+
+from masonry_dem._parameters import function_of
+from masonry_dem._validation import check_choice, positive_scalar
+from masonry_dem.geometry.blocks import Blocks
+from masonry_dem.geometry.builders import _count, _Courses, _Unit, cut_openings
+from masonry_dem.geometry.plans import _assemble, _Run
+
+#: the bonds a shear wall is built in (``running``: head joints shift by half a block from
+#: course to course; ``stack``: they line up)
+Bond = Literal["running", "stack"]
+BONDS: tuple[str, ...] = get_args(Bond)
+
+
+@dataclass(frozen=True)
+class _ShearWallLength:
+    length: float
+
+
+@dataclass(frozen=True)
+class _ShearWall(_Unit, _Courses, _ShearWallLength):
+    """A wall between a bottom and a top beam, as in-plane shear tests are built.
+
+    The wall is ``length`` long (along e1) and ``courses`` x (a + e) high (along e2), of
+    blocks a x b x s with the joint e included in them, cut at the bond points (running
+    bond: ends in shorter pieces where ``length`` is not a whole number of blocks). Under it
+    a bottom beam, over it a top beam: each one rigid block as long and thick as the wall.
+    The blocks come course by course from the bottom, then the bottom beam, then the top
+    beam (``md.select.edge(blocks, "bottom")`` and ``"top"`` find the beams).
+
+    Parameters
+    ----------
+    length : float
+        The wall's length [m], > 0, at least one block.
+    courses : int
+        Courses of the wall, 1 to 10^4.
+    block_height, block_length, thickness : float
+        The block's a, b and s [m] (along e2, e1, e3), each > 0; required, by name or by
+        letter.
+    unit_weight : float
+        Weight per unit volume of the wall [N/m^3], >= 0 (0: weightless); required.
+    joint : float, default 0.0
+        e, the mortar joint thickness [m], >= 0, included in the blocks.
+    bond : {"running", "stack"}, default "running"
+        Running bond (head joints shifted by half a block in alternate courses) or stack
+        bond.
+    start_with_half : bool, default False
+        Running bond: shift the bottom course's head joints (and so every course's).
+    beam_depth : float, optional
+        Each beam's depth [m], > 0 (None: one course, a + e).
+    beam_unit_weight : float, default 0.0
+        Weight per unit volume of the beams [N/m^3], >= 0 (0: the top beam's weight is left
+        to the precompression a case applies).
+    openings : sequence of (x_min, y_min, x_max, y_max), default ()
+        Openings in the wall [m] (y from the wall's bottom, the top of the bottom beam), cut
+        out of the wall alone as :func:`~masonry_dem.cut_openings` cuts them.
+    lintels : bool, default True
+        Straight jambs and a lintel over each opening (:func:`~masonry_dem.cut_openings`).
+    a, b, s : float, optional, keyword-only
+        The paper's letters for ``block_height``, ``block_length`` and ``thickness``; giving
+        both names of one size is an error.
+
+    Returns
+    -------
+    Blocks
+        The wall course by course, then the bottom beam, then the top beam.
+
+    Raises
+    ------
+    ValueError
+        If a size, count or weight is out of its range (named), ``length`` is shorter than a
+        block, ``bond`` is not one of its values, or an opening is out of the wall.
+
+    Examples
+    --------
+    The 0.30 MPa wall of Raijmakers & Vermeltfoort: 16 active courses of 210 x 52 mm bricks
+    with 10 mm joints, 990 mm long (four bricks and a half in every course).
+
+    >>> import masonry_dem as md
+    >>> wall = md.shear_wall(0.99, 16, 0.052, 0.21, 0.1, 18e3, joint=0.01)
+    >>> wall.count  # 16 courses of 5 pieces, two beams
+    82
+    >>> wall.upper.max(axis=0).round(6).tolist()  # the top beam: one course deep
+    [0.99, 1.054, 0.1]
+    >>> md.select.edge(wall, "top").tolist(), md.select.edge(wall, "bottom").tolist()
+    ([81], [80])
+    """
+
+    joint: float = 0.0
+    bond: Bond = "running"
+    start_with_half: bool = False
+    beam_depth: float | None = None
+    beam_unit_weight: float = 0.0
+    openings: Sequence[Sequence[float]] = ()
+    lintels: bool = True
+
+    def __call__(self) -> Blocks:
+        length = positive_scalar("length", self.length)
+        courses = _count("courses", self.courses)
+        a, b, s = self.size()
+        gamma = self.weight()
+        e = positive_scalar("joint", self.joint, strict=False)
+        check_choice("bond", self.bond, BONDS)
+        pitch, course_pitch = b + e, a + e
+        if length < pitch:
+            raise ValueError(
+                f"length = {length:g} m is shorter than one block with its joint "
+                f"({pitch:g} m): a shear wall needs at least one whole block"
+            )
+        depth = (
+            course_pitch
+            if self.beam_depth is None
+            else positive_scalar("beam_depth", self.beam_depth)
+        )
+        beam_gamma = positive_scalar("beam_unit_weight", self.beam_unit_weight, strict=False)
+        # the bottom course's phase and the next one's: running bond alternates them
+        first = int(bool(self.start_with_half)) if self.bond == "running" else 0
+        second = 1 - first if self.bond == "running" else 0
+        run = _Run(0, 0.0, 1, (0.0, s), (0.0, length, first), (0.0, length, second))
+        wall = _assemble([run], courses, pitch, course_pitch, gamma)
+        if len(self.openings):
+            wall = cut_openings(wall, self.openings, lintels=bool(self.lintels))
+        height = courses * course_pitch
+        lower = np.array([[0.0, -depth, 0.0], [0.0, height, 0.0]])
+        upper = np.array([[length, 0.0, s], [length, height + depth, s]])
+        beams = Blocks.from_boxes(lower, upper, beam_gamma)
+        return Blocks.concatenate(wall, beams)
+
+
+shear_wall = function_of(_ShearWall)

@@ -1,0 +1,139 @@
+"""The shear-wall specimen (``md.shear_wall``): its bond as the Raijmakers & Vermeltfoort walls
+were laid, its beams, its openings, its case file, and the closed form of a dry wall whose top
+beam slides over the top course."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import masonry_dem as md
+from helpers.case_files import write_case
+from masonry_dem.cases.casefile import load_case
+
+# 210 x 52 x 100 mm bricks with 10 mm joints, 990 mm long, 16 active courses
+RV = {"block_height": 0.052, "block_length": 0.21, "thickness": 0.1, "joint": 0.01}
+
+
+def test_a_990_mm_wall_lays_four_bricks_and_a_half_in_every_course():
+    """The pitch is 220 mm: 990 mm is 4.5 bricks, so every course holds four whole bricks and
+    a half, the half at the right end of even courses and at the left end of odd ones; the
+    courses are 62 mm high and the beams, one course deep, span the wall."""
+    blocks = md.shear_wall(0.99, 16, unit_weight=18e3, **RV)
+    wall, bottom, top = np.arange(80), 80, 81
+    assert blocks.count == 82
+    levels = np.round(blocks.lower[wall, 1] / 0.062).astype(int)
+    assert np.bincount(levels).tolist() == [5] * 16
+    lengths = blocks.sizes[wall, 0].reshape(16, 5)
+    assert np.allclose(lengths[0::2], [0.22, 0.22, 0.22, 0.22, 0.11], atol=1e-12)
+    assert np.allclose(lengths[1::2], [0.11, 0.22, 0.22, 0.22, 0.22], atol=1e-12)
+    assert np.allclose(blocks.lower[bottom], [0.0, -0.062, 0.0], atol=1e-12)
+    assert np.allclose(blocks.upper[bottom], [0.99, 0.0, 0.1], atol=1e-12)
+    assert np.allclose(blocks.lower[top], [0.0, 0.992, 0.0], atol=1e-12)
+    assert np.allclose(blocks.upper[top], [0.99, 1.054, 0.1], atol=1e-12)
+    assert blocks.weights[[bottom, top]].tolist() == [0.0, 0.0]  # beams weightless by default
+    # the wall weighs its volume: 0.99 x 0.992 x 0.1 m^3 at 18 kN/m^3
+    assert blocks.weights[wall].sum() == pytest.approx(18e3 * 0.99 * 0.992 * 0.1, rel=1e-12)
+
+
+def test_stack_bond_lines_up_the_head_joints_and_start_with_half_swaps_the_courses():
+    stack = md.shear_wall(0.99, 4, unit_weight=0.0, bond="stack", **RV)
+    lengths = stack.sizes[:-2, 0].reshape(4, 5)
+    assert np.allclose(lengths, [0.22, 0.22, 0.22, 0.22, 0.11], atol=1e-12)
+    swapped = md.shear_wall(0.99, 2, unit_weight=0.0, start_with_half=True, **RV)
+    assert np.allclose(swapped.sizes[:5, 0], [0.11, 0.22, 0.22, 0.22, 0.22], atol=1e-12)
+
+
+def test_an_opening_is_cut_out_of_the_wall_and_never_out_of_a_beam():
+    """A window over the middle of the wall: the beams stay whole, the lintel spans it."""
+    solid = md.shear_wall(0.99, 16, unit_weight=18e3, **RV)
+    window = md.shear_wall(0.99, 16, unit_weight=18e3, openings=[(0.33, 0.31, 0.66, 0.62)], **RV)
+    assert window.count < solid.count
+    for which in ("top", "bottom"):
+        beam = md.select.edge(window, which)
+        assert beam.size == 1 and window.sizes[beam[0], 0] == pytest.approx(0.99, rel=1e-12)
+    inside = (
+        (window.centres[:, 0] > 0.33)
+        & (window.centres[:, 0] < 0.66)
+        & (window.centres[:, 1] > 0.31)
+        & (window.centres[:, 1] < 0.62)
+    )
+    assert not inside.any()
+
+
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        ({"length": 0.2}, "length"),
+        ({"courses": 0}, "courses"),
+        ({"bond": "flemish"}, "bond"),
+        ({"beam_depth": -0.1}, "beam_depth"),
+        ({"beam_unit_weight": -1.0}, "beam_unit_weight"),
+    ],
+)
+def test_bad_shear_wall_arguments_are_named(change, message):
+    arguments = {"length": 0.99, "courses": 16, "unit_weight": 18e3, **RV, **change}
+    with pytest.raises(ValueError, match=message):
+        md.shear_wall(**arguments)
+
+
+def _dry_shear_wall(unit_weight: float, precompression: float) -> md.Model:
+    """The wall on its clamped bottom beam, the precompression on the top beam (dead) and a
+    horizontal force on it (live); the top beam held against rotation and out of plane."""
+    blocks = md.shear_wall(0.99, 16, unit_weight=unit_weight, **RV)
+    bottom, top = md.select.edge(blocks, "bottom"), md.select.edge(blocks, "top")
+    return md.Model.build(
+        blocks,
+        md.InterfaceMaterial(kn=82e9, kt=36e9, friction=0.75),
+        supports=[md.Support(bottom), md.Support(top, ["u3", "w1", "w2", "w3"])],
+        loads=[
+            md.SelfWeight(),
+            md.PointLoad(top, (0.0, -precompression, 0.0)),
+            md.PointLoad(top, (1000.0, 0.0, 0.0), live=True),
+        ],
+    )
+
+
+@pytest.mark.parametrize("unit_weight", [0.0, 18e3])
+def test_a_dry_wall_gives_way_where_its_top_beam_slides_over_the_top_course(unit_weight):
+    """Dry joints (tension 0, mu 0.75) under 0.30 MPa on 990 x 100 mm (29.7 kN) with the top
+    beam held against rotation: every bed joint below carries the precompression and the
+    weight above it, so the least resistant is the one under the beam, which slides at
+    H = mu N = 0.75 x 29.7 kN = 22.275 kN, whatever the wall weighs (1 %)."""
+    precompression = 0.30e6 * 0.99 * 0.1
+    model = _dry_shear_wall(unit_weight, precompression)
+    result = md.analyze(model, "pushover")
+    assert result.status == "collapse"
+    assert result.load_factor * 1000.0 == pytest.approx(0.75 * precompression, rel=0.01)
+
+
+def test_a_case_file_builds_the_same_shear_wall(tmp_path):
+    """``builder = "shear_wall"`` in a case file, with an opening: the blocks the Python call
+    builds, and ``edge:top`` selects the top beam."""
+    geometry = {
+        "builder": "shear_wall",
+        "length": 0.99,
+        "courses": 16,
+        "unit_weight": 18e3,
+        "openings": [[0.33, 0.31, 0.66, 0.62]],
+        "lintels": True,
+        **RV,
+    }
+    case = {
+        "name": "shear wall",
+        "geometry": geometry,
+        "material": {"kn": 82e9, "kt": 36e9, "friction": 0.75},
+        "supports": [{"select": "edge:bottom"}, {"select": "edge:top", "dofs": ["w3"]}],
+        "loads": [
+            {"type": "self_weight"},
+            {"type": "point", "select": "edge:top", "force": [1000.0, 0.0, 0.0], "live": True},
+        ],
+    }
+    loaded = load_case(write_case(tmp_path, case))
+    expected = md.shear_wall(
+        0.99, 16, unit_weight=18e3, openings=[(0.33, 0.31, 0.66, 0.62)], lintels=True, **RV
+    )
+    assert np.array_equal(loaded.model.blocks.centres, expected.centres)
+    assert np.array_equal(loaded.model.blocks.sizes, expected.sizes)
+    top = md.select.edge(expected, "top")
+    assert np.flatnonzero(loaded.model.live[:, 0]).tolist() == top.tolist()
