@@ -38,7 +38,7 @@ if TYPE_CHECKING:
     )
     from masonry_dem.geometry.interfaces import detect_interfaces, subdivide_interfaces
     from masonry_dem.geometry.plans import box_wall, l_wall, t_wall, u_wall
-    from masonry_dem.geometry.specimens import shear_wall
+    from masonry_dem.geometry.specimens import shear_wall, split_units
     from masonry_dem.mechanism import collapse_mode
     from masonry_dem.model import (
         InterfaceMaterial,
@@ -89,7 +89,7 @@ _LAZY = {
     "detect_interfaces": "masonry_dem.geometry.interfaces",
     "subdivide_interfaces": "masonry_dem.geometry.interfaces",
     **dict.fromkeys(("box_wall", "l_wall", "t_wall", "u_wall"), "masonry_dem.geometry.plans"),
-    "shear_wall": "masonry_dem.geometry.specimens",
+    **dict.fromkeys(("shear_wall", "split_units"), "masonry_dem.geometry.specimens"),
     **dict.fromkeys(
         (
             "InterfaceMaterial",
@@ -182,6 +182,7 @@ __all__ = [
     "shear_wall",
     "single_block",
     "solve_linear",
+    "split_units",
     "stack_bond_column",
     "subdivide_interfaces",
     "sweep",

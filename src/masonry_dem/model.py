@@ -543,8 +543,13 @@ def _check_build(
                 raise ValueError(
                     f"Model.build: {name}[{k}] must be a {allowed} (e.g. {hint}), got {_kind(item)}"
                 )
+    _check_overrides("material_overrides", overrides, "block indices")
+
+
+def _check_overrides(name: str, overrides: object, what: str) -> None:
+    """A list of (``what``, InterfaceMaterial) pairs, or a ValueError naming the entry."""
     if isinstance(overrides, (str, bytes)) or not isinstance(overrides, Sequence):
-        raise ValueError(f"Model.build: material_overrides must be a list, got {_kind(overrides)}")
+        raise ValueError(f"Model.build: {name} must be a list, got {_kind(overrides)}")
     for k, pair in enumerate(overrides):
         if (
             not isinstance(pair, Sequence)
@@ -552,9 +557,32 @@ def _check_build(
             or not isinstance(pair[1], InterfaceMaterial)
         ):
             raise ValueError(
-                f"Model.build: material_overrides[{k}] must be a pair (block indices, "
-                f"InterfaceMaterial), got {_kind(pair)}"
+                f"Model.build: {name}[{k}] must be a pair ({what}, InterfaceMaterial), "
+                f"got {_kind(pair)}"
             )
+
+
+def _interfaces_between(
+    name: str, pairs: ArrayLike, interfaces: Interfaces, n_blocks: int
+) -> BoolArray:
+    """The interfaces joining the given (k, 2) pairs of blocks (either way round); a pair
+    that shares no interface is named."""
+    arr = np.asarray(pairs)
+    if arr.ndim != 2 or arr.shape[1] != 2 or arr.shape[0] == 0:
+        raise ValueError(f"{name}: pairs must have shape (k, 2) with k >= 1, got {arr.shape}")
+    flat = block_indices(name, arr.reshape(-1), n_blocks).reshape(-1, 2)
+
+    def key(i: NDArray[np.int64], j: NDArray[np.int64]) -> NDArray[np.int64]:
+        return np.minimum(i, j) * n_blocks + np.maximum(i, j)
+
+    wanted = key(flat[:, 0], flat[:, 1])
+    present = key(interfaces.block_i.astype(np.int64), interfaces.block_j.astype(np.int64))
+    found = np.isin(wanted, present)
+    if not found.all():
+        i, j = flat[np.argmin(found)]
+        raise ValueError(f"{name}: blocks {i} and {j} share no interface")
+    hit: BoolArray = np.isin(present, wanted)
+    return hit
 
 
 # --------------------------------------------------------------------------- model
@@ -632,6 +660,7 @@ class Model:
         interfaces: Interfaces | None = None,
         material_overrides: Sequence[tuple[ArrayLike, InterfaceMaterial]] = (),
         meta: dict[str, Any] | None = None,
+        interface_overrides: Sequence[tuple[ArrayLike, InterfaceMaterial]] = (),
     ) -> Model:
         """Detect contacts, apply supports and loads.
 
@@ -658,6 +687,10 @@ class Model:
             rigid base).
         meta : dict, optional
             Kept with the model.
+        interface_overrides : sequence of (pairs, InterfaceMaterial), default ()
+            Other materials for the interfaces between given pairs of blocks, ``pairs`` of
+            shape (k, 2) (e.g. the potential cracks of units split by
+            :func:`~masonry_dem.split_units`); applied after ``material_overrides``.
 
         Returns
         -------
@@ -672,6 +705,7 @@ class Model:
             (:meth:`check_supported`).
         """
         _check_build(blocks, material, supports, loads, interfaces, material_overrides)
+        _check_overrides("interface_overrides", interface_overrides, "pairs of blocks (k, 2)")
         n = blocks.count
         fixed = np.zeros((n, 6), dtype=bool)
         for sup in supports:
@@ -691,6 +725,10 @@ class Model:
             blk = block_indices(f"material_overrides[{k}] blocks", blk, n)
             touch = np.isin(its.block_i, blk) | np.isin(its.block_j, blk)
             props[touch] = per_interface(mat)
+        for k, (pairs, mat) in enumerate(interface_overrides):
+            props[_interfaces_between(f"interface_overrides[{k}]", pairs, its, n)] = per_interface(
+                mat
+            )
         props[:, 4] = np.where(np.isnan(props[:, 4]), 1.5, props[:, 4])
 
         dead = np.zeros((n, 6))

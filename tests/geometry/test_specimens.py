@@ -137,3 +137,64 @@ def test_a_case_file_builds_the_same_shear_wall(tmp_path):
     assert np.array_equal(loaded.model.blocks.sizes, expected.sizes)
     top = md.select.edge(expected, "top")
     assert np.flatnonzero(loaded.model.live[:, 0]).tolist() == top.tolist()
+
+
+def test_split_units_halves_each_unit_in_place_and_names_the_pairs():
+    """Every whole brick of a two-course wall split: each becomes its left and right halves
+    (equal, together the brick: volume and weight kept), in the brick's place, and the pairs
+    are the halves; the beams and half bricks stay whole."""
+    wall = md.shear_wall(0.99, 2, unit_weight=18e3, **RV)
+    whole = np.flatnonzero(np.isclose(wall.sizes[:, 0], 0.22))
+    split, pairs = md.split_units(wall, whole)
+    assert split.count == wall.count + whole.size and pairs.shape == (whole.size, 2)
+    left, right = pairs.T
+    assert np.allclose(split.sizes[left, 0], 0.11) and np.allclose(split.sizes[right, 0], 0.11)
+    assert np.allclose(split.upper[left, 0], split.lower[right, 0], atol=0)
+    assert np.allclose(split.lower[left], wall.lower[whole], atol=0)
+    assert np.allclose(split.upper[right], wall.upper[whole], atol=0)
+    assert split.weights.sum() == pytest.approx(wall.weights.sum(), rel=1e-12)
+    # the order of the rest is kept: the blocks not split, in their order
+    rest = np.setdiff1d(np.arange(split.count), pairs.ravel())
+    kept = np.setdiff1d(np.arange(wall.count), whole)
+    assert np.array_equal(split.centres[rest], wall.centres[kept])
+
+
+def _pulled_unit(crack: md.InterfaceMaterial | None) -> md.Model:
+    """One 220 x 52 x 100 mm unit split in two, its left half held, its right half (hanging
+    on the crack alone, weightless) pulled along e1 by lambda x 1 kN."""
+    unit = md.Blocks.from_boxes([[0.0, 0.0, 0.0]], [[0.22, 0.052, 0.1]], 0.0)
+    blocks, pairs = md.split_units(unit)
+    joint = md.InterfaceMaterial(kn=82e9, kt=36e9, friction=0.75, tensile_strength=0.16e6)
+    return md.Model.build(
+        blocks,
+        joint,
+        supports=[md.Support([0])],
+        loads=[md.PointLoad([1], (1000.0, 0.0, 0.0), live=True)],
+        interface_overrides=[] if crack is None else [(pairs, crack)],
+    )
+
+
+@pytest.mark.parametrize("unit_tension", [None, 2.0e6])
+def test_a_split_unit_opens_at_the_tensile_strength_of_its_crack(unit_tension):
+    """Pulled apart, the halves part when the crack's tensile force ft x a x s is reached:
+    the joints' 0.16 MPa without an override, the unit's 2.0 MPa with one (1 %)."""
+    crack = (
+        None
+        if unit_tension is None
+        else md.InterfaceMaterial(kn=1e12, kt=1e12, friction=1.0, tensile_strength=unit_tension)
+    )
+    model = _pulled_unit(crack)
+    ft = 0.16e6 if unit_tension is None else unit_tension
+    assert model.tensile_strength.tolist() == [ft]
+    result = md.analyze(model, "pushover")
+    assert result.load_factor * 1000.0 == pytest.approx(ft * 0.052 * 0.1, rel=0.01)
+
+
+def test_interface_overrides_name_a_pair_that_shares_no_interface():
+    wall = md.shear_wall(0.99, 2, unit_weight=18e3, **RV)
+    joint = md.InterfaceMaterial(kn=82e9, kt=36e9, friction=0.75)
+    bottom = md.select.edge(wall, "bottom")
+    with pytest.raises(ValueError, match=r"interface_overrides\[0\]: blocks 0 and 9"):
+        md.Model.build(wall, joint, [md.Support(bottom)], interface_overrides=[([[0, 9]], joint)])
+    with pytest.raises(ValueError, match="shape"):
+        md.Model.build(wall, joint, [md.Support(bottom)], interface_overrides=[([0, 1], joint)])

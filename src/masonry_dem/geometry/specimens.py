@@ -1,4 +1,5 @@
-"""Test specimens: the in-plane shear wall, a wall built between a bottom and a top beam.
+"""Test specimens: the in-plane shear wall, a wall built between a bottom and a top beam, and
+units split by a potential crack.
 
 In the classic shear test of masonry (Raijmakers & Vermeltfoort, TU Eindhoven, 1992, as
 Lourenco used them, 1996) the wall stands on a concrete (or steel) beam clamped to the floor;
@@ -13,6 +14,11 @@ number of blocks ends in shorter pieces (the 990 mm wall of 210 mm bricks with 1
 four whole bricks and a half in every course, the half at alternate ends), as a bricklayer
 lays it; a piece shorter than 0.3 block stays with its neighbour
 (:data:`~masonry_dem.geometry.plans.SHORTEST_PIECE`).
+
+Rigid units cannot crack, while the diagonal cracks of shear walls under high precompression
+run through the bricks. :func:`split_units` splits units at mid-length into two blocks and
+names the pairs, whose interface takes the unit's own strength (``Model.build``'s
+``interface_overrides``): the potential crack of Lourenco & Rots (1997), one per unit.
 """
 
 from __future__ import annotations
@@ -22,9 +28,10 @@ from dataclasses import dataclass
 from typing import Literal, get_args
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from masonry_dem._parameters import function_of
-from masonry_dem._validation import check_choice, positive_scalar
+from masonry_dem._validation import block_indices, check_choice, positive_scalar
 from masonry_dem.geometry.blocks import Blocks
 from masonry_dem.geometry.builders import _count, _Courses, _Unit, cut_openings
 from masonry_dem.geometry.plans import _assemble, _Run
@@ -151,3 +158,62 @@ class _ShearWall(_Unit, _Courses, _ShearWallLength):
 
 
 shear_wall = function_of(_ShearWall)
+
+
+def split_units(blocks: Blocks, among: ArrayLike | None = None) -> tuple[Blocks, NDArray[np.intp]]:
+    """Split units at mid-length (along e1) by a vertical potential crack.
+
+    Each unit becomes two blocks, left then right, in the unit's place; the other blocks keep
+    their order. Give the pairs to ``Model.build(interface_overrides=[(pairs, material)])``
+    so that the crack has the unit's tensile and shear strength (Lourenco & Rots, 1997).
+
+    Parameters
+    ----------
+    blocks : Blocks
+        The assembly.
+    among : array_like of int, optional
+        The units to split (None: every block), e.g. the whole bricks of a wall.
+
+    Returns
+    -------
+    blocks : Blocks
+        The assembly with the units split.
+    pairs : numpy.ndarray of int, shape (k, 2)
+        The (left, right) blocks of each split unit, in the new numbering.
+
+    Raises
+    ------
+    ValueError
+        If ``among`` is empty, not block indices or out of range.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import masonry_dem as md
+    >>> wall = md.shear_wall(0.99, 2, 0.052, 0.21, 0.1, 18e3, joint=0.01)
+    >>> whole = (wall.sizes[:, 0] > 0.2) & (wall.sizes[:, 0] < 0.3)  # the bricks, not beams
+    >>> split, pairs = md.split_units(wall, np.flatnonzero(whole))
+    >>> wall.count, split.count, pairs[:2].tolist()
+    (12, 20, [[0, 1], [2, 3]])
+    """
+    n = blocks.count
+    idx = np.arange(n) if among is None else block_indices("among", among, n)
+    if idx.size == 0:
+        raise ValueError("split_units: among selects no block")
+    split = np.zeros(n, dtype=bool)
+    split[idx] = True
+    # every block in its place, the right half of a split unit right after its left half
+    first = np.cumsum(1 + split) - (1 + split)
+    lower, upper = blocks.lower, blocks.upper
+    middle = blocks.centres[split, 0]
+    new_lower = np.empty((n + int(split.sum()), 3))
+    new_upper = np.empty_like(new_lower)
+    gamma = np.empty(new_lower.shape[0])
+    new_lower[first], new_upper[first], gamma[first] = lower, upper, blocks.unit_weight
+    new_upper[first[split], 0] = middle
+    right = first[split] + 1
+    new_lower[right], new_upper[right] = lower[split], upper[split]
+    new_lower[right, 0] = middle
+    gamma[right] = blocks.unit_weight[split]
+    pairs = np.stack([first[split], right], axis=1).astype(np.intp)
+    return Blocks.from_boxes(new_lower, new_upper, gamma), pairs
