@@ -65,6 +65,7 @@ if TYPE_CHECKING:
     )
     from masonry_dem.solvers.linear import solve_linear
     from masonry_dem.solvers.quasi_static import QuasiStaticSettings, quasi_static
+    from masonry_dem.solvers.static.stages import Stage
     from masonry_dem.studies.sweep import sweep
 
 from masonry_dem._version import __version__ as __version__
@@ -122,6 +123,7 @@ _LAZY = {
     "QuasiStaticSettings": "masonry_dem.solvers.quasi_static",
     "quasi_static": "masonry_dem.solvers.quasi_static",
     "sweep": "masonry_dem.studies.sweep",
+    "Stage": "masonry_dem.solvers.static.stages",
 }
 _names = lazy_names(__name__, _LAZY)
 
@@ -154,6 +156,7 @@ __all__ = [
     "Pressure",
     "QuasiStaticSettings",
     "SelfWeight",
+    "Stage",
     "StaticSettings",
     "Status",
     "StepResult",
