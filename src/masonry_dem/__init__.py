@@ -29,6 +29,7 @@ if TYPE_CHECKING:
     from masonry_dem.geometry.blocks import Blocks
     from masonry_dem.geometry.builders import (
         add_base,
+        add_top_beam,
         boxes,
         cut_openings,
         running_bond_wall,
@@ -77,6 +78,7 @@ _LAZY = {
     **dict.fromkeys(
         (
             "add_base",
+            "add_top_beam",
             "boxes",
             "cut_openings",
             "running_bond_wall",
@@ -164,6 +166,7 @@ __all__ = [
     "Support",
     "WeightProportional",
     "add_base",
+    "add_top_beam",
     "analyze",
     "box_wall",
     "boxes",

@@ -206,3 +206,34 @@ def test_analyze_runs_stages_of_the_pushover_only(tmp_path):
     late = streamed.steps[len(streamed.steps) // 2]  # read back from disk
     assert late.stage == 1 and late.reactions is not None
     assert np.array_equal(late.reactions, result.history.steps[len(streamed.steps) // 2].reactions)
+
+
+def test_shear_wall_test_of_a_running_bond_wall():
+    """Item 2: a dry running-bond wall between a fixed base and a loading beam
+    (``add_top_beam``), precompressed through the beam, then the beam held at its height and
+    rotation and pushed by displacement. The horizontal force is lambda x the live 1 N on
+    the beam against its u1; every bed joint slides at mu x its normal force, the smallest
+    in the joint under the beam (N = P + W_beam), so the curve tops at mu (P + W_beam) and
+    stays there while the wall slides under the beam."""
+    wall = md.running_bond_wall(4, 4, 0.1, 0.2, 0.1, 18e3)
+    blocks, base = md.add_base(wall)
+    blocks, beam = md.add_top_beam(blocks, depth=0.1, unit_weight=20e3)
+    model = Model.build(blocks, DRY, supports=[Support([base])], loads=[SelfWeight()])
+    precompression = 2000.0
+    history = md.pushover(
+        model,
+        stages=[
+            Stage(loads=[PointLoad([beam], (0.0, -precompression, 0.0))]),
+            Stage(
+                loads=[PointLoad([beam], (1.0, 0.0, 0.0), live=True)],
+                supports=[Support([beam], ["u2", "w3"])],
+                control=DisplacementControl(block=beam, dof="u1", target=0.003, steps=30),
+            ),
+        ],
+    )
+    assert history.status == "completed", history.reason
+    pushed = history.stages == 1
+    expected = MU * (precompression + float(blocks.weights[beam]))
+    assert history.load_factors[pushed].max() == pytest.approx(expected, rel=0.01)
+    assert history.load_factors[-1] == pytest.approx(expected, rel=0.01)
+    assert history.control_displacements[-1] == pytest.approx(0.003)
