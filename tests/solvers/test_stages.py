@@ -9,6 +9,7 @@ import pytest
 
 import masonry_dem as md
 from masonry_dem.assembly.stiffness import Assembly
+from masonry_dem.export.results_series import read_pushover
 from masonry_dem.geometry.builders import boxes
 from masonry_dem.model import InterfaceMaterial, Model, PointLoad, SelfWeight, Support
 from masonry_dem.results import STATE_NAMES
@@ -198,7 +199,10 @@ def test_analyze_runs_stages_of_the_pushover_only(tmp_path):
     result = md.analyze(model, stages=[PRECOMPRESSION, _push(steps_target := 0.001)], out=tmp_path)
     assert result.status == "completed"
     assert result.history is not None and set(result.history.stages.tolist()) == {0, 1}
-    assert (tmp_path / "pushover.csv").exists()
+    table = read_pushover(tmp_path)
+    assert np.array_equal(table["stage"], result.history.stages)
+    assert np.allclose(table["lambda"], result.history.load_factors, rtol=1e-9, atol=0)
+    assert "stage" not in read_pushover(_plain_folder(tmp_path / "plain"))
     with pytest.raises(ValueError, match="stages is a setting of the pushover"):
         md.analyze(model, "limit", stages=[PRECOMPRESSION])
     streamed = md.pushover(model, stages=[PRECOMPRESSION, _push(steps_target)], stream=True)
@@ -237,3 +241,16 @@ def test_shear_wall_test_of_a_running_bond_wall():
     assert history.load_factors[pushed].max() == pytest.approx(expected, rel=0.01)
     assert history.load_factors[-1] == pytest.approx(expected, rel=0.01)
     assert history.control_displacements[-1] == pytest.approx(0.003)
+
+
+def _plain_folder(folder):
+    """The results folder of a run with no stages (its pushover.csv has no stage column)."""
+    model = _specimen()
+    tilted = Model.build(
+        model.blocks,
+        DRY,
+        supports=[Support([BASE])],
+        loads=[SelfWeight(), md.WeightProportional((1.0, 0.0, 0.0))],
+    )
+    md.pushover(tilted, out=folder)
+    return folder
