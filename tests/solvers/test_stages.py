@@ -254,3 +254,25 @@ def _plain_folder(folder):
     )
     md.pushover(tilted, out=folder)
     return folder
+
+
+def test_a_later_stage_under_load_control_collapses_certified_and_carries_its_load():
+    """A later stage's collapse is certified with the law state it started from: pushed
+    under load control the held beam's joint slides at mu N (a certified collapse); pushed
+    past sliding by displacement in stage 2, then back under load control in stage 3, the
+    stage-2 force mu N stays on (a dead load of stage 3) and the joint slides back when
+    lambda x 1 N against it reaches 2 mu N."""
+    model = _specimen()
+    expected = MU * (P + float(model.blocks.weights[BEAM]))
+    hold = [Support([BEAM], ["u2", "w3"])]
+    push = Stage(loads=[PointLoad([BEAM], (1.0, 0.0, 0.0), live=True)], supports=hold)
+    history = md.pushover(model, stages=[PRECOMPRESSION, push])
+    assert history.status == "collapse", history.reason
+    assert history.certificate is not None and history.certificate.holds
+    assert history.collapse_multiplier == pytest.approx(expected, rel=0.01)
+    back = Stage(loads=[PointLoad([BEAM], (-1.0, 0.0, 0.0), live=True)], name="back")
+    history = md.pushover(model, stages=[PRECOMPRESSION, _push(target=0.0005), back])
+    assert history.status == "collapse", history.reason
+    assert history.reason.startswith("stage 3 of 3 (back)")
+    assert history.certificate is not None and history.certificate.holds
+    assert history.collapse_multiplier == pytest.approx(2 * expected, rel=0.01)

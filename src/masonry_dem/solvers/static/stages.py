@@ -253,8 +253,8 @@ def run_stages(
     for k, (stage, plan) in enumerate(zip(chosen, plans, strict=True)):
         staged = replace(model, fixed=plan.fixed, dead=carried + plan.dead_loads, live=plan.live)
         solver = StaticSolver(staged, settings, bound=bound)
-        solver.q, solver.plastic, solver.cracked = q.copy(), plastic.copy(), cracked.copy()
-        solver.search_state = (solver.plastic.copy(), solver.cracked.copy())
+        if k > 0:  # the state the stage before ended in
+            solver.start_from(q, plastic, cracked)
         asm = solver.problem.asm
 
         def on_step(step: StepResult, k: int = k, staged: Model = staged, asm: Any = asm) -> None:
