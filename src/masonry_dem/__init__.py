@@ -29,6 +29,7 @@ if TYPE_CHECKING:
     from masonry_dem.geometry.blocks import Blocks
     from masonry_dem.geometry.builders import (
         add_base,
+        add_top_beam,
         boxes,
         cut_openings,
         running_bond_wall,
@@ -66,6 +67,7 @@ if TYPE_CHECKING:
     )
     from masonry_dem.solvers.linear import solve_linear
     from masonry_dem.solvers.quasi_static import QuasiStaticSettings, quasi_static
+    from masonry_dem.solvers.static.stages import Stage
     from masonry_dem.studies.sweep import sweep
 
 from masonry_dem._version import __version__ as __version__
@@ -77,6 +79,7 @@ _LAZY = {
     **dict.fromkeys(
         (
             "add_base",
+            "add_top_beam",
             "boxes",
             "cut_openings",
             "running_bond_wall",
@@ -124,6 +127,7 @@ _LAZY = {
     "QuasiStaticSettings": "masonry_dem.solvers.quasi_static",
     "quasi_static": "masonry_dem.solvers.quasi_static",
     "sweep": "masonry_dem.studies.sweep",
+    "Stage": "masonry_dem.solvers.static.stages",
 }
 _names = lazy_names(__name__, _LAZY)
 
@@ -156,6 +160,7 @@ __all__ = [
     "Pressure",
     "QuasiStaticSettings",
     "SelfWeight",
+    "Stage",
     "StaticSettings",
     "Status",
     "StepResult",
@@ -163,6 +168,7 @@ __all__ = [
     "Support",
     "WeightProportional",
     "add_base",
+    "add_top_beam",
     "analyze",
     "box_wall",
     "boxes",

@@ -52,6 +52,7 @@ def analyze(
     monitor: Monitor | None = None,
     out: str | Path | None = None,
     progress: Callable[[Any], None] | None = None,
+    stages: Any = None,
 ) -> AnalysisResult:
     """Run one analysis of ``model`` and return its :class:`~masonry_dem.results.AnalysisResult`.
 
@@ -81,6 +82,9 @@ def analyze(
     progress : callable, optional
         Called as the analysis goes: with each converged ``StepResult`` (pushover,
         relaxation) or each ``LimitProgress`` (limit analysis).
+    stages : sequence of Stage, optional
+        Pushover only: loading stages run in turn, the state carried from one to the next
+        (:class:`~masonry_dem.Stage`; not with ``control``); None: one stage.
 
     Returns
     -------
@@ -106,14 +110,14 @@ def analyze(
     require_model("analyze", model)
     name = method_name(method)
     if name != "pushover":
-        for key, value in (("control", control), ("bound", bound)):
+        for key, value in (("control", control), ("bound", bound), ("stages", stages)):
             if value is not None:
                 raise ValueError(f"{key} is a setting of the pushover, not of method {name!r}")
     if name == "limit" and monitor is not None:
         raise ValueError("monitor is a setting of the pushover and the relaxation, not of 'limit'")
     t0 = time.perf_counter()
     if name == "pushover":
-        return _pushover(model, settings, control, bound, monitor, out, progress, t0)
+        return _pushover(model, settings, control, bound, monitor, out, progress, t0, stages)
     if name == "relaxation":
         return _relaxation(model, settings, monitor, out, progress, t0)
     return _limit(model, settings, out, progress, t0)
@@ -135,13 +139,22 @@ def _check_settings(name: str, settings: Any, kind: type) -> None:
         )
 
 
-def _pushover(model, settings, control, bound, monitor, out, progress, t0) -> AnalysisResult:
+def _pushover(
+    model, settings, control, bound, monitor, out, progress, t0, stages=None
+) -> AnalysisResult:
     from masonry_dem.export.analyses import pushover
     from masonry_dem.solvers.incremental import StaticSettings
 
     _check_settings("pushover", settings, StaticSettings)
     history = pushover(
-        model, settings, control=control, out=out, monitor=monitor, callback=progress, bound=bound
+        model,
+        settings,
+        control=control,
+        out=out,
+        monitor=monitor,
+        callback=progress,
+        bound=bound,
+        stages=stages,
     )
     cost = {"iterations": history.iterations, "factorizations": history.factorizations}
     return _of_history("pushover", model, history, time.perf_counter() - t0, cost)

@@ -123,6 +123,13 @@ class StepResult:
         wall (None: the one the steps before it give).
     found_cracked : numpy.ndarray of bool, shape (m,), optional
         The cracked joints the state was found with, likewise.
+    stage : int, default 0
+        The loading stage the state belongs to (0: the first, and the only one of an
+        analysis with no stages; :class:`~masonry_dem.solvers.static.stages.Stage`).
+    reactions : numpy.ndarray, shape (n, 6), optional
+        The generalised forces the supports put on the blocks at their held DOFs (zero at
+        the free ones): what the joints put on them less the applied load there. Set by a
+        staged analysis (None otherwise).
 
     Examples
     --------
@@ -157,6 +164,10 @@ class StepResult:
     #: and cracks moved with the wall (None: the one the steps before it give)
     found_plastic: FloatArray | None = None
     found_cracked: NDArray[np.bool_] | None = None
+    #: the loading stage of the state (0: the first, or the only one)
+    stage: int = 0
+    #: (n, 6) the supports' forces on the blocks at their held DOFs (a staged analysis)
+    reactions: FloatArray | None = None
 
     def __post_init__(self) -> None:
         for name in (
@@ -167,6 +178,7 @@ class StepResult:
             "flags",
             "found_plastic",
             "found_cracked",
+            "reactions",
         ):
             value = getattr(self, name)
             if isinstance(value, np.ndarray):
@@ -276,6 +288,14 @@ class History:
         if kept is not None:
             return np.array(kept, dtype=float)
         return np.array([s.control_displacement for s in self.steps])
+
+    @property
+    def stages(self) -> NDArray[np.int64]:
+        """(steps,) the loading stage of every converged step (all 0 without stages)."""
+        kept = getattr(self.steps, "stages", None)
+        if kept is not None:
+            return np.array(kept, dtype=np.int64)
+        return np.array([s.stage for s in self.steps], dtype=np.int64)
 
     @property
     def last(self) -> StepResult:

@@ -29,7 +29,16 @@ from masonry_dem.results import StepResult
 
 log = logging.getLogger(__name__)
 
-_ARRAYS = ("q", "actions", "state", "utilisation", "flags", "found_plastic", "found_cracked")
+_ARRAYS = (
+    "q",
+    "actions",
+    "state",
+    "utilisation",
+    "flags",
+    "found_plastic",
+    "found_cracked",
+    "reactions",
+)
 
 
 class StreamedSteps(Sequence[StepResult]):
@@ -51,6 +60,7 @@ class StreamedSteps(Sequence[StepResult]):
         self._recent: dict[int, StepResult] = {}
         self.load_factors: list[float] = []
         self.control_displacements: list[float] = []
+        self.stages: list[int] = []
 
     def _path(self, index: int) -> Path:
         return self.folder / f"step_{index:06d}.npz"
@@ -58,10 +68,10 @@ class StreamedSteps(Sequence[StepResult]):
     def append(self, step: StepResult) -> None:
         """Write ``step`` (the next one) to disk; keep it in memory while it is recent."""
         arrays = {k: getattr(step, k) for k in _ARRAYS if getattr(step, k) is not None}
-        scalars = np.array(
-            [step.step, step.load_factor, step.control_displacement, step.iterations],
-            dtype=float,
-        )
+        values = [step.step, step.load_factor, step.control_displacement, step.iterations]
+        if step.stage:  # a later loading stage (the first keeps the four scalars)
+            values.append(step.stage)
+        scalars = np.array(values, dtype=float)
         path = self._path(self._count)
         tmp = path.with_suffix(".part")
         with open(tmp, "wb") as f:  # a reader never sees half a step
@@ -74,6 +84,7 @@ class StreamedSteps(Sequence[StepResult]):
         self._count += 1
         self.load_factors.append(float(step.load_factor))
         self.control_displacements.append(float(step.control_displacement))
+        self.stages.append(int(step.stage))
 
     def _read(self, index: int) -> StepResult:
         with np.load(self._path(index)) as data:
@@ -91,6 +102,8 @@ class StreamedSteps(Sequence[StepResult]):
             flags=arrays.get("flags"),
             found_plastic=arrays.get("found_plastic"),
             found_cracked=arrays.get("found_cracked"),
+            stage=int(scalars[4]) if scalars.size > 4 else 0,
+            reactions=arrays.get("reactions"),
         )
 
     def __len__(self) -> int:

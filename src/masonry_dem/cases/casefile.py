@@ -36,6 +36,7 @@ from masonry_dem.model import (
     Support,
 )
 from masonry_dem.solvers.incremental import DisplacementControl, StaticSettings
+from masonry_dem.solvers.static.stages import Stage, as_stages, plan_stages
 
 DEFAULT_CASE = "default_wall.toml"
 AnalysisMethod = Literal["pushover", "limit"]
@@ -54,7 +55,7 @@ _BUILDERS = {
     "box_wall": plans.box_wall,
     "shear_wall": specimens.shear_wall,
 }
-_GEOMETRY_EXTRA = {"builder", "base", "openings", "lintels"}
+_GEOMETRY_EXTRA = {"builder", "base", "openings", "lintels", "top_beam"}
 
 
 @dataclass(frozen=True)
@@ -81,6 +82,9 @@ class Case:
     limit_options : dict, optional
         The options of the limit analysis (``associative``, ``grid``, ``backend``,
         ``time_limit``, ``start``).
+    stages : tuple of Stage, optional
+        The loading stages of ``[[stages]]`` (None: one stage, the model as it is), for
+        ``pushover(case.model, case.settings, stages=case.stages)``.
 
     Examples
     --------
@@ -99,6 +103,8 @@ class Case:
     #: the limit analysis (``associative``, ``grid``, ``backend``) in ``limit_options``
     method: AnalysisMethod = "pushover"
     limit_options: dict[str, Any] | None = None
+    #: ``[[stages]]``: the loading stages (None: one stage, the model as it is)
+    stages: tuple[Stage, ...] | None = None
 
 
 def _unknown(section: str, given: dict[str, Any], allowed: set[str]) -> None:
@@ -160,6 +166,9 @@ def build_blocks(
     if geometry.get("base", False):
         blocks, base = builders.add_base(blocks)
         wall = np.append(wall, False)
+    if geometry.get("top_beam") is not None:  # the loading beam: select = "beam"
+        blocks, _ = builders.add_top_beam(blocks, depth=geometry["top_beam"])
+        wall = np.append(wall, False)
     return blocks, base, wall
 
 
@@ -182,6 +191,14 @@ def select_blocks(
                 'select = "base" but the geometry has no base (set [geometry].base = true)'
             )
         return np.array([base])
+    if spec == "beam":  # the block neither of the wall nor the base: the loading beam
+        beam = np.flatnonzero(~wall & (np.arange(blocks.count) != (-1 if base is None else base)))
+        if beam.size != 1:
+            raise ValueError(
+                'select = "beam" but the geometry has no loading beam (set [geometry].top_beam '
+                "= its depth in m)"
+            )
+        return beam
     if spec == "all":
         return np.flatnonzero(wall)
     kind, _, arg = str(spec).partition(":")
@@ -199,7 +216,8 @@ def select_blocks(
     if spec in sel.PARTS:
         return sel.part(blocks, str(spec), among=wall)
     raise ValueError(
-        f"select must be 'base', 'all', 'column:left|right', 'course:K', 'edge:NAME', a part of "
+        f"select must be 'base', 'beam', 'all', 'column:left|right', 'course:K', 'edge:NAME', "
+        "a part of "
         f"walls that meet ({', '.join(sel.PARTS)}) or a list of block indices, got {plain(spec)}"
     )
 
@@ -297,6 +315,7 @@ def case_from_dict(data: dict[str, Any], source: str = "<dict>") -> Case:
             name=str(data.get("name", Path(source).stem)),
             interfaces=interfaces,
         )
+    stages = _stages(data, source, model, blocks, wall, base, control_spec, method)
     control = None
     if control_spec is not None:
         with _at(source, "[analysis].control.block"):
@@ -309,8 +328,69 @@ def case_from_dict(data: dict[str, Any], source: str = "<dict>") -> Case:
             model.dof_index(monitor_spec["block"], monitor_spec["dof"])
         monitor = (int(monitor_spec["block"]), cast(DofName, monitor_spec["dof"]))  # checked above
     return Case(
-        model, settings, control, monitor, source, cast(AnalysisMethod, method), limit_options
+        model,
+        settings,
+        control,
+        monitor,
+        source,
+        cast(AnalysisMethod, method),
+        limit_options,
+        stages,
     )
+
+
+def _stages(
+    data: dict[str, Any],
+    source: str,
+    model: Model,
+    blocks: Blocks,
+    wall: NDArray[np.bool_],
+    base: int | None,
+    control_spec: Any,
+    method: str,
+) -> tuple[Stage, ...] | None:
+    """The loading stages of ``[[stages]]`` (None without it), each with its own
+    ``[[stages.loads]]``, ``[[stages.supports]]`` and ``[stages.control]``, checked on the
+    model (a control on a held DOF, every DOF held: named)."""
+    specs = data.get("stages")
+    if specs is None:
+        return None
+    if method != "pushover":
+        raise CaseError(
+            f"case file {source}: [[stages]] are loading stages of the pushover; method = "
+            f'"{method}" in [analysis] runs none'
+        )
+    if control_spec is not None:
+        raise CaseError(
+            f"case file {source}: [analysis].control = {plain(control_spec)} with [[stages]]: "
+            "each stage names its own control ([stages.control])"
+        )
+    stages = []
+    for k, spec in enumerate(specs):
+        with _at(source, f"[stages][{k}]"):
+            supports = [
+                Support(
+                    select_blocks(blocks, sup["select"], wall, base),
+                    sup.get("dofs", "all"),
+                    sup.get("settles_with_wall", False),
+                )
+                for sup in spec.get("supports") or []
+            ]
+            loads = [
+                _load(ld, blocks, wall, base, j) for j, ld in enumerate(spec.get("loads") or [])
+            ]
+            control = spec.get("control")
+            stages.append(
+                Stage(
+                    loads=loads,
+                    supports=supports,
+                    control=None if control is None else DisplacementControl(**control),
+                    name=spec.get("name") or "",
+                )
+            )
+    with _at(source, "[stages]"):
+        plan_stages(model, as_stages(stages))
+    return tuple(stages)
 
 
 def _refuse_pushover_keys(analysis: dict[str, Any], source: str) -> None:

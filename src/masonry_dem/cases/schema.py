@@ -295,6 +295,13 @@ _SELECT = Annotated[Any, AfterValidator(_selector)]
 _OPENING = Annotated[list[float], AfterValidator(lambda v: _opening(v))]
 
 
+def _depth(v: float) -> float:
+    """A loading beam's depth [m]: a finite number > 0."""
+    if not math.isfinite(v) or v <= 0:
+        raise PydanticCustomError("depth", "must be a depth > 0 [m] (the loading beam's)")
+    return v
+
+
 def _opening(v: list[float]) -> list[float]:
     if len(v) != 4:
         raise PydanticCustomError("shape", "must hold 4 numbers [x_min, y_min, x_max, y_max]")
@@ -336,6 +343,7 @@ TOP = _table(
         "supports": (list[dict], None),
         "loads": (list[dict], None),
         "analysis": (dict, None),
+        "stages": (list[dict], None),
     },
 )
 _LAW = {name: (allowed, getattr(InterfaceMaterial, name)) for name, allowed in LAW_OPTIONS.items()}
@@ -406,6 +414,16 @@ CONTROL = _table(
     },
 )
 MONITOR = _table("Monitor", {"block": _number("block"), "dof": _choice(DOF_NAMES)})
+#: ``[[stages]]``: a loading stage, its loads and supports tables as the file's own
+STAGE = _table(
+    "Stage",
+    {
+        "name": (str, None),
+        "loads": (list[dict], None),
+        "supports": (list[dict], None),
+        "control": (dict | None, None),
+    },
+)
 #: ``[analysis] start`` of the non-associative limit analysis: the joints' elastic state
 #: under the dead load, or the associative collapse (Gilbert et al. 2006); the solver's own
 #: ``STARTS`` (a test keeps them equal; the schema does not import the solvers)
@@ -460,6 +478,7 @@ def _geometry_table(builder: str, func: Callable) -> type[BaseModel]:
         "base": (bool, False),
         "openings": (list[_OPENING] | None, None),
         "lintels": (bool, False),
+        "top_beam": (Annotated[float, AfterValidator(_depth)] | None, None),
     }
     for name, p in inspect.signature(func).parameters.items():
         kind = _by_annotation(name, p.annotation)
@@ -500,7 +519,14 @@ def _path(loc: tuple) -> str:
     for item in loc:
         if isinstance(item, int):
             out += f"[{item}]"
-        elif not dotted and item in ("geometry", "material", "supports", "loads", "analysis"):
+        elif not dotted and item in (
+            "geometry",
+            "material",
+            "supports",
+            "loads",
+            "analysis",
+            "stages",
+        ):
             out += f"[{item}]"
             dotted = True
         else:
@@ -589,16 +615,13 @@ def check_case(
                 errors,
             )
         material = _validate(MATERIAL, data["material"], ("material",), source, errors)
-        for k, spec in enumerate(data.get("supports") or []):
-            _validate(SUPPORT, spec, ("supports", k), source, errors)
-        for k, spec in enumerate(data.get("loads") or []):
-            kind = spec.get("type")
-            if not isinstance(kind, str) or kind not in LOAD_TABLES:
-                errors.append(
-                    f"[loads][{k}].type = {plain(kind)}: must be one of {', '.join(LOAD_TABLES)}"
-                )
-                continue
-            _validate(LOAD_TABLES[kind], spec, ("loads", k), source, errors)
+        _check_supports_and_loads(data, (), source, errors)
+        for k, stage in enumerate(data.get("stages") or []):
+            if _validate(STAGE, stage, ("stages", k), source, errors) is not None:
+                _check_supports_and_loads(stage, ("stages", k), source, errors)
+                if stage.get("control") is not None:
+                    where = ("stages", k, "control")
+                    _validate(CONTROL, stage["control"], where, source, errors)
         if "analysis" in data:
             analysis = _validate(
                 _analysis_table(settings_type), data["analysis"], ("analysis",), source, errors
@@ -612,6 +635,22 @@ def check_case(
     if errors:
         more = f" (and {len(errors) - 1} more)" if len(errors) > 1 else ""
         raise CaseError(f"case file {source}: {errors[0]}{more}")
+
+
+def _check_supports_and_loads(
+    data: Mapping[str, Any], table: tuple, source: str, errors: list[str]
+) -> None:
+    """The ``[[supports]]`` and ``[[loads]]`` tables of ``data`` (the file, or a stage of it
+    at ``table``) against their schemas."""
+    for k, spec in enumerate(data.get("supports") or []):
+        _validate(SUPPORT, spec, (*table, "supports", k), source, errors)
+    for k, spec in enumerate(data.get("loads") or []):
+        kind = spec.get("type") if isinstance(spec, dict) else None
+        if not isinstance(kind, str) or kind not in LOAD_TABLES:
+            where = _path((*table, "loads", k, "type"))
+            errors.append(f"{where} = {plain(kind)}: must be one of {', '.join(LOAD_TABLES)}")
+            continue
+        _validate(LOAD_TABLES[kind], spec, (*table, "loads", k), source, errors)
 
 
 def _warn_above(table: Mapping[str, Any], where: str, source: str) -> None:

@@ -5,9 +5,9 @@ import no writer; this module, above them, hands them one)."""
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from masonry_dem.model import Model, Monitor
 from masonry_dem.results import History, Observer, StepResult
@@ -16,6 +16,7 @@ if TYPE_CHECKING:
     from masonry_dem.solvers.dynamic_relaxation.settings import DRSettings
     from masonry_dem.solvers.static.certificate import Bound
     from masonry_dem.solvers.static.settings import DisplacementControl, StaticSettings
+    from masonry_dem.solvers.static.stages import Stage
 
 __all__ = ["pushover", "relax", "results_writer"]
 
@@ -48,6 +49,7 @@ def pushover(
     bound: Bound = None,
     stream: bool | str | Path | None = None,
     observer: Observer | None = None,
+    stages: Sequence[Stage | Mapping[str, Any]] | None = None,
 ) -> History:
     """Run the static incremental analysis (the pushover) of ``model``.
 
@@ -85,6 +87,11 @@ def pushover(
         :meth:`~masonry_dem.solvers.static.solver.StaticSolver.run`).
     observer : Observer, optional
         Follows the run instead of a results folder (:class:`~masonry_dem.results.Observer`).
+    stages : sequence of Stage, optional
+        Loading stages run in turn, the state carried from one to the next
+        (:class:`~masonry_dem.Stage`, or mappings of its fields; the model's own supports
+        and loads are the first stage's); None: one stage, the model as it is. Each
+        stage's steps are marked ``StepResult.stage``, with the reactions at the held DOFs.
 
     Returns
     -------
@@ -96,8 +103,9 @@ def pushover(
     ------
     ValueError
         If ``model`` is not a :class:`~masonry_dem.Model`, ``bound`` is neither a finite
-        number, a function nor None, ``write_every`` is not a whole number >= 1, or both
-        ``out`` and ``observer`` are given.
+        number, a function nor None, ``write_every`` is not a whole number >= 1, both
+        ``out`` and ``observer`` are given, both ``control`` and ``stages`` are given, or
+        a stage is bad (an empty list, an unknown field, a control on a held DOF: named).
 
     Examples
     --------
@@ -118,6 +126,27 @@ def pushover(
 
     require_model("pushover", model)  # before the folder is claimed
     check_bound(bound)
+    if stages is not None:
+        from masonry_dem.solvers.static.stages import as_stages, plan_stages
+        from masonry_dem.solvers.static.stages import pushover as run_staged
+
+        if control is not None:
+            raise ValueError(
+                "give control or stages, not both: each stage names its own control "
+                f"(Stage(control=...)), got control={control!r}"
+            )
+        chosen = as_stages(stages)
+        plan_stages(model, chosen)  # before the folder is claimed
+        return run_staged(
+            model,
+            chosen,
+            settings,
+            monitor=monitor,
+            callback=callback,
+            bound=bound,
+            stream=stream,
+            observer=results_writer(model, out, write_every, observer),
+        )
     return run(
         model,
         settings,

@@ -16,6 +16,8 @@ from masonry_dem.export.results_folder import PUSHOVER, write_atomic, write_erro
 
 #: the first columns of ``pushover.csv``; the third's name goes on with what it records
 PUSHOVER_COLUMNS = ("step", "lambda", "control_displacement")
+#: the fourth column of the ``pushover.csv`` of a run in loading stages: each step's stage
+STAGE_COLUMN = "stage"
 DOF_NAMES = ("u1", "u2", "u3", "w1", "w2", "w3")
 #: what the third column records when no one block DOF equals it at every step
 LARGEST_TRANSLATION = "largest block translation (any block, u1-u3)"
@@ -110,28 +112,42 @@ def displacement_column(recorded: Recorded) -> str:
 
 
 def write_pushover(
-    folder: Path | str, steps, load_factors, control_displacements, recorded: Recorded = None
+    folder: Path | str,
+    steps,
+    load_factors,
+    control_displacements,
+    recorded: Recorded = None,
+    stages=None,
 ) -> None:
-    """``pushover.csv``: one row per step (step, lambda, control_displacement), the third
-    column's header naming what it records (:func:`displacement_column`)."""
-    rows = np.column_stack(
-        [np.asarray(steps, dtype=float), np.asarray(load_factors), control_displacements]
-    ).reshape(-1, 3)
+    """``pushover.csv``: one row per step (step, lambda, control_displacement, and with
+    ``stages`` each step's loading stage), the third column's header naming what it records
+    (:func:`displacement_column`)."""
+    columns = [np.asarray(steps, dtype=float), np.asarray(load_factors), control_displacements]
+    if stages is not None:
+        columns.append(np.asarray(stages, dtype=float))
+    rows = np.column_stack(columns).reshape(-1, len(columns))
     write_atomic(Path(folder) / PUSHOVER, lambda tmp: save_pushover_rows(tmp, rows, recorded))
 
 
 def append_pushover_row(
-    folder: Path | str, step: int, load_factor: float, control: float, recorded: Recorded = None
+    folder: Path | str,
+    step: int,
+    load_factor: float,
+    control: float,
+    recorded: Recorded = None,
+    stage: int | None = None,
 ) -> None:
     """One row of ``pushover.csv`` as its step is handed over (the header with the first,
     ``step`` 0, naming ``recorded`` as :func:`save_pushover_rows` does), each in one
     ``write`` of a whole line to a file opened for appending: a run killed outright leaves
-    the curve up to its last whole row, which the readers take."""
+    the curve up to its last whole row, which the readers take. ``stage``: the step's
+    loading stage, a fourth column (None: none)."""
     path = Path(folder) / PUSHOVER
-    line = f"{int(step)},{float(load_factor):.10g},{float(control):.10g}\n"
+    line = f"{int(step)},{float(load_factor):.10g},{float(control):.10g}"
+    line += "\n" if stage is None else f",{int(stage)}\n"
     flags = os.O_WRONLY | os.O_CREAT | (os.O_TRUNC if step == 0 else os.O_APPEND)
     if step == 0:
-        line = pushover_header(recorded) + "\n" + line
+        line = pushover_header(recorded, stage is not None) + "\n" + line
     try:
         fd = os.open(path, flags, 0o644)
         try:
@@ -144,32 +160,38 @@ def append_pushover_row(
 
 def write_history_pushover(folder: Path | str, history: Any) -> None:
     """``pushover.csv`` of a :class:`~masonry_dem.results.History`: every step's lambda and
-    recorded displacement, named by :func:`recorded_dof_of` its steps."""
+    recorded displacement, named by :func:`recorded_dof_of` its steps (and each step's
+    loading stage, for a run in stages)."""
     displacements = history.control_displacements
+    stages = history.stages
     write_pushover(
         folder,
         np.arange(len(history.steps)),
         history.load_factors,
         displacements,
         recorded_dof_of(history.steps, displacements),
+        stages if stages.any() else None,
     )
 
 
-def pushover_header(recorded: Recorded = None) -> str:
-    """The header line of ``pushover.csv``: step, lambda and :func:`displacement_column`."""
-    return ",".join([*PUSHOVER_COLUMNS[:2], displacement_column(recorded)])
+def pushover_header(recorded: Recorded = None, staged: bool = False) -> str:
+    """The header line of ``pushover.csv``: step, lambda and :func:`displacement_column`
+    (and ``stage``, for a run in loading stages)."""
+    names = [*PUSHOVER_COLUMNS[:2], displacement_column(recorded)]
+    return ",".join([*names, STAGE_COLUMN] if staged else names)
 
 
 def save_pushover_rows(path: Path, rows: np.ndarray, recorded: Recorded = None) -> None:
     """The one layout of ``pushover.csv``: one header line, then rows of (step, lambda,
-    control_displacement)."""
+    control_displacement), and the stage for rows of four columns."""
+    staged = rows.ndim == 2 and rows.shape[1] == 4
     np.savetxt(
         path,
         rows,
         delimiter=",",
-        header=pushover_header(recorded),
+        header=pushover_header(recorded, staged),
         comments="",
-        fmt=["%d", "%.10g", "%.10g"],
+        fmt=["%d", "%.10g", "%.10g", "%d"] if staged else ["%d", "%.10g", "%.10g"],
     )
 
 

@@ -168,8 +168,9 @@ def recorded_in_pushover(folder: Path | str) -> pf.Recorded:
 
 
 def read_pushover(folder: Path | str) -> dict[str, np.ndarray]:
-    """Columns of ``pushover.csv`` (step, lambda, control_displacement) as arrays, each
-    found by its name (the third's header goes on with its unit and what it records)."""
+    """Columns of ``pushover.csv`` (step, lambda, control_displacement, and ``stage`` for a
+    run in loading stages) as arrays, each found by its name (the third's header goes on
+    with its unit and what it records)."""
     path = Path(folder) / rf.PUSHOVER
     if not path.is_file():
         raise FileNotFoundError(
@@ -190,4 +191,6 @@ def read_pushover(folder: Path | str) -> dict[str, np.ndarray]:
     except ValueError as exc:
         raise ValueError(f"{path}: non-numeric value ({exc})") from exc
     data = data.reshape(-1, len(header))
-    return {h: data[:, header.index(h)] for h in need}
+    # a run in loading stages adds each step's stage
+    names = [*need, pf.STAGE_COLUMN] if pf.STAGE_COLUMN in header else need
+    return {h: data[:, header.index(h)] for h in names}

@@ -103,7 +103,9 @@ class ResultsWriter:
         self.interface_files: list[str] = []
         self.times: list[float] = []
         self.steps_written: list[int] = []
-        self._curve: list[tuple[int, float, float]] = []
+        self._curve: list[tuple[int, float, float, int]] = []
+        #: a step of a later loading stage came: pushover.csv has its stage column
+        self._staged = False
         self._recorded = pf.RecordedSoFar()
         self._count = 0
         self._failed: BaseException | None = None
@@ -136,8 +138,10 @@ class ResultsWriter:
         when the step changes what the header says is recorded (block, DOF, unit: the one
         :meth:`finish` writes again at the end, :func:`pushover_file.recorded_dof_of`)."""
         index = len(self._curve)
-        self._curve.append((step.step, step.load_factor, step.control_displacement))
+        self._curve.append((step.step, step.load_factor, step.control_displacement, step.stage))
         changed = self._recorded.add(index, step.control_displacement, step.q)
+        if step.stage and not self._staged:  # the first step of a later stage: a new column
+            self._staged = changed = True
         if changed and index > 0:
             self._write_curve()
         else:
@@ -147,12 +151,20 @@ class ResultsWriter:
                 step.load_factor,
                 step.control_displacement,
                 self._recorded.recorded,
+                step.stage if self._staged else None,
             )
 
     def _write_curve(self) -> None:
         """``pushover.csv`` of every step handed over, at once."""
-        steps, lams, disp = (np.asarray(c) for c in zip(*self._curve, strict=True))
-        pf.write_pushover(self.folder, np.arange(steps.size), lams, disp, self._recorded.recorded)
+        steps, lams, disp, stages = (np.asarray(c) for c in zip(*self._curve, strict=True))
+        pf.write_pushover(
+            self.folder,
+            np.arange(steps.size),
+            lams,
+            disp,
+            self._recorded.recorded,
+            stages if self._staged else None,
+        )
 
     def _raise_failed(self) -> None:
         done = [f for f in self._pending if f.done()]

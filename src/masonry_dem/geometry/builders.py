@@ -640,3 +640,54 @@ def add_base(
     base_hi = np.array([hi[0] + overhang, lo[1], hi[2] + overhang])
     base = Blocks.from_boxes(base_lo[None], base_hi[None], 0.0)
     return Blocks.concatenate(blocks, base), blocks.count
+
+
+def add_top_beam(
+    blocks: Blocks, depth: float | None = None, unit_weight: float = 0.0
+) -> tuple[Blocks, int]:
+    """Append a rigid loading beam on top of the assembly; returns the blocks and its index.
+
+    The beam spans the footprint of the assembly and its bottom face touches the highest
+    blocks, so real interfaces join it to the wall: the top beam of a shear-wall test, to
+    load (a dead :class:`~masonry_dem.PointLoad` or :class:`~masonry_dem.Pressure` on it),
+    hold (``Support([beam], ["u2", "w3"])`` in a :class:`~masonry_dem.Stage`) and push by
+    displacement (:class:`~masonry_dem.DisplacementControl` of its ``u1``).
+
+    Parameters
+    ----------
+    blocks : Blocks
+        The assembly.
+    depth : float, optional
+        The beam's depth [m], > 0 (None: the median block height).
+    unit_weight : float, default 0.0
+        The beam's weight per unit volume [N/m^3], >= 0 (0: weightless).
+
+    Returns
+    -------
+    blocks : Blocks
+        The assembly with the beam appended last.
+    beam : int
+        The beam's index (the number of blocks given).
+
+    Raises
+    ------
+    ValueError
+        If ``depth`` is not positive or ``unit_weight`` is negative (or not finite).
+
+    Examples
+    --------
+    >>> import masonry_dem as md
+    >>> wall = md.running_bond_wall(6, 6, 0.1, 0.2, 0.1, 18e3)
+    >>> blocks, beam = md.add_top_beam(wall, depth=0.2)
+    >>> beam, blocks.sizes[beam].round(6).tolist(), round(float(blocks.lower[beam, 1]), 6)
+    (39, [1.2, 0.2, 0.1], 0.6)
+    """
+    lo, hi = blocks.lower.min(axis=0), blocks.upper.max(axis=0)
+    unit_weight = positive_scalar("unit_weight", unit_weight, strict=False)
+    depth = (
+        float(np.median(blocks.sizes[:, 1])) if depth is None else positive_scalar("depth", depth)
+    )
+    beam_lo = np.array([lo[0], hi[1], lo[2]])
+    beam_hi = np.array([hi[0], hi[1] + depth, hi[2]])
+    beam = Blocks.from_boxes(beam_lo[None], beam_hi[None], unit_weight)
+    return Blocks.concatenate(blocks, beam), blocks.count

@@ -423,7 +423,8 @@ def blocks_of_geometry(geometry: dict) -> int | None:
     None for a builder or parameters it does not know (the caller then builds the model and
     estimates from it)."""
     builder = geometry.get("builder")
-    base = 1 if geometry.get("base", False) else 0
+    # the base slab and the loading beam, each one block
+    base = (1 if geometry.get("base", False) else 0) + (1 if geometry.get("top_beam") else 0)
     try:
         if builder == "running_bond_wall":
             n, courses = int(geometry["blocks_along_length"]), int(geometry["courses"])

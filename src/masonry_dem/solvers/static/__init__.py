@@ -8,7 +8,8 @@
 * :mod:`.outcome` - typed outcomes: :class:`Status`, :class:`StopReason`, :class:`Failure`;
 * :mod:`.certificate` - when a stop of the path is a collapse;
 * :mod:`.settings` - every number that steers it; :mod:`.solver` - the solver, ``pushover``;
-* :mod:`.branches` - load against displacement control on one model.
+* :mod:`.branches` - load against displacement control on one model;
+* :mod:`.stages` - loading stages: runs of the solver in turn, the state carried.
 
 Names are imported lazily, so that :mod:`masonry_dem.results` can use the outcome enums.
 """
@@ -28,6 +29,8 @@ if TYPE_CHECKING:  # the names ``__getattr__`` imports, seen by type checkers as
     from masonry_dem.solvers.static.settings import StaticSettings as StaticSettings
     from masonry_dem.solvers.static.solver import StaticSolver as StaticSolver
     from masonry_dem.solvers.static.solver import pushover as pushover
+    from masonry_dem.solvers.static.stages import Stage as Stage
+    from masonry_dem.solvers.static.stages import run_stages as run_stages
 
 _LAZY = {
     "StaticSettings": ".settings",
@@ -37,6 +40,8 @@ _LAZY = {
     "Certificate": ".certificate",
     "certify": ".certificate",
     "DiscreteProblem": ".problem",
+    "Stage": ".stages",
+    "run_stages": ".stages",
 }
 __getattr__ = lazy_names(__name__, _LAZY)
 

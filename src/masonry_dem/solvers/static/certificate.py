@@ -71,6 +71,8 @@ if TYPE_CHECKING:
 
 #: an upper bound of the collapse multiplier: a number, or a function of the model
 Bound = float | Callable[["Model"], "float | None"] | None
+#: a law state: the joints' (m, 6) plastic part and (m,) cracked flags
+LawState = tuple[np.ndarray, np.ndarray]
 
 NOT_CHECKED = "not checked"
 #: a multiplier at most ZERO_LOAD x tolerance (in load scales) cannot be told from zero load
@@ -155,6 +157,7 @@ def certify(
     rests_at: Callable[[float], bool] | None = None,
     run_off: np.ndarray | None = None,
     instability: str = NOT_CHECKED,
+    start: LawState | None = None,
 ) -> Certificate:
     """Check the stop of ``hist`` at its last recorded state (see the module). Only the
     model's discrete problem and the History are used: the law state of the last step (the
@@ -174,7 +177,7 @@ def certify(
     peak = hist.collapse_multiplier
     lam = float(peak if peak is not None else hist.load_factors.max())
     q = state.q.reshape(-1)
-    plastic, cracked = law_state_before(problem, hist, last)
+    plastic, cracked = law_state_before(problem, hist, last, start)
     # (a) the residual re-evaluated at the state, with the law state it was found with
     _, rnorm, response = problem.residual(q, lam_state, plastic, cracked)
     equilibrium = bool(rnorm <= s.tolerance)
@@ -194,7 +197,7 @@ def certify(
         stiffness = live_norm / compliance / elastic_slope
     else:
         stiffness = math.inf
-    T0 = _dead_load_tangent(problem, hist, s)
+    T0 = _dead_load_tangent(problem, hist, s, start)
     rho = _rayleigh(problem, v, compliance, T0)
     # a path stopped by the displacement limit still found equilibria: its curve must have
     # stopped rising there, as work control measures flatness (flat_slope); a path that
@@ -260,7 +263,7 @@ def certify(
     zero_check = NOT_CHECKED
     lam_end = ZERO_LOAD * s.tolerance * problem.load_scale
     if near_zero:
-        zero_rho, zero_mode = _dead_load_mode(problem, hist, s)
+        zero_rho, zero_mode = _dead_load_mode(problem, hist, s, start)
         singular_at_zero = zero_rho <= ZERO_MODE * s.residual_stiffness
         # a contact may close after a small motion: the mechanism must also run away
         # where an independent method looks for rest (no rest at the resolvable lambda)
@@ -442,22 +445,26 @@ def _full(problem: DiscreteProblem, x: np.ndarray) -> np.ndarray:
     return q.reshape(-1, 6)
 
 
-def law_state_before(problem: DiscreteProblem, hist: History, index: int):
+def law_state_before(
+    problem: DiscreteProblem, hist: History, index: int, start: LawState | None = None
+):
     """(plastic part, cracked joints) that step ``index`` of the path was found with (or a
     step after the last would be): the joints detached at the steps before it (brittle
     tension), the plastic part stored at the step before it (memory of slip); or, for a rest
-    of the damped motion, the law state kept with the step."""
+    of the damped motion, the law state kept with the step. ``start``: the law state the
+    path started from (a later loading stage's, carried from the stage before; None: the
+    unloaded wall's, no slip and no crack)."""
     law = problem.law
     if index < len(hist.steps):
         found = hist.steps[index]
         if found.found_plastic is not None and found.found_cracked is not None:
             return found.found_plastic, found.found_cracked
     m = problem.model.interfaces.count
-    cracked = np.zeros(m, dtype=bool)
+    cracked = np.zeros(m, dtype=bool) if start is None else start[1].copy()
     if law.tension == "brittle" and index > 0:
         flags = np.array([st.flags for st in hist.steps[:index]])
-        cracked = np.any((flags & DETACHED_FLAG) > 0, axis=0)
-    plastic = np.zeros((m, 6))
+        cracked |= np.any((flags & DETACHED_FLAG) > 0, axis=0)
+    plastic = np.zeros((m, 6)) if start is None else start[0].copy()
     if index > 0:
         before = hist.steps[index - 1]
         relative = problem.asm.relative_displacements(before.q.reshape(-1))
@@ -466,7 +473,10 @@ def law_state_before(problem: DiscreteProblem, hist: History, index: int):
 
 
 def _dead_load_tangent(
-    problem: DiscreteProblem, hist: History, settings: StaticSettings
+    problem: DiscreteProblem,
+    hist: History,
+    settings: StaticSettings,
+    start: LawState | None = None,
 ) -> np.ndarray:
     """(m, 6, 6) tangents of the joints at the dead-load state (the first step), as Newton
     assembles them (:meth:`DiscreteProblem.joint_tangents`): the head joints of a dry wall
@@ -477,12 +487,16 @@ def _dead_load_tangent(
     corrector takes them, they give a metric that scales with kn exactly."""
     m = problem.model.interfaces.count
     first = hist.steps[0].q.reshape(-1)
-    _, _, response = problem.residual(first, 0.0, np.zeros((m, 6)), np.zeros(m, dtype=bool))
+    plastic, cracked = (np.zeros((m, 6)), np.zeros(m, dtype=bool)) if start is None else start
+    _, _, response = problem.residual(first, 0.0, plastic, cracked)
     return problem.joint_tangents(response, settings.residual_stiffness)
 
 
 def _dead_load_mode(
-    problem: DiscreteProblem, hist: History, settings: StaticSettings
+    problem: DiscreteProblem,
+    hist: History,
+    settings: StaticSettings,
+    start: LawState | None = None,
 ) -> tuple[float, np.ndarray | None]:
     """The smaller rho of the dead-load state's tangent along K_0^-1 F_L, and of the tangent
     at that state's linear extension to the smallest resolvable multiplier (ZERO_LOAD x
@@ -491,7 +505,7 @@ def _dead_load_mode(
     (every joint at kbar); with that mode (free DOFs), scaled to a largest translation of 1
     and oriented so that the live load does work on it."""
     m = problem.model.interfaces.count
-    none = (np.zeros((m, 6)), np.zeros(m, dtype=bool))
+    none = (np.zeros((m, 6)), np.zeros(m, dtype=bool)) if start is None else start
     first = hist.steps[0].q.reshape(-1)
     F = problem.F_live
     _, _, response = problem.residual(first, 0.0, *none)

@@ -82,6 +82,18 @@ class StaticSolver(Corrector):
         #: the step from which the path measures its displacement limit: the dead-load
         #: state, then each rest the instability rule finds past the limit
         self.limit_origin = 0
+        #: the law state (plastic part, cracked joints) the run starts from: None, the
+        #: unloaded wall's; a later loading stage's, carried (:meth:`start_from`)
+        self.start_state: tuple[np.ndarray, np.ndarray] | None = None
+
+    def start_from(self, q: np.ndarray, plastic: np.ndarray, cracked: np.ndarray) -> None:
+        """Start the run from the state (q, plastic part, cracked joints) another run ended
+        in (the stage before, :mod:`.stages`): the held DOFs of q stay where they are."""
+        self.q = np.asarray(q, dtype=float).reshape(-1).copy()
+        self.plastic = np.asarray(plastic, dtype=float).copy()
+        self.cracked = np.asarray(cracked, dtype=bool).copy()
+        self.search_state = (self.plastic.copy(), self.cracked.copy())
+        self.start_state = (self.plastic.copy(), self.cracked.copy())
 
     # ------------------------------------------------------------------ states of the path
     def accept(self, out: Outcome, step: int, control_value: float) -> StepResult:
@@ -386,6 +398,7 @@ class StaticSolver(Corrector):
                 self._rests_at,
                 run_off=self.run_off,
                 instability=self.instability,
+                start=self.start_state,
             )
             hist.certificate = cert
             if cert.holds:

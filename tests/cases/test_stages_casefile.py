@@ -1,0 +1,106 @@
+"""``[[stages]]`` in a case file (issue 41, item 4): the loading stages of the pushover, each
+with its own loads, supports and control; a loading beam by ``[geometry].top_beam`` and
+``select = "beam"``."""
+
+from __future__ import annotations
+
+import copy
+
+import numpy as np
+import pytest
+
+import masonry_dem as md
+from masonry_dem.cases.casefile import case_from_dict
+from masonry_dem.cases.schema import CaseError
+
+P = 1500.0  # the precompression on the beam [N]
+
+WALL = {
+    "name": "shear wall",
+    "geometry": {
+        "builder": "running_bond_wall",
+        "blocks_along_length": 3,
+        "courses": 3,
+        "block_height": 0.1,
+        "block_length": 0.2,
+        "thickness": 0.1,
+        "unit_weight": 18e3,
+        "base": True,
+        "top_beam": 0.1,
+    },
+    "material": {"kn": 1e9, "kt": 0.4e9, "friction": 0.6},
+    "supports": [{"select": "base"}],
+    "loads": [{"type": "self_weight"}],
+}
+
+STAGED = {
+    **WALL,
+    "stages": [
+        {
+            "name": "precompression",
+            "loads": [{"type": "point", "select": "beam", "force": [0, -P, 0]}],
+        },
+        {
+            "name": "push",
+            "supports": [{"select": "beam", "dofs": ["u2", "w3"]}],
+            "loads": [{"type": "point", "select": "beam", "force": [1, 0, 0], "live": True}],
+            "control": {"block": 11, "dof": "u1", "target": 0.001, "steps": 10},
+        },
+    ],
+}
+
+
+def _relative(a: np.ndarray, b: np.ndarray) -> float:
+    return float(np.abs(a - b).max() / max(np.abs(b).max(), 1e-300))
+
+
+def test_a_two_stage_case_file_ends_stage_one_at_the_dead_load_state():
+    case = case_from_dict(copy.deepcopy(STAGED))
+    beam = case.model.blocks.count - 1
+    assert beam == 11 and case.stages is not None and len(case.stages) == 2
+    assert case.stages[1].control == md.DisplacementControl(
+        block=11, dof="u1", target=0.001, steps=10
+    )
+    history = md.pushover(case.model, case.settings, stages=case.stages)
+    assert history.status == "completed", history.reason
+    first = [s for s in history.steps if s.stage == 0][-1]
+    single = copy.deepcopy(WALL)
+    single["loads"].append({"type": "point", "select": [beam], "force": [0, -P, 0]})
+    dead = md.pushover(case_from_dict(single).model)
+    assert dead.stop is md.StopReason.NO_LIVE_LOAD
+    assert _relative(first.q, dead.last.q) <= 1e-9
+    assert _relative(first.actions, dead.last.actions) <= 1e-9
+    pushed = history.steps[-1]
+    assert pushed.stage == 1 and pushed.q[beam, 1] == first.q[beam, 1]
+
+
+def test_a_case_file_with_no_stages_has_none():
+    case = case_from_dict(copy.deepcopy(WALL))
+    assert case.stages is None
+
+
+@pytest.mark.parametrize(
+    ("change", "words"),
+    [
+        (lambda d: d["stages"][0].update(load_factor=2), "[stages][0].load_factor: unknown key"),
+        (lambda d: d["stages"][1]["control"].update(dof="u4"), "[stages][1].control.dof"),
+        (
+            lambda d: d["stages"][1]["control"].update(dof="u2"),
+            "stages[1] (push).control: dof 'u2' of block 11 is held",
+        ),
+        (lambda d: d["stages"][0]["loads"][0].update(type="wind"), "[stages][0].loads[0].type"),
+        (lambda d: d.update(stages=[]), "at least one Stage"),
+        (
+            lambda d: d.update(analysis={"control": {"block": 11, "dof": "u1", "target": 0.01}}),
+            "each stage names its own control",
+        ),
+        (lambda d: d["geometry"].pop("top_beam"), 'select = "beam" but the geometry has no'),
+        (lambda d: d["geometry"].update(top_beam=-0.1), "[geometry].top_beam = -0.1"),
+    ],
+)
+def test_a_bad_stage_table_is_named(change, words):
+    data = copy.deepcopy(STAGED)
+    change(data)
+    with pytest.raises(CaseError) as err:
+        case_from_dict(data)
+    assert words in str(err.value)
