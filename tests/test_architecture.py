@@ -19,6 +19,7 @@ PACKAGE = Path(__file__).resolve().parents[1] / "src" / "masonry_dem"
 STAGES: tuple[tuple[str, ...], ...] = (
     (
         "_arrays",
+        "_docstrings",
         "_lazy",
         "_parameters",
         "_signals",
