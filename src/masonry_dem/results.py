@@ -12,9 +12,11 @@ from typing import TYPE_CHECKING, Any, Protocol, overload
 import numpy as np
 from numpy.typing import NDArray
 
-# re-exported: the names of the codes of StepResult.state (docs/rendering.md)
 from masonry_dem._arrays import FloatArray
+from masonry_dem._docstrings import SHARED, fill
 from masonry_dem._validation import read_only
+
+# re-exported: the names of the codes of StepResult.state (docs/rendering.md)
 from masonry_dem.constitutive.states import STATE_NAMES as STATE_NAMES
 
 if TYPE_CHECKING:
@@ -89,6 +91,7 @@ class StopReason(_Text):
     NO_REST = "no rest"  # the reference analysis: the damped wall found no rest above lambda
 
 
+@fill(SHARED)
 @dataclass(frozen=True)
 class StepResult:
     """One converged equilibrium state.
@@ -126,14 +129,7 @@ class StepResult:
 
     Examples
     --------
-    >>> import masonry_dem as md
-    >>> blocks, base = md.add_base(md.single_block(0.2, 0.2, 0.1, 18e3))
-    >>> model = md.Model.build(
-    ...     blocks,
-    ...     md.InterfaceMaterial(kn=1e9, kt=4e8, friction=0.6),
-    ...     supports=[md.Support([base])],
-    ...     loads=[md.SelfWeight(), md.WeightProportional((1, 0, 0))],
-    ... )
+    %(sliding_block)s
     >>> history = md.pushover(model)
     >>> step = history.last
     >>> step.q.shape, step.actions.shape, round(step.load_factor, 6)
@@ -190,6 +186,7 @@ class Steps(Protocol):
     def __iter__(self) -> Iterator[StepResult]: ...
 
 
+@fill(SHARED)
 @dataclass
 class History:
     """All steps of a run, and how it ended.
@@ -218,14 +215,7 @@ class History:
 
     Examples
     --------
-    >>> import masonry_dem as md
-    >>> blocks, base = md.add_base(md.single_block(0.2, 0.2, 0.1, 18e3))
-    >>> model = md.Model.build(
-    ...     blocks,
-    ...     md.InterfaceMaterial(kn=1e9, kt=4e8, friction=0.6),
-    ...     supports=[md.Support([base])],
-    ...     loads=[md.SelfWeight(), md.WeightProportional((1, 0, 0))],
-    ... )
+    %(sliding_block)s
     >>> history = md.pushover(model)
     >>> history.status, history.stop
     (<Status.COLLAPSE: 'collapse'>, <StopReason.STIFFNESS_LOST: 'stiffness lost'>)
@@ -325,6 +315,7 @@ class History:
         return out
 
 
+@fill(SHARED)
 @dataclass(frozen=True)
 class AnalysisResult:
     """What every analysis returns through :func:`masonry_dem.analyze`.
@@ -378,14 +369,7 @@ class AnalysisResult:
 
     Examples
     --------
-    >>> import masonry_dem as md
-    >>> blocks, base = md.add_base(md.single_block(0.2, 0.2, 0.1, 18e3))
-    >>> model = md.Model.build(
-    ...     blocks,
-    ...     md.InterfaceMaterial(kn=1e9, kt=4e8, friction=0.6),
-    ...     supports=[md.Support([base])],
-    ...     loads=[md.SelfWeight(), md.WeightProportional((1, 0, 0))],
-    ... )
+    %(sliding_block)s
     >>> result = md.analyze(model, "relaxation")
     >>> result.summary()["status"], result.mechanism[0, :3].round(3).tolist()
     ('collapse', [1.0, 0.0, 0.0])
@@ -441,6 +425,7 @@ class AnalysisResult:
         }
 
 
+@fill(SHARED)
 class Observer(Protocol):
     """What follows a run as it goes, handed to a solver (``observer=``).
 
@@ -453,14 +438,7 @@ class Observer(Protocol):
 
     Examples
     --------
-    >>> import masonry_dem as md
-    >>> blocks, base = md.add_base(md.single_block(0.2, 0.2, 0.1, 18e3))  # 72 N
-    >>> model = md.Model.build(
-    ...     blocks,
-    ...     md.InterfaceMaterial(kn=1e9, kt=4e8, friction=0.6),
-    ...     supports=[md.Support([base])],
-    ...     loads=[md.SelfWeight(), md.WeightProportional((1, 0, 0))],
-    ... )
+    %(sliding_block)s
     >>> class Count:
     ...     def __enter__(self):
     ...         self.steps = 0

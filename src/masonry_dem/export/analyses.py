@@ -9,6 +9,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from masonry_dem._docstrings import SHARED, fill
 from masonry_dem.model import Model, Monitor
 from masonry_dem.results import History, Observer, StepResult
 
@@ -37,6 +38,7 @@ def results_writer(
     return ResultsWriter(out, model, every=write_every, background=True)
 
 
+@fill(SHARED)
 def pushover(
     model: Model,
     settings: StaticSettings | None = None,
@@ -101,14 +103,7 @@ def pushover(
 
     Examples
     --------
-    >>> import masonry_dem as md
-    >>> blocks, base = md.add_base(md.single_block(0.2, 0.2, 0.1, 18e3))  # 72 N
-    >>> model = md.Model.build(
-    ...     blocks,
-    ...     md.InterfaceMaterial(kn=1e9, kt=4e8, friction=0.6),
-    ...     supports=[md.Support([base])],
-    ...     loads=[md.SelfWeight(), md.WeightProportional((1, 0, 0))],
-    ... )
+    %(sliding_block)s
     >>> history = md.pushover(model)
     >>> str(history.status), round(history.collapse_multiplier, 6)  # sliding: mu = 0.6
     ('collapse', 0.6)
@@ -130,6 +125,7 @@ def pushover(
     )
 
 
+@fill(SHARED)
 def relax(
     model: Model,
     settings: DRSettings | None = None,
@@ -174,14 +170,7 @@ def relax(
 
     Examples
     --------
-    >>> import masonry_dem as md
-    >>> blocks, base = md.add_base(md.single_block(0.2, 0.2, 0.1, 18e3))  # 72 N
-    >>> model = md.Model.build(
-    ...     blocks,
-    ...     md.InterfaceMaterial(kn=1e9, kt=4e8, friction=0.6),
-    ...     supports=[md.Support([base])],
-    ...     loads=[md.SelfWeight(), md.WeightProportional((1, 0, 0))],
-    ... )
+    %(sliding_block)s
     >>> history = md.relax(model)
     >>> str(history.status), round(history.collapse_multiplier, 3)
     ('collapse', 0.6)

@@ -50,6 +50,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from masonry_dem._docstrings import SHARED, fill
 from masonry_dem._threads import kernel_threads_for
 from masonry_dem._validation import (
     at_least,
@@ -597,6 +598,7 @@ class QuasiStatic:
                 increment = 0.5 * (failed[0] - lam)
 
 
+@fill(SHARED)
 def quasi_static(
     model: Model,
     settings: QuasiStaticSettings | None = None,
@@ -630,14 +632,7 @@ def quasi_static(
 
     Examples
     --------
-    >>> import masonry_dem as md
-    >>> blocks, base = md.add_base(md.single_block(0.2, 0.2, 0.1, 18e3))
-    >>> model = md.Model.build(
-    ...     blocks,
-    ...     md.InterfaceMaterial(kn=1e9, kt=4e8, friction=0.6),
-    ...     supports=[md.Support([base])],
-    ...     loads=[md.SelfWeight(), md.WeightProportional((1, 0, 0))],
-    ... )
+    %(sliding_block)s
     >>> history = md.quasi_static(model)
     >>> str(history.status), round(history.collapse_multiplier, 3)
     ('collapse', 0.6)
