@@ -7,7 +7,7 @@ from collections.abc import Iterator
 from dataclasses import dataclass, field
 from enum import Enum
 from functools import cached_property
-from typing import TYPE_CHECKING, Any, Protocol, overload
+from typing import Any, Protocol, overload
 
 import numpy as np
 from numpy.typing import NDArray
@@ -18,9 +18,6 @@ from masonry_dem._validation import read_only
 
 # re-exported: the names of the codes of StepResult.state (docs/rendering.md)
 from masonry_dem.constitutive.states import STATE_NAMES as STATE_NAMES
-
-if TYPE_CHECKING:
-    from masonry_dem.solvers.static.certificate import Certificate
 
 
 class _Text(str, Enum):
@@ -186,6 +183,26 @@ class Steps(Protocol):
     def __iter__(self) -> Iterator[StepResult]: ...
 
 
+class CollapseCertificate(Protocol):
+    """What a History keeps of the certificate of its collapse:
+    :class:`masonry_dem.solvers.static.certificate.Certificate` is one (named here by what it
+    does, so that the results import nothing of the solvers, not even for annotations)."""
+
+    @property
+    def holds(self) -> bool:
+        """Whether the stop is a collapse."""
+        ...
+
+    @property
+    def reason(self) -> str:
+        """Why, for people."""
+        ...
+
+    def as_dict(self) -> dict[str, Any]:
+        """The fields, JSON-ready (no arrays)."""
+        ...
+
+
 @fill(SHARED)
 @dataclass
 class History:
@@ -204,7 +221,7 @@ class History:
         Why the path stopped, for code.
     certificate : Certificate, optional
         For a stop the solver took for a collapse, the certificate that confirmed or refused
-        it.
+        it (:class:`~masonry_dem.solvers.static.certificate.Certificate`).
     collapse_bracket : (float, float), optional
         The refined bracket of lambda at collapse: the last converged value and the first
         failed one.
@@ -227,7 +244,7 @@ class History:
     status: Status = Status.RUNNING
     reason: str = ""
     stop: StopReason = StopReason.NONE
-    certificate: Certificate | None = None
+    certificate: CollapseCertificate | None = None
     collapse_bracket: tuple[float, float] | None = None
     seconds: float = 0.0
     iterations: int = 0
