@@ -58,6 +58,13 @@ def fill(*docs: Mapping[str, str]) -> Callable[[T], T]:
 
 #: text shared across the package
 SHARED: dict[str, str] = {
+    # the Raises of the settings, which check every field by its range
+    "field_errors": """
+        Raises
+        ------
+        ValueError
+            If a field is out of its range, named.
+    """,
     # the model of the Examples: a block on a rigid base, pushed sideways by a load
     # proportional to its weight; it slides at lambda = mu = 0.6
     "sliding_block": """

@@ -92,6 +92,7 @@ CEILING_GROWTH = 1.25
 NEWTON_FORCING = 1e-2
 
 
+@fill(SHARED)
 @dataclass(frozen=True)
 class QuasiStaticSettings:
     """How finely the reference analysis loads and moves the wall.
@@ -144,10 +145,7 @@ class QuasiStaticSettings:
     max_step : float, default 1.0
         The iteration rule's largest increment (load scales), with ``newton_steps``; > 0.
 
-    Raises
-    ------
-    ValueError
-        If a field is out of its range, named.
+    %(field_errors)s
 
     Examples
     --------
