@@ -21,6 +21,24 @@ if TYPE_CHECKING:
 __all__ = ["pushover", "relax", "results_writer"]
 
 
+#: the parameters pushover and relax share (:func:`masonry_dem._docstrings.fill`)
+DOCS: dict[str, str] = {
+    "output": """
+        out : str or pathlib.Path, optional
+            A results folder to write as the steps converge (None: nothing written; give
+            ``out`` or ``observer``, not both).
+        monitor : (int, str), optional
+            (block, DOF name) whose displacement the pushover curve records (None: the
+            largest block translation).
+        write_every : int, default 1
+            With ``out``: write every ``write_every``-th step (>= 1).
+        callback : callable, optional
+            ``callback(step)`` is called after each converged step (e.g. a progress bar).
+    """,
+    **SHARED,
+}
+
+
 def results_writer(
     model: Model,
     out: str | Path | None,
@@ -38,7 +56,7 @@ def results_writer(
     return ResultsWriter(out, model, every=write_every, background=True)
 
 
-@fill(SHARED)
+@fill(DOCS)
 def pushover(
     model: Model,
     settings: StaticSettings | None = None,
@@ -65,16 +83,7 @@ def pushover(
         The solver's settings (None: the defaults).
     control : DisplacementControl, optional
         Drive one DOF to a target instead of raising lambda (None: load control).
-    out : str or pathlib.Path, optional
-        A results folder to write as the steps converge (None: nothing written; give
-        ``out`` or ``observer``, not both).
-    monitor : (int, str), optional
-        (block, DOF name) whose displacement the pushover curve records (None: the largest
-        block translation).
-    write_every : int, default 1
-        With ``out``: write every ``write_every``-th step (>= 1).
-    callback : callable, optional
-        ``callback(step)`` is called after each converged step (e.g. a progress bar).
+    %(output)s
     bound : float or callable, optional
         An upper bound of the collapse multiplier (the associative limit-analysis multiplier
         of the model, a number or a function of the model) that a certified collapse may not
@@ -125,7 +134,7 @@ def pushover(
     )
 
 
-@fill(SHARED)
+@fill(DOCS)
 def relax(
     model: Model,
     settings: DRSettings | None = None,
@@ -143,16 +152,7 @@ def relax(
         The wall.
     settings : DRSettings, optional
         The knobs of dynamic relaxation (None: the defaults).
-    out : str or pathlib.Path, optional
-        A results folder to write as the steps converge (None: nothing written; give
-        ``out`` or ``observer``, not both).
-    monitor : (int, str), optional
-        (block, DOF name) whose displacement the pushover curve records (None: the largest
-        block translation).
-    write_every : int, default 1
-        With ``out``: write every ``write_every``-th step (>= 1).
-    callback : callable, optional
-        ``callback(step)`` is called after each converged step (e.g. a progress bar).
+    %(output)s
     observer : Observer, optional
         Follows the run instead of a results folder (:class:`~masonry_dem.results.Observer`).
 

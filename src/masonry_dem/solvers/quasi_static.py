@@ -632,7 +632,7 @@ def quasi_static(
     --------
     %(sliding_block)s
     >>> history = md.quasi_static(model)
-    >>> str(history.status), round(history.collapse_multiplier, 3)
-    ('collapse', 0.6)
+    >>> print(history.status, round(history.collapse_multiplier, 3))
+    collapse 0.6
     """
     return QuasiStatic(model, settings).run(callback)
