@@ -63,6 +63,13 @@ Record = Callable[[Outcome], None]
 RESUMED = ("resumed", StopReason.NONE)
 
 
+def _out_of_steps(hist: History, max_steps: int, lam: float) -> None:
+    """End the path as failed: ``max_steps`` converged steps and no stop, at lambda ``lam``."""
+    hist.end(
+        Status.FAILED, StopReason.MAX_STEPS, f"max_steps={max_steps} reached at lambda={lam:.6g}"
+    )
+
+
 def load_control(solver: PathSolver, hist: History, record: Record, resume: bool = False) -> None:
     """Load control from the dead-load state (or, ``resume``, from the last converged state, a
     rest the instability rule found), handing over to work control at its first failure,
@@ -193,11 +200,7 @@ def _load_control(
                 break
             dlam = lam_fail - lam  # re-try the first failure from the bracket's end
     else:
-        hist.end(
-            Status.FAILED,
-            StopReason.MAX_STEPS,
-            f"max_steps={s.max_steps} reached at lambda={lam:.6g}",
-        )
+        _out_of_steps(hist, s.max_steps, lam)
         return None
     hist.collapse_bracket = (lam, lam_fail)
     hist.end(
@@ -467,11 +470,7 @@ def work_control(
             step.grow(out.iterations)
         step.cuts = 0
     else:
-        hist.end(
-            Status.FAILED,
-            StopReason.MAX_STEPS,
-            f"max_steps={s.max_steps} reached at lambda={lam:.6g}",
-        )
+        _out_of_steps(hist, s.max_steps, lam)
         return None
     if turned is not None:  # the curve fell, went flat or ran far: the rule looks above the peak
         reason, stop = turned
