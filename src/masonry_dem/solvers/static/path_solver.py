@@ -80,13 +80,15 @@ class PathSolver(Protocol):
     def equilibrate(
         self,
         load_factor: float,
-        dead_factor: float = 1.0,
-        control: tuple[np.ndarray, float, float] | None = None,
-        radius: float | None = None,
-        damped: bool = False,
-        start: np.ndarray | None = None,
+        *,
+        control: tuple[np.ndarray, float, float] | None = ...,
+        radius: float | None = ...,
+        start: np.ndarray | None = ...,
     ) -> Outcome:
-        """Newton iterations from the last converged state to equilibrium."""
+        """Newton iterations from the last converged state to equilibrium at ``load_factor``
+        or, with ``control``, along a generalised displacement (the corrector's
+        :meth:`~masonry_dem.solvers.static.corrector.Corrector.equilibrate`, as the
+        followers call it)."""
         ...
 
     def damped_motion(self, target: float, dead: float = 1.0) -> Outcome:
