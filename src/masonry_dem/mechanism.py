@@ -26,6 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from masonry_dem._docstrings import SHARED, fill
 from masonry_dem.assembly.compatibility import compatibility_matrix
 from masonry_dem.model import Model
 from masonry_dem.results import History, StepResult
@@ -40,6 +41,7 @@ def last_increment(history: History) -> NDArray[np.float64]:
     return history.steps[-1].q - history.steps[-2].q
 
 
+@fill(SHARED)
 def collapse_mode(model: Model, step: StepResult, floor: float = 1e-9) -> NDArray[np.float64]:
     """The collapse mechanism at a converged step.
 
@@ -75,14 +77,7 @@ def collapse_mode(model: Model, step: StepResult, floor: float = 1e-9) -> NDArra
 
     Examples
     --------
-    >>> import masonry_dem as md
-    >>> blocks, base = md.add_base(md.single_block(0.2, 0.2, 0.1, 18e3))  # 72 N
-    >>> model = md.Model.build(
-    ...     blocks,
-    ...     md.InterfaceMaterial(kn=1e9, kt=4e8, friction=0.6),
-    ...     supports=[md.Support([base])],
-    ...     loads=[md.SelfWeight(), md.WeightProportional((1, 0, 0))],
-    ... )
+    %(sliding_block)s
     >>> mode = md.collapse_mode(model, md.pushover(model).last)
     >>> mode[0, :3].round(3).tolist()  # the block slides along e1
     [1.0, 0.0, 0.0]

@@ -16,6 +16,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from masonry_dem._arrays import BoolArray, FloatArray
+from masonry_dem._docstrings import fill
 from masonry_dem._validation import (
     as_finite_array,
     block_indices,
@@ -246,6 +247,31 @@ class Support:
 
 
 # --------------------------------------------------------------------------- loads
+#: the text the loads' docstrings share (:func:`masonry_dem._docstrings.fill`)
+DOCS: dict[str, str] = {
+    "vector": """
+        The load's (n, 6) generalised forces at the block centres.
+
+        Parameters
+        ----------
+        blocks : Blocks
+            The assembly the load acts on.
+
+        Returns
+        -------
+        numpy.ndarray, shape (n, 6)
+            Forces [N] and moments [N m] at the block centres.
+    """,
+    "live_blocks": """
+        live : bool, default True
+            Scaled by lambda (True) or applied first and held (False).
+        blocks : array_like of int or bool, optional
+            The loaded blocks (None: every block).
+    """,
+}
+
+
+@fill(DOCS)
 @dataclass(frozen=True)
 class SelfWeight:
     """Block weights acting along -e2 (dead, or live for a vertical-acceleration pattern).
@@ -274,23 +300,13 @@ class SelfWeight:
         boolean("SelfWeight.live", self.live)
 
     def vector(self, blocks: Blocks) -> FloatArray:
-        """The load's (n, 6) generalised forces at the block centres.
-
-        Parameters
-        ----------
-        blocks : Blocks
-            The assembly the load acts on.
-
-        Returns
-        -------
-        numpy.ndarray, shape (n, 6)
-            Forces [N] and moments [N m] at the block centres.
-        """
+        """%(vector)s"""
         out = np.zeros((blocks.count, 6))
         out[:, 1] = -blocks.weights
         return out
 
 
+@fill(DOCS)
 @dataclass(frozen=True)
 class WeightProportional:
     """A horizontal (or any) pattern proportional to the block weights, e.g. a tilt table.
@@ -301,10 +317,7 @@ class WeightProportional:
     ----------
     direction : sequence of 3 floats, default (0, 0, 1)
         The force's direction (any non-zero length; e3: out of plane).
-    live : bool, default True
-        Scaled by lambda (True) or applied first and held (False).
-    blocks : array_like of int or bool, optional
-        The loaded blocks (None: every block).
+    %(live_blocks)s
 
     Raises
     ------
@@ -328,18 +341,7 @@ class WeightProportional:
         boolean("WeightProportional.live", self.live)
 
     def vector(self, blocks: Blocks) -> FloatArray:
-        """The load's (n, 6) generalised forces at the block centres.
-
-        Parameters
-        ----------
-        blocks : Blocks
-            The assembly the load acts on.
-
-        Returns
-        -------
-        numpy.ndarray, shape (n, 6)
-            Forces [N] and moments [N m] at the block centres.
-        """
+        """%(vector)s"""
         d = as_finite_array("direction", self.direction, (3,))
         largest = float(np.abs(d).max())
         if largest == 0:
@@ -358,6 +360,7 @@ class WeightProportional:
         return out
 
 
+@fill(DOCS)
 @dataclass(frozen=True)
 class Pressure:
     """Uniform pressure [Pa] on the face of the selected blocks normal to ``axis``.
@@ -373,10 +376,7 @@ class Pressure:
         The normal of the loaded face (2: out of plane).
     sign : {1, -1}, default 1
         Pushes towards +e[axis] or -e[axis].
-    live : bool, default True
-        Scaled by lambda (True) or applied first and held (False).
-    blocks : array_like of int or bool, optional
-        The loaded blocks (None: every block).
+    %(live_blocks)s
 
     Raises
     ------
@@ -405,18 +405,7 @@ class Pressure:
         boolean("Pressure.live", self.live)
 
     def vector(self, blocks: Blocks) -> FloatArray:
-        """The load's (n, 6) generalised forces at the block centres.
-
-        Parameters
-        ----------
-        blocks : Blocks
-            The assembly the load acts on.
-
-        Returns
-        -------
-        numpy.ndarray, shape (n, 6)
-            Forces [N] and moments [N m] at the block centres.
-        """
+        """%(vector)s"""
         p = self.value
         others = [k for k in range(3) if k != self.axis]
         area = blocks.sizes[:, others[0]] * blocks.sizes[:, others[1]]
@@ -430,6 +419,7 @@ class Pressure:
         return out
 
 
+@fill(DOCS)
 @dataclass(frozen=True)
 class PointLoad:
     """Point forces on each selected block, applied at offsets from the block centres.
@@ -470,18 +460,7 @@ class PointLoad:
         boolean("PointLoad.live", self.live)
 
     def vector(self, blocks: Blocks) -> FloatArray:
-        """The load's (n, 6) generalised forces at the block centres.
-
-        Parameters
-        ----------
-        blocks : Blocks
-            The assembly the load acts on.
-
-        Returns
-        -------
-        numpy.ndarray, shape (n, 6)
-            Forces [N] and moments [N m] at the block centres.
-        """
+        """%(vector)s"""
         idx = block_indices("PointLoad.blocks", self.blocks, blocks.count)
         f = as_finite_array("force", self.force, (3,))
         r = as_finite_array("offset", self.offset, (3,))

@@ -7,18 +7,17 @@ from collections.abc import Iterator
 from dataclasses import dataclass, field
 from enum import Enum
 from functools import cached_property
-from typing import TYPE_CHECKING, Any, Protocol, overload
+from typing import Any, Protocol, overload
 
 import numpy as np
 from numpy.typing import NDArray
 
-# re-exported: the names of the codes of StepResult.state (docs/rendering.md)
 from masonry_dem._arrays import FloatArray
+from masonry_dem._docstrings import SHARED, fill
 from masonry_dem._validation import read_only
-from masonry_dem.constitutive.states import STATE_NAMES as STATE_NAMES
 
-if TYPE_CHECKING:
-    from masonry_dem.solvers.static.certificate import Certificate
+# re-exported: the names of the codes of StepResult.state (docs/rendering.md)
+from masonry_dem.constitutive.states import STATE_NAMES as STATE_NAMES
 
 
 class _Text(str, Enum):
@@ -89,6 +88,7 @@ class StopReason(_Text):
     NO_REST = "no rest"  # the reference analysis: the damped wall found no rest above lambda
 
 
+@fill(SHARED)
 @dataclass(frozen=True)
 class StepResult:
     """One converged equilibrium state.
@@ -133,14 +133,7 @@ class StepResult:
 
     Examples
     --------
-    >>> import masonry_dem as md
-    >>> blocks, base = md.add_base(md.single_block(0.2, 0.2, 0.1, 18e3))
-    >>> model = md.Model.build(
-    ...     blocks,
-    ...     md.InterfaceMaterial(kn=1e9, kt=4e8, friction=0.6),
-    ...     supports=[md.Support([base])],
-    ...     loads=[md.SelfWeight(), md.WeightProportional((1, 0, 0))],
-    ... )
+    %(sliding_block)s
     >>> history = md.pushover(model)
     >>> step = history.last
     >>> step.q.shape, step.actions.shape, round(step.load_factor, 6)
@@ -202,6 +195,27 @@ class Steps(Protocol):
     def __iter__(self) -> Iterator[StepResult]: ...
 
 
+class CollapseCertificate(Protocol):
+    """What a History keeps of the certificate of its collapse:
+    :class:`masonry_dem.solvers.static.certificate.Certificate` is one (named here by what it
+    does, so that the results import nothing of the solvers, not even for annotations)."""
+
+    @property
+    def holds(self) -> bool:
+        """Whether the stop is a collapse."""
+        ...
+
+    @property
+    def reason(self) -> str:
+        """Why, for people."""
+        ...
+
+    def as_dict(self) -> dict[str, Any]:
+        """The fields, JSON-ready (no arrays)."""
+        ...
+
+
+@fill(SHARED)
 @dataclass
 class History:
     """All steps of a run, and how it ended.
@@ -219,7 +233,7 @@ class History:
         Why the path stopped, for code.
     certificate : Certificate, optional
         For a stop the solver took for a collapse, the certificate that confirmed or refused
-        it.
+        it (:class:`~masonry_dem.solvers.static.certificate.Certificate`).
     collapse_bracket : (float, float), optional
         The refined bracket of lambda at collapse: the last converged value and the first
         failed one.
@@ -230,14 +244,7 @@ class History:
 
     Examples
     --------
-    >>> import masonry_dem as md
-    >>> blocks, base = md.add_base(md.single_block(0.2, 0.2, 0.1, 18e3))
-    >>> model = md.Model.build(
-    ...     blocks,
-    ...     md.InterfaceMaterial(kn=1e9, kt=4e8, friction=0.6),
-    ...     supports=[md.Support([base])],
-    ...     loads=[md.SelfWeight(), md.WeightProportional((1, 0, 0))],
-    ... )
+    %(sliding_block)s
     >>> history = md.pushover(model)
     >>> history.status, history.stop
     (<Status.COLLAPSE: 'collapse'>, <StopReason.STIFFNESS_LOST: 'stiffness lost'>)
@@ -249,7 +256,7 @@ class History:
     status: Status = Status.RUNNING
     reason: str = ""
     stop: StopReason = StopReason.NONE
-    certificate: Certificate | None = None
+    certificate: CollapseCertificate | None = None
     collapse_bracket: tuple[float, float] | None = None
     seconds: float = 0.0
     iterations: int = 0
@@ -345,6 +352,7 @@ class History:
         return out
 
 
+@fill(SHARED)
 @dataclass(frozen=True)
 class AnalysisResult:
     """What every analysis returns through :func:`masonry_dem.analyze`.
@@ -398,14 +406,7 @@ class AnalysisResult:
 
     Examples
     --------
-    >>> import masonry_dem as md
-    >>> blocks, base = md.add_base(md.single_block(0.2, 0.2, 0.1, 18e3))
-    >>> model = md.Model.build(
-    ...     blocks,
-    ...     md.InterfaceMaterial(kn=1e9, kt=4e8, friction=0.6),
-    ...     supports=[md.Support([base])],
-    ...     loads=[md.SelfWeight(), md.WeightProportional((1, 0, 0))],
-    ... )
+    %(sliding_block)s
     >>> result = md.analyze(model, "relaxation")
     >>> result.summary()["status"], result.mechanism[0, :3].round(3).tolist()
     ('collapse', [1.0, 0.0, 0.0])
@@ -461,6 +462,7 @@ class AnalysisResult:
         }
 
 
+@fill(SHARED)
 class Observer(Protocol):
     """What follows a run as it goes, handed to a solver (``observer=``).
 
@@ -473,14 +475,7 @@ class Observer(Protocol):
 
     Examples
     --------
-    >>> import masonry_dem as md
-    >>> blocks, base = md.add_base(md.single_block(0.2, 0.2, 0.1, 18e3))  # 72 N
-    >>> model = md.Model.build(
-    ...     blocks,
-    ...     md.InterfaceMaterial(kn=1e9, kt=4e8, friction=0.6),
-    ...     supports=[md.Support([base])],
-    ...     loads=[md.SelfWeight(), md.WeightProportional((1, 0, 0))],
-    ... )
+    %(sliding_block)s
     >>> class Count:
     ...     def __enter__(self):
     ...         self.steps = 0

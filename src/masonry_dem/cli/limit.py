@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING, Any
 
 from masonry_dem.cli.options import (
     add_case,
+    add_max_memory,
     add_output,
     add_overwrite,
     positive_seconds,
@@ -73,12 +74,7 @@ def add_parser(subparsers) -> None:
     add_output(p, "results/limit", "the PNG of the mechanism")
     p.add_argument("--quiet", action="store_true", help="no progress line")
     add_overwrite(p)
-    p.add_argument(
-        "--max-memory",
-        default=None,
-        help="refuse an analysis whose estimated memory is above this (e.g. 16G, 500M; "
-        "default: what the machine and the process's limits leave)",
-    )
+    add_max_memory(p, "an analysis")
     p.set_defaults(func=limit_command)
 
 

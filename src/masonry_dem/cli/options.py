@@ -37,6 +37,17 @@ def add_overwrite(p: argparse.ArgumentParser) -> None:
     p.add_argument("--overwrite", action="store_true", help=OVERWRITE_HELP)
 
 
+def add_max_memory(p: argparse.ArgumentParser, what: str) -> None:
+    """``--max-memory``: refuse ``what`` (a run, an analysis) whose estimated memory is above
+    it (the estimate is checked against the least of it and what the machine leaves)."""
+    p.add_argument(
+        "--max-memory",
+        default=None,
+        help=f"refuse {what} whose estimated memory is above this (e.g. 16G, 500M; "
+        "default: what the machine and the process's limits leave)",
+    )
+
+
 def whole_number(option: str, minimum: int) -> Callable[[str], int]:
     """An argparse ``type``: a whole number of at least ``minimum``, else an error that names
     ``option``, the bound and the text given."""

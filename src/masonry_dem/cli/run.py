@@ -9,7 +9,13 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from masonry_dem.cli.options import add_case, add_output, add_overwrite, results_line
+from masonry_dem.cli.options import (
+    add_case,
+    add_max_memory,
+    add_output,
+    add_overwrite,
+    results_line,
+)
 from masonry_dem.run_case import Progress, estimate_run, run_case
 
 if TYPE_CHECKING:
@@ -27,12 +33,7 @@ def add_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) 
     add_output(p, "results/default", "the PNGs of the last step and of the collapse mechanism")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     add_overwrite(p)
-    p.add_argument(
-        "--max-memory",
-        default=None,
-        help="refuse a run whose estimated memory is above this (e.g. 16G, 500M; default: "
-        "the machine's available memory)",
-    )
+    add_max_memory(p, "a run")
     p.add_argument(
         "--no-bound",
         action="store_true",

@@ -433,6 +433,19 @@ def nb_plain_row(f1, f2, fn, m1, m2, m3, fti, l1, l2, mu, snap1, snap2, torsion)
 
 
 @numba.njit(error_model="numpy", inline="always")
+def _row_product(idx, val, v, start, end):
+    """One row of a sparse product: the sum of ``val[t] * v[idx[t]]`` over the stored entries
+    ``start`` to ``end`` of the row, in stored order (``t`` unsigned, as the index arrays:
+    see :func:`forces`)."""
+    total = 0.0
+    t = start
+    while t < end:
+        total += val[t] * v[idx[t]]
+        t += np.uint32(1)
+    return total
+
+
+@numba.njit(error_model="numpy", inline="always")
 def _row(i, trial, ft, l1, l2, friction, alpha, snap1, snap2, constants):
     """Row ``i``'s trial actions and constants, as :func:`nb_project_rows` takes them."""
     t = trial[i]
@@ -474,11 +487,7 @@ def forces(
     start = h_ptr[0]
     for r in range(6 * m):
         end = h_ptr[r + 1]
-        total = 0.0
-        t = start
-        while t < end:
-            total += h_val[t] * x[h_idx[t]]
-            t += np.uint32(1)
+        total = _row_product(h_idx, h_val, x, start, end)
         start = end
         rel_flat[r] = total
         value = kbar_flat[r] * (total - plastic_flat[r])
@@ -525,13 +534,8 @@ def forces(
     start = t_ptr[0]
     for r in range(n_out):
         end = t_ptr[r + 1]
-        total = 0.0
-        t = start
-        while t < end:
-            total += t_val[t] * flat[t_idx[t]]
-            t += np.uint32(1)
+        internal[r] = _row_product(t_idx, t_val, flat, start, end)
         start = end
-        internal[r] = total
     return rel, trial, ft, actions, flags, internal, True
 
 

@@ -9,6 +9,7 @@ from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from masonry_dem._docstrings import SHARED, fill
 from masonry_dem.model import Model, Monitor
 from masonry_dem.results import History, Observer, StepResult
 
@@ -19,6 +20,24 @@ if TYPE_CHECKING:
     from masonry_dem.solvers.static.stages import Stage
 
 __all__ = ["pushover", "relax", "results_writer"]
+
+
+#: the parameters pushover and relax share (:func:`masonry_dem._docstrings.fill`)
+DOCS: dict[str, str] = {
+    "output": """
+        out : str or pathlib.Path, optional
+            A results folder to write as the steps converge (None: nothing written; give
+            ``out`` or ``observer``, not both).
+        monitor : (int, str), optional
+            (block, DOF name) whose displacement the pushover curve records (None: the
+            largest block translation).
+        write_every : int, default 1
+            With ``out``: write every ``write_every``-th step (>= 1).
+        callback : callable, optional
+            ``callback(step)`` is called after each converged step (e.g. a progress bar).
+    """,
+    **SHARED,
+}
 
 
 def results_writer(
@@ -38,6 +57,7 @@ def results_writer(
     return ResultsWriter(out, model, every=write_every, background=True)
 
 
+@fill(DOCS)
 def pushover(
     model: Model,
     settings: StaticSettings | None = None,
@@ -65,16 +85,7 @@ def pushover(
         The solver's settings (None: the defaults).
     control : DisplacementControl, optional
         Drive one DOF to a target instead of raising lambda (None: load control).
-    out : str or pathlib.Path, optional
-        A results folder to write as the steps converge (None: nothing written; give
-        ``out`` or ``observer``, not both).
-    monitor : (int, str), optional
-        (block, DOF name) whose displacement the pushover curve records (None: the largest
-        block translation).
-    write_every : int, default 1
-        With ``out``: write every ``write_every``-th step (>= 1).
-    callback : callable, optional
-        ``callback(step)`` is called after each converged step (e.g. a progress bar).
+    %(output)s
     bound : float or callable, optional
         An upper bound of the collapse multiplier (the associative limit-analysis multiplier
         of the model, a number or a function of the model) that a certified collapse may not
@@ -109,14 +120,7 @@ def pushover(
 
     Examples
     --------
-    >>> import masonry_dem as md
-    >>> blocks, base = md.add_base(md.single_block(0.2, 0.2, 0.1, 18e3))  # 72 N
-    >>> model = md.Model.build(
-    ...     blocks,
-    ...     md.InterfaceMaterial(kn=1e9, kt=4e8, friction=0.6),
-    ...     supports=[md.Support([base])],
-    ...     loads=[md.SelfWeight(), md.WeightProportional((1, 0, 0))],
-    ... )
+    %(sliding_block)s
     >>> history = md.pushover(model)
     >>> str(history.status), round(history.collapse_multiplier, 6)  # sliding: mu = 0.6
     ('collapse', 0.6)
@@ -159,6 +163,7 @@ def pushover(
     )
 
 
+@fill(DOCS)
 def relax(
     model: Model,
     settings: DRSettings | None = None,
@@ -176,16 +181,7 @@ def relax(
         The wall.
     settings : DRSettings, optional
         The knobs of dynamic relaxation (None: the defaults).
-    out : str or pathlib.Path, optional
-        A results folder to write as the steps converge (None: nothing written; give
-        ``out`` or ``observer``, not both).
-    monitor : (int, str), optional
-        (block, DOF name) whose displacement the pushover curve records (None: the largest
-        block translation).
-    write_every : int, default 1
-        With ``out``: write every ``write_every``-th step (>= 1).
-    callback : callable, optional
-        ``callback(step)`` is called after each converged step (e.g. a progress bar).
+    %(output)s
     observer : Observer, optional
         Follows the run instead of a results folder (:class:`~masonry_dem.results.Observer`).
 
@@ -203,14 +199,7 @@ def relax(
 
     Examples
     --------
-    >>> import masonry_dem as md
-    >>> blocks, base = md.add_base(md.single_block(0.2, 0.2, 0.1, 18e3))  # 72 N
-    >>> model = md.Model.build(
-    ...     blocks,
-    ...     md.InterfaceMaterial(kn=1e9, kt=4e8, friction=0.6),
-    ...     supports=[md.Support([base])],
-    ...     loads=[md.SelfWeight(), md.WeightProportional((1, 0, 0))],
-    ... )
+    %(sliding_block)s
     >>> history = md.relax(model)
     >>> str(history.status), round(history.collapse_multiplier, 3)
     ('collapse', 0.6)

@@ -11,9 +11,29 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from masonry_dem._arrays import FloatArray, Rows
+from masonry_dem._docstrings import fill
 from masonry_dem._validation import as_finite_array, require_positive
 
+#: the text :meth:`Blocks.from_boxes` and :func:`~masonry_dem.geometry.builders.boxes` share
+#: (:func:`masonry_dem._docstrings.fill`)
+DOCS: dict[str, str] = {
+    "boxes": """
+        Parameters
+        ----------
+        lower, upper : array_like, shape (n, 3)
+            Lower and upper corners [m]; ``upper`` above ``lower`` along every axis.
+        unit_weight : float or array_like, shape (n,)
+            Weight per unit volume [N/m^3], >= 0.
 
+        Returns
+        -------
+        Blocks
+            The boxes, in the order given.
+    """,
+}
+
+
+@fill(DOCS)
 @dataclass(frozen=True)
 class Blocks(Rows):
     """Rigid box blocks, one row per block.
@@ -73,17 +93,7 @@ class Blocks(Rows):
     def from_boxes(cls, lower: ArrayLike, upper: ArrayLike, unit_weight: ArrayLike) -> Blocks:
         """Blocks from their lower and upper corners.
 
-        Parameters
-        ----------
-        lower, upper : array_like, shape (n, 3)
-            Lower and upper corners [m]; ``upper`` above ``lower`` along every axis.
-        unit_weight : float or array_like, shape (n,)
-            Weight per unit volume [N/m^3], >= 0.
-
-        Returns
-        -------
-        Blocks
-            The boxes, in the order given.
+        %(boxes)s
 
         Raises
         ------

@@ -21,8 +21,10 @@ from dataclasses import KW_ONLY, dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from masonry_dem._docstrings import fill
 from masonry_dem._parameters import function_of
 from masonry_dem._validation import as_finite_array, plain, positive_scalar
+from masonry_dem.geometry.blocks import DOCS as BLOCKS_DOCS
 from masonry_dem.geometry.blocks import Blocks
 
 log = logging.getLogger(__name__)
@@ -81,6 +83,29 @@ def _weight(unit_weight: float | None) -> float:
     return positive_scalar("unit_weight", unit_weight, strict=False)
 
 
+#: the parameters the builders (and the plans) share, filled into their docstrings
+#: (:func:`masonry_dem._docstrings.fill`)
+DOCS: dict[str, str] = {
+    "courses": """
+        courses : int
+            Number of courses, 1 to 10^4.
+    """,
+    "unit": """
+        block_height, block_length, thickness : float
+            The block's a, b and s [m] (along e2, e1, e3), each > 0; required, by name or by
+            letter.
+        unit_weight : float
+            Weight per unit volume [N/m^3], >= 0 (0: weightless); required.
+    """,
+    "letters": """
+        a, b, s : float, optional, keyword-only
+            The paper's letters for ``block_height``, ``block_length`` and ``thickness`` (as
+            case files and older scripts write them); giving both names of one size is an
+            error.
+    """,
+}
+
+
 @dataclass(frozen=True)
 class _Along:
     blocks_along_length: int
@@ -116,6 +141,7 @@ class _Unit:
         return _weight(self.unit_weight)
 
 
+@fill(DOCS)
 @dataclass(frozen=True)
 class _RunningBondWall(_Unit, _Courses, _Along):
     """A single-leaf running-bond wall with straight ends.
@@ -131,22 +157,15 @@ class _RunningBondWall(_Unit, _Courses, _Along):
     ----------
     blocks_along_length : int
         n, whole blocks in an even course, 1 to 10^4.
-    courses : int
-        Number of courses, 1 to 10^4.
-    block_height, block_length, thickness : float
-        The block's a, b and s [m] (along e2, e1, e3), each > 0; required, by name or by
-        letter.
-    unit_weight : float
-        Weight per unit volume [N/m^3], >= 0 (0: weightless); required.
+    %(courses)s
+    %(unit)s
     joint : float, default 0.0
         e, the mortar joint thickness [m], >= 0, included in the blocks.
     origin : sequence of 3 floats, default (0, 0, 0)
         The wall's lower-left-back corner [m].
     start_with_half : bool, default False
         Start the bottom course with half blocks (swaps even and odd courses).
-    a, b, s : float, optional, keyword-only
-        The paper's letters for ``block_height``, ``block_length`` and ``thickness`` (as case
-        files and older scripts write them); giving both names of one size is an error.
+    %(letters)s
 
     Returns
     -------
@@ -206,6 +225,7 @@ class _Extent:
     height: float
 
 
+@fill(DOCS)
 @dataclass(frozen=True)
 class _RunningBondWallOfSize(_Unit, _Extent):
     """A running-bond wall of the given overall size (``length`` x ``height`` [m]).
@@ -218,16 +238,10 @@ class _RunningBondWallOfSize(_Unit, _Extent):
     ----------
     length, height : float
         The wall's overall length (along e1) and height (along e2) [m], each > 0.
-    block_height, block_length, thickness : float
-        The block's a, b and s [m] (along e2, e1, e3), each > 0; required, by name or by
-        letter.
-    unit_weight : float
-        Weight per unit volume [N/m^3], >= 0 (0: weightless); required.
+    %(unit)s
     joint : float, default 0.0
         The mortar joint thickness [m], >= 0, included in the blocks.
-    a, b, s : float, optional, keyword-only
-        The paper's letters for ``block_height``, ``block_length`` and ``thickness`` (as case
-        files and older scripts write them); giving both names of one size is an error.
+    %(letters)s
 
     Returns
     -------
@@ -265,6 +279,7 @@ class _RunningBondWallOfSize(_Unit, _Extent):
         return running_bond_wall(n, nc, pitch_y, pitch_x, s, self.unit_weight, joint=0.0)
 
 
+@fill(DOCS)
 @dataclass(frozen=True)
 class _StackBondColumn(_Unit, _Courses):
     """Blocks stacked one on another, the column's base on y = 0.
@@ -276,14 +291,8 @@ class _StackBondColumn(_Unit, _Courses):
     ----------
     courses : int
         Number of blocks, 1 to 10^4.
-    block_height, block_length, thickness : float
-        The block's a, b and s [m] (along e2, e1, e3), each > 0; required, by name or by
-        letter.
-    unit_weight : float
-        Weight per unit volume [N/m^3], >= 0 (0: weightless); required.
-    a, b, s : float, optional, keyword-only
-        The paper's letters for ``block_height``, ``block_length`` and ``thickness`` (as case
-        files and older scripts write them); giving both names of one size is an error.
+    %(unit)s
+    %(letters)s
 
     Returns
     -------
@@ -312,6 +321,7 @@ class _StackBondColumn(_Unit, _Courses):
         return Blocks(centres, np.tile([b, a, s], (nc, 1)), np.full(nc, self.weight()))
 
 
+@fill(DOCS)
 @dataclass(frozen=True)
 class _SingleBlock(_Unit):
     """One block, its base on y = 0.
@@ -320,14 +330,8 @@ class _SingleBlock(_Unit):
 
     Parameters
     ----------
-    block_height, block_length, thickness : float
-        The block's a, b and s [m] (along e2, e1, e3), each > 0; required, by name or by
-        letter.
-    unit_weight : float
-        Weight per unit volume [N/m^3], >= 0 (0: weightless); required.
-    a, b, s : float, optional, keyword-only
-        The paper's letters for ``block_height``, ``block_length`` and ``thickness`` (as case
-        files and older scripts write them); giving both names of one size is an error.
+    %(unit)s
+    %(letters)s
 
     Returns
     -------
@@ -357,20 +361,11 @@ stack_bond_column = function_of(_StackBondColumn)
 single_block = function_of(_SingleBlock)
 
 
+@fill(BLOCKS_DOCS)
 def boxes(lower: ArrayLike, upper: ArrayLike, unit_weight: ArrayLike) -> Blocks:
     """Any user list of boxes given by their lower and upper corners.
 
-    Parameters
-    ----------
-    lower, upper : array_like, shape (n, 3)
-        Lower and upper corners [m]; ``upper`` above ``lower`` along every axis.
-    unit_weight : float or array_like, shape (n,)
-        Weight per unit volume [N/m^3], >= 0.
-
-    Returns
-    -------
-    Blocks
-        The boxes, in the order given.
+    %(boxes)s
 
     Raises
     ------

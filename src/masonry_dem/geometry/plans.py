@@ -44,9 +44,11 @@ from typing import Literal, get_args
 import numpy as np
 from numpy.typing import NDArray
 
+from masonry_dem._docstrings import fill, filled
 from masonry_dem._parameters import function_of
 from masonry_dem._validation import plain, positive_scalar
 from masonry_dem.geometry.blocks import Blocks
+from masonry_dem.geometry.builders import DOCS as BUILDER_DOCS
 from masonry_dem.geometry.builders import (
     _Along,
     _count,
@@ -257,6 +259,50 @@ def _facade_with_lintels(
     return both.subset(np.lexsort((lo[:, 2], lo[:, 0], lo[:, 1])))
 
 
+#: the parameters and the Returns the plans share, filled into their docstrings
+#: (:func:`masonry_dem._docstrings.fill`)
+DOCS: dict[str, str] = {
+    "facade": """
+        blocks_along_length : int
+            n, the facade's length in blocks (n b outside to outside), 1 to 10^4; long enough
+            for its corners.
+        %(courses)s
+        %(unit)s
+    """,
+    "return_blocks": """
+        return_blocks : int, default 4
+            m, the return wall's length in blocks (m b from the facade's outer face), 1 to
+            10^4, longer than the facade is thick.
+    """,
+    "plan_keywords": """
+        %(letters)s
+        joint : float, default 0.0, keyword-only
+            The mortar joint thickness [m], >= 0, included in the blocks.
+        facade_openings : sequence of (x_min, y_min, x_max, y_max), optional, keyword-only
+            Rectangles cut out of the facade alone [m].
+        lintels : bool, default False, keyword-only
+            Straight jambs and a lintel over each facade opening (a dry wall cannot stand
+            without), within the facade, between the corners.
+    """,
+    "plan_returns": """
+        Returns
+        -------
+        Blocks
+            The walls' blocks, course by course from the bottom; the parts are found back by
+            :func:`masonry_dem.geometry.selectors.part`.
+
+        Raises
+        ------
+        ValueError
+            If a count, a size or ``unit_weight`` is out of range, the facade is too short
+            for its corners or a return wall does not reach behind the facade, or an opening
+            is refused (it removes no block, or with ``lintels`` it reaches outside the
+            facade, its end or a corner).
+    """,
+}
+DOCS = {key: filled(text, BUILDER_DOCS) or "" for key, text in DOCS.items()}
+
+
 @dataclass(frozen=True)
 class _Plan(_Unit, _Courses, _Along):
     """The parameters every plan shares (the facade's, the unit's, ``joint`` and the
@@ -287,6 +333,7 @@ class _Plan(_Unit, _Courses, _Along):
         return blocks
 
 
+@fill(DOCS)
 @dataclass(frozen=True)
 class _LWall(_Plan):
     """A facade with one return wall at one corner, interlocked there.
@@ -298,45 +345,14 @@ class _LWall(_Plan):
 
     Parameters
     ----------
-    blocks_along_length : int
-        n, the facade's length in blocks (n b outside to outside), 1 to 10^4; long enough for
-        its corners.
-    courses : int
-        Number of courses, 1 to 10^4.
-    block_height, block_length, thickness : float
-        The block's a, b and s [m] (along e2, e1, e3), each > 0; required, by name or by
-        letter.
-    unit_weight : float
-        Weight per unit volume [N/m^3], >= 0 (0: weightless); required.
-    return_blocks : int, default 4
-        m, the return wall's length in blocks (m b from the facade's outer face), 1 to 10^4,
-        longer than the facade is thick.
+    %(facade)s
+    %(return_blocks)s
     corner : {"left", "right"}, default "left"
         Where the return wall stands: x = 0 (``left``) or x = n b (``right``).
-    a, b, s : float, optional, keyword-only
-        The paper's letters for ``block_height``, ``block_length`` and ``thickness``; giving
-        both names of one size is an error.
-    joint : float, default 0.0, keyword-only
-        The mortar joint thickness [m], >= 0, included in the blocks.
-    facade_openings : sequence of (x_min, y_min, x_max, y_max), optional, keyword-only
-        Rectangles cut out of the facade alone [m].
-    lintels : bool, default False, keyword-only
-        Straight jambs and a lintel over each facade opening (a dry wall cannot stand
-        without), within the facade, between the corners.
+    %(plan_keywords)s
 
-    Returns
-    -------
-    Blocks
-        The walls' blocks, course by course from the bottom; the parts are found back by
-        :func:`masonry_dem.geometry.selectors.part`.
-
-    Raises
-    ------
-    ValueError
-        If a count, a size or ``unit_weight`` is out of range, the facade is too short for
-        its corners or a return wall does not reach behind the facade, ``corner`` is
-        not one of the two, or an opening is refused (it removes no block, or with
-        ``lintels`` it reaches outside the facade, its end or a corner).
+    %(plan_returns)s
+        Or if ``corner`` is not one of the two.
 
     Examples
     --------
@@ -368,6 +384,7 @@ class _LWall(_Plan):
         return Blocks.from_boxes(lo[order], hi[order], gamma)
 
 
+@fill(DOCS)
 @dataclass(frozen=True)
 class _UWall(_Plan):
     """A facade between two return walls, interlocked at both corners.
@@ -377,43 +394,11 @@ class _UWall(_Plan):
 
     Parameters
     ----------
-    blocks_along_length : int
-        n, the facade's length in blocks (n b outside to outside), 1 to 10^4; long enough for
-        its corners.
-    courses : int
-        Number of courses, 1 to 10^4.
-    block_height, block_length, thickness : float
-        The block's a, b and s [m] (along e2, e1, e3), each > 0; required, by name or by
-        letter.
-    unit_weight : float
-        Weight per unit volume [N/m^3], >= 0 (0: weightless); required.
-    return_blocks : int, default 4
-        m, the return wall's length in blocks (m b from the facade's outer face), 1 to 10^4,
-        longer than the facade is thick.
-    a, b, s : float, optional, keyword-only
-        The paper's letters for ``block_height``, ``block_length`` and ``thickness``; giving
-        both names of one size is an error.
-    joint : float, default 0.0, keyword-only
-        The mortar joint thickness [m], >= 0, included in the blocks.
-    facade_openings : sequence of (x_min, y_min, x_max, y_max), optional, keyword-only
-        Rectangles cut out of the facade alone [m].
-    lintels : bool, default False, keyword-only
-        Straight jambs and a lintel over each facade opening (a dry wall cannot stand
-        without), within the facade, between the corners.
+    %(facade)s
+    %(return_blocks)s
+    %(plan_keywords)s
 
-    Returns
-    -------
-    Blocks
-        The walls' blocks, course by course from the bottom; the parts are found back by
-        :func:`masonry_dem.geometry.selectors.part`.
-
-    Raises
-    ------
-    ValueError
-        If a count, a size or ``unit_weight`` is out of range, the facade is too short for
-        its corners or a return wall does not reach behind the facade, or an opening is
-        refused (it removes no block, or with ``lintels`` it reaches outside the facade or a
-        corner).
+    %(plan_returns)s
 
     Examples
     --------
@@ -432,6 +417,7 @@ class _UWall(_Plan):
         return [facade, left, right]
 
 
+@fill(DOCS)
 @dataclass(frozen=True)
 class _TWall(_Plan):
     """A facade with a cross wall behind it.
@@ -443,45 +429,15 @@ class _TWall(_Plan):
 
     Parameters
     ----------
-    blocks_along_length : int
-        n, the facade's length in blocks (n b outside to outside), 1 to 10^4; long enough for
-        its corners.
-    courses : int
-        Number of courses, 1 to 10^4.
-    block_height, block_length, thickness : float
-        The block's a, b and s [m] (along e2, e1, e3), each > 0; required, by name or by
-        letter.
-    unit_weight : float
-        Weight per unit volume [N/m^3], >= 0 (0: weightless); required.
-    return_blocks : int, default 4
-        m, the return wall's length in blocks (m b from the facade's outer face), 1 to 10^4,
-        longer than the facade is thick.
+    %(facade)s
+    %(return_blocks)s
     cross_at : float, optional
         x of the cross wall's centre line [m] (None: the facade's middle); the cross wall
         must stay 0.3 block from the facade's ends.
-    a, b, s : float, optional, keyword-only
-        The paper's letters for ``block_height``, ``block_length`` and ``thickness``; giving
-        both names of one size is an error.
-    joint : float, default 0.0, keyword-only
-        The mortar joint thickness [m], >= 0, included in the blocks.
-    facade_openings : sequence of (x_min, y_min, x_max, y_max), optional, keyword-only
-        Rectangles cut out of the facade alone [m].
-    lintels : bool, default False, keyword-only
-        Straight jambs and a lintel over each facade opening (a dry wall cannot stand
-        without), within the facade, between the corners.
+    %(plan_keywords)s
 
-    Returns
-    -------
-    Blocks
-        The walls' blocks, course by course from the bottom; the parts are found back by
-        :func:`masonry_dem.geometry.selectors.part`.
-
-    Raises
-    ------
-    ValueError
-        If a count, a size or ``unit_weight`` is out of range, the facade is too short for
-        its corners or a return wall does not reach behind the facade, ``cross_at``
-        puts the cross wall within 0.3 block of the facade's ends, or an opening is refused.
+    %(plan_returns)s
+        Or if ``cross_at`` puts the cross wall within 0.3 block of the facade's ends.
 
     Examples
     --------
@@ -508,6 +464,7 @@ class _TWall(_Plan):
         return [facade, facade_right, _returns(m, pitch, s, (x0, x1))]
 
 
+@fill(DOCS)
 @dataclass(frozen=True)
 class _BoxWall(_Plan):
     """A closed box of four walls.
@@ -520,42 +477,14 @@ class _BoxWall(_Plan):
 
     Parameters
     ----------
-    blocks_along_length : int
-        n, the facade's length in blocks (n b outside to outside), 1 to 10^4; long enough for
-        its corners.
-    courses : int
-        Number of courses, 1 to 10^4.
-    block_height, block_length, thickness : float
-        The block's a, b and s [m] (along e2, e1, e3), each > 0; required, by name or by
-        letter.
-    unit_weight : float
-        Weight per unit volume [N/m^3], >= 0 (0: weightless); required.
+    %(facade)s
     blocks_along_depth : int, optional
         m, the box's depth in blocks (None: n, a square box); it must leave a side wall
         between the corners.
-    a, b, s : float, optional, keyword-only
-        The paper's letters for ``block_height``, ``block_length`` and ``thickness``; giving
-        both names of one size is an error.
-    joint : float, default 0.0, keyword-only
-        The mortar joint thickness [m], >= 0, included in the blocks.
-    facade_openings : sequence of (x_min, y_min, x_max, y_max), optional, keyword-only
-        Rectangles cut out of the facade alone [m].
-    lintels : bool, default False, keyword-only
-        Straight jambs and a lintel over each facade opening (a dry wall cannot stand
-        without), within the facade, between the corners.
+    %(plan_keywords)s
 
-    Returns
-    -------
-    Blocks
-        The walls' blocks, course by course from the bottom; the parts are found back by
-        :func:`masonry_dem.geometry.selectors.part`.
-
-    Raises
-    ------
-    ValueError
-        If a count, a size or ``unit_weight`` is out of range, the facade is too short for
-        its corners or a return wall does not reach behind the facade, ``blocks_along_depth``
-        leaves no side wall between the corners, or an opening is refused.
+    %(plan_returns)s
+        Or if ``blocks_along_depth`` leaves no side wall between the corners.
 
     Examples
     --------

@@ -21,6 +21,7 @@ from typing import Literal, get_args
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from masonry_dem._docstrings import fill
 from masonry_dem.geometry.blocks import Blocks
 
 Edge = Literal["left", "right", "bottom", "top", "back", "front"]
@@ -70,22 +71,42 @@ def _tol(blocks: Blocks) -> float:
     return 1e-6 * float(np.median(blocks.sizes))
 
 
+#: the text the selectors' docstrings share (:func:`masonry_dem._docstrings.fill`)
+DOCS: dict[str, str] = {
+    "assembly": """
+        Parameters
+        ----------
+        blocks : Blocks
+            The assembly.
+    """,
+    "among": """
+        among : array_like of bool or int, optional
+            A boolean mask (n,) or block indices that restricts the search (None: every
+            block).
+    """,
+    "indices": """
+        Returns
+        -------
+        numpy.ndarray of int
+            The indices of the blocks, ascending.
+    """,
+    "wall": """
+        >>> import masonry_dem as md
+        >>> wall = md.running_bond_wall(4, 3, 0.1, 0.2, 0.1, 18e3)
+    """,
+}
+
+
+@fill(DOCS)
 def edge(blocks: Blocks, which: Edge, among: ArrayLike | None = None) -> NDArray[np.intp]:
     """Blocks touching one edge of the assembly's bounding box.
 
-    Parameters
-    ----------
-    blocks : Blocks
-        The assembly.
+    %(assembly)s
     which : {"left", "right", "bottom", "top", "back", "front"}
         The edge (smallest or largest e1, e2, e3 of the blocks searched).
-    among : array_like of bool or int, optional
-        A boolean mask (n,) or block indices that restricts the search (None: every block).
+    %(among)s
 
-    Returns
-    -------
-    numpy.ndarray of int
-        The indices of the blocks, ascending.
+    %(indices)s
 
     Raises
     ------
@@ -95,8 +116,7 @@ def edge(blocks: Blocks, which: Edge, among: ArrayLike | None = None) -> NDArray
 
     Examples
     --------
-    >>> import masonry_dem as md
-    >>> wall = md.running_bond_wall(4, 3, 0.1, 0.2, 0.1, 18e3)
+    %(wall)s
     >>> md.select.edge(wall, "bottom").tolist()
     [0, 1, 2, 3]
     """
@@ -117,6 +137,7 @@ def edge(blocks: Blocks, which: Edge, among: ArrayLike | None = None) -> NDArray
     return _checked(f"edge={which!r}", mask, mask_among)
 
 
+@fill(DOCS)
 def column(
     blocks: Blocks, which: Literal["left", "right"] = "left", among: ArrayLike | None = None
 ) -> NDArray[np.intp]:
@@ -128,13 +149,9 @@ def column(
         The wall.
     which : {"left", "right"}, default "left"
         The end.
-    among : array_like of bool or int, optional
-        A boolean mask (n,) or block indices that restricts the search (None: every block).
+    %(among)s
 
-    Returns
-    -------
-    numpy.ndarray of int
-        The indices of the blocks, ascending.
+    %(indices)s
 
     Raises
     ------
@@ -143,8 +160,7 @@ def column(
 
     Examples
     --------
-    >>> import masonry_dem as md
-    >>> wall = md.running_bond_wall(4, 3, 0.1, 0.2, 0.1, 18e3)
+    %(wall)s
     >>> md.select.column(wall, "left").tolist()
     [0, 4, 9]
     """
@@ -153,15 +169,12 @@ def column(
     return edge(blocks, which, among)
 
 
+@fill(DOCS)
 def course_levels(blocks: Blocks, among: ArrayLike | None = None) -> NDArray[np.float64]:
     """The sorted distinct centre heights (e2) of the blocks: one per course.
 
-    Parameters
-    ----------
-    blocks : Blocks
-        The assembly.
-    among : array_like of bool or int, optional
-        A boolean mask (n,) or block indices that restricts the search (None: every block).
+    %(assembly)s
+    %(among)s
 
     Returns
     -------
@@ -175,8 +188,7 @@ def course_levels(blocks: Blocks, among: ArrayLike | None = None) -> NDArray[np.
 
     Examples
     --------
-    >>> import masonry_dem as md
-    >>> wall = md.running_bond_wall(4, 3, 0.1, 0.2, 0.1, 18e3)
+    %(wall)s
     >>> md.select.course_levels(wall).round(6).tolist()
     [0.05, 0.15, 0.25]
     """
@@ -189,22 +201,16 @@ def course_levels(blocks: Blocks, among: ArrayLike | None = None) -> NDArray[np.
     return np.asarray(y[np.concatenate([[True], gaps])], dtype=np.float64)
 
 
+@fill(DOCS)
 def course(blocks: Blocks, k: int, among: ArrayLike | None = None) -> NDArray[np.intp]:
     """Blocks of course ``k`` (0 = lowest; negative counts from the top).
 
-    Parameters
-    ----------
-    blocks : Blocks
-        The assembly.
+    %(assembly)s
     k : int
         The course.
-    among : array_like of bool or int, optional
-        A boolean mask (n,) or block indices that restricts the search (None: every block).
+    %(among)s
 
-    Returns
-    -------
-    numpy.ndarray of int
-        The indices of the blocks, ascending.
+    %(indices)s
 
     Raises
     ------
@@ -213,8 +219,7 @@ def course(blocks: Blocks, k: int, among: ArrayLike | None = None) -> NDArray[np
 
     Examples
     --------
-    >>> import masonry_dem as md
-    >>> wall = md.running_bond_wall(4, 3, 0.1, 0.2, 0.1, 18e3)
+    %(wall)s
     >>> md.select.course(wall, -1).tolist()
     [9, 10, 11, 12]
     """
@@ -226,24 +231,19 @@ def course(blocks: Blocks, k: int, among: ArrayLike | None = None) -> NDArray[np
     return _checked(f"course={k}", mask, mask_among)
 
 
+@fill(DOCS)
 def where(
     blocks: Blocks, predicate: Callable[[NDArray[np.float64]], ArrayLike], name: str = "predicate"
 ) -> NDArray[np.intp]:
     """Blocks whose centres (n, 3) satisfy ``predicate(centres) -> bool mask``.
 
-    Parameters
-    ----------
-    blocks : Blocks
-        The assembly.
+    %(assembly)s
     predicate : callable
         Takes the (n, 3) centres [m], returns an (n,) boolean mask.
     name : str, default "predicate"
         Names the selector in errors.
 
-    Returns
-    -------
-    numpy.ndarray of int
-        The indices of the blocks, ascending.
+    %(indices)s
 
     Raises
     ------
@@ -252,8 +252,7 @@ def where(
 
     Examples
     --------
-    >>> import masonry_dem as md
-    >>> wall = md.running_bond_wall(4, 3, 0.1, 0.2, 0.1, 18e3)
+    %(wall)s
     >>> md.select.where(wall, lambda c: c[:, 0] < 0.2).tolist()
     [0, 4, 9]
     """
@@ -321,6 +320,7 @@ def _wall_labels(
     return label, t, np.stack([lo, hi])
 
 
+@fill(DOCS)
 def part(blocks: Blocks, name: str, among: ArrayLike | None = None) -> NDArray[np.intp]:
     """Blocks of one part of walls that meet, found from the plan alone.
 
@@ -340,13 +340,9 @@ def part(blocks: Blocks, name: str, among: ArrayLike | None = None) -> NDArray[n
         The walls.
     name : str
         The part: one of the walls or corners above.
-    among : array_like of bool or int, optional
-        A boolean mask (n,) or block indices that restricts the search (None: every block).
+    %(among)s
 
-    Returns
-    -------
-    numpy.ndarray of int
-        The indices of the blocks, ascending.
+    %(indices)s
 
     Raises
     ------
@@ -358,7 +354,8 @@ def part(blocks: Blocks, name: str, among: ArrayLike | None = None) -> NDArray[n
     --------
     >>> import masonry_dem as md
     >>> walls = md.l_wall(6, 4, 0.1, 0.2, 0.1, 18e3)
-    >>> md.select.part(walls, "corner:left").tolist()
+    >>> corner = md.select.part(walls, "corner:left")
+    >>> corner.tolist()
     [4, 13, 24, 33]
     """
     if name not in PARTS:

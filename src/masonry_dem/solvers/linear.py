@@ -8,6 +8,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.sparse.linalg import splu
 
+from masonry_dem._docstrings import SHARED, fill
 from masonry_dem.assembly.stiffness import Assembly
 from masonry_dem.model import Model
 
@@ -22,6 +23,7 @@ class LinearSolution:
     relative: NDArray[np.float64]  # (m, 6) relative displacements
 
 
+@fill(SHARED)
 def solve_linear(
     model: Model, load_factor: float = 1.0, assembly: Assembly | None = None
 ) -> LinearSolution:
@@ -50,14 +52,7 @@ def solve_linear(
 
     Examples
     --------
-    >>> import masonry_dem as md
-    >>> blocks, base = md.add_base(md.single_block(0.2, 0.2, 0.1, 18e3))  # 72 N
-    >>> model = md.Model.build(
-    ...     blocks,
-    ...     md.InterfaceMaterial(kn=1e9, kt=4e8, friction=0.6),
-    ...     supports=[md.Support([base])],
-    ...     loads=[md.SelfWeight(), md.WeightProportional((1, 0, 0))],
-    ... )
+    %(sliding_block)s
     >>> solution = md.solve_linear(model)
     >>> solution.reactions[base, :2].round(6).tolist()  # weight and horizontal load
     [-72.0, 72.0]

@@ -8,6 +8,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from masonry_dem._docstrings import SHARED, fill
 from masonry_dem._validation import (
     at_least,
     check_fields,
@@ -18,7 +19,30 @@ from masonry_dem._validation import (
     positive_or_none,
 )
 
+#: the fields of :class:`LoadPathSettings` that a subclass documents as they are, filled into
+#: the docstrings (:func:`masonry_dem._docstrings.fill`)
+DOCS: dict[str, str] = {
+    "load_path_fields": """
+        growth : float, default 1.5
+            An easy step makes the next one ``growth`` times longer, >= 1.
+        bracket_tolerance : float, default 0.005
+            Width of the collapse bracket, relative to lambda, > 0.
+        refine : bool, default True
+            Halve a failed load step (False: stop at the first failure, an upper bracket
+            only).
+        max_steps : int, default 1000
+            Converged steps of a run, >= 1.
+        max_load_factor : float, default inf
+            The run ends ``completed`` when lambda reaches it, > 0 (inf: no cap).
+        displacement_limit : float, optional
+            Largest translation [m] still in the small-displacement range, > 0 (None: the
+            solver's own, from the size of the blocks).
+    """,
+    **SHARED,
+}
 
+
+@fill(DOCS)
 @dataclass(frozen=True)
 class LoadPathSettings:
     """How a solver steps lambda from the dead-load state to a collapse.
@@ -31,24 +55,9 @@ class LoadPathSettings:
     ----------
     initial_step, max_step : float, default 0.02 and 1.0
         The first and the largest lambda increment, > 0.
-    growth : float, default 1.5
-        An easy step makes the next one ``growth`` times longer, >= 1.
-    bracket_tolerance : float, default 0.005
-        Width of the collapse bracket, relative to lambda, > 0.
-    refine : bool, default True
-        Halve a failed load step (False: stop at the first failure, an upper bracket only).
-    max_steps : int, default 1000
-        Converged steps of a run, >= 1.
-    max_load_factor : float, default inf
-        The run ends ``completed`` when lambda reaches it, > 0 (inf: no cap).
-    displacement_limit : float, optional
-        Largest translation [m] still in the small-displacement range, > 0 (None: the
-        solver's own, from the size of the blocks).
+    %(load_path_fields)s
 
-    Raises
-    ------
-    ValueError
-        If a field is out of its range, named.
+    %(field_errors)s
     """
 
     initial_step: float = positive(0.02)

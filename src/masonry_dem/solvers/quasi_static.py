@@ -50,6 +50,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from masonry_dem._docstrings import SHARED, fill
 from masonry_dem._threads import kernel_threads_for
 from masonry_dem._validation import (
     at_least,
@@ -91,6 +92,7 @@ CEILING_GROWTH = 1.25
 NEWTON_FORCING = 1e-2
 
 
+@fill(SHARED)
 @dataclass(frozen=True)
 class QuasiStaticSettings:
     """How finely the reference analysis loads and moves the wall.
@@ -143,10 +145,7 @@ class QuasiStaticSettings:
     max_step : float, default 1.0
         The iteration rule's largest increment (load scales), with ``newton_steps``; > 0.
 
-    Raises
-    ------
-    ValueError
-        If a field is out of its range, named.
+    %(field_errors)s
 
     Examples
     --------
@@ -597,6 +596,7 @@ class QuasiStatic:
                 increment = 0.5 * (failed[0] - lam)
 
 
+@fill(SHARED)
 def quasi_static(
     model: Model,
     settings: QuasiStaticSettings | None = None,
@@ -630,16 +630,9 @@ def quasi_static(
 
     Examples
     --------
-    >>> import masonry_dem as md
-    >>> blocks, base = md.add_base(md.single_block(0.2, 0.2, 0.1, 18e3))
-    >>> model = md.Model.build(
-    ...     blocks,
-    ...     md.InterfaceMaterial(kn=1e9, kt=4e8, friction=0.6),
-    ...     supports=[md.Support([base])],
-    ...     loads=[md.SelfWeight(), md.WeightProportional((1, 0, 0))],
-    ... )
+    %(sliding_block)s
     >>> history = md.quasi_static(model)
-    >>> str(history.status), round(history.collapse_multiplier, 3)
-    ('collapse', 0.6)
+    >>> print(history.status, round(history.collapse_multiplier, 3))
+    collapse 0.6
     """
     return QuasiStatic(model, settings).run(callback)

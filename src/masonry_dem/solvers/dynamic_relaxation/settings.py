@@ -8,8 +8,9 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Literal, get_args
 
+from masonry_dem._docstrings import fill
 from masonry_dem._validation import choice, count, positive, positive_or_none
-from masonry_dem.solvers.load_path import LoadPathSettings
+from masonry_dem.solvers.load_path import DOCS, LoadPathSettings
 
 MassRule = Literal["stiffness", "density"]
 TimeStepRule = Literal["gershgorin", "power"]
@@ -19,6 +20,7 @@ OnBlowup = Literal["cut", "refuse"]
 Stability = Literal["elastic", "current"]
 
 
+@fill(DOCS)
 @dataclass(frozen=True)
 class DRSettings(LoadPathSettings):
     """Knobs of dynamic relaxation.
@@ -37,19 +39,7 @@ class DRSettings(LoadPathSettings):
     max_step : float, default 0.2
         The largest lambda increment of a load step (shorter than the static solver's: each
         step is relaxed from the last converged state), > 0.
-    growth : float, default 1.5
-        An easy step makes the next one ``growth`` times longer, >= 1.
-    bracket_tolerance : float, default 0.005
-        Width of the collapse bracket, relative to lambda, > 0.
-    refine : bool, default True
-        Halve a failed load step (False: stop at the first failure, an upper bracket only).
-    max_steps : int, default 1000
-        Converged steps of a run, >= 1.
-    max_load_factor : float, default inf
-        The run ends ``completed`` when lambda reaches it, > 0 (inf: no cap).
-    displacement_limit : float, optional
-        Largest translation [m] still in the small-displacement range, > 0 (None: the
-        solver's own, from the size of the blocks).
+    %(load_path_fields)s
     mass : {"stiffness", "density"}, default "stiffness"
         ``"stiffness"`` (M_ii from the rows of the elastic K: the stable step is 2 on every
         wall) or ``"density"`` (the blocks' masses and inertias, one common factor).
@@ -110,10 +100,7 @@ class DRSettings(LoadPathSettings):
         same bits as the Python loop, which False selects; docs/history/solvers_record.md,
         "One compiled time step").
 
-    Raises
-    ------
-    ValueError
-        If a field is out of its range, named.
+    %(field_errors)s
 
     Examples
     --------

@@ -11,6 +11,7 @@ from typing import Any
 
 import numpy as np
 
+from masonry_dem._docstrings import SHARED, fill
 from masonry_dem.model import Model, require_model
 
 from .backends import solve_associative
@@ -37,6 +38,7 @@ EXACT_CONE_FROM = 600
 
 
 # --------------------------------------------------------------------------- public entry
+@fill(SHARED)
 def limit_analysis(
     model: Model,
     *,
@@ -140,14 +142,7 @@ def limit_analysis(
 
     Examples
     --------
-    >>> import masonry_dem as md
-    >>> blocks, base = md.add_base(md.single_block(0.2, 0.2, 0.1, 18e3))
-    >>> model = md.Model.build(
-    ...     blocks,
-    ...     md.InterfaceMaterial(kn=1e9, kt=4e8, friction=0.6),
-    ...     supports=[md.Support([base])],
-    ...     loads=[md.SelfWeight(), md.WeightProportional((1, 0, 0))],
-    ... )
+    %(sliding_block)s
     >>> result = md.limit_analysis(model)
     >>> result.status, round(result.load_factor, 6)
     ('collapse', 0.6)

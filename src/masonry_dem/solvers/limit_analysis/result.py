@@ -8,6 +8,7 @@ from typing import Any
 
 import numpy as np
 
+from masonry_dem._docstrings import SHARED, fill
 from masonry_dem.assembly.compatibility import compatibility_matrix
 from masonry_dem.model import Model
 
@@ -17,6 +18,7 @@ from .interface import grid_points
 STATUSES = ("collapse", "no collapse", "failed")
 
 
+@fill(SHARED)
 @dataclass(frozen=True)
 class LimitAnalysisResult:
     """Outcome of :func:`limit_analysis`.
@@ -71,14 +73,7 @@ class LimitAnalysisResult:
 
     Examples
     --------
-    >>> import masonry_dem as md
-    >>> blocks, base = md.add_base(md.single_block(0.2, 0.2, 0.1, 18e3))
-    >>> model = md.Model.build(
-    ...     blocks,
-    ...     md.InterfaceMaterial(kn=1e9, kt=4e8, friction=0.6),
-    ...     supports=[md.Support([base])],
-    ...     loads=[md.SelfWeight(), md.WeightProportional((1, 0, 0))],
-    ... )
+    %(sliding_block)s
     >>> result = md.limit_analysis(model)
     >>> result.summary()["status"], result.bound, result.method
     ('collapse', 'estimate', 'associative')

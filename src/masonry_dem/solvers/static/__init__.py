@@ -5,6 +5,7 @@
 * :mod:`.corrector` - one equilibrium: Newton with its safeguards (where it finds none,
   the instability rule: the damped motion of :mod:`masonry_dem.solvers.quasi_static`);
 * :mod:`.paths` - path followers (load, work, displacement control) sharing one step rule;
+  :mod:`.path_solver` - what they ask of the solver that runs them;
 * :mod:`.outcome` - typed outcomes: :class:`Status`, :class:`StopReason`, :class:`Failure`;
 * :mod:`.certificate` - when a stop of the path is a collapse;
 * :mod:`.settings` - every number that steers it; :mod:`.solver` - the solver, ``pushover``;

@@ -23,7 +23,7 @@ from masonry_dem.solvers.static.settings import DisplacementControl
 from masonry_dem.solvers.static.steps import StepController
 
 if TYPE_CHECKING:
-    from masonry_dem.solvers.static.solver import StaticSolver
+    from masonry_dem.solvers.static.path_solver import PathSolver
 
 log = logging.getLogger(__name__)
 
@@ -41,14 +41,14 @@ MAX_CONTROL_CUTS = 12
 TURN_RATE = 0.1
 
 
-def control_rate(solver: StaticSolver, c: np.ndarray) -> float:
+def control_rate(solver: PathSolver, c: np.ndarray) -> float:
     """d(c.q)/d lambda along the tangent of the last converged state: c.K_t^-1 F_L, how fast
     the controlled displacement grows with the load there."""
     _, _, response = solver.residual(solver.q, solver.load_factor)
     return float(c @ solver.problem.factor(response).solve(solver.problem.F_live))
 
 
-def _control_turn(solver: StaticSolver, hist: History, c: np.ndarray) -> str:
+def _control_turn(solver: PathSolver, hist: History, c: np.ndarray) -> str:
     """Why displacement control cannot go on: the controlled displacement's rate of growth
     with the load at the last state, against the first live-load step's (a limit point of
     the controlled DOF, where it stops growing or turns back while the load still rises,
@@ -74,7 +74,7 @@ def _control_turn(solver: StaticSolver, hist: History, c: np.ndarray) -> str:
     )
 
 
-def _load_for(solver: StaticSolver, k: int, du: float) -> float:
+def _load_for(solver: PathSolver, k: int, du: float) -> float:
     """The live-load increment whose tangent response at the last converged state moves
     free DOF ``k`` by ``du`` (the smallest load the residual resolves where the DOF does not
     move that way under the load)."""
@@ -85,7 +85,7 @@ def _load_for(solver: StaticSolver, k: int, du: float) -> float:
 
 
 def displacement_control(
-    solver: StaticSolver, hist: History, record: Record, control: DisplacementControl, dof: int
+    solver: PathSolver, hist: History, record: Record, control: DisplacementControl, dof: int
 ) -> None:
     s = solver.settings
     position = np.flatnonzero(solver.problem.asm.free_index == dof)

@@ -43,7 +43,7 @@ from masonry_dem.solvers.static.steps import (
 )
 
 if TYPE_CHECKING:
-    from masonry_dem.solvers.static.solver import StaticSolver
+    from masonry_dem.solvers.static.path_solver import PathSolver
 
 log = logging.getLogger(__name__)
 
@@ -63,7 +63,14 @@ Record = Callable[[Outcome], None]
 RESUMED = ("resumed", StopReason.NONE)
 
 
-def load_control(solver: StaticSolver, hist: History, record: Record, resume: bool = False) -> None:
+def _out_of_steps(hist: History, max_steps: int, lam: float) -> None:
+    """End the path as failed: ``max_steps`` converged steps and no stop, at lambda ``lam``."""
+    hist.end(
+        Status.FAILED, StopReason.MAX_STEPS, f"max_steps={max_steps} reached at lambda={lam:.6g}"
+    )
+
+
+def load_control(solver: PathSolver, hist: History, record: Record, resume: bool = False) -> None:
     """Load control from the dead-load state (or, ``resume``, from the last converged state, a
     rest the instability rule found), handing over to work control at its first failure,
     and again from each rest the rule finds above a stop of work control."""
@@ -72,7 +79,7 @@ def load_control(solver: StaticSolver, hist: History, record: Record, resume: bo
 
 
 def _load_control(
-    solver: StaticSolver, hist: History, record: Record, resume: bool
+    solver: PathSolver, hist: History, record: Record, resume: bool
 ) -> tuple[str, StopReason] | None:
     s = solver.settings
     lam = solver.load_factor if resume else 0.0
@@ -193,11 +200,7 @@ def _load_control(
                 break
             dlam = lam_fail - lam  # re-try the first failure from the bracket's end
     else:
-        hist.end(
-            Status.FAILED,
-            StopReason.MAX_STEPS,
-            f"max_steps={s.max_steps} reached at lambda={lam:.6g}",
-        )
+        _out_of_steps(hist, s.max_steps, lam)
         return None
     hist.collapse_bracket = (lam, lam_fail)
     hist.end(
@@ -217,7 +220,7 @@ def _load_control(
     return None
 
 
-def unstable(solver: StaticSolver, out: Outcome) -> bool:
+def unstable(solver: PathSolver, out: Outcome) -> bool:
     """Is the converged state ``out`` of the path an unstable equilibrium: det K_t < 0
     (:meth:`.problem.DiscreteProblem.determinant_sign`)? The path follower's equilibria
     are those of any branch, stable or not; the damped, slowly loaded wall of the reference
@@ -239,7 +242,7 @@ def _hands_over(hist: History) -> bool:
     return len(hist.steps) > 2
 
 
-def control_radius(solver: StaticSolver, c: np.ndarray, dw: float) -> float:
+def control_radius(solver: PathSolver, c: np.ndarray, dw: float) -> float:
     """Trust radius for a controlled step: room for the requested increment."""
     return max(
         4.0 * solver.last_increment,
@@ -249,7 +252,7 @@ def control_radius(solver: StaticSolver, c: np.ndarray, dw: float) -> float:
 
 
 def work_control(
-    solver: StaticSolver, hist: History, record: Record, first_failure: str
+    solver: PathSolver, hist: History, record: Record, first_failure: str
 ) -> tuple[str, StopReason] | None:
     """Continue past the first failure of load control with lambda free and the
     work-conjugate displacement w = c . q (c = F_L / |F_L|) prescribed, from the last
@@ -467,11 +470,7 @@ def work_control(
             step.grow(out.iterations)
         step.cuts = 0
     else:
-        hist.end(
-            Status.FAILED,
-            StopReason.MAX_STEPS,
-            f"max_steps={s.max_steps} reached at lambda={lam:.6g}",
-        )
+        _out_of_steps(hist, s.max_steps, lam)
         return None
     if turned is not None:  # the curve fell, went flat or ran far: the rule looks above the peak
         reason, stop = turned
@@ -491,9 +490,7 @@ def work_control(
     return None
 
 
-def _to_limit(
-    solver: StaticSolver, hist: History, path_w: list[float], origin: np.ndarray
-) -> float:
+def _to_limit(solver: PathSolver, hist: History, path_w: list[float], origin: np.ndarray) -> float:
     """How far in w the displacement limit (measured from the state ``origin``) lies ahead,
     by the secant of the largest translation over the last two states (inf where it did
     not grow)."""
@@ -504,7 +501,7 @@ def _to_limit(
     return (solver.limit - last) / rate if rate > 0 else math.inf
 
 
-def _tangent_slope(solver: StaticSolver) -> float:
+def _tangent_slope(solver: PathSolver) -> float:
     """d lambda / d w along the tangent of the last converged state: |F_L| / F_L.K_t^-1 F_L."""
     F = solver.problem.F_live
     _, _, response = solver.residual(solver.q, solver.load_factor)

@@ -8,6 +8,7 @@ import math
 from dataclasses import dataclass, fields
 from typing import Literal, get_args
 
+from masonry_dem._docstrings import SHARED, fill
 from masonry_dem._validation import (
     check_choice,
     choice,
@@ -26,6 +27,7 @@ Continuation = Literal["work", "bracket"]
 CONTINUATION: tuple[str, ...] = get_args(Continuation)
 
 
+@fill(SHARED)
 @dataclass(frozen=True)
 class StaticSettings(LoadPathSettings):
     """The settings of the static solver: the parameters of its methods and its tolerances.
@@ -95,10 +97,7 @@ class StaticSettings(LoadPathSettings):
         lambda may exceed the associative limit-analysis bound (when one is given) by this
         fraction, > 0.
 
-    Raises
-    ------
-    ValueError
-        If a field is out of its range, named.
+    %(field_errors)s
 
     Notes
     -----
@@ -135,6 +134,7 @@ class StaticSettings(LoadPathSettings):
 SETTING_NAMES = tuple(f.name for f in fields(StaticSettings))
 
 
+@fill(SHARED)
 @dataclass(frozen=True)
 class DisplacementControl:
     """Drive DOF ``dof`` (name, e.g. ``u3``) of ``block`` to ``target`` in ``steps`` steps.
@@ -150,10 +150,7 @@ class DisplacementControl:
     steps : int, default 50
         Steps to reach it, >= 1.
 
-    Raises
-    ------
-    ValueError
-        If a field is out of its range, named.
+    %(field_errors)s
 
     Examples
     --------

@@ -15,7 +15,7 @@ import numpy as np
 from masonry_dem.constitutive.law import CONTACT_BAND
 
 if TYPE_CHECKING:
-    from masonry_dem.solvers.static.solver import StaticSolver
+    from masonry_dem.solvers.static.path_solver import PathSolver
 
 __all__ = [
     "ElasticRange",
@@ -94,7 +94,7 @@ class ElasticRange:
     rate: np.ndarray
 
 
-def elastic_range(solver: StaticSolver, cap: float) -> ElasticRange | None:
+def elastic_range(solver: PathSolver, cap: float) -> ElasticRange | None:
     """The load factor at which the first joint that carries load reaches its strength
     domain along the tangent response to the live load from the last converged state, in
     closed form up to a bisection: along q + lambda K_t^-1 F_L the trial actions of each
