@@ -109,7 +109,8 @@ def test_a_dry_wall_gives_way_where_its_top_beam_slides_over_the_top_course(unit
 
 def test_a_case_file_builds_the_same_shear_wall(tmp_path):
     """``builder = "shear_wall"`` in a case file, with an opening: the blocks the Python call
-    builds, and ``edge:top`` selects the top beam."""
+    builds; ``base`` selects the bottom beam and ``beam`` the top one, and ``base = true``
+    (a second base) is refused, named."""
     geometry = {
         "builder": "shear_wall",
         "length": 0.99,
@@ -123,10 +124,10 @@ def test_a_case_file_builds_the_same_shear_wall(tmp_path):
         "name": "shear wall",
         "geometry": geometry,
         "material": {"kn": 82e9, "kt": 36e9, "friction": 0.75},
-        "supports": [{"select": "edge:bottom"}, {"select": "edge:top", "dofs": ["w3"]}],
+        "supports": [{"select": "base"}, {"select": "beam", "dofs": ["w3"]}],
         "loads": [
             {"type": "self_weight"},
-            {"type": "point", "select": "edge:top", "force": [1000.0, 0.0, 0.0], "live": True},
+            {"type": "point", "select": "beam", "force": [1000.0, 0.0, 0.0], "live": True},
         ],
     }
     loaded = load_case(write_case(tmp_path, case))
@@ -137,6 +138,10 @@ def test_a_case_file_builds_the_same_shear_wall(tmp_path):
     assert np.array_equal(loaded.model.blocks.sizes, expected.sizes)
     top = md.select.edge(expected, "top")
     assert np.flatnonzero(loaded.model.live[:, 0]).tolist() == top.tolist()
+    assert loaded.model.fixed[md.select.edge(expected, "bottom")].all()
+    geometry["base"] = True
+    with pytest.raises(ValueError, match=r"\[geometry\] base: builder 'shear_wall'"):
+        load_case(write_case(tmp_path, case))
 
 
 def test_split_units_halves_each_unit_in_place_and_names_the_pairs():

@@ -163,6 +163,15 @@ def build_blocks(
         blocks = builders.cut_openings(blocks, geometry["openings"], lintels=lintels)
     wall = np.ones(blocks.count, dtype=bool)
     base = None
+    if builder == "shear_wall":  # its own beams: "base" selects the bottom, "beam" the top
+        for key in ("base", "top_beam"):
+            if geometry.get(key) not in (None, False):
+                raise ValueError(
+                    f"case file [geometry] {key}: builder 'shear_wall' has its own bottom and "
+                    'top beams (select = "base" and "beam"); leave it out'
+                )
+        wall[-2:] = False
+        base = blocks.count - 2
     if geometry.get("base", False):
         blocks, base = builders.add_base(blocks)
         wall = np.append(wall, False)

@@ -30,10 +30,19 @@ from typing import Literal, get_args
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from masonry_dem._docstrings import fill
 from masonry_dem._parameters import function_of
 from masonry_dem._validation import block_indices, check_choice, positive_scalar
 from masonry_dem.geometry.blocks import Blocks
-from masonry_dem.geometry.builders import _count, _Courses, _Unit, cut_openings
+from masonry_dem.geometry.builders import (
+    DOCS,
+    _count,
+    _Courses,
+    _Unit,
+    add_base,
+    add_top_beam,
+    cut_openings,
+)
 from masonry_dem.geometry.plans import _assemble, _Run
 
 #: the bonds a shear wall is built in (``running``: head joints shift by half a block from
@@ -47,6 +56,7 @@ class _ShearWallLength:
     length: float
 
 
+@fill(DOCS)
 @dataclass(frozen=True)
 class _ShearWall(_Unit, _Courses, _ShearWallLength):
     """A wall between a bottom and a top beam, as in-plane shear tests are built.
@@ -62,13 +72,8 @@ class _ShearWall(_Unit, _Courses, _ShearWallLength):
     ----------
     length : float
         The wall's length [m], > 0, at least one block.
-    courses : int
-        Courses of the wall, 1 to 10^4.
-    block_height, block_length, thickness : float
-        The block's a, b and s [m] (along e2, e1, e3), each > 0; required, by name or by
-        letter.
-    unit_weight : float
-        Weight per unit volume of the wall [N/m^3], >= 0 (0: weightless); required.
+    %(courses)s
+    %(unit)s
     joint : float, default 0.0
         e, the mortar joint thickness [m], >= 0, included in the blocks.
     bond : {"running", "stack"}, default "running"
@@ -86,9 +91,7 @@ class _ShearWall(_Unit, _Courses, _ShearWallLength):
         out of the wall alone as :func:`~masonry_dem.cut_openings` cuts them.
     lintels : bool, default True
         Straight jambs and a lintel over each opening (:func:`~masonry_dem.cut_openings`).
-    a, b, s : float, optional, keyword-only
-        The paper's letters for ``block_height``, ``block_length`` and ``thickness``; giving
-        both names of one size is an error.
+    %(letters)s
 
     Returns
     -------
@@ -150,11 +153,9 @@ class _ShearWall(_Unit, _Courses, _ShearWallLength):
         wall = _assemble([run], courses, pitch, course_pitch, gamma)
         if len(self.openings):
             wall = cut_openings(wall, self.openings, lintels=bool(self.lintels))
-        height = courses * course_pitch
-        lower = np.array([[0.0, -depth, 0.0], [0.0, height, 0.0]])
-        upper = np.array([[length, 0.0, s], [length, height + depth, s]])
-        beams = Blocks.from_boxes(lower, upper, beam_gamma)
-        return Blocks.concatenate(wall, beams)
+        blocks, _ = add_base(wall, depth)
+        blocks, _ = add_top_beam(blocks, depth, beam_gamma)
+        return blocks
 
 
 shear_wall = function_of(_ShearWall)
