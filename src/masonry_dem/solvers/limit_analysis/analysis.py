@@ -189,7 +189,12 @@ def limit_analysis(
     )
     covers = friction_scale >= model_friction_scale(model) * (1 - 1e-9)
     if friction_scale != 1:
-        model = replace(model, friction=model.friction * float(friction_scale))
+        scaled = model.friction * float(friction_scale)
+        # the shear strength c - mu sigma scaled as a whole: the cohesion beyond mu ft too
+        cohesion = scaled * model.tensile_strength + float(friction_scale) * (
+            model.cohesion_beyond_friction
+        )
+        model = replace(model, friction=scaled, cohesion=cohesion)
     method = "associative" if associative else "non-associative"
     n, m = model.blocks.count, model.interfaces.count
 
