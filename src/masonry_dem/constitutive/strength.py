@@ -372,7 +372,7 @@ def cohesion_beyond_friction(
         i = int(np.flatnonzero(low)[0])
         raise ValueError(
             f"cohesive_force must be at least friction x tensile_force (ft <= c / mu), got "
-            f"{c[i]!r} < {floor[i]!r} at index {i}"
+            f"{float(c[i])!r} < {float(floor[i])!r} at index {i}"
         )
     return np.maximum(c - floor, 0.0)
 
