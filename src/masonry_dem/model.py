@@ -685,8 +685,10 @@ class Model:
 
     @property
     def cohesion_beyond_friction(self) -> FloatArray:
-        """(m,) ``c - mu ft`` [Pa] >= 0: the shear strength left at the tension cap, zero
-        where the cohesion is the paper's ``mu ft`` (bit for bit)."""
+        """(m,) ``c - mu ft`` [Pa] >= 0: the shear strength left at the tension cap.
+
+        Zero where the cohesion is the paper's ``mu ft`` (bit for bit).
+        """
         assert self.cohesion is not None  # resolved in __post_init__
         return np.maximum(self.cohesion - self.friction * self.tensile_strength, 0.0)
 
@@ -754,9 +756,7 @@ class Model:
         def per_interface(mat: InterfaceMaterial) -> FloatArray:
             alpha = np.nan if mat.alpha is None else mat.alpha
             cohesion = np.nan if mat.cohesion is None else mat.cohesion
-            return np.array(
-                [mat.kn, mat.kt, mat.friction, mat.tensile_strength, alpha, cohesion]
-            )
+            return np.array([mat.kn, mat.kt, mat.friction, mat.tensile_strength, alpha, cohesion])
 
         props = np.tile(per_interface(material), (m, 1))
         for k, (blk, mat) in enumerate(material_overrides):

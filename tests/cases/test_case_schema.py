@@ -288,7 +288,9 @@ def test_a_cohesion_of_its_own_reaches_the_model(tmp_path):
 
     case = tmp_path / "case.toml"
     case.write_text(
-        _edit(GOOD, "friction = 0.7", "friction = 0.75\ntensile_strength = 0.16e6\ncohesion = 0.224e6")
+        _edit(
+            GOOD, "friction = 0.7", "friction = 0.75\ntensile_strength = 0.16e6\ncohesion = 0.224e6"
+        )
     )
     model = load_case(case).model
     np.testing.assert_array_equal(model.cohesion, 0.224e6)

@@ -85,6 +85,15 @@ class LawResponse:
         return FACTORS_OF_FLAGS[self.flags]
 
     @cached_property
+    def strength_at_zero(self) -> np.ndarray:
+        """(m,) positive where a joint has a strength at zero normal force: its tensile force
+        or its cohesive force beyond mu ft (both >= 0; the tensile force itself without
+        one)."""
+        if self.cohesion is None:
+            return self.tensile_force
+        return self.tensile_force + self.cohesion
+
+    @cached_property
     def state(self) -> np.ndarray:
         """(m,) damage code."""
         return STATE_OF_FLAGS[self.flags]
@@ -194,9 +203,7 @@ class InterfaceLaw:
         else:
             if not np.isfinite(trial.sum()):  # one cheap test; _actions says what is wrong
                 trial = checked_actions(trial)
-            actions, flags = projection_and_flags(
-                trial, ft, self._domain, self.projection, c0=c0
-            )
+            actions, flags = projection_and_flags(trial, ft, self._domain, self.projection, c0=c0)
             util = None
         if self.tension == "brittle":
             actions[(flags & DETACHED_FLAG) > 0] = 0.0
@@ -261,9 +268,7 @@ class InterfaceLaw:
     def admissibility(self, r: LawResponse) -> np.ndarray:
         """(m,) demand/capacity of the corrected actions of ``r`` (at most 1 where they lie
         in the strength domain, up to the round-off of the return)."""
-        return self._check(
-            np.ascontiguousarray(r.actions), r.tensile_force, r.cohesion
-        ).utilisation
+        return self._check(np.ascontiguousarray(r.actions), r.tensile_force, r.cohesion).utilisation
 
     def tangent(self, r: LawResponse, floor: float = 1e-9, method: str = "analytic") -> np.ndarray:
         """(m, 6, 6) consistent tangent d(actions)/d(relative displacements) at ``r``.
@@ -301,9 +306,7 @@ class InterfaceLaw:
             method == "analytic",
         )
         if rows.size:  # the rows the analytic derivative does not cover
-            fd = fd_tangent(
-                t, h, ft, rows, self._domain, k, self.projection, normal_only, c0_rows
-            )
+            fd = fd_tangent(t, h, ft, rows, self._domain, k, self.projection, normal_only, c0_rows)
             diagonal = np.arange(6)
             fd[:, diagonal, diagonal] += float(floor) * k
             T[rows] = fd

@@ -506,9 +506,11 @@ class DiscreteProblem:
         Newton they carry what they cannot: along that direction hundreds of such joints
         change state at any step length and the residual rises (docs/history/solvers_record.md, "Why
         Newton stalls from the dead-load state"). The residual is unchanged, so a
-        converged state is still an exact equilibrium of the law."""
+        converged state is still an exact equilibrium of the law. A joint with a cohesion
+        beyond mu ft keeps a shear strength at zero compression: it is not one of them."""
+        strength = response.strength_at_zero
         _reduce_zero_capacity(
-            T, response.trial, response.tensile_force, self.law.kbar, float(floor), CONTACT_BAND
+            T, response.trial, strength, self.law.kbar, float(floor), CONTACT_BAND
         )
 
     def _factorizer(self) -> Factorizer:
