@@ -6,8 +6,15 @@ from __future__ import annotations
 import pytest
 
 from masonry_dem.export.analyses import pushover
-from masonry_dem.geometry.builders import add_base, single_block
-from masonry_dem.model import InterfaceMaterial, Model, PointLoad, Support
+from masonry_dem.geometry.builders import add_base, running_bond_wall, single_block
+from masonry_dem.model import (
+    InterfaceMaterial,
+    Model,
+    PointLoad,
+    SelfWeight,
+    Support,
+    WeightProportional,
+)
 from masonry_dem.solvers.dynamic_relaxation import DRSettings, DynamicRelaxation
 
 A_, B, S = 0.1, 0.4, 0.2  # height, length, thickness: a joint of 0.4 x 0.2 m
@@ -48,3 +55,24 @@ def test_the_relaxation_slides_it_there_too():
     history = DynamicRelaxation(_model(C), DRSettings(bracket_tolerance=0.01)).run()
     assert history.status == "collapse", history.reason
     assert history.collapse_multiplier == pytest.approx(C * B * S + MU * N, rel=1e-2)
+
+
+def test_the_papers_cohesion_given_is_the_default_bit_for_bit():
+    """c = mu ft given explicitly is the paper's reading: the same pushover, bit for bit."""
+    blocks, base = add_base(running_bond_wall(3, 3, 0.1, 0.2, 0.1, 18e3))
+
+    def run(cohesion: float | None):
+        material = InterfaceMaterial(
+            kn=1e9, kt=4e8, friction=0.7, tensile_strength=2e3, cohesion=cohesion
+        )
+        model = Model.build(
+            blocks,
+            material,
+            supports=[Support([base])],
+            loads=[SelfWeight(), WeightProportional((1.0, 0.0, 0.0))],
+        )
+        return pushover(model)
+
+    paper, given = run(None), run(0.7 * 2e3)
+    assert given.collapse_multiplier == paper.collapse_multiplier
+    assert given.last.actions.tobytes() == paper.last.actions.tobytes()
