@@ -166,3 +166,20 @@ def test_the_limit_analysis_bound_is_computed_only_to_certify_a_collapse(tmp_pat
     assert summary["status"] == "collapse" and len(calls) == 1
     assert summary["certificate"]["bound_status"] == "not checked"
     assert summary["limit_analysis_status"] == "not computed (--no-bound)"
+
+
+def test_a_case_with_a_cohesion_of_its_own_runs_without_a_bound(tmp_path):
+    """The limit analysis has the paper's cohesion mu ft only: a run whose joints have one
+    of their own collapses (the block tilts at s/a = 0.5: no tension, so no rocking strength
+    from the cohesion) with the bound not computed, and says why."""
+    from masonry_dem.export.run_case import NO_BOUND_WITH_COHESION
+
+    material = dict(SINGLE_BLOCK["material"], cohesion=5e3)
+    case = _write_case(tmp_path, dict(SINGLE_BLOCK, material=material))
+    out = tmp_path / "cohesive"
+    assert main(["run", str(case), "--out", str(out), "--no-render", "--quiet"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "collapse"
+    assert summary["lambda"] == pytest.approx(0.5, rel=0.01)
+    assert summary["limit_analysis_bound"] is None
+    assert summary["limit_analysis_status"] == NO_BOUND_WITH_COHESION
