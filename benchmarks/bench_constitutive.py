@@ -377,7 +377,7 @@ def forces_parts(path: str, s23: str | None = None) -> None:
             t = trial[i]
             if stored:
                 c1, c2, c3, c4 = constants[i, 1], constants[i, 2], constants[i, 3], constants[i, 4]
-            p = nb_check_row(t[0], t[1], t[2], t[3], t[4], t[5], ft[i], l1[i], l2[i], friction[i], alpha[i], snap1[i], snap2[i], on, on, on, stored, c1, c2, c3, c4)  # fmt: skip
+            p = nb_check_row(t[0], t[1], t[2], t[3], t[4], t[5], ft[i], 0.0, l1[i], l2[i], friction[i], alpha[i], snap1[i], snap2[i], on, on, on, stored, c1, c2, c3, c4)  # fmt: skip
             actions[i, 0], actions[i, 1], actions[i, 2] = p[0], p[1], p[2]
             actions[i, 3], actions[i, 4], actions[i, 5] = p[3], p[4], p[5]
             flags[i] = p[6]
@@ -391,9 +391,9 @@ def forces_parts(path: str, s23: str | None = None) -> None:
             i = 2 * k
             j = i + 1 if i + 1 < n else i
             t, c = trial[i], constants[i]
-            first = (t[0], t[1], t[2], t[3], t[4], t[5], ft[i], l1[i], l2[i], friction[i], alpha[i], snap1[i], snap2[i], c[1], c[2], c[3], c[4])  # fmt: skip
+            first = (t[0], t[1], t[2], t[3], t[4], t[5], ft[i], 0.0, l1[i], l2[i], friction[i], alpha[i], snap1[i], snap2[i], c[1], c[2], c[3], c[4])  # fmt: skip
             t, c = trial[j], constants[j]
-            second = (t[0], t[1], t[2], t[3], t[4], t[5], ft[j], l1[j], l2[j], friction[j], alpha[j], snap1[j], snap2[j], c[1], c[2], c[3], c[4])  # fmt: skip
+            second = (t[0], t[1], t[2], t[3], t[4], t[5], ft[j], 0.0, l1[j], l2[j], friction[j], alpha[j], snap1[j], snap2[j], c[1], c[2], c[3], c[4])  # fmt: skip
             p, flag, q, flag_b = nb_project_rows(first, second, True)
             for c in range(6):
                 actions[i, c] = p[c]
@@ -407,7 +407,7 @@ def forces_parts(path: str, s23: str | None = None) -> None:
         # energy return's bracketed Newton steps, and whether it ran on the shear half
         for i in range(trial.shape[0]):
             t, c = trial[i], constants[i]
-            _, _, _, _, _, _, _, _, _, fsu, abs_m3, m3u, shear, a, cc = _nb_demands(t[0], t[1], t[2], t[3], t[4], t[5], ft[i], l1[i], l2[i], friction[i], snap1[i], snap2[i], True)  # fmt: skip
+            _, _, _, _, _, _, _, _, _, fsu, abs_m3, m3u, shear, a, cc = _nb_demands(t[0], t[1], t[2], t[3], t[4], t[5], ft[i], 0.0, l1[i], l2[i], friction[i], snap1[i], snap2[i], True)  # fmt: skip
             s, newton, m, big_a, big_c = _nb_radial_closed(a, cc, alpha[i])
             steps = 0
             if newton:
@@ -454,7 +454,7 @@ def forces_parts(path: str, s23: str | None = None) -> None:
         n = 0
         for i in range(trial.shape[0]):
             t = trial[i]
-            n += nb_plain_row(t[0], t[1], t[2], t[3], t[4], t[5], ft[i], l1[i], l2[i], friction[i], snap1[i], snap2[i], torsion[i])  # fmt: skip
+            n += nb_plain_row(t[0], t[1], t[2], t[3], t[4], t[5], ft[i], 0.0, l1[i], l2[i], friction[i], snap1[i], snap2[i], torsion[i])  # fmt: skip
         return n
 
     @numba.njit(error_model="numpy")

@@ -45,7 +45,8 @@ def test_one_definition_of_the_joint_states():
 
 def test_the_two_variants_give_the_same_bits():
     """Each row of the parallel loop is worked out alone: the parallel variant of the law's
-    forces (all rows yielding in some way) is the serial one, bit for bit."""
+    forces (all rows yielding in some way, half of them with a cohesion beyond mu ft) is the
+    serial one, bit for bit."""
     rng = np.random.default_rng(3)
     m = 64
     kbar = np.tile([1e9, 1e9, 2e9, 1e6, 2e6, 5e5], (m, 1))
@@ -62,7 +63,8 @@ def test_the_two_variants_give_the_same_bits():
     dom = law._domain
     args = (
         x, _unsigned(H.indptr), _unsigned(H.indices), H.data, law.kbar, np.zeros((m, 6)),
-        np.zeros(m, dtype=bool), np.ascontiguousarray(law.tensile_force), *dom.kernel_arrays,
+        np.zeros(m, dtype=bool), np.ascontiguousarray(law.tensile_force),
+        np.where(rng.random(m) < 0.5, 0.0, 100.0), *dom.kernel_arrays,
         dom.row_constants, True, True, _unsigned(H_T.indptr), _unsigned(H_T.indices),
         H_T.data, n,
     )  # fmt: skip

@@ -68,7 +68,8 @@ class InterfaceMaterial:
     friction : float
         mu = tan(phi), >= 0.
     tensile_strength : float, default 0.0
-        ft [Pa], >= 0 (also sets cohesion c = mu * ft).
+        ft [Pa], >= 0: the tension cap of the Mohr-Coulomb domain, at most ``cohesion /
+        friction``.
     alpha : float, optional
         Torsion-shear exponent of Eq. (A5), > 0 (None: 1.5, the paper's value for
         running-bond masonry).
@@ -79,12 +80,21 @@ class InterfaceMaterial:
         holonomic.
     projection : {"energy", "radial"}, default "energy"
         The shear-torsion return: ``"energy"`` (closest point) or ``"radial"``.
+    cohesion : float, optional
+        c [Pa], >= 0: the shear strength at zero normal stress, ``|tau| <= c - mu sigma``
+        (sigma tension positive) up to the tension cap ``sigma <= ft``. None (default):
+        ``c = mu * ft``, the paper's reading of Eq. (10), whose domain closes at the cap. A
+        larger c leaves the joint a shear strength ``c - mu ft`` at the cap (Lourenco's
+        joint: ft = 0.16 MPa, c = 0.224 MPa, mu = 0.75). It needs ``mu * ft <= c`` (``ft <=
+        c / mu``; with mu = 0 any ft). A joint that cracks (``tension="brittle"``) loses
+        its cohesion with its tensile strength and becomes a dry Coulomb joint.
 
     Raises
     ------
     ValueError
-        If a stiffness is not positive, ``friction`` or ``tensile_strength`` is negative (or
-        any is not finite), ``alpha`` is not positive, or an option is not one of its values.
+        If a stiffness is not positive, ``friction``, ``tensile_strength`` or ``cohesion`` is
+        negative (or any is not finite), ``alpha`` is not positive, ``tensile_strength``
+        exceeds ``cohesion / friction``, or an option is not one of its values.
 
     Examples
     --------
@@ -101,15 +111,46 @@ class InterfaceMaterial:
     tension: Tension = "brittle"
     memory: Memory = "slip"
     projection: str = "energy"
+    cohesion: float | None = None
 
     def __post_init__(self) -> None:
-        for name in ("kn", "kt", "friction", "tensile_strength", "alpha"):
+        for name in ("kn", "kt", "friction", "tensile_strength", "alpha", "cohesion"):
             value = getattr(self, name)
-            if value is not None or name != "alpha":
+            if value is not None or name not in ("alpha", "cohesion"):
                 strict = name in ("kn", "kt", "alpha")
                 object.__setattr__(self, name, positive_scalar(name, value, strict=strict))
+        if self.cohesion is not None:
+            check_tension_cap(self.friction, self.tensile_strength, self.cohesion)
         for name, allowed in LAW_OPTIONS.items():
             check_choice(name, getattr(self, name), allowed)
+
+
+#: the round-off allowed on ``mu * ft <= c`` (a cap given as c / mu in decimal)
+CAP_TOLERANCE = 1e-12
+
+
+def check_tension_cap(friction: float, tensile_strength: float, cohesion: float) -> None:
+    """Refuse a tension cap above the Mohr-Coulomb vertex: ``mu * ft <= c`` (``ft <= c /
+    mu``), to a relative :data:`CAP_TOLERANCE`.
+
+    Parameters
+    ----------
+    friction, tensile_strength, cohesion : float
+        mu, ft [Pa] and c [Pa], each finite and >= 0.
+
+    Raises
+    ------
+    ValueError
+        If ``friction * tensile_strength > cohesion``, naming the three and the allowed range.
+    """
+    if friction * tensile_strength > cohesion * (1.0 + CAP_TOLERANCE):
+        raise ValueError(
+            f"tensile_strength must be at most cohesion / friction = {cohesion / friction:g} Pa "
+            f"(the tension cap of the Mohr-Coulomb domain, ft <= c / mu), got tensile_strength "
+            f"= {tensile_strength:g} Pa with cohesion = {cohesion:g} Pa and friction = "
+            f"{friction:g}; raise the cohesion to at least {friction * tensile_strength:g} Pa "
+            "or lower the tensile strength"
+        )
 
 
 def _warn_idle_load(k: int, load: Load, vector: FloatArray, fixed: BoolArray) -> None:
@@ -591,6 +632,15 @@ class Model:
         Anything the caller keeps with the model (a case's source, ...).
     tension, memory, projection : str
         The interface law's options (of the ``material`` of :meth:`build`).
+    cohesion : numpy.ndarray, shape (m,), optional
+        c [Pa] of each interface, ``friction * tensile_strength <= cohesion`` (None:
+        ``friction * tensile_strength``, the paper's reading; :meth:`build` resolves it so
+        where a material gives none).
+
+    Raises
+    ------
+    ValueError
+        If ``cohesion`` is below ``friction * tensile_strength`` at an interface.
 
     Examples
     --------
@@ -622,11 +672,32 @@ class Model:
     tension: Tension = "brittle"
     memory: Memory = "slip"
     projection: str = "energy"
+    cohesion: FloatArray | None = None
 
     def __post_init__(self) -> None:
         for name in ("kn", "kt", "friction", "tensile_strength", "alpha", "dead", "live"):
             object.__setattr__(self, name, frozen(getattr(self, name), float))
         object.__setattr__(self, "fixed", frozen(self.fixed, bool))
+        if self.cohesion is None:
+            cohesion = self.friction * self.tensile_strength
+        else:
+            cohesion = np.broadcast_to(np.asarray(self.cohesion, dtype=float), self.friction.shape)
+            low = self.friction * self.tensile_strength > cohesion * (1.0 + CAP_TOLERANCE)
+            if low.any():
+                k = int(np.flatnonzero(low)[0])
+                check_tension_cap(
+                    float(self.friction[k]), float(self.tensile_strength[k]), float(cohesion[k])
+                )
+        object.__setattr__(self, "cohesion", frozen(cohesion, float))
+
+    @property
+    def cohesion_beyond_friction(self) -> FloatArray:
+        """(m,) ``c - mu ft`` [Pa] >= 0: the shear strength left at the tension cap.
+
+        Zero where the cohesion is the paper's ``mu ft`` (bit for bit).
+        """
+        assert self.cohesion is not None  # resolved in __post_init__
+        return np.maximum(self.cohesion - self.friction * self.tensile_strength, 0.0)
 
     @classmethod
     def build(
@@ -697,7 +768,8 @@ class Model:
 
         def per_interface(mat: InterfaceMaterial) -> FloatArray:
             alpha = np.nan if mat.alpha is None else mat.alpha
-            return np.array([mat.kn, mat.kt, mat.friction, mat.tensile_strength, alpha])
+            cohesion = np.nan if mat.cohesion is None else mat.cohesion
+            return np.array([mat.kn, mat.kt, mat.friction, mat.tensile_strength, alpha, cohesion])
 
         props = np.tile(per_interface(material), (m, 1))
         for k, (blk, mat) in enumerate(material_overrides):
@@ -716,7 +788,9 @@ class Model:
             vector = load.vector(blocks)
             (live if load.live else dead)[...] += vector
             _warn_idle_load(k, load, vector, fixed)
-        kn, kt, friction, tensile, alpha = props.T.copy()
+        kn, kt, friction, tensile, alpha, cohesion = props.T.copy()
+        # not given: the paper's c = mu ft, computed as Model computes it (bit for bit)
+        cohesion = np.where(np.isnan(cohesion), friction * tensile, cohesion)
         model = cls(
             blocks,
             its,
@@ -733,6 +807,7 @@ class Model:
             tension=material.tension,
             memory=material.memory,
             projection=material.projection,
+            cohesion=cohesion,
         )
         model.check_supported()
         return model

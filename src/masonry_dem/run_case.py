@@ -65,13 +65,28 @@ class LazyBound:
         }
 
 
+#: the bound's status where the joints have a cohesion of their own above mu ft
+NO_BOUND_WITH_COHESION = (
+    "not computed (a cohesion above friction x tensile strength: the limit analysis has the "
+    "paper's cohesion mu ft only)"
+)
+
+
 def limit_analysis_bound(model: Model) -> dict[str, Any]:
     """The associative limit-analysis multiplier of the model, an upper bound of the
     pushover's (``limit_analysis_bound``: None unless the LA finds a collapse), and its
     status and time: the exact cone (Clarabel) with the friction enlarged by kappa(alpha),
-    whose domain contains the DEM's (``solvers.limit_analysis.dem_upper_bound``)."""
+    whose domain contains the DEM's (``solvers.limit_analysis.dem_upper_bound``). Not
+    computed for joints with a cohesion above mu ft: the limit analysis has the paper's
+    cohesion only."""
     from masonry_dem.solvers.limit_analysis import dem_upper_bound
 
+    if model.cohesion_beyond_friction.any():
+        return {
+            "limit_analysis_bound": None,
+            "limit_analysis_status": NO_BOUND_WITH_COHESION,
+            "limit_analysis_seconds": 0.0,
+        }
     la = dem_upper_bound(model)
     return {
         "limit_analysis_bound": la.load_factor if la.status == "collapse" else None,
@@ -224,7 +239,8 @@ def run_case(
     shown = progress or Progress()
     lazy = LazyBound(enabled=bound)
     model, stopped = case.model, None
-    hopeless = cannot_collapse(case.model)
+    # a run in loading stages pushes with its stages' loads, not the model's live load
+    hopeless = None if case.stages is not None else cannot_collapse(case.model)
     if hopeless is not None:
         stopped = (
             "the live load cannot drive a collapse: it pushes nothing sideways and the "
@@ -265,6 +281,7 @@ def run_case(
                             "pushover",
                             case.settings,
                             control=case.control,
+                            stages=case.stages,
                             bound=lazy,
                             monitor=case.monitor,
                             progress=on_step,

@@ -60,6 +60,15 @@ CASES = {
     # silent wrong answers on 7022155: refused at the input with the range and the unit
     "friction 1e10": (_edit(GOOD, "friction = 0.7", "friction = 1e10"), "[material].friction"),
     "kn 1e300": (_edit(GOOD, "kn = 2.4e9", "kn = 1e300"), "[material].kn = 1e300"),
+    # a cohesion of its own: its range, and the tension cap ft <= c / mu
+    "negative cohesion": (
+        _edit(GOOD, "friction = 0.7", "friction = 0.7\ncohesion = -1.0"),
+        "[material].cohesion = -1",
+    ),
+    "tension above c / mu": (
+        _edit(GOOD, "friction = 0.7", "friction = 0.7\ntensile_strength = 2e5\ncohesion = 1e5"),
+        "[material]: tensile_strength must be at most cohesion / friction = 142857 Pa",
+    ),
     "negative max_load_factor": (
         GOOD + "[analysis]\nmax_load_factor = -1\n",
         "[analysis].max_load_factor = -1",
@@ -272,3 +281,18 @@ def test_the_schema_and_the_case_file_know_the_same_load_types():
     for kind, load in LOAD_TYPES.items():
         keys = {"select" if f.name == "blocks" else f.name for f in fields(load)} | {"type"}
         assert set(LOAD_TABLES[kind].model_fields) == keys, kind
+
+
+def test_a_cohesion_of_its_own_reaches_the_model(tmp_path):
+    from masonry_dem.cases.casefile import load_case
+
+    case = tmp_path / "case.toml"
+    case.write_text(
+        _edit(
+            GOOD, "friction = 0.7", "friction = 0.75\ntensile_strength = 0.16e6\ncohesion = 0.224e6"
+        )
+    )
+    model = load_case(case).model
+    np.testing.assert_array_equal(model.cohesion, 0.224e6)
+    case.write_text(_edit(GOOD, "friction = 0.7", "friction = 0.75\ntensile_strength = 0.16e6"))
+    np.testing.assert_array_equal(load_case(case).model.cohesion, 0.75 * 0.16e6)

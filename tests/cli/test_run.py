@@ -206,3 +206,20 @@ def test_run_goes_through_analyze_and_shows_the_newton_progress(tmp_path, monkey
     assert summary["lambda"] == alone.load_factor
     assert shown.ticks and shown.ticks == sorted(shown.ticks)
     assert shown.ticks[-1][0] <= summary["iterations"]
+
+
+def test_a_case_with_a_cohesion_of_its_own_runs_without_a_bound(tmp_path):
+    """The limit analysis has the paper's cohesion mu ft only: a run whose joints have one
+    of their own collapses (the block tilts at s/a = 0.5: no tension, so no rocking strength
+    from the cohesion) with the bound not computed, and says why."""
+    from masonry_dem.run_case import NO_BOUND_WITH_COHESION
+
+    material = dict(SINGLE_BLOCK["material"], cohesion=5e3)
+    case = _write_case(tmp_path, dict(SINGLE_BLOCK, material=material))
+    out = tmp_path / "cohesive"
+    assert main(["run", str(case), "--out", str(out), "--no-render", "--quiet"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "collapse"
+    assert summary["lambda"] == pytest.approx(0.5, rel=0.01)
+    assert summary["limit_analysis_bound"] is None
+    assert summary["limit_analysis_status"] == NO_BOUND_WITH_COHESION

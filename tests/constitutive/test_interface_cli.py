@@ -53,6 +53,21 @@ def test_text_output_and_custom_interface(capsys):
     assert out["alpha_table"] == []
 
 
+def test_a_cohesion_of_its_own(capsys):
+    """Lourenco's joint (ft 0.16 MPa, c 0.224 MPa, mu 0.75): fsu = c A - mu fn, the spring
+    model's too."""
+    args = ["--l1", "0.2", "--l2", "0.1", "--fn", "-100", "--friction", "0.75", "--n", "8"]
+    more = ["--tensile-strength", "0.16e6", "--cohesion", "0.224e6", "--no-alpha-table"]
+    out = _json(capsys, *args, *more)
+    assert out["interface"]["cohesion"] == 0.224e6
+    assert out["shear_strength"] == pytest.approx(0.224e6 * 0.02 + 0.75 * 100, rel=1e-12)
+    assert out["spring_shear_strength"] == pytest.approx(out["shear_strength"], rel=1e-9)
+    assert main(["interface", *args, *more]) == 0
+    assert "cohesion = 224000 Pa" in capsys.readouterr().out
+    assert main(["interface", *args, "--tensile-strength", "0.16e6", "--cohesion", "1e4"]) == 2
+    assert "tensile_strength must be at most cohesion / friction" in capsys.readouterr().err
+
+
 def test_text_table(capsys):
     assert main(["interface", "--alpha-n", "8", "--n", "8"]) == 0
     text = capsys.readouterr().out

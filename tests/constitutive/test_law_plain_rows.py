@@ -82,7 +82,9 @@ def test_rows_at_each_surface_give_the_check_s_actions_bit_for_bit(ft, tension):
     dom = law._domain
     plain = np.array(
         [
-            nb_plain_row(*t, ft, L1, L2, MU, dom.snap1[0], dom.snap2[0], dom.torsion_constant[0])
+            nb_plain_row(
+                *t, ft, 0.0, L1, L2, MU, dom.snap1[0], dom.snap2[0], dom.torsion_constant[0]
+            )
             for t in trial
         ]
     )
@@ -111,7 +113,9 @@ def test_the_early_out_is_conservative_on_random_rows():
     dom = law._domain
     plain = np.array(
         [
-            nb_plain_row(*row, ft, L1, L2, MU, dom.snap1[0], dom.snap2[0], dom.torsion_constant[0])
+            nb_plain_row(
+                *row, ft, 0.0, L1, L2, MU, dom.snap1[0], dom.snap2[0], dom.torsion_constant[0]
+            )
             for row in t
         ]
     )

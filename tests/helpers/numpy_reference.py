@@ -201,6 +201,7 @@ def _evaluate_numpy(
     torsion_bending_interaction: bool = True,
     projection_only: bool = False,
     projection: str = "energy",
+    c0: NDArray | None = None,
 ) -> StrengthCheck | NDArray:
     """:func:`check_strength` on validated inputs (``act`` (m, 6), ``ft`` (m,) >= 0), in numpy:
     the reference of the compiled :func:`_evaluate` (used by the tests).
@@ -211,6 +212,8 @@ def _evaluate_numpy(
     ``projection_only`` returns just the projected actions and skips the radial factor of
     rows well inside Eq. (A5), where it is only needed for the utilisation.
     """
+    # the reference is the paper's domain, c = mu ft (no cohesion beyond it)
+    assert c0 is None or not np.any(c0)
     m = act.shape[0]
     f1, f2, fn, m1, m2, m3 = np.ascontiguousarray(act.T)
 

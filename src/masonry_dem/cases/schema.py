@@ -28,7 +28,7 @@ from pydantic import AfterValidator, BaseModel, ConfigDict, ValidationError, cre
 from pydantic_core import PydanticCustomError
 
 from masonry_dem._validation import GRID_MOST, plain
-from masonry_dem.model import LAW_OPTIONS, InterfaceMaterial
+from masonry_dem.model import LAW_OPTIONS, InterfaceMaterial, check_tension_cap
 
 log = logging.getLogger(__name__)
 
@@ -141,6 +141,13 @@ RANGES: dict[str, Range] = {
     ),
     "tensile_strength": Range(
         0.0, 1e8, "Pa", "0 for dry joints; 100 MPa is ten times the tensile strength of granite"
+    ),
+    "cohesion": Range(
+        0.0,
+        1e8,
+        "Pa",
+        "leave it out for friction x tensile_strength (the paper's reading); 100 MPa is ten "
+        "times the shear strength of granite",
     ),
     "alpha": Range(0.0, 10.0, "", "exponent of Eq. (A5); the paper's value is 1.5", open_lo=True),
     # loads
@@ -354,6 +361,7 @@ MATERIAL = _table(
         "kt": _number("kt"),
         "friction": _number("friction"),
         "tensile_strength": (_number("tensile_strength"), 0.0),
+        "cohesion": (_number("cohesion") | None, None),
         "alpha": (_number("alpha") | None, None),
         # the interface law's options
         **{name: (_choice(allowed), default) for name, (allowed, default) in _LAW.items()},
@@ -615,6 +623,8 @@ def check_case(
                 errors,
             )
         material = _validate(MATERIAL, data["material"], ("material",), source, errors)
+        if material is not None:
+            _check_tension_cap(data["material"], errors)
         _check_supports_and_loads(data, (), source, errors)
         for k, stage in enumerate(data.get("stages") or []):
             if _validate(STAGE, stage, ("stages", k), source, errors) is not None:
@@ -651,6 +661,21 @@ def _check_supports_and_loads(
             errors.append(f"{where} = {plain(kind)}: must be one of {', '.join(LOAD_TABLES)}")
             continue
         _validate(LOAD_TABLES[kind], spec, (*table, "loads", k), source, errors)
+
+
+def _check_tension_cap(material: Mapping[str, Any], errors: list[str]) -> None:
+    """The cross-field rule of ``[material]``: a cohesion given caps the tensile strength,
+    ``friction * tensile_strength <= cohesion``."""
+    if material.get("cohesion") is None:
+        return
+    try:
+        check_tension_cap(
+            float(material["friction"]),
+            float(material.get("tensile_strength", 0.0)),
+            float(material["cohesion"]),
+        )
+    except ValueError as exc:
+        errors.append(f"[material]: {exc}")
 
 
 def _warn_above(table: Mapping[str, Any], where: str, source: str) -> None:

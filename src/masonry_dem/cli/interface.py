@@ -31,8 +31,12 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     p.add_argument("--l2", type=float, default=ref.l2, help="side along y2 (m)")
     p.add_argument("--fn", type=float, default=ref.normal_force, help="normal force (N, <0)")
     p.add_argument("--friction", type=float, default=ref.friction, help="friction coefficient")
+    p.add_argument("--tensile-strength", type=float, default=0.0, help="tensile strength (Pa)")
     p.add_argument(
-        "--tensile-strength", type=float, default=0.0, help="tensile strength (Pa), c = mu*ft"
+        "--cohesion",
+        type=float,
+        default=None,
+        help="cohesion c (Pa), at least friction x tensile strength (default: mu ft, the paper's)",
     )
     p.add_argument("--kn", type=float, default=ref.kn, help="normal stiffness (N/m^3)")
     p.add_argument("--ks", type=float, default=ref.ks, help="shear stiffness (N/m^3)")
@@ -51,7 +55,15 @@ def compute(args: argparse.Namespace) -> dict[str, Any]:
     from masonry_dem.studies.interface import Interface, interface_study
 
     it = Interface(
-        args.l1, args.l2, args.fn, args.friction, args.tensile_strength, args.kn, args.ks, args.n
+        args.l1,
+        args.l2,
+        args.fn,
+        args.friction,
+        args.tensile_strength,
+        args.kn,
+        args.ks,
+        args.n,
+        args.cohesion,
     )
     return interface_study(it, args.directions, args.alpha_n, not args.no_alpha_table)
 

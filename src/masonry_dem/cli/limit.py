@@ -198,6 +198,14 @@ def limit_command(args: argparse.Namespace) -> int:
     from masonry_dem.solvers.resources import TooLarge, parse_memory
 
     case = load_case(args.case)
+    if case.stages is not None:
+        print(
+            "masonry-dem limit: refused: the case has loading stages ([[stages]]); limit "
+            "analysis takes one dead and one live load: run it with masonry-dem run, or give "
+            "the stage to analyse as the case's own [[loads]] and [[supports]]",
+            file=sys.stderr,
+        )
+        return 2
     options = dict(case.limit_options or {})
     if args.associative is not None:
         options["associative"] = args.associative

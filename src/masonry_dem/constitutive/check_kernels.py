@@ -204,10 +204,16 @@ def nb_reduced_side(side: float, abs_moment: float, cap: float, snap: float) -> 
 
 
 @_part
-def _nb_demands(f1, f2, fn, m1, m2, m3, fti, l1, l2, mu, snap1, snap2, torsion_bending_interaction):  # fmt: skip
+def _nb_demands(f1, f2, fn, m1, m2, m3, fti, c0, l1, l2, mu, snap1, snap2, torsion_bending_interaction):  # fmt: skip
     """The first part of :func:`nb_check_row`: detachment, the rocking clip and the
     shear-torsion demand/capacity ratios of one row, ``(detached, rock1, rock2, abs_m1,
-    abs_m2, m1_lim, m2_lim, abs_m1c, abs_m2c, fsu, abs_m3, m3u, shear, a, c)``."""
+    abs_m2, m1_lim, m2_lim, abs_m1c, abs_m2c, fsu, abs_m3, m3u, shear, a, c)``.
+
+    ``c0`` is the cohesive force beyond mu ft, ``(c - mu ft) A`` >= 0: the Mohr-Coulomb
+    strength c A - mu fn = mu (ft - fn) + c0 below the tension cap. Where the rocking leaves
+    the rectangle of uniform compression ``l1' x l2'``, the rest of the interface sits at the
+    cap (stress ft), where the shear strength is c - mu ft: so m3u = cT(l1', l2') mu (ft - fn)
+    + cT(l1, l2) c0. With c0 = 0 (the paper's c = mu ft) the operations are the paper's."""
     # detachment
     detached = fn > fti
     live = not detached
@@ -226,6 +232,7 @@ def _nb_demands(f1, f2, fn, m1, m2, m3, fti, l1, l2, mu, snap1, snap2, torsion_b
 
     # shear and torsion: demand/capacity ratios a = |m3|/m3u, c = |f|/fsu
     fsu = mu * cap
+    cohesive = c0 > 0 and live
     abs_m3 = abs(m3)
     m3u = 0.0
     if abs_m3 > 0 and cap > 0:
@@ -236,6 +243,10 @@ def _nb_demands(f1, f2, fn, m1, m2, m3, fti, l1, l2, mu, snap1, snap2, torsion_b
         else:
             c_t = nb_torsion_constant(l1, l2)
         m3u = c_t * fsu
+    if cohesive:
+        fsu += c0
+        if abs_m3 > 0:
+            m3u += nb_torsion_constant(l1, l2) * c0
     shear = math.hypot(f1, f2)
     a = abs_m3 / m3u if abs_m3 > 0 else 0.0  # 0/0 = 0, d/0 = inf (no capacity)
     c = shear / fsu if shear > 0 else 0.0
@@ -275,12 +286,12 @@ def _nb_row_flags(sliding, rock1, rock2, detached) -> int:
 
 @_jit
 def nb_check_row(
-    f1, f2, fn, m1, m2, m3, fti, l1, l2, mu, al, snap1, snap2,
+    f1, f2, fn, m1, m2, m3, fti, c0, l1, l2, mu, al, snap1, snap2,
     torsion_bending_interaction, projection_only, energy,
     stored, t_switch, ta_switch, shear_hi, rho,
 ):  # fmt: skip
     """The strength check of one row, scalars in and out: the trial actions ``f1 .. m3`` and
-    the row's constants (``t_switch`` .. ``rho``: :func:`nb_slide_constants`, computed here
+    the row's constants (``fti`` the tensile force, ``c0`` the cohesive force beyond mu ft) (``t_switch`` .. ``rho``: :func:`nb_slide_constants`, computed here
     unless ``stored``) give ``(p1, p2, pn, p4, p5, p6, flags, utilisation, radial_failed,
     energy_failed)``: the projection, its flags, the utilisation (0 with
     ``projection_only``) and whether the radial factor and the energy projection did not
@@ -306,7 +317,7 @@ def nb_check_row(
         a,
         c,
     ) = _nb_demands(  # fmt: skip  # noqa: E501
-        f1, f2, fn, m1, m2, m3, fti, l1, l2, mu, snap1, snap2, torsion_bending_interaction
+        f1, f2, fn, m1, m2, m3, fti, c0, l1, l2, mu, snap1, snap2, torsion_bending_interaction
     )
     live = not detached
 
@@ -374,16 +385,16 @@ def nb_check_row(
 def nb_project_rows(first, second, energy):
     """The projection and flags of two rows (:func:`nb_check_row` with the torsion-bending
     interaction, ``projection_only`` and the rows' stored constants), the same bits: each
-    row is a tuple ``(f1, f2, fn, m1, m2, m3, ft, l1, l2, mu, alpha, snap1, snap2, t_switch,
+    row is a tuple ``(f1, f2, fn, m1, m2, m3, ft, c0, l1, l2, mu, alpha, snap1, snap2, t_switch,
     ta_switch, shear_hi, rho)``; returns ``(p1 .. p6)`` and the flags of each. The iterations
     of the two rows' radial factors and energy returns alternate in one loop
     (:func:`nb_radial_factors`, :func:`_nb_energy_closest_points`): one row's steps wait on
     each other, the two rows' do not, so the processor overlaps them."""
-    f1, f2, fn, m1, m2, m3, fti, l1, l2, mu, al, snap1, snap2, t_switch, ta_switch, shear_hi, rho = first  # fmt: skip  # noqa: E501
-    f1_b, f2_b, fn_b, m1_b, m2_b, m3_b, fti_b, l1_b, l2_b, mu_b, al_b, snap1_b, snap2_b, t_switch_b, ta_switch_b, shear_hi_b, rho_b = second  # fmt: skip  # noqa: E501
+    f1, f2, fn, m1, m2, m3, fti, c0, l1, l2, mu, al, snap1, snap2, t_switch, ta_switch, shear_hi, rho = first  # fmt: skip  # noqa: E501
+    f1_b, f2_b, fn_b, m1_b, m2_b, m3_b, fti_b, c0_b, l1_b, l2_b, mu_b, al_b, snap1_b, snap2_b, t_switch_b, ta_switch_b, shear_hi_b, rho_b = second  # fmt: skip  # noqa: E501
     on = True
-    detached, rock1, rock2, _, _, _, _, abs_m1c, abs_m2c, fsu, abs_m3, m3u, shear, a, c = _nb_demands(f1, f2, fn, m1, m2, m3, fti, l1, l2, mu, snap1, snap2, on)  # fmt: skip  # noqa: E501
-    detached_b, rock1_b, rock2_b, _, _, _, _, abs_m1c_b, abs_m2c_b, fsu_b, abs_m3_b, m3u_b, shear_b, a_b, c_b = _nb_demands(f1_b, f2_b, fn_b, m1_b, m2_b, m3_b, fti_b, l1_b, l2_b, mu_b, snap1_b, snap2_b, on)  # fmt: skip  # noqa: E501
+    detached, rock1, rock2, _, _, _, _, abs_m1c, abs_m2c, fsu, abs_m3, m3u, shear, a, c = _nb_demands(f1, f2, fn, m1, m2, m3, fti, c0, l1, l2, mu, snap1, snap2, on)  # fmt: skip  # noqa: E501
+    detached_b, rock1_b, rock2_b, _, _, _, _, abs_m1c_b, abs_m2c_b, fsu_b, abs_m3_b, m3u_b, shear_b, a_b, c_b = _nb_demands(f1_b, f2_b, fn_b, m1_b, m2_b, m3_b, fti_b, c0_b, l1_b, l2_b, mu_b, snap1_b, snap2_b, on)  # fmt: skip  # noqa: E501
     # a + c^2 >= a^alpha + c^2 for a, c <= 1 and alpha >= 1: below 1 no row slides
     check = not detached and not a + c * c < 0.999
     check_b = not detached_b and not a_b + c_b * c_b < 0.999
@@ -439,6 +450,7 @@ def nb_evaluate_row(
     i,
     act,
     ft,
+    c0,
     l1,
     l2,
     friction,
@@ -458,7 +470,7 @@ def nb_evaluate_row(
     projection did not converge (0 or 1 each)."""
     stored = act.shape[0] < 0  # False, as a variable: a literal would compile the row again
     p1, p2, pn, p4, p5, p6, flag, u, n_radial, n_energy = nb_check_row(
-        act[i, 0], act[i, 1], act[i, 2], act[i, 3], act[i, 4], act[i, 5], ft[i], l1[i], l2[i],
+        act[i, 0], act[i, 1], act[i, 2], act[i, 3], act[i, 4], act[i, 5], ft[i], c0[i], l1[i], l2[i],
         friction[i], alpha[i], snap1[i], snap2[i], torsion_bending_interaction, projection_only,
         energy, stored, 0.0, 0.0, 0.0, 0.0,
     )  # fmt: skip
@@ -476,7 +488,7 @@ def nb_evaluate_row(
 
 @kernel(parallel=True, error_model="numpy")
 def evaluate_rows(
-    act, ft, l1, l2, friction, alpha, snap1, snap2, torsion_bending_interaction,
+    act, ft, c0, l1, l2, friction, alpha, snap1, snap2, torsion_bending_interaction,
     projection_only, energy, proj, flags, util,
 ):  # fmt: skip
     """The strength check (see :func:`~masonry_dem.constitutive.strength.check_strength`) row
@@ -488,7 +500,7 @@ def evaluate_rows(
     for i in numba.prange(act.shape[0]):
         # one compiled row function: the parallel loop stays small to compile
         radial_failed, energy_failed = nb_evaluate_row(
-            i, act, ft, l1, l2, friction, alpha, snap1, snap2, torsion_bending_interaction,
+            i, act, ft, c0, l1, l2, friction, alpha, snap1, snap2, torsion_bending_interaction,
             projection_only, energy, proj, flags, util,
         )  # fmt: skip
         n_radial += radial_failed

@@ -22,6 +22,9 @@ What the law remembers between converged steps (``memory``):
 
 Tensile strength (``tension``): ``"brittle"`` (a joint whose normal force exceeds ft loses
 its tensile strength for good, as a cracked mortar joint does) or ``"plastic"`` (it keeps ft).
+A cracked joint loses its cohesion with its tensile strength: it becomes a dry Coulomb joint,
+shear strength ``-mu fn``. With the paper's cohesion c = mu ft this is what losing ft does; a
+cohesion given of its own (:class:`~masonry_dem.model.InterfaceMaterial`) goes the same way.
 
 ``tension``, ``memory`` and the shear-torsion ``projection`` are set on the model's
 :class:`~masonry_dem.model.InterfaceMaterial`. The compiled kernels are :mod:`~masonry_dem.constitutive.law_kernels`'.
@@ -72,12 +75,23 @@ class LawResponse:
     actions: np.ndarray  # (m, 6) corrected actions
     flags: np.ndarray  # (m,) violated-criteria bit flags
     utilisation: np.ndarray | None  # (m,); None when not asked for (InterfaceLaw.utilisation)
+    #: (m,) the cohesive force beyond mu ft at this iterate (0 once cracked); None: zero
+    cohesion: np.ndarray | None = None
 
     # derived from the flags when asked for: most residuals of a search never need them
     @cached_property
     def tangent(self) -> np.ndarray:
         """(m, 6) stiffness factors of Eqs. (13)-(14), 0 or 1."""
         return FACTORS_OF_FLAGS[self.flags]
+
+    @cached_property
+    def strength_at_zero(self) -> np.ndarray:
+        """(m,) positive where a joint has a strength at zero normal force: its tensile force
+        or its cohesive force beyond mu ft (both >= 0; the tensile force itself without
+        one)."""
+        if self.cohesion is None:
+            return self.tensile_force
+        return self.tensile_force + self.cohesion
 
     @cached_property
     def state(self) -> np.ndarray:
@@ -98,6 +112,8 @@ class InterfaceLaw:
     tension: Tension = "brittle"
     memory: Memory = "slip"
     projection: str = "energy"  # shear-torsion return (see check_strength)
+    #: (m,) c0 = (c - mu ft) x area, the cohesive force beyond the paper's mu ft; None: zero
+    cohesion: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         if self.tension not in TENSION:
@@ -117,6 +133,7 @@ class InterfaceLaw:
         model's material's (``tension`` or ``memory`` given here override them: the
         deprecated settings fields of the solvers)."""
         its = model.interfaces
+        beyond = model.cohesion_beyond_friction  # zero, bit for bit, where c = mu ft
         return cls(
             kbar,
             its.l1,
@@ -127,6 +144,7 @@ class InterfaceLaw:
             model.tension if tension is None else tension,
             model.memory if memory is None else memory,
             model.projection,
+            beyond * its.area if beyond.any() else None,
         )
 
     @cached_property
@@ -145,10 +163,25 @@ class InterfaceLaw:
         ft = checked_field("tensile_force", self.tensile_force, m, minimum=0.0, strict=False)
         return writable_c(ft)
 
-    def _check(self, trial: np.ndarray, ft: np.ndarray) -> StrengthCheck:
+    @cached_property
+    def _cohesion_rows(self) -> np.ndarray:
+        """c0 of every row, (m,) and contiguous (zeros without a cohesion of its own)."""
+        m = self.kbar.shape[0]
+        if self.cohesion is None:
+            return np.zeros(m)
+        return writable_c(checked_field("cohesion", self.cohesion, m, minimum=0.0, strict=False))
+
+    def cohesion_at(self, cracked: np.ndarray) -> np.ndarray | None:
+        """(m,) the cohesive force beyond mu ft of the joints, zero where ``cracked`` (None
+        without a cohesion of its own: zero everywhere)."""
+        if self.cohesion is None:
+            return None
+        return np.where(cracked, 0.0, self._cohesion_rows)
+
+    def _check(self, trial: np.ndarray, ft: np.ndarray, c0: np.ndarray | None) -> StrengthCheck:
         if not np.isfinite(trial.sum()):  # one cheap test; _actions says what is wrong
             trial = checked_actions(trial)
-        return evaluate(trial, ft, self._domain, projection=self.projection)
+        return evaluate(trial, ft, self._domain, projection=self.projection, c0=c0)
 
     def respond(
         self,
@@ -163,17 +196,18 @@ class InterfaceLaw:
         flags bit for bit, about a quarter faster, for residuals that only need the forces."""
         trial = self.kbar * (relative - plastic)
         ft = np.where(cracked, 0.0, self.tensile_force)
+        c0 = self.cohesion_at(cracked)
         if utilisation:
-            chk = self._check(trial, ft)
+            chk = self._check(trial, ft, c0)
             actions, flags, util = chk.projected, chk.flags, chk.utilisation  # fresh arrays
         else:
             if not np.isfinite(trial.sum()):  # one cheap test; _actions says what is wrong
                 trial = checked_actions(trial)
-            actions, flags = projection_and_flags(trial, ft, self._domain, self.projection)
+            actions, flags = projection_and_flags(trial, ft, self._domain, self.projection, c0=c0)
             util = None
         if self.tension == "brittle":
             actions[(flags & DETACHED_FLAG) > 0] = 0.0
-        return LawResponse(trial, ft, actions, flags, util)
+        return LawResponse(trial, ft, actions, flags, util, c0)
 
     def forces(
         self,
@@ -193,7 +227,8 @@ class InterfaceLaw:
         )
         if not finite:
             checked_actions(trial)  # says which action is not finite
-        return rel, LawResponse(trial, ft, actions, flags, None), internal
+        response = LawResponse(trial, ft, actions, flags, None, self.cohesion_at(cracked))
+        return rel, response, internal
 
     def kernel_operands(
         self,
@@ -213,6 +248,7 @@ class InterfaceLaw:
             np.ascontiguousarray(plastic, dtype=float),
             np.ascontiguousarray(cracked, dtype=bool),
             self._tensile_rows,
+            self._cohesion_rows,
             *dom.kernel_arrays,
             dom.row_constants,
             self.projection == "energy",
@@ -227,12 +263,12 @@ class InterfaceLaw:
         """(m,) utilisation of the trial actions of ``r`` (see :func:`check_strength`)."""
         if r.utilisation is not None:
             return r.utilisation
-        return self._check(r.trial, r.tensile_force).utilisation
+        return self._check(r.trial, r.tensile_force, r.cohesion).utilisation
 
     def admissibility(self, r: LawResponse) -> np.ndarray:
         """(m,) demand/capacity of the corrected actions of ``r`` (at most 1 where they lie
         in the strength domain, up to the round-off of the return)."""
-        return self._check(np.ascontiguousarray(r.actions), r.tensile_force).utilisation
+        return self._check(np.ascontiguousarray(r.actions), r.tensile_force, r.cohesion).utilisation
 
     def tangent(self, r: LawResponse, floor: float = 1e-9, method: str = "analytic") -> np.ndarray:
         """(m, 6, 6) consistent tangent d(actions)/d(relative displacements) at ``r``.
@@ -254,9 +290,11 @@ class InterfaceLaw:
         """
         if method not in TANGENT_METHODS:
             raise ValueError(f"method must be one of {TANGENT_METHODS}, got {method!r}")
-        T, rows, t, h, ft, k, normal_only = law_tangent.serial(
+        c0 = np.zeros(r.flags.shape[0]) if r.cohesion is None else writable_c(r.cohesion)
+        T, rows, t, h, ft, c0_rows, k, normal_only = law_tangent.serial(
             r.trial,
             r.tensile_force,
+            c0,
             r.flags,
             r.actions,
             self.kbar,
@@ -268,7 +306,7 @@ class InterfaceLaw:
             method == "analytic",
         )
         if rows.size:  # the rows the analytic derivative does not cover
-            fd = fd_tangent(t, h, ft, rows, self._domain, k, self.projection, normal_only)
+            fd = fd_tangent(t, h, ft, rows, self._domain, k, self.projection, normal_only, c0_rows)
             diagonal = np.arange(6)
             fd[:, diagonal, diagonal] += float(floor) * k
             T[rows] = fd
@@ -303,10 +341,12 @@ def fd_tangent(
     kbar: np.ndarray,
     projection: str = "energy",
     normal_only: np.ndarray | None = None,
+    c0: np.ndarray | None = None,
 ) -> np.ndarray:
     """(n, 6, 6) forward-difference tangent of the projection at ``trial`` (n, 6), steps ``h``
     (n, 6), for the rows ``rows`` of ``dom`` (``ft`` and ``kbar`` already taken at those rows);
-    ``normal_only`` (n,) marks rows at zero capacity, probed along fn alone; see
+    ``normal_only`` (n,) marks rows at zero capacity, probed along fn alone; ``c0`` (n,) the
+    rows' cohesive force beyond mu ft (None: zero); see
     :data:`~masonry_dem.constitutive.law_kernels.fd_tangent_rows`."""
     n = trial.shape[0]
     out = np.empty((n, 6, 6))
@@ -314,6 +354,7 @@ def fd_tangent(
         writable_c(trial),
         writable_c(h),
         writable_c(ft),
+        np.zeros(n) if c0 is None else writable_c(c0),
         np.ascontiguousarray(rows, dtype=np.int64),
         *dom.kernel_arrays,
         projection == "energy",

@@ -54,7 +54,7 @@ _jit = numba.njit(error_model="numpy")
 
 
 @_jit
-def _nb_fd_probes(t, h, ft, rows, l1, l2, friction, alpha, snap1, snap2, normal_only):
+def _nb_fd_probes(t, h, ft, c0, rows, l1, l2, friction, alpha, snap1, snap2, normal_only):
     """The trials ``t`` (n, 6) of the rows ``rows`` of a domain and their forward-difference
     probes ``t_r + h_rp e_p``, with the row constants, as the input arrays of the strength
     check's rows (n first, then the probes), and ``probe_row`` (n, 6): the row of each probe,
@@ -68,7 +68,7 @@ def _nb_fd_probes(t, h, ft, rows, l1, l2, friction, alpha, snap1, snap2, normal_
                 probe_row[r, p] = total
                 total += 1
     act = np.empty((total, 6))
-    consts = np.empty((7, total))  # ft, l1, l2, friction, alpha, snap1, snap2
+    consts = np.empty((8, total))  # ft, l1, l2, friction, alpha, snap1, snap2, c0
     for r in range(n):
         for p in range(-1, 6):  # -1: the trial itself
             row = r if p < 0 else probe_row[r, p]
@@ -86,6 +86,7 @@ def _nb_fd_probes(t, h, ft, rows, l1, l2, friction, alpha, snap1, snap2, normal_
             consts[4, row] = alpha[i]
             consts[5, row] = snap1[i]
             consts[6, row] = snap2[i]
+            consts[7, row] = c0[r]
     return act, consts, probe_row
 
 
@@ -112,19 +113,19 @@ def _nb_fd_collect(proj, h, k, probe_row, out) -> None:
 
 @kernel(parallel=True, eager=False, error_model="numpy")  # most analyses never call it
 def fd_tangent_rows(
-    t, h, ft, rows, l1, l2, friction, alpha, snap1, snap2, energy, k, normal_only, out
+    t, h, ft, c0, rows, l1, l2, friction, alpha, snap1, snap2, energy, k, normal_only, out
 ):
     """Forward-difference derivative of the projection at the rows ``rows`` of a domain
     (:func:`_nb_fd_probes`, the strength check of every probe, :func:`_nb_fd_collect`)."""
     act, c, probe_row = _nb_fd_probes(
-        t, h, ft, rows, l1, l2, friction, alpha, snap1, snap2, normal_only
+        t, h, ft, c0, rows, l1, l2, friction, alpha, snap1, snap2, normal_only
     )
     proj = np.empty((act.shape[0], 6))
     flags = np.empty(act.shape[0], dtype=np.uint8)
     util = np.empty(0)
     on = act.shape[0] >= 0  # True, as a variable: a literal would compile the row again
     for j in numba.prange(act.shape[0]):
-        nb_evaluate_row(j, act, c[0], c[1], c[2], c[3], c[4], c[5], c[6], on, on, energy, proj, flags, util)  # fmt: skip
+        nb_evaluate_row(j, act, c[0], c[7], c[1], c[2], c[3], c[4], c[5], c[6], on, on, energy, proj, flags, util)  # fmt: skip
     _nb_fd_collect(proj, h, k, probe_row, out)
 
 
@@ -221,7 +222,7 @@ def _nb_contact_tangent(t, fti, mu, l1, l2, al, snap1, snap2, k, fd_step, out, g
 
 
 @_jit
-def _nb_row_tangent(t, p, fti, l1, l2, mu, al, snap1, snap2, flag, k, fd_step, out, g) -> bool:
+def _nb_row_tangent(t, p, fti, c0, l1, l2, mu, al, snap1, snap2, flag, k, fd_step, out, g) -> bool:
     """Analytic derivative of the energy projection of one live row, ``out[a, q] =
     d p_a / d t_q * k_q`` (the chain rule through the trial ``k * relative``), at the trial
     ``t`` (6,) whose projection is ``p`` (6,) and flags ``flag``; ``g`` (9, 6) is scratch;
@@ -236,13 +237,17 @@ def _nb_row_tangent(t, p, fti, l1, l2, mu, al, snap1, snap2, flag, k, fd_step, o
     fn, m1 and m2 (the reduced sides of the torsion-bending interaction).
     Returns False, with ``out`` undefined, where the row needs the finite difference: zero
     capacity, alpha = 1 (a vertex), no shear (r0 = 0), capacities near the subnormal range,
-    or a projection that is not the closest point (the radial fallback)."""
+    or a projection that is not the closest point (the radial fallback), and a sliding or
+    detached row with cohesion beyond mu ft (``c0 > 0``: its capacities are not
+    proportional to ft - fn)."""
     f1 = t[0]
     f2 = t[1]
     fn = t[2]
     m1 = t[3]
     m2 = t[4]
     m3 = t[5]
+    if c0 > 0.0 and flag & (FLAG_DETACHED | FLAG_SHEAR_TORSION):
+        return False
     if flag & FLAG_DETACHED:
         return _nb_contact_tangent(t, fti, mu, l1, l2, al, snap1, snap2, k, fd_step, out, g)
     cap = fti - fn
@@ -398,7 +403,7 @@ ROW_CHECK, ROW_ELASTIC, ROW_DETACHED = 0, 1, 2
 
 
 @_jit
-def nb_plain_row(f1, f2, fn, m1, m2, m3, fti, l1, l2, mu, snap1, snap2, torsion) -> int:
+def nb_plain_row(f1, f2, fn, m1, m2, m3, fti, c0, l1, l2, mu, snap1, snap2, torsion) -> int:
     """Whether the strength check of a row (trial actions ``f1 .. m3``, the row's constants)
     has a plain answer: :data:`ROW_DETACHED` (fn > ft: the check returns zero actions but
     fn = ft, with the one flag), :data:`ROW_ELASTIC` (inside the domain by a margin: the
@@ -409,7 +414,8 @@ def nb_plain_row(f1, f2, fn, m1, m2, m3, fti, l1, l2, mu, snap1, snap2, torsion)
     through a lower bound of the torsion constant of the reduced sides: cT is the mean
     distance from the centre, so it grows with each side and is homogeneous of degree one,
     ``cT(l1', l2') >= s cT(l1, l2)`` with ``s = min(l1'/l1, l2'/l2)``; ``torsion`` is
-    cT(l1, l2). A NaN fails the comparisons and leaves the row to the check. Scalars in and
+    cT(l1, l2); with the cohesion beyond mu ft, ``c0``, the bound holds as well (m3u =
+    cT(l1', l2') mu cap + cT c0 >= s cT (mu cap + c0)). A NaN fails the comparisons and leaves the row to the check. Scalars in and
     out, as :func:`~masonry_dem.constitutive.check_kernels.nb_check_row`."""
     if fn > fti:
         return ROW_DETACHED
@@ -420,6 +426,8 @@ def nb_plain_row(f1, f2, fn, m1, m2, m3, fti, l1, l2, mu, snap1, snap2, torsion)
     if not (abs_m1 <= half * l2 and abs_m2 <= half * l1):
         return ROW_CHECK
     fsu = mu * cap
+    if c0 > 0:
+        fsu += c0
     shear = math.hypot(f1, f2)
     c = shear / fsu if shear > 0 else 0.0
     abs_m3 = abs(m3)
@@ -446,19 +454,19 @@ def _row_product(idx, val, v, start, end):
 
 
 @numba.njit(error_model="numpy", inline="always")
-def _row(i, trial, ft, l1, l2, friction, alpha, snap1, snap2, constants):
+def _row(i, trial, ft, c0, l1, l2, friction, alpha, snap1, snap2, constants):
     """Row ``i``'s trial actions and constants, as :func:`nb_project_rows` takes them."""
     t = trial[i]
     c = constants[i]
     return (
-        t[0], t[1], t[2], t[3], t[4], t[5], ft[i], l1[i], l2[i], friction[i], alpha[i],
+        t[0], t[1], t[2], t[3], t[4], t[5], ft[i], c0[i], l1[i], l2[i], friction[i], alpha[i],
         snap1[i], snap2[i], c[ROW_T_SWITCH], c[ROW_TA_SWITCH], c[ROW_SHEAR_HI], c[ROW_RHO],
     )  # fmt: skip
 
 
 @kernel(parallel=True, error_model="numpy")
 def forces(
-    x, h_ptr, h_idx, h_val, kbar, plastic, cracked, tensile_force,
+    x, h_ptr, h_idx, h_val, kbar, plastic, cracked, tensile_force, cohesion,
     l1, l2, friction, alpha, snap1, snap2, constants, energy, brittle, t_ptr, t_idx, t_val, n_out,
 ):  # fmt: skip
     """Relative displacements ``H x``, trial actions, their projection (flags) and the
@@ -474,6 +482,7 @@ def forces(
     rel = np.empty((m, 6))
     trial = np.empty((m, 6))
     ft = np.empty(m)
+    c0 = np.empty(m)
     actions = np.empty((m, 6))
     flags = np.zeros(m, dtype=np.uint8)
     internal = np.zeros(n_out)
@@ -483,6 +492,7 @@ def forces(
     plastic_flat = plastic.reshape(-1)
     for i in range(m):
         ft[i] = 0.0 if cracked[i] else tensile_force[i]
+        c0[i] = 0.0 if cracked[i] else cohesion[i]  # a crack takes the cohesion with ft
     finite = 0.0  # stays 0 unless a trial is inf or NaN (0 * inf = NaN)
     start = h_ptr[0]
     for r in range(6 * m):
@@ -499,7 +509,8 @@ def forces(
     for i in numba.prange(m):
         plain = nb_plain_row(
             trial[i, 0], trial[i, 1], trial[i, 2], trial[i, 3], trial[i, 4], trial[i, 5],
-            ft[i], l1[i], l2[i], friction[i], snap1[i], snap2[i], constants[i, ROW_TORSION],
+            ft[i], c0[i], l1[i], l2[i], friction[i], snap1[i], snap2[i],
+            constants[i, ROW_TORSION],
         )  # fmt: skip
         if plain == ROW_ELASTIC:
             for j in range(6):
@@ -517,8 +528,8 @@ def forces(
     for k in numba.prange((n + 1) // 2):
         i = rows[2 * k]
         j = rows[2 * k + 1] if 2 * k + 1 < n else i  # the last row alone: twice
-        first = _row(i, trial, ft, l1, l2, friction, alpha, snap1, snap2, constants)
-        second = _row(j, trial, ft, l1, l2, friction, alpha, snap1, snap2, constants)
+        first = _row(i, trial, ft, c0, l1, l2, friction, alpha, snap1, snap2, constants)
+        second = _row(j, trial, ft, c0, l1, l2, friction, alpha, snap1, snap2, constants)
         p, flag, q, flag2 = nb_project_rows(first, second, energy)
         for c in range(6):
             actions[i, c] = p[c]
@@ -541,7 +552,7 @@ def forces(
 
 @kernel(error_model="numpy")
 def law_tangent(
-    trial, ft, flags, actions, k, floor, contact_band, fd_step, l1, l2, friction, alpha, snap1,
+    trial, ft, c0, flags, actions, k, floor, contact_band, fd_step, l1, l2, friction, alpha, snap1,
     snap2, energy, analytic,
 ):  # fmt: skip
     """:meth:`InterfaceLaw.tangent` in one compiled call: diag(kbar), zero for open joints,
@@ -549,7 +560,7 @@ def law_tangent(
     kbar. The derivative is analytic (:func:`_nb_row_tangent`) where ``analytic`` and the row
     allows it; the other yielded rows are returned for the forward difference
     (:data:`fd_tangent_rows`, the operations of the batched numpy version, so the same bits),
-    with their trials ``t``, steps ``h``, ``ft``, ``k`` and ``normal_only``, and without the
+    with their trials ``t``, steps ``h``, ``ft``, ``c0``, ``k`` and ``normal_only``, and without the
     floor (their caller adds it after the difference). One thread: the rows are cheap."""
     m = k.shape[0]
     T = np.zeros((m, 6, 6))
@@ -568,7 +579,7 @@ def law_tangent(
         if flags[i] == 0 or open_:
             continue
         done = analytic and energy and _nb_row_tangent(
-            trial[i], actions[i], ft[i], l1[i], l2[i], friction[i], alpha[i], snap1[i],
+            trial[i], actions[i], ft[i], c0[i], l1[i], l2[i], friction[i], alpha[i], snap1[i],
             snap2[i], flags[i], k[i], fd_step, block, scratch,
         )  # fmt: skip
         # (a detached row in the contact band is taken at fn = ft: _nb_contact_tangent reads
@@ -584,6 +595,7 @@ def law_tangent(
     t = np.empty((count, 6))
     h = np.empty((count, 6))
     ft_rows = np.empty(count)
+    c0_rows = np.empty(count)
     k_rows = np.empty((count, 6))
     normal_only = np.empty(count, np.bool_)
     count = 0
@@ -594,11 +606,12 @@ def law_tangent(
                 k_rows[count, j] = k[i, j]
             _nb_contact_side(trial[i], ft[i], fd_step, t[count], h[count])
             ft_rows[count] = ft[i]
+            c0_rows[count] = c0[i]
             # detached joints in the contact band sit at zero capacity (fn = ft): only fn
-            # moves their projection
-            normal_only[count] = flags[i] == FLAG_DETACHED
+            # moves their projection (a cohesive one keeps a shear capacity c0 there)
+            normal_only[count] = flags[i] == FLAG_DETACHED and not c0[i] > 0.0
             count += 1
         else:
             for j in range(6):
                 T[i, j, j] += floor * k[i, j]
-    return T, rows, t, h, ft_rows, k_rows, normal_only
+    return T, rows, t, h, ft_rows, c0_rows, k_rows, normal_only

@@ -6,8 +6,9 @@ spring has a normal stiffness ``kn`` and a shear stiffness ``ks`` (N/m^3). The n
 elastic with a tension cut-off, ``sigma = min(kn * un, sigma_t)`` (no tension when
 ``sigma_t = 0``; the cut-off has no memory, which is exact for dry contact and for monotonic
 opening). The shear stress is elastic-perfectly plastic with the Mohr-Coulomb limit
-``|tau| <= c - mu sigma`` with ``c = mu sigma_t`` (Appendix), zero in tension beyond the
-cut-off; the plastic slip is remembered through the stress (radial return each step).
+``|tau| <= c - mu sigma`` with ``c = mu sigma_t`` (Appendix; zero at the cut-off) or a
+cohesion ``c >= mu sigma_t`` of its own (then ``c - mu sigma_t`` at the cut-off); the plastic
+slip is remembered through the stress (radial return each step).
 
 The indenter moves by a history of relative displacements and rotations about the interface
 centre, in the package's local order ``[d1, d2, dn, delta1, delta2, delta3]`` (see
@@ -32,6 +33,7 @@ from scipy.optimize import minimize_scalar
 
 from masonry_dem._parameters import function_of
 from masonry_dem.constitutive.strength import DIRECTIONS, radial_factor
+from masonry_dem.model import check_tension_cap
 
 __all__ = [
     "REFERENCE_INTERFACE",
@@ -111,7 +113,8 @@ class SpringInterface:
         n: springs per side (n*n springs; spring index ``i * n + j``, i along y1).
         kn, ks: normal and shear stiffness per unit area (N/m^3), > 0.
         friction: mu >= 0.
-        tensile_strength: sigma_t >= 0 (Pa); cohesion c = mu * sigma_t.
+        tensile_strength: sigma_t >= 0 (Pa).
+        cohesion: c (Pa), ``mu * sigma_t <= c``; None: ``mu * sigma_t``.
     """
 
     l1: float
@@ -121,12 +124,16 @@ class SpringInterface:
     ks: float
     friction: float
     tensile_strength: float = 0.0
+    cohesion: float | None = None
 
     def __post_init__(self) -> None:
         for name in ("l1", "l2", "kn", "ks"):
             object.__setattr__(self, name, _positive(name, getattr(self, name)))
         for name in ("friction", "tensile_strength"):
             object.__setattr__(self, name, _positive(name, getattr(self, name), strict=False))
+        if self.cohesion is not None:
+            object.__setattr__(self, "cohesion", _positive("cohesion", self.cohesion, strict=False))
+            check_tension_cap(self.friction, self.tensile_strength, self.cohesion)
         if isinstance(self.n, bool) or not float(self.n).is_integer() or int(self.n) < 1:
             raise ValueError(f"n must be an integer >= 1, got {self.n!r}")
         object.__setattr__(self, "n", int(self.n))
@@ -157,7 +164,9 @@ class SpringInterface:
     def yield_slip(self, normal_force: float) -> float:
         """Shear slip at which a spring yields under a uniform normal stress (m)."""
         sigma = min(normal_force / self.area, self.tensile_strength)
-        return self.friction * (self.tensile_strength - sigma) / self.ks
+        if self.cohesion is None:
+            return self.friction * (self.tensile_strength - sigma) / self.ks
+        return (self.cohesion - self.friction * sigma) / self.ks
 
     # ----------------------------------------------------------------------------------------
 
@@ -238,7 +247,10 @@ class SpringInterface:
         mu, st = self.friction, self.tensile_strength
         d1, d2, dn, r1, r2, r3 = (disp[..., i, None] for i in range(6))
         sigma = np.minimum(self.kn * (dn + r1 * y2 - r2 * y1), st)  # (..., steps, N)
-        tau_lim = np.maximum(mu * (st - sigma), 0.0)
+        if self.cohesion is None:
+            tau_lim = np.maximum(mu * (st - sigma), 0.0)
+        else:  # sigma <= st <= c / mu: never below c - mu st >= 0
+            tau_lim = np.maximum(self.cohesion - mu * sigma, 0.0)
         slip = np.stack([d1 - r3 * y2, d2 + r3 * y1], axis=-1)  # (..., steps, N, 2)
         dslip = np.diff(slip, axis=-3, prepend=np.zeros_like(slip[..., :1, :, :]))
         dslip *= self.ks
@@ -305,7 +317,14 @@ class SpringInterface:
 
 
 def _interface(
-    l1: float, l2: float, n: int, kn: float | None, ks: float | None, friction: float, st: float
+    l1: float,
+    l2: float,
+    n: int,
+    kn: float | None,
+    ks: float | None,
+    friction: float,
+    st: float,
+    cohesion: float | None = None,
 ) -> SpringInterface:
     ref = REFERENCE_INTERFACE
     return SpringInterface(
@@ -316,14 +335,16 @@ def _interface(
         ks=ref.ks if ks is None else ks,
         friction=friction,
         tensile_strength=st,
+        cohesion=cohesion,
     )
 
 
 @dataclass(frozen=True)
 class _StrengthRun:
     """A strength run of the spring model: an ``l1`` x ``l2`` interface with ``friction`` and
-    ``tensile_strength``, under the constant ``normal_force``, of ``n`` x ``n`` springs of
-    stiffness ``kn``, ``ks`` (None: the reference interface's), loaded in ``steps`` steps."""
+    ``tensile_strength`` (and ``cohesion``, None: mu x tensile strength), under the constant
+    ``normal_force``, of ``n`` x ``n`` springs of stiffness ``kn``, ``ks`` (None: the
+    reference interface's), loaded in ``steps`` steps."""
 
     l1: float
     l2: float
@@ -335,9 +356,12 @@ class _StrengthRun:
     kn: float | None = None
     ks: float | None = None
     steps: int = 20
+    cohesion: float | None = None
 
     def interface(self, l1: float, l2: float, tensile_strength: float) -> SpringInterface:
-        return _interface(l1, l2, self.n, self.kn, self.ks, self.friction, tensile_strength)
+        return _interface(
+            l1, l2, self.n, self.kn, self.ks, self.friction, tensile_strength, self.cohesion
+        )
 
 
 @dataclass(frozen=True)
@@ -368,7 +392,10 @@ class _TorsionStrengthNumeric(_StrengthRun):
     paper's assumption is followed (Figure 10, after Orduna and Lourenco): the compression
     ``ft - fn`` is uniform over the reduced rectangle
     ``l1' = l1 - 2|m2|/(ft - fn)``, ``l2' = l2 - 2|m1|/(ft - fn)``, which is discretized by its
-    own ``n x n`` springs and twisted about its centre (so the resultant shear is zero).
+    own ``n x n`` springs and twisted about its centre (so the resultant shear is zero). With
+    a ``cohesion`` above mu x tensile strength, the rest of the interface sits at the cut-off,
+    where the shear strength is ``c - mu sigma_t``: the whole interface, as springs of that
+    cohesion and no friction, twisted about its centre, adds its torsion.
     """
 
     m1: float = 0.0
@@ -392,10 +419,17 @@ class _TorsionStrengthNumeric(_StrengthRun):
                 raise ValueError(
                     f"bending moments m1={m1!r}, m2={m2!r} reach the rocking limit: no compressed area"
                 )
-            iface = self.interface(l1r, l2r, 0.0)
+            iface = _interface(l1r, l2r, self.n, self.kn, self.ks, self.friction, 0.0)
             fn = -cap
         path = iface.rotation_paths(0.0, np.zeros(1), fn, self.steps)
-        return float(iface.run(path, normal_force=fn).ultimate[0, 5])
+        m3 = float(iface.run(path, normal_force=fn).ultimate[0, 5])
+        if (m1 != 0 or m2 != 0) and self.cohesion is not None:
+            beyond = self.cohesion - self.friction * self.tensile_strength
+            if beyond > 0:
+                rest = _interface(l1, l2, self.n, self.kn, self.ks, 0.0, 0.0, beyond)
+                path = rest.rotation_paths(0.0, np.zeros(1), 0.0, self.steps)
+                m3 += float(rest.run(path, normal_force=0.0).ultimate[0, 5])
+        return m3
 
 
 shear_strength_numeric = function_of(_ShearStrengthNumeric)

@@ -9,17 +9,26 @@ shear along the local axis y1, shear along y2, normal force (tension positive, c
 negative), bending about y1, bending about y2 and torsion about the normal. The interface is an
 ``l1 x l2`` rectangle, ``l1`` along y1 and ``l2`` along y2.
 
-Criteria, with ``ft`` the tensile force of the whole interface (tensile strength x area) and
-``cap = ft - fn``:
+Criteria, with ``ft`` the tensile force of the whole interface (tensile strength x area),
+``cap = ft - fn`` and ``C = c A`` the cohesive force (cohesion x area; the paper's reading,
+Eq. (10), is ``C = mu ft``, the default):
 
 * detachment: ``fn <= ft``;
 * rocking: ``|m1| <= cap * l2 / 2`` and ``|m2| <= cap * l1 / 2`` (the lever is half the side
   perpendicular to the bending axis: for the paper's horizontal running-bond joints this is
   lc1 = s/2 and lc2 = b/4);
 * shear-torsion, Eq. (A5): ``(|m3| / m3u)**alpha + (f1**2 + f2**2) / fsu**2 <= 1`` with
-  ``fsu = mu * cap`` and ``m3u = cT * mu * cap``. With the torsion-bending interaction of
-  Figure 10, ``cT`` is evaluated on the reduced rectangle under uniform compression,
-  ``l1' = l1 - 2 |m2| / cap`` and ``l2' = l2 - 2 |m1| / cap`` (bending moments already clipped).
+  ``fsu = C - mu * fn = mu * cap + c0`` and ``m3u = cT * mu * cap + cT(l1, l2) * c0``, where
+  ``c0 = C - mu * ft >= 0`` is the cohesion beyond the paper's (zero by default). With the
+  torsion-bending interaction of Figure 10, ``cT`` is evaluated on the reduced rectangle under
+  uniform compression, ``l1' = l1 - 2 |m2| / cap`` and ``l2' = l2 - 2 |m1| / cap`` (bending
+  moments already clipped); the rest of the interface sits at the tension cap, where the
+  shear strength is ``c - mu ft`` per unit area, hence the c0 term on the whole rectangle.
+
+Mohr-Coulomb with a tension cap: ``|tau| <= c - mu sigma`` and ``sigma <= ft`` (sigma tension
+positive), with ``ft <= c / mu``. With ``ft < c / mu`` the domain has a vertical cap: at
+``fn = ft`` the joint still carries the shear ``C - mu ft = c0``; beyond it, it is detached
+(its actions projected to ``[0, 0, ft, 0, 0, 0]``).
 
 The torsion constant ``cT`` is the mean distance of the rectangle's points from its centre; the
 printed Eq. (11) is garbled and the correct form is used here (see ``DESIGN.md``).
@@ -64,6 +73,7 @@ __all__ = [
     "StrengthDomain",
     "alpha_from_table",
     "check_strength",
+    "cohesion_beyond_friction",
     "checked_actions",
     "checked_field",
     "evaluate",
@@ -300,8 +310,38 @@ class StrengthCheck:
     utilisation: NDArray
 
 
-def shear_strength(fn: ArrayLike, friction: ArrayLike, tensile_force: ArrayLike = 0.0) -> NDArray:
-    """Shear strength fsu = mu (ft - fn) of Eq. (10), zero when fn >= ft (N)."""
+def shear_strength(
+    fn: ArrayLike,
+    friction: ArrayLike,
+    tensile_force: ArrayLike = 0.0,
+    cohesive_force: ArrayLike | None = None,
+) -> NDArray:
+    """Shear strength of an interface (N): ``fsu = C - mu fn`` below the tension cap.
+
+    Parameters
+    ----------
+    fn : array_like
+        Normal force [N], tension positive.
+    friction : array_like
+        mu >= 0.
+    tensile_force : array_like, default 0.0
+        ft = tensile strength x area [N], >= 0.
+    cohesive_force : array_like, optional
+        C = cohesion x area [N], with ``mu ft <= C`` (None: ``mu ft``, the paper's Eq. (10),
+        ``fsu = mu (ft - fn)``).
+
+    Returns
+    -------
+    numpy.ndarray
+        fsu [N], broadcast over the arguments: ``C - mu fn`` for ``fn <= ft`` (``mu (ft -
+        fn)`` and zero from fn = ft on without ``cohesive_force``), zero where ``fn > ft``
+        (detached).
+
+    Raises
+    ------
+    ValueError
+        If an argument is not finite, friction or a force is negative, or ``C < mu ft``.
+    """
     fn_, mu, ft = np.broadcast_arrays(
         *(np.asarray(x, dtype=float) for x in (fn, friction, tensile_force))
     )
@@ -312,7 +352,29 @@ def shear_strength(fn: ArrayLike, friction: ArrayLike, tensile_force: ArrayLike 
         raise ValueError(f"fn must be finite, got {fn!r}")
     mu = checked_field("friction", mu.ravel(), m, minimum=0.0, strict=False)
     ft = checked_field("tensile_force", ft.ravel(), m, minimum=0.0, strict=False)
-    return (mu * np.maximum(ft - fn_, 0.0)).reshape(shape)
+    fsu = mu * np.maximum(ft - fn_, 0.0)
+    if cohesive_force is not None:
+        c0 = cohesion_beyond_friction(cohesive_force, mu, ft, shape, m)
+        fsu = np.where(fn_ <= ft, fsu + c0, 0.0)
+    return fsu.reshape(shape)
+
+
+def cohesion_beyond_friction(
+    cohesive_force: ArrayLike, mu: NDArray, ft: NDArray, shape: tuple[int, ...], m: int
+) -> NDArray:
+    """``c0 = C - mu ft`` (m,) of a cohesive force ``C`` broadcast to ``shape``, checked:
+    finite, >= 0 and not below ``mu ft`` (beyond a relative 1e-12 of round-off)."""
+    arr = np.broadcast_to(np.asarray(cohesive_force, dtype=float), shape).ravel()
+    c = checked_field("cohesive_force", arr, m, minimum=0.0, strict=False)
+    floor = mu * ft
+    low = c < floor * (1.0 - 1e-12)
+    if low.any():
+        i = int(np.flatnonzero(low)[0])
+        raise ValueError(
+            f"cohesive_force must be at least friction x tensile_force (ft <= c / mu), got "
+            f"{float(c[i])!r} < {float(floor[i])!r} at index {i}"
+        )
+    return np.maximum(c - floor, 0.0)
 
 
 def torsion_strength(
@@ -323,12 +385,42 @@ def torsion_strength(
     tensile_force: ArrayLike = 0.0,
     m1: ArrayLike = 0.0,
     m2: ArrayLike = 0.0,
+    cohesive_force: ArrayLike | None = None,
 ) -> NDArray:
-    """Pure-torsion strength m3u = cT mu (ft - fn) (N m), Eq. (12).
+    """Pure-torsion strength m3u = cT mu (ft - fn) (N m), Eq. (12), with cohesion.
 
     With bending moments, cT is evaluated on the reduced rectangle of uniform compression
     ``l1' = l1 - 2|m2|/(ft - fn)``, ``l2' = l2 - 2|m1|/(ft - fn)`` (Figure 10); moments beyond
-    the rocking limits give a zero reduced side.
+    the rocking limits give a zero reduced side. With a cohesive force ``C`` above ``mu ft``,
+    ``m3u = cT(l1', l2') mu (ft - fn) + cT(l1, l2) (C - mu ft)`` for ``fn <= ft`` (the part of
+    the interface outside the reduced rectangle sits at the tension cap, where the shear
+    strength is ``c - mu ft``), zero where ``fn > ft``.
+
+    Parameters
+    ----------
+    fn : array_like
+        Normal force [N], tension positive.
+    l1, l2 : array_like
+        Sides [m], > 0.
+    friction : array_like
+        mu >= 0.
+    tensile_force : array_like, default 0.0
+        ft = tensile strength x area [N], >= 0.
+    m1, m2 : array_like, default 0.0
+        Bending moments [N m] about y1 and y2.
+    cohesive_force : array_like, optional
+        C = cohesion x area [N], ``mu ft <= C`` (None: ``mu ft``, the paper's reading).
+
+    Returns
+    -------
+    numpy.ndarray
+        m3u [N m], broadcast over the arguments.
+
+    Raises
+    ------
+    ValueError
+        If an argument is not finite, a side is not positive, friction or a force is
+        negative, or ``C < mu ft``.
     """
     arrs = np.broadcast_arrays(
         *(np.asarray(x, dtype=float) for x in (fn, l1, l2, friction, tensile_force, m1, m2))
@@ -345,7 +437,11 @@ def torsion_strength(
     ft = checked_field("tensile_force", ft, m, minimum=0.0, strict=False)
     cap = np.maximum(ft - fn_, 0.0)
     l1r, l2r = _reduced_sides(l1_, l2_, cap, np.abs(m1_), np.abs(m2_))
-    return (_torsion_constant(l1r, l2r) * mu * cap).reshape(shape)
+    m3u = _torsion_constant(l1r, l2r) * mu * cap
+    if cohesive_force is not None:
+        c0 = cohesion_beyond_friction(cohesive_force, mu, ft, shape, m)
+        m3u = np.where(fn_ <= ft, m3u + _torsion_constant(l1_, l2_) * c0, 0.0)
+    return m3u.reshape(shape)
 
 
 def _reduced_sides(
@@ -370,6 +466,7 @@ def check_strength(
     alpha: ArrayLike | None = None,
     torsion_bending_interaction: bool = True,
     projection: str = "energy",
+    cohesive_force: ArrayLike | None = None,
 ) -> StrengthCheck:
     """Check m interfaces against the closed-form domain and project the actions back on it.
 
@@ -388,6 +485,8 @@ def check_strength(
             (a joint rocking about both axes bears on a corner): the energy projection keeps
             the shear up to mu (ft - fn) and drops the torsion, as a point contact does; the
             radial one drops both, which lets a lightly loaded block spin free.
+        cohesive_force: C = cohesion x area (N), ``mu ft <= C``; scalar or (m,). None means
+            ``mu ft`` (the paper's reading, Eq. (10)).
 
     Projection order: fn > ft -> detached, projected to ``[0, 0, ft, 0, 0, 0]``; then m1, m2
     clipped to their rocking limits; then (f1, f2, m3) returned onto the shear-torsion
@@ -406,7 +505,12 @@ def check_strength(
     domain = StrengthDomain.of(m, l1, l2, friction, alpha)
     if projection not in PROJECTIONS:
         raise ValueError(f"projection must be one of {PROJECTIONS}, got {projection!r}")
-    return evaluate(act, ft, domain, torsion_bending_interaction, projection=projection)
+    c0 = (
+        None
+        if cohesive_force is None
+        else cohesion_beyond_friction(cohesive_force, domain.friction, ft, (m,), m)
+    )
+    return evaluate(act, ft, domain, torsion_bending_interaction, projection=projection, c0=c0)
 
 
 # --------------------------------------------------------------------------------------------
@@ -483,6 +587,7 @@ def _run_kernel(
     torsion_bending_interaction: bool,
     projection_only: bool,
     projection: str,
+    c0: NDArray | None,
 ) -> tuple[NDArray, NDArray, NDArray]:
     """:data:`~masonry_dem.constitutive.check_kernels.evaluate_rows` on fresh output arrays: (projected (m, 6), flags (m,), utilisation
     (m,), empty when ``projection_only``)."""
@@ -493,6 +598,7 @@ def _run_kernel(
     n_radial, n_energy = evaluate_rows.for_rows(m)(
         writable_c(act),
         writable_c(ft),
+        np.zeros(m) if c0 is None else writable_c(c0),
         *dom.kernel_arrays,
         bool(torsion_bending_interaction),
         bool(projection_only),
@@ -514,11 +620,12 @@ def projection_and_flags(
     dom: StrengthDomain,
     projection: str = "energy",
     torsion_bending_interaction: bool = True,
+    c0: NDArray | None = None,
 ) -> tuple[NDArray, NDArray]:
     """The projected actions (m, 6) and bit flags (m,) of :func:`evaluate`, bit for bit,
     without the utilisation: the radial factor of the rows well inside Eq. (A5) is skipped.
     For the residuals of a Newton search or a time step, where only the forces count."""
-    proj, flags, _ = _run_kernel(act, ft, dom, torsion_bending_interaction, True, projection)
+    proj, flags, _ = _run_kernel(act, ft, dom, torsion_bending_interaction, True, projection, c0)
     return proj, flags
 
 
@@ -535,15 +642,19 @@ def evaluate(
     dom: StrengthDomain,
     torsion_bending_interaction: bool = True,
     projection: str = "energy",
+    c0: NDArray | None = None,
 ) -> StrengthCheck:
-    """:func:`check_strength` on validated inputs (``act`` (m, 6), ``ft`` (m,) >= 0).
+    """:func:`check_strength` on validated inputs (``act`` (m, 6), ``ft`` (m,) >= 0, ``c0``
+    (m,) >= 0 the cohesive force beyond mu ft, None: zero).
 
     The compiled :data:`~masonry_dem.constitutive.check_kernels.evaluate_rows`, which gives what the numpy reference of the tests gives
     (the same floating-point operations row by row: the finite-difference tangent of the law
     divides differences of projections by 1e-7 and must not see a changed last bit).
     :func:`projection_and_flags` is the same check without the utilisation.
     """
-    proj, flags, util = _run_kernel(act, ft, dom, torsion_bending_interaction, False, projection)
+    proj, flags, util = _run_kernel(
+        act, ft, dom, torsion_bending_interaction, False, projection, c0
+    )
     return StrengthCheck(
         projected=proj,
         state=STATE_OF_FLAGS[flags],

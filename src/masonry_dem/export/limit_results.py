@@ -56,8 +56,11 @@ def collapse_step(model: Model, result: LimitAnalysisResult) -> tuple[StepResult
     its = model.interfaces
     actions = np.asarray(result.interface_actions, dtype=float)
     if its.count:
+        beyond = model.cohesion_beyond_friction
+        ft = model.tensile_strength * its.area
+        cohesive = model.friction * ft + beyond * its.area if beyond.any() else None
         chk = check_strength(
-            actions, its.l1, its.l2, model.friction, model.tensile_strength * its.area, model.alpha
+            actions, its.l1, its.l2, model.friction, ft, model.alpha, cohesive_force=cohesive
         )
         state, flags = chk.state, chk.flags
         util, why = capped_utilisation(chk.utilisation)

@@ -111,6 +111,7 @@ def in_plane_model(model: Model) -> Model:
         kt=model.kt[keep],
         friction=model.friction[keep],
         tensile_strength=model.tensile_strength[keep],
+        cohesion=model.cohesion[keep] if model.cohesion is not None else None,
         alpha=model.alpha[keep],
         fixed=fixed,
         name=f"{model.name} [in-plane]",

@@ -20,6 +20,7 @@ from masonry_dem.constitutive import (
     torsion_strength,
     torsion_strength_numeric,
 )
+from masonry_dem.model import check_tension_cap
 
 #: springs per side of the torsion-convergence table (n = 64 is 4096 springs, a few ms)
 CONVERGENCE_N = (4, 8, 16, 32, 64)
@@ -28,8 +29,9 @@ CONVERGENCE_N = (4, 8, 16, 32, 64)
 @dataclass(frozen=True)
 class Interface:
     """One rectangular interface: sides l1, l2 [m], normal force [N] (< 0: compression),
-    friction coefficient, tensile strength [Pa] (cohesion mu ft), stiffnesses [N/m^3] and
-    springs per side of its spring model. The default: Section 2.1 of the paper."""
+    friction coefficient, tensile strength [Pa], stiffnesses [N/m^3], springs per side of its
+    spring model and cohesion [Pa] (None: mu ft, the paper's reading; at least mu ft). The
+    default: Section 2.1 of the paper."""
 
     l1: float = REFERENCE_INTERFACE.l1
     l2: float = REFERENCE_INTERFACE.l2
@@ -39,6 +41,7 @@ class Interface:
     kn: float = REFERENCE_INTERFACE.kn
     ks: float = REFERENCE_INTERFACE.ks
     springs_per_side: int = REFERENCE_INTERFACE.n
+    cohesion: float | None = None
 
 
 def interface_study(
@@ -49,13 +52,16 @@ def interface_study(
     if directions < 1:
         raise ValueError(f"directions must be >= 1, got {directions}")
     l1, l2, fn, mu, ts = it.l1, it.l2, it.normal_force, it.friction, it.tensile_strength
+    if it.cohesion is not None:  # named in Pa, as the material names it
+        check_tension_cap(mu, ts, it.cohesion)
     ft = ts * l1 * l2
-    fsu = float(shear_strength(fn, mu, ft))
-    m3u = float(torsion_strength(fn, l1, l2, mu, ft))
+    c, ca = it.cohesion, None if it.cohesion is None else it.cohesion * l1 * l2
+    fsu = float(shear_strength(fn, mu, ft, ca))
+    m3u = float(torsion_strength(fn, l1, l2, mu, ft, cohesive_force=ca))
     n, kn, ks = it.springs_per_side, it.kn, it.ks
     angles = np.linspace(0.0, 2.0 * np.pi, directions, endpoint=False)
-    fs = shear_strength_numeric(l1, l2, fn, mu, ts, angles=angles, n=n, kn=kn, ks=ks)
-    m3s = torsion_strength_numeric(l1, l2, fn, mu, ts, n=n, kn=kn, ks=ks)
+    fs = shear_strength_numeric(l1, l2, fn, mu, ts, angles=angles, n=n, kn=kn, ks=ks, cohesion=c)
+    m3s = torsion_strength_numeric(l1, l2, fn, mu, ts, n=n, kn=kn, ks=ks, cohesion=c)
     out: dict[str, Any] = {
         "interface": {k: v for k, v in asdict(it).items()},
         "torsion_constant": float(torsion_constant(l1, l2)),
@@ -69,7 +75,7 @@ def interface_study(
         "alpha_table": [],
     }
     for side in CONVERGENCE_N:
-        value = torsion_strength_numeric(l1, l2, fn, mu, ts, n=side, kn=kn, ks=ks)
+        value = torsion_strength_numeric(l1, l2, fn, mu, ts, n=side, kn=kn, ks=ks, cohesion=c)
         out["torsion_convergence"].append(
             {"n": side, "spring_torsion_strength": value, "relative_error": value / m3u - 1.0}
         )
@@ -104,7 +110,12 @@ def interface_text(res: dict[str, Any]) -> str:
     lines = [
         f"Interface {i['l1']:.3f} x {i['l2']:.3f} m, fn = {i['normal_force']:g} N, "
         f"mu = {i['friction']:g}, tensile strength = {i['tensile_strength']:g} Pa, "
-        f"{n} x {n} springs",
+        + (
+            "cohesion = mu ft, "
+            if i.get("cohesion") is None
+            else f"cohesion = {i['cohesion']:g} Pa, "
+        )
+        + f"{n} x {n} springs",
         f"torsion constant cT = {res['torsion_constant']:.5f} m",
         f"{'':24s}{'closed form':>14s}{'spring model':>14s}{'difference':>14s}",
     ]

@@ -92,7 +92,15 @@ def _run(data: dict[str, Any], source: str, keep: str, folder: str | None) -> di
             "folder": folder,
         }
     # the row's bound column: the same certified bound a pushover's summary carries
-    bound_fields = limit_analysis_bound(case.model)
+    # (a run in loading stages has none: the limit analysis takes one dead and one live load)
+    bound_fields = (
+        limit_analysis_bound(case.model)
+        if case.stages is None
+        else {
+            "limit_analysis_bound": None,
+            "limit_analysis_status": "not computed (loading stages)",
+        }
+    )
     bound = bound_fields["limit_analysis_bound"]
     extra: dict[str, Any] = {
         k: bound_fields[k] for k in ("limit_analysis_bound", "limit_analysis_status")
@@ -108,6 +116,7 @@ def _run(data: dict[str, Any], source: str, keep: str, folder: str | None) -> di
             "pushover",
             case.settings,
             control=case.control,
+            stages=case.stages,
             bound=bound,
             monitor=case.monitor,
             progress=writer,

@@ -485,7 +485,7 @@ class Relaxation:
             self.stats.law_evaluations += int(ints[kin.EVALUATIONS])
             ints[kin.STEPS] = ints[kin.RESETS] = ints[kin.EVALUATIONS] = 0
             self._courant = float(fs[kin.COURANT])
-            resp = LawResponse(trial, ft, actions, flags, None)
+            resp = LawResponse(trial, ft, actions, flags, None, self.law.cohesion_at(cracked))
             cycle = int(ints[kin.CYCLE])
             check_stop()  # at each return of the kernel: a signal stops a long relaxation
             if code != kin.PEAK:

@@ -34,7 +34,7 @@ def _steps(  # type: ignore[no-untyped-def]  # numba types the arguments
     fs, ints, dt, Fn, fscale, tolerance, energy_tolerance, limit, window, max_cycles,
     steps_left, probe_every, blowup_patience,
     rel, trial, ft, actions, flags,
-    h_ptr, h_idx, h_val, kbar, plastic, cracked, tensile_force,
+    h_ptr, h_idx, h_val, kbar, plastic, cracked, tensile_force, cohesion,
     l1, l2, friction, alpha, snap1, snap2, constants, energy, brittle, t_ptr, t_idx, t_val, n_out,
 ):  # fmt: skip
     """Time steps from cycle ``ints[CYCLE] + 1`` on; ``x``, ``v``, ``fint``, ``R``,
@@ -101,7 +101,7 @@ def _steps(  # type: ignore[no-untyped-def]  # numba types the arguments
             h = 0.5 * dt
             for i in range(n):
                 x[i] = x[i] - h * v_old[i]
-            out = _forces(x, h_ptr, h_idx, h_val, kbar, plastic, cracked, tensile_force, l1, l2, friction, alpha, snap1, snap2, constants, energy, brittle, t_ptr, t_idx, t_val, n_out)  # fmt: skip  # noqa: E501
+            out = _forces(x, h_ptr, h_idx, h_val, kbar, plastic, cracked, tensile_force, cohesion, l1, l2, friction, alpha, snap1, snap2, constants, energy, brittle, t_ptr, t_idx, t_val, n_out)  # fmt: skip  # noqa: E501
             rel, trial, ft, actions, flags, internal, finite = out
             if not finite:
                 code = NOT_FINITE
@@ -122,7 +122,7 @@ def _steps(  # type: ignore[no-untyped-def]  # numba types the arguments
         for i in range(n):
             dx[i] = dt * v[i]
             x[i] = x[i] + dx[i]
-        out = _forces(x, h_ptr, h_idx, h_val, kbar, plastic, cracked, tensile_force, l1, l2, friction, alpha, snap1, snap2, constants, energy, brittle, t_ptr, t_idx, t_val, n_out)  # fmt: skip  # noqa: E501
+        out = _forces(x, h_ptr, h_idx, h_val, kbar, plastic, cracked, tensile_force, cohesion, l1, l2, friction, alpha, snap1, snap2, constants, energy, brittle, t_ptr, t_idx, t_val, n_out)  # fmt: skip  # noqa: E501
         rel, trial, ft, actions, flags, internal, finite = out
         if not finite:
             code = NOT_FINITE

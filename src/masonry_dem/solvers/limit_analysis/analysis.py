@@ -137,8 +137,9 @@ def limit_analysis(
     Raises
     ------
     ValueError
-        If ``model`` is not a :class:`~masonry_dem.Model` or an argument is out of its range
-        (named).
+        If ``model`` is not a :class:`~masonry_dem.Model`, an argument is out of its range
+        (named), or a joint has a cohesion above friction x tensile strength (the
+        formulation has the paper's cohesion, mu ft, only).
 
     Examples
     --------
@@ -153,6 +154,7 @@ def limit_analysis(
     """
     t0 = time.perf_counter()
     require_model("limit_analysis", model)
+    _refuse_own_cohesion(model)
     # every setting checked (a ValueError naming it and its range) where LimitSettings is
     LimitSettings(
         associative=associative,
@@ -184,7 +186,12 @@ def limit_analysis(
     )
     covers = friction_scale >= model_friction_scale(model) * (1 - 1e-9)
     if friction_scale != 1:
-        model = replace(model, friction=model.friction * float(friction_scale))
+        scaled = model.friction * float(friction_scale)
+        # the shear strength c - mu sigma scaled as a whole: the cohesion beyond mu ft too
+        cohesion = scaled * model.tensile_strength + float(friction_scale) * (
+            model.cohesion_beyond_friction
+        )
+        model = replace(model, friction=scaled, cohesion=cohesion)
     method = "associative" if associative else "non-associative"
     n, m = model.blocks.count, model.interfaces.count
 
@@ -277,3 +284,21 @@ def dem_upper_bound(model: Model, **options: Any) -> LimitAnalysisResult:
     options.setdefault("backend", "clarabel")
     options.setdefault("friction_scale", model_friction_scale(model))
     return limit_analysis(model, associative=True, **options)
+
+
+def _refuse_own_cohesion(model: Model) -> None:
+    """The statics and the dissipation of the formulation carry the paper's cohesion mu ft
+    (the friction cone shifted by ft): a joint whose cohesion exceeds it would need a
+    cohesive shear at every contact point beside the cone, which no backend has yet."""
+    beyond = np.flatnonzero(model.cohesion_beyond_friction > 0)
+    if beyond.size:
+        k = int(beyond[0])
+        assert model.cohesion is not None  # resolved by Model
+        raise ValueError(
+            f"limit_analysis: {beyond.size} interface(s) have a cohesion above friction x "
+            f"tensile strength (interface {k}: cohesion {float(model.cohesion[k]):g} Pa, "
+            f"friction x tensile strength "
+            f"{float(model.friction[k] * model.tensile_strength[k]):g} Pa); the limit analysis "
+            "has the paper's cohesion mu ft only: leave the material's cohesion out, or run a "
+            "pushover"
+        )

@@ -148,12 +148,13 @@ def _entry_terms(pair, r, c, ptr, pair_start, record_order):
 
 
 @kernel()
-def _reduce_zero_capacity(T, trial, tensile_force, kbar, floor, contact_band):
-    """In place, the joints of :meth:`DiscreteProblem._zero_capacity_tangent`: no tensile
-    strength and a trial normal force within ``contact_band`` x the largest of zero keep
-    only their normal stiffness, with ``floor`` x kbar on the other diagonal terms. One
-    compiled pass: on the small validation walls the dozen numpy calls of the same
-    selection cost more than the law's tangent itself."""
+def _reduce_zero_capacity(T, trial, strength, kbar, floor, contact_band):
+    """In place, the joints of :meth:`DiscreteProblem._zero_capacity_tangent`: no strength
+    at zero compression (``strength``: the tensile force, plus the cohesive force beyond mu
+    ft where there is one) and a trial normal force within ``contact_band`` x the largest of
+    zero keep only their normal stiffness, with ``floor`` x kbar on the other diagonal
+    terms. One compiled pass: on the small validation walls the dozen numpy calls of the
+    same selection cost more than the law's tangent itself."""
     m = trial.shape[0]
     largest = 0.0
     for i in range(m):
@@ -162,7 +163,7 @@ def _reduce_zero_capacity(T, trial, tensile_force, kbar, floor, contact_band):
     if band == 0.0:  # the undeformed start: every joint at zero, none decided by round-off
         return
     for i in range(m):
-        if tensile_force[i] <= 0.0 and abs(trial[i, 2]) <= band:
+        if strength[i] <= 0.0 and abs(trial[i, 2]) <= band:
             normal = T[i, 2, 2]
             for r in range(6):
                 for c in range(6):
@@ -506,9 +507,11 @@ class DiscreteProblem:
         Newton they carry what they cannot: along that direction hundreds of such joints
         change state at any step length and the residual rises (docs/history/solvers_record.md, "Why
         Newton stalls from the dead-load state"). The residual is unchanged, so a
-        converged state is still an exact equilibrium of the law."""
+        converged state is still an exact equilibrium of the law. A joint with a cohesion
+        beyond mu ft keeps a shear strength at zero compression: it is not one of them."""
+        strength = response.strength_at_zero
         _reduce_zero_capacity(
-            T, response.trial, response.tensile_force, self.law.kbar, float(floor), CONTACT_BAND
+            T, response.trial, strength, self.law.kbar, float(floor), CONTACT_BAND
         )
 
     def _factorizer(self) -> Factorizer:

@@ -118,7 +118,9 @@ def elastic_range(solver: PathSolver, cap: float) -> ElasticRange | None:
     base = problem.asm.relative_displacements(solver.q)
     per_unit = problem.asm.relative_displacements(moved)
     normal = np.abs(response.trial[:, 2])
-    no_load = (response.tensile_force <= 0.0) & (normal <= CONTACT_BAND * normal.max(initial=0.0))
+    no_load = (response.strength_at_zero <= 0.0) & (
+        normal <= CONTACT_BAND * normal.max(initial=0.0)
+    )
     # the law's own test: a joint is inside its domain where no criterion is violated (its
     # flags are zero); one at capacity under the dead load has yielded already
     inside = law.respond(base, solver.plastic, solver.cracked, utilisation=False).flags == 0
