@@ -104,3 +104,26 @@ def test_a_bad_stage_table_is_named(change, words):
     with pytest.raises(CaseError) as err:
         case_from_dict(data)
     assert words in str(err.value)
+
+
+def test_masonry_dem_run_runs_the_stages_and_limit_refuses_them(tmp_path, capsys):
+    """``masonry-dem run`` of the two-stage file: its pushover is the staged one (the stage
+    column in pushover.csv; the beam pushed by displacement reaches mu (P + the beam's
+    weight, 0 here) = 0.6 x 1500 N = 900 N, 1 %), not the model's own loads alone (which push
+    nothing); ``masonry-dem limit`` refuses the file, named."""
+    import json
+
+    from helpers.case_files import write_case
+    from masonry_dem.cli import main
+
+    path = write_case(tmp_path, copy.deepcopy(STAGED))
+    out = tmp_path / "res"
+    assert main(["run", str(path), "--out", str(out), "--no-render", "--quiet"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    rows = np.loadtxt(out / "pushover.csv", delimiter=",", skiprows=1, ndmin=2)
+    assert rows.shape[1] == 4 and set(rows[:, 3]) == {0.0, 1.0}
+    assert summary["status"] == "completed"
+    assert rows[:, 1].max() == pytest.approx(0.6 * P, rel=0.01)
+    capsys.readouterr()
+    assert main(["limit", str(path), "--out", str(tmp_path / "la")]) == 2
+    assert "loading stages" in capsys.readouterr().err

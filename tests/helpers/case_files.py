@@ -23,28 +23,29 @@ SINGLE_BLOCK = {
 
 
 def write_case(tmp_path: Path, data: dict) -> Path:
-    """``data`` (a case as a dict) written as ``tmp_path/case.toml``."""
-    lines = []
+    """``data`` (a case as a dict) written as ``tmp_path/case.toml``: values first, then
+    each table (``[a.b]``) and array of tables (``[[a.b]]``, e.g. ``[[stages]]`` with their
+    ``[[stages.loads]]`` and ``[stages.control]``), nested as deep as the dict."""
+    lines: list[str] = []
 
-    def emit(table: dict) -> None:
-        simple = {
-            k: v
-            for k, v in table.items()
-            if not isinstance(v, (dict, list))
-            or (isinstance(v, list) and not (v and isinstance(v[0], dict)))
-        }
-        for k, v in simple.items():
-            lines.append(f"{k} = {json.dumps(v)}")
+    def is_tables(value: object) -> bool:
+        return isinstance(value, list) and bool(value) and isinstance(value[0], dict)
 
-    emit(data)
-    for key in ("geometry", "material", "analysis"):
-        if key in data:
-            lines.append(f"[{key}]")
-            emit(data[key])
-    for key in ("supports", "loads"):
-        for item in data.get(key, []):
-            lines.append(f"[[{key}]]")
-            emit(item)
+    def emit(table: dict, prefix: str) -> None:
+        for k, v in table.items():
+            if not isinstance(v, dict) and not is_tables(v):
+                lines.append(f"{k} = {json.dumps(v)}")
+        for k, v in table.items():
+            name = f"{prefix}.{k}" if prefix else k
+            if isinstance(v, dict):
+                lines.append(f"[{name}]")
+                emit(v, name)
+            elif is_tables(v):
+                for item in v:
+                    lines.append(f"[[{name}]]")
+                    emit(item, name)
+
+    emit(data, "")
     path = tmp_path / "case.toml"
     path.write_text("\n".join(lines))
     return path
