@@ -3,7 +3,8 @@ run ended (Status) and why its path stopped (StopReason)."""
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
+from contextlib import nullcontext
 from dataclasses import dataclass, field
 from enum import Enum
 from functools import cached_property
@@ -88,6 +89,19 @@ class StopReason(_Text):
     NO_REST = "no rest"  # the reference analysis: the damped wall found no rest above lambda
 
 
+#: the arrays of a :class:`StepResult` (frozen when it is made; on disk in a streamed History)
+STEP_ARRAYS = (
+    "q",
+    "actions",
+    "state",
+    "utilisation",
+    "flags",
+    "found_plastic",
+    "found_cracked",
+    "reactions",
+)
+
+
 @fill(SHARED)
 @dataclass(frozen=True)
 class StepResult:
@@ -163,16 +177,7 @@ class StepResult:
     reactions: FloatArray | None = None
 
     def __post_init__(self) -> None:
-        for name in (
-            "q",
-            "actions",
-            "state",
-            "utilisation",
-            "flags",
-            "found_plastic",
-            "found_cracked",
-            "reactions",
-        ):
+        for name in STEP_ARRAYS:
             value = getattr(self, name)
             if isinstance(value, np.ndarray):
                 object.__setattr__(self, name, read_only(value))
@@ -516,3 +521,27 @@ class Observer(Protocol):
             Anything; the solver ignores it.
         """
         ...
+
+
+def observed(
+    run: Callable[[Callable[[StepResult], None]], History],
+    observer: Observer | None = None,
+    callback: Callable[[StepResult], None] | None = None,
+    finish: Callable[[], dict[str, Any]] | None = None,
+) -> History:
+    """``run(on_step)``, a solver's loop, followed as the :class:`Observer` protocol says:
+    the observer entered around it, each step handed to the observer and then to
+    ``callback``, and ``observer.finish(history, **finish())`` once it is over (``finish``:
+    what the solver adds, known only then)."""
+
+    def on_step(step: StepResult) -> None:
+        if observer is not None:
+            observer(step)
+        if callback is not None:
+            callback(step)
+
+    with observer or nullcontext():  # the steps handed to a writer reach the disk
+        history = run(on_step)
+    if observer is not None:
+        observer.finish(history, **(finish() if finish is not None else {}))
+    return history

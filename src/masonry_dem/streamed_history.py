@@ -25,20 +25,11 @@ from typing import overload
 
 import numpy as np
 
-from masonry_dem.results import StepResult
+from masonry_dem.results import STEP_ARRAYS, StepResult
 
 log = logging.getLogger(__name__)
 
-_ARRAYS = (
-    "q",
-    "actions",
-    "state",
-    "utilisation",
-    "flags",
-    "found_plastic",
-    "found_cracked",
-    "reactions",
-)
+_ARRAYS = STEP_ARRAYS
 
 
 class StreamedSteps(Sequence[StepResult]):

@@ -27,7 +27,6 @@ import logging
 import math
 import time
 from collections.abc import Callable
-from contextlib import nullcontext
 
 import numpy as np
 from numpy.typing import NDArray
@@ -35,7 +34,7 @@ from numpy.typing import NDArray
 from masonry_dem._threads import kernel_threads_for
 from masonry_dem.constitutive.law import LawResponse
 from masonry_dem.model import DofName, Model, Monitor
-from masonry_dem.results import History, Observer, StepResult
+from masonry_dem.results import History, Observer, StepResult, observed
 from masonry_dem.solvers.dynamic_relaxation.integrator import (
     FATAL,
     Relaxation,
@@ -379,15 +378,9 @@ def relax_with(
     observer: Observer | None = None,
 ) -> History:
     """:func:`relax` with the solver made by the caller, who keeps it for its ``stats``."""
-
-    def on_step(step: StepResult) -> None:
-        if observer is not None:
-            observer(step)
-        if callback is not None:
-            callback(step)
-
-    with observer or nullcontext():  # the steps handed to a writer reach the disk
-        history = solver.run(callback=on_step, monitor=monitor)
-    if observer is not None:
-        observer.finish(history, method="dynamic_relaxation", time_steps=solver.stats.time_steps)
-    return history
+    return observed(
+        lambda on_step: solver.run(callback=on_step, monitor=monitor),
+        observer,
+        callback,
+        lambda: {"method": "dynamic_relaxation", "time_steps": solver.stats.time_steps},
+    )

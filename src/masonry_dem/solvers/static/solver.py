@@ -12,7 +12,6 @@ from __future__ import annotations
 import logging
 import time
 from collections.abc import Callable
-from contextlib import nullcontext
 from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -21,7 +20,7 @@ import numpy as np
 
 from masonry_dem._threads import kernel_threads_for
 from masonry_dem.model import Model, Monitor
-from masonry_dem.results import History, Observer, StepResult
+from masonry_dem.results import History, Observer, StepResult, observed
 from masonry_dem.solvers.factorization import SingularMatrix
 from masonry_dem.solvers.resources import should_stream
 from masonry_dem.solvers.static import paths
@@ -449,16 +448,11 @@ def pushover(
     require_model("pushover", model)
     check_bound(bound)
     prepare(model.interfaces.count)  # announced compilation of the kernels, on a cold cache
-
-    def on_step(step: StepResult) -> None:
-        if observer is not None:
-            observer(step)
-        if callback is not None:
-            callback(step)
-
     solver = StaticSolver(model, settings, bound=bound)
-    with observer or nullcontext():  # the steps handed to a writer reach the disk
-        history = solver.run(control=control, callback=on_step, monitor=monitor, stream=stream)
-    if observer is not None:
-        observer.finish(history)
-    return history
+    return observed(
+        lambda on_step: solver.run(
+            control=control, callback=on_step, monitor=monitor, stream=stream
+        ),
+        observer,
+        callback,
+    )

@@ -31,7 +31,6 @@ from __future__ import annotations
 import logging
 import time
 from collections.abc import Callable, Mapping, Sequence
-from contextlib import nullcontext
 from dataclasses import dataclass, fields, replace
 from pathlib import Path
 from typing import Any
@@ -39,7 +38,7 @@ from typing import Any
 import numpy as np
 
 from masonry_dem.model import LOAD_TYPES, Load, Model, Monitor, Support, _warn_idle_load
-from masonry_dem.results import History, Observer, StepResult
+from masonry_dem.results import History, Observer, StepResult, observed
 from masonry_dem.solvers.resources import should_stream
 from masonry_dem.solvers.static.certificate import Bound
 from masonry_dem.solvers.static.outcome import Status
@@ -311,17 +310,10 @@ def pushover(
     chosen = as_stages(stages)
     plan_stages(model, chosen)  # a bad stage is refused before any solve
     prepare(model.interfaces.count)
-
-    def on_step(step: StepResult) -> None:
-        if observer is not None:
-            observer(step)
-        if callback is not None:
-            callback(step)
-
-    with observer or nullcontext():  # the steps handed to a writer reach the disk
-        history = run_stages(
+    return observed(
+        lambda on_step: run_stages(
             model, chosen, settings, monitor=monitor, callback=on_step, bound=bound, stream=stream
-        )
-    if observer is not None:
-        observer.finish(history)
-    return history
+        ),
+        observer,
+        callback,
+    )
