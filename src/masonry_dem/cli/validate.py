@@ -1,6 +1,8 @@
 """``masonry-dem validate [CASE] [--json] [--out DIR] [--jobs N]``: run the paper's validation cases
 (Tables 1-3, :mod:`masonry_dem.studies.validation`) and print ours against the paper's DEM and
 the reference (test / FEM) values; each case's results (VTU/PVD, PNGs) go to ``DIR/<case>/``.
+``masonry-dem validate shear-walls``: the shear walls of Raijmakers & Vermeltfoort
+(:mod:`masonry_dem.studies.shear_walls`), each with its curve and crack pattern.
 """
 
 from __future__ import annotations
@@ -20,7 +22,12 @@ def add_parser(subparsers: Any) -> None:
         description="Run the validation cases of Tables 1-3 of the paper (all, or one) and "
         "print ours vs the paper's DEM and the test or FEM reference.",
     )
-    p.add_argument("case", nargs="?", help="one case (OL1, S11, 2-3, ...); default: all")
+    p.add_argument(
+        "case",
+        nargs="?",
+        help="one case (OL1, S11, 2-3, ...), or shear-walls (the Raijmakers & Vermeltfoort "
+        "shear walls); default: every case of the paper",
+    )
     p.add_argument("--json", action="store_true", help="print the rows as a JSON array")
     add_output(p, "results/validation", "the PNGs")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -52,6 +59,8 @@ def add_parser(subparsers: Any) -> None:
 
 
 def validate_command(args: argparse.Namespace) -> int:
+    if args.case == "shear-walls":
+        return _shear_walls(args)
     from tqdm import tqdm
 
     from masonry_dem.cases.paper import RETURN_WALL_CASES, case_names
@@ -89,3 +98,17 @@ def validate_command(args: argparse.Namespace) -> int:
             )
         )
     return 0 if all(r["status"] == "collapse" for r in rows) else 1
+
+
+def _shear_walls(args: argparse.Namespace) -> int:
+    """The shear-wall validation: one row per wall, its curve and crack pattern."""
+    from masonry_dem.studies.shear_walls import format_shear_walls, run_shear_walls
+
+    out = Path(args.out)
+    rows = run_shear_walls(out=out, render=not args.no_render)
+    if args.json:
+        print(json.dumps(rows, indent=1))
+    else:
+        print(format_shear_walls(rows))
+        print(f"results in {out}/<wall>/ (curve.csv, cracks.png)")
+    return 0 if all(r["status"] in ("completed", "collapse") for r in rows) else 1
