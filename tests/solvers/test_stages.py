@@ -114,6 +114,23 @@ def test_pushed_beam_held_at_its_height_slides_at_mu_n():
     assert last.reactions[BASE, 0] == pytest.approx(-last.load_factor, rel=1e-9)
 
 
+@pytest.mark.parametrize("cohesion", [0.0, 2.0e3])
+def test_pushed_beam_slides_at_c_a_plus_mu_n_on_cohesive_joints(cohesion):
+    """(b) with a cohesion of its own: joints with c (tension 0, so the cap ft <= c / mu
+    holds) under the same stages; the joint under the beam (area 0.4 x 0.1 m, the smaller
+    N = P + W_beam) slides first, at H = c A + mu N, worked by hand: c = 2 kPa gives
+    80 N + 0.6 x (500 N + 80 N) = 428 N (1 %)."""
+    material = InterfaceMaterial(kn=1e9, kt=4e8, friction=MU, cohesion=cohesion)
+    model = _specimen()
+    cohesive = Model.build(model.blocks, material, supports=[Support([BASE])], loads=[SelfWeight()])
+    history = md.pushover(cohesive, stages=[PRECOMPRESSION, _push()])
+    assert history.status == "completed", history.reason
+    w_beam = float(model.blocks.weights[BEAM])
+    expected = cohesion * 0.4 * 0.1 + MU * (P + w_beam)
+    pushed = history.load_factors[history.stages == 1]
+    assert pushed.max() == pytest.approx(expected, rel=0.01)
+
+
 def test_a_dof_held_anew_stays_at_its_current_value_and_its_reaction_balances_it():
     """(c) the beam sinks under the precompression (u2 < 0); held in stage 2, u2 keeps that
     value through every step, the joint under it keeps its compression (it would open, were
