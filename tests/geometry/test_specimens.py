@@ -203,3 +203,28 @@ def test_interface_overrides_name_a_pair_that_shares_no_interface():
         md.Model.build(wall, joint, [md.Support(bottom)], interface_overrides=[([[0, 9]], joint)])
     with pytest.raises(ValueError, match="shape"):
         md.Model.build(wall, joint, [md.Support(bottom)], interface_overrides=[([0, 1], joint)])
+
+
+def test_a_case_file_splits_the_units_of_its_wall_by_unit_cracks(tmp_path):
+    """``[unit_cracks]`` splits every unit of the wall (never a beam) at mid-length and gives
+    the cracks its material; ``base`` and ``beam`` still select the beams; a law option in
+    it is refused, named."""
+    case = {
+        "name": "cracking units",
+        "geometry": {"builder": "shear_wall", "length": 0.99, "courses": 2, "unit_weight": 0.0}
+        | RV,
+        "material": {"kn": 82e9, "kt": 36e9, "friction": 0.75},
+        "unit_cracks": {"kn": 1e12, "kt": 1e12, "friction": 1.0, "tensile_strength": 2.0e6},
+        "supports": [{"select": "base"}, {"select": "beam", "dofs": ["w3"]}],
+        "loads": [{"type": "point", "select": "beam", "force": [1000.0, 0.0, 0.0], "live": True}],
+    }
+    model = load_case(write_case(tmp_path, case)).model
+    wall = md.shear_wall(0.99, 2, unit_weight=0.0, **RV)
+    assert model.blocks.count == wall.count + 10  # 2 courses of 5 units, each split
+    assert (model.tensile_strength == 2.0e6).sum() == 10
+    beams = np.isclose(model.blocks.sizes[:, 0], 0.99)
+    assert beams.sum() == 2 and model.fixed[np.flatnonzero(beams)[0]].all()
+    assert np.flatnonzero(model.live[:, 0]).tolist() == [np.flatnonzero(beams)[1]]
+    case["unit_cracks"]["tension"] = "plastic"
+    with pytest.raises(ValueError, match=r"\[unit_cracks\]\.tension"):
+        load_case(write_case(tmp_path, case))

@@ -27,6 +27,7 @@ from masonry_dem.geometry import selectors as sel
 from masonry_dem.geometry.blocks import Blocks
 from masonry_dem.geometry.interfaces import detect_interfaces
 from masonry_dem.model import (
+    LAW_OPTIONS,
     LOAD_TYPES,
     DofName,
     InterfaceMaterial,
@@ -181,6 +182,17 @@ def build_blocks(
     return blocks, base, wall
 
 
+def _split_wall_units(
+    blocks: Blocks, wall: NDArray[np.bool_], base: int | None
+) -> tuple[Blocks, NDArray[np.intp], NDArray[np.bool_], int | None]:
+    """Every unit of the wall split at mid-length (``[unit_cracks]``): the blocks, the
+    pairs of halves, the wall mask and the base's index in the new numbering (a split unit's
+    halves take its place, so the blocks after it move on by the units split before them)."""
+    split, pairs = specimens.split_units(blocks, np.flatnonzero(wall))
+    moved = np.cumsum(1 + wall) - (1 + wall)  # each old block's first new index
+    return split, pairs, np.repeat(wall, 1 + wall), None if base is None else int(moved[base])
+
+
 def select_blocks(
     blocks: Blocks, spec: str | list[int], wall: np.ndarray, base: int | None
 ) -> np.ndarray:
@@ -278,6 +290,15 @@ def case_from_dict(data: dict[str, Any], source: str = "<dict>") -> Case:
         blocks, base, wall = build_blocks(data["geometry"])
     with _at(source, "[material]"):
         material = InterfaceMaterial(**data["material"])
+    overrides = []
+    if data.get("unit_cracks") is not None:  # every unit of the wall split at mid-length
+        with _at(source, "[unit_cracks]"):
+            crack = InterfaceMaterial(
+                **data["unit_cracks"],
+                **{name: getattr(material, name) for name in LAW_OPTIONS},
+            )
+        blocks, pairs, wall, base = _split_wall_units(blocks, wall, base)
+        overrides.append((pairs, crack))
     supports = []
     for k, spec in enumerate(data.get("supports", [])):
         with _at(source, f"[supports][{k}].select"):
@@ -323,6 +344,7 @@ def case_from_dict(data: dict[str, Any], source: str = "<dict>") -> Case:
             loads,
             name=str(data.get("name", Path(source).stem)),
             interfaces=interfaces,
+            interface_overrides=overrides,
         )
     stages = _stages(data, source, model, blocks, wall, base, control_spec, method)
     control = None

@@ -351,6 +351,7 @@ TOP = _table(
         "loads": (list[dict], None),
         "analysis": (dict, None),
         "stages": (list[dict], None),
+        "unit_cracks": (dict, None),
     },
 )
 _LAW = {name: (allowed, getattr(InterfaceMaterial, name)) for name, allowed in LAW_OPTIONS.items()}
@@ -625,6 +626,16 @@ def check_case(
         material = _validate(MATERIAL, data["material"], ("material",), source, errors)
         if material is not None:
             _check_tension_cap(data["material"], errors)
+        if data.get("unit_cracks") is not None:
+            cracks = data["unit_cracks"]
+            law = sorted(set(cracks) & set(LAW_OPTIONS))
+            if law:
+                errors.append(
+                    f"[unit_cracks].{law[0]}: the interface law's options are the model's, "
+                    "given in [material] only"
+                )
+            elif _validate(MATERIAL, cracks, ("unit_cracks",), source, errors) is not None:
+                _check_tension_cap(cracks, errors, "[unit_cracks]")
         _check_supports_and_loads(data, (), source, errors)
         for k, stage in enumerate(data.get("stages") or []):
             if _validate(STAGE, stage, ("stages", k), source, errors) is not None:
@@ -663,7 +674,9 @@ def _check_supports_and_loads(
         _validate(LOAD_TABLES[kind], spec, (*table, "loads", k), source, errors)
 
 
-def _check_tension_cap(material: Mapping[str, Any], errors: list[str]) -> None:
+def _check_tension_cap(
+    material: Mapping[str, Any], errors: list[str], table: str = "[material]"
+) -> None:
     """The cross-field rule of ``[material]``: a cohesion given caps the tensile strength,
     ``friction * tensile_strength <= cohesion``."""
     if material.get("cohesion") is None:
@@ -675,7 +688,7 @@ def _check_tension_cap(material: Mapping[str, Any], errors: list[str]) -> None:
             float(material["cohesion"]),
         )
     except ValueError as exc:
-        errors.append(f"[material]: {exc}")
+        errors.append(f"{table}: {exc}")
 
 
 def _warn_above(table: Mapping[str, Any], where: str, source: str) -> None:

@@ -84,7 +84,7 @@ def shear_wall_case(
 ) -> ShearWallCase:
     """The shear wall ``name`` of the data file as loading stages.
 
-    ``unit_crack``: the material of a potential crack at mid-length of each whole brick
+    ``unit_crack``: the material of a potential crack at mid-length of each unit
     (:func:`~masonry_dem.split_units`; None: rigid bricks). The data file has no unit
     strength (no source in reach gives one), so the caller gives it. ``push`` [m] in
     ``steps``: the top beam's horizontal displacement in stage 2.
@@ -106,9 +106,8 @@ def shear_wall_case(
     cracks = None
     overrides: list[tuple[NDArray[np.intp], InterfaceMaterial]] = []
     if unit_crack is not None:
-        pitch = spec["brick_length"] + spec["joint"]
-        whole = np.flatnonzero(np.isclose(blocks.sizes[:, 0], pitch))
-        blocks, cracks = split_units(blocks, whole)
+        # every unit of the wall (the two beams, last, stay whole), as [unit_cracks] does
+        blocks, cracks = split_units(blocks, np.arange(blocks.count - 2))
         overrides.append((cracks, unit_crack))
     bottom, top = sel.edge(blocks, "bottom"), sel.edge(blocks, "top")
     material = InterfaceMaterial(
