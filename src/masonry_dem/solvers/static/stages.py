@@ -53,9 +53,9 @@ log = logging.getLogger(__name__)
 class Stage:
     """One loading stage of a static analysis: the loads and supports it adds.
 
-    How its live load is followed is ``control``. The loads of the earlier stages stay on at the values they reached, and their supports
-    stay; a DOF this stage holds anew is held where it is (its current displacement, not
-    zero). See :func:`masonry_dem.pushover` (``stages``) and docs/solvers.md, "Loading
+    How its live load is followed is ``control``. The loads of the earlier stages stay on
+    at the values they reached, and their supports stay; a DOF this stage holds anew is held
+    where it is (its current displacement, not zero). See :func:`masonry_dem.pushover` (``stages``) and docs/solvers.md, "Loading
     stages".
 
     Parameters
