@@ -84,14 +84,17 @@ def limit_memory(case, options: dict, max_memory: float | None = None) -> LimitE
     :class:`~masonry_dem.solvers.resources.TooLarge` when it is above ``max_memory`` bytes
     (None: what the machine, the process's ``ulimit -v`` and its cgroup leave)."""
     from masonry_dem.solvers.limit_analysis.analysis import choose_backend
-    from masonry_dem.solvers.limit_analysis.formulation import associative_grid
-    from masonry_dem.solvers.limit_analysis.interface import NON_ASSOCIATIVE_GRID, lobatto_rule
+    from masonry_dem.solvers.limit_analysis.interface import (
+        ASSOCIATIVE_GRID,
+        NON_ASSOCIATIVE_GRID,
+        lobatto_rule,
+    )
     from masonry_dem.solvers.resources import LIMIT_BYTES, check_fits, limit_estimate
 
     model = case.model
     backend = options.get("backend") or choose_backend(model, options.get("cone"))
     grid = options.get("grid") or (
-        associative_grid(model) if options.get("associative", True) else NON_ASSOCIATIVE_GRID
+        ASSOCIATIVE_GRID if options.get("associative", True) else NON_ASSOCIATIVE_GRID
     )
     lobatto_rule(grid)  # a grid out of its range is named as such, not as too large
     if backend not in LIMIT_BYTES:

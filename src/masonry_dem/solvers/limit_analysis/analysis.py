@@ -18,8 +18,8 @@ from .backends import solve_associative
 from .budget import DEFAULT_TIME_LIMIT, budget
 from .dead_load import check_dead_load
 from .dem_domain import model_friction_scale
-from .formulation import Problem, associative_grid
-from .interface import NON_ASSOCIATIVE_GRID, pyramid_edges
+from .formulation import Problem
+from .interface import ASSOCIATIVE_GRID, NON_ASSOCIATIVE_GRID, pyramid_edges
 from .non_associative import non_associative
 from .progress import ProgressCallback, reporting
 from .result import _ADMISSIBILITY_TOLERANCE, LimitAnalysisResult, finish, mechanism_violation
@@ -71,8 +71,8 @@ def limit_analysis(
         default cone; False: zero dilatancy (Gilbert et al. 2006).
     grid : int, optional, keyword-only
         Contact points per side of each interface (n x n, >= 2). None: 2 for the associative
-        problem (exact, see the module docstring; ``NON_ASSOCIATIVE_GRID`` where a joint has
-        a cohesion above mu ft, whose dissipation in a twist the corners overestimate) and
+        problem (exact, see the module docstring; a cohesion above mu ft dissipates on its
+        own grid, at least ``NON_ASSOCIATIVE_GRID``: ``formulation.cohesive_grid``) and
         ``NON_ASSOCIATIVE_GRID`` for the frozen capacities of the non-associative one.
     backend : {"highs", "clarabel"}, optional, keyword-only
         "highs" (LP, friction pyramid) or "clarabel" (SOCP, the exact cone). None: the one
@@ -179,7 +179,7 @@ def limit_analysis(
         cone = "circumscribed" if cone is None else cone
         dirs = pyramid_edges(friction_sides, cone)  # refuses the exact cone with HiGHS
     grid = (
-        int(associative_grid(model) if associative else NON_ASSOCIATIVE_GRID)
+        int(ASSOCIATIVE_GRID if associative else NON_ASSOCIATIVE_GRID)
         if grid is None
         else int(grid)
     )

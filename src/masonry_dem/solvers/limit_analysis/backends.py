@@ -15,9 +15,11 @@ from .formulation import (
     Solution,
     associative_columns,
     cohesive_columns,
+    cohesive_grid,
     cohesive_offsets,
     lambda_cap,
     objective_scale,
+    slip_columns,
 )
 from .kinematic import solve_kinematic_clarabel
 from .mirror import mirror_dofs, mirror_pairs
@@ -212,7 +214,7 @@ def solve_associative(
     R, K = associative_columns(model, grid, dirs)
     if dirs is not None:
         ineq = None
-        cohesive = cohesive_columns(model, grid, dirs)
+        cohesive = cohesive_columns(model, grid, dirs)  # on the cohesion's own grid
         if cohesive is not None:  # the shear a point carries at its tension cap
             R_c, C_c = cohesive
             C = sparse.hstack([sparse.csr_matrix((C_c.shape[0], R.shape[1])), C_c], format="csc")
@@ -225,8 +227,15 @@ def solve_associative(
     else:  # velocities of the free DOFs; the live work row and 3 cone rows per point
         size = (problem.H_T.shape[0], 1 + R.shape[1])
         sol = _solve_kinematic(problem, grid)
+        slip = slip_columns(model, grid)
         if sol.status == "error":
-            sol = _static_clarabel(problem, R, K, grid, sol.detail)
+            # the static form holds the cohesion in each point's cone: one grid for both,
+            # the cohesion's (``cohesive_grid``)
+            g = grid if slip is None else cohesive_grid(grid)
+            R, K = associative_columns(model, g, None)
+            sol = _static_clarabel(problem, R, K, g, sol.detail)
+        elif slip is not None:  # the kinematic form's cohesive shears follow its points'
+            R = sparse.hstack([R, slip], format="csc")
     if sol.status == "optimal":
         sol.info_actions = (problem.a0 + R @ sol.x).reshape(-1, 6)  # type: ignore[attr-defined]
     return sol, size

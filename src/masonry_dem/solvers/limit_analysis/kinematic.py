@@ -30,7 +30,7 @@ from scipy import sparse
 from masonry_dem.assembly.compatibility import compatibility_matrix
 
 from .budget import CLARABEL_ITERATIONS, clarabel_room, solver_seconds
-from .formulation import Problem, Solution, cohesive_offsets, lambda_cap
+from .formulation import Problem, Solution, cohesive_grid, cohesive_points, lambda_cap
 from .interface import grid_points
 
 
@@ -82,7 +82,8 @@ def solve_kinematic_clarabel(
     problem: Problem, grid: int, options: Mapping[str, Any] | None = None
 ) -> tuple[Solution, np.ndarray, int]:
     """min -(rhs/|live|) . u s.t. (live/|live|) . u = 1, corner rows in SOC(3). Returns the
-    solution (``x``: per point (c, t1, t2), the layout of ``associative_columns``; ``duals``:
+    solution (``x``: per point (c, t1, t2), the layout of ``associative_columns``, then
+    with a cohesion of its own the cohesive shears, ``slip_columns``; ``duals``:
     the mechanism u; ``iterations`` and ``setup_seconds``, Clarabel's), and the points per
     interface. ``options`` override ``clarabel_options`` (Clarabel's settings by name)."""
     import clarabel
@@ -94,14 +95,14 @@ def solve_kinematic_clarabel(
     live, rhs = problem.live / norm, problem.rhs / norm
     A = sparse.vstack([sparse.csc_matrix(live.reshape(1, -1)), -G], format="csc")
     q = -rhs
-    # a cohesion beyond mu ft: at each such point an epigraph variable tau_k >= |v_t| (its
-    # own SOC) whose dissipation o_k tau_k (``cohesive_offsets``) joins the objective
-    offset = cohesive_offsets(problem.model, grid)
-    slipping = np.flatnonzero(offset > 0)
+    # a cohesion beyond mu ft: at each of its points (``cohesive_points``, on the cohesion's
+    # own grid) an epigraph variable tau_k >= |v_t| (its own SOC) whose dissipation
+    # o_k tau_k joins the objective
+    slipping, _, offset = cohesive_points(problem.model, grid)
     p = slipping.size
     if p:
         ones = np.ones(problem.model.interfaces.count)
-        slip = corner_velocity_rows(problem, grid, ones).tocsr()
+        slip = corner_velocity_rows(problem, cohesive_grid(grid), ones).tocsr()
         rows = np.stack([3 * slipping + 1, 3 * slipping + 2], axis=1).ravel()
         T = slip[rows]  # (2p, n_u): the slip velocities of the cohesive points
         tau = sparse.csc_matrix((-np.ones(p), (3 * np.arange(p), np.arange(p))), shape=(3 * p, p))
@@ -110,7 +111,7 @@ def solve_kinematic_clarabel(
         A = sparse.bmat(
             [[A, sparse.csc_matrix((A.shape[0], p))], [-(place @ T), tau]], format="csc"
         )
-        q = np.concatenate([q, offset[slipping] / norm])
+        q = np.concatenate([q, offset / norm])
     A.sort_indices()
     b = np.zeros(A.shape[0])
     b[0] = 1.0
@@ -144,12 +145,11 @@ def solve_kinematic_clarabel(
         return Solution("dead load", detail=detail), np.zeros(0), K
     z = np.asarray(sol.z)[1:].reshape(-1, 3)
     mu = np.repeat(problem.model.friction, K)
-    x3 = np.column_stack(
+    x = np.column_stack(
         [norm * z[:n_points, 0], -norm * mu * z[:n_points, 1], -norm * mu * z[:n_points, 2]]
-    )
-    if p:  # the cohesive shear, the duals of the slip cones
-        x3[slipping, 1:] -= norm * z[n_points:, 1:]
-    x = x3.ravel()
+    ).ravel()
+    if p:  # then the cohesive shears (t1, t2), the duals of the slip cones (``slip_columns``)
+        x = np.concatenate([x, -norm * z[n_points:, 1:].ravel()])
     detail = f"Clarabel: {word} (kinematic, {sol.iterations} iterations)"
     answer = Solution("optimal", lam, x, u, detail, int(sol.iterations), setup)
     return answer, u, K

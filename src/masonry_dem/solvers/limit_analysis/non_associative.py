@@ -14,7 +14,7 @@ from masonry_dem.model import Model
 from .backends import solve_associative, solve_clarabel
 from .budget import spent
 from .columns import FrozenFriction, Patterns, full_lp, solve_frozen_columns, solve_frozen_full
-from .formulation import Problem, Solution, associative_columns, associative_grid
+from .formulation import Problem, Solution, associative_columns
 from .interface import ASSOCIATIVE_GRID, grid_points, lobatto_rule, resultant_columns
 from .progress import report
 from .result import LimitAnalysisResult, finish
@@ -98,7 +98,7 @@ def non_associative(
     model = problem.model
     m = model.interfaces.count
     start_relaxation = relaxation
-    first, size = solve_associative(problem, associative_grid(model), dirs)
+    first, size = solve_associative(problem, ASSOCIATIVE_GRID, dirs)
     if first.status != "optimal":
         return finish(problem, first, size, result, iterations=1, load_factors=())
     # the associative multiplier bounds every zero-dilatancy one of the same cone from above
