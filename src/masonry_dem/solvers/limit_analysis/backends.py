@@ -249,7 +249,7 @@ def _solve_kinematic(problem: Problem, grid: int) -> Solution:
     statics, a stalled iteration)."""
     velocities = problem.H_T.shape[0]
     # the normal equations have one SOC per point, the slip's; a cohesion beyond mu ft adds
-    # a second (its dissipation c A |v_t|), which only Clarabel's form carries
+    # a second (its dissipation (c - mu ft) A_k |v_t|), which only Clarabel's form carries
     cohesive = bool(problem.model.cohesion_beyond_friction.any())
     if velocities >= NORMAL_EQUATIONS_FROM and not cohesive:
         # a failure on the symmetric mechanisms goes to Clarabel: if the whole problem had
