@@ -65,28 +65,14 @@ class LazyBound:
         }
 
 
-#: the bound's status where the joints have a cohesion of their own above mu ft
-NO_BOUND_WITH_COHESION = (
-    "not computed (a cohesion above friction x tensile strength: the limit analysis has the "
-    "paper's cohesion mu ft only)"
-)
-
-
 def limit_analysis_bound(model: Model) -> dict[str, Any]:
     """The associative limit-analysis multiplier of the model, an upper bound of the
     pushover's (``limit_analysis_bound``: None unless the LA finds a collapse), and its
     status and time: the exact cone (Clarabel) with the friction enlarged by kappa(alpha),
-    whose domain contains the DEM's (``solvers.limit_analysis.dem_upper_bound``). Not
-    computed for joints with a cohesion above mu ft: the limit analysis has the paper's
-    cohesion only."""
+    whose domain contains the DEM's (``solvers.limit_analysis.dem_upper_bound``); a
+    cohesion of its own included."""
     from masonry_dem.solvers.limit_analysis import dem_upper_bound
 
-    if model.cohesion_beyond_friction.any():
-        return {
-            "limit_analysis_bound": None,
-            "limit_analysis_status": NO_BOUND_WITH_COHESION,
-            "limit_analysis_seconds": 0.0,
-        }
     la = dem_upper_bound(model)
     return {
         "limit_analysis_bound": la.load_factor if la.status == "collapse" else None,

@@ -208,12 +208,10 @@ def test_run_goes_through_analyze_and_shows_the_newton_progress(tmp_path, monkey
     assert shown.ticks[-1][0] <= summary["iterations"]
 
 
-def test_a_case_with_a_cohesion_of_its_own_runs_without_a_bound(tmp_path):
-    """The limit analysis has the paper's cohesion mu ft only: a run whose joints have one
-    of their own collapses (the block tilts at s/a = 0.5: no tension, so no rocking strength
-    from the cohesion) with the bound not computed, and says why."""
-    from masonry_dem.run_case import NO_BOUND_WITH_COHESION
-
+def test_a_case_with_a_cohesion_of_its_own_runs_with_its_bound(tmp_path):
+    """A run whose joints have a cohesion of their own collapses (the block tilts at s/a =
+    0.5: no tension, so no rocking strength from the cohesion) within the limit analysis's
+    bound, computed with the cohesion: the same 0.5 (rocking opens the joint, no slip)."""
     material = dict(SINGLE_BLOCK["material"], cohesion=5e3)
     case = _write_case(tmp_path, dict(SINGLE_BLOCK, material=material))
     out = tmp_path / "cohesive"
@@ -221,5 +219,6 @@ def test_a_case_with_a_cohesion_of_its_own_runs_without_a_bound(tmp_path):
     summary = json.loads((out / "summary.json").read_text())
     assert summary["status"] == "collapse"
     assert summary["lambda"] == pytest.approx(0.5, rel=0.01)
-    assert summary["limit_analysis_bound"] is None
-    assert summary["limit_analysis_status"] == NO_BOUND_WITH_COHESION
+    assert summary["limit_analysis_status"] == "collapse"
+    assert summary["limit_analysis_bound"] == pytest.approx(0.5, rel=1e-6)
+    assert summary["lambda"] <= summary["limit_analysis_bound"] * (1 + 1e-6)

@@ -207,15 +207,17 @@ def test_tensile_strength_adds_the_cohesive_capacity():
     assert _lam(limit_analysis(model)) == pytest.approx(expected, rel=1e-6)
 
 
-def test_a_cohesion_of_its_own_is_refused():
-    """The formulation has the paper's cohesion mu ft only; the same cohesion given is fine."""
+def test_a_cohesion_of_its_own_is_analysed():
+    """The same cohesion given is the paper's, bit for bit; one of its own (c = 2 mu ft)
+    slides at lambda W = c A + mu W (``test_limit_cohesion``: every backend)."""
     a, b, s, mu, ft = 0.1, 0.3, 0.3, 0.3, 2.0e3
     paper = _on_base(single_block(a, b, s, GAMMA), mu, ft=ft)
     given = replace(paper, cohesion=paper.friction * paper.tensile_strength)
     assert _lam(limit_analysis(given)) == _lam(limit_analysis(paper))
     own = replace(paper, cohesion=np.full(paper.interfaces.count, 2.0 * mu * ft))
-    with pytest.raises(ValueError, match="cohesion above friction x tensile strength"):
-        limit_analysis(own)
+    W = float(paper.blocks.weights[0])
+    expected = (2.0 * mu * ft * b * s + mu * W) / W
+    assert _lam(limit_analysis(own)) == pytest.approx(expected, rel=1e-6)
 
 
 def test_bad_arguments_name_the_field():

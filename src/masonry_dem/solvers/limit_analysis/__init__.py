@@ -7,9 +7,10 @@ Gauss-Lobatto points of the rectangle, corners included). Point k carries
 tensile force (tensile strength x area, Lobatto weights) and the compression lies in the
 friction cone ``|t| <= mu c``, ``n = ft_k - c``, ``c >= 0``: no tension beyond ``ft``, Coulomb
 friction with the cohesion ``mu ft`` of the paper's law (``fsu = mu (ft - fn)``), and rocking
-and torsion that follow the interface's real area. A model whose joints have a cohesion of
-their own above ``mu ft`` (:class:`~masonry_dem.model.InterfaceMaterial`) is refused: it would
-need a cohesive shear at every point beside the cone. The point forces reduce to the interface
+and torsion that follow the interface's real area. A cohesion of its own ``c > mu ft``
+(:class:`~masonry_dem.model.InterfaceMaterial`) grows each point's cone by the shear the joint
+keeps at its tension cap, ``|t| <= mu c + (c - mu ft) A_k`` (``formulation.cohesive_offsets``;
+docs/limit_analysis.md, "The formulation"). The point forces reduce to the interface
 actions ``[f1, f2, fn, m1, m2, m3]`` about its centre (``m = y x p``), which are work-conjugate
 to the rows of the compatibility matrix H of Eqs. (A1)-(A3); equilibrium of the free DOFs is
 ``H^T a = F_dead + lambda F_live``.

@@ -71,8 +71,9 @@ def limit_analysis(
         default cone; False: zero dilatancy (Gilbert et al. 2006).
     grid : int, optional, keyword-only
         Contact points per side of each interface (n x n, >= 2). None: 2 for the associative
-        problem (exact, see the module docstring) and ``NON_ASSOCIATIVE_GRID`` for the frozen
-        capacities of the non-associative one.
+        problem (exact, see the module docstring; a cohesion above mu ft dissipates on its
+        own grid, at least ``NON_ASSOCIATIVE_GRID``: ``formulation.cohesive_grid``) and
+        ``NON_ASSOCIATIVE_GRID`` for the frozen capacities of the non-associative one.
     backend : {"highs", "clarabel"}, optional, keyword-only
         "highs" (LP, friction pyramid) or "clarabel" (SOCP, the exact cone). None: the one
         ``cone`` names, else by size, HiGHS below ``EXACT_CONE_FROM`` free DOFs and Clarabel
@@ -137,9 +138,8 @@ def limit_analysis(
     Raises
     ------
     ValueError
-        If ``model`` is not a :class:`~masonry_dem.Model`, an argument is out of its range
-        (named), or a joint has a cohesion above friction x tensile strength (the
-        formulation has the paper's cohesion, mu ft, only).
+        If ``model`` is not a :class:`~masonry_dem.Model`, or an argument is out of its
+        range (named).
 
     Examples
     --------
@@ -154,7 +154,6 @@ def limit_analysis(
     """
     t0 = time.perf_counter()
     require_model("limit_analysis", model)
-    _refuse_own_cohesion(model)
     # every setting checked (a ValueError naming it and its range) where LimitSettings is
     LimitSettings(
         associative=associative,
@@ -284,21 +283,3 @@ def dem_upper_bound(model: Model, **options: Any) -> LimitAnalysisResult:
     options.setdefault("backend", "clarabel")
     options.setdefault("friction_scale", model_friction_scale(model))
     return limit_analysis(model, associative=True, **options)
-
-
-def _refuse_own_cohesion(model: Model) -> None:
-    """The statics and the dissipation of the formulation carry the paper's cohesion mu ft
-    (the friction cone shifted by ft): a joint whose cohesion exceeds it would need a
-    cohesive shear at every contact point beside the cone, which no backend has yet."""
-    beyond = np.flatnonzero(model.cohesion_beyond_friction > 0)
-    if beyond.size:
-        k = int(beyond[0])
-        assert model.cohesion is not None  # resolved by Model
-        raise ValueError(
-            f"limit_analysis: {beyond.size} interface(s) have a cohesion above friction x "
-            f"tensile strength (interface {k}: cohesion {float(model.cohesion[k]):g} Pa, "
-            f"friction x tensile strength "
-            f"{float(model.friction[k] * model.tensile_strength[k]):g} Pa); the limit analysis "
-            "has the paper's cohesion mu ft only: leave the material's cohesion out, or run a "
-            "pushover"
-        )

@@ -10,7 +10,17 @@ import numpy as np
 from scipy import sparse
 
 from .budget import CLARABEL_ITERATIONS, HIGHS_IPM_ITERATIONS, clarabel_room, solver_seconds
-from .formulation import Problem, Solution, associative_columns, lambda_cap, objective_scale
+from .formulation import (
+    Problem,
+    Solution,
+    associative_columns,
+    cohesive_columns,
+    cohesive_grid,
+    cohesive_offsets,
+    lambda_cap,
+    objective_scale,
+    slip_columns,
+)
 from .kinematic import solve_kinematic_clarabel
 from .mirror import mirror_dofs, mirror_pairs
 from .normal_ipm import NORMAL_EQUATIONS_FROM, solve_kinematic_normal
@@ -105,10 +115,12 @@ def solve_clarabel(
     capacity: np.ndarray | None,
     n_normal: int = 0,
     fix_lambda: bool = False,
+    offset: np.ndarray | None = None,
 ) -> Solution:
     """max lambda s.t. E x - lambda live = rhs with, per point, x = (c, t1, t2):
-    ``|t| <= mu c``, ``c >= 0`` (``capacity`` None), or ``|t| <= mu capacity`` and then
-    ``n_normal`` leading columns of compressions >= 0."""
+    ``|t| <= mu c + o``, ``c >= 0`` (``capacity`` None), or ``|t| <= mu capacity + o`` and
+    then ``n_normal`` leading columns of compressions >= 0; ``o`` the points' cohesive
+    shear ``offset`` (``formulation.cohesive_offsets``; None: none)."""
     try:
         import clarabel
     except ImportError as exc:  # pragma: no cover - declared dependency
@@ -130,7 +142,10 @@ def solve_clarabel(
         b.append(np.zeros(n_points))
         cones.append(clarabel.NonnegativeConeT(n_points))
         rows.append(G)
-        b.append(np.zeros(3 * n_points))
+        bb = np.zeros(3 * n_points)
+        if offset is not None:  # s = (mu c + o, t1, t2)
+            bb[3 * p] = offset
+        b.append(bb)
         cones += [clarabel.SecondOrderConeT(3)] * n_points
     else:
         # normal compressions >= 0; per shear point s = (mu cap, t1, t2) in SOC(3)
@@ -144,7 +159,7 @@ def solve_clarabel(
         c = n_normal + np.concatenate([2 * p, 2 * p + 1])
         G = sparse.csc_matrix((-np.ones(2 * n_points), (r, c)), shape=(3 * n_points, nvar))
         bb = np.zeros(3 * n_points)
-        bb[3 * p] = mu * capacity
+        bb[3 * p] = mu * capacity if offset is None else mu * capacity + offset
         rows.append(G)
         b.append(bb)
         cones += [clarabel.SecondOrderConeT(3)] * n_points
@@ -198,15 +213,29 @@ def solve_associative(
     model = problem.model
     R, K = associative_columns(model, grid, dirs)
     if dirs is not None:
+        ineq = None
+        cohesive = cohesive_columns(model, grid, dirs)  # on the cohesion's own grid
+        if cohesive is not None:  # the shear a point carries at its tension cap
+            R_c, C_c = cohesive
+            C = sparse.hstack([sparse.csr_matrix((C_c.shape[0], R.shape[1])), C_c], format="csc")
+            R = sparse.hstack([R, R_c], format="csc")
+            ineq = (C, np.ones(C.shape[0]))
         E = (problem.H_T @ R).tocsc()
-        size = (E.shape[1] + 1, E.shape[0])
+        size = (E.shape[1] + 1, E.shape[0] + (0 if ineq is None else ineq[1].size))
         k = E.shape[1]
-        sol = solve_highs(E, problem.live, problem.rhs, np.zeros(k), np.full(k, np.inf))
+        sol = solve_highs(E, problem.live, problem.rhs, np.zeros(k), np.full(k, np.inf), ineq)
     else:  # velocities of the free DOFs; the live work row and 3 cone rows per point
         size = (problem.H_T.shape[0], 1 + R.shape[1])
         sol = _solve_kinematic(problem, grid)
+        slip = slip_columns(model, grid)
         if sol.status == "error":
-            sol = _static_clarabel(problem, R, K, sol.detail)
+            # the static form holds the cohesion in each point's cone: one grid for both,
+            # the cohesion's (``cohesive_grid``)
+            g = grid if slip is None else cohesive_grid(grid)
+            R, K = associative_columns(model, g, None)
+            sol = _static_clarabel(problem, R, K, g, sol.detail)
+        elif slip is not None:  # the kinematic form's cohesive shears follow its points'
+            R = sparse.hstack([R, slip], format="csc")
     if sol.status == "optimal":
         sol.info_actions = (problem.a0 + R @ sol.x).reshape(-1, 6)  # type: ignore[attr-defined]
     return sol, size
@@ -219,7 +248,10 @@ def _solve_kinematic(problem: Problem, grid: int) -> Solution:
     below, and wherever the normal equations give up (no PARDISO, no mechanism, no
     statics, a stalled iteration)."""
     velocities = problem.H_T.shape[0]
-    if velocities >= NORMAL_EQUATIONS_FROM:
+    # the normal equations have one SOC per point, the slip's; a cohesion beyond mu ft adds
+    # a second (its dissipation (c - mu ft) A_k |v_t|), which only Clarabel's form carries
+    cohesive = bool(problem.model.cohesion_beyond_friction.any())
+    if velocities >= NORMAL_EQUATIONS_FROM and not cohesive:
         # a failure on the symmetric mechanisms goes to Clarabel: if the whole problem had
         # a mechanism, its symmetric part would be one too
         drop = mirror_dofs(problem.model)
@@ -233,7 +265,7 @@ def _solve_kinematic(problem: Problem, grid: int) -> Solution:
     return sol
 
 
-def _static_clarabel(problem: Problem, R, K: int, kinematic_detail: str) -> Solution:
+def _static_clarabel(problem: Problem, R, K: int, grid: int, kinematic_detail: str) -> Solution:
     """The static form, when the kinematic one stalls: on walls with no mechanism (an
     infeasible kinematic problem) Clarabel sometimes stops with "InsufficientProgress"
     instead of an infeasibility certificate; the static form is bounded by
@@ -243,14 +275,15 @@ def _static_clarabel(problem: Problem, R, K: int, kinematic_detail: str) -> Solu
     n_points = R.shape[1] // 3
     mu = np.repeat(problem.model.friction, K)
     args = (E, problem.live, problem.rhs, n_points, mu, None)
-    first = solve_clarabel(*args, fix_lambda=True)
+    offset = cohesive_offsets(problem.model, grid)
+    first = solve_clarabel(*args, fix_lambda=True, offset=offset)
     note = f"{kinematic_detail}; static form: "
     if first.status == "infeasible":
         return Solution("dead load", detail=f"{note}{first.detail} at lambda = 0")
     if first.status != "optimal":
         word = "budget" if first.status == "budget" else "error"
         return Solution(word, detail=f"{note}{first.detail} at lambda = 0")
-    sol = solve_clarabel(*args)
+    sol = solve_clarabel(*args, offset=offset)
     sol.detail = note + sol.detail
     if sol.status == "infeasible":  # stood at lambda = 0, so not expected
         sol.status = "error"

@@ -12,7 +12,7 @@ the rest (or a support) then either opens (its normal velocity is positive), sli
 own plane (zero normal velocity), or closes. If none closes:
 
 * with zero dilatancy the sliding joints' normal gap does not change, so nothing compresses
-  them: they resist with their cohesion ``mu ft A`` only; the opening joints with their
+  them: they resist with their cohesion ``c A`` only; the opening joints with their
   tensile strength ``ft A`` (times the normal share of ``d``) at most;
 * the virtual work of any equilibrium on this motion is the dead load's work on S,
   ``W = sum over S of F_dead . d``, and the joints' forces can do at most
@@ -130,6 +130,8 @@ def check_dead_load(model: Model) -> DeadLoadCheck:
     opening = np.abs(t[edge])  # no joint between loose and carried blocks closes
     sliding = np.sqrt(np.maximum(1.0 - t[edge] ** 2, 0.0))
     resist = ft_area * (opening + np.asarray(model.friction)[edge] * sliding)
+    # the cohesion beyond mu ft, where the joint has one of its own (+ 0.0 where not)
+    resist = resist + model.cohesion_beyond_friction[edge] * np.asarray(its.area)[edge] * sliding
     owner = np.where(loose[i[edge]], i[edge], j[edge])
     # per group, in one pass whatever their number (a carried block's group weighs nothing):
     # the dead load's work on the fall and what the group's joints resist

@@ -11,7 +11,7 @@ from scipy import sparse
 from masonry_dem.assembly.compatibility import compatibility_matrix
 from masonry_dem.model import Model
 
-from .interface import grid_points, resultant_columns
+from .interface import NON_ASSOCIATIVE_GRID, grid_points, resultant_columns
 
 
 # --------------------------------------------------------------------------- the problem
@@ -56,6 +56,83 @@ class Problem:
         v = q.reshape(-1, 6)
         peak = float(np.abs(v[:, :3]).max(initial=0.0))
         return v / peak if peak > 0 else v
+
+
+def cohesive_grid(grid: int) -> int:
+    """The grid of the cohesion's dissipation ``(c - mu ft) |v_t(y)|``, at least
+    ``NON_ASSOCIATIVE_GRID``, whatever the friction's (the corners are exact for the
+    friction, ``interface``): it is integrated by the grid's Lobatto rule, exact for a
+    translation (v_t constant), but a twist's ``|v_t|`` grows with the distance from its
+    centre, and the corners would take it at the corner distance (0.71 l on a square,
+    against the mean 0.38 l: 85 % over); the 8 x 8 rule is within 1 % of it, above, on
+    rectangles of aspect 1 to 4 (``torsion_quadrature``)."""
+    return max(int(grid), NON_ASSOCIATIVE_GRID)
+
+
+def cohesive_offsets(model: Model, grid: int) -> np.ndarray:
+    """(m K,) the shear every contact point of the n x n grid carries at its tension cap:
+    ``(c - mu ft) A_k`` (N), A_k the point's Lobatto area weight. The point's cone is
+    ``|t| <= mu c_k + (c - mu ft) A_k`` with ``c_k >= 0`` its compression beyond the cap, so
+    that ``|t| <= mu N + c A_k`` in the compression ``N = c_k - ft A_k`` >= -ft A_k. Zeros
+    (bit for bit the paper's cone) where the cohesion is the paper's mu ft."""
+    its = model.interfaces
+    _, w = grid_points(its.l1, its.l2, grid)
+    return (model.cohesion_beyond_friction[:, None] * w).ravel()
+
+
+def cohesive_points(model: Model, grid: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The points that carry a cohesive shear on the ``cohesive_grid`` of ``grid``: their
+    indices among the m n^2 points (interface-major), their local positions (p, 2) and
+    offsets (p,) (``cohesive_offsets``)."""
+    g = cohesive_grid(grid)
+    its = model.interfaces
+    offset = cohesive_offsets(model, g)
+    points = np.flatnonzero(offset > 0)
+    y, _ = grid_points(its.l1, its.l2, g)
+    return points, y.reshape(-1, 2)[points], offset[points]
+
+
+def slip_columns(model: Model, grid: int) -> sparse.csc_matrix | None:
+    """(6m, 2p) the actions of unit shears (t1, t2) at the cohesive points
+    (``cohesive_points``), the layout of the kinematic form's cohesive statics; None
+    without a cohesion of its own."""
+    points, y, _ = cohesive_points(model, grid)
+    if points.size == 0:
+        return None
+    K = cohesive_grid(grid) ** 2
+    shear = np.tile(np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]), (points.size, 1))
+    iface = np.repeat(points // K, 2)
+    return resultant_columns(np.repeat(y, 2, axis=0), shear, iface, model.interfaces.count)
+
+
+def cohesive_columns(
+    model: Model, grid: int, dirs: np.ndarray
+) -> tuple[sparse.csc_matrix, sparse.csr_matrix] | None:
+    """The cohesive shear of the pyramid (HiGHS), None where no joint has one: at every
+    cohesive point (``cohesive_points``: the ``cohesive_grid``, not the friction's) D
+    columns, the pyramid's section scaled by its offset o_k (forces ``o_k e_d``, no normal),
+    and the rows ``sum_d w_kd <= 1`` (their convex hull, with 0), (R_c (6m, p D), C (p, p D)).
+    With the friction edges ``mu e_d`` per unit compression, the shear spans ``mu c_k``
+    times the pyramid's section plus ``o_k`` times it: the friction's polygon grown by
+    the cohesion."""
+    points, y, offset = cohesive_points(model, grid)
+    if points.size == 0:
+        return None
+    K = cohesive_grid(grid) ** 2
+    D = dirs.shape[0]
+    force = np.zeros((points.size, D, 3))
+    force[:, :, :2] = offset[:, None, None] * dirs[None, :, :]
+    R = resultant_columns(
+        np.repeat(y, D, axis=0),
+        force.reshape(-1, 3),
+        np.repeat(points // K, D),
+        model.interfaces.count,
+    )
+    p = points.size
+    C = sparse.csr_matrix(
+        (np.ones(p * D), (np.repeat(np.arange(p), D), np.arange(p * D))), shape=(p, p * D)
+    )
+    return R, C
 
 
 def associative_columns(

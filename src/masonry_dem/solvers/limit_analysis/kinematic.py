@@ -30,13 +30,16 @@ from scipy import sparse
 from masonry_dem.assembly.compatibility import compatibility_matrix
 
 from .budget import CLARABEL_ITERATIONS, clarabel_room, solver_seconds
-from .formulation import Problem, Solution, lambda_cap
+from .formulation import Problem, Solution, cohesive_grid, cohesive_points, lambda_cap
 from .interface import grid_points
 
 
-def corner_velocity_rows(problem: Problem, grid: int) -> sparse.csc_matrix:
+def corner_velocity_rows(
+    problem: Problem, grid: int, friction: np.ndarray | None = None
+) -> sparse.csc_matrix:
     """(3 m K, n_free) rows ``(v_n, mu v_t1, mu v_t2)`` of the relative velocity at the K grid
-    points of every interface, per unit of the scaled free DOFs; built in one call."""
+    points of every interface, per unit of the scaled free DOFs; built in one call.
+    ``friction`` (m,) in place of the model's (ones: the slip itself)."""
     model = problem.model
     its = model.interfaces
     m = its.count
@@ -47,7 +50,7 @@ def corner_velocity_rows(problem: Problem, grid: int) -> sparse.csc_matrix:
     k = np.arange(m * K)
     i = k // K
     y1, y2 = y[:, :, 0].ravel(), y[:, :, 1].ravel()
-    mu = model.friction[i]
+    mu = (model.friction if friction is None else friction)[i]
     # v_n = d3 + d4 y2 - d5 y1; v_t1 = d1 - d6 y2; v_t2 = d2 + d6 y1 (d = H u, 0-based below)
     rows = np.concatenate([3 * k, 3 * k, 3 * k, 3 * k + 1, 3 * k + 1, 3 * k + 2, 3 * k + 2])
     cols = np.concatenate([6 * i + 2, 6 * i + 3, 6 * i + 4, 6 * i, 6 * i + 5, 6 * i + 1, 6 * i + 5])
@@ -79,7 +82,8 @@ def solve_kinematic_clarabel(
     problem: Problem, grid: int, options: Mapping[str, Any] | None = None
 ) -> tuple[Solution, np.ndarray, int]:
     """min -(rhs/|live|) . u s.t. (live/|live|) . u = 1, corner rows in SOC(3). Returns the
-    solution (``x``: per point (c, t1, t2), the layout of ``associative_columns``; ``duals``:
+    solution (``x``: per point (c, t1, t2), the layout of ``associative_columns``, then
+    with a cohesion of its own the cohesive shears, ``slip_columns``; ``duals``:
     the mechanism u; ``iterations`` and ``setup_seconds``, Clarabel's), and the points per
     interface. ``options`` override ``clarabel_options`` (Clarabel's settings by name)."""
     import clarabel
@@ -90,17 +94,36 @@ def solve_kinematic_clarabel(
     norm = max(float(np.linalg.norm(problem.live)), 1e-300)
     live, rhs = problem.live / norm, problem.rhs / norm
     A = sparse.vstack([sparse.csc_matrix(live.reshape(1, -1)), -G], format="csc")
+    q = -rhs
+    # a cohesion beyond mu ft: at each of its points (``cohesive_points``, on the cohesion's
+    # own grid) an epigraph variable tau_k >= |v_t| (its own SOC) whose dissipation
+    # o_k tau_k joins the objective
+    slipping, _, offset = cohesive_points(problem.model, grid)
+    p = slipping.size
+    if p:
+        ones = np.ones(problem.model.interfaces.count)
+        slip = corner_velocity_rows(problem, cohesive_grid(grid), ones).tocsr()
+        rows = np.stack([3 * slipping + 1, 3 * slipping + 2], axis=1).ravel()
+        T = slip[rows]  # (2p, n_u): the slip velocities of the cohesive points
+        tau = sparse.csc_matrix((-np.ones(p), (3 * np.arange(p), np.arange(p))), shape=(3 * p, p))
+        order = np.stack([3 * np.arange(p) + 1, 3 * np.arange(p) + 2], axis=1).ravel()
+        place = sparse.csc_matrix((np.ones(2 * p), (order, np.arange(2 * p))), shape=(3 * p, 2 * p))
+        A = sparse.bmat(
+            [[A, sparse.csc_matrix((A.shape[0], p))], [-(place @ T), tau]], format="csc"
+        )
+        q = np.concatenate([q, offset / norm])
     A.sort_indices()
     b = np.zeros(A.shape[0])
     b[0] = 1.0
-    cones = [clarabel.ZeroConeT(1)] + [clarabel.SecondOrderConeT(3)] * n_points
+    cones = [clarabel.ZeroConeT(1)] + [clarabel.SecondOrderConeT(3)] * (n_points + p)
     settings = clarabel.DefaultSettings()
     settings.verbose = False
     for name, value in {**clarabel_options(n_u), **(options or {})}.items():
         setattr(settings, name, value)
     t0 = time.process_time()
     clarabel_room(A)
-    out = clarabel.DefaultSolver(sparse.csc_matrix((n_u, n_u)), -rhs, A, b, cones, settings)
+    n_x = n_u + p
+    out = clarabel.DefaultSolver(sparse.csc_matrix((n_x, n_x)), q, A, b, cones, settings)
     setup = time.process_time() - t0
     sol = out.solve()
     word = str(sol.status)
@@ -113,8 +136,8 @@ def solve_kinematic_clarabel(
         return Solution("dead load", detail=f"Clarabel: {word} (kinematic)"), np.zeros(0), K
     if word not in ("Solved", "AlmostSolved"):
         return Solution("error", detail=f"Clarabel: {word} (kinematic)"), np.zeros(0), K
-    u = np.asarray(sol.x)
-    lam = float(-rhs @ u)
+    u = np.asarray(sol.x)[:n_u]
+    lam = float(q @ np.asarray(sol.x))
     if lam >= lambda_cap(problem.live, problem.rhs) * (1 - 1e-3):
         return Solution("unbounded", detail="Clarabel: lambda reached its cap"), np.zeros(0), K
     if lam < 0:
@@ -122,7 +145,11 @@ def solve_kinematic_clarabel(
         return Solution("dead load", detail=detail), np.zeros(0), K
     z = np.asarray(sol.z)[1:].reshape(-1, 3)
     mu = np.repeat(problem.model.friction, K)
-    x = np.column_stack([norm * z[:, 0], -norm * mu * z[:, 1], -norm * mu * z[:, 2]]).ravel()
+    x = np.column_stack(
+        [norm * z[:n_points, 0], -norm * mu * z[:n_points, 1], -norm * mu * z[:n_points, 2]]
+    ).ravel()
+    if p:  # then the cohesive shears (t1, t2), the duals of the slip cones (``slip_columns``)
+        x = np.concatenate([x, -norm * z[n_points:, 1:].ravel()])
     detail = f"Clarabel: {word} (kinematic, {sol.iterations} iterations)"
     answer = Solution("optimal", lam, x, u, detail, int(sol.iterations), setup)
     return answer, u, K

@@ -37,10 +37,16 @@ _PLANE_SHEAR = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
 
 
 # --------------------------------------------------------------------------- non-associative
-def frozen_layout(model: Model, actions: np.ndarray, grid: int) -> tuple[np.ndarray, np.ndarray]:
-    """Points (m, K, 2) and frozen compressions (m, K) of the DEM's reading of the
-    actions: ``ft - fn`` spread uniformly over the reduced rectangle centred on the
-    resultant (Figure 10)."""
+def frozen_layout(
+    model: Model, actions: np.ndarray, grid: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Points (m, K, 2), frozen compressions (m, K) and cohesive shears (m, K) of the DEM's
+    reading of the actions: ``ft - fn`` spread uniformly over the reduced rectangle
+    centred on the resultant (Figure 10). With a cohesion of its own, the whole
+    rectangle's n x n points follow (K = 2 n^2), with no compression and the shear the
+    joint keeps at its tension cap, ``(c - mu ft) A`` by their Lobatto weights: the joint's
+    ``mu (ft A - fn) + (c - mu ft) A = c A - mu fn``, the law's (docs/solvers.md: the rest
+    of the joint sits at the cap). Without, the cohesive shears are zeros."""
     its = model.interfaces
     ft = model.tensile_strength * its.area
     cap = np.maximum(ft - actions[:, 2], 0.0)
@@ -58,7 +64,17 @@ def frozen_layout(model: Model, actions: np.ndarray, grid: int) -> tuple[np.ndar
     _, wl = lobatto_rule(grid)
     wu = np.outer(wl, wl).ravel() / 4.0
     share = np.where(area[:, None] > 0, w / np.where(area > 0, area, 1.0)[:, None], wu[None, :])
-    return pts, cap[:, None] * share
+    frozen = cap[:, None] * share
+    beyond = model.cohesion_beyond_friction
+    if not beyond.any():
+        return pts, frozen, np.zeros_like(frozen)
+    whole, wa = grid_points(its.l1, its.l2, grid)
+    none = np.zeros_like(frozen)
+    return (
+        np.concatenate([pts, whole], axis=1),
+        np.concatenate([frozen, none], axis=1),
+        np.concatenate([none, beyond[:, None] * wa], axis=1),
+    )
 
 
 def non_associative(
@@ -90,7 +106,11 @@ def non_associative(
     upper = float(first.lam)
     select_rows, select_weights = action_weights(model.interfaces.l1, model.interfaces.l2)
     selections = selection_rounds = 0
-    if nearest and dirs is not None:
+    # a cohesion beyond mu ft: the frozen shear capacities grow by it (``frozen_layout``)
+    own_cohesion = bool(model.cohesion_beyond_friction.any())
+    # the least-normal-actions start has the associative LP's friction columns only: with a
+    # cohesion of its own the start is the associative optimum as the solver gave it
+    if nearest and dirs is not None and not own_cohesion:
         # the associative LP is as degenerate: its optimum with the least normal actions
         # (fn, m1, m2 nearest the unloaded state), so that the start is unique too
         R0, _ = associative_columns(model, ASSOCIATIVE_GRID, dirs)
@@ -128,12 +148,13 @@ def non_associative(
             return finish(
                 problem, sol, size, result, iterations=it - 1, load_factors=tuple(lams), **kw
             )
-        pts, cap = frozen_layout(model, actions, grid)
+        pts, cap, cohesive = frozen_layout(model, actions, grid)
         K = pts.shape[1]
         iface = np.repeat(np.arange(m), K)
         yk = pts.reshape(-1, 2)
         mu = np.repeat(model.friction, K)
         capk = cap.ravel()
+        offset = cohesive.ravel() if own_cohesion else None
         if dirs is None:
             shear = np.zeros((m * K, 2, 3))
             shear[:, 0, 0] = 1.0
@@ -143,13 +164,22 @@ def non_associative(
             )
             R = sparse.hstack([R_n, R_s], format="csc")
             E = (problem.H_T @ R).tocsc()
-            sol = solve_clarabel(E, problem.live, problem.rhs, m * K, mu, capk, 4 * m)
+            sol = solve_clarabel(
+                E, problem.live, problem.rhs, m * K, mu, capk, 4 * m, offset=offset
+            )
             if sol.status == "infeasible":
                 sol = Solution("dead load", detail=f"{sol.detail} (frozen capacities)")
         else:
             D = dirs.shape[0]
+            scale = mu
+            if offset is not None:
+                # a point with a cohesive shear o: edges e_d (not mu e_d) on the capacity
+                # mu cap + o, so that mu = 0 carries o too; the others as they were
+                cohesive_point = offset > 0
+                scale = np.where(cohesive_point, 1.0, mu)
+                capk = np.where(cohesive_point, mu * capk + offset, capk)
             force = np.zeros((m * K, D, 3))
-            force[:, :, :2] = mu[:, None, None] * dirs[None, :, :]
+            force[:, :, :2] = scale[:, None, None] * dirs[None, :, :]
             R_s = resultant_columns(
                 np.repeat(yk, D, axis=0), force.reshape(-1, 3), np.repeat(iface, D), m
             )
@@ -206,14 +236,18 @@ def non_associative(
             # capacities hold more than the optimal face. The frozen capacity at the
             # reduced rectangle's corners only (grid 2): the same shear, more torsion, so
             # every LP optimum is among its states, on a sixteenth of the cones
-            pts2, cap2 = frozen_layout(model, actions, 2)
-            shear2 = np.tile(_PLANE_SHEAR, (4 * m, 1))
+            pts2, cap2, cohesive2 = frozen_layout(model, actions, 2)
+            K2 = pts2.shape[1]  # 4, or 8 with the whole rectangle's corners (cohesion)
+            shear2 = np.tile(_PLANE_SHEAR, (K2 * m, 1))
+            iface2 = np.repeat(np.arange(m), K2)
             R_st = resultant_columns(
-                np.repeat(pts2.reshape(-1, 2), 2, axis=0), shear2, np.repeat(iface4, 2), m
+                np.repeat(pts2.reshape(-1, 2), 2, axis=0), shear2, np.repeat(iface2, 2), m
             )
             # with the pyramid, the circle through its edges holds every LP optimum
             rho = 1.0 if dirs is None else float(np.hypot(*dirs[0]))
-            radius = rho * np.repeat(model.friction, 4) * cap2.ravel()
+            radius = rho * np.repeat(model.friction, K2) * cap2.ravel()
+            if own_cohesion:
+                radius = radius + rho * cohesive2.ravel()
             state = least_energy_frozen(problem, R_n, R_st, radius, sol.lam * (1 - LAMBDA_SLACK))
             if state is not None:
                 new = state
