@@ -19,7 +19,7 @@ from masonry_dem.results import History
 from masonry_dem.solvers.static.outcome import Status, StopReason
 from masonry_dem.solvers.static.paths import Record, control_radius
 from masonry_dem.solvers.static.settings import DisplacementControl
-from masonry_dem.solvers.static.steps import StepController
+from masonry_dem.solvers.static.steps import StepController, elastic_range
 
 if TYPE_CHECKING:
     from masonry_dem.solvers.static.path_solver import PathSolver
@@ -73,6 +73,25 @@ def _control_turn(solver: PathSolver, hist: History, c: np.ndarray) -> str:
     )
 
 
+def _elastic_step(solver: PathSolver, c: np.ndarray, longest: float, direction: float) -> float:
+    """The first controlled step: a bracket tolerance short of the end of the elastic range
+    along the tangent response to the live load (:func:`.steps.elastic_range`), as load
+    control's first step (``elastic_first_step``), at most ``longest``. A first step past it
+    carries every joint from its elastic trial to its return in one increment: the
+    non-associative return of a trial far outside the domain slides and opens the joints
+    as no gradual push does (a dry wall's plateau a few per cent under mu N, a brittle wall's
+    peak 10 % apart between step counts; docs/history/solvers_record.md, "Issue 41:
+    displacement control on shear walls")."""
+    rate = control_rate(solver, c) * direction  # (the live load pushes the DOF its way)
+    if not rate > 0:
+        return longest
+    elastic = elastic_range(solver, longest / rate)
+    if elastic is None or not math.isfinite(elastic.load_factor):
+        return longest
+    du = (1.0 - solver.settings.bracket_tolerance) * elastic.load_factor * rate
+    return du if 0.0 < du < longest else longest
+
+
 def _moved_to(solver: PathSolver, c: np.ndarray, goal: float) -> np.ndarray:
     """Where the held motion past a fold starts: the last converged state moved along the
     tangent response to the live load (K_t^-1 F_L) until c.q reaches ``goal``, the whole wall
@@ -108,6 +127,8 @@ def displacement_control(
     du_nominal = control.target / control.steps
     direction = float(np.sign(du_nominal))
     step = StepController(abs(du_nominal), s.growth, cap=abs(du_nominal))
+    if s.elastic_first_step:
+        step.size = min(step.size, _elastic_step(solver, unit, abs(du_nominal), direction))
     lam = 0.0
     u = float(solver.q[dof])
     moved_from = -1  # the step from which the last damped motion started
