@@ -134,7 +134,7 @@ def displacement_control(
     lam = 0.0
     u = float(solver.q[dof])
     moved_from = -1  # the step from which the last damped motion started
-    turned = []  # (lambda, u before, u after) of the damped motions past folds
+    turned = []  # (lambda before, lambda after) of the damped motions past folds
 
     def reached() -> bool:
         return abs(u - control.target) <= 1e-12 * abs(control.target)

@@ -191,6 +191,11 @@ class StaticSolver(Corrector):
         ``held`` = (c, start) the motion of a displacement-controlled test: c.q held at its
         value at ``start``, lambda (from ``target``) free, its rest's lambda the reaction."""
         judge = self.judge()
+        if held is not None:
+            # a held motion is a step of displacement control's path (max_steps bounds
+            # them), not a verdict of the rule: each has the rule's whole budget, else a
+            # long push spends the run's on its folds and then creeps in halved steps
+            judge.budget = self.factorizations + JUDGE_FACTORIZATIONS
         before = judge.iterations
         motion = judge.move_to_rest(target, dead, held)
         if motion.load_factor is not None:
