@@ -1,6 +1,5 @@
 """Displacement control, the path follower that drives one DOF to a target with lambda
-free (``StaticSolver.run(control=...)``): its steps (the first one inside the elastic
-range), its damped motions past folds of the controlled path with the controlled
+free (``StaticSolver.run(control=...)``): its steps, its damped motions past folds of the controlled path with the controlled
 displacement held (a testing machine's: Kelley & Keyes 1998, pseudo-transient continuation),
 and why it stops where the controlled DOF has a limit point
 (docs/solvers.md, "Displacement control"; the measurements: docs/history/solvers_record.md,
@@ -21,7 +20,7 @@ from masonry_dem.results import History
 from masonry_dem.solvers.static.outcome import Status, StopReason
 from masonry_dem.solvers.static.paths import Record, control_radius
 from masonry_dem.solvers.static.settings import DisplacementControl
-from masonry_dem.solvers.static.steps import StepController, elastic_range
+from masonry_dem.solvers.static.steps import StepController
 
 if TYPE_CHECKING:
     from masonry_dem.solvers.static.path_solver import PathSolver
@@ -75,30 +74,11 @@ def _control_turn(solver: PathSolver, hist: History, c: np.ndarray) -> str:
     )
 
 
-def _elastic_step(solver: PathSolver, c: np.ndarray, longest: float, direction: float) -> float:
-    """The first controlled step: a bracket tolerance short of the end of the elastic range
-    along the tangent response to the live load (:func:`.steps.elastic_range`), as load
-    control's first step (``elastic_first_step``), at most ``longest``. A first step past it
-    carries every joint from its elastic trial to its return in one increment: the
-    non-associative return of a trial far outside the domain slides and opens the joints
-    as no gradual push does (a dry wall's plateau a few per cent under mu N, a brittle wall's
-    peak 10 % apart between step counts; docs/history/solvers_record.md, "Issue 41:
-    displacement control on shear walls")."""
-    rate = control_rate(solver, c) * direction  # (the live load pushes the DOF its way)
-    if not rate > 0:
-        return longest
-    elastic = elastic_range(solver, longest / rate)
-    if elastic is None or not math.isfinite(elastic.load_factor):
-        return longest
-    du = (1.0 - solver.settings.bracket_tolerance) * elastic.load_factor * rate
-    return du if 0.0 < du < longest else longest
-
-
 def _moved_to(solver: PathSolver, c: np.ndarray, goal: float) -> np.ndarray:
     """Where the held motion past a fold starts: the last converged state moved along the
     tangent response to the live load (K_t^-1 F_L) until c.q reaches ``goal``, the whole wall
     moving with the controlled DOF as its equilibrium would. Moving the controlled DOF alone
-    strains the joints beside it only, and a brittle joint there cracks for it; where the
+    strains the joints beside it only, and a brittle joint there may crack for it; where the
     controlled DOF does not grow with the load (a limit point of its own) it moves alone,
     the time steps then spreading it."""
     free = solver.problem.asm.free_index
@@ -129,8 +109,6 @@ def displacement_control(
     du_nominal = control.target / control.steps
     direction = float(np.sign(du_nominal))
     step = StepController(abs(du_nominal), s.growth, cap=abs(du_nominal))
-    if s.elastic_first_step:
-        step.size = min(step.size, _elastic_step(solver, unit, abs(du_nominal), direction))
     lam = 0.0
     u = float(solver.q[dof])
     moved_from = -1  # the step from which the last damped motion started

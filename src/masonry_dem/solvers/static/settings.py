@@ -71,8 +71,7 @@ class StaticSettings(LoadPathSettings):
     elastic_first_step : bool, default True
         The first live step goes to just short of the end of the elastic range (the load at
         which the first joint reaches its strength domain along the tangent response of the
-        dead-load state), started from that response; displacement control's first step
-        ends there too.
+        dead-load state), started from that response.
     tolerance : float, default 1e-8
         Force residual ``|R| / |F_D + lambda F_L|`` (moments as forces at the median block size)
         below which a state is in equilibrium, > 0.
