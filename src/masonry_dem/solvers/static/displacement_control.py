@@ -1,7 +1,8 @@
 """Displacement control, the path follower that drives one DOF to a target with lambda
-free (``StaticSolver.run(control=...)``): its steps, its damped motions past folds of the controlled path with the controlled
-displacement held (a testing machine's: Kelley & Keyes 1998, pseudo-transient continuation),
-and why it stops where the controlled DOF has a limit point
+free (``StaticSolver.run(control=...)``): its steps, its damped motions past folds of the
+controlled path with the controlled displacement held (a testing machine's: Kelley & Keyes
+1998, pseudo-transient continuation), and why it stops where the controlled DOF has a limit
+point
 (docs/solvers.md, "Displacement control"; the measurements: docs/history/solvers_record.md,
 "Invariance", its paragraph "Load against displacement control"). It shares the step rule
 (:class:`StepController`) and the trust radius of a controlled step
