@@ -186,6 +186,9 @@ class Motion:
     undecided: bool = False  # neither a rest nor a run past the limit: no verdict
     #: where a motion past the displacement limit ended (its direction is the mechanism)
     end: np.ndarray | None = None
+    #: the load factor at its end: the load of the motion, or, in a motion with a
+    #: displacement held (``move_to_rest(held=...)``), the reaction it came to
+    load_factor: float | None = None
 
 
 class QuasiStatic:
@@ -247,43 +250,63 @@ class QuasiStatic:
 
     # ------------------------------------------------------------------ one time step
     def _time_step(
-        self, q_n: np.ndarray, lam: float, dead: float, dt: float, start: np.ndarray
-    ) -> tuple[np.ndarray, LawResponse, float] | None:
+        self,
+        q_n: np.ndarray,
+        lam: float,
+        dead: float,
+        dt: float,
+        start: np.ndarray,
+        held: tuple[np.ndarray, float] | None = None,
+    ) -> tuple[np.ndarray, LawResponse, float, float] | None:
         """Backward Euler from ``q_n`` over ``dt``: Newton on G(q) = 0 from ``start``, with a
-        backtracking line search on |G|. (q, the law's response, the static residual |R|),
-        or None when Newton does not converge."""
+        backtracking line search on |G|. (q, the law's response, the static residual |R|,
+        lambda), or None when Newton does not converge. With ``held`` = (c over the free
+        DOFs, value) c.q is held at the value (``start`` moved onto it along c) and lambda is
+        free: the bordered Newton step of the static corrector, on the matrix of the time
+        step."""
         s = self.settings
         free = self.problem.asm.free_index
         q = start.copy()
         rate = 1.0 / dt
+        if held is not None:
+            c, goal = held
+            q[free] += (goal - float(c @ q[free])) / float(c @ c) * c
 
-        def balance(qq: np.ndarray) -> tuple[np.ndarray, float, LawResponse, float]:
+        def balance(qq: np.ndarray, ll: float) -> tuple[np.ndarray, float, LawResponse, float]:
             residual, rnorm, response = self.problem.residual(
-                qq, lam, self.plastic, self.cracked, dead
+                qq, ll, self.plastic, self.cracked, dead
             )
             g = residual - rate * (self.viscosity @ (qq[free] - q_n[free]))
-            return g, self.problem.relative_norm(g, lam, dead), response, rnorm
+            return g, self.problem.relative_norm(g, ll, dead), response, rnorm
 
         def solved(gn: float, rn: float) -> bool:
             """The stopping test (NEWTON_FORCING); a residual that overflowed solves nothing."""
             return math.isfinite(rn) and gn <= max(s.tolerance, NEWTON_FORCING * rn)
 
-        g, gnorm, response, rnorm = balance(q)
+        g, gnorm, response, rnorm = balance(q, lam)
         factors = None  # the matrix factorized at an earlier iterate, kept while it converges
+        live = np.zeros(0)  # the factorized matrix's response to the live load (held only)
         for _ in range(s.max_newton):
             if solved(gnorm, rnorm):
-                return q, response, rnorm
+                return q, response, rnorm, lam
             self.iterations += 1
             chord = factors is not None
             if factors is None:
                 factors = self.problem.factor(response, rate)
+                if held is not None:
+                    live = factors.solve(self.problem.F_live)
             dq = factors.solve(g)
-            if not np.all(np.isfinite(dq)):
+            dlam = 0.0
+            if held is not None:
+                dlam = (goal - float(c @ q[free]) - float(c @ dq)) / float(c @ live)
+                dq = dq + dlam * live
+            if not np.all(np.isfinite(dq)) or not math.isfinite(dlam):
                 return None
             if chord:  # a kept matrix: its step is taken only while it converges fast
                 trial = q.copy()
                 trial[free] += dq
-                g_t, n_t, resp_t, r_t = balance(trial)
+                lam_t = lam + dlam
+                g_t, n_t, resp_t, r_t = balance(trial, lam_t)
                 if n_t > CHORD_RATIO * gnorm and not solved(n_t, r_t):
                     factors = None  # factor anew at q
                     continue
@@ -292,7 +315,8 @@ class QuasiStatic:
                 for _cut in range(12):
                     trial = q.copy()
                     trial[free] += length * dq
-                    g_t, n_t, resp_t, r_t = balance(trial)
+                    lam_t = lam + length * dlam
+                    g_t, n_t, resp_t, r_t = balance(trial, lam_t)
                     if n_t < gnorm or solved(n_t, r_t):
                         break
                     length *= 0.5
@@ -300,14 +324,25 @@ class QuasiStatic:
                     return None
             if n_t > CHORD_RATIO * gnorm:
                 factors = None  # slow convergence: the next iteration factors
-            q, g, gnorm, response, rnorm = trial, g_t, n_t, resp_t, r_t
-        return (q, response, rnorm) if solved(gnorm, rnorm) else None
+            q, g, gnorm, response, rnorm, lam = trial, g_t, n_t, resp_t, r_t, lam_t
+        return (q, response, rnorm, lam) if solved(gnorm, rnorm) else None
 
     # ------------------------------------------------------------------ one load level
-    def move_to_rest(self, lam: float, dead: float = 1.0) -> Motion:
+    def move_to_rest(
+        self,
+        lam: float,
+        dead: float = 1.0,
+        held: tuple[np.ndarray, np.ndarray] | None = None,
+    ) -> Motion:
         """The damped motion from the last rest at load (``dead`` F_D + ``lam`` F_L) until it
         is at rest (the wall's state becomes that rest), runs past the displacement limit,
-        or spends ``max_time_steps``."""
+        or spends ``max_time_steps``.
+
+        ``held`` = (c, start): the motion of a displacement-controlled test instead, the
+        generalised displacement c.q of the free DOFs held at its value at ``start`` (the
+        first time step's start, c.q moved there from the last rest as the test's machine
+        moves it) and lambda free, the reaction of the held displacement; ``lam`` is where
+        it starts. Its end: ``Motion.load_factor``."""
         s = self.settings
         free = self.problem.asm.free_index
         moving = self.problem.moving_translations
@@ -317,8 +352,9 @@ class QuasiStatic:
         # by more than half a block under its own weight)
         limit = self.problem.limit + (unit if self.origin is None else 0.0)
         rest_q = self.q.copy()
+        fixed = None if held is None else (held[0], float(held[0] @ held[1][free]))
         _, rnorm, response = self.problem.residual(self.q, lam, self.plastic, self.cracked, dead)
-        if rnorm <= s.tolerance:
+        if rnorm <= s.tolerance and held is None:
             self.response = response
             self.found_with = (self.plastic, self.cracked)
             return Motion(True, 0)
@@ -341,7 +377,8 @@ class QuasiStatic:
             # (the velocity predictor; retaking a failed step from q instead is no help: its
             # zero increment leaves the yielded joints' flags to round-off, and that Newton
             # fails at its first iteration)
-            stepped = self._time_step(q, lam, dead, dt, q + velocity * dt)
+            start = held[1] if held is not None and taken == 0 else q + velocity * dt
+            stepped = self._time_step(q, lam, dead, dt, start, fixed)
             if stepped is None:
                 failed = dt if failed is None else min(failed, dt)
                 rejected = True
@@ -351,7 +388,7 @@ class QuasiStatic:
                         False, taken, "no time step converges (dt < 1e-12)", undecided=True
                     )
                 continue
-            q_new, response, rnorm = stepped
+            q_new, response, rnorm, lam_new = stepped
             new_velocity = (q_new - q) / dt
             # local error of backward Euler: dt^2 / 2 |q''| ~ dt / 2 |v_new - v_old|
             # (rotations as displacements at the median block size)
@@ -366,6 +403,7 @@ class QuasiStatic:
                 continue
             taken += 1
             self.time_steps += 1
+            lam = lam_new
             if failed is not None:
                 failed *= CEILING_GROWTH
             # the law's state moves with the wall: an incremental law, one time step at a time
@@ -380,10 +418,11 @@ class QuasiStatic:
                     f"the displacement limit {limit:.3g} m (a mechanism)",
                     past_limit=True,
                     end=q_new,
+                    load_factor=lam,
                 )
             if rnorm <= s.tolerance:
                 self._dt = min(dt, 1.0)
-                return Motion(True, taken)
+                return Motion(True, taken, load_factor=lam)
             dt *= min(1.0 if rejected else 4.0, 0.9 / math.sqrt(max(error, 1e-12)))
             dt = min(dt, 1e15)
             rejected = False

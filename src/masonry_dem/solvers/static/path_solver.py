@@ -91,8 +91,14 @@ class PathSolver(Protocol):
         followers call it)."""
         ...
 
-    def damped_motion(self, target: float, dead: float = 1.0) -> Outcome:
-        """The instability rule where Newton finds no equilibrium."""
+    def damped_motion(
+        self,
+        target: float,
+        dead: float = 1.0,
+        held: tuple[np.ndarray, np.ndarray] | None = None,
+    ) -> Outcome:
+        """The instability rule where Newton finds no equilibrium (``held``: with a
+        generalised displacement held, lambda free)."""
         ...
 
     def rule_at(self, top: float) -> Outcome:

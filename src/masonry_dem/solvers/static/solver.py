@@ -176,15 +176,29 @@ class StaticSolver(Corrector):
         judge.start_from(self.q, self.plastic, self.cracked, self._dead_rest)
         return judge
 
-    def damped_motion(self, target: float, dead: float = 1.0) -> Outcome:
+    def damped_motion(
+        self,
+        target: float,
+        dead: float = 1.0,
+        held: tuple[np.ndarray, np.ndarray] | None = None,
+    ) -> Outcome:
         """The instability rule where Newton finds no equilibrium: the reference's damped
         motion (:meth:`QuasiStatic.move_to_rest`) from the last converged state at load
         (``dead`` F_D + ``target`` F_L). An equilibrium where it comes to rest; else why
         not, failing with ``Failure.DISPLACEMENT_LIMIT`` where it ran past the limit (the
-        wall has no rest there) and ``Failure.NO_REST`` where it gave no verdict."""
+        wall has no rest there) and ``Failure.NO_REST`` where it gave no verdict. With
+        ``held`` = (c, start) the motion of a displacement-controlled test: c.q held at its
+        value at ``start``, lambda (from ``target``) free, its rest's lambda the reaction."""
         judge = self.judge()
+        if held is not None:
+            # a held motion is a step of displacement control's path (max_steps bounds
+            # them), not a verdict of the rule: each has the rule's whole budget, else a
+            # long push spends the run's on its folds and then creeps in halved steps
+            judge.budget = self.factorizations + JUDGE_FACTORIZATIONS
         before = judge.iterations
-        motion = judge.move_to_rest(target, dead)
+        motion = judge.move_to_rest(target, dead, held)
+        if motion.load_factor is not None:
+            target = motion.load_factor
         self.iterations += judge.iterations - before
         self.time_steps += motion.time_steps
         if motion.rest:
