@@ -231,3 +231,14 @@ def test_without_dilatancy_a_cohesive_joint_twists_at_c_a_plus_mu_n_times_ct():
     assert exact <= clarabel <= 1.01 * exact
     for kw in EVERY[2:4]:
         assert exact <= _lam(model, **kw) <= 1.01 * exact / np.cos(np.pi / 8)
+
+
+def test_with_no_backend_given_a_cohesion_of_its_own_chooses_clarabel():
+    """A small model goes to HiGHS, unless its joints have a cohesion above mu ft: their
+    cohesive points cost the pyramid columns and rows, Clarabel's cone one each."""
+    from masonry_dem.solvers.limit_analysis.analysis import choose_backend
+
+    dry, cohesive = _pushed(0.75, 0.0, None), _pushed(0.75, 0.0, 2e3)
+    assert choose_backend(dry) == "highs"
+    assert choose_backend(cohesive) == "clarabel"
+    assert choose_backend(cohesive, "inscribed") == "highs"  # a cone named is obeyed
