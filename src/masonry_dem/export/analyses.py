@@ -131,25 +131,29 @@ def pushover(
     require_model("pushover", model)  # before the folder is claimed
     check_bound(bound)
     if stages is not None:
-        from masonry_dem.solvers.static.stages import as_stages, plan_stages
-        from masonry_dem.solvers.static.stages import pushover as run_staged
+        from masonry_dem.results import observed
+        from masonry_dem.solvers.static.stages import as_stages, plan_stages, run_plans
+        from masonry_dem.solvers.warmup import prepare
 
         if control is not None:
             raise ValueError(
                 "give control or stages, not both: each stage names its own control "
                 f"(Stage(control=...)), got control={control!r}"
             )
-        chosen = as_stages(stages)
-        plan_stages(model, chosen)  # before the folder is claimed
-        return run_staged(
-            model,
-            chosen,
-            settings,
-            monitor=monitor,
-            callback=callback,
-            bound=bound,
-            stream=stream,
-            observer=results_writer(model, out, write_every, observer),
+        plans = plan_stages(model, as_stages(stages))  # checked before the folder is claimed
+        prepare(model.interfaces.count)
+        return observed(
+            lambda on_step: run_plans(
+                model,
+                plans,
+                settings,
+                monitor=monitor,
+                callback=on_step,
+                bound=bound,
+                stream=stream,
+            ),
+            results_writer(model, out, write_every, observer),
+            callback,
         )
     return run(
         model,

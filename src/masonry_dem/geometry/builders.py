@@ -624,17 +624,10 @@ def add_base(
     >>> base, blocks.sizes[base].tolist()
     (39, [1.2000000000000002, 0.1, 0.1])
     """
-    lo, hi = blocks.lower.min(axis=0), blocks.upper.max(axis=0)
     # checked by name: a NaN overhang would surface as a non-finite corner, a negative one
     # would shrink the base silently
     overhang = positive_scalar("overhang", overhang, strict=False)
-    depth = (
-        float(np.median(blocks.sizes[:, 1])) if depth is None else positive_scalar("depth", depth)
-    )
-    base_lo = np.array([lo[0] - overhang, lo[1] - depth, lo[2] - overhang])
-    base_hi = np.array([hi[0] + overhang, lo[1], hi[2] + overhang])
-    base = Blocks.from_boxes(base_lo[None], base_hi[None], 0.0)
-    return Blocks.concatenate(blocks, base), blocks.count
+    return _add_slab(blocks, depth, below=True, overhang=overhang, unit_weight=0.0)
 
 
 def add_top_beam(
@@ -677,12 +670,22 @@ def add_top_beam(
     >>> beam, blocks.sizes[beam].round(6).tolist(), round(float(blocks.lower[beam, 1]), 6)
     (39, [1.2, 0.2, 0.1], 0.6)
     """
-    lo, hi = blocks.lower.min(axis=0), blocks.upper.max(axis=0)
     unit_weight = positive_scalar("unit_weight", unit_weight, strict=False)
+    return _add_slab(blocks, depth, below=False, overhang=0.0, unit_weight=unit_weight)
+
+
+def _add_slab(
+    blocks: Blocks, depth: float | None, below: bool, overhang: float, unit_weight: float
+) -> tuple[Blocks, int]:
+    """One block over the footprint of ``blocks`` (plus ``overhang`` in the plane), ``depth``
+    deep (None: the median block height) under their lowest face or over their highest,
+    appended last; the blocks and its index."""
+    lo, hi = blocks.lower.min(axis=0), blocks.upper.max(axis=0)
     depth = (
         float(np.median(blocks.sizes[:, 1])) if depth is None else positive_scalar("depth", depth)
     )
-    beam_lo = np.array([lo[0], hi[1], lo[2]])
-    beam_hi = np.array([hi[0], hi[1] + depth, hi[2]])
-    beam = Blocks.from_boxes(beam_lo[None], beam_hi[None], unit_weight)
-    return Blocks.concatenate(blocks, beam), blocks.count
+    y0, y1 = (lo[1] - depth, lo[1]) if below else (hi[1], hi[1] + depth)
+    slab_lo = np.array([lo[0] - overhang, y0, lo[2] - overhang])
+    slab_hi = np.array([hi[0] + overhang, y1, hi[2] + overhang])
+    slab = Blocks.from_boxes(slab_lo[None], slab_hi[None], unit_weight)
+    return Blocks.concatenate(blocks, slab), blocks.count

@@ -38,7 +38,7 @@ from typing import Any
 import numpy as np
 
 from masonry_dem.model import LOAD_TYPES, Load, Model, Monitor, Support, _warn_idle_load
-from masonry_dem.results import History, Observer, StepResult, observed
+from masonry_dem.results import History, StepResult
 from masonry_dem.solvers.resources import should_stream
 from masonry_dem.solvers.static.certificate import Bound
 from masonry_dem.solvers.static.outcome import Status
@@ -160,11 +160,13 @@ def as_stages(stages: object) -> list[Stage]:
 
 @dataclass(frozen=True)
 class _Plan:
-    """What one stage runs: its fixed DOFs, its dead and live loads (n, 6) and its label."""
+    """What one stage runs: its fixed DOFs, its dead and live loads (n, 6), its control and
+    its label."""
 
     fixed: np.ndarray
     dead_loads: np.ndarray  # this stage's own dead loads (the carried ones added at run time)
     live: np.ndarray
+    control: DisplacementControl | None
     label: str
 
 
@@ -205,9 +207,8 @@ def plan_stages(model: Model, stages: Sequence[Stage]) -> list[_Plan]:
                     f"this stage (by the model's supports or a stage's); the controlled DOF "
                     f"must be free"
                 )
-        plans.append(_Plan(fixed.copy(), dead, live, f"stage {k + 1} of {len(stages)}"))
-        if stage.name:
-            plans[-1] = replace(plans[-1], label=f"{plans[-1].label} ({stage.name})")
+        label = f"stage {k + 1} of {len(stages)}" + (f" ({stage.name})" if stage.name else "")
+        plans.append(_Plan(fixed.copy(), dead, live, control, label))
     return plans
 
 
@@ -236,8 +237,24 @@ def run_stages(
     in the whole run, marked with its stage); ``monitor`` is the curve's DOF in a stage
     with no control (a stage's control DOF is its curve's). ``settings``, ``bound`` and
     ``stream`` as for :meth:`StaticSolver.run`; ``settings.max_steps`` counts per stage."""
-    chosen = as_stages(stages)
-    plans = plan_stages(model, chosen)
+    plans = plan_stages(model, as_stages(stages))
+    return run_plans(
+        model, plans, settings, monitor=monitor, callback=callback, bound=bound, stream=stream
+    )
+
+
+def run_plans(
+    model: Model,
+    plans: Sequence[_Plan],
+    settings: StaticSettings | None = None,
+    *,
+    monitor: Monitor | None = None,
+    callback: Callable[[StepResult], None] | None = None,
+    bound: Bound = None,
+    stream: bool | str | Path | None = None,
+) -> History:
+    """:func:`run_stages` of stages already planned (:func:`plan_stages`: checked, their
+    loads' warnings logged once), e.g. before a results folder was claimed."""
     t0 = time.perf_counter()
     if stream is None:
         stream = should_stream(model.blocks.count, model.interfaces.count)
@@ -249,7 +266,7 @@ def run_stages(
     plastic = np.zeros((m, 6))
     cracked = np.zeros(m, dtype=bool)
     carried = np.zeros((model.blocks.count, 6))  # the earlier stages' loads, as they ended
-    for k, (stage, plan) in enumerate(zip(chosen, plans, strict=True)):
+    for k, plan in enumerate(plans):
         staged = replace(model, fixed=plan.fixed, dead=carried + plan.dead_loads, live=plan.live)
         solver = StaticSolver(staged, settings, bound=bound)
         if k > 0:  # the state the stage before ended in
@@ -266,7 +283,7 @@ def run_stages(
 
         log.info("%s: %s", model.name, plan.label)
         part = solver.run(
-            control=stage.control,
+            control=plan.control,
             callback=on_step,
             monitor=monitor,
             stream=False if stream is False else True,
@@ -278,42 +295,11 @@ def run_stages(
         hist.certificate = part.certificate
         hist.collapse_bracket = part.collapse_bracket
         if part.status is not Status.COMPLETED:
-            if k + 1 < len(chosen):
-                hist.reason += f"; stages {k + 2} to {len(chosen)} not run"
+            if k + 1 < len(plans):
+                hist.reason += f"; stages {k + 2} to {len(plans)} not run"
             break
         lam = part.final_load_factor
         carried = staged.dead + lam * staged.live
         q, plastic, cracked = solver.q, solver.plastic, solver.cracked
     hist.seconds = time.perf_counter() - t0
     return hist
-
-
-def pushover(
-    model: Model,
-    stages: Sequence[Stage | Mapping[str, Any]],
-    settings: StaticSettings | None = None,
-    monitor: Monitor | None = None,
-    callback: Callable[[StepResult], None] | None = None,
-    bound: Bound = None,
-    stream: bool | str | Path | None = None,
-    observer: Observer | None = None,
-) -> History:
-    """:func:`~masonry_dem.solvers.static.solver.pushover` run in loading stages
-    (:func:`run_stages`): the stages checked before any solve, ``callback`` and ``observer``
-    handed each step of the whole run. ``masonry_dem.pushover(model, stages=...)`` is this
-    with ``out``, a results folder."""
-    from masonry_dem.model import check_bound, require_model
-    from masonry_dem.solvers.warmup import prepare
-
-    require_model("pushover", model)
-    check_bound(bound)
-    chosen = as_stages(stages)
-    plan_stages(model, chosen)  # a bad stage is refused before any solve
-    prepare(model.interfaces.count)
-    return observed(
-        lambda on_step: run_stages(
-            model, chosen, settings, monitor=monitor, callback=on_step, bound=bound, stream=stream
-        ),
-        observer,
-        callback,
-    )
