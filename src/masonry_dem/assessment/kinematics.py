@@ -244,12 +244,7 @@ class Mechanism:
         v0, w = sign * v0, sign * w
         path = None
         if kinematics == "incremental":
-            wmax = float(np.linalg.norm(w, axis=1).max(initial=0.0))
-            if wmax == 0:
-                raise ValueError(
-                    "kinematics = 'incremental': the mode turns no block, so no step of rotation"
-                )
-            path = IncrementalPath(model, v0, w, step / wmax)
+            path = IncrementalPath(model, v0, w, step)
             v0, w = path.xi[0][:, :3].copy(), path.xi[0][:, 3:].copy()
             u = v0 + np.cross(w, centres)
             reach = np.linalg.norm(u, axis=1) + np.linalg.norm(w, axis=1) * half

@@ -11,10 +11,15 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
+from masonry_dem._progress import reporting
 from masonry_dem.cli.options import add_results
+
+if TYPE_CHECKING:
+    from masonry_dem.assessment.incremental import IncrementalProgress
 
 #: the keys of a --config file: its name, the parameter it sets, its help
 FIELDS: dict[str, str] = {
@@ -124,7 +129,41 @@ def add_parser(subparsers) -> None:
         "--case", default=None, help="the run's case file, if summary.json's is not found"
     )
     p.add_argument("--no-render", action="store_true", help="skip adrs.png")
+    p.add_argument(
+        "--quiet", action="store_true", help="no progress line while the incremental path runs"
+    )
     p.set_defaults(func=assess_command)
+
+
+class IncrementalBar:
+    """The progress line of the incremental kinematics (tqdm on stderr): its steps, the
+    largest rotation of a block and the kinetic norm the lock test reads
+    (``IncrementalProgress``). It appears at the first step: an assessment that integrates
+    no path shows nothing."""
+
+    def __init__(self, quiet: bool) -> None:
+        self.quiet = quiet
+        self.bar: Any = None
+
+    def __enter__(self) -> IncrementalBar:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        if self.bar is not None:
+            self.bar.close()
+
+    def __call__(self, event: IncrementalProgress) -> None:
+        if self.quiet:
+            return
+        if self.bar is None:
+            from tqdm import tqdm
+
+            self.bar = tqdm(desc="incremental kinematics", unit="step")
+        self.bar.set_postfix_str(
+            f"a block turned {math.degrees(event.rotation):.1f} deg, kinetic norm "
+            f"{event.kinetic:.2f} of the mode's"
+        )
+        self.bar.update(1)
 
 
 def _number(name: str):
@@ -246,15 +285,16 @@ def assess_command(args: argparse.Namespace) -> int:
     folder = Path(args.results)
     params, from_file = parameters(args)
     try:
-        data = run_assessment(
-            folder,
-            params,
-            args.alpha0,
-            args.case,
-            not args.no_render,
-            args.moving,
-            args.kinematics,
-        )
+        with IncrementalBar(args.quiet) as bar, reporting(bar):
+            data = run_assessment(
+                folder,
+                params,
+                args.alpha0,
+                args.case,
+                not args.no_render,
+                args.moving,
+                args.kinematics,
+            )
     except ValueError as exc:  # a value of the file is named with the file, as case files are
         key = str(exc).split(" ", 1)[0].rstrip(":")
         if key in from_file:
