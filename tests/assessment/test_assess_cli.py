@@ -315,3 +315,14 @@ def test_overwrite_removes_the_assessment(tmp_path):
     args = ["run", str(case), "--out", str(out), "--no-render", "--quiet", "--overwrite"]
     assert main(args) == 0
     assert not FILES & {p.name for p in out.iterdir()}
+
+
+def test_the_incremental_path_shows_its_steps_unless_quiet(block_run, capsys):
+    """The incremental kinematics reports each step; ``assess`` shows them on one progress
+    line on stderr, and nothing with ``--quiet``."""
+    args = ["assess", str(block_run), *NTC, "--kinematics", "incremental", "--no-render"]
+    assert main(args) == 0
+    err = capsys.readouterr().err
+    assert "incremental kinematics" in err and "a block turned" in err
+    assert main([*args, "--quiet"]) == 0
+    assert "incremental kinematics" not in capsys.readouterr().err

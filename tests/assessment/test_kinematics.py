@@ -415,6 +415,32 @@ def test_incremental_block_rocks_about_its_toe_exactly(block):
     assert curve.d_k0 == pytest.approx(t / 2, rel=1e-12)
 
 
+def test_incremental_steps_by_the_projected_mode(block):
+    """A mode that pushes the block's toe into its base (the rocking about the toe, 0.37,
+    plus a turn of 0.2 about the heel) is projected onto the rocking about the toe, which
+    turns the block more slowly than the mode given: the path's step is ``step`` radians
+    of the projected mode's rotation (exactly), and the block still rocks about its toe
+    exactly."""
+    model, b, h, t, _, _, _ = block
+    centre = model.blocks.centres[[b]]
+    mode = np.zeros((model.blocks.count, 6))
+    mode[b] = (
+        _rotation_about(centre, (0.0, t), 0.37)[0] + _rotation_about(centre, (0.0, 0.0), 0.2)[0]
+    )
+    mech = Mechanism.of(model, mode, kinematics="incremental")
+    assert mech.path is not None
+    turn = float(np.linalg.norm(mech.w[b]))
+    assert turn < 0.57 - 0.05  # the projection took the push into the base away
+    assert mech.path.ds * turn == pytest.approx(0.005, rel=1e-12)
+    about_toe = _rotation_about(centre, (0.0, t), turn)[0]
+    moved = np.hstack([mech.v0[b] + np.cross(mech.w[b], centre[0]), mech.w[b]])
+    assert np.abs(moved - about_toe).max() < 1e-12 * turn
+    curve = mech.capacity_curve()
+    theta = turn * curve.s
+    closed = (t * np.cos(theta) - h * np.sin(theta)) / (h * np.cos(theta) + t * np.sin(theta))
+    assert np.abs(curve.alpha - closed).max() < 1e-12
+
+
 def _hinged_pair_alpha(A, C0, r1, r2, W1, W2):
     """alpha(th) of a lower body turning by th about the toe A and an upper one by 2 th
     about the hinge C (turning with the lower body), their centroids at A + r1 and C0 + r2
