@@ -98,12 +98,23 @@ def test_alpha0_of_the_run_by_default(block_run):
 
 
 @pytest.mark.parametrize("code", ["ntc2018", "ec8"])
-def test_default_wall(default_run, code):
-    """The bundled wall: every number finite, the verdicts those of the ratios."""
+def test_default_wall(default_run, code, capsys):
+    """The bundled wall: every number finite, the verdicts those of the ratios. Its
+    pushover's mode is no finite mechanism of rigid blocks (docs/assessment.md): the motion
+    chosen overlaps, and the command says by how much, against the blocks' least size (70 mm
+    thick), and why the incremental path was not taken."""
     extra = ["--F0", "2.4", "--Tc", "0.3"] if code == "ntc2018" else ["--spectrum-type", "1"]
     args = ["assess", str(default_run), "--code", code, "--ag", "0.25", "--soil", "B", *extra]
     assert main(args) == 0
     a = _read(default_run)
+    out = capsys.readouterr().out
+    assert a["overlap_at_du"] > 1e-9 and a["least_block_size"] == pytest.approx(0.07, rel=TOL)
+    worst = max(a["overlap_at_du"], a["drift_at_du"])
+    assert f"its blocks overlap by {1e3 * a['overlap_at_du']:.3g} mm" in a["motion_note"]
+    share = f"{100 * worst / a['least_block_size']:.2g} % of the moving blocks' least size (70 mm)"
+    assert share in a["motion_note"]
+    assert "the incremental path, which keeps the contacts, ends before" in a["motion_note"]
+    assert f"warning: {a['motion_note']}; a limit analysis of the same case" in out
     assert a["code"] == code
     assert a["passes"] == (a["a0_star"] >= a["demand"])
     assert 0 < a["e_star"] <= 1 and a["M_star"] > 0

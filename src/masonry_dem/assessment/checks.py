@@ -16,6 +16,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import asdict, dataclass
 from typing import Any, Literal
 
@@ -628,11 +629,48 @@ def assess_mode(
     # ties (up to the floor among them): the first listed, the chain first
     best = min(found, key=error)
     out, curve, mech, overlap, drift = found[best]
+    least = float(np.asarray(model.blocks.sizes, dtype=float)[mech.moving].min())
     info = {
         "kinematics": best,
         "overlap_at_du": overlap,
         "overlaps": {k: v[3] for k, v in found.items()},
         "drift_at_du": drift,
         "drifts": {k: v[4] for k, v in found.items()},
+        "least_block_size": least,
+        "motion_note": motion_note(best, overlap, drift, least, found),
     }
     return out, curve, mech, info
+
+
+def motion_note(
+    best: str,
+    overlap: float,
+    drift: float,
+    least: float,
+    found: Mapping[str, tuple[Assessment, CapacityCurve, Mechanism, float, float]],
+) -> str:
+    """What an engineer must know of the finite motion the nonlinear check rests on, when it
+    is not admissible (its blocks overlap, or a held block drifts, beyond round-off at the
+    displacement capacity): how much against the moving blocks' least size, and why no
+    admissible one was found. Empty when the motion is admissible or was not checked."""
+    worst = max(overlap, drift)
+    if not math.isfinite(worst) or worst <= OVERLAP_FLOOR:
+        return ""
+    parts = []
+    if overlap > OVERLAP_FLOOR:
+        parts.append(f"its blocks overlap by {1e3 * overlap:.3g} mm")
+    if drift > OVERLAP_FLOOR:
+        parts.append(f"a held block drifts by {1e3 * drift:.3g} mm")
+    text = (
+        f"the finite motion of the nonlinear check ({best} kinematics) is not admissible at "
+        f"the displacement capacity: {' and '.join(parts)}, {100 * worst / least:.2g} % of "
+        f"the moving blocks' least size ({1e3 * least:.3g} mm)"
+    )
+    incremental = found.get("incremental")
+    if incremental is not None and incremental[1].reason:
+        text += (
+            "; the incremental path, which keeps the contacts, ends before alpha = 0 ("
+            + incremental[1].reason
+            + ")"
+        )
+    return text

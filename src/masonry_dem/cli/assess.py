@@ -329,5 +329,13 @@ def assess_command(args: argparse.Namespace) -> int:
             f"{linear}; nonlinear: {'passes' if data['passes_nonlinear'] else 'fails'} "
             f"({data['nonlinear_summary']})"
         )
+    if data["motion_note"]:
+        note = f"warning: {data['motion_note']}"
+        if data["analysis"] != "limit":
+            note += (
+                "; a limit analysis of the same case (masonry-dem limit) gives a mechanism of "
+                "rigid blocks to assess beside it"
+            )
+        print(note)
     print(f"results in {folder}/ ({', '.join(data['files'])})")
     return 0

@@ -171,10 +171,12 @@ def verdict(summary: dict[str, Any], assessment: dict[str, Any] | None) -> tuple
             nonlinear += ")"
         ok = bool(assessment.get("passes")) and nonlinear_ok is not False
         word = "PASSES" if ok else "FAILS"
+        note = str(assessment.get("motion_note") or "")
         return (
             "pass" if ok else "fail",
             f"The mechanism {word} the check of {code} at ag = "
-            f"{_num(assessment.get('spectrum', {}).get('ag'), '.3g')} g: {linear}; {nonlinear}.",
+            f"{_num(assessment.get('spectrum', {}).get('ag'), '.3g')} g: {linear}; {nonlinear}."
+            + (f" Note: {note[0].upper()}{note[1:]}." if note else ""),
         )
     status = summary.get("status")
     if status == "collapse":
