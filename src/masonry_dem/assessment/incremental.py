@@ -25,10 +25,14 @@ STEP = 0.005
 CONTACT_GAP = 1e-3
 #: the incremental motion locks when the projections onto the contacts have left its twists
 #: less than this share of the mode's norm in the kinetic metric: the capacity curve stops
-#: there. A heuristic between measured cases: the limit analysis's mechanisms of the default
-#: and U walls keep 0.84 and 0.97 of it down to alpha = 0; the pushover's mechanisms fall to
-#: 0.05 (default wall) and 0.42 (U wall, where 6 blocks keep turning and the 39 that carried
-#: 90 % of the mode stop) within 0.05 rad of their fastest block
+#: there. alpha holds the joints' work rate D at its value on the mode, so on a motion that
+#: kept a share k of the mode's norm D weighs 1/k times what it would on the mode: past the
+#: lock alpha is biased upwards and a d_k0 found there would lie too far. The share is ours;
+#: measured, the verdicts do not depend on it: the limit analysis's mechanisms of the
+#: default, U and windowed U walls keep 0.84-0.98 down to alpha = 0, the pushover's of the
+#: default and U walls fall below 0.5 within two steps (to 0.06 and 0.42 by 180 degrees, with
+#: alpha still positive), and d0* and the verdicts of all five are the same for 0.1, 0.25,
+#: 0.5 and 0.75 (docs/history/assessment_record.md)
 LOCKED = 0.5
 #: a corner in contact sticks (its tangential relative velocity held at 0 as well) when the
 #: mode slides it by at most this share of the largest corner speed at s = 0 (0: none sticks)
