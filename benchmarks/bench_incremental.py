@@ -29,36 +29,12 @@ from pathlib import Path
 import numpy as np
 import scipy.sparse.linalg as sla
 from _machine import arguments, print_machine
+from bench_limit_analysis import U_WALL
 
 import masonry_dem as md
 import masonry_dem.assessment.incremental as incremental
 from masonry_dem.assessment.kinematics import Mechanism
 from masonry_dem.cases.casefile import load_case
-
-#: the U wall of docs/walls_that_meet.md
-U_WALL = """
-[geometry]
-builder = "u_wall"
-blocks_along_length = 8
-courses = 21
-a = 0.02824
-b = 0.07978
-s = 0.03968
-unit_weight = 26.8e3
-return_blocks = 4
-base = true
-[material]
-kn = 1e9
-kt = 0.4e9
-friction = 0.7
-[[supports]]
-select = "base"
-[[loads]]
-type = "self_weight"
-[[loads]]
-type = "weight_proportional"
-direction = [0, 0, 1]
-"""
 
 
 def wall(name: str) -> md.Model:

@@ -16,7 +16,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from masonry_dem._progress import reporting
-from masonry_dem.cli.options import add_results
+from masonry_dem.cli.options import EventLine, add_results
 
 if TYPE_CHECKING:
     from masonry_dem.assessment.incremental import IncrementalProgress
@@ -135,35 +135,19 @@ def add_parser(subparsers) -> None:
     p.set_defaults(func=assess_command)
 
 
-class IncrementalBar:
-    """The progress line of the incremental kinematics (tqdm on stderr): its steps, the
-    largest rotation of a block and the kinetic norm the lock test reads
-    (``IncrementalProgress``). It appears at the first step: an assessment that integrates
-    no path shows nothing."""
+class IncrementalBar(EventLine):
+    """The progress line of the incremental kinematics: its steps, the largest rotation of a
+    block and the kinetic norm the lock test reads (``IncrementalProgress``). An assessment
+    that integrates no path shows nothing."""
 
     def __init__(self, quiet: bool) -> None:
-        self.quiet = quiet
-        self.bar: Any = None
-
-    def __enter__(self) -> IncrementalBar:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        if self.bar is not None:
-            self.bar.close()
+        super().__init__("incremental kinematics", "step", quiet)
 
     def __call__(self, event: IncrementalProgress) -> None:
-        if self.quiet:
-            return
-        if self.bar is None:
-            from tqdm import tqdm
-
-            self.bar = tqdm(desc="incremental kinematics", unit="step")
-        self.bar.set_postfix_str(
+        self.tick(
             f"a block turned {math.degrees(event.rotation):.1f} deg, kinetic norm "
             f"{event.kinetic:.2f} of the mode's"
         )
-        self.bar.update(1)
 
 
 def _number(name: str):

@@ -10,9 +10,10 @@ import logging
 import sys
 import time
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 from masonry_dem.cli.options import (
+    EventLine,
     add_case,
     add_max_memory,
     add_output,
@@ -104,38 +105,22 @@ def limit_memory(case, options: dict, max_memory: float | None = None) -> LimitE
     return est
 
 
-class LimitBar:
-    """The progress line of a limit analysis (tqdm on stderr): the iterations of its stage
-    and the two values that close on lambda (``LimitProgress``). It appears at the first
-    iteration reported: a solve that reports none (HiGHS, Clarabel on small walls) shows
-    nothing."""
+class LimitBar(EventLine):
+    """The progress line of a limit analysis: the iterations of its stage and the two values
+    that close on lambda (``LimitProgress``). A solve that reports none (HiGHS, Clarabel on
+    small walls) shows nothing."""
 
     def __init__(self, name: str, quiet: bool) -> None:
-        self.name, self.quiet = name, quiet
-        self.bar: Any = None
-
-    def __enter__(self) -> LimitBar:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        if self.bar is not None:
-            self.bar.close()
+        super().__init__(name[:40], "it", quiet)
 
     def __call__(self, event: LimitProgress) -> None:
-        if self.quiet:
-            return
-        if self.bar is None:
-            from tqdm import tqdm
-
-            self.bar = tqdm(desc=self.name[:40], unit="it")
         if event.lower == event.upper:
-            self.bar.set_postfix_str(f"{event.stage} {event.iteration}: lambda {event.lower:.6g}")
+            self.tick(f"{event.stage} {event.iteration}: lambda {event.lower:.6g}")
         else:
-            self.bar.set_postfix_str(
+            self.tick(
                 f"{event.stage} {event.iteration}: lambda in [{event.lower:.6g}, "
                 f"{event.upper:.6g}] (not yet certified)"
             )
-        self.bar.update(1)
 
 
 def run_limit(

@@ -6,7 +6,7 @@ from __future__ import annotations
 import argparse
 from collections.abc import Callable, Collection
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 #: ``--overwrite`` of the commands that write a results folder
 OVERWRITE_HELP = (
@@ -112,3 +112,34 @@ def parameter_file(path: str | None, keys: Collection[str], what: str) -> dict[s
             f"{what} {where}: unknown key {unknown[0]!r}; the keys are {', '.join(keys)}"
         )
     return params
+
+
+Line = TypeVar("Line", bound="EventLine")
+
+
+class EventLine:
+    """A progress line on stderr (tqdm) that appears at the first event a running analysis
+    reports (:mod:`masonry_dem._progress`), one tick per event, and closes on exit: an
+    analysis that reports nothing shows nothing, and ``quiet`` shows nothing at all."""
+
+    def __init__(self, desc: str, unit: str, quiet: bool) -> None:
+        self.desc, self.unit, self.quiet = desc, unit, quiet
+        self.bar: Any = None
+
+    def __enter__(self: Line) -> Line:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        if self.bar is not None:
+            self.bar.close()
+
+    def tick(self, postfix: str) -> None:
+        """One event, described by ``postfix``."""
+        if self.quiet:
+            return
+        if self.bar is None:
+            from tqdm import tqdm
+
+            self.bar = tqdm(desc=self.desc, unit=self.unit)
+        self.bar.set_postfix_str(postfix)
+        self.bar.update(1)
