@@ -82,6 +82,7 @@ def test_block_from_its_run(block_run, capsys):
     np.testing.assert_allclose(a["control_point"], [0.15, 0.2, 0.1], atol=TOL)
     assert a["lambda"] == pytest.approx(0.5, rel=0.005)  # the run's own multiplier
     assert a["kinematics"] == "chain" and a["overlap_at_du"] < TOL  # one body: both exact
+    assert a["motion_note"] == "" and "warning" not in printed
     curve = np.loadtxt(block_run / "capacity_curve.csv", delimiter=",", skiprows=1)
     assert curve[0, 1] == pytest.approx(0.5, rel=TOL) and curve[-1, 1] == 0.0
     assert curve[-1, 3] == pytest.approx(0.1, rel=TOL)

@@ -633,3 +633,22 @@ def test_incremental_bad_input_and_auto_spares_it_on_a_chain():
     assert info["kinematics"] == "chain"
     assert set(info["overlaps"]) == {"chain", "independent"}
     assert mech.path is None
+
+
+def test_the_motion_note_names_an_overlap_beyond_the_contact_gap():
+    """The note of an inadmissible motion starts past the incremental path's contact gap
+    (1e-3 of the moving blocks' least size: 70 micrometres for 70 mm blocks), says the
+    overlap against that size, and where the incremental path ended."""
+    from masonry_dem.assessment.checks import motion_note
+    from masonry_dem.assessment.incremental import CONTACT_GAP
+
+    least = 0.07
+    assert motion_note("independent", 0.999 * CONTACT_GAP * least, 0.0, least, {}) == ""
+    assert motion_note("chain", math.inf, math.inf, least, {}) == ""  # no alpha = 0: no check
+    note = motion_note("independent", 0.004, 0.0, least, {})
+    assert note.endswith(
+        "its blocks overlap by 4 mm, 5.7 % of the moving blocks' least size (70 mm)"
+    )
+    assert "drifts" not in note
+    note = motion_note("chain", 0.0, 1.01 * CONTACT_GAP * least, least, {})
+    assert "a held block drifts by 0.0707 mm, 0.1 %" in note

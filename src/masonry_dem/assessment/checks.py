@@ -22,6 +22,7 @@ from typing import Any, Literal
 
 import numpy as np
 
+from masonry_dem.assessment.incremental import CONTACT_GAP
 from masonry_dem.assessment.kinematics import (
     KINEMATICS,
     MOVING,
@@ -650,16 +651,18 @@ def motion_note(
     found: Mapping[str, tuple[Assessment, CapacityCurve, Mechanism, float, float]],
 ) -> str:
     """What an engineer must know of the finite motion the nonlinear check rests on, when it
-    is not admissible (its blocks overlap, or a held block drifts, beyond round-off at the
-    displacement capacity): how much against the moving blocks' least size, and why no
-    admissible one was found. Empty when the motion is admissible or was not checked."""
+    is not admissible: its blocks overlap, or a held block drifts, at the displacement
+    capacity by more than :data:`~masonry_dem.assessment.incremental.CONTACT_GAP` of the
+    moving blocks' least size ``least`` (the gap at which the incremental path takes two
+    blocks as in contact): by how much, against ``least``, and why no admissible motion was
+    found. Empty when the motion is admissible or was not checked."""
     worst = max(overlap, drift)
-    if not math.isfinite(worst) or worst <= OVERLAP_FLOOR:
+    if not math.isfinite(worst) or worst <= CONTACT_GAP * least:
         return ""
     parts = []
-    if overlap > OVERLAP_FLOOR:
+    if overlap > CONTACT_GAP * least:
         parts.append(f"its blocks overlap by {1e3 * overlap:.3g} mm")
-    if drift > OVERLAP_FLOOR:
+    if drift > CONTACT_GAP * least:
         parts.append(f"a held block drifts by {1e3 * drift:.3g} mm")
     text = (
         f"the finite motion of the nonlinear check ({best} kinematics) is not admissible at "
