@@ -350,8 +350,10 @@ class IncrementalPath:
         return norms / norms[0] if norms[0] > 0 else np.ones(norms.size)
 
     def _reach(self, last: float) -> None:
-        """Integrate to the node past ``last`` (the twist interpolates between nodes)."""
-        while self.s[-1] <= last:
+        """Integrate to the node past ``last`` (the twist interpolates between nodes), or to
+        the first node where the motion has locked (:data:`LOCKED`): past it the capacity
+        curve ends, and a configuration asked for there is the last step's, continued."""
+        while self.s[-1] <= last and self._norms()[-1] >= LOCKED:
             self._advance()
 
     def motion(

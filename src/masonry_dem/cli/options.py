@@ -141,5 +141,5 @@ class EventLine:
             from tqdm import tqdm
 
             self.bar = tqdm(desc=self.desc, unit=self.unit)
-        self.bar.set_postfix_str(postfix)
+        self.bar.set_postfix_str(postfix, refresh=False)  # shown by the update, with its count
         self.bar.update(1)
