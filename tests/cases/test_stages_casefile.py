@@ -127,3 +127,24 @@ def test_masonry_dem_run_runs_the_stages_and_limit_refuses_them(tmp_path, capsys
     capsys.readouterr()
     assert main(["limit", str(path), "--out", str(tmp_path / "la")]) == 2
     assert "loading stages" in capsys.readouterr().err
+
+
+def test_an_idle_load_of_a_stage_is_named_once_per_run(tmp_path, caplog):
+    """A stage's live load on held DOFs alone (a push on the base) is named when the stages
+    are planned to run, once: loading the file checks the stages without warning."""
+    import logging
+
+    from helpers.case_files import write_case
+    from masonry_dem.cli import main
+
+    data = copy.deepcopy(STAGED)
+    data["stages"][1]["loads"].append(
+        {"type": "point", "select": "base", "force": [1, 0, 0], "live": True}
+    )
+    path = write_case(tmp_path, data)
+    with caplog.at_level(logging.WARNING):
+        assert (
+            main(["run", str(path), "--out", str(tmp_path / "res"), "--no-render", "--quiet"]) == 0
+        )
+    named = [r for r in caplog.records if "acts only on held DOFs" in r.getMessage()]
+    assert len(named) == 1 and "loads[1] (PointLoad, live)" in named[0].getMessage()

@@ -419,8 +419,8 @@ def _stages(
                     name=spec.get("name") or "",
                 )
             )
-    with _at(source, "[stages]"):
-        plan_stages(model, as_stages(stages))
+    with _at(source, "[stages]"):  # checked here; planned again, with warnings, at the run
+        plan_stages(model, as_stages(stages), warn=False)
     return tuple(stages)
 
 

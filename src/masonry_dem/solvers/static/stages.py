@@ -170,10 +170,11 @@ class _Plan:
     label: str
 
 
-def plan_stages(model: Model, stages: Sequence[Stage]) -> list[_Plan]:
+def plan_stages(model: Model, stages: Sequence[Stage], warn: bool = True) -> list[_Plan]:
     """Each stage's fixed DOFs and own loads, checked before anything runs: a stage's
     loads and supports on the model's blocks, its control on a DOF free in it, and some
-    DOF left free."""
+    DOF left free. ``warn``: log a load that acts on held DOFs alone (False: a check whose
+    stages are planned again when they run, which warns then)."""
     n = model.blocks.count
     fixed = model.fixed.copy()
     plans = []
@@ -190,7 +191,8 @@ def plan_stages(model: Model, stages: Sequence[Stage]) -> list[_Plan]:
             for j, load in enumerate(stage.loads):
                 vector = load.vector(model.blocks)
                 (live if load.live else dead)[...] += vector
-                _warn_idle_load(j, load, vector, fixed)
+                if warn:
+                    _warn_idle_load(j, load, vector, fixed)
         except ValueError as exc:
             raise ValueError(f"{where}: {exc}") from exc
         if fixed.all():
