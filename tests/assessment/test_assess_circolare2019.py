@@ -86,8 +86,13 @@ def test_slv_of_a_block_at_ground_level(mechanism):
     assert out.displacement_capacity == out.d_SLV and out.nonlinear_period == out.T_SLV
     assert out.displacement_ratio == pytest.approx(0.04 / 0.027165786102205446, rel=TOL)
     assert out.passes_nonlinear is True
-    # the 2009 quantities are not those of this check, and are not reported
-    assert out.du_star is None and out.Ts is None and out.ds_star is None
+    # the curve's secant period (the 2009 check's, EC8's T*) reported beside it, by hand:
+    # d_u* = 0.04 m, d_s* = 0.016 m = t/2 - c t with c = 0.42, a_s* = 2 c t g / (FC sqrt(h^2
+    # + (1 - 4 c^2) t^2)) = 2.9455 m/s2, Ts = 2 pi sqrt(d_s* / a_s*) = 0.4631 s
+    a_s = 2 * 0.42 * 0.2 * G / (FC * math.sqrt(0.4**2 + (1 - 4 * 0.42**2) * 0.2**2))
+    assert out.du_star == pytest.approx(0.04, rel=TOL) and out.ds_star == pytest.approx(0.016)
+    assert out.as_star == pytest.approx(a_s, rel=TOL)
+    assert out.Ts == pytest.approx(2 * math.pi * math.sqrt(0.016 / a_s), rel=TOL)
     assert out.d_SLC is None and out.T_SLC is None
     assert "T_SLV = 1.68 pi" in out.nonlinear_summary and "xi = 8 %" in out.nonlinear_summary
 

@@ -401,6 +401,15 @@ def assess(
     if curve.complete:
         nonlinear.update(d_k0=curve.d_k0, d0_star=curve.d0_star)
         s_end = float(curve.s[-1])
+        # the curve's secant period, Circolare 2009 C8A.4.2.2: d_u* = 0.4 d0*, Ts = 2 pi
+        # sqrt(d_s*/a_s*) at d_s* = 0.4 d_u* (EN 1998-1's T* here); the 2009 check's and
+        # EC8's, and reported beside the 2019 check (which reads T_SLV or T_SLC)
+        du = 0.4 * curve.d0_star
+        ds = 0.4 * du
+        s_s = mechanism.configuration_at(ds * e_star, s_end)
+        as_star = float(mechanism.alpha(s_s, alpha0)[0]) * G / (e_star * FC)
+        secant = 2.0 * math.pi * math.sqrt(ds / as_star)
+        nonlinear.update(du_star=du, ds_star=ds, as_star=as_star, Ts=secant)
         if circ2019:
             # C8.7.1.2.1.6: d_SLV = 0.4 d0 (d_SLC = 0.6 d0), d0 where a(d) = 0
             capacity = LIMIT_SHARE[limit_state] * curve.d0_star
@@ -415,15 +424,7 @@ def assess(
                 f"T_{limit_state}": period,
             }
         else:
-            # Circolare 2009 C8A.4.2.2: d_u* = 0.4 d0*, Ts = 2 pi sqrt(d_s*/a_s*) at
-            # d_s* = 0.4 d_u* (also EN 1998-1's T* here)
-            du = 0.4 * curve.d0_star
-            ds = 0.4 * du
-            s_s = mechanism.configuration_at(ds * e_star, s_end)
-            as_star = float(mechanism.alpha(s_s, alpha0)[0]) * G / (e_star * FC)
-            period = 2.0 * math.pi * math.sqrt(ds / as_star)
-            capacity = du
-            nonlinear.update(du_star=du, ds_star=ds, as_star=as_star, Ts=period)
+            capacity, period = du, secant
 
     if code == "ntc2018":
         ground, height = ntc_linear_demand(spectrum, building, q, demand_at_height)

@@ -325,13 +325,18 @@ ASSESSMENT_ROWS = (
 ONE_CHECK_ROWS = frozenset(
     ("nonlinear_check", "d_SLV", "T_SLV", "d_SLC", "T_SLC", "nonlinear_damping", "du_star", "Ts")
 )
+#: the secant period's rows: assessment.json reports them beside the Circolare 2019 check,
+#: the page only for the check that reads them
+SECANT_ROWS = frozenset(("du_star", "Ts"))
 
 
 def _assessment_table(a: dict[str, Any]) -> str:
     rows = []
     for key, label, unit, fmt, factor in ASSESSMENT_ROWS:
         value = a.get(key)
-        if value is None and key in ONE_CHECK_ROWS:
+        if key in ONE_CHECK_ROWS and (
+            value is None or (key in SECANT_ROWS and a.get("nonlinear_check") == "circolare_2019")
+        ):
             continue
         if isinstance(value, str):
             text = html.escape(value)
