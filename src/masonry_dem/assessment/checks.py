@@ -655,8 +655,8 @@ def motion_note(
     is not admissible: its blocks overlap, or a held block drifts, at the displacement
     capacity by more than :data:`~masonry_dem.assessment.incremental.CONTACT_GAP` of the
     moving blocks' least size ``least`` (the gap at which the incremental path takes two
-    blocks as in contact): by how much, against ``least``, and why no admissible motion was
-    found. Empty when the motion is admissible or was not checked."""
+    blocks as in contact): by how much, against ``least``, and whether the incremental path
+    was tried in vain. Empty when the motion is admissible or was not checked."""
     worst = max(overlap, drift)
     if not math.isfinite(worst) or worst <= CONTACT_GAP * least:
         return ""
@@ -672,9 +672,6 @@ def motion_note(
     )
     incremental = found.get("incremental")
     if incremental is not None and incremental[1].reason:
-        text += (
-            "; the incremental path, which keeps the contacts, ends before alpha = 0 ("
-            + incremental[1].reason
-            + ")"
-        )
+        # its reason in full is the incremental run's nonlinear_reason (--kinematics)
+        text += "; the incremental path, which keeps the contacts, reaches no alpha = 0"
     return text
