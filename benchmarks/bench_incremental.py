@@ -3,10 +3,11 @@ mechanism integrated in steps, the blocks' twists projected onto the joints' con
 each step), its sparse factorizations as SuperLU's defaults make them against the symmetric
 setting the package uses.
 
-Run:  python benchmarks/bench_incremental.py [--steps 30] [--repeat 2] [--walls default u]
+Run:  python benchmarks/bench_incremental.py [--steps 30] [--repeat 2] [--walls default u big]
 
 For each wall (``default``: the bundled case; ``u``: the U wall of docs/walls_that_meet.md,
-8 x 21 blocks with returns of 4, dry joints) it runs the associative limit analysis, takes
+8 x 21 blocks with returns of 4, dry joints; ``big``: the same U wall of 14 x 30 blocks with
+returns of 6, as bench_walls_that_meet.py builds it) it runs the associative limit analysis, takes
 its mechanism (``Mechanism.of(..., kinematics="incremental")``) and integrates ``--steps``
 steps of the path (each: two predictions, two projections, 1-4 factorizations each). In one
 run, alternating the two settings ``--repeat`` times, best of each, it prints:
@@ -40,9 +41,16 @@ from masonry_dem.cases.casefile import load_case
 def wall(name: str) -> md.Model:
     if name == "default":
         return load_case().model
+    text = U_WALL
+    if name == "big":  # bench_walls_that_meet.py's big U wall: 14 blocks x 30 courses, returns 6
+        text = (
+            U_WALL.replace("blocks_along_length = 8", "blocks_along_length = 14")
+            .replace("courses = 21", "courses = 30")
+            .replace("return_blocks = 4", "return_blocks = 6")
+        )
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "u_wall.toml"
-        path.write_text(U_WALL)
+        path.write_text(text)
         return load_case(path).model
 
 
@@ -64,7 +72,9 @@ def main() -> None:
     parser = arguments(__doc__)
     parser.add_argument("--steps", type=int, default=30)
     parser.add_argument("--repeat", type=int, default=2)
-    parser.add_argument("--walls", nargs="+", default=["default", "u"])
+    parser.add_argument(
+        "--walls", nargs="+", choices=("default", "u", "big"), default=["default", "u"]
+    )
     args = parser.parse_args()
     print_machine()
     symmetric = incremental.spd_lu
