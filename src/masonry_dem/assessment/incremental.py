@@ -61,9 +61,10 @@ class IncrementalProgress:
 
 def spd_lu(matrix: Any) -> Any:
     """SuperLU of a sparse symmetric positive definite matrix: the ordering of A^T + A and
-    the diagonal pivots, as SuperLU's user guide sets it for a symmetric matrix: 20 % less
-    time a step than the default COLAMD with partial pivoting on the U wall's mechanism (327
-    blocks), the same on the 46-block default wall (benchmarks/bench_incremental.py)."""
+    the diagonal pivots, as SuperLU's user guide sets it for a symmetric matrix: 20-25 % less
+    time a step than the default COLAMD with partial pivoting on the U walls' mechanisms (327
+    and 766 blocks), the same on the 46-block default wall, d0* the same to 1e-10
+    (benchmarks/bench_incremental.py)."""
     from scipy.sparse.linalg import splu
 
     return splu(
