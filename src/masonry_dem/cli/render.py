@@ -90,6 +90,16 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
 
 
 def run(args: argparse.Namespace) -> int:
+    from masonry_dem._signals import run_interruptible
+
+    # in a worker thread: a Ctrl-C stops the main thread at once, and the scene's VTK objects
+    # stay with the worker to the process's end; raised in the thread that built them, it
+    # unwound their frames and freed a render window VTK was still setting up (SIGSEGV in
+    # about one interrupted render in four)
+    return run_interruptible(lambda: _render(args))
+
+
+def _render(args: argparse.Namespace) -> int:
     from masonry_dem.export import render  # imports pyvista lazily, only when rendering
     from masonry_dem.export.results_folder import warn_if_unfinished
 
