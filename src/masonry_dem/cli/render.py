@@ -94,8 +94,8 @@ def run(args: argparse.Namespace) -> int:
 
     # in a worker thread: a Ctrl-C stops the main thread at once, and the scene's VTK objects
     # stay with the worker to the process's end; raised in the thread that built them, it
-    # unwound their frames and freed a render window VTK was still setting up (SIGSEGV in
-    # about one interrupted render in four)
+    # unwound their frames, most likely freeing a render window VTK was still setting up
+    # (SIGSEGV in 4 of 14 interrupted renders; docs/reliability.md)
     return run_interruptible(lambda: _render(args))
 
 
