@@ -1,5 +1,6 @@
 """Small models on a rigid base for the solver tests: one block of a x b x s (``A, B, S``),
-whose tilting load factor out of plane is S / A, and walls held on their left column."""
+whose tilting load factor out of plane is S / A, walls held on their left column, and a
+block pushed along its bed joint under a dead load (:func:`pushed_joint`)."""
 
 from __future__ import annotations
 
@@ -11,10 +12,19 @@ import pytest
 from masonry_dem.geometry import builders
 from masonry_dem.geometry import selectors as sel
 from masonry_dem.geometry.blocks import Blocks
-from masonry_dem.model import InterfaceMaterial, Model, SelfWeight, Support, WeightProportional
+from masonry_dem.model import (
+    InterfaceMaterial,
+    Model,
+    PointLoad,
+    SelfWeight,
+    Support,
+    WeightProportional,
+)
 from masonry_dem.solvers.static import StaticSettings, StaticSolver
 
 A, B, S = 0.2, 0.3, 0.1  # block height, width, thickness [m]
+#: the pushed joint: a block 0.1 high on a bed joint of 0.4 x 0.2 m under a dead load [N]
+JOINT_HEIGHT, JOINT_LENGTH, JOINT_WIDTH, JOINT_LOAD = 0.1, 0.4, 0.2, 20e3
 
 
 def on_base(
@@ -114,3 +124,28 @@ def assert_closed_form(build, settings: StaticSettings | None = None) -> None:
     hist = StaticSolver(model, settings or StaticSettings()).run()
     assert hist.status == "collapse", hist.reason
     assert hist.collapse_multiplier == pytest.approx(closed_form, rel=1e-6)
+
+
+def pushed_joint(friction: float, tensile_strength: float, cohesion: float | None) -> Model:
+    """One block on a rigid base under a dead load of ``JOINT_LOAD`` N and a live unit
+    force along e1, both at its centre, and no self-weight: it slides at c A + mu N, N the
+    dead load alone."""
+    blocks, base = builders.add_base(
+        builders.single_block(JOINT_HEIGHT, JOINT_LENGTH, JOINT_WIDTH, 18e3)
+    )
+    material = InterfaceMaterial(
+        kn=1e10,
+        kt=4e9,
+        friction=friction,
+        tensile_strength=tensile_strength,
+        cohesion=cohesion,
+    )
+    return Model.build(
+        blocks,
+        material,
+        supports=[Support([base])],
+        loads=[
+            PointLoad([0], (0.0, -JOINT_LOAD, 0.0)),
+            PointLoad([0], (1.0, 0.0, 0.0), live=True),
+        ],
+    )

@@ -5,34 +5,24 @@ from __future__ import annotations
 
 import pytest
 
+from helpers.walls import JOINT_LENGTH, JOINT_LOAD, JOINT_WIDTH, pushed_joint
 from masonry_dem.export.analyses import pushover
-from masonry_dem.geometry.builders import add_base, running_bond_wall, single_block
+from masonry_dem.geometry.builders import add_base, running_bond_wall
 from masonry_dem.model import (
     InterfaceMaterial,
     Model,
-    PointLoad,
     SelfWeight,
     Support,
     WeightProportional,
 )
 from masonry_dem.solvers.dynamic_relaxation import DRSettings, DynamicRelaxation
 
-A_, B, S = 0.1, 0.4, 0.2  # height, length, thickness: a joint of 0.4 x 0.2 m
-N = 20e3  # the dead load [N] (no self-weight: H is c A + mu N alone)
+B, S, N = JOINT_LENGTH, JOINT_WIDTH, JOINT_LOAD  # a joint of 0.4 x 0.2 m under 20 kN
 MU, FT, C = 0.75, 0.16e6, 0.224e6  # Lourenco's joint
 
 
 def _model(cohesion: float | None) -> Model:
-    blocks, base = add_base(single_block(A_, B, S, 18e3))
-    material = InterfaceMaterial(
-        kn=1e10, kt=4e9, friction=MU, tensile_strength=FT, cohesion=cohesion
-    )
-    return Model.build(
-        blocks,
-        material,
-        supports=[Support([base])],
-        loads=[PointLoad([0], (0.0, -N, 0.0)), PointLoad([0], (1.0, 0.0, 0.0), live=True)],
-    )
+    return pushed_joint(MU, FT, cohesion)
 
 
 def _slide(cohesion: float | None) -> float:

@@ -12,6 +12,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from helpers.walls import JOINT_HEIGHT, JOINT_LENGTH, JOINT_LOAD, JOINT_WIDTH, pushed_joint
 from masonry_dem.export.analyses import pushover
 from masonry_dem.geometry.builders import add_base, single_block
 from masonry_dem.model import (
@@ -36,19 +37,10 @@ EVERY = [
     dict(backend="clarabel", associative=False),
 ]
 #: a wide flat block (0.1 high on a 0.4 x 0.2 joint) under a dead load N, pushed along x
-A_, B, S = 0.1, 0.4, 0.2
-N = 20e3
+A_, B, S, N = JOINT_HEIGHT, JOINT_LENGTH, JOINT_WIDTH, JOINT_LOAD
 
 
-def _pushed(mu: float, ft: float, c: float | None) -> Model:
-    blocks, base = add_base(single_block(A_, B, S, 18e3))
-    material = InterfaceMaterial(kn=1e10, kt=4e9, friction=mu, tensile_strength=ft, cohesion=c)
-    return Model.build(
-        blocks,
-        material,
-        supports=[Support([base])],
-        loads=[PointLoad([0], (0.0, -N, 0.0)), PointLoad([0], (1.0, 0.0, 0.0), live=True)],
-    )
+_pushed = pushed_joint
 
 
 def _lam(model: Model, **kw) -> float:
@@ -176,7 +168,6 @@ def test_a_twist_dissipates_the_cohesion_by_the_mean_distance():
     safe side for a bound (above); the corners alone would take the corner distance, 85 %
     above."""
     from masonry_dem.constitutive import torsion_constant
-    from masonry_dem.model import PointLoad
 
     l, c = 0.3, 1.0e4
     blocks, base = add_base(single_block(0.2, l, l, 2e4))
@@ -210,7 +201,6 @@ def test_without_dilatancy_a_cohesive_joint_twists_at_c_a_plus_mu_n_times_ct():
     (mu (W + ft A) + (c - mu ft) A) cT = (c A + mu W) cT = 123.96 N m: the 8 x 8 rule within
     1 % above (124.18); the pyramid by up to 1 / cos(pi / 8) more (130.43)."""
     from masonry_dem.constitutive import torsion_constant
-    from masonry_dem.model import PointLoad
 
     l, mu, ft, c = 0.3, 0.5, 1e3, 1.0e4
     blocks, base = add_base(single_block(0.2, l, l, 2e4))
