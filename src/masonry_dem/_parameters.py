@@ -42,6 +42,7 @@ def function_of(parameters: Callable[P, Computation[T]]) -> Callable[P, T]:
         return parameters(*args, **kwargs)()
 
     for attribute, value in (
+        ("parameter_class", parameters),  # what the class declares of its result (SLABS)
         ("__signature__", signature),
         ("__name__", name),
         ("__qualname__", name),

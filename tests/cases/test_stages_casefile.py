@@ -148,3 +148,29 @@ def test_an_idle_load_of_a_stage_is_named_once_per_run(tmp_path, caplog):
         )
     named = [r for r in caplog.records if "acts only on held DOFs" in r.getMessage()]
     assert len(named) == 1 and "loads[1] (PointLoad, live)" in named[0].getMessage()
+
+
+def test_a_builder_that_builds_its_own_slabs_refuses_another_named():
+    """The shear wall declares its beams (``base``, then ``beam``): ``select = "base"`` is
+    its bottom beam and ``"beam"`` its top one; ``base`` or ``top_beam`` given besides is
+    refused, named."""
+    wall = {
+        "builder": "shear_wall",
+        "length": 0.6,
+        "courses": 3,
+        "a": 0.1,
+        "b": 0.2,
+        "s": 0.1,
+        "unit_weight": 18e3,
+    }
+    data = {**WALL, "geometry": wall}
+    case = case_from_dict(copy.deepcopy(data))
+    blocks = case.model.blocks
+    base, beam = blocks.count - 2, blocks.count - 1
+    assert case.model.fixed[base].all() and not case.model.fixed[beam].any()
+    assert blocks.centres[beam, 1] == blocks.centres[:, 1].max()
+    for key, value in (("base", True), ("top_beam", 0.1)):
+        bad = copy.deepcopy(data)
+        bad["geometry"][key] = value
+        with pytest.raises(ValueError, match=f"{key}: builder 'shear_wall' builds its own slabs"):
+            case_from_dict(bad)

@@ -164,15 +164,19 @@ def build_blocks(
         blocks = builders.cut_openings(blocks, geometry["openings"], lintels=lintels)
     wall = np.ones(blocks.count, dtype=bool)
     base = None
-    if builder == "shear_wall":  # its own beams: "base" selects the bottom, "beam" the top
+    # a builder that builds its own slabs (the shear wall's beams) declares them, last, by
+    # the selector that names each
+    slabs: tuple[str, ...] = getattr(getattr(func, "parameter_class", None), "SLABS", ())
+    if slabs:
         for key in ("base", "top_beam"):
             if geometry.get(key) not in (None, False):
                 raise ValueError(
-                    f"case file [geometry] {key}: builder 'shear_wall' has its own bottom and "
-                    'top beams (select = "base" and "beam"); leave it out'
+                    f"{key}: builder {builder!r} builds its own slabs "
+                    f"({' and '.join(f'select = {name!r}' for name in slabs)}); leave it out"
                 )
-        wall[-2:] = False
-        base = blocks.count - 2
+        wall[-len(slabs) :] = False
+        if "base" in slabs:
+            base = blocks.count - len(slabs) + slabs.index("base")
     if geometry.get("base", False):
         blocks, base = builders.add_base(blocks)
         wall = np.append(wall, False)

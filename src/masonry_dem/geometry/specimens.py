@@ -25,7 +25,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Literal, get_args
+from typing import ClassVar, Literal, get_args
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -118,6 +118,10 @@ class _ShearWall(_Unit, _Courses, _ShearWallLength):
     >>> md.select.edge(wall, "top").tolist(), md.select.edge(wall, "bottom").tolist()
     ([81], [80])
     """
+
+    #: the slabs it builds last, in order, by the selector that names each in a case file:
+    #: the bottom beam (``select = "base"``), then the top beam (``select = "beam"``)
+    SLABS: ClassVar[tuple[str, ...]] = ("base", "beam")
 
     joint: float = 0.0
     bond: Bond = "running"
