@@ -330,9 +330,7 @@ class IncrementalPath:
         self.s.append(self.s[-1] + self.ds)
         if listening():
             turned = np.arccos(np.clip((np.trace(R1, axis1=1, axis2=2) - 1) / 2, -1.0, 1.0))
-            report(
-                IncrementalProgress(len(self.xi_mid), float(turned.max()), float(self._norms()[-1]))
-            )
+            report(IncrementalProgress(len(self.xi_mid), float(turned.max()), self._last_kinetic()))
 
     def kinetic(self, s: NDArray[np.float64]) -> NDArray[np.float64]:
         """The norm of the twists in the kinetic metric at the node at or before each of
@@ -343,18 +341,27 @@ class IncrementalPath:
 
     def _norms(self) -> NDArray[np.float64]:
         """The kinetic norm of each node's twists over the mode's, as far as integrated."""
+        self._measure()
+        norms = np.asarray(self.norms)
+        return norms / norms[0] if norms[0] > 0 else np.ones(norms.size)
+
+    def _last_kinetic(self) -> float:
+        """The last node's kinetic norm over the mode's (what the lock test reads)."""
+        self._measure()
+        return self.norms[-1] / self.norms[0] if self.norms[0] > 0 else 1.0
+
+    def _measure(self) -> None:
+        """The kinetic norm of the twists of each node integrated since the last call."""
         while len(self.norms) < len(self.xi):
             j = len(self.norms)
             c = np.einsum("nij,nj->ni", self.R[j], self.centres) + self.t[j]
             self.norms.append(float(np.linalg.norm(self._to_free(self.xi[j], c))))
-        norms = np.asarray(self.norms)
-        return norms / norms[0] if norms[0] > 0 else np.ones(norms.size)
 
     def _reach(self, last: float) -> None:
         """Integrate to the node past ``last`` (the twist interpolates between nodes), or to
         the first node where the motion has locked (:data:`LOCKED`): past it the capacity
         curve ends, and a configuration asked for there is the last step's, continued."""
-        while self.s[-1] <= last and self._norms()[-1] >= LOCKED:
+        while self.s[-1] <= last and self._last_kinetic() >= LOCKED:
             self._advance()
 
     def motion(
