@@ -140,7 +140,9 @@ def test_a_case_file_builds_the_same_shear_wall(tmp_path):
     assert np.flatnonzero(loaded.model.live[:, 0]).tolist() == top.tolist()
     assert loaded.model.fixed[md.select.edge(expected, "bottom")].all()
     geometry["base"] = True
-    with pytest.raises(ValueError, match=r"\[geometry\] base: builder 'shear_wall'"):
+    with pytest.raises(
+        ValueError, match=r"\[geometry\]: base: builder 'shear_wall' builds its own slabs"
+    ):
         load_case(write_case(tmp_path, case))
 
 
